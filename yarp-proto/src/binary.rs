@@ -1,0 +1,241 @@
+//! Binary Bottle codec, byte-exact with C++ YARP 3.12 (`BottleImpl::synch` / `read`).
+//!
+//! Layout: a Bottle is `int32 tag` (LIST | subtype) + `int32 count` + elements. When every
+//! element has the same simple type the list is compacted: the tag carries that type and the
+//! elements are written without their own tags. All numbers are little-endian.
+
+use crate::error::DecodeError;
+use crate::tags;
+use crate::value::{Bottle, Value};
+use crate::vocab::Vocab32;
+
+/// Nesting limit when decoding untrusted input (C++ has none and would overflow its stack).
+pub const MAX_DEPTH: usize = 256;
+
+/// Encodes a top-level Bottle.
+pub fn encode(b: &Bottle) -> Vec<u8> {
+    let mut out = Vec::with_capacity(encoded_len_hint(b));
+    encode_into(b, &mut out);
+    out
+}
+
+/// Appends the encoding of a top-level Bottle to `out`.
+pub fn encode_into(b: &Bottle, out: &mut Vec<u8>) {
+    let sub = b.homogeneous_tag();
+    put_i32(out, tags::LIST | sub);
+    write_content(b, sub, out);
+}
+
+fn encoded_len_hint(b: &Bottle) -> usize {
+    8 + b.len() * 12
+}
+
+fn write_content(b: &Bottle, sub: i32, out: &mut Vec<u8>) {
+    put_i32(out, b.len() as i32);
+    for v in b.iter() {
+        if sub == 0 {
+            put_i32(out, v.tag());
+        }
+        write_raw(v, out);
+    }
+}
+
+/// The element body (everything after its tag).
+fn write_raw(v: &Value, out: &mut Vec<u8>) {
+    match v {
+        Value::Int8(x) => out.push(*x as u8),
+        Value::Int16(x) => out.extend_from_slice(&x.to_le_bytes()),
+        Value::Int32(x) => put_i32(out, *x),
+        Value::Int64(x) => out.extend_from_slice(&x.to_le_bytes()),
+        Value::Float32(x) => out.extend_from_slice(&x.to_le_bytes()),
+        Value::Float64(x) => out.extend_from_slice(&x.to_le_bytes()),
+        Value::Vocab32(x) => put_i32(out, x.0),
+        Value::String(s) | Value::Blob(s) => {
+            put_i32(out, s.len() as i32);
+            out.extend_from_slice(s);
+        }
+        Value::List(b) => write_content(b, b.homogeneous_tag(), out),
+        Value::Dict(b) => encode_into(b, out),
+    }
+}
+
+fn put_i32(out: &mut Vec<u8>, x: i32) {
+    out.extend_from_slice(&x.to_le_bytes());
+}
+
+/// Decodes a top-level Bottle; returns it with the number of bytes it used.
+pub fn decode(bytes: &[u8]) -> Result<(Bottle, usize), DecodeError> {
+    let mut r = Reader { buf: bytes, pos: 0 };
+    let b = r.top_level(0)?;
+    Ok((b, r.pos))
+}
+
+/// Decodes one element body of the given tag (used by carriers and Portables that embed
+/// single values).
+pub fn decode_value(tag: i32, bytes: &[u8]) -> Result<(Value, usize), DecodeError> {
+    let mut r = Reader { buf: bytes, pos: 0 };
+    let v = r.value(tag, 0)?;
+    Ok((v, r.pos))
+}
+
+struct Reader<'a> {
+    buf: &'a [u8],
+    pos: usize,
+}
+
+impl Reader<'_> {
+    fn take(&mut self, n: usize, what: &'static str) -> Result<&[u8], DecodeError> {
+        let remaining = self.buf.len() - self.pos;
+        if n > remaining {
+            return Err(DecodeError::Truncated {
+                offset: self.pos,
+                needed: n - remaining,
+                what,
+            });
+        }
+        let s = &self.buf[self.pos..self.pos + n];
+        self.pos += n;
+        Ok(s)
+    }
+
+    fn array<const N: usize>(&mut self, what: &'static str) -> Result<[u8; N], DecodeError> {
+        let s = self.take(N, what)?;
+        let mut a = [0u8; N];
+        a.copy_from_slice(s);
+        Ok(a)
+    }
+
+    fn i32(&mut self, what: &'static str) -> Result<i32, DecodeError> {
+        Ok(i32::from_le_bytes(self.array(what)?))
+    }
+
+    /// A top-level (or dict-content) Bottle: the tag's unit bits select compaction; C++
+    /// does not insist on the LIST bit here, and neither do we.
+    fn top_level(&mut self, depth: usize) -> Result<Bottle, DecodeError> {
+        let code = self.i32("bottle tag")?;
+        self.content(code & tags::UNIT_MASK, depth)
+    }
+
+    fn content(&mut self, sub: i32, depth: usize) -> Result<Bottle, DecodeError> {
+        if depth > MAX_DEPTH {
+            return Err(DecodeError::TooDeep {
+                limit: MAX_DEPTH,
+                offset: self.pos,
+            });
+        }
+        let count_at = self.pos;
+        let count = self.i32("element count")?;
+        if count <= 0 {
+            // C++ loops `for (i = 0; i < len; i++)`: a negative count is an empty list.
+            return Ok(Bottle::new());
+        }
+        let remaining = self.buf.len() - self.pos;
+        if count as usize > remaining {
+            // every element takes at least one byte
+            return Err(DecodeError::CountTooLarge {
+                count,
+                remaining,
+                offset: count_at,
+            });
+        }
+        let mut items = Vec::with_capacity(count as usize);
+        for _ in 0..count {
+            let tag = if sub == 0 {
+                self.i32("element tag")?
+            } else {
+                sub
+            };
+            items.push(self.value(tag, depth)?);
+        }
+        Ok(Bottle::from(items))
+    }
+
+    fn value(&mut self, tag: i32, depth: usize) -> Result<Value, DecodeError> {
+        let at = self.pos;
+        Ok(match tag {
+            tags::INT8 => Value::Int8(self.array::<1>("int8")?[0] as i8),
+            tags::INT16 => Value::Int16(i16::from_le_bytes(self.array("int16")?)),
+            tags::INT32 => Value::Int32(self.i32("int32")?),
+            tags::INT64 => Value::Int64(i64::from_le_bytes(self.array("int64")?)),
+            tags::VOCAB32 => Value::Vocab32(Vocab32(self.i32("vocab")?)),
+            tags::FLOAT32 => Value::Float32(f32::from_le_bytes(self.array("float32")?)),
+            tags::FLOAT64 => Value::Float64(f64::from_le_bytes(self.array("float64")?)),
+            tags::STRING => Value::String(self.sized("string")?),
+            tags::BLOB => Value::Blob(self.sized("blob")?),
+            t if t & tags::GROUP_MASK != 0 => {
+                if t & tags::DICT != 0 {
+                    Value::Dict(self.top_level(depth + 1)?)
+                } else {
+                    Value::List(self.content(t & tags::UNIT_MASK, depth + 1)?)
+                }
+            }
+            t => return Err(DecodeError::UnknownTag { tag: t, offset: at }),
+        })
+    }
+
+    fn sized(&mut self, what: &'static str) -> Result<Vec<u8>, DecodeError> {
+        let at = self.pos;
+        let len = self.i32(what)?;
+        if len < 0 {
+            return Err(DecodeError::NegativeLength {
+                len,
+                what,
+                offset: at,
+            });
+        }
+        // bounds-checked before allocating: a forged length cannot reserve memory
+        Ok(self.take(len as usize, what)?.to_vec())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bottle;
+
+    #[test]
+    fn compacts_homogeneous_lists() {
+        let b = bottle![1, 2, 3];
+        assert_eq!(hex(&b.encode()), "0101000003000000010000000200000003000000");
+        let mixed = bottle!["hello", 42];
+        assert_eq!(
+            hex(&mixed.encode()),
+            "0001000002000000040000000500000068656c6c6f010000002a000000"
+        );
+    }
+
+    #[test]
+    fn hostile_lengths_are_errors_not_allocations() {
+        // string claiming 4 GiB - 1 in a 20-byte message
+        let evil = [
+            0x00, 0x01, 0, 0, 1, 0, 0, 0, 4, 0, 0, 0, 0xff, 0xff, 0xff, 0x7f, b'a', b'b', b'c',
+            b'd',
+        ];
+        assert!(matches!(
+            Bottle::decode(&evil),
+            Err(DecodeError::Truncated { offset: 16, .. })
+        ));
+        let many = [0x00, 0x01, 0, 0, 0xff, 0xff, 0xff, 0x7f];
+        assert!(matches!(
+            Bottle::decode(&many),
+            Err(DecodeError::CountTooLarge { .. })
+        ));
+    }
+
+    #[test]
+    fn deep_nesting_is_bounded() {
+        let mut bytes = vec![0x00, 0x01, 0, 0];
+        for _ in 0..10_000 {
+            bytes.extend_from_slice(&[1, 0, 0, 0, 0x00, 0x01, 0, 0]);
+        }
+        bytes.extend_from_slice(&[0, 0, 0, 0]);
+        assert!(matches!(
+            Bottle::decode(&bytes),
+            Err(DecodeError::TooDeep { .. })
+        ));
+    }
+
+    fn hex(b: &[u8]) -> String {
+        b.iter().map(|x| format!("{x:02x}")).collect()
+    }
+}

@@ -1,0 +1,31 @@
+//! The YARP core, free of sockets: values and Bottles with their binary and text codecs,
+//! vocabs, envelopes (stamps) and Property/Searchable configuration.
+//!
+//! Everything here is pure encode/decode and data structures; network I/O lives in the
+//! crates layered above (as `quinn-proto` sits under `quinn`). Byte layouts follow
+//! C++ YARP 3.12 exactly and are checked against recordings of the real thing.
+//!
+//! ```
+//! use yarp_proto::{Bottle, Value};
+//! let b = Bottle::from_text("set pos 0 100.0");
+//! assert_eq!(b.get(2), Some(&Value::Int32(0)));
+//! let bytes = b.encode();
+//! assert_eq!(Bottle::decode(&bytes).unwrap(), b);
+//! assert_eq!(b.to_string(), "set pos 0 100.0");
+//! ```
+
+pub mod binary;
+pub mod error;
+pub mod number;
+pub mod property;
+pub mod stamp;
+pub mod tags;
+pub mod text;
+pub mod value;
+pub mod vocab;
+
+pub use error::{DecodeError, ParseError};
+pub use property::Property;
+pub use stamp::Stamp;
+pub use value::{Bottle, Value};
+pub use vocab::Vocab32;
