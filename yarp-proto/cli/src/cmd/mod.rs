@@ -1,0 +1,3 @@
+//! One module per `yarp` subcommand.
+
+pub mod bottle;
