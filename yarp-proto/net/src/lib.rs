@@ -1,0 +1,1 @@
+//! YARP networking on tokio: the thin I/O layer above the sans-I/O `yarp-proto` core.
