@@ -385,13 +385,11 @@ impl Bottle {
     }
 }
 
-/// C++ compares keys with `Value::toString()`: a string's bare text, a vocab without brackets.
+/// C++ compares keys with `Value::toString()`: a string's bare text, a vocab without
+/// brackets, a number's digits. Lists and blobs never match.
 fn key_matches(v: &Value, key: &str) -> bool {
     match v {
         Value::String(s) => s == key.as_bytes(),
-        Value::Vocab32(voc) => {
-            crate::text::value_to_text(&Value::Vocab32(*voc), false) == key.as_bytes()
-        }
         Value::List(_) | Value::Dict(_) | Value::Blob(_) => false,
         other => other.to_text_bare() == key.as_bytes(),
     }
@@ -461,4 +459,36 @@ macro_rules! bottle {
         $( b.push($v); )+
         b
     }};
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bottle;
+
+    #[test]
+    fn find_and_groups_like_cpp() {
+        let b = Bottle::from_text("name /foo (axes 4) (gains 1.0 2.0) [ok] 7");
+        assert_eq!(b.find("name").and_then(Value::as_str), Some("/foo"));
+        assert_eq!(b.find("axes"), Some(&Value::Int32(4)));
+        assert_eq!(b.find("ok"), Some(&Value::Int32(7)));
+        assert_eq!(b.find_group("gains").map(|g| g.len()), Some(3));
+        assert!(b.check("gains") && b.check("name") && !b.check("missing"));
+        assert_eq!(b.find_or("missing", 3), Value::Int32(3));
+    }
+
+    #[test]
+    fn builders_and_accessors() {
+        let mut b = bottle![Vocab32::new("set"), 0, 1.5, "x", true];
+        b.add_list().push(1).push(2);
+        assert_eq!(b.to_string(), "[set] 0 1.5 x true (1 2)");
+        assert_eq!(b[1].as_f64(), Some(0.0));
+        assert_eq!(b[2].as_i32(), Some(1));
+        assert_eq!(b[4].as_bool(), Some(true));
+        assert_eq!(b[5].as_list().map(Bottle::len), Some(2));
+        assert!(Value::Float64(f64::NAN) == Value::Float64(f64::NAN));
+        assert!(Value::Float64(0.0) != Value::Float64(-0.0));
+        let collected: Bottle = [1, 2, 3].into_iter().collect();
+        assert_eq!(collected.homogeneous_tag(), crate::tags::INT32);
+    }
 }
