@@ -15,6 +15,7 @@
 //! ```
 
 pub mod binary;
+pub mod contact;
 pub mod error;
 pub mod number;
 pub mod property;
@@ -24,6 +25,7 @@ pub mod text;
 pub mod value;
 pub mod vocab;
 
+pub use contact::{Contact, PortRef};
 pub use error::{DecodeError, ParseError};
 pub use property::Property;
 pub use stamp::Stamp;
