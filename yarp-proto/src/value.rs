@@ -354,10 +354,8 @@ impl Bottle {
     pub fn find(&self, key: &str) -> Option<&Value> {
         for (i, v) in self.items.iter().enumerate() {
             match v {
-                Value::List(group) => {
-                    if group.get(0).is_some_and(|k| key_matches(k, key)) {
-                        return group.get(1);
-                    }
+                Value::List(group) if group.get(0).is_some_and(|k| key_matches(k, key)) => {
+                    return group.get(1);
                 }
                 other if key_matches(other, key) => return self.items.get(i + 1),
                 _ => {}
@@ -464,7 +462,6 @@ macro_rules! bottle {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bottle;
 
     #[test]
     fn find_and_groups_like_cpp() {
