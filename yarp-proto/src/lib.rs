@@ -18,6 +18,7 @@ pub mod binary;
 pub mod contact;
 pub mod error;
 pub mod number;
+pub mod port_admin;
 pub mod property;
 pub mod stamp;
 pub mod tags;
