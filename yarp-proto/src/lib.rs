@@ -25,6 +25,7 @@ pub mod tags;
 pub mod text;
 pub mod value;
 pub mod vocab;
+pub mod wire;
 
 pub use contact::{Contact, PortRef};
 pub use error::{DecodeError, ParseError};
