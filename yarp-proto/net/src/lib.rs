@@ -1,1 +1,3 @@
 //! YARP networking on tokio: the thin I/O layer above the sans-I/O `yarp-proto` core.
+
+pub mod nameserver;
