@@ -1,0 +1,371 @@
+//! Input side: accepting connections, reading the carrier header, and serving each
+//! connection's messages (data to the owner, admin commands, text-mode commands).
+
+use super::output::{self, next_event, OutputError};
+use super::{Incoming, Shared};
+use std::sync::Arc;
+use tokio::io::AsyncWriteExt;
+use tokio::net::{TcpListener, TcpStream};
+use tokio::sync::{oneshot, Notify};
+use yarp_proto::port_admin::{
+    self, add_output_text, format_add_result, format_del_result, handle_admin, remove_input_text,
+    remove_output_text, AddOutcome, AdminAction, Pending, Route,
+};
+use yarp_proto::wire::{
+    self, text_carrier, CarrierSpec, CommandKind, Decoder, DecoderConfig, Event, Framing, Message,
+};
+use yarp_proto::Bottle;
+
+/// An input connection as the port keeps it.
+pub(crate) struct InputEntry {
+    pub(crate) route: Route,
+    kill: Arc<Notify>,
+}
+
+pub(crate) async fn accept_loop(shared: Arc<Shared>, listener: TcpListener) {
+    let mut shutdown = shared.shutdown.clone();
+    loop {
+        tokio::select! {
+            _ = shutdown.changed() => return,
+            accepted = listener.accept() => match accepted {
+                Ok((stream, _)) => {
+                    let _ = stream.set_nodelay(true);
+                    tokio::spawn(serve_connection(shared.clone(), stream));
+                }
+                Err(e) => {
+                    tracing::warn!("{}: accept failed: {e}", shared.name);
+                    tokio::time::sleep(std::time::Duration::from_millis(50)).await;
+                }
+            }
+        }
+    }
+}
+
+/// What ended a connection's input loop.
+enum End {
+    Closed,
+    Reversed(String, CarrierSpec),
+}
+
+async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
+    let id = shared.next_id();
+    let kill = Arc::new(Notify::new());
+    let mut shutdown = shared.shutdown.clone();
+    let mut conn = Conn {
+        shared: &shared,
+        id,
+        kill: kill.clone(),
+        decoder: Decoder::accepting(DecoderConfig::default()),
+        spec: None,
+        from: String::new(),
+    };
+    let end = tokio::select! {
+        _ = shutdown.changed() => Ok(End::Closed),
+        _ = kill.notified() => Ok(End::Closed),
+        r = conn.run(&mut stream) => r,
+    };
+    shared.lock().inputs.remove(&id);
+    match end {
+        Ok(End::Reversed(peer, spec)) => {
+            let handle = output::from_reversed(&shared, &peer, stream, spec);
+            let oid = shared.next_id();
+            shared.lock().outputs.insert(oid, handle);
+        }
+        Ok(End::Closed) => {
+            let _ = stream.shutdown().await;
+        }
+        Err(e) => {
+            tracing::debug!("{}: input connection ended: {e}", shared.name);
+            let _ = stream.shutdown().await;
+        }
+    }
+}
+
+struct Conn<'a> {
+    shared: &'a Arc<Shared>,
+    id: u64,
+    kill: Arc<Notify>,
+    decoder: Decoder,
+    spec: Option<CarrierSpec>,
+    from: String,
+}
+
+impl Conn<'_> {
+    async fn run(&mut self, stream: &mut TcpStream) -> Result<End, OutputError> {
+        loop {
+            let ev = match next_event(stream, &mut self.decoder, &self.from).await {
+                Ok(ev) => ev,
+                Err(OutputError::PeerClosed(_)) => return Ok(End::Closed),
+                Err(e) => return Err(e),
+            };
+            match ev {
+                Event::Header(h) => {
+                    let spec = h.carrier().spec();
+                    if !matches!(spec.framing, Framing::Stream | Framing::Text) {
+                        // udp/mcast/shmem/local handshakes, http, name-server lines:
+                        // not served by ports yet
+                        tracing::debug!(
+                            "{}: carrier {} not supported on input",
+                            self.shared.name,
+                            spec.carrier
+                        );
+                        return Ok(End::Closed);
+                    }
+                    self.spec = Some(spec);
+                }
+                Event::SenderName(name) => {
+                    self.from = String::from_utf8_lossy(&name).into_owned();
+                    let Some(spec) = self.spec else {
+                        return Ok(End::Closed);
+                    };
+                    let greeting = match spec.framing {
+                        Framing::Text => text_carrier::welcome_line(&name),
+                        _ => wire::encode_header_reply(self.shared.contact.port as i32).to_vec(),
+                    };
+                    write(stream, &greeting, &self.from).await?;
+                    self.shared.lock().inputs.insert(
+                        self.id,
+                        InputEntry {
+                            route: Route::new(&self.from, &self.shared.name, spec.carrier.name()),
+                            kill: self.kill.clone(),
+                        },
+                    );
+                }
+                Event::Message(m) => {
+                    if let Some(end) = self.message(stream, m).await? {
+                        return Ok(end);
+                    }
+                }
+                Event::InvalidMessage { error, .. } => {
+                    // C++ skips it without an acknowledgement
+                    tracing::warn!(
+                        "{}: bad message from {}: {error}",
+                        self.shared.name,
+                        self.from
+                    );
+                }
+                _ => {}
+            }
+        }
+    }
+
+    fn is_text(&self) -> bool {
+        self.spec.is_some_and(|s| s.framing == Framing::Text)
+    }
+
+    /// Writes the acknowledgement if the carrier wants one.
+    async fn ack(&self, stream: &mut TcpStream) -> Result<(), OutputError> {
+        match self.spec {
+            Some(s) if s.requires_ack => {
+                let bytes: &[u8] = if s.framing == Framing::Text {
+                    text_carrier::ACK_LINE
+                } else {
+                    &wire::ack()
+                };
+                write(stream, bytes, &self.from).await
+            }
+            _ => Ok(()),
+        }
+    }
+
+    async fn message(
+        &mut self,
+        stream: &mut TcpStream,
+        m: Message,
+    ) -> Result<Option<End>, OutputError> {
+        let text = self.is_text();
+        match m.command.kind() {
+            CommandKind::Data { reply } => {
+                let wants_reply = reply && self.spec.is_some_and(|s| s.supports_reply);
+                let (tx, rx) = if wants_reply {
+                    let (tx, rx) = oneshot::channel();
+                    (Some(tx), Some(rx))
+                } else {
+                    (None, None)
+                };
+                let incoming = Incoming {
+                    stamp: m.stamp(),
+                    payload: m.payload,
+                    is_text: text,
+                    from: self.from.clone(),
+                    reply: tx,
+                };
+                if self.shared.deliver.send(incoming).await.is_err() {
+                    return Ok(Some(End::Closed));
+                }
+                if let Some(rx) = rx {
+                    if let Ok(b) = rx.await {
+                        let bytes = if text {
+                            port_admin::reply_text_line(&b)
+                        } else {
+                            b.encode()
+                        };
+                        write(stream, &bytes, &self.from).await?;
+                    }
+                }
+                self.ack(stream).await?;
+            }
+            CommandKind::Admin => {
+                let cmd = if text {
+                    Bottle::from_text(&m.payload)
+                } else {
+                    Bottle::decode(&m.payload).unwrap_or_default()
+                };
+                let reply = self.admin(&cmd).await;
+                let bytes = if text {
+                    port_admin::reply_text_line(&reply)
+                } else {
+                    reply.encode()
+                };
+                write(stream, &bytes, &self.from).await?;
+                self.ack(stream).await?;
+            }
+            CommandKind::Close => {
+                self.ack(stream).await?;
+                return Ok(Some(End::Closed));
+            }
+            CommandKind::Describe => {
+                let snap = self.shared.snapshot();
+                if text {
+                    write(stream, port_admin::describe(&snap).as_bytes(), &self.from).await?;
+                } else {
+                    // over binary connections C++ prints the description on the owner's stdout
+                    print!("{}", port_admin::describe_for_stdout(&snap));
+                }
+                self.ack(stream).await?;
+            }
+            CommandKind::Help => {
+                if text {
+                    write(stream, port_admin::help_text().as_bytes(), &self.from).await?;
+                }
+                self.ack(stream).await?;
+            }
+            CommandKind::Reverse => {
+                self.ack(stream).await?;
+                let Some(spec) = self.spec else {
+                    return Ok(Some(End::Closed));
+                };
+                return Ok(Some(End::Reversed(self.from.clone(), spec)));
+            }
+            CommandKind::AddOutput(dest) => {
+                let dest = String::from_utf8_lossy(&dest).into_owned();
+                let outcome = self.add_output(&dest).await;
+                if text {
+                    let line = add_output_text(&self.shared.name, &dest, &outcome);
+                    write(stream, line.as_bytes(), &self.from).await?;
+                }
+                self.ack(stream).await?;
+            }
+            CommandKind::RemoveOutput(dest) => {
+                let dest = String::from_utf8_lossy(&dest).into_owned();
+                let removed = self.shared.remove_output(&dest);
+                if text {
+                    let line = remove_output_text(&self.shared.name, &dest, removed);
+                    write(stream, line.as_bytes(), &self.from).await?;
+                }
+                self.ack(stream).await?;
+            }
+            CommandKind::RemoveInput(src) => {
+                let src = String::from_utf8_lossy(&src).into_owned();
+                let removed = self.remove_input(&src);
+                if text {
+                    let line = remove_input_text(&self.shared.name, &src, removed);
+                    write(stream, line.as_bytes(), &self.from).await?;
+                }
+                self.ack(stream).await?;
+            }
+            _ => {
+                if text {
+                    let t = port_admin::NOT_UNDERSTOOD_TEXT;
+                    write(stream, t.as_bytes(), &self.from).await?;
+                }
+                self.ack(stream).await?;
+            }
+        }
+        Ok(None)
+    }
+
+    async fn add_output(&self, dest: &str) -> AddOutcome {
+        match self.shared.add_output(dest, None).await {
+            Ok(()) => AddOutcome::Added { note: None },
+            Err(super::PortError::UnknownPort(_)) => AddOutcome::UnknownTarget,
+            Err(e) => {
+                tracing::info!("{}: cannot connect to {dest}: {e}", self.shared.name);
+                AddOutcome::CannotConnect
+            }
+        }
+    }
+
+    /// Closes every input coming from `src` (other than this admin connection itself).
+    fn remove_input(&self, src: &str) -> bool {
+        let st = self.shared.lock();
+        let mut any = false;
+        for (id, e) in st.inputs.iter() {
+            if e.route.from == src {
+                any = true;
+                if *id != self.id {
+                    e.kill.notify_one();
+                }
+            }
+        }
+        any
+    }
+
+    /// Runs an admin Bottle through the protocol and carries out its actions.
+    async fn admin(&self, cmd: &Bottle) -> Bottle {
+        let resp = handle_admin(cmd, &self.shared.snapshot());
+        let mut reply = resp.reply;
+        let mut add_outcome = None;
+        let (mut removed_out, mut removed_in) = (false, false);
+        for action in resp.actions {
+            match action {
+                AdminAction::AddOutput { dest, target } => {
+                    // C++ replaces an existing connection to the same port
+                    self.shared.remove_output(&target.name);
+                    let outcome = match self
+                        .shared
+                        .add_output(&target.name, target.carrier.as_deref())
+                        .await
+                    {
+                        Ok(()) => AddOutcome::Added { note: None },
+                        Err(super::PortError::UnknownPort(_)) => AddOutcome::UnknownTarget,
+                        Err(_) => AddOutcome::CannotConnect,
+                    };
+                    add_outcome = Some((dest, outcome));
+                }
+                AdminAction::RemoveOutput { to } => {
+                    removed_out |= self.shared.remove_output(&to);
+                }
+                AdminAction::RemoveInput { from } => {
+                    removed_in |= self.remove_input(&from);
+                }
+                AdminAction::SetProperty { key, value } => {
+                    self.shared.lock().properties.insert(key, value);
+                }
+                _ => {}
+            }
+        }
+        match resp.pending {
+            Pending::Add { dest } => {
+                if let Some((_, outcome)) = &add_outcome {
+                    reply = format_add_result(&self.shared.name, &dest, outcome);
+                }
+            }
+            Pending::Del { dest } => {
+                reply = format_del_result(&self.shared.name, &dest, removed_out, removed_in);
+            }
+            _ => {}
+        }
+        reply
+    }
+}
+
+async fn write(stream: &mut TcpStream, bytes: &[u8], peer: &str) -> Result<(), OutputError> {
+    stream
+        .write_all(bytes)
+        .await
+        .map_err(|source| OutputError::Io {
+            target: peer.to_string(),
+            source,
+        })
+}

@@ -1,0 +1,434 @@
+//! YARP ports on tokio: a named endpoint with any number of input and output connections,
+//! reachable by every tcp-family and text carrier, administered by the C++ port protocol.
+//!
+//! The protocol itself (framing, port commands, admin replies) is in `yarp_proto::wire`
+//! and `yarp_proto::port_admin`; this module only moves bytes and keeps the live state.
+//!
+//! ```no_run
+//! # async fn demo(ns: yarp_net::nameserver::NameClient) -> Result<(), yarp_net::port::PortError> {
+//! use yarp_net::port::Port;
+//! let out = Port::open("/writer", ns.clone()).await?;
+//! let inp = Port::open("/reader", ns).await?;
+//! out.connect("/reader", None).await?;
+//! out.write(&yarp_proto::bottle!["hello", 42]).await;
+//! let msg = inp.read().await.expect("port open");
+//! assert_eq!(msg.bottle()?.to_string(), "hello 42");
+//! # Ok(()) }
+//! ```
+
+mod input;
+mod output;
+
+use crate::nameserver::{NameClient, NameClientError};
+use std::collections::BTreeMap;
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tokio::net::TcpListener;
+use tokio::sync::{mpsc, oneshot, watch};
+use yarp_proto::nameserver::RegisterRequest;
+use yarp_proto::port_admin::{Connection, PortSnapshot};
+use yarp_proto::wire::Carrier;
+use yarp_proto::{Bottle, Contact, DecodeError, PortRef, Stamp, Value};
+
+pub use output::OutputError;
+
+/// How long connection set-up steps (TCP connect, header reply, welcome) may take.
+pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
+/// How long a writer waits for a peer's acknowledgement before giving the peer up.
+pub const ACK_TIMEOUT: Duration = Duration::from_secs(30);
+/// Messages queued per output connection before new ones are dropped (slow reader).
+pub const OUTPUT_QUEUE: usize = 64;
+/// Messages queued for the owner before the inputs stop reading (back-pressure).
+pub const INPUT_QUEUE: usize = 64;
+
+#[derive(Debug, thiserror::Error)]
+pub enum PortError {
+    #[error("name server: {0}")]
+    NameServer(#[from] NameClientError),
+    #[error("port {0} is not known to the name server")]
+    UnknownPort(String),
+    #[error("cannot listen for port {name}: {source}")]
+    Bind {
+        name: String,
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    #[error("the reply is not a valid Bottle: {0}")]
+    BadReply(#[from] DecodeError),
+    #[error("port {0} has no output connection for the RPC")]
+    NotConnected(String),
+    #[error("port closed")]
+    Closed,
+}
+
+/// A message received by a port.
+#[derive(Debug)]
+pub struct Incoming {
+    /// The payload: Bottle bytes (binary carriers) or Bottle text (text carriers).
+    pub payload: Vec<u8>,
+    /// The payload is text (from a text carrier), not binary.
+    pub is_text: bool,
+    /// The envelope, when the sender attached one.
+    pub stamp: Option<Stamp>,
+    /// The sending port's name.
+    pub from: String,
+    reply: Option<oneshot::Sender<Bottle>>,
+}
+
+impl Incoming {
+    /// The payload as a Bottle.
+    pub fn bottle(&self) -> Result<Bottle, DecodeError> {
+        if self.is_text {
+            Ok(Bottle::from_text(&self.payload))
+        } else {
+            Bottle::decode(&self.payload)
+        }
+    }
+
+    /// Whether the sender waits for a reply.
+    pub fn wants_reply(&self) -> bool {
+        self.reply.is_some()
+    }
+
+    /// Sends the reply (no effect when none is expected). Dropping the message without
+    /// replying lets the sender go on without a reply, as C++ does.
+    pub fn reply(&mut self, b: Bottle) {
+        if let Some(tx) = self.reply.take() {
+            let _ = tx.send(b);
+        }
+    }
+
+    /// Takes the reply handle, to answer later from elsewhere.
+    pub fn take_replier(&mut self) -> Option<Replier> {
+        self.reply.take().map(Replier)
+    }
+}
+
+/// A pending RPC reply.
+#[derive(Debug)]
+pub struct Replier(oneshot::Sender<Bottle>);
+
+impl Replier {
+    pub fn send(self, b: Bottle) {
+        let _ = self.0.send(b);
+    }
+}
+
+/// Live state shared by a port's tasks.
+pub(crate) struct Shared {
+    pub(crate) name: String,
+    pub(crate) contact: Contact,
+    pub(crate) ns: Option<NameClient>,
+    pub(crate) state: Mutex<State>,
+    pub(crate) deliver: mpsc::Sender<Incoming>,
+    pub(crate) shutdown: watch::Receiver<bool>,
+    next_id: AtomicU64,
+}
+
+#[derive(Default)]
+pub(crate) struct State {
+    pub(crate) inputs: BTreeMap<u64, input::InputEntry>,
+    pub(crate) outputs: BTreeMap<u64, output::OutputHandle>,
+    pub(crate) properties: BTreeMap<String, Value>,
+}
+
+impl Shared {
+    pub(crate) fn next_id(&self) -> u64 {
+        self.next_id.fetch_add(1, Ordering::Relaxed)
+    }
+
+    pub(crate) fn lock(&self) -> std::sync::MutexGuard<'_, State> {
+        // a panicking task cannot leave the plain data inconsistent; keep serving
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The admin protocol's view of this port.
+    pub(crate) fn snapshot(&self) -> PortSnapshot {
+        let st = self.lock();
+        let mut s = PortSnapshot::new(
+            &self.name,
+            "tcp",
+            &self.contact.host,
+            self.contact.port as i32,
+        );
+        s.inputs = st
+            .inputs
+            .values()
+            .map(|e| Connection::new(e.route.clone()))
+            .collect();
+        s.outputs = st
+            .outputs
+            .values()
+            .map(|o| Connection::new(o.route.clone()))
+            .collect();
+        s.properties = st.properties.clone();
+        s.process.pid = std::process::id() as i32;
+        s
+    }
+
+    /// Opens an output connection to `target` and records it.
+    pub(crate) async fn add_output(
+        self: &Arc<Self>,
+        target: &str,
+        carrier: Option<&str>,
+    ) -> Result<(), PortError> {
+        let r = PortRef::parse(target);
+        let carrier_name = carrier
+            .map(str::to_string)
+            .or(r.carrier.clone())
+            .unwrap_or_else(|| "tcp".to_string());
+        let contact = match &self.ns {
+            Some(ns) => ns
+                .query(&r.name)
+                .await?
+                .ok_or_else(|| PortError::UnknownPort(r.name.clone()))?,
+            None => return Err(PortError::UnknownPort(r.name.clone())),
+        };
+        let already = self
+            .lock()
+            .outputs
+            .values()
+            .any(|o| o.route.to == r.name && o.route.carrier == carrier_name);
+        if already {
+            return Ok(());
+        }
+        let handle = output::connect(self, &r.name, &contact, &carrier_name).await?;
+        let id = self.next_id();
+        self.lock().outputs.insert(id, handle);
+        Ok(())
+    }
+
+    /// Removes outputs to `to`; true if there was one.
+    pub(crate) fn remove_output(&self, to: &str) -> bool {
+        let removed: Vec<_> = {
+            let mut st = self.lock();
+            let ids: Vec<u64> = st
+                .outputs
+                .iter()
+                .filter(|(_, o)| o.route.to == to)
+                .map(|(id, _)| *id)
+                .collect();
+            ids.into_iter()
+                .filter_map(|id| st.outputs.remove(&id))
+                .collect()
+        };
+        let any = !removed.is_empty();
+        for o in removed {
+            o.close();
+        }
+        any
+    }
+}
+
+/// A YARP port.
+pub struct Port {
+    shared: Arc<Shared>,
+    rx: tokio::sync::Mutex<mpsc::Receiver<Incoming>>,
+    shutdown_tx: watch::Sender<bool>,
+    accept_task: tokio::task::JoinHandle<()>,
+}
+
+impl Port {
+    /// Opens a port registered with the name server under `name`, as C++ `Port::open`:
+    /// the server chooses the port number, then the port listens on it.
+    pub async fn open(name: &str, ns: NameClient) -> Result<Port, PortError> {
+        let ip = advertised_ip(&ns);
+        let req = RegisterRequest::name(name);
+        let pid = std::process::id() as i32;
+        let mut contact = ns.register_port(&req, &[ip.as_str()], pid).await?;
+        let listener = match TcpListener::bind(("0.0.0.0", contact.port)).await {
+            Ok(l) => l,
+            Err(_) => {
+                // the allocated number is taken by something else: take any free one and
+                // register it explicitly
+                let l =
+                    TcpListener::bind(("0.0.0.0", 0))
+                        .await
+                        .map_err(|source| PortError::Bind {
+                            name: name.to_string(),
+                            source,
+                        })?;
+                let port = l.local_addr().map(|a| a.port()).unwrap_or(0);
+                ns.unregister(&contact.name).await?;
+                let req = RegisterRequest::explicit(name, "tcp", &contact.host, port);
+                contact = ns.register_port(&req, &[ip.as_str()], pid).await?;
+                l
+            }
+        };
+        Ok(Port::start(contact, Some(ns), listener))
+    }
+
+    /// Opens a port on a given local address without a name server (tests, embedded use).
+    pub async fn bind(name: &str, addr: SocketAddr) -> Result<Port, PortError> {
+        let listener = TcpListener::bind(addr)
+            .await
+            .map_err(|source| PortError::Bind {
+                name: name.to_string(),
+                source,
+            })?;
+        let local = listener.local_addr().map_err(|source| PortError::Bind {
+            name: name.to_string(),
+            source,
+        })?;
+        let contact = Contact::new(name, "tcp", &local.ip().to_string(), local.port());
+        Ok(Port::start(contact, None, listener))
+    }
+
+    fn start(contact: Contact, ns: Option<NameClient>, listener: TcpListener) -> Port {
+        let (tx, rx) = mpsc::channel(INPUT_QUEUE);
+        let (shutdown_tx, shutdown_rx) = watch::channel(false);
+        let shared = Arc::new(Shared {
+            name: contact.name.clone(),
+            contact,
+            ns,
+            state: Mutex::new(State::default()),
+            deliver: tx,
+            shutdown: shutdown_rx,
+            next_id: AtomicU64::new(1),
+        });
+        let accept_task = tokio::spawn(input::accept_loop(shared.clone(), listener));
+        Port {
+            shared,
+            rx: tokio::sync::Mutex::new(rx),
+            shutdown_tx,
+            accept_task,
+        }
+    }
+
+    pub fn name(&self) -> &str {
+        &self.shared.name
+    }
+
+    /// Where the port listens, as registered.
+    pub fn contact(&self) -> &Contact {
+        &self.shared.contact
+    }
+
+    /// Connects this port's output to `target` (`/name` or `carrier:/name`).
+    pub async fn connect(&self, target: &str, carrier: Option<&str>) -> Result<(), PortError> {
+        self.shared.add_output(target, carrier).await
+    }
+
+    /// Removes the output connection to `target`; false if there was none.
+    pub fn disconnect(&self, target: &str) -> bool {
+        self.shared.remove_output(&PortRef::parse(target).name)
+    }
+
+    /// Names of the ports this one sends to.
+    pub fn outputs(&self) -> Vec<String> {
+        self.shared
+            .lock()
+            .outputs
+            .values()
+            .map(|o| o.route.to.clone())
+            .collect()
+    }
+
+    /// Names of the ports sending to this one.
+    pub fn inputs(&self) -> Vec<String> {
+        self.shared
+            .lock()
+            .inputs
+            .values()
+            .map(|e| e.route.from.clone())
+            .collect()
+    }
+
+    /// Sends a Bottle to every output; returns how many outputs took it. A slow output
+    /// whose queue is full misses this message (counted as a drop), as C++ BufferedPort.
+    pub async fn write(&self, b: &Bottle) -> usize {
+        self.send(b, None).await
+    }
+
+    /// Sends a Bottle with an envelope (timestamp) to every output.
+    pub async fn write_stamped(&self, b: &Bottle, stamp: Stamp) -> usize {
+        self.send(b, Some(stamp)).await
+    }
+
+    async fn send(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
+        let msg = Arc::new(output::Outgoing::new(b, stamp));
+        let outs: Vec<_> = self
+            .shared
+            .lock()
+            .outputs
+            .values()
+            .map(|o| o.sender())
+            .collect();
+        let mut n = 0;
+        for tx in outs {
+            if tx.try_send(output::Job::Data(msg.clone())).is_ok() {
+                n += 1;
+            }
+        }
+        n
+    }
+
+    /// Sends a Bottle on the first output and waits for the reply (C++ `Port::write(cmd,
+    /// reply)`).
+    pub async fn rpc(&self, b: &Bottle) -> Result<Bottle, PortError> {
+        let tx = self
+            .shared
+            .lock()
+            .outputs
+            .values()
+            .next()
+            .map(|o| o.sender())
+            .ok_or_else(|| PortError::NotConnected(self.shared.name.clone()))?;
+        let (rtx, rrx) = oneshot::channel();
+        let msg = Arc::new(output::Outgoing::new(b, None));
+        tx.send(output::Job::Rpc(msg, rtx))
+            .await
+            .map_err(|_| PortError::Closed)?;
+        let reply = rrx.await.map_err(|_| PortError::Closed)??;
+        Ok(reply)
+    }
+
+    /// The next received message; `None` once the port is closed.
+    pub async fn read(&self) -> Option<Incoming> {
+        self.rx.lock().await.recv().await
+    }
+
+    /// Unregisters, closes every connection (outputs get a `q`) and stops listening.
+    pub async fn close(self) {
+        let _ = self.shutdown_tx.send(true);
+        let outputs: Vec<_> = {
+            let mut st = self.shared.lock();
+            std::mem::take(&mut st.outputs).into_values().collect()
+        };
+        for o in outputs {
+            o.close_and_wait().await;
+        }
+        self.accept_task.abort();
+        if let Some(ns) = &self.shared.ns {
+            let _ = ns.unregister(&self.shared.name).await;
+        }
+    }
+}
+
+impl Drop for Port {
+    fn drop(&mut self) {
+        let _ = self.shutdown_tx.send(true);
+        self.accept_task.abort();
+    }
+}
+
+/// The address to advertise: the one we reach the name server from (so that other hosts
+/// can reach us), or loopback.
+fn advertised_ip(ns: &NameClient) -> String {
+    let server = ns.server();
+    std::net::UdpSocket::bind(("0.0.0.0", 0))
+        .and_then(|s| {
+            s.connect(server)?;
+            s.local_addr()
+        })
+        .map(|a| a.ip().to_string())
+        .unwrap_or_else(|_| "127.0.0.1".to_string())
+}
+
+/// Carrier lookup by name, for the carriers ports can use today.
+pub(crate) fn carrier_by_name(name: &str) -> Option<Carrier> {
+    Carrier::from_name(name)
+}

@@ -1,0 +1,398 @@
+//! Output connections: one task per connection owns the socket, writes queued messages
+//! in the connection's carrier and reads acknowledgements and replies.
+
+use super::{PortError, Shared, ACK_TIMEOUT, CONNECT_TIMEOUT, OUTPUT_QUEUE};
+use std::sync::{Arc, Weak};
+use std::time::Duration;
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::TcpStream;
+use tokio::sync::{mpsc, oneshot};
+use tokio::task::JoinHandle;
+use tokio::time::timeout;
+use yarp_proto::port_admin::Route;
+use yarp_proto::wire::{
+    self, encode_connection_start, text_carrier, CarrierSpec, Decoder, DecoderConfig, Event,
+    Framing, PortCommand, WireError,
+};
+use yarp_proto::{Bottle, Contact, Stamp};
+
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("carrier {0:?} is not supported for output connections yet")]
+    UnsupportedCarrier(String),
+    #[error("cannot connect to {target} at {addr}: {source}")]
+    Connect {
+        target: String,
+        addr: String,
+        source: std::io::Error,
+    },
+    #[error(
+        "{target} did not answer the connection header within {0:?}",
+        CONNECT_TIMEOUT
+    )]
+    HandshakeTimeout { target: String },
+    #[error("{target} answered the connection header with {what}")]
+    Unexpected { target: String, what: String },
+    #[error("connection to {0} closed")]
+    PeerClosed(String),
+    #[error("protocol error from {target}: {source}")]
+    Protocol { target: String, source: WireError },
+    #[error("i/o error talking to {target}: {source}")]
+    Io {
+        target: String,
+        source: std::io::Error,
+    },
+    #[error("{0} did not acknowledge within {1:?}")]
+    AckTimeout(String, Duration),
+}
+
+/// A message ready to go out on any carrier.
+pub(crate) struct Outgoing {
+    bottle: Bottle,
+    binary: Vec<u8>,
+    stamp: Option<Stamp>,
+}
+
+impl Outgoing {
+    pub(crate) fn new(bottle: &Bottle, stamp: Option<Stamp>) -> Outgoing {
+        Outgoing {
+            binary: bottle.encode(),
+            bottle: bottle.clone(),
+            stamp,
+        }
+    }
+
+    fn command(&self, reply: bool) -> PortCommand {
+        match &self.stamp {
+            Some(s) => PortCommand::with_stamp(s, reply),
+            None => PortCommand::data(reply),
+        }
+    }
+
+    /// The bytes of this message for a carrier's framing.
+    fn encode(&self, framing: Framing, cmd: &PortCommand) -> Vec<u8> {
+        let mut out = Vec::with_capacity(self.binary.len() + 64);
+        match framing {
+            Framing::Text => text_carrier::encode_message(cmd, &self.bottle.to_text(), &mut out),
+            _ => wire::encode_message(cmd, &[&self.binary], &mut out),
+        }
+        out
+    }
+}
+
+pub(crate) type RpcResult = Result<Bottle, PortError>;
+
+pub(crate) enum Job {
+    Data(Arc<Outgoing>),
+    Rpc(Arc<Outgoing>, oneshot::Sender<RpcResult>),
+    Close(Option<oneshot::Sender<()>>),
+}
+
+/// A live output connection as the port keeps it.
+pub(crate) struct OutputHandle {
+    pub(crate) route: Route,
+    tx: mpsc::Sender<Job>,
+    task: JoinHandle<()>,
+}
+
+impl OutputHandle {
+    pub(crate) fn sender(&self) -> mpsc::Sender<Job> {
+        self.tx.clone()
+    }
+
+    /// Asks the connection to send `q` and close; does not wait.
+    pub(crate) fn close(self) {
+        if self.tx.try_send(Job::Close(None)).is_err() {
+            self.task.abort();
+        }
+    }
+
+    /// Sends `q`, waits (bounded) for the connection to finish.
+    pub(crate) async fn close_and_wait(self) {
+        let (tx, rx) = oneshot::channel();
+        if self.tx.send(Job::Close(Some(tx))).await.is_ok() {
+            let _ = timeout(Duration::from_secs(2), rx).await;
+        }
+        self.task.abort();
+    }
+}
+
+/// Opens a connection from port `shared` to `target` at `contact` using `carrier`.
+pub(crate) async fn connect(
+    shared: &Arc<Shared>,
+    target: &str,
+    contact: &Contact,
+    carrier: &str,
+) -> Result<OutputHandle, OutputError> {
+    let spec = super::carrier_by_name(carrier)
+        .map(|c| c.spec())
+        .filter(|s| matches!(s.framing, Framing::Stream | Framing::Text))
+        .ok_or_else(|| OutputError::UnsupportedCarrier(carrier.to_string()))?;
+    let addr = format!("{}:{}", contact.host, contact.port);
+    let mut stream = match timeout(CONNECT_TIMEOUT, TcpStream::connect(&addr)).await {
+        Ok(Ok(s)) => s,
+        Ok(Err(source)) => {
+            return Err(OutputError::Connect {
+                target: target.to_string(),
+                addr,
+                source,
+            })
+        }
+        Err(_) => {
+            return Err(OutputError::HandshakeTimeout {
+                target: target.to_string(),
+            })
+        }
+    };
+    let _ = stream.set_nodelay(true);
+    let io_err = |source| OutputError::Io {
+        target: target.to_string(),
+        source,
+    };
+    stream
+        .write_all(&encode_connection_start(&spec, shared.name.as_bytes()))
+        .await
+        .map_err(io_err)?;
+    let mut decoder = Decoder::connecting(spec, DecoderConfig::default());
+    // the accepting side answers with its port number (tcp family) or a welcome line
+    let ev = timeout(
+        CONNECT_TIMEOUT,
+        next_event(&mut stream, &mut decoder, target),
+    )
+    .await
+    .map_err(|_| OutputError::HandshakeTimeout {
+        target: target.to_string(),
+    })??;
+    if !matches!(ev, Event::HeaderReply(_) | Event::Welcome(_)) {
+        return Err(OutputError::Unexpected {
+            target: target.to_string(),
+            what: format!("{ev:?}"),
+        });
+    }
+    let route = Route::new(&shared.name, target, spec.carrier.name());
+    Ok(spawn(shared, route, stream, decoder, spec))
+}
+
+/// Turns an accepted connection into an output (the peer sent `r`).
+pub(crate) fn from_reversed(
+    shared: &Arc<Shared>,
+    peer: &str,
+    stream: TcpStream,
+    spec: CarrierSpec,
+) -> OutputHandle {
+    // what the peer sends from now on are acks and replies to our messages
+    let decoder = Decoder::responses(spec, DecoderConfig::default());
+    let route = Route::new(&shared.name, peer, spec.carrier.name());
+    spawn(shared, route, stream, decoder, spec)
+}
+
+fn spawn(
+    shared: &Arc<Shared>,
+    route: Route,
+    stream: TcpStream,
+    decoder: Decoder,
+    spec: CarrierSpec,
+) -> OutputHandle {
+    let (tx, rx) = mpsc::channel(OUTPUT_QUEUE);
+    let task = tokio::spawn(run(
+        Arc::downgrade(shared),
+        route.to.clone(),
+        stream,
+        decoder,
+        spec,
+        rx,
+    ));
+    OutputHandle { route, tx, task }
+}
+
+async fn run(
+    port: Weak<Shared>,
+    target: String,
+    mut stream: TcpStream,
+    mut decoder: Decoder,
+    spec: CarrierSpec,
+    mut rx: mpsc::Receiver<Job>,
+) {
+    let result = serve(&target, &mut stream, &mut decoder, spec, &mut rx).await;
+    if let Err(e) = &result {
+        tracing::debug!("output to {target} ended: {e}");
+    }
+    let _ = stream.shutdown().await;
+    // a dead peer disappears from the port's outputs
+    if let Some(shared) = port.upgrade() {
+        if result.is_err() {
+            shared.lock().outputs.retain(|_, o| o.route.to != target);
+        }
+    }
+}
+
+async fn serve(
+    target: &str,
+    stream: &mut TcpStream,
+    decoder: &mut Decoder,
+    spec: CarrierSpec,
+    rx: &mut mpsc::Receiver<Job>,
+) -> Result<(), OutputError> {
+    let io_err = |source| OutputError::Io {
+        target: target.to_string(),
+        source,
+    };
+    let mut probe = [0u8; 512];
+    loop {
+        // idle: wait for work, noticing a peer that goes away meanwhile
+        let job = tokio::select! {
+            job = rx.recv() => job,
+            n = stream.read(&mut probe) => {
+                let n = n.map_err(io_err)?;
+                if n == 0 {
+                    return Err(OutputError::PeerClosed(target.to_string()));
+                }
+                decoder.feed(&probe[..n]);
+                drain(decoder, target)?;
+                continue;
+            }
+        };
+        let Some(job) = job else {
+            return Ok(());
+        };
+        match job {
+            Job::Data(msg) => {
+                let cmd = msg.command(false);
+                stream
+                    .write_all(&msg.encode(spec.framing, &cmd))
+                    .await
+                    .map_err(io_err)?;
+                decoder.expect_response(&cmd);
+                if spec.requires_ack {
+                    await_ack(stream, decoder, target).await?;
+                }
+            }
+            Job::Rpc(msg, reply_tx) => {
+                let cmd = msg.command(true);
+                stream
+                    .write_all(&msg.encode(spec.framing, &cmd))
+                    .await
+                    .map_err(io_err)?;
+                decoder.expect_response(&cmd);
+                let reply = await_reply(stream, decoder, target, spec).await;
+                let failed = reply.is_err();
+                let _ = reply_tx.send(reply);
+                if failed {
+                    return Err(OutputError::PeerClosed(target.to_string()));
+                }
+            }
+            Job::Close(done) => {
+                let cmd = PortCommand::close();
+                let bytes = match spec.framing {
+                    Framing::Text => {
+                        let mut out = Vec::new();
+                        text_carrier::encode_message(&cmd, &[], &mut out);
+                        out
+                    }
+                    _ => wire::close_message(),
+                };
+                let _ = stream.write_all(&bytes).await;
+                decoder.expect_response(&cmd);
+                if spec.requires_ack {
+                    let _ =
+                        timeout(Duration::from_secs(1), await_ack(stream, decoder, target)).await;
+                }
+                if let Some(done) = done {
+                    let _ = done.send(());
+                }
+                return Ok(());
+            }
+        }
+    }
+}
+
+/// Consumes whatever complete events are buffered (unsolicited acks are harmless).
+fn drain(decoder: &mut Decoder, target: &str) -> Result<(), OutputError> {
+    while decoder
+        .poll()
+        .map_err(|source| OutputError::Protocol {
+            target: target.to_string(),
+            source,
+        })?
+        .is_some()
+    {}
+    Ok(())
+}
+
+async fn await_ack(
+    stream: &mut TcpStream,
+    decoder: &mut Decoder,
+    target: &str,
+) -> Result<(), OutputError> {
+    let wait = async {
+        loop {
+            if let Event::Ack(_) = next_event(stream, decoder, target).await? {
+                return Ok(());
+            }
+        }
+    };
+    timeout(ACK_TIMEOUT, wait)
+        .await
+        .map_err(|_| OutputError::AckTimeout(target.to_string(), ACK_TIMEOUT))?
+}
+
+async fn await_reply(
+    stream: &mut TcpStream,
+    decoder: &mut Decoder,
+    target: &str,
+    spec: CarrierSpec,
+) -> Result<Bottle, PortError> {
+    let mut reply = None;
+    loop {
+        match next_event(stream, decoder, target).await? {
+            Event::Reply(bytes) => {
+                reply = Some(Bottle::decode(&bytes)?);
+                if !spec.requires_ack {
+                    break;
+                }
+            }
+            Event::Line(text) if text.as_slice() != text_carrier::ACK_TEXT => {
+                reply = Some(Bottle::from_text(&text));
+                if !spec.requires_ack {
+                    break;
+                }
+            }
+            Event::Ack(_) => break,
+            _ => {}
+        }
+    }
+    // an acknowledgement without a reply: the receiver did not answer
+    Ok(reply.unwrap_or_default())
+}
+
+/// Reads until the decoder produces an event.
+pub(crate) async fn next_event(
+    stream: &mut TcpStream,
+    decoder: &mut Decoder,
+    target: &str,
+) -> Result<Event, OutputError> {
+    let mut buf = vec![0u8; 64 * 1024];
+    loop {
+        match decoder.poll() {
+            Ok(Some(ev)) => return Ok(ev),
+            Ok(None) => {}
+            Err(source) => {
+                return Err(OutputError::Protocol {
+                    target: target.to_string(),
+                    source,
+                })
+            }
+        }
+        let n = stream
+            .read(&mut buf)
+            .await
+            .map_err(|source| OutputError::Io {
+                target: target.to_string(),
+                source,
+            })?;
+        if n == 0 {
+            return Err(OutputError::PeerClosed(target.to_string()));
+        }
+        decoder.feed(&buf[..n]);
+    }
+}

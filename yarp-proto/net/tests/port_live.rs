@@ -1,0 +1,238 @@
+//! Ports over real loopback sockets with a real (in-process) name server: data, RPC,
+//! envelopes, text-mode telnet sessions, admin commands, reverse connections, dead peers.
+//! Run under ../shared/netns-run.
+
+use std::time::Duration;
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::TcpStream;
+use tokio::time::timeout;
+use yarp_net::nameserver::{NameClient, NameServer};
+use yarp_net::port::Port;
+use yarp_proto::{bottle, Bottle, Stamp, Vocab32};
+
+const T: Duration = Duration::from_secs(10);
+
+async fn name_server() -> (NameClient, yarp_net::nameserver::ShutdownHandle) {
+    let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
+        .await
+        .expect("bind ns");
+    let addr = ns.local_addr();
+    let stop = ns.shutdown_handle();
+    tokio::spawn(ns.serve());
+    (NameClient::new(addr).with_timeout(T), stop)
+}
+
+async fn read_bottle(p: &Port) -> Bottle {
+    let m = timeout(T, p.read())
+        .await
+        .expect("message in time")
+        .expect("port open");
+    m.bottle().expect("valid bottle")
+}
+
+/// Reads from a raw socket until `want` has been seen (bounded).
+async fn read_until(s: &mut TcpStream, want: &[u8]) -> Vec<u8> {
+    let mut got = Vec::new();
+    let mut buf = [0u8; 4096];
+    timeout(T, async {
+        while !got.windows(want.len()).any(|w| w == want) {
+            let n = s.read(&mut buf).await.expect("read");
+            assert!(
+                n > 0,
+                "peer closed; got {:?}",
+                String::from_utf8_lossy(&got)
+            );
+            got.extend_from_slice(&buf[..n]);
+        }
+    })
+    .await
+    .unwrap_or_else(|_| panic!("timed out; got {:?}", String::from_utf8_lossy(&got)));
+    got
+}
+
+#[tokio::test]
+async fn write_and_read_over_tcp_fast_tcp_and_text() {
+    let (ns, stop) = name_server().await;
+    let w = Port::open("/w", ns.clone()).await.expect("open /w");
+    let r = Port::open("/r", ns.clone()).await.expect("open /r");
+    for carrier in ["tcp", "fast_tcp", "text", "text_ack"] {
+        w.connect("/r", Some(carrier)).await.expect("connect");
+        let b = bottle!["hello", 42, 2.5, Vocab32::new("ok")];
+        assert_eq!(w.write(&b).await, 1);
+        assert_eq!(read_bottle(&r).await, b, "{carrier}");
+        assert!(w.disconnect("/r"));
+        // the reader notices the disconnection
+        timeout(T, async {
+            while !r.inputs().is_empty() {
+                tokio::time::sleep(Duration::from_millis(10)).await;
+            }
+        })
+        .await
+        .expect("input removed");
+    }
+    // envelopes travel with the message
+    w.connect("/r", None).await.expect("connect");
+    w.write_stamped(&bottle![1], Stamp::new(7, 1795298248.55057))
+        .await;
+    let m = timeout(T, r.read()).await.unwrap().unwrap();
+    assert_eq!(m.stamp, Some(Stamp::new(7, 1795298248.55057)));
+    assert_eq!(r.inputs(), vec!["/w".to_string()]);
+    w.close().await;
+    r.close().await;
+    assert_eq!(ns.query("/w").await.unwrap(), None, "unregistered on close");
+    stop.shutdown();
+}
+
+#[tokio::test]
+async fn rpc_round_trip() {
+    let (ns, stop) = name_server().await;
+    let server = Port::open("/srv", ns.clone()).await.unwrap();
+    let client = Port::open("/cli", ns.clone()).await.unwrap();
+    tokio::spawn(async move {
+        while let Some(mut m) = server.read().await {
+            let b = m.bottle().unwrap();
+            let mut reply = bottle![Vocab32::new("is")];
+            reply.extend(b.into_items());
+            m.reply(reply);
+        }
+    });
+    for carrier in ["tcp", "text_ack"] {
+        client.connect("/srv", Some(carrier)).await.unwrap();
+        let reply = timeout(T, client.rpc(&bottle![Vocab32::new("get"), 3]))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(reply.to_string(), "[is] [get] 3", "{carrier}");
+        client.disconnect("/srv");
+    }
+    stop.shutdown();
+}
+
+#[tokio::test]
+async fn telnet_style_text_session_and_admin() {
+    let (ns, stop) = name_server().await;
+    let r = Port::open("/rd", ns.clone()).await.unwrap();
+    let c = r.contact().clone();
+    let mut s = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
+    s.write_all(b"CONNECT /rawtext\n").await.unwrap();
+    assert_eq!(read_until(&mut s, b"\r\n").await, b"Welcome /rawtext\r\n");
+    s.write_all(b"d\nhello from raw text\n").await.unwrap();
+    assert_eq!(read_bottle(&r).await.to_string(), "hello from raw text");
+    s.write_all(b"*\n").await.unwrap();
+    let desc = read_until(&mut s, b"using text\r\n").await;
+    let desc = String::from_utf8_lossy(&desc);
+    assert!(
+        desc.starts_with(&format!("This is /rd at tcp://127.0.0.1:{}/\r\n", c.port)),
+        "{desc}"
+    );
+    assert!(desc.contains("There is an input connection from /rawtext to /rd using text"));
+
+    let mut a = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
+    a.write_all(b"CONNACK /rawadm\n").await.unwrap();
+    read_until(&mut a, b"Welcome /rawadm\r\n").await;
+    a.write_all(b"a\n[ver]\n").await.unwrap();
+    assert_eq!(
+        read_until(&mut a, b"<ACK>\r\n").await,
+        b"[ver] 1 2 3\r\n<ACK>\r\n"
+    );
+    a.write_all(b"a\n[list] [in]\n").await.unwrap();
+    let listed = read_until(&mut a, b"<ACK>\r\n").await;
+    assert_eq!(listed, b"\"/rawtext\" \"/rawadm\"\r\n<ACK>\r\n");
+    // garbage does not hurt the port
+    a.write_all(b"zzz\n").await.unwrap();
+    read_until(&mut a, b"<ACK>\r\n").await;
+    a.write_all(b"q\n").await.unwrap();
+    read_until(&mut a, b"<ACK>\r\n").await;
+    r.close().await;
+    stop.shutdown();
+}
+
+#[tokio::test]
+async fn third_party_connect_through_admin_add() {
+    let (ns, stop) = name_server().await;
+    let w = Port::open("/w3", ns.clone()).await.unwrap();
+    let r = Port::open("/r3", ns.clone()).await.unwrap();
+    // what `yarp connect /w3 /r3` does: an admin [add] sent to /w3
+    let c = w.contact().clone();
+    let mut a = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
+    a.write_all(b"CONNACK /admin\n").await.unwrap();
+    read_until(&mut a, b"\r\n").await;
+    a.write_all(b"a\n[add] /r3\n").await.unwrap();
+    let reply = read_until(&mut a, b"<ACK>\r\n").await;
+    assert_eq!(
+        String::from_utf8_lossy(&reply),
+        "0 \"Added connection from /w3 to /r3\\r\\n\"\r\n<ACK>\r\n"
+    );
+    assert_eq!(w.outputs(), vec!["/r3".to_string()]);
+    w.write(&bottle![5]).await;
+    assert_eq!(read_bottle(&r).await, bottle![5]);
+    a.write_all(b"a\n[del] /r3\n").await.unwrap();
+    let reply = read_until(&mut a, b"<ACK>\r\n").await;
+    assert!(String::from_utf8_lossy(&reply).starts_with("0 \"Removed connection from /w3 to /r3"));
+    a.write_all(b"a\n[add] /nobody\n").await.unwrap();
+    let reply = read_until(&mut a, b"<ACK>\r\n").await;
+    assert_eq!(
+        String::from_utf8_lossy(&reply),
+        "-1 \"Do not know how to connect to /nobody\\r\\n\"\r\n<ACK>\r\n"
+    );
+    stop.shutdown();
+}
+
+#[tokio::test]
+async fn reverse_connection_carries_output() {
+    let (ns, stop) = name_server().await;
+    let w = Port::open("/wrev", ns.clone()).await.unwrap();
+    let c = w.contact().clone();
+    let mut s = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
+    s.write_all(b"CONNECT /rawrev\n").await.unwrap();
+    read_until(&mut s, b"\r\n").await;
+    s.write_all(b"r\n").await.unwrap();
+    timeout(T, async {
+        while w.outputs().is_empty() {
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+    })
+    .await
+    .expect("reversed into an output");
+    w.write(&Bottle::from_text("reversed 1 2.5")).await;
+    assert_eq!(
+        read_until(&mut s, b"2.5\r\n").await,
+        b"D\r\nreversed 1 2.5\r\n"
+    );
+    stop.shutdown();
+}
+
+#[tokio::test]
+async fn dead_peers_and_garbage_are_survived() {
+    let (ns, stop) = name_server().await;
+    let r = Port::open("/rg", ns.clone()).await.unwrap();
+    let c = r.contact().clone();
+    // garbage header, truncated header, a peer dying mid-message
+    for junk in [
+        &b"GARBAGE!xxxx"[..],
+        b"YA",
+        b"\x59\x41\xe4\x1e\x00\x00\x52\x50\x03\x00\x00\x00/x\x00\x59\x41\x0a",
+    ] {
+        let mut s = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
+        s.write_all(junk).await.unwrap();
+        drop(s);
+    }
+    let w = Port::open("/wg", ns.clone()).await.unwrap();
+    w.connect("/rg", None).await.unwrap();
+    w.write(&bottle![1, 2]).await;
+    assert_eq!(read_bottle(&r).await, bottle![1, 2]);
+    // the reader vanishes: the writer drops the output instead of hanging
+    r.close().await;
+    timeout(T, async {
+        loop {
+            w.write(&bottle![3]).await;
+            if w.outputs().is_empty() {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(20)).await;
+        }
+    })
+    .await
+    .expect("dead output removed");
+    stop.shutdown();
+}
