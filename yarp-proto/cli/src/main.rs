@@ -1,4 +1,5 @@
-//! `yarp`: the YARP command-line tool, with C++ YARP's subcommand names and flags.
+//! `yarp`: the YARP command-line tool, with C++ YARP's subcommand names, arguments and
+//! output formats, so scripts written for C++ `yarp` keep working.
 
 mod cmd;
 
@@ -6,7 +7,11 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "yarp", version, about = "YARP command-line tool (Rust implementation)")]
+#[command(
+    name = "yarp",
+    version,
+    about = "YARP command-line tool (Rust implementation)"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -14,6 +19,52 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run a name server (same options as `yarpserver`).
+    Server {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// Read from a port and print what arrives: `yarp read /port [envelope] [/source...]`.
+    Read { port: String, rest: Vec<String> },
+    /// Write stdin lines (one Bottle each) to a port: `yarp write /port [/target...]`.
+    Write { port: String, targets: Vec<String> },
+    /// Send stdin lines as RPC commands to a port and print the replies.
+    Rpc {
+        target: String,
+        carrier: Option<String>,
+    },
+    /// Serve RPC on a port: print each request and reply with the next stdin line.
+    Rpcserver { port: String },
+    /// Connect two ports: `yarp connect /from /to [carrier]`.
+    Connect {
+        from: String,
+        to: String,
+        carrier: Option<String>,
+    },
+    /// Remove a connection: `yarp disconnect /from /to`.
+    Disconnect { from: String, to: String },
+    /// Send a command to the name server: `yarp name query /port`, `yarp name list` ...
+    Name {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// Exit status 0 if a port (or a connection `/from /to`) exists, 1 otherwise.
+    Exists { args: Vec<String> },
+    /// Wait until a port exists.
+    Wait { port: String },
+    /// Unregister ports that no longer answer.
+    Clean,
+    /// Show or set where the name server is: `yarp conf [<ip> <port> | --clean]`.
+    Conf {
+        #[arg(allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// Report where the name server is and whether it answers.
+    Where,
+    /// Look for the name server and report it.
+    Detect,
+    /// Show or set the YARP namespace.
+    Namespace { args: Vec<String> },
     /// Bottle debugging aid: convert between YARP text and the binary wire encoding.
     #[command(subcommand)]
     Bottle(cmd::bottle::BottleCommand),
@@ -24,6 +75,25 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Server { args } => cmd::net::server(&args),
+        Command::Read { port, rest } => cmd::net::read(&port, &rest),
+        Command::Write { port, targets } => cmd::net::write(&port, &targets),
+        Command::Rpc { target, carrier } => cmd::net::rpc(&target, carrier.as_deref()),
+        Command::Rpcserver { port } => cmd::net::rpcserver(&port),
+        Command::Connect { from, to, carrier } => cmd::net::connect(&from, &to, carrier.as_deref()),
+        Command::Disconnect { from, to } => cmd::net::disconnect(&from, &to),
+        Command::Name { args } => cmd::net::name(&args),
+        Command::Exists { args } => match cmd::net::exists(&args) {
+            Ok(true) => Ok(()),
+            Ok(false) => return ExitCode::FAILURE,
+            Err(e) => Err(e),
+        },
+        Command::Wait { port } => cmd::net::wait(&port),
+        Command::Clean => cmd::net::clean(),
+        Command::Conf { args } => cmd::net::conf(&args),
+        Command::Where => cmd::net::where_(false),
+        Command::Detect => cmd::net::where_(true),
+        Command::Namespace { args } => cmd::net::namespace(&args),
         Command::Bottle(c) => cmd::bottle::run(c),
         Command::Version => {
             println!("YARP version {} (Rust)", env!("CARGO_PKG_VERSION"));

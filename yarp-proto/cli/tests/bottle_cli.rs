@@ -29,7 +29,10 @@ fn yarp(args: &[&str], stdin: &str) -> (i32, String, String) {
 fn encode_argument_and_stdin_lines() {
     let (code, out, _) = yarp(&["bottle", "encode", "hello", "42"], "");
     assert_eq!(code, 0);
-    assert_eq!(out, "0001000002000000040000000500000068656c6c6f010000002a000000\n");
+    assert_eq!(
+        out,
+        "0001000002000000040000000500000068656c6c6f010000002a000000\n"
+    );
 
     let (code, out, _) = yarp(&["bottle", "encode"], "1 2 3\r\n-1\n");
     assert_eq!(code, 0);

@@ -1,4 +1,6 @@
 //! YARP networking on tokio: the thin I/O layer above the sans-I/O `yarp-proto` core.
 
 pub mod nameserver;
+pub mod network;
 pub mod port;
+pub mod rpc;

@@ -27,7 +27,8 @@ pub fn run(cmd: BottleCommand) -> Result<()> {
         BottleCommand::Encode { text } => {
             if text.is_empty() {
                 for (n, line) in stdin_lines()?.into_iter().enumerate() {
-                    let hex = encode_line(&line).with_context(|| format!("stdin line {}", n + 1))?;
+                    let hex =
+                        encode_line(&line).with_context(|| format!("stdin line {}", n + 1))?;
                     writeln!(out, "{hex}")?;
                 }
             } else {

@@ -1,3 +1,4 @@
 //! One module per `yarp` subcommand.
 
 pub mod bottle;
+pub mod net;

@@ -17,7 +17,7 @@
 //! ```
 
 mod input;
-mod output;
+pub(crate) mod output;
 
 use crate::nameserver::{NameClient, NameClientError};
 use std::collections::BTreeMap;
@@ -236,6 +236,8 @@ impl Port {
     /// the server chooses the port number, then the port listens on it.
     pub async fn open(name: &str, ns: NameClient) -> Result<Port, PortError> {
         let ip = advertised_ip(&ns);
+        // C++ asks first whether the name is taken (a stale entry is simply replaced)
+        ns.query(name).await?;
         let req = RegisterRequest::name(name);
         let pid = std::process::id() as i32;
         let mut contact = ns.register_port(&req, &[ip.as_str()], pid).await?;

@@ -319,7 +319,7 @@ fn drain(decoder: &mut Decoder, target: &str) -> Result<(), OutputError> {
     Ok(())
 }
 
-async fn await_ack(
+pub(crate) async fn await_ack(
     stream: &mut TcpStream,
     decoder: &mut Decoder,
     target: &str,
@@ -336,7 +336,7 @@ async fn await_ack(
         .map_err(|_| OutputError::AckTimeout(target.to_string(), ACK_TIMEOUT))?
 }
 
-async fn await_reply(
+pub(crate) async fn await_reply(
     stream: &mut TcpStream,
     decoder: &mut Decoder,
     target: &str,

@@ -1,0 +1,383 @@
+//! The networking subcommands of `yarp`, with C++ YARP's arguments and output formats.
+
+use anyhow::{anyhow, bail, Context, Result};
+use std::io::{BufRead, Write};
+use std::time::Duration;
+use yarp_net::network::{self, NetworkError};
+use yarp_net::port::Port;
+use yarp_net::rpc::RpcClient;
+use yarp_proto::wire::Carrier;
+use yarp_proto::{Bottle, Value};
+
+fn runtime() -> Result<tokio::runtime::Runtime> {
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting the async runtime")
+}
+
+/// Resolves when the user asks us to stop (Ctrl-C or SIGTERM).
+async fn stop_signal() {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{signal, SignalKind};
+        if let Ok(mut term) = signal(SignalKind::terminate()) {
+            tokio::select! {
+                _ = tokio::signal::ctrl_c() => {}
+                _ = term.recv() => {}
+            }
+            return;
+        }
+    }
+    let _ = tokio::signal::ctrl_c().await;
+}
+
+fn info(msg: &str) {
+    println!("[INFO] |yarp.os.Network| {msg}");
+}
+
+/// `yarp read <port> [envelope] [source...]`
+pub fn read(port: &str, rest: &[String]) -> Result<()> {
+    let envelope = rest.iter().any(|a| a == "envelope");
+    let sources: Vec<&String> = rest.iter().filter(|a| *a != "envelope").collect();
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        let p = Port::open(port, ns.clone()).await?;
+        for s in sources {
+            let (ok, msg) = network::connect(&ns, s, port, None).await?;
+            if !ok {
+                bail!("cannot connect {s} to {port}: {}", msg.trim_end());
+            }
+        }
+        let stdout = std::io::stdout();
+        loop {
+            tokio::select! {
+                _ = stop_signal() => break,
+                m = p.read() => {
+                    let Some(m) = m else { break };
+                    let text = match m.bottle() {
+                        Ok(b) => String::from_utf8_lossy(&b.to_text()).into_owned(),
+                        Err(e) => { eprintln!("yarp: undecodable message from {}: {e}", m.from); continue }
+                    };
+                    let mut out = stdout.lock();
+                    if envelope {
+                        if let Some(s) = m.stamp {
+                            let _ = write!(out, "{} {:.4}     ", s.count, s.time);
+                        }
+                    }
+                    let _ = writeln!(out, "{text}");
+                    let _ = out.flush();
+                }
+            }
+        }
+        p.close().await;
+        Ok(())
+    })
+}
+
+/// `yarp write <port> [target...]`: one Bottle per stdin line.
+pub fn write(port: &str, targets: &[String]) -> Result<()> {
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        let p = Port::open(port, ns.clone()).await?;
+        for t in targets {
+            p.connect(t, None)
+                .await
+                .with_context(|| format!("connecting {port} to {t}"))?;
+        }
+        let (tx, mut rx) = tokio::sync::mpsc::channel::<String>(16);
+        std::thread::spawn(move || {
+            for line in std::io::stdin().lock().lines() {
+                let Ok(line) = line else { break };
+                if tx.blocking_send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        loop {
+            tokio::select! {
+                _ = stop_signal() => break,
+                line = rx.recv() => {
+                    let Some(line) = line else { break };
+                    p.write(&Bottle::from_text(line.trim_end_matches('\r'))).await;
+                }
+            }
+        }
+        // let queued messages drain before closing
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        p.close().await;
+        Ok(())
+    })
+}
+
+/// Prints an RPC reply as `yarp rpc` does (`Response:` or `Responses:` for `[many]`).
+fn print_response(reply: &Bottle) {
+    if reply.get(0) == Some(&Value::vocab("many")) {
+        println!("Responses:");
+        for v in reply.iter().skip(1) {
+            println!("  {}", String::from_utf8_lossy(&v.to_text_bare()));
+        }
+    } else {
+        println!("Response: {reply}");
+    }
+}
+
+/// `yarp rpc <target> [carrier]`: stdin lines are commands, replies printed.
+pub fn rpc(target: &str, carrier: Option<&str>) -> Result<()> {
+    let carrier = match carrier {
+        Some(c) => Carrier::from_name(c).ok_or_else(|| anyhow!("unknown carrier {c}"))?,
+        None => Carrier::Tcp,
+    };
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        let contact = ns
+            .query(target)
+            .await?
+            .ok_or_else(|| NetworkError::UnknownPort(target.to_string()))?;
+        let mut client = RpcClient::connect(&contact, "anon_rpc", carrier).await?;
+        let stdin = std::io::stdin();
+        for line in stdin.lock().lines() {
+            let line = line?;
+            let cmd = Bottle::from_text(line.trim_end_matches('\r'));
+            let reply = client.call(&cmd).await?;
+            print_response(&reply);
+        }
+        client.close().await;
+        Ok(())
+    })
+}
+
+/// `yarp rpcserver <port>`: prints each request and answers with the next stdin line.
+pub fn rpcserver(port: &str) -> Result<()> {
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        let p = Port::open(port, ns).await?;
+        let mut lines = std::io::stdin().lock().lines();
+        loop {
+            tokio::select! {
+                _ = stop_signal() => break,
+                m = p.read() => {
+                    let Some(mut m) = m else { break };
+                    println!("Message: {}", m.bottle().map(|b| b.to_string()).unwrap_or_default());
+                    print!("Reply: ");
+                    let _ = std::io::stdout().flush();
+                    let reply = lines.next().and_then(|l| l.ok()).unwrap_or_default();
+                    m.reply(Bottle::from_text(reply));
+                }
+            }
+        }
+        p.close().await;
+        Ok(())
+    })
+}
+
+/// `yarp connect <from> <to> [carrier]`
+pub fn connect(from: &str, to: &str, carrier: Option<&str>) -> Result<()> {
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        let (ok, msg) = network::connect(&ns, from, to, carrier).await?;
+        if ok {
+            info(&format!("Success: {msg}"));
+            Ok(())
+        } else {
+            println!("[ERROR] |yarp.os.Network| Failure: {msg}");
+            bail!("connection failed")
+        }
+    })
+}
+
+/// `yarp disconnect <from> <to>`
+pub fn disconnect(from: &str, to: &str) -> Result<()> {
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        if network::is_connected(&ns, from, to).await? {
+            info(&format!(
+                "Connection found between {from} and {to} using carrier tcp"
+            ));
+        }
+        let (ok, msg) = network::disconnect(&ns, from, to).await?;
+        if ok {
+            info(&format!("Success: {msg}"));
+            Ok(())
+        } else {
+            println!("[ERROR] |yarp.os.Network| Failure: {msg}");
+            bail!("disconnection failed")
+        }
+    })
+}
+
+/// `yarp exists <port>` (exit status only) or `yarp exists <from> <to>` (connection).
+pub fn exists(args: &[String]) -> Result<bool> {
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        Ok(match args {
+            [p] => network::exists(&ns, p).await?,
+            [from, to] => network::is_connected(&ns, from, to).await.unwrap_or(false),
+            _ => bail!("usage: yarp exists <port> | yarp exists <from> <to>"),
+        })
+    })
+}
+
+/// `yarp wait <port>`: waits until the port exists.
+pub fn wait(port: &str) -> Result<()> {
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        loop {
+            if network::exists(&ns, port).await.unwrap_or(false) {
+                return Ok(());
+            }
+            tokio::select! {
+                _ = stop_signal() => bail!("interrupted"),
+                _ = tokio::time::sleep(Duration::from_millis(200)) => {}
+            }
+        }
+    })
+}
+
+/// `yarp name <command...>`: a raw name-server command, printed as C++ does.
+pub fn name(args: &[String]) -> Result<()> {
+    if args.is_empty() {
+        bail!("usage: yarp name <command> [args...] (try `yarp name help`)");
+    }
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        let cmd = args.join(" ");
+        let eol = if matches!(args[0].as_str(), "register" | "set") {
+            "\r\n"
+        } else {
+            "\n"
+        };
+        let reply = ns
+            .request(&yarp_proto::wire::name_server_request(&cmd, eol))
+            .await?;
+        let text = reply.replace("\r\n", "\n");
+        match args[0].as_str() {
+            "query" | "register" => {
+                print!("{}", text.replace("*** end of message\n", ""));
+                println!();
+            }
+            "unregister" => println!("Unregistered name."),
+            _ => print!("{text}"),
+        }
+        Ok(())
+    })
+}
+
+/// `yarp clean`: unregister ports that no longer answer.
+pub fn clean() -> Result<()> {
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        let ports = ns.list(None).await?;
+        for c in ports {
+            if c.name == "/root" || !c.name.starts_with('/') || c.carrier == "mcast" {
+                continue;
+            }
+            if !network::exists(&ns, &c.name).await.unwrap_or(false) {
+                println!("Removing {} (was at {})", c.name, c.to_uri());
+                ns.unregister(&c.name).await?;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// `yarp conf [--clean | <ip> <port>]`
+pub fn conf(args: &[String]) -> Result<()> {
+    match args {
+        [] => println!("{}", network::conf_path().display()),
+        [c] if c == "--clean" => {
+            let p = network::conf_path();
+            let _ = std::fs::remove_file(&p);
+            println!("Cleaned {}", p.display());
+        }
+        [ip, port] => {
+            let port: u16 = port.parse().with_context(|| format!("bad port {port}"))?;
+            let p = network::write_conf(ip, port)?;
+            println!("Configuration stored in file {}", p.display());
+        }
+        _ => bail!("usage: yarp conf [--clean | <ip> <port>]"),
+    }
+    Ok(())
+}
+
+/// `yarp where` / `yarp detect`: where the name server is, and whether it answers.
+pub fn where_(detect: bool) -> Result<()> {
+    let conf = network::read_conf()?;
+    if detect {
+        println!(
+            "Checking for name server at ip {} port {}",
+            conf.host, conf.port
+        );
+    } else {
+        println!(
+            "Looking for name server on {}, port number {}",
+            conf.host, conf.port
+        );
+    }
+    println!("If there is a long delay, try:\n  yarp conf --clean");
+    let reachable = std::net::TcpStream::connect_timeout(
+        &format!("{}:{}", conf.host, conf.port)
+            .parse()
+            .map_err(|_| anyhow!("bad address in yarp.conf"))?,
+        Duration::from_secs(3),
+    )
+    .is_ok();
+    if !reachable {
+        println!("No valid name server found");
+        bail!("name server not available");
+    }
+    if detect {
+        println!("\n=========================================================\n==\n== FOUND");
+        println!(
+            "== /root is available at ip {} port {}",
+            conf.host, conf.port
+        );
+        println!(
+            "== /root can be browsed at http://{}:{}/",
+            conf.host, conf.port
+        );
+        println!("== \n=========================================================");
+    } else {
+        println!(
+            "Name server /root is available at ip {} port {}",
+            conf.host, conf.port
+        );
+    }
+    Ok(())
+}
+
+/// `yarp namespace [name]`
+pub fn namespace(args: &[String]) -> Result<()> {
+    match args {
+        [] => {
+            let env = |k: &str| std::env::var(k).ok();
+            let read = |p: &std::path::Path| std::fs::read_to_string(p).ok();
+            println!("{}", yarp_proto::nameserver::namespace(&env, &read));
+        }
+        [ns] => {
+            let env = |k: &str| std::env::var(k).ok();
+            let dir = yarp_proto::nameserver::config_home(&env);
+            std::fs::create_dir_all(&dir)?;
+            let f = dir.join(yarp_proto::nameserver::NAMESPACE_FILENAME);
+            std::fs::write(&f, format!("{ns}\n"))?;
+            println!("Namespace set to {ns}");
+        }
+        _ => bail!("usage: yarp namespace [/name]"),
+    }
+    Ok(())
+}
+
+/// `yarp server [yarpserver options]`: runs the `yarpserver` program beside this one.
+pub fn server(args: &[String]) -> Result<()> {
+    let exe = std::env::current_exe()?;
+    let sibling = exe.with_file_name("yarpserver");
+    let status = std::process::Command::new(&sibling)
+        .args(args)
+        .status()
+        .with_context(|| format!("running {}", sibling.display()))?;
+    if !status.success() {
+        bail!("yarpserver exited with {status}");
+    }
+    Ok(())
+}
