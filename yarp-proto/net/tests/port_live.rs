@@ -236,3 +236,86 @@ async fn dead_peers_and_garbage_are_survived() {
     .expect("dead output removed");
     stop.shutdown();
 }
+
+#[tokio::test]
+async fn ports_register_again_after_a_name_server_restart() {
+    let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1").await.unwrap();
+    let addr = ns.local_addr();
+    let stop = ns.shutdown_handle();
+    let server = tokio::spawn(ns.serve());
+    let client = NameClient::new(addr).with_timeout(T);
+    let p = Port::open("/survivor", client.clone()).await.unwrap();
+    let contact = p.contact().clone();
+    stop.shutdown();
+    let _ = timeout(T, server).await;
+    // a fresh, empty server on the same address
+    let ns2 = NameServer::bind(addr, "127.0.0.1")
+        .await
+        .expect("rebind same port");
+    let stop2 = ns2.shutdown_handle();
+    tokio::spawn(ns2.serve());
+    timeout(T, async {
+        loop {
+            if let Ok(Some(c)) = client.query("/survivor").await {
+                assert_eq!(
+                    (c.host.as_str(), c.port),
+                    (contact.host.as_str(), contact.port)
+                );
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(100)).await;
+        }
+    })
+    .await
+    .expect("re-registered");
+    p.close().await;
+    stop2.shutdown();
+}
+
+#[tokio::test]
+async fn many_ports_and_many_connections() {
+    let (ns, stop) = name_server().await;
+    let r = Port::open("/hub", ns.clone()).await.unwrap();
+    // 100 concurrent connections into one port
+    let c = r.contact().clone();
+    let mut tasks = Vec::new();
+    for i in 0..100 {
+        let c = c.clone();
+        tasks.push(tokio::spawn(async move {
+            let mut s = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
+            s.write_all(format!("CONNECT /c{i}\nd\n{i}\n").as_bytes())
+                .await
+                .unwrap();
+            read_until(&mut s, b"\r\n").await;
+            s
+        }));
+    }
+    let mut streams = Vec::new();
+    for t in tasks {
+        streams.push(timeout(T, t).await.unwrap().unwrap());
+    }
+    let mut seen = std::collections::BTreeSet::new();
+    for _ in 0..100 {
+        let b = read_bottle(&r).await;
+        seen.insert(b.get(0).and_then(|v| v.as_i64()).unwrap());
+    }
+    assert_eq!(seen.len(), 100);
+    drop(streams);
+    // 1000 registered ports
+    let mut names = Vec::new();
+    for i in 0..1000 {
+        let name = format!("/many/{i}");
+        ns.register(&yarp_proto::nameserver::RegisterRequest::explicit(
+            &name,
+            "tcp",
+            "127.0.0.1",
+            20000 + i,
+        ))
+        .await
+        .unwrap();
+        names.push(name);
+    }
+    let listed = ns.list(Some("/many")).await.unwrap();
+    assert_eq!(listed.len(), 1000);
+    stop.shutdown();
+}

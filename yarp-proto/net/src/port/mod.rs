@@ -292,6 +292,9 @@ impl Port {
             next_id: AtomicU64::new(1),
         });
         let accept_task = tokio::spawn(input::accept_loop(shared.clone(), listener));
+        if shared.ns.is_some() {
+            tokio::spawn(keep_registered(Arc::downgrade(&shared)));
+        }
         Port {
             shared,
             rx: tokio::sync::Mutex::new(rx),
@@ -414,6 +417,41 @@ impl Drop for Port {
     fn drop(&mut self) {
         let _ = self.shutdown_tx.send(true);
         self.accept_task.abort();
+    }
+}
+
+/// How often a port checks that the name server still knows it.
+pub const REGISTRATION_CHECK: Duration = Duration::from_secs(2);
+
+/// Re-registers the port when the name server forgot it (restarted, or `yarp clean` by
+/// mistake), so that live ports stay reachable by name. Ends with the port.
+async fn keep_registered(port: std::sync::Weak<Shared>) {
+    loop {
+        let Some(shared) = port.upgrade() else { return };
+        let mut shutdown = shared.shutdown.clone();
+        if *shutdown.borrow() {
+            return;
+        }
+        if let Some(ns) = &shared.ns {
+            let c = &shared.contact;
+            let known = ns.query(&shared.name).await;
+            let lost = matches!(&known, Ok(None))
+                || matches!(&known, Ok(Some(k)) if k.port != c.port || k.host != c.host);
+            if lost && !*shutdown.borrow() {
+                tracing::info!(
+                    "{}: name server lost the registration; registering again",
+                    shared.name
+                );
+                let req = RegisterRequest::explicit(&shared.name, "tcp", &c.host, c.port);
+                let pid = std::process::id() as i32;
+                let _ = ns.register_port(&req, &[c.host.as_str()], pid).await;
+            }
+        }
+        drop(shared);
+        tokio::select! {
+            _ = shutdown.changed() => return,
+            _ = tokio::time::sleep(REGISTRATION_CHECK) => {}
+        }
     }
 }
 
