@@ -1,5 +1,8 @@
 //! YARP networking on tokio: the thin I/O layer above the sans-I/O `yarp-proto` core.
 
+pub mod blocking;
+pub mod buffered;
+pub mod dgram;
 pub mod nameserver;
 pub mod network;
 pub mod port;

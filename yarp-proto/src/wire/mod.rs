@@ -40,6 +40,7 @@
 
 pub mod carrier;
 pub mod command;
+pub mod datagram;
 pub mod decoder;
 pub mod error;
 pub mod line;

@@ -353,6 +353,27 @@ impl Port {
         self.send(b, Some(stamp)).await
     }
 
+    /// Sends a Bottle (with an optional envelope) to every output, waiting for room in
+    /// each output's queue (bounded by [`ACK_TIMEOUT`] per output) instead of dropping.
+    pub async fn write_strict(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
+        let msg = Arc::new(output::Outgoing::new(b, stamp));
+        let outs: Vec<_> = self
+            .shared
+            .lock()
+            .outputs
+            .values()
+            .map(|o| o.sender())
+            .collect();
+        let mut n = 0;
+        for tx in outs {
+            let sent = tokio::time::timeout(ACK_TIMEOUT, tx.send(output::Job::Data(msg.clone())));
+            if matches!(sent.await, Ok(Ok(()))) {
+                n += 1;
+            }
+        }
+        n
+    }
+
     async fn send(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
         let msg = Arc::new(output::Outgoing::new(b, stamp));
         let outs: Vec<_> = self
