@@ -191,12 +191,31 @@ pub async fn disconnect(
 
 /// Whether `from` has an output to `to` (`[list] [out] to` answers with details).
 pub async fn is_connected(ns: &NameClient, from: &str, to: &str) -> Result<bool, NetworkError> {
+    Ok(connection_carrier(ns, from, to).await?.is_some())
+}
+
+/// The carrier of the connection `from` -> `to`, if there is one.
+pub async fn connection_carrier(
+    ns: &NameClient,
+    from: &str,
+    to: &str,
+) -> Result<Option<String>, NetworkError> {
     let src = lookup(ns, &PortRef::parse(from).name).await?;
     let mut cmd = Bottle::new();
     cmd.add_vocab("list");
     cmd.add_vocab("out");
     cmd.push(PortRef::parse(to).name.as_str());
-    Ok(!admin_command(&src, &cmd).await?.is_empty())
+    let reply = admin_command(&src, &cmd).await?;
+    if reply.is_empty() {
+        return Ok(None);
+    }
+    Ok(Some(
+        reply
+            .find("carrier")
+            .and_then(|v| v.as_str())
+            .unwrap_or("tcp")
+            .to_string(),
+    ))
 }
 
 /// Whether a port is registered and answers on its address (`yarp exists`).

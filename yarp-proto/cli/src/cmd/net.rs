@@ -191,9 +191,9 @@ pub fn connect(from: &str, to: &str, carrier: Option<&str>) -> Result<()> {
 pub fn disconnect(from: &str, to: &str) -> Result<()> {
     runtime()?.block_on(async {
         let ns = network::name_client()?;
-        if network::is_connected(&ns, from, to).await? {
+        if let Some(carrier) = network::connection_carrier(&ns, from, to).await? {
             info(&format!(
-                "Connection found between {from} and {to} using carrier tcp"
+                "Connection found between {from} and {to} using carrier {carrier}"
             ));
         }
         let (ok, msg) = network::disconnect(&ns, from, to).await?;
@@ -213,8 +213,28 @@ pub fn exists(args: &[String]) -> Result<bool> {
         let ns = network::name_client()?;
         Ok(match args {
             [p] => network::exists(&ns, p).await?,
-            [from, to] => network::is_connected(&ns, from, to).await.unwrap_or(false),
-            _ => bail!("usage: yarp exists <port> | yarp exists <from> <to>"),
+            // C++ checks for a connection with the given carrier, tcp by default
+            [from, to] | [from, to, _] => {
+                let want = args.get(2).map(String::as_str).unwrap_or("tcp");
+                match network::connection_carrier(&ns, from, to)
+                    .await
+                    .unwrap_or(None)
+                {
+                    Some(c) => {
+                        info(&format!(
+                            "Connection found between {from} and {to} using carrier {c}"
+                        ));
+                        if c == want {
+                            true
+                        } else {
+                            info(&format!("No connection from {from} to {to} found"));
+                            false
+                        }
+                    }
+                    None => false,
+                }
+            }
+            _ => bail!("usage: yarp exists <port> | yarp exists <from> <to> [carrier]"),
         })
     })
 }

@@ -342,15 +342,21 @@ impl Port {
             .collect()
     }
 
-    /// Sends a Bottle to every output; returns how many outputs took it. A slow output
-    /// whose queue is full misses this message (counted as a drop), as C++ BufferedPort.
+    /// Sends a Bottle to every output, waiting for room in each output's queue as a C++
+    /// `Port::write` waits; returns how many outputs took it.
     pub async fn write(&self, b: &Bottle) -> usize {
-        self.send(b, None).await
+        self.write_strict(b, None).await
     }
 
-    /// Sends a Bottle with an envelope (timestamp) to every output.
+    /// Sends a Bottle with an envelope (timestamp) to every output (waiting, as `write`).
     pub async fn write_stamped(&self, b: &Bottle, stamp: Stamp) -> usize {
-        self.send(b, Some(stamp)).await
+        self.write_strict(b, Some(stamp)).await
+    }
+
+    /// Sends without waiting: an output whose queue is full misses this message (the
+    /// "drop if busy" of C++ BufferedPort). Returns how many outputs took it.
+    pub fn write_nowait(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
+        self.send(b, stamp)
     }
 
     /// Sends a Bottle (with an optional envelope) to every output, waiting for room in
@@ -374,7 +380,7 @@ impl Port {
         n
     }
 
-    async fn send(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
+    fn send(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
         let msg = Arc::new(output::Outgoing::new(b, stamp));
         let outs: Vec<_> = self
             .shared
