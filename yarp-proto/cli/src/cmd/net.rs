@@ -388,16 +388,7 @@ pub fn namespace(args: &[String]) -> Result<()> {
     Ok(())
 }
 
-/// `yarp server [yarpserver options]`: runs the `yarpserver` program beside this one.
+/// `yarp server [yarpserver options]`: the name server, in this process.
 pub fn server(args: &[String]) -> Result<()> {
-    let exe = std::env::current_exe()?;
-    let sibling = exe.with_file_name("yarpserver");
-    let status = std::process::Command::new(&sibling)
-        .args(args)
-        .status()
-        .with_context(|| format!("running {}", sibling.display()))?;
-    if !status.success() {
-        bail!("yarpserver exited with {status}");
-    }
-    Ok(())
+    yarp_net::nameserver::program::main_with_args(args.iter().cloned())
 }

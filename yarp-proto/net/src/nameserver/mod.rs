@@ -3,6 +3,7 @@
 //! request bytes) lives in [`yarp_proto::nameserver`].
 
 mod client;
+pub mod program;
 mod server;
 
 pub use client::{NameClient, NameClientError};
