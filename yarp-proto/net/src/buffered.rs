@@ -38,8 +38,6 @@ use yarp_proto::{Bottle, Contact, DecodeError, Stamp};
 /// Strict-mode buffer size before the reader stops draining the port (back-pressure).
 pub const DEFAULT_STRICT_CAPACITY: usize = 256;
 
-/// How often a strict write retries while every output queue is full.
-
 /// A decoded message from a `BufferedPort` or `RpcServer`.
 #[derive(Debug)]
 pub struct Message {
