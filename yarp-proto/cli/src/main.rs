@@ -68,6 +68,12 @@ enum Command {
     /// Bottle debugging aid: convert between YARP text and the binary wire encoding.
     #[command(subcommand)]
     Bottle(cmd::bottle::BottleCommand),
+    /// Round-trip latency benchmark, compatible with C++ `yarp latency-test`.
+    #[command(disable_help_flag = true)]
+    LatencyTest {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Print the version of this YARP implementation.
     Version,
 }
@@ -95,6 +101,7 @@ fn main() -> ExitCode {
         Command::Detect => cmd::net::where_(true),
         Command::Namespace { args } => cmd::net::namespace(&args),
         Command::Bottle(c) => cmd::bottle::run(c),
+        Command::LatencyTest { args } => cmd::latency::run(&args),
         Command::Version => {
             println!("YARP version {} (Rust)", env!("CARGO_PKG_VERSION"));
             Ok(())

@@ -1,4 +1,5 @@
 //! One module per `yarp` subcommand.
 
 pub mod bottle;
+pub mod latency;
 pub mod net;

@@ -1,7 +1,7 @@
 //! Input side: accepting connections, reading the carrier header, and serving each
 //! connection's messages (data to the owner, admin commands, text-mode commands).
 
-use super::output::{self, next_event, OutputError};
+use super::output::{self, next_event_buf, read_buffer, write_all_2, OutputError};
 use super::{Incoming, Shared};
 use std::sync::Arc;
 use tokio::io::AsyncWriteExt;
@@ -58,6 +58,7 @@ async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
         decoder: Decoder::accepting(DecoderConfig::default()),
         spec: None,
         from: String::new(),
+        rbuf: read_buffer(),
     };
     let end = tokio::select! {
         _ = shutdown.changed() => Ok(End::Closed),
@@ -88,16 +89,19 @@ struct Conn<'a> {
     decoder: Decoder,
     spec: Option<CarrierSpec>,
     from: String,
+    /// Reused for every socket read.
+    rbuf: Vec<u8>,
 }
 
 impl Conn<'_> {
     async fn run(&mut self, stream: &mut TcpStream) -> Result<End, OutputError> {
         loop {
-            let ev = match next_event(stream, &mut self.decoder, &self.from).await {
-                Ok(ev) => ev,
-                Err(OutputError::PeerClosed(_)) => return Ok(End::Closed),
-                Err(e) => return Err(e),
-            };
+            let ev =
+                match next_event_buf(stream, &mut self.decoder, &self.from, &mut self.rbuf).await {
+                    Ok(ev) => ev,
+                    Err(OutputError::PeerClosed(_)) => return Ok(End::Closed),
+                    Err(e) => return Err(e),
+                };
             match ev {
                 Event::Header(h) => {
                     let spec = h.carrier().spec();
@@ -153,19 +157,36 @@ impl Conn<'_> {
         self.spec.is_some_and(|s| s.framing == Framing::Text)
     }
 
+    /// The acknowledgement bytes, if the carrier wants one.
+    fn ack_bytes(&self) -> Option<&'static [u8]> {
+        const ACK: &[u8] = &wire::number::ACK;
+        match self.spec {
+            Some(s) if s.requires_ack => Some(if s.framing == Framing::Text {
+                text_carrier::ACK_LINE
+            } else {
+                ACK
+            }),
+            _ => None,
+        }
+    }
+
     /// Writes the acknowledgement if the carrier wants one.
     async fn ack(&self, stream: &mut TcpStream) -> Result<(), OutputError> {
-        match self.spec {
-            Some(s) if s.requires_ack => {
-                let bytes: &[u8] = if s.framing == Framing::Text {
-                    text_carrier::ACK_LINE
-                } else {
-                    &wire::ack()
-                };
-                write(stream, bytes, &self.from).await
-            }
-            _ => Ok(()),
+        match self.ack_bytes() {
+            Some(bytes) => write(stream, bytes, &self.from).await,
+            None => Ok(()),
         }
+    }
+
+    /// Writes a reply followed by the acknowledgement (if any) in one go.
+    async fn reply_and_ack(&self, stream: &mut TcpStream, reply: &[u8]) -> Result<(), OutputError> {
+        let ack = self.ack_bytes().unwrap_or_default();
+        write_all_2(stream, reply, ack)
+            .await
+            .map_err(|source| OutputError::Io {
+                target: self.from.clone(),
+                source,
+            })
     }
 
     async fn message(
@@ -193,17 +214,21 @@ impl Conn<'_> {
                 if self.shared.deliver.send(incoming).await.is_err() {
                     return Ok(Some(End::Closed));
                 }
-                if let Some(rx) = rx {
-                    if let Ok(b) = rx.await {
+                let reply = match rx {
+                    Some(rx) => rx.await.ok(),
+                    None => None,
+                };
+                match reply {
+                    Some(b) => {
                         let bytes = if text {
                             port_admin::reply_text_line(&b)
                         } else {
                             b.encode()
                         };
-                        write(stream, &bytes, &self.from).await?;
+                        self.reply_and_ack(stream, &bytes).await?;
                     }
+                    None => self.ack(stream).await?,
                 }
-                self.ack(stream).await?;
             }
             CommandKind::Admin => {
                 let cmd = if text {

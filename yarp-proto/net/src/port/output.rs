@@ -2,7 +2,8 @@
 //! in the connection's carrier and reads acknowledgements and replies.
 
 use super::{PortError, Shared, ACK_TIMEOUT, CONNECT_TIMEOUT, OUTPUT_QUEUE};
-use std::sync::{Arc, Weak};
+use std::io::IoSlice;
+use std::sync::{Arc, OnceLock, Weak};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
@@ -12,7 +13,7 @@ use tokio::time::timeout;
 use yarp_proto::port_admin::Route;
 use yarp_proto::wire::{
     self, encode_connection_start, text_carrier, CarrierSpec, Decoder, DecoderConfig, Event,
-    Framing, PortCommand, WireError,
+    Framing, Index, PortCommand, WireError,
 };
 use yarp_proto::{Bottle, Contact, Stamp};
 
@@ -47,9 +48,14 @@ pub enum OutputError {
 }
 
 /// A message ready to go out on any carrier.
+///
+/// The Bottle is encoded once, when the message is made; every binary connection writes
+/// those bytes directly after its own index and port command (one vectored write, no
+/// copy into a message buffer). The text form is made only if a text connection needs
+/// it, from the encoded bytes (the binary codec round-trips exactly).
 pub(crate) struct Outgoing {
-    bottle: Bottle,
     binary: Vec<u8>,
+    text: OnceLock<Vec<u8>>,
     stamp: Option<Stamp>,
 }
 
@@ -57,7 +63,7 @@ impl Outgoing {
     pub(crate) fn new(bottle: &Bottle, stamp: Option<Stamp>) -> Outgoing {
         Outgoing {
             binary: bottle.encode(),
-            bottle: bottle.clone(),
+            text: OnceLock::new(),
             stamp,
         }
     }
@@ -69,15 +75,58 @@ impl Outgoing {
         }
     }
 
-    /// The bytes of this message for a carrier's framing.
-    fn encode(&self, framing: Framing, cmd: &PortCommand) -> Vec<u8> {
-        let mut out = Vec::with_capacity(self.binary.len() + 64);
-        match framing {
-            Framing::Text => text_carrier::encode_message(cmd, &self.bottle.to_text(), &mut out),
-            _ => wire::encode_message(cmd, &[&self.binary], &mut out),
-        }
-        out
+    fn text(&self) -> &[u8] {
+        self.text.get_or_init(|| {
+            Bottle::decode(&self.binary)
+                .map(|b| b.to_text())
+                .unwrap_or_default()
+        })
     }
+
+    /// Writes this message in a carrier's framing.
+    async fn write_to(
+        &self,
+        stream: &mut TcpStream,
+        framing: Framing,
+        cmd: &PortCommand,
+    ) -> std::io::Result<()> {
+        match framing {
+            Framing::Text => {
+                let mut out = Vec::with_capacity(self.text().len() + 16);
+                text_carrier::encode_message(cmd, self.text(), &mut out);
+                stream.write_all(&out).await
+            }
+            _ => {
+                // the bytes of `wire::encode_message(cmd, &[&self.binary])`: index, port
+                // command, payload
+                let mut head = Vec::with_capacity(64);
+                Index::new(vec![cmd.binary_len() as u32, self.binary.len() as u32])
+                    .encode(&mut head);
+                cmd.encode_binary(&mut head);
+                write_all_2(stream, &head, &self.binary).await
+            }
+        }
+    }
+}
+
+/// Writes `a` then `b` with as few system calls as the socket allows (`writev`).
+pub(crate) async fn write_all_2(stream: &mut TcpStream, a: &[u8], b: &[u8]) -> std::io::Result<()> {
+    let (mut a, mut b) = (a, b);
+    while !a.is_empty() {
+        let n = stream
+            .write_vectored(&[IoSlice::new(a), IoSlice::new(b)])
+            .await?;
+        if n == 0 {
+            return Err(std::io::ErrorKind::WriteZero.into());
+        }
+        if n < a.len() {
+            a = &a[n..];
+        } else {
+            b = &b[n - a.len()..];
+            a = &[];
+        }
+    }
+    stream.write_all(b).await
 }
 
 pub(crate) type RpcResult = Result<Bottle, PortError>;
@@ -238,6 +287,7 @@ async fn serve(
         source,
     };
     let mut probe = [0u8; 512];
+    let mut rbuf = read_buffer();
     loop {
         // idle: wait for work, noticing a peer that goes away meanwhile
         let job = tokio::select! {
@@ -258,23 +308,21 @@ async fn serve(
         match job {
             Job::Data(msg) => {
                 let cmd = msg.command(false);
-                stream
-                    .write_all(&msg.encode(spec.framing, &cmd))
+                msg.write_to(stream, spec.framing, &cmd)
                     .await
                     .map_err(io_err)?;
                 decoder.expect_response(&cmd);
                 if spec.requires_ack {
-                    await_ack(stream, decoder, target).await?;
+                    await_ack(stream, decoder, target, &mut rbuf).await?;
                 }
             }
             Job::Rpc(msg, reply_tx) => {
                 let cmd = msg.command(true);
-                stream
-                    .write_all(&msg.encode(spec.framing, &cmd))
+                msg.write_to(stream, spec.framing, &cmd)
                     .await
                     .map_err(io_err)?;
                 decoder.expect_response(&cmd);
-                let reply = await_reply(stream, decoder, target, spec).await;
+                let reply = await_reply_buf(stream, decoder, target, spec, &mut rbuf).await;
                 let failed = reply.is_err();
                 let _ = reply_tx.send(reply);
                 if failed {
@@ -294,8 +342,11 @@ async fn serve(
                 let _ = stream.write_all(&bytes).await;
                 decoder.expect_response(&cmd);
                 if spec.requires_ack {
-                    let _ =
-                        timeout(Duration::from_secs(1), await_ack(stream, decoder, target)).await;
+                    let _ = timeout(
+                        Duration::from_secs(1),
+                        await_ack(stream, decoder, target, &mut rbuf),
+                    )
+                    .await;
                 }
                 if let Some(done) = done {
                     let _ = done.send(());
@@ -319,14 +370,25 @@ fn drain(decoder: &mut Decoder, target: &str) -> Result<(), OutputError> {
     Ok(())
 }
 
+/// Size of one socket read; a connection's buffer grows up to [`MAX_READ_CHUNK`] while
+/// reads keep filling it (large messages), so big transfers take fewer system calls.
+pub(crate) const READ_CHUNK: usize = 64 * 1024;
+pub(crate) const MAX_READ_CHUNK: usize = 1024 * 1024;
+
+/// A connection's reusable read buffer.
+pub(crate) fn read_buffer() -> Vec<u8> {
+    Vec::with_capacity(READ_CHUNK)
+}
+
 pub(crate) async fn await_ack(
     stream: &mut TcpStream,
     decoder: &mut Decoder,
     target: &str,
+    buf: &mut Vec<u8>,
 ) -> Result<(), OutputError> {
     let wait = async {
         loop {
-            if let Event::Ack(_) = next_event(stream, decoder, target).await? {
+            if let Event::Ack(_) = next_event_buf(stream, decoder, target, buf).await? {
                 return Ok(());
             }
         }
@@ -342,9 +404,19 @@ pub(crate) async fn await_reply(
     target: &str,
     spec: CarrierSpec,
 ) -> Result<Bottle, PortError> {
+    await_reply_buf(stream, decoder, target, spec, &mut read_buffer()).await
+}
+
+pub(crate) async fn await_reply_buf(
+    stream: &mut TcpStream,
+    decoder: &mut Decoder,
+    target: &str,
+    spec: CarrierSpec,
+    buf: &mut Vec<u8>,
+) -> Result<Bottle, PortError> {
     let mut reply = None;
     loop {
-        match next_event(stream, decoder, target).await? {
+        match next_event_buf(stream, decoder, target, buf).await? {
             Event::Reply(bytes) => {
                 reply = Some(Bottle::decode(&bytes)?);
                 if !spec.requires_ack {
@@ -371,7 +443,17 @@ pub(crate) async fn next_event(
     decoder: &mut Decoder,
     target: &str,
 ) -> Result<Event, OutputError> {
-    let mut buf = vec![0u8; 64 * 1024];
+    next_event_buf(stream, decoder, target, &mut read_buffer()).await
+}
+
+/// Reads until the decoder produces an event, reading through `buf` (reused across calls,
+/// never zeroed).
+pub(crate) async fn next_event_buf(
+    stream: &mut TcpStream,
+    decoder: &mut Decoder,
+    target: &str,
+    buf: &mut Vec<u8>,
+) -> Result<Event, OutputError> {
     loop {
         match decoder.poll() {
             Ok(Some(ev)) => return Ok(ev),
@@ -383,8 +465,12 @@ pub(crate) async fn next_event(
                 })
             }
         }
+        buf.clear();
+        if buf.capacity() < READ_CHUNK {
+            buf.reserve(READ_CHUNK);
+        }
         let n = stream
-            .read(&mut buf)
+            .read_buf(buf)
             .await
             .map_err(|source| OutputError::Io {
                 target: target.to_string(),
@@ -394,5 +480,8 @@ pub(crate) async fn next_event(
             return Err(OutputError::PeerClosed(target.to_string()));
         }
         decoder.feed(&buf[..n]);
+        if n == buf.capacity() && n < MAX_READ_CHUNK {
+            buf.reserve(2 * n);
+        }
     }
 }
