@@ -873,7 +873,7 @@ fn rustserver_cpp_name_query_exists_where_clean() {
 // ---------------------------------------------------------------------------------------
 // Carriers (C++ yarpserver). The writer's side is told to connect by the other side's
 // `yarp connect /w /r <carrier>`, so both ports' admin handling is exercised too.
-// udp, mcast and shmem are not implemented on our side yet: not tested here.
+// shmem is not implemented on our side yet: not tested here.
 // ---------------------------------------------------------------------------------------
 
 fn carrier_case(test: &str, writer: Side, carrier: &str) {
@@ -931,6 +931,26 @@ fn carrier_text_ack_rust_write_to_cpp_read() {
 #[test]
 fn carrier_text_ack_cpp_write_to_rust_read() {
     carrier_case("carrier_text_ack_cpp_to_rust", Side::Cpp, "text_ack");
+}
+
+#[test]
+fn carrier_udp_rust_write_to_cpp_read() {
+    carrier_case("carrier_udp_rust_to_cpp", Side::Rust, "udp");
+}
+
+#[test]
+fn carrier_udp_cpp_write_to_rust_read() {
+    carrier_case("carrier_udp_cpp_to_rust", Side::Cpp, "udp");
+}
+
+#[test]
+fn carrier_mcast_rust_write_to_cpp_read() {
+    carrier_case("carrier_mcast_rust_to_cpp", Side::Rust, "mcast");
+}
+
+#[test]
+fn carrier_mcast_cpp_write_to_rust_read() {
+    carrier_case("carrier_mcast_cpp_to_rust", Side::Cpp, "mcast");
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1303,20 +1323,16 @@ fn zz_print_interop_matrix() {
             "cpp name query/list, exists, where, clean",
         ),
         (
-            "carrier_{tcp,fast_tcp,text,text_ack}_rust_write_to_cpp_read",
+            "carrier_{tcp,fast_tcp,text,text_ack,udp,mcast}_rust_write_to_cpp_read",
             "C++ server",
             "rust write -> cpp read via `cpp yarp connect /w /r <carrier>`",
         ),
         (
-            "carrier_{tcp,fast_tcp,text,text_ack}_cpp_write_to_rust_read",
+            "carrier_{tcp,fast_tcp,text,text_ack,udp,mcast}_cpp_write_to_rust_read",
             "C++ server",
             "cpp write -> rust read via `rust yarp connect /w /r <carrier>`",
         ),
-        (
-            "(udp, mcast, shmem)",
-            "-",
-            "not implemented on our side: not tested",
-        ),
+        ("(shmem)", "-", "not implemented on our side: not tested"),
         (
             "rpc_cpp_client_to_rust_rpcserver",
             "C++ server",

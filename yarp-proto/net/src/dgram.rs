@@ -348,6 +348,11 @@ impl McastReceiver {
     pub fn group(&self) -> SocketAddrV4 {
         self.group
     }
+
+    /// The receiver itself (its socket stays in the group while it lives).
+    pub fn into_inner(self) -> UdpReceiver {
+        self.inner
+    }
 }
 
 impl Deref for McastReceiver {

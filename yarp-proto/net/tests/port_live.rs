@@ -319,3 +319,74 @@ async fn many_ports_and_many_connections() {
     assert_eq!(listed.len(), 1000);
     stop.shutdown();
 }
+
+#[tokio::test]
+async fn datagram_carriers_udp_and_mcast() {
+    let (ns, stop) = name_server().await;
+    let w = Port::open("/wd", ns.clone()).await.unwrap();
+    let r1 = Port::open("/rd1", ns.clone()).await.unwrap();
+    let r2 = Port::open("/rd2", ns.clone()).await.unwrap();
+    w.connect("/rd1", Some("udp")).await.expect("udp connect");
+    timeout(T, async {
+        while r1.inputs().is_empty() {
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+    })
+    .await
+    .expect("udp input registered");
+    let big = Bottle::from_text(&format!("{{{}}}", "7 ".repeat(200_000)));
+    w.write(&bottle!["over", "udp", 1]).await;
+    assert_eq!(read_bottle(&r1).await.to_string(), "over udp 1");
+    w.write(&big).await;
+    assert_eq!(read_bottle(&r1).await, big);
+    // disconnecting a udp output asks the reader to drop the input (`~/wd`)
+    assert!(w.disconnect("/rd1"));
+    timeout(T, async {
+        while !r1.inputs().is_empty() {
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+    })
+    .await
+    .expect("udp input removed");
+
+    // one multicast group reaches both readers
+    w.connect("/rd1", Some("mcast"))
+        .await
+        .expect("mcast connect 1");
+    w.connect("/rd2", Some("mcast"))
+        .await
+        .expect("mcast connect 2");
+    timeout(T, async {
+        while r1.inputs().is_empty() || r2.inputs().is_empty() {
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+    })
+    .await
+    .expect("mcast inputs registered");
+    w.write(&bottle!["to", "everyone"]).await;
+    assert_eq!(read_bottle(&r1).await.to_string(), "to everyone");
+    assert_eq!(read_bottle(&r2).await.to_string(), "to everyone");
+    stop.shutdown();
+}
+
+#[tokio::test]
+async fn a_port_seen_from_a_browser() {
+    let (ns, stop) = name_server().await;
+    let r = Port::open("/web", ns.clone()).await.unwrap();
+    let c = r.contact().clone();
+    let mut s = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
+    s.write_all(b"GET / HTTP/1.1\r\nHost: x\r\n\r\n")
+        .await
+        .unwrap();
+    let page = read_until(&mut s, b"</html>").await;
+    let page = String::from_utf8_lossy(&page);
+    assert!(page.starts_with("HTTP/1.1 200 OK\r\n"), "{page}");
+    assert!(page.contains("This is /web at tcp://"), "{page}");
+    let mut s = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
+    s.write_all(b"GET /?data=hello+%5Bok%5D+3 HTTP/1.1\r\n\r\n")
+        .await
+        .unwrap();
+    read_until(&mut s, b"</html>").await;
+    assert_eq!(read_bottle(&r).await.to_string(), "hello [ok] 3");
+    stop.shutdown();
+}

@@ -11,8 +11,10 @@ use yarp_proto::port_admin::{
     self, add_output_text, format_add_result, format_del_result, handle_admin, remove_input_text,
     remove_output_text, AddOutcome, AdminAction, Pending, Route,
 };
+use yarp_proto::wire::datagram::McastGroup;
 use yarp_proto::wire::{
-    self, text_carrier, CarrierSpec, CommandKind, Decoder, DecoderConfig, Event, Framing, Message,
+    self, text_carrier, Carrier, CarrierSpec, CommandKind, Decoder, DecoderConfig, Event, Framing,
+    Message,
 };
 use yarp_proto::Bottle;
 
@@ -45,6 +47,12 @@ pub(crate) async fn accept_loop(shared: Arc<Shared>, listener: TcpListener) {
 enum End {
     Closed,
     Reversed(String, CarrierSpec),
+    /// A udp connection's handshake: reply with a UDP port, then read datagrams.
+    Udp,
+    /// A mcast connection's handshake: join the group the sender named.
+    Mcast(std::net::SocketAddrV4),
+    /// An http request (its first bytes).
+    Http(Vec<u8>),
 }
 
 async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
@@ -57,6 +65,7 @@ async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
         kill: kill.clone(),
         decoder: Decoder::accepting(DecoderConfig::default()),
         spec: None,
+        dgram: None,
         from: String::new(),
         rbuf: read_buffer(),
     };
@@ -65,6 +74,8 @@ async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
         _ = kill.notified() => Ok(End::Closed),
         r = conn.run(&mut stream) => r,
     };
+    let conn_name = conn.from.clone();
+    drop(conn);
     shared.lock().inputs.remove(&id);
     match end {
         Ok(End::Reversed(peer, spec)) => {
@@ -74,6 +85,33 @@ async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
         }
         Ok(End::Closed) => {
             let _ = stream.shutdown().await;
+        }
+        Ok(End::Http(head)) => super::http::serve(&shared, &mut stream, head).await,
+        Ok(End::Udp) => {
+            let local = stream.local_addr().map(|a| a.ip());
+            match crate::dgram::udp_handshake_accept(&mut stream, unspecified(local)).await {
+                Ok(rx) => {
+                    let _ = stream.shutdown().await;
+                    drop(stream);
+                    datagram_input(&shared, id, kill, conn_from(&conn_name), "udp", rx).await;
+                }
+                Err(e) => tracing::debug!("{}: udp handshake failed: {e}", shared.name),
+            }
+        }
+        Ok(End::Mcast(group)) => {
+            let iface = match stream.local_addr().map(|a| a.ip()) {
+                Ok(std::net::IpAddr::V4(ip)) => ip,
+                _ => crate::dgram::DEFAULT_MCAST_INTERFACE,
+            };
+            let _ = stream.shutdown().await;
+            drop(stream);
+            match crate::dgram::McastReceiver::join(group, iface).await {
+                Ok(rx) => {
+                    let from = conn_from(&conn_name);
+                    datagram_input(&shared, id, kill, from, "mcast", rx.into_inner()).await;
+                }
+                Err(e) => tracing::warn!("{}: cannot join {group}: {e}", shared.name),
+            }
         }
         Err(e) => {
             tracing::debug!("{}: input connection ended: {e}", shared.name);
@@ -88,6 +126,8 @@ struct Conn<'a> {
     kill: Arc<Notify>,
     decoder: Decoder,
     spec: Option<CarrierSpec>,
+    /// The connection is the TCP handshake of a datagram carrier.
+    dgram: Option<Carrier>,
     from: String,
     /// Reused for every socket read.
     rbuf: Vec<u8>,
@@ -105,6 +145,22 @@ impl Conn<'_> {
             match ev {
                 Event::Header(h) => {
                     let spec = h.carrier().spec();
+                    match h.carrier() {
+                        Carrier::Udp | Carrier::Mcast => {
+                            self.dgram = Some(h.carrier());
+                            self.spec = Some(spec);
+                            continue;
+                        }
+                        Carrier::Http => {
+                            // the rest of the request may already sit in the decoder
+                            let mut head = h.raw.to_vec();
+                            while let Ok(Some(Event::Raw(more))) = self.decoder.poll() {
+                                head.extend_from_slice(&more);
+                            }
+                            return Ok(End::Http(head));
+                        }
+                        _ => {}
+                    }
                     if !matches!(spec.framing, Framing::Stream | Framing::Text) {
                         // udp/mcast/shmem/local handshakes, http, name-server lines:
                         // not served by ports yet
@@ -119,6 +175,11 @@ impl Conn<'_> {
                 }
                 Event::SenderName(name) => {
                     self.from = String::from_utf8_lossy(&name).into_owned();
+                    match self.dgram {
+                        Some(Carrier::Udp) => return Ok(End::Udp),
+                        Some(_) => return self.mcast_group(stream).await,
+                        None => {}
+                    }
                     let Some(spec) = self.spec else {
                         return Ok(End::Closed);
                     };
@@ -393,4 +454,71 @@ async fn write(stream: &mut TcpStream, bytes: &[u8], peer: &str) -> Result<(), O
             target: peer.to_string(),
             source,
         })
+}
+
+impl Conn<'_> {
+    /// Reads the 6 bytes a mcast sender puts after its name: the group address and port.
+    async fn mcast_group(&mut self, stream: &mut TcpStream) -> Result<End, OutputError> {
+        let mut got = Vec::with_capacity(6);
+        while got.len() < 6 {
+            match next_event_buf(stream, &mut self.decoder, &self.from, &mut self.rbuf).await? {
+                Event::Raw(bytes) => got.extend_from_slice(&bytes),
+                _ => return Ok(End::Closed),
+            }
+        }
+        let mut six = [0u8; 6];
+        six.copy_from_slice(&got[..6]);
+        Ok(End::Mcast(McastGroup::decode(&six).addr()))
+    }
+}
+
+fn conn_from(name: &str) -> String {
+    name.to_string()
+}
+
+/// Where to bind the UDP socket of an incoming udp connection (C++ binds all interfaces).
+fn unspecified(_local: std::io::Result<std::net::IpAddr>) -> std::net::IpAddr {
+    std::net::IpAddr::V4(std::net::Ipv4Addr::UNSPECIFIED)
+}
+
+/// Serves an incoming udp/mcast connection: its messages go to the owner (no replies, no
+/// acknowledgements) until the sender removes it (`~/sender`), or the port closes.
+async fn datagram_input(
+    shared: &Arc<Shared>,
+    id: u64,
+    kill: Arc<Notify>,
+    from: String,
+    carrier: &str,
+    mut rx: crate::dgram::UdpReceiver,
+) {
+    shared.lock().inputs.insert(
+        id,
+        InputEntry {
+            route: Route::new(&from, &shared.name, carrier),
+            kill: kill.clone(),
+        },
+    );
+    let mut shutdown = shared.shutdown.clone();
+    loop {
+        let m = tokio::select! {
+            _ = shutdown.changed() => break,
+            _ = kill.notified() => break,
+            m = rx.recv() => m,
+        };
+        let Ok(m) = m else { break };
+        if !matches!(m.command.kind(), CommandKind::Data { .. }) {
+            continue;
+        }
+        let incoming = Incoming {
+            stamp: m.stamp(),
+            payload: m.payload,
+            is_text: false,
+            from: from.clone(),
+            reply: None,
+        };
+        if shared.deliver.send(incoming).await.is_err() {
+            break;
+        }
+    }
+    shared.lock().inputs.remove(&id);
 }

@@ -16,6 +16,8 @@
 //! # Ok(()) }
 //! ```
 
+mod dgram_out;
+mod http;
 mod input;
 pub(crate) mod output;
 
@@ -133,6 +135,8 @@ pub(crate) struct State {
     pub(crate) inputs: BTreeMap<u64, input::InputEntry>,
     pub(crate) outputs: BTreeMap<u64, output::OutputHandle>,
     pub(crate) properties: BTreeMap<String, Value>,
+    /// The multicast group this port's mcast outputs share, once allocated.
+    pub(crate) mcast_group: Option<std::net::SocketAddrV4>,
 }
 
 impl Shared {

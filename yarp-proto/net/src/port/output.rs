@@ -12,8 +12,8 @@ use tokio::task::JoinHandle;
 use tokio::time::timeout;
 use yarp_proto::port_admin::Route;
 use yarp_proto::wire::{
-    self, encode_connection_start, text_carrier, CarrierSpec, Decoder, DecoderConfig, Event,
-    Framing, Index, PortCommand, WireError,
+    self, encode_connection_start, text_carrier, Carrier, CarrierSpec, Decoder, DecoderConfig,
+    Event, Framing, Index, PortCommand, WireError,
 };
 use yarp_proto::{Bottle, Contact, Stamp};
 
@@ -83,6 +83,14 @@ impl Outgoing {
         })
     }
 
+    /// The whole binary message (index, port command `D`, payload), as datagram carriers
+    /// send it.
+    pub(crate) fn binary_message(&self) -> Vec<u8> {
+        let mut out = Vec::with_capacity(self.binary.len() + 64);
+        wire::encode_message(&self.command(false), &[&self.binary], &mut out);
+        out
+    }
+
     /// Writes this message in a carrier's framing.
     async fn write_to(
         &self,
@@ -145,6 +153,10 @@ pub(crate) struct OutputHandle {
 }
 
 impl OutputHandle {
+    pub(crate) fn new(route: Route, tx: mpsc::Sender<Job>, task: JoinHandle<()>) -> OutputHandle {
+        OutputHandle { route, tx, task }
+    }
+
     pub(crate) fn sender(&self) -> mpsc::Sender<Job> {
         self.tx.clone()
     }
@@ -173,6 +185,9 @@ pub(crate) async fn connect(
     contact: &Contact,
     carrier: &str,
 ) -> Result<OutputHandle, OutputError> {
+    if let Some(c @ (Carrier::Udp | Carrier::Mcast)) = super::carrier_by_name(carrier) {
+        return super::dgram_out::connect(shared, target, contact, c).await;
+    }
     let spec = super::carrier_by_name(carrier)
         .map(|c| c.spec())
         .filter(|s| matches!(s.framing, Framing::Stream | Framing::Text))
