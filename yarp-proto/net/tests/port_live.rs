@@ -334,7 +334,7 @@ async fn datagram_carriers_udp_and_mcast() {
     })
     .await
     .expect("udp input registered");
-    let big = Bottle::from_text(&format!("{{{}}}", "7 ".repeat(200_000)));
+    let big = Bottle::from_text(format!("{{{}}}", "7 ".repeat(200_000)));
     w.write(&bottle!["over", "udp", 1]).await;
     assert_eq!(read_bottle(&r1).await.to_string(), "over udp 1");
     w.write(&big).await;
