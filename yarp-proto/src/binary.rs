@@ -65,15 +65,55 @@ fn put_i32(out: &mut Vec<u8>, x: i32) {
 
 /// Decodes a top-level Bottle; returns it with the number of bytes it used.
 pub fn decode(bytes: &[u8]) -> Result<(Bottle, usize), DecodeError> {
-    let mut r = Reader { buf: bytes, pos: 0 };
+    let mut r = Reader::new(bytes);
     let b = r.top_level(0)?;
     Ok((b, r.pos))
+}
+
+/// A string or blob at least this long may take over the buffer given to
+/// [`decode_owned`].
+const REUSE_MIN: usize = 64 * 1024;
+
+/// Decodes a top-level Bottle from a buffer it may keep: exactly [`decode`], but a string
+/// or blob that makes up at least half of `bytes` (and 64 KiB) is moved to the front of
+/// `bytes` and becomes that value, instead of being copied into a new allocation.
+pub fn decode_owned(mut bytes: Vec<u8>) -> Result<(Bottle, usize), DecodeError> {
+    let min = (bytes.len() / 2).max(REUSE_MIN);
+    let mut r = Reader::new(&bytes);
+    r.reuse = Some(Reuse {
+        min,
+        path: Vec::new(),
+        found: None,
+    });
+    let mut b = r.top_level(0)?;
+    let used = r.pos;
+    if let Some((path, start, len)) = r.reuse.and_then(|r| r.found) {
+        bytes.copy_within(start..start + len, 0);
+        bytes.truncate(len);
+        if let Some(Value::String(s) | Value::Blob(s)) = value_at(&mut b, &path) {
+            *s = bytes;
+        }
+    }
+    Ok((b, used))
+}
+
+/// The value at `path` (element indices, through lists and dicts).
+fn value_at<'a>(b: &'a mut Bottle, path: &[usize]) -> Option<&'a mut Value> {
+    let (&last, outer) = path.split_last()?;
+    let mut b = b;
+    for &i in outer {
+        match b.get_mut(i)? {
+            Value::List(inner) | Value::Dict(inner) => b = inner,
+            _ => return None,
+        }
+    }
+    b.get_mut(last)
 }
 
 /// Decodes one element body of the given tag (used by carriers and Portables that embed
 /// single values).
 pub fn decode_value(tag: i32, bytes: &[u8]) -> Result<(Value, usize), DecodeError> {
-    let mut r = Reader { buf: bytes, pos: 0 };
+    let mut r = Reader::new(bytes);
     let v = r.value(tag, 0)?;
     Ok((v, r.pos))
 }
@@ -81,9 +121,29 @@ pub fn decode_value(tag: i32, bytes: &[u8]) -> Result<(Value, usize), DecodeErro
 struct Reader<'a> {
     buf: &'a [u8],
     pos: usize,
+    /// Set by [`decode_owned`]: looks for the one string or blob that will take over the
+    /// buffer (decoded as empty, filled in afterwards).
+    reuse: Option<Reuse>,
 }
 
-impl Reader<'_> {
+struct Reuse {
+    /// Shortest string or blob taken.
+    min: usize,
+    /// Index of the element being decoded in each enclosing list.
+    path: Vec<usize>,
+    /// Where the taken value is: its path, and its bytes' offset and length.
+    found: Option<(Vec<usize>, usize, usize)>,
+}
+
+impl<'a> Reader<'a> {
+    fn new(buf: &'a [u8]) -> Reader<'a> {
+        Reader {
+            buf,
+            pos: 0,
+            reuse: None,
+        }
+    }
+
     fn take(&mut self, n: usize, what: &'static str) -> Result<&[u8], DecodeError> {
         let remaining = self.buf.len() - self.pos;
         if n > remaining {
@@ -138,14 +198,25 @@ impl Reader<'_> {
                 offset: count_at,
             });
         }
-        let mut items = Vec::with_capacity(count as usize);
-        for _ in 0..count {
+        // A Value is 32 bytes while an element can be 1: reserve modestly and let the Vec
+        // grow with elements that really decode, so forged counts cost nothing.
+        let mut items = Vec::with_capacity((count as usize).min(remaining / 4).min(1024));
+        if let Some(r) = &mut self.reuse {
+            r.path.push(0);
+        }
+        for i in 0..count as usize {
+            if let Some(at) = self.reuse.as_mut().and_then(|r| r.path.last_mut()) {
+                *at = i;
+            }
             let tag = if sub == 0 {
                 self.i32("element tag")?
             } else {
                 sub
             };
             items.push(self.value(tag, depth)?);
+        }
+        if let Some(r) = &mut self.reuse {
+            r.path.pop();
         }
         Ok(Bottle::from(items))
     }
@@ -183,8 +254,16 @@ impl Reader<'_> {
                 offset: at,
             });
         }
+        let len = len as usize;
+        if let Some(r) = &mut self.reuse {
+            if r.found.is_none() && len >= r.min && len <= self.buf.len() - self.pos {
+                r.found = Some((r.path.clone(), self.pos, len));
+                self.pos += len;
+                return Ok(Vec::new());
+            }
+        }
         // bounds-checked before allocating: a forged length cannot reserve memory
-        Ok(self.take(len as usize, what)?.to_vec())
+        Ok(self.take(len, what)?.to_vec())
     }
 }
 
@@ -233,6 +312,94 @@ mod tests {
             Bottle::decode(&bytes),
             Err(DecodeError::TooDeep { .. })
         ));
+    }
+
+    /// A deterministic pseudo-random Bottle: mixed and homogeneous lists, dicts, strings
+    /// and blobs (sometimes large).
+    fn random_bottle(next: &mut impl FnMut() -> u64, depth: usize) -> Bottle {
+        let mut b = Bottle::new();
+        let n = next() % 6;
+        let homogeneous = next() % 3 == 1;
+        let kind = next() % 10;
+        for _ in 0..n {
+            let k = if homogeneous { kind } else { next() % 10 };
+            let r = next();
+            b.push(match k {
+                0 => Value::Int8(r as i8),
+                1 => Value::Int32(r as i32),
+                2 => Value::Int64(r as i64),
+                3 => Value::Float64(r as f64),
+                4 => Value::Vocab32(Vocab32(r as i32)),
+                5 => Value::String(vec![b's'; (r % 20) as usize]),
+                6 => {
+                    let len = if r % 4 == 1 { 70_000 + r % 9 } else { r % 30 };
+                    Value::Blob((0..len).map(|i| i as u8).collect())
+                }
+                7 if depth < 3 => Value::List(random_bottle(next, depth + 1)),
+                8 if depth < 3 => Value::Dict(random_bottle(next, depth + 1)),
+                _ => Value::Int16(r as i16),
+            });
+        }
+        b
+    }
+
+    #[test]
+    fn decode_owned_matches_decode() {
+        let mut x: u64 = 0x9e3779b97f4a7c15;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let mut large = 0;
+        for _ in 0..400 {
+            let b = random_bottle(&mut next, 0);
+            let mut bytes = b.encode();
+            if next() % 2 == 1 {
+                bytes.extend_from_slice(&[1, 2, 3]);
+            }
+            let (owned, used) = decode_owned(bytes.clone()).unwrap();
+            assert_eq!(owned, b);
+            assert_eq!(used, b.encode().len());
+            large += usize::from(bytes.len() >= 70_000);
+            // corrupt or truncated input: the same error
+            for _ in 0..3 {
+                let mut bad = bytes.clone();
+                if next() % 2 == 1 {
+                    bad.truncate((next() as usize) % (bad.len() + 1));
+                } else {
+                    let at = (next() as usize) % bad.len();
+                    bad[at] = next() as u8;
+                }
+                let a = decode(&bad);
+                let o = decode_owned(bad);
+                assert_eq!(a, o);
+            }
+        }
+        assert!(large > 10);
+        // the large blob keeps the buffer
+        let mut b = bottle![1, 2];
+        b.add_list()
+            .push("x")
+            .push(Value::Dict(bottle![bottle!["k", 1]]));
+        let mut inner = bottle!["k"];
+        inner.push(Value::Blob(vec![5; 200_000]));
+        b.push(Value::Dict(bottle![inner]));
+        let bytes = b.encode();
+        let ptr = bytes.as_ptr();
+        let (owned, _) = decode_owned(bytes).unwrap();
+        assert_eq!(owned, b);
+        let Some(Value::Dict(d)) = owned.get(3) else {
+            panic!()
+        };
+        let Some(Value::List(kv)) = d.get(0) else {
+            panic!()
+        };
+        assert_eq!(
+            kv.get(1).and_then(Value::as_bytes).map(<[u8]>::as_ptr),
+            Some(ptr)
+        );
     }
 
     fn hex(b: &[u8]) -> String {

@@ -278,6 +278,12 @@ impl Bottle {
         crate::binary::decode(bytes).map(|(b, _)| b)
     }
 
+    /// [`Bottle::decode`] from a buffer it may keep: a large string or blob that makes up
+    /// most of `bytes` takes over the buffer instead of being copied.
+    pub fn decode_owned(bytes: Vec<u8>) -> Result<Bottle, crate::DecodeError> {
+        crate::binary::decode_owned(bytes).map(|(b, _)| b)
+    }
+
     pub fn len(&self) -> usize {
         self.items.len()
     }

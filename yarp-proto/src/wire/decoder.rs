@@ -12,11 +12,19 @@
 //!   index-less reply Bottle is due and when a reversed connection (`r`) starts carrying
 //!   messages the other way.
 //!
-//! The decoder never blocks, never panics on input, and never reserves memory on the word
-//! of a length field: bytes are buffered only as they arrive, and any frame announcing more
-//! than [`DecoderConfig::max_message_size`] bytes is an error at once.
+//! The decoder never blocks and never panics on input. Any frame announcing more than
+//! [`DecoderConfig::max_message_size`] bytes is an error at once; below that limit,
+//! [`Decoder::feed`] buffers bytes only as they arrive, while [`Decoder::read_buf`] (the
+//! zero-copy path for socket reads) reserves room for the rest of the frame being read,
+//! which is known to fit the limit, once.
+//!
+//! Large frames are handed out without copying: a frame that fills the buffer becomes the
+//! event's `Vec` and the decoder starts a new buffer for the bytes after it.
 
 use std::collections::VecDeque;
+
+use bytes::buf::UninitSlice;
+use bytes::BufMut;
 
 use super::carrier::{CarrierRegistry, CarrierSpec, ConnectionHeader, Framing, MAX_SENDER_NAME};
 use super::command::PortCommand;
@@ -26,12 +34,15 @@ use super::message::{BinaryFrame, Index, Message, INDEX_FIXED_LEN};
 use super::number::{YarpNumber, INDEX_VALUE};
 use super::scan::{BottleScanner, Scan};
 use super::text_carrier::{ACK_TEXT, WELCOME_PREFIX};
-use crate::Bottle;
 
 /// Default limit for one message, reply or text payload: 256 MiB.
 pub const DEFAULT_MAX_MESSAGE_SIZE: usize = 256 * 1024 * 1024;
 /// Default limit for one text line: 16 MiB.
 pub const DEFAULT_MAX_LINE_LEN: usize = 16 * 1024 * 1024;
+
+/// Frames (binary message payloads, reply Bottles, raw bytes) at least this long are
+/// handed out by moving the decoder's buffer into the event rather than copying them.
+const SPLIT_MIN: usize = 64 * 1024;
 
 /// Limits and the carrier table.
 #[derive(Debug, Clone)]
@@ -119,6 +130,14 @@ enum State {
     NameServer {
         swallow: usize,
     },
+    /// A large binary message whose index and port command have been read; its payload
+    /// (`len` bytes) starts at `pos`.
+    MessagePayload {
+        index: Index,
+        command: PortCommand,
+        command_header: [u8; 8],
+        len: usize,
+    },
     HeaderReply,
     Welcome,
     Responses,
@@ -144,8 +163,50 @@ pub struct Decoder {
     line: LineReader,
     scanner: Option<BottleScanner>,
     need: u64,
+    /// Bytes (from `pos`) the frame being read needs in all, when known (always within
+    /// `max_message_size`): sizes [`Decoder::read_buf`]'s reservation.
+    hint: usize,
     discard: u64,
     expect: VecDeque<Expect>,
+}
+
+/// Room for one read straight into a [`Decoder`]'s buffer, from [`Decoder::read_buf`].
+///
+/// It is a [`BufMut`] over the buffer's spare capacity (not zeroed, never grown past what
+/// `read_buf` reserved), so `tokio::io::AsyncReadExt::read_buf` can fill it; the bytes
+/// written become input of the decoder, as if fed.
+#[derive(Debug)]
+pub struct ReadSpace<'a> {
+    buf: &'a mut Vec<u8>,
+}
+
+impl ReadSpace<'_> {
+    /// Bytes that can be written.
+    pub fn len(&self) -> usize {
+        self.buf.capacity() - self.buf.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+// SAFETY: every method forwards to `Vec<u8>`'s implementation; `remaining_mut` is the
+// spare capacity, so the buffer is never asked to grow.
+unsafe impl BufMut for ReadSpace<'_> {
+    fn remaining_mut(&self) -> usize {
+        self.len()
+    }
+
+    unsafe fn advance_mut(&mut self, cnt: usize) {
+        // SAFETY: the caller initialised `cnt` bytes of `chunk_mut`, which is the
+        // vector's spare capacity; `Vec::advance_mut` checks `cnt` against it.
+        unsafe { self.buf.advance_mut(cnt) }
+    }
+
+    fn chunk_mut(&mut self) -> &mut UninitSlice {
+        UninitSlice::uninit(self.buf.spare_capacity_mut())
+    }
 }
 
 impl Decoder {
@@ -160,6 +221,7 @@ impl Decoder {
             line,
             scanner: None,
             need: 0,
+            hint: 0,
             discard: 0,
             expect: VecDeque::new(),
         }
@@ -229,7 +291,7 @@ impl Decoder {
 
     /// Switches to reading messages now (a reversed connection, managed by the caller).
     pub fn start_messages(&mut self) {
-        if matches!(self.state, State::Failed(_)) {
+        if matches!(self.state, State::Failed(_) | State::MessagePayload { .. }) {
             return;
         }
         self.state = match self.spec.map(|s| s.framing) {
@@ -248,11 +310,57 @@ impl Decoder {
         self.buf.extend_from_slice(data);
     }
 
+    /// Room for reading at least `min` (at least 1) bytes straight into the decoder's
+    /// buffer, without the copy of [`Decoder::feed`]: read into it, e.g. with
+    /// `stream.read_buf(&mut decoder.read_buf(n))`, then [`Decoder::poll`].
+    ///
+    /// When the frame being read has announced its size (a message index, or a reply
+    /// Bottle's strings and blobs as scanned so far), the room covers the rest of that
+    /// frame too, so that it arrives into one allocation that then becomes the event's
+    /// bytes. Such sizes have been checked against [`DecoderConfig::max_message_size`].
+    pub fn read_buf(&mut self, min: usize) -> ReadSpace<'_> {
+        let min = min.max(1);
+        let pos = self.pos.min(self.buf.len());
+        let have = self.buf.len() - pos;
+        let frame = self.hint.min(self.config.max_message_size);
+        let want = frame.saturating_sub(have).saturating_add(min);
+        let spare = self.buf.capacity() - self.buf.len();
+        // drop consumed bytes (a large frame then starts the buffer and can be handed
+        // out without a copy); `have` is at most what earlier reads brought
+        if pos > 0 && (pos == self.buf.len() || spare < want || frame >= SPLIT_MIN) {
+            self.buf.drain(..pos);
+            self.pos = 0;
+        }
+        let spare = self.buf.capacity() - self.buf.len();
+        if spare < want {
+            self.buf.reserve(want);
+        }
+        ReadSpace { buf: &mut self.buf }
+    }
+
+    /// Hands back a buffer the decoder gave out (an event's bytes, once used), to read into
+    /// again: the next large frame then arrives in memory already mapped, not in a fresh
+    /// allocation the kernel has to fault in page by page. Kept only if it is larger than
+    /// the current buffer (and within `max_message_size`, plus room for one read).
+    pub fn recycle(&mut self, mut buf: Vec<u8>) {
+        let limit = self.config.max_message_size.saturating_add(SPLIT_MIN);
+        if buf.capacity() <= self.buf.capacity() || buf.capacity() > limit {
+            return;
+        }
+        buf.clear();
+        buf.extend_from_slice(self.avail());
+        self.buf = buf;
+        self.pos = 0;
+    }
+
     /// Bytes received but not yet turned into events (including a partial line).
     pub fn pending(&self) -> usize {
-        self.buf.len() - self.pos
+        self.buf.len().saturating_sub(self.pos)
             + usize::from(self.line.has_partial())
-            + usize::from(matches!(self.state, State::TextPayload { .. }))
+            + usize::from(matches!(
+                self.state,
+                State::TextPayload { .. } | State::MessagePayload { .. }
+            ))
     }
 
     /// Whether the stream stopped at an event boundary (check this at end of stream).
@@ -293,6 +401,27 @@ impl Decoder {
         self.buf.get(self.pos..).unwrap_or_default()
     }
 
+    /// Takes the frame at `buf[start..end]` out of the buffer and consumes it. A large
+    /// frame that starts the buffer and fills most of it is moved out whole, the fewer
+    /// bytes after it going to a new buffer; anything else is copied.
+    fn take_frame(&mut self, start: usize, end: usize) -> Vec<u8> {
+        let len = self.buf.len();
+        let end = end.min(len);
+        let start = start.min(end);
+        let tail = len - end;
+        let unused = self.buf.capacity() - end;
+        if start == 0 && end >= SPLIT_MIN && tail <= end && unused <= end + SPLIT_MIN {
+            let rest = self.buf[end..].to_vec();
+            let mut frame = std::mem::replace(&mut self.buf, rest);
+            frame.truncate(end);
+            self.pos = 0;
+            return frame;
+        }
+        let frame = self.buf[start..end].to_vec();
+        self.pos = end;
+        frame
+    }
+
     fn framing(&self) -> Framing {
         self.spec.map(|s| s.framing).unwrap_or(Framing::Raw)
     }
@@ -329,6 +458,7 @@ impl Decoder {
     }
 
     fn step(&mut self) -> Result<Step, WireError> {
+        self.hint = 0;
         if self.discard > 0 {
             let n = (self.avail().len() as u64).min(self.discard);
             self.pos += n as usize;
@@ -349,6 +479,35 @@ impl Decoder {
                 Ok(Step::Event(Event::SenderName(line)))
             }
             State::Messages => self.step_message(),
+            State::MessagePayload { len, .. } => {
+                let len = *len;
+                if self.avail().len() < len {
+                    self.hint = len;
+                    return Ok(Step::NeedMore);
+                }
+                let State::MessagePayload {
+                    index,
+                    command,
+                    command_header,
+                    ..
+                } = std::mem::replace(&mut self.state, State::Messages)
+                else {
+                    return Ok(Step::Continue);
+                };
+                if command.key() == b'r' {
+                    // the accepting port now writes on this connection; the peer acks
+                    self.state = State::Responses;
+                }
+                let payload = self.take_frame(self.pos, self.pos + len);
+                Ok(Step::Event(Event::Message(Message {
+                    command,
+                    payload,
+                    frame: Some(BinaryFrame {
+                        index,
+                        command_header,
+                    }),
+                })))
+            }
             State::TextMessages => self.step_text_message(),
             State::TextPayload { .. } => self.step_text_payload(),
             State::NameServer { swallow } => {
@@ -412,8 +571,7 @@ impl Decoder {
                 if avail.is_empty() {
                     return Ok(Step::NeedMore);
                 }
-                let bytes = avail.to_vec();
-                self.pos = self.buf.len();
+                let bytes = self.take_frame(self.pos, self.buf.len());
                 Ok(Step::Event(Event::Raw(bytes)))
             }
         }
@@ -507,8 +665,28 @@ impl Decoder {
         }
         let end = index_len + body_len as usize;
         let Some(body) = avail.get(index_len..end) else {
+            // a large body: once its port command is in, read the payload on its own so
+            // that it can be handed out without a copy
+            if body_len as usize >= SPLIT_MIN {
+                let have = avail.get(index_len..).unwrap_or_default();
+                // (a command that cannot be decoded yet waits for the whole body)
+                if let Ok((command, used)) = PortCommand::decode_binary(have) {
+                    let mut command_header = [0u8; 8];
+                    command_header.copy_from_slice(&have[..8]);
+                    self.pos += index_len + used;
+                    self.state = State::MessagePayload {
+                        index,
+                        command,
+                        command_header,
+                        len: body_len as usize - used,
+                    };
+                    return Ok(Step::Continue);
+                }
+            }
+            self.hint = end;
             return Ok(Step::NeedMore);
         };
+        let (body_at, body_end) = (self.pos + index_len, self.pos + end);
         let event = match PortCommand::decode_binary(body) {
             Ok((command, used)) => {
                 let mut command_header = [0u8; 8];
@@ -519,7 +697,7 @@ impl Decoder {
                 }
                 Event::Message(Message {
                     command,
-                    payload: body[used..].to_vec(),
+                    payload: self.take_frame(body_at + used, body_end),
                     frame: Some(BinaryFrame {
                         index,
                         command_header,
@@ -528,11 +706,10 @@ impl Decoder {
             }
             Err(error) => Event::InvalidMessage {
                 index,
-                body: body.to_vec(),
+                body: self.take_frame(body_at, body_end),
                 error,
             },
         };
-        self.pos += end;
         Ok(Step::Event(event))
     }
 
@@ -667,6 +844,7 @@ impl Decoder {
         let start = self.pos;
         let avail_len = self.avail().len() as u64;
         if avail_len < self.need {
+            self.hint = self.need as usize;
             return Ok(Step::NeedMore);
         }
         let scanner = self.scanner.get_or_insert_with(BottleScanner::new);
@@ -677,12 +855,12 @@ impl Decoder {
             Scan::NeedAtLeast(n) => {
                 self.too_large("reply", n)?;
                 self.need = n;
+                self.hint = n as usize;
                 Ok(Step::NeedMore)
             }
             Scan::Complete(end) => {
-                let bytes = self.buf[start..start + end].to_vec();
-                Bottle::decode(&bytes).map_err(WireError::BadReply)?;
-                self.pos += end;
+                // the scanner applies the rules of `Bottle::decode`: these bytes decode
+                let bytes = self.take_frame(start, start + end);
                 self.scanner = None;
                 self.need = 0;
                 if let Some(f) = self.expect.front_mut() {

@@ -55,7 +55,9 @@ pub use carrier::{
     Framing, HeaderPattern, ACK_FLAG, PROTOCOL_NOT_FOUND, SPECIFIER_BASE,
 };
 pub use command::{CommandKind, PortCommand, NOT_UNDERSTOOD, PORT_HELP};
-pub use decoder::{Decoder, DecoderConfig, Event, DEFAULT_MAX_LINE_LEN, DEFAULT_MAX_MESSAGE_SIZE};
+pub use decoder::{
+    Decoder, DecoderConfig, Event, ReadSpace, DEFAULT_MAX_LINE_LEN, DEFAULT_MAX_MESSAGE_SIZE,
+};
 pub use error::WireError;
 pub use message::{
     ack, admin_message, close_message, command_message, data_message, encode_message,

@@ -214,6 +214,71 @@ mod tests {
         ));
     }
 
+    /// The decoder no longer decodes a reply to validate it: whatever the scanner finds
+    /// complete must decode, to the same length, and whatever decodes the scanner finds.
+    #[test]
+    fn scanner_agrees_with_decode() {
+        let mut x: u64 = 0x2545f4914f6cdd1d;
+        let mut next = move || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        let pieces: [&[u8]; 12] = [
+            &[0, 1, 0, 0],
+            &[1, 0, 0, 0],
+            &[2, 0, 0, 0],
+            &[0xff, 0xff, 0xff, 0xff],
+            &[1, 1, 0, 0],
+            &[4, 0, 0, 0],
+            &[12, 0, 0, 0],
+            &[0x20, 0, 0, 0],
+            &[0x0a, 0x01, 0, 0],
+            &[0, 2, 0, 0],
+            &[0x33, 0, 0, 0],
+            &[7],
+        ];
+        let mut complete = 0;
+        for round in 0..50_000 {
+            let mut bytes = Vec::new();
+            if round % 2 == 1 {
+                let mut b = bottle!["a", 1];
+                b.add_list()
+                    .push(2.5)
+                    .push(Value::Blob(vec![1; (next() % 9) as usize]));
+                b.push(Value::Dict(bottle![bottle!["k", 1i64]]));
+                bytes = b.encode();
+                for _ in 0..1 + next() % 3 {
+                    let at = (next() as usize) % bytes.len();
+                    bytes[at] = match next() % 3 {
+                        0 => next() as u8,
+                        1 => 0,
+                        _ => 1,
+                    };
+                }
+            } else {
+                bytes.extend_from_slice(pieces[(next() % 10) as usize]);
+                for _ in 0..next() % 16 {
+                    bytes.extend_from_slice(pieces[(next() % 12) as usize]);
+                }
+            }
+            let scanned = BottleScanner::new().scan(&bytes);
+            match (scanned.clone(), crate::binary::decode(&bytes)) {
+                (Ok(Scan::Complete(n)), Ok((_, used))) => {
+                    assert_eq!(n, used, "{bytes:?}");
+                    complete += 1;
+                }
+                (Ok(Scan::Complete(n)), Err(e)) => panic!("scanned {n}, decode {e:?}: {bytes:?}"),
+                (Ok(Scan::NeedAtLeast(_)) | Err(_), Ok(_)) => {
+                    panic!("decodes, scanner {scanned:?}: {bytes:?}")
+                }
+                (Ok(Scan::NeedAtLeast(_)) | Err(_), Err(_)) => {}
+            }
+        }
+        assert!(complete > 1000, "{complete}");
+    }
+
     #[test]
     fn deep_nesting_is_an_error() {
         let mut bytes = vec![0, 1, 0, 0];

@@ -1,7 +1,7 @@
 //! Decoder tests: round trips, segmentation independence, hostile input.
 
 use super::*;
-use crate::{bottle, Bottle, Stamp};
+use crate::{bottle, Bottle, Stamp, Value};
 
 fn cfg() -> DecoderConfig {
     DecoderConfig::default()
@@ -465,4 +465,213 @@ fn encoders_match_recorded_cpp_bytes() {
         text_carrier::data_message(&b, false),
         b"D\r\n1 2.5 [ok] \"two words\" (3 4)\r\n"
     );
+}
+
+/// Reads `bytes` through [`Decoder::read_buf`] as a socket would, `chunk` bytes at most
+/// per read; returns the events and the buffers read into (to check for copies).
+fn read_through(
+    d: &mut Decoder,
+    mut bytes: &[u8],
+    chunk: usize,
+) -> Result<(Vec<Event>, Vec<*const u8>), WireError> {
+    use bytes::BufMut;
+    let mut events = Vec::new();
+    let mut bufs = Vec::new();
+    while !bytes.is_empty() {
+        let mut space = d.read_buf(chunk);
+        assert!(space.remaining_mut() >= chunk);
+        let n = chunk.min(bytes.len());
+        space.put_slice(&bytes[..n]);
+        bytes = &bytes[n..];
+        bufs.push(d.buf.as_ptr());
+        while let Some(ev) = d.poll()? {
+            events.push(ev);
+        }
+    }
+    Ok((events, bufs))
+}
+
+fn big_blob(len: usize) -> Vec<u8> {
+    (0..len).map(|i| (i * 7 + i / 251) as u8).collect()
+}
+
+#[test]
+fn read_buf_hands_out_large_messages_without_copying() {
+    let mut big = bottle![1, "x"];
+    big.push(Value::Blob(big_blob(300_000)));
+    let mut bytes = encode_connection_start(&Carrier::Tcp.spec(), b"/w");
+    bytes.extend(data_message(&big, false));
+    bytes.extend(data_message(&bottle!["small"], false));
+    bytes.extend(envelope_message(&big, &Stamp::new(3, 1.25), true));
+    // a 'd' with command text (NUL-terminated) and a large payload
+    encode_message(
+        &PortCommand::new(0, b"d".to_vec()),
+        &[&big.encode()],
+        &mut bytes,
+    );
+    // a well-framed large body with an unusable command
+    Index::new(vec![70_000]).encode(&mut bytes);
+    bytes.extend(vec![b'z'; 70_000]);
+    bytes.extend(data_message(&big, false));
+    let whole = Decoder::accepting(cfg()).decode(&bytes).unwrap();
+    assert_eq!(whole.len(), 8);
+    for chunk in [1000, 4096, 65_536, 1 << 20] {
+        let mut d = Decoder::accepting(cfg());
+        let (evs, bufs) = read_through(&mut d, &bytes, chunk).unwrap();
+        assert_eq!(evs, whole, "chunk {chunk}");
+        assert!(d.is_idle());
+        for ev in &evs {
+            if let Event::Message(m) = ev {
+                if m.payload.len() > 100_000 && chunk < 300_000 {
+                    assert!(bufs.contains(&m.payload.as_ptr()), "chunk {chunk}: copied");
+                }
+            }
+        }
+    }
+    // also the same one byte at a time through `feed`
+    assert_eq!(
+        both_ways(|| Decoder::accepting(cfg()), &bytes[..bytes.len() / 3]).unwrap(),
+        Decoder::accepting(cfg())
+            .decode(&bytes[..bytes.len() / 3])
+            .unwrap()
+    );
+}
+
+#[test]
+fn read_buf_hands_out_large_replies_without_copying() {
+    let mut big = bottle![7, 8];
+    big.push(Value::Blob(big_blob(500_000)));
+    big.push(2.5);
+    let mut bytes = reply_message(&big, true);
+    bytes.extend(reply_message(&bottle![1], true));
+    bytes.extend(reply_message(&big, false));
+    let make = || {
+        let mut d = Decoder::responses(Carrier::Tcp.spec(), cfg());
+        d.expect_response(&PortCommand::data(true));
+        d.expect_response(&PortCommand::data(true));
+        d.expect_response(&PortCommand::data(true));
+        d
+    };
+    let whole = make().decode(&bytes).unwrap();
+    assert_eq!(whole.len(), 5);
+    for chunk in [1000, 65_536, 1 << 20] {
+        let mut d = make();
+        let (evs, bufs) = read_through(&mut d, &bytes, chunk).unwrap();
+        assert_eq!(evs, whole, "chunk {chunk}");
+        let Event::Reply(r) = &evs[0] else { panic!() };
+        if chunk < 500_000 {
+            assert!(bufs.contains(&r.as_ptr()), "chunk {chunk}: copied");
+        }
+        assert_eq!(Bottle::decode_owned(r.clone()).unwrap(), big);
+    }
+}
+
+#[test]
+fn reversed_connection_after_a_large_message() {
+    let mut bytes = encode_connection_start(&Carrier::Tcp.spec(), b"/w");
+    encode_message(
+        &PortCommand::new(b'r', Vec::new()),
+        &[&[9u8; 100_000]],
+        &mut bytes,
+    );
+    bytes.extend(ack());
+    let whole = Decoder::accepting(cfg()).decode(&bytes).unwrap();
+    assert_eq!(whole.last(), Some(&Event::Ack(0)));
+    let (evs, _) = read_through(&mut Decoder::accepting(cfg()), &bytes, 5000).unwrap();
+    assert_eq!(evs, whole);
+}
+
+#[test]
+fn read_buf_reserves_only_verified_sizes() {
+    let small = DecoderConfig {
+        max_message_size: 1 << 20,
+        ..DecoderConfig::default()
+    };
+    // a body within the limit: room for it once its index is in
+    let mut bytes = tcp_after_handshake();
+    bytes.extend_from_slice(&number::INDEX_MARKER);
+    bytes.extend_from_slice(&[1, 1, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff]);
+    bytes.extend_from_slice(&(1_000_000i32).to_le_bytes());
+    bytes.extend_from_slice(&0i32.to_le_bytes());
+    bytes.extend_from_slice(b"0000~d\0\x01short");
+    let mut d = Decoder::accepting(small.clone());
+    let (evs, _) = read_through(&mut d, &bytes, 512).unwrap();
+    assert_eq!(evs.len(), 2);
+    assert!(!d.is_idle());
+    let cap = d.read_buf(512).len();
+    assert!((1_000_000 - 13..=1_000_000 + 1024).contains(&cap), "{cap}");
+    // a body over the limit: an error, nothing reserved
+    let mut bytes = tcp_after_handshake();
+    bytes.extend_from_slice(&number::INDEX_MARKER);
+    bytes.extend_from_slice(&[1, 1, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff]);
+    bytes.extend_from_slice(&(2_000_000i32).to_le_bytes());
+    bytes.extend_from_slice(&0i32.to_le_bytes());
+    let mut d = Decoder::accepting(small.clone());
+    assert!(matches!(
+        read_through(&mut d, &bytes, 512),
+        Err(WireError::TooLarge { .. })
+    ));
+    assert!(d.read_buf(512).len() < 4096);
+    // a reply claiming a 2 GiB string
+    let mut d = Decoder::responses(Carrier::Tcp.spec(), small.clone());
+    d.expect_response(&PortCommand::data(true));
+    let evil = [0, 1, 0, 0, 1, 0, 0, 0, 4, 0, 0, 0, 0xff, 0xff, 0xff, 0x7f];
+    assert!(read_through(&mut d, &evil, 512).is_err());
+    assert!(d.read_buf(512).len() < 4096);
+    // a reply claiming 900 kB: room for that, not more
+    let mut d = Decoder::responses(Carrier::Tcp.spec(), small);
+    d.expect_response(&PortCommand::data(true));
+    let claim = [0, 1, 0, 0, 1, 0, 0, 0, 4, 0, 0, 0, 0xa0, 0xbb, 0x0d, 0];
+    read_through(&mut d, &claim, 512).unwrap();
+    let cap = d.read_buf(512).len();
+    assert!((900_000..=900_000 + 1024).contains(&cap), "{cap}");
+}
+
+#[test]
+fn random_large_frames_never_panic() {
+    let mut x: u64 = 0x2545f4914f6cdd1d;
+    let mut next = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    };
+    let mut big = bottle!["a", 1];
+    big.push(Value::Blob(big_blob(70_000)));
+    let mut base = tcp_after_handshake();
+    base.extend(data_message(&big, true));
+    base.extend(envelope_message(&big, &Stamp::new(1, 2.0), false));
+    let reply = reply_message(&big, true);
+    for round in 0..300 {
+        for bytes in [&base, &reply] {
+            let mut bytes = bytes.clone();
+            for _ in 0..(next() % 4) {
+                let at = (next() as usize) % bytes.len().min(200);
+                bytes[at] = next() as u8;
+            }
+            bytes.truncate(bytes.len() - (next() as usize) % 100_000.min(bytes.len()));
+            let small = DecoderConfig {
+                max_message_size: 100_000 + (next() % 100_000) as usize,
+                ..DecoderConfig::default()
+            };
+            let chunk = 1 + (next() % 70_000) as usize;
+            let make: Box<dyn Fn() -> Decoder> = if round % 2 == 1 {
+                Box::new(|| Decoder::accepting(small.clone()))
+            } else {
+                Box::new(|| {
+                    let mut d = Decoder::responses(Carrier::Tcp.spec(), small.clone());
+                    d.expect_response(&PortCommand::data(true));
+                    d
+                })
+            };
+            let whole = make().decode(&bytes);
+            let read = read_through(&mut make(), &bytes, chunk).map(|(e, _)| e);
+            match (&whole, &read) {
+                (Ok(a), Ok(b)) => assert_eq!(a, b),
+                (Err(a), Err(b)) => assert_eq!(a, b),
+                // events before the error are not returned by `decode`
+                (Err(_), Ok(_)) | (Ok(_), Err(_)) => panic!("{whole:?} vs {read:?}"),
+            }
+        }
+    }
 }

@@ -302,7 +302,6 @@ async fn serve(
         source,
     };
     let mut probe = [0u8; 512];
-    let mut rbuf = read_buffer();
     loop {
         // idle: wait for work, noticing a peer that goes away meanwhile
         let job = tokio::select! {
@@ -328,7 +327,7 @@ async fn serve(
                     .map_err(io_err)?;
                 decoder.expect_response(&cmd);
                 if spec.requires_ack {
-                    await_ack(stream, decoder, target, &mut rbuf).await?;
+                    await_ack(stream, decoder, target).await?;
                 }
             }
             Job::Rpc(msg, reply_tx) => {
@@ -337,7 +336,7 @@ async fn serve(
                     .await
                     .map_err(io_err)?;
                 decoder.expect_response(&cmd);
-                let reply = await_reply_buf(stream, decoder, target, spec, &mut rbuf).await;
+                let reply = await_reply(stream, decoder, target, spec).await;
                 let failed = reply.is_err();
                 let _ = reply_tx.send(reply);
                 if failed {
@@ -357,11 +356,8 @@ async fn serve(
                 let _ = stream.write_all(&bytes).await;
                 decoder.expect_response(&cmd);
                 if spec.requires_ack {
-                    let _ = timeout(
-                        Duration::from_secs(1),
-                        await_ack(stream, decoder, target, &mut rbuf),
-                    )
-                    .await;
+                    let _ =
+                        timeout(Duration::from_secs(1), await_ack(stream, decoder, target)).await;
                 }
                 if let Some(done) = done {
                     let _ = done.send(());
@@ -385,25 +381,25 @@ fn drain(decoder: &mut Decoder, target: &str) -> Result<(), OutputError> {
     Ok(())
 }
 
-/// Size of one socket read; a connection's buffer grows up to [`MAX_READ_CHUNK`] while
-/// reads keep filling it (large messages), so big transfers take fewer system calls.
+/// Least room offered to one socket read. Reads go straight into the decoder's buffer,
+/// which makes room for the whole of a frame once its size is known, so a large message
+/// arrives in few system calls and is not copied on its way to its event.
 pub(crate) const READ_CHUNK: usize = 64 * 1024;
-pub(crate) const MAX_READ_CHUNK: usize = 1024 * 1024;
 
-/// A connection's reusable read buffer.
+/// Kept for callers of [`next_event_buf`]: reads no longer go through a separate buffer,
+/// so this allocates nothing.
 pub(crate) fn read_buffer() -> Vec<u8> {
-    Vec::with_capacity(READ_CHUNK)
+    Vec::new()
 }
 
 pub(crate) async fn await_ack(
     stream: &mut TcpStream,
     decoder: &mut Decoder,
     target: &str,
-    buf: &mut Vec<u8>,
 ) -> Result<(), OutputError> {
     let wait = async {
         loop {
-            if let Event::Ack(_) = next_event_buf(stream, decoder, target, buf).await? {
+            if let Event::Ack(_) = next_event(stream, decoder, target).await? {
                 return Ok(());
             }
         }
@@ -419,21 +415,13 @@ pub(crate) async fn await_reply(
     target: &str,
     spec: CarrierSpec,
 ) -> Result<Bottle, PortError> {
-    await_reply_buf(stream, decoder, target, spec, &mut read_buffer()).await
-}
-
-pub(crate) async fn await_reply_buf(
-    stream: &mut TcpStream,
-    decoder: &mut Decoder,
-    target: &str,
-    spec: CarrierSpec,
-    buf: &mut Vec<u8>,
-) -> Result<Bottle, PortError> {
     let mut reply = None;
     loop {
-        match next_event_buf(stream, decoder, target, buf).await? {
+        match next_event(stream, decoder, target).await? {
             Event::Reply(bytes) => {
                 reply = Some(Bottle::decode(&bytes)?);
+                // the next large reply is read into the same (already mapped) memory
+                decoder.recycle(bytes);
                 if !spec.requires_ack {
                     break;
                 }
@@ -452,22 +440,13 @@ pub(crate) async fn await_reply_buf(
     Ok(reply.unwrap_or_default())
 }
 
-/// Reads until the decoder produces an event.
+/// Reads until the decoder produces an event, reading straight into the decoder's buffer
+/// (no intermediate copy; a large frame is read into one allocation that becomes the
+/// event's bytes).
 pub(crate) async fn next_event(
     stream: &mut TcpStream,
     decoder: &mut Decoder,
     target: &str,
-) -> Result<Event, OutputError> {
-    next_event_buf(stream, decoder, target, &mut read_buffer()).await
-}
-
-/// Reads until the decoder produces an event, reading through `buf` (reused across calls,
-/// never zeroed).
-pub(crate) async fn next_event_buf(
-    stream: &mut TcpStream,
-    decoder: &mut Decoder,
-    target: &str,
-    buf: &mut Vec<u8>,
 ) -> Result<Event, OutputError> {
     loop {
         match decoder.poll() {
@@ -480,12 +459,8 @@ pub(crate) async fn next_event_buf(
                 })
             }
         }
-        buf.clear();
-        if buf.capacity() < READ_CHUNK {
-            buf.reserve(READ_CHUNK);
-        }
         let n = stream
-            .read_buf(buf)
+            .read_buf(&mut decoder.read_buf(READ_CHUNK))
             .await
             .map_err(|source| OutputError::Io {
                 target: target.to_string(),
@@ -494,9 +469,15 @@ pub(crate) async fn next_event_buf(
         if n == 0 {
             return Err(OutputError::PeerClosed(target.to_string()));
         }
-        decoder.feed(&buf[..n]);
-        if n == buf.capacity() && n < MAX_READ_CHUNK {
-            buf.reserve(2 * n);
-        }
     }
+}
+
+/// [`next_event`], for callers that kept a read buffer: `_buf` is no longer used.
+pub(crate) async fn next_event_buf(
+    stream: &mut TcpStream,
+    decoder: &mut Decoder,
+    target: &str,
+    _buf: &mut Vec<u8>,
+) -> Result<Event, OutputError> {
+    next_event(stream, decoder, target).await
 }
