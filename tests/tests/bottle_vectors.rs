@@ -39,9 +39,15 @@ fn text_cases_encode_and_print_like_cpp() {
         }
         checked += 1;
     }
-    println!("bottle text vectors: {checked} checked, {} failed", failures.len());
+    println!(
+        "bottle text vectors: {checked} checked, {} failed",
+        failures.len()
+    );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    assert!(checked >= 50, "expected the full recorded set, got {checked}");
+    assert!(
+        checked >= 50,
+        "expected the full recorded set, got {checked}"
+    );
 }
 
 #[test]
@@ -71,17 +77,22 @@ fn crafted_binary_is_accepted_or_rejected_like_cpp() {
                 }
             }
             (Err(_), false) => {}
-            (Ok(b), false) => failures.push(format!(
-                "{}: C++ rejects this but we decoded {b}",
-                id(&rec)
-            )),
+            (Ok(b), false) => {
+                failures.push(format!("{}: C++ rejects this but we decoded {b}", id(&rec)))
+            }
             (Err(e), true) => failures.push(format!("{}: C++ accepts, we fail: {e}", id(&rec))),
         }
         checked += 1;
     }
-    println!("bottle crafted vectors: {checked} checked, {} failed", failures.len());
+    println!(
+        "bottle crafted vectors: {checked} checked, {} failed",
+        failures.len()
+    );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
-    assert!(checked >= 20, "expected the full recorded set, got {checked}");
+    assert!(
+        checked >= 20,
+        "expected the full recorded set, got {checked}"
+    );
 }
 
 #[test]
@@ -97,7 +108,10 @@ fn printed_text_reparses_to_the_same_bytes() {
         let b = Bottle::decode(&binary).expect("decodes");
         let reparsed = Bottle::from_text(text_out);
         if reparsed.to_text() != text_out.as_bytes() {
-            panic!("{}: print/parse is not a fixed point for {text_out:?}", id(&rec));
+            panic!(
+                "{}: print/parse is not a fixed point for {text_out:?}",
+                id(&rec)
+            );
         }
         // floats print with 21 digits, so the value itself survives the text round trip
         if !text_out.contains("nan") {
