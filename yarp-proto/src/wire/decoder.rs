@@ -763,7 +763,8 @@ impl Decoder {
             true
         } else if text.last() == Some(&b'\\') {
             text.pop();
-            check.feed(&text[start..]);
+            // the backslash may have come from an earlier line (an empty line joined)
+            check.feed(&text[start.min(text.len())..]);
             self.state = State::TextPayload {
                 command,
                 text,

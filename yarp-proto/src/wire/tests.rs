@@ -675,3 +675,16 @@ fn random_large_frames_never_panic() {
         }
     }
 }
+
+/// Found by the `wire_decode` fuzz target: a text payload ending in an escaped backslash
+/// followed by an empty line used to index past the end of the joined text.
+#[test]
+fn text_payload_backslash_then_empty_line_does_not_panic() {
+    let input = b"CONNACK /ra;;;;;\nD\r\nHeLlo\\\\\\\n\n\n\n\n\n\n\n\n\n\xf4\xf5\xdd\xf5\n\nr]\n";
+    let mut d = Decoder::accepting(DecoderConfig::default());
+    let _ = d.decode(input);
+    let mut d = Decoder::accepting(DecoderConfig::default());
+    for b in input.iter() {
+        let _ = d.decode(std::slice::from_ref(b));
+    }
+}
