@@ -11,7 +11,6 @@
 
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::path::PathBuf;
 
 use serde_json::Value as Json;
 use yarp_proto::wire::{
@@ -22,32 +21,9 @@ use yarp_proto::{Bottle, Stamp, Value};
 
 // ---------------------------------------------------------------- loading
 
-fn vectors_dir() -> PathBuf {
-    let dir = std::env::var_os("YARP_VECTORS_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/yarp-vectors")
-        });
-    assert!(
-        dir.join("carriers.jsonl").is_file(),
-        "YARP vectors not found at {} (set YARP_VECTORS_DIR); these tests must not be skipped",
-        dir.display()
-    );
-    dir
-}
-
+/// The shared loader (fails loudly when the vectors are missing).
 fn load(file: &str) -> Vec<Json> {
-    let path = vectors_dir().join(file);
-    let text = std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
-    text.lines()
-        .filter(|l| !l.trim().is_empty())
-        .enumerate()
-        .map(|(i, l)| {
-            serde_json::from_str(l)
-                .unwrap_or_else(|e| panic!("{}:{}: bad JSON: {e}", path.display(), i + 1))
-        })
-        .collect()
+    yarp_interop_tests::load_records(file)
 }
 
 fn unhex(s: &str) -> Vec<u8> {

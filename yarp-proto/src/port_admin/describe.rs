@@ -4,28 +4,14 @@
 
 use super::{PortSnapshot, TextCommand};
 
-const HELP_TEXT: &str = "This is a YARP port.  Here are the commands it responds to:\r\n\
-*       Gives a description of this port\r\n\
-d       Signals the beginning of input for the port's owner\r\n\
-do      The same as \"d\" except replies should be suppressed (\"data-only\")\r\n\
-q       Disconnects\r\n\
-r       Reverse connection type to be a reader\r\n\
-/port   Requests to send output to /port\r\n\
-!/port  Requests to stop sending output to /port\r\n\
-~/port  Requests to stop receiving input from /port\r\n\
-a       Signals the beginning of an administrative message\r\n\
-?       Gives this help\r\n";
-
 /// What C++ writes back for a text command it does not know (the key is neither a
 /// command nor `h`/`?`; release builds also treat `i` this way).
-pub const NOT_UNDERSTOOD_TEXT: &str = "Port command not understood.\r\n\
-Type d to send data to the port's owner.\r\n\
-Type ? for help.\r\n";
+pub const NOT_UNDERSTOOD_TEXT: &str = crate::wire::NOT_UNDERSTOOD;
 
 /// The help text (`?`, `help`, or any line starting with `h`), as a release build of
 /// C++ YARP 3.12 writes it (the debug-only `i` line is absent).
 pub fn help_text() -> &'static str {
-    HELP_TEXT
+    crate::wire::PORT_HELP
 }
 
 /// C++ `Contact::toURI()`: `carrier:/` + `/host:port/` (each part only when known).

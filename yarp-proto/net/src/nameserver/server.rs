@@ -32,6 +32,7 @@ use tokio::task::JoinSet;
 use tokio::time::timeout;
 
 use yarp_proto::nameserver::{reply_binary, reply_text, Registry, RegistryConfig};
+use yarp_proto::wire::{self, CommandKind, Decoder, DecoderConfig, Event, Framing};
 use yarp_proto::Bottle;
 
 /// C++ `yarp::os::impl` text sent to a peer whose first 8 bytes name no protocol.
@@ -312,10 +313,7 @@ async fn handle(stream: TcpStream, peer: SocketAddr, ctx: &Ctx) -> io::Result<()
         b"NAME_SER" => nameser_session(&mut rd, &mut wr, ctx, &remote).await,
         b"CONNECT " => text_session(&mut rd, &mut wr, ctx, &remote, false).await,
         b"CONNACK " => text_session(&mut rd, &mut wr, ctx, &remote, true).await,
-        [b'Y', b'A', a, b, c, d, b'R', b'P'] => {
-            let spec = i32::from_le_bytes([*a, *b, *c, *d]) - 7777;
-            binary_session(&mut rd, &mut wr, ctx, &remote, spec).await
-        }
+        [b'Y', b'A', ..] => binary_session(&mut rd, &mut wr, ctx, &remote, header).await,
         _ => write_t(&mut wr, PROTOCOL_NOT_FOUND, idle).await,
     }
 }
@@ -391,117 +389,81 @@ where
     }
 }
 
-fn yarp_number(bytes: &[u8]) -> Option<i32> {
-    match bytes {
-        [b'Y', b'A', a, b, c, d, b'R', b'P'] => Some(i32::from_le_bytes([*a, *b, *c, *d])),
-        _ => None,
-    }
-}
-
-fn encode_yarp_number(v: i32) -> [u8; 8] {
-    let n = v.to_le_bytes();
-    [b'Y', b'A', n[0], n[1], n[2], n[3], b'R', b'P']
-}
-
-async fn read_i32<R: AsyncRead + Unpin>(rd: &mut R, idle: Duration) -> io::Result<Option<i32>> {
-    let mut b = [0u8; 4];
-    Ok(read_exact_t(rd, &mut b, idle)
-        .await?
-        .then(|| i32::from_le_bytes(b)))
-}
-
 fn bad(msg: &str) -> io::Error {
     io::Error::new(io::ErrorKind::InvalidData, msg.to_string())
 }
 
+/// A tcp-family connection carrying command Bottles (what C++ clients send when they
+/// talk to the name server as to a port), framed by the shared `yarp_proto::wire` decoder.
 async fn binary_session<R, W>(
     rd: &mut R,
     wr: &mut W,
     ctx: &Ctx,
     remote: &str,
-    spec: i32,
+    header: [u8; 8],
 ) -> io::Result<()>
 where
     R: AsyncBufReadExt + Unpin,
     W: AsyncWrite + Unpin,
 {
     let idle = ctx.config.idle_timeout;
-    // tcp (3) and the other stream carriers; udp (0) and mcast (1) need datagrams.
-    let base = spec & !128;
-    if !(2..128).contains(&base) {
-        return Ok(());
-    }
-    let acks = spec & 128 != 0;
-    let Some(len) = read_i32(rd, idle).await? else {
-        return Ok(());
+    let config = DecoderConfig {
+        max_message_size: ctx.config.max_message,
+        ..DecoderConfig::default()
     };
-    let len = usize::try_from(len).map_err(|_| bad("negative sender name length"))?;
-    if len > MAX_SENDER_NAME {
-        return Err(bad("sender name too long"));
-    }
-    let mut name = vec![0u8; len];
-    if !read_exact_t(rd, &mut name, idle).await? {
-        return Ok(());
-    }
-    write_t(wr, &encode_yarp_number(ctx.port as i32), idle).await?;
+    let mut dec = Decoder::accepting(config);
+    dec.feed(&header);
+    let mut acks = false;
+    let mut buf = vec![0u8; 8192];
     loop {
-        let mut marker = [0u8; 8];
-        if !read_exact_t(rd, &mut marker, idle).await? {
-            return Ok(());
-        }
-        if yarp_number(&marker) != Some(10) {
-            return Err(bad("expected a message index"));
-        }
-        let mut head = [0u8; 10];
-        if !read_exact_t(rd, &mut head, idle).await? {
-            return Ok(());
-        }
-        let (n_blocks, n_replies) = (head[0] as usize, head[1] as usize);
-        let mut lens = Vec::with_capacity(n_blocks);
-        let mut total = 0usize;
-        for _ in 0..n_blocks {
-            let Some(l) = read_i32(rd, idle).await? else {
-                return Ok(());
-            };
-            let l = usize::try_from(l).map_err(|_| bad("negative block length"))?;
-            total = total.saturating_add(l);
-            lens.push(l);
-        }
-        for _ in 0..n_replies {
-            if read_i32(rd, idle).await?.is_none() {
-                return Ok(());
-            }
-        }
-        if total > ctx.config.max_message {
-            return Err(bad("message too large"));
-        }
-        let mut data = vec![0u8; total];
-        if !read_exact_t(rd, &mut data, idle).await? {
-            return Ok(());
-        }
-        let mut out = Vec::new();
-        let mut ok = true;
-        if data.len() >= 8 && data[4] == b'~' {
-            match data[5] {
-                ch @ (b'd' | b'D') => match Bottle::decode(&data[8..]) {
-                    Ok(cmd) => {
-                        let reply = run_command(ctx, &cmd, remote);
-                        if ch == b'd' {
-                            out = reply_binary(&reply);
-                        }
+        while let Some(ev) = dec.poll().map_err(|e| bad(&e.to_string()))? {
+            match ev {
+                Event::Header(h) => {
+                    // udp (0) and mcast (1) need datagrams; only stream carriers here
+                    if h.framing() != Framing::Stream {
+                        return Ok(());
                     }
-                    // C++ neither answers nor acks a message it cannot read.
-                    Err(_) => ok = false,
-                },
-                0 if data[8..].first() == Some(&b'q') => return Ok(()),
+                    acks = h.requires_ack();
+                }
+                Event::SenderName(name) => {
+                    if name.len() > MAX_SENDER_NAME {
+                        return Err(bad("sender name too long"));
+                    }
+                    write_t(wr, &wire::encode_header_reply(ctx.port as i32), idle).await?;
+                }
+                Event::Message(m) => {
+                    let mut out = Vec::new();
+                    match m.command.kind() {
+                        CommandKind::Data { reply } => match m.bottle() {
+                            Ok(cmd) => {
+                                let answer = run_command(ctx, &cmd, remote);
+                                if reply {
+                                    out = reply_binary(&answer);
+                                }
+                            }
+                            // C++ neither answers nor acks a message it cannot read.
+                            Err(_) => continue,
+                        },
+                        CommandKind::Close => return Ok(()),
+                        _ => {}
+                    }
+                    if acks {
+                        out.extend_from_slice(&wire::ack());
+                    }
+                    if !out.is_empty() {
+                        write_t(wr, &out, idle).await?;
+                    }
+                }
                 _ => {}
             }
         }
-        if ok && acks {
-            out.extend_from_slice(&encode_yarp_number(0));
+        let n = match timeout(idle, rd.read(&mut buf)).await {
+            Ok(r) => r?,
+            Err(_) => return Err(timed_out()),
+        };
+        if n == 0 {
+            return Ok(());
         }
-        if !out.is_empty() {
-            write_t(wr, &out, idle).await?;
-        }
+        dec.feed(&buf[..n]);
     }
 }
