@@ -18,7 +18,7 @@ echo "== cargo clippy"
 cargo clippy --workspace --all-targets --quiet -- -D warnings
 echo "== fuzz targets (build + short smoke)"
 if [[ -x fuzz/smoke.sh ]]; then fuzz/smoke.sh; fi
-echo "== tests (under netns-run)"
-"$netns_run" cargo nextest run --workspace --no-fail-fast
 echo "== doc tests"
 cargo test --workspace --doc --quiet
+echo "== tests (under netns-run)"
+"$netns_run" cargo nextest run --workspace --no-fail-fast
