@@ -320,7 +320,7 @@ impl Bench {
 }
 
 fn supports_reply(carrier: &str) -> bool {
-    Carrier::from_name(carrier).is_some_and(|c| c.spec().supports_reply)
+    carrier == "local" || Carrier::from_name(carrier).is_some_and(|c| c.spec().supports_reply)
 }
 
 /// `("echo" <int32> <float64> "<64 bytes>")`: 100 bytes encoded.
@@ -385,7 +385,7 @@ fn main() {
                 b.rpc_client_small(carrier).await;
             }
         }
-        for carrier in ["tcp", "fast_tcp"] {
+        for carrier in ["tcp", "fast_tcp", "local"] {
             for size in [KB, 64 * KB, MB, 8 * MB] {
                 if want(&format!("rtt {carrier} {size}")) {
                     b.round_trip(carrier, size).await;
@@ -395,7 +395,7 @@ fn main() {
         if want("rtt text 1000") {
             b.round_trip("text", KB).await;
         }
-        for carrier in ["tcp", "fast_tcp"] {
+        for carrier in ["tcp", "fast_tcp", "local"] {
             for size in [KB, 64 * KB, MB, 8 * MB] {
                 if want(&format!("stream {carrier} {size}")) {
                     b.stream(carrier, size).await;

@@ -390,3 +390,41 @@ async fn a_port_seen_from_a_browser() {
     assert_eq!(read_bottle(&r).await.to_string(), "hello [ok] 3");
     stop.shutdown();
 }
+
+#[tokio::test]
+async fn local_carrier_between_ports_of_one_process() {
+    let (ns, stop) = name_server().await;
+    let w = Port::open("/wl", ns.clone()).await.unwrap();
+    let r = Port::open("/rl", ns.clone()).await.unwrap();
+    w.connect("/rl", Some("local"))
+        .await
+        .expect("local connect");
+    assert_eq!(r.inputs(), vec!["/wl".to_string()]);
+    let big = Bottle::from_text(format!("{{{}}}", "9 ".repeat(100_000)));
+    w.write_stamped(&big, Stamp::new(3, 1.5)).await;
+    let m = timeout(T, r.read()).await.unwrap().unwrap();
+    assert_eq!(m.stamp, Some(Stamp::new(3, 1.5)));
+    assert_eq!(m.bottle().unwrap(), big);
+    // RPC over local
+    let r2 = std::sync::Arc::new(r);
+    let server = r2.clone();
+    tokio::spawn(async move {
+        while let Some(mut m) = server.read().await {
+            let b = m.bottle().unwrap();
+            m.reply(bottle![Vocab32::new("ok"), b.len() as i32]);
+        }
+    });
+    let reply = timeout(T, w.rpc(&bottle![1, 2, 3])).await.unwrap().unwrap();
+    assert_eq!(reply.to_string(), "[ok] 3");
+    assert!(w.disconnect("/rl"));
+    timeout(T, async {
+        while !r2.inputs().is_empty() {
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+    })
+    .await
+    .expect("local input removed");
+    // a port of another process cannot be reached locally
+    assert!(w.connect("/nowhere", Some("local")).await.is_err());
+    stop.shutdown();
+}

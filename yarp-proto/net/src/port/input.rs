@@ -24,6 +24,12 @@ pub(crate) struct InputEntry {
     kill: Arc<Notify>,
 }
 
+impl InputEntry {
+    pub(crate) fn new(route: Route, kill: Arc<Notify>) -> InputEntry {
+        InputEntry { route, kill }
+    }
+}
+
 pub(crate) async fn accept_loop(shared: Arc<Shared>, listener: TcpListener) {
     let mut shutdown = shared.shutdown.clone();
     loop {

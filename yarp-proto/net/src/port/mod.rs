@@ -19,6 +19,7 @@
 mod dgram_out;
 mod http;
 mod input;
+mod local;
 pub(crate) mod output;
 
 use crate::nameserver::{NameClient, NameClientError};
@@ -185,6 +186,8 @@ impl Shared {
             .or(r.carrier.clone())
             .unwrap_or_else(|| "tcp".to_string());
         let contact = match &self.ns {
+            // same-process connections need no address
+            _ if carrier_name == "local" => Contact::new(&r.name, "local", "", 0),
             Some(ns) => ns
                 .query(&r.name)
                 .await?
@@ -295,6 +298,7 @@ impl Port {
             shutdown: shutdown_rx,
             next_id: AtomicU64::new(1),
         });
+        local::register(&shared);
         let accept_task = tokio::spawn(input::accept_loop(shared.clone(), listener));
         if shared.ns.is_some() {
             tokio::spawn(keep_registered(Arc::downgrade(&shared)));
@@ -446,6 +450,7 @@ impl Port {
 
 impl Drop for Port {
     fn drop(&mut self) {
+        local::unregister(&self.shared);
         let _ = self.shutdown_tx.send(true);
         self.accept_task.abort();
     }

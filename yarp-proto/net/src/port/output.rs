@@ -83,6 +83,16 @@ impl Outgoing {
         })
     }
 
+    /// The encoded Bottle.
+    pub(crate) fn payload(&self) -> &[u8] {
+        &self.binary
+    }
+
+    /// The envelope, if any.
+    pub(crate) fn stamp(&self) -> Option<Stamp> {
+        self.stamp
+    }
+
     /// The whole binary message (index, port command `D`, payload), as datagram carriers
     /// send it.
     pub(crate) fn binary_message(&self) -> Vec<u8> {
@@ -185,6 +195,9 @@ pub(crate) async fn connect(
     contact: &Contact,
     carrier: &str,
 ) -> Result<OutputHandle, OutputError> {
+    if carrier == "local" {
+        return super::local::connect(shared, target);
+    }
     if let Some(c @ (Carrier::Udp | Carrier::Mcast)) = super::carrier_by_name(carrier) {
         return super::dgram_out::connect(shared, target, contact, c).await;
     }
