@@ -61,8 +61,12 @@ enum Command {
     },
     /// Report where the name server is and whether it answers.
     Where,
-    /// Look for the name server and report it.
-    Detect,
+    /// Look for the name server (yarp.conf, then multicast) and report it; `--write`
+    /// saves it to yarp.conf.
+    Detect {
+        #[arg(allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Show or set the YARP namespace.
     Namespace { args: Vec<String> },
     /// Bottle debugging aid: convert between YARP text and the binary wire encoding.
@@ -97,8 +101,8 @@ fn main() -> ExitCode {
         Command::Wait { port } => cmd::net::wait(&port),
         Command::Clean => cmd::net::clean(),
         Command::Conf { args } => cmd::net::conf(&args),
-        Command::Where => cmd::net::where_(false),
-        Command::Detect => cmd::net::where_(true),
+        Command::Where => cmd::net::where_(),
+        Command::Detect { args } => cmd::net::detect(&args),
         Command::Namespace { args } => cmd::net::namespace(&args),
         Command::Bottle(c) => cmd::bottle::run(c),
         Command::LatencyTest { args } => cmd::latency::run(&args),

@@ -428,3 +428,38 @@ async fn local_carrier_between_ports_of_one_process() {
     assert!(w.connect("/nowhere", Some("local")).await.is_err());
     stop.shutdown();
 }
+
+#[tokio::test]
+async fn name_server_found_by_multicast() {
+    use yarp_net::nameserver::{fallback, ServerConfig};
+    // a port number of our own so that other servers in the namespace do not answer
+    let probe = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let mport = probe.local_addr().unwrap().port();
+    drop(probe);
+    let mut cfg = ServerConfig::new("127.0.0.1");
+    cfg.fallback_port = mport as i32;
+    let ns = NameServer::bind_with("127.0.0.1:0", cfg).await.unwrap();
+    let addr = ns.local_addr();
+    let stop = ns.shutdown_handle();
+    tokio::spawn(ns.serve());
+    let mut found = None;
+    for _ in 0..20 {
+        found = fallback::detect(
+            mport,
+            "/root",
+            std::net::Ipv4Addr::LOCALHOST,
+            Duration::from_millis(300),
+        )
+        .await
+        .expect("multicast available in the test namespace");
+        if found.is_some() {
+            break;
+        }
+    }
+    let c = found.expect("the server answered the multicast query");
+    assert_eq!(
+        (c.name.as_str(), c.host.as_str(), c.port),
+        ("/root", "127.0.0.1", addr.port())
+    );
+    stop.shutdown();
+}

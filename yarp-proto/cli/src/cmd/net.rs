@@ -321,49 +321,87 @@ pub fn conf(args: &[String]) -> Result<()> {
     Ok(())
 }
 
-/// `yarp where` / `yarp detect`: where the name server is, and whether it answers.
-pub fn where_(detect: bool) -> Result<()> {
+/// `yarp where`: where yarp.conf says the name server is, and whether it answers.
+pub fn where_() -> Result<()> {
     let conf = network::read_conf()?;
-    if detect {
+    println!(
+        "Looking for name server on {}, port number {}",
+        conf.host, conf.port
+    );
+    println!("If there is a long delay, try:\n  yarp conf --clean");
+    if !reachable(&conf.host, conf.port) {
+        println!("No valid name server found");
+        bail!("name server not available");
+    }
+    println!(
+        "Name server /root is available at ip {} port {}",
+        conf.host, conf.port
+    );
+    Ok(())
+}
+
+fn reachable(host: &str, port: i32) -> bool {
+    format!("{host}:{port}")
+        .parse()
+        .ok()
+        .is_some_and(|a| std::net::TcpStream::connect_timeout(&a, Duration::from_secs(3)).is_ok())
+}
+
+/// `yarp detect [--write]`: the name server of yarp.conf if it answers, else one found by
+/// multicast on 224.2.1.1 (as C++); `--write` stores what was found in yarp.conf.
+pub fn detect(args: &[String]) -> Result<()> {
+    let write = args.iter().any(|a| a == "--write");
+    let mut found = None;
+    if let Ok(conf) = network::read_conf() {
         println!(
             "Checking for name server at ip {} port {}",
             conf.host, conf.port
         );
-    } else {
-        println!(
-            "Looking for name server on {}, port number {}",
-            conf.host, conf.port
-        );
+        println!("If there is a long delay, try:\n  yarp conf --clean");
+        if reachable(&conf.host, conf.port) {
+            found = Some((conf.host.clone(), conf.port));
+        }
     }
-    println!("If there is a long delay, try:\n  yarp conf --clean");
-    let reachable = std::net::TcpStream::connect_timeout(
-        &format!("{}:{}", conf.host, conf.port)
-            .parse()
-            .map_err(|_| anyhow!("bad address in yarp.conf"))?,
-        Duration::from_secs(3),
-    )
-    .is_ok();
-    if !reachable {
+    if found.is_none() {
+        let port = std::env::var("YARP_PORT_RANGE")
+            .ok()
+            .and_then(|p| p.trim().parse().ok())
+            .unwrap_or(10000u16);
+        let env = |k: &str| std::env::var(k).ok();
+        let read = |p: &std::path::Path| std::fs::read_to_string(p).ok();
+        let space = yarp_proto::nameserver::namespace(&env, &read);
+        let c = runtime()?.block_on(async {
+            for _ in 0..3 {
+                let r = yarp_net::nameserver::fallback::detect(
+                    port,
+                    &space,
+                    std::net::Ipv4Addr::UNSPECIFIED,
+                    Duration::from_millis(500),
+                )
+                .await?;
+                if r.is_some() {
+                    return Ok::<_, anyhow::Error>(r);
+                }
+            }
+            Ok(None)
+        })?;
+        found = c.map(|c| (c.host, c.port as i32));
+    }
+    let Some((host, port)) = found else {
         println!("No valid name server found");
-        bail!("name server not available");
+        bail!("name server not found");
+    };
+    println!("\n=========================================================\n==\n== FOUND");
+    println!("== /root is available at ip {host} port {port}");
+    println!("== /root can be browsed at http://{host}:{port}/");
+    println!("== ");
+    if write {
+        network::write_conf(&host, port as u16)?;
+        println!("== Address saved.");
+        println!("== YARP programs will now be able to use the name server.");
+        println!("== ");
     }
-    if detect {
-        println!("\n=========================================================\n==\n== FOUND");
-        println!(
-            "== /root is available at ip {} port {}",
-            conf.host, conf.port
-        );
-        println!(
-            "== /root can be browsed at http://{}:{}/",
-            conf.host, conf.port
-        );
-        println!("== \n=========================================================");
-    } else {
-        println!(
-            "Name server /root is available at ip {} port {}",
-            conf.host, conf.port
-        );
-    }
+    println!("=========================================================");
     Ok(())
 }
 

@@ -3,6 +3,7 @@
 //! request bytes) lives in [`yarp_proto::nameserver`].
 
 mod client;
+pub mod fallback;
 pub mod program;
 mod server;
 

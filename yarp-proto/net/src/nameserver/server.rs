@@ -69,6 +69,8 @@ pub struct ServerConfig {
     pub echo_commands: bool,
     /// Registry settings other than host/port (taken from the fields above).
     pub fallback_port: i32,
+    /// Answer multicast discovery (`yarp detect`) on 224.2.1.1:`fallback_port`, as C++.
+    pub multicast_fallback: bool,
     /// The namespace name registered for the server itself.
     pub root_name: String,
 }
@@ -84,6 +86,7 @@ impl ServerConfig {
             max_connections: 512,
             echo_commands: false,
             fallback_port: 10000,
+            multicast_fallback: true,
             root_name: "/root".to_string(),
         }
     }
@@ -172,6 +175,20 @@ impl NameServer {
             mut shutdown_rx,
             ..
         } = self;
+        if ctx.config.multicast_fallback {
+            let iface = ctx
+                .config
+                .advertised_host
+                .parse()
+                .unwrap_or(std::net::Ipv4Addr::UNSPECIFIED);
+            let port = u16::try_from(ctx.config.fallback_port).unwrap_or(10000);
+            tokio::spawn(super::fallback::serve(
+                ctx.registry.clone(),
+                port,
+                iface,
+                shutdown_rx.clone(),
+            ));
+        }
         let limit = Arc::new(Semaphore::new(ctx.config.max_connections.max(1)));
         let mut tasks = JoinSet::new();
         loop {
