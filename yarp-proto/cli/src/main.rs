@@ -28,6 +28,11 @@ enum Command {
     Read { port: String, rest: Vec<String> },
     /// Write stdin lines (one Bottle each) to a port: `yarp write /port [/target...]`.
     Write { port: String, targets: Vec<String> },
+    /// Read from one port and write stdin lines to another: `yarp readwrite /in /out`.
+    Readwrite {
+        read_port: String,
+        write_port: String,
+    },
     /// Send stdin lines as RPC commands to a port and print the replies.
     Rpc {
         target: String,
@@ -88,6 +93,10 @@ fn main() -> ExitCode {
         Command::Server { args } => cmd::net::server(&args),
         Command::Read { port, rest } => cmd::net::read(&port, &rest),
         Command::Write { port, targets } => cmd::net::write(&port, &targets),
+        Command::Readwrite {
+            read_port,
+            write_port,
+        } => cmd::net::readwrite(&read_port, &write_port),
         Command::Rpc { target, carrier } => cmd::net::rpc(&target, carrier.as_deref()),
         Command::Rpcserver { port } => cmd::net::rpcserver(&port),
         Command::Connect { from, to, carrier } => cmd::net::connect(&from, &to, carrier.as_deref()),

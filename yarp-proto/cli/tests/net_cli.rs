@@ -203,3 +203,44 @@ fn conf_and_where() {
     assert!(ok);
     assert!(out.trim_end().ends_with("yarp.conf"));
 }
+
+#[test]
+fn readwrite_reads_one_port_and_writes_another() {
+    let env = Env::new("rwr");
+    let mut rw = Reaped(
+        env.yarp(&["readwrite", "/rw/in", "/rw/out"])
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    );
+    let got = lines(&mut rw.0);
+    env.wait_exists("/rw/out");
+    let mut reader = Reaped(
+        env.yarp(&["read", "/rw/check"])
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    );
+    let checked = lines(&mut reader.0);
+    env.wait_exists("/rw/check");
+    assert!(env.run(&["connect", "/rw/out", "/rw/check"]).0);
+    let stdin = rw.0.stdin.as_mut().unwrap();
+    stdin.write_all(b"from stdin 1\n").unwrap();
+    stdin.flush().unwrap();
+    let t = Duration::from_secs(10);
+    assert_eq!(checked.recv_timeout(t).unwrap(), "from stdin 1");
+    let mut w = env
+        .yarp(&["write", "/rw/w", "/rw/in"])
+        .stdin(Stdio::piped())
+        .spawn()
+        .unwrap();
+    w.stdin
+        .as_mut()
+        .unwrap()
+        .write_all(b"to the reader 2\n")
+        .unwrap();
+    drop(w.stdin.take());
+    let _ = w.wait();
+    assert_eq!(got.recv_timeout(t).unwrap(), "to the reader 2");
+}

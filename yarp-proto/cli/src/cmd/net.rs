@@ -111,6 +111,44 @@ pub fn write(port: &str, targets: &[String]) -> Result<()> {
     })
 }
 
+/// `yarp readwrite <read-port> <write-port>`: prints what arrives on the first port and
+/// writes stdin lines (one Bottle each) from the second.
+pub fn readwrite(read_port: &str, write_port: &str) -> Result<()> {
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        let r = Port::open(read_port, ns.clone()).await?;
+        let w = Port::open(write_port, ns).await?;
+        let (tx, mut rx) = tokio::sync::mpsc::channel::<String>(16);
+        std::thread::spawn(move || {
+            for line in std::io::stdin().lock().lines() {
+                let Ok(line) = line else { break };
+                if tx.blocking_send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        loop {
+            tokio::select! {
+                _ = stop_signal() => break,
+                line = rx.recv() => {
+                    let Some(line) = line else { break };
+                    w.write(&Bottle::from_text(line.trim_end_matches('\r'))).await;
+                }
+                m = r.read() => {
+                    let Some(m) = m else { break };
+                    match m.bottle() {
+                        Ok(b) => println!("{b}"),
+                        Err(e) => eprintln!("yarp: undecodable message from {}: {e}", m.from),
+                    }
+                }
+            }
+        }
+        w.close().await;
+        r.close().await;
+        Ok(())
+    })
+}
+
 /// Prints an RPC reply as `yarp rpc` does (`Response:` or `Responses:` for `[many]`).
 fn print_response(reply: &Bottle) {
     if reply.get(0) == Some(&Value::vocab("many")) {
