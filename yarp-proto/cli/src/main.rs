@@ -55,6 +55,11 @@ enum Command {
     },
     /// Exit status 0 if a port (or a connection `/from /to`) exists, 1 otherwise.
     Exists { args: Vec<String> },
+    /// Describe a port, or time connections to it (`--time`).
+    Ping {
+        #[arg(allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Wait until a port exists.
     Wait { port: String },
     /// Unregister ports that no longer answer.
@@ -88,6 +93,13 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    // Behave like C tools when the reader of our output goes away (`yarp read | head`):
+    // end quietly on SIGPIPE instead of panicking on a failed print.
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Server { args } => cmd::net::server(&args),
@@ -107,6 +119,7 @@ fn main() -> ExitCode {
             Ok(false) => return ExitCode::FAILURE,
             Err(e) => Err(e),
         },
+        Command::Ping { args } => cmd::net::ping(&args),
         Command::Wait { port } => cmd::net::wait(&port),
         Command::Clean => cmd::net::clean(),
         Command::Conf { args } => cmd::net::conf(&args),

@@ -244,3 +244,35 @@ fn readwrite_reads_one_port_and_writes_another() {
     let _ = w.wait();
     assert_eq!(got.recv_timeout(t).unwrap(), "to the reader 2");
 }
+
+#[test]
+fn ping_describes_a_port() {
+    let env = Env::new("ping");
+    let _reader = Reaped(
+        env.yarp(&["read", "/pinged"])
+            .stdout(Stdio::null())
+            .spawn()
+            .unwrap(),
+    );
+    env.wait_exists("/pinged");
+    let (ok, out) = env.run(&["ping", "/pinged"]);
+    assert!(ok, "{out}");
+    assert!(
+        out.starts_with("This is /pinged at tcp://127.0.0.1:"),
+        "{out}"
+    );
+    assert!(
+        out.contains("There is an input connection from <ping> to /pinged using text_ack"),
+        "{out}"
+    );
+    let (ok, out) = env.run(&["ping", "--time", "/pinged"]);
+    assert!(ok);
+    assert!(
+        out.starts_with("Timing communication with /pinged...\n"),
+        "{out}"
+    );
+    assert!(out.contains("connection time"), "{out}");
+    let (ok, out) = env.run(&["ping", "/nobody"]);
+    assert!(ok, "C++ exits 0 here too");
+    assert_eq!(out, "[ERROR] could not find port\n");
+}

@@ -112,6 +112,26 @@ pub async fn admin_text(contact: &Contact, lines: &[&str]) -> Result<String, Net
         .unwrap_or_default())
 }
 
+/// A text_ack session as `sender` (C++ `yarp ping` uses `<ping>`): sends each line, then
+/// `q`, and returns what the port wrote back after its welcome line, without the
+/// `<ACK>` lines.
+pub async fn admin_text_ack(
+    contact: &Contact,
+    sender: &str,
+    lines: &[&str],
+) -> Result<String, NetworkError> {
+    let mut req = format!("CONNACK {sender}\r\n").into_bytes();
+    for l in lines {
+        req.extend_from_slice(l.as_bytes());
+        req.extend_from_slice(b"\r\n");
+    }
+    req.extend_from_slice(b"q\r\n");
+    let reply = session(contact, &req, b"").await?;
+    let text = String::from_utf8_lossy(&reply).into_owned();
+    let body = text.split_once("\r\n").map(|(_, r)| r).unwrap_or("");
+    Ok(body.replace("<ACK>\r\n", ""))
+}
+
 /// Writes `req`, reads until `until` appears (or the port closes), bounded in time.
 async fn session(contact: &Contact, req: &[u8], until: &[u8]) -> Result<Vec<u8>, NetworkError> {
     let name = contact.name.clone();

@@ -149,6 +149,78 @@ pub fn readwrite(read_port: &str, write_port: &str) -> Result<()> {
     })
 }
 
+/// `yarp ping <port>` describes a port (what it is connected to) as the port itself tells
+/// it; `yarp ping --time <port>` times connections to it, in C++'s format.
+pub fn ping(args: &[String]) -> Result<()> {
+    let time = args.iter().any(|a| a == "--time");
+    let Some(port) = args.iter().find(|a| !a.starts_with("--")) else {
+        bail!("usage: yarp ping [--time] <port>");
+    };
+    runtime()?.block_on(async {
+        let ns = network::name_client()?;
+        let Some(contact) = ns.query(port).await? else {
+            // C++ reports this and still exits 0
+            println!("[ERROR] could not find port");
+            return Ok(());
+        };
+        if !time {
+            let text = network::admin_text_ack(&contact, "<ping>", &["*"]).await?;
+            print!("{}", text.replace("\r\n", "\n"));
+            return Ok(());
+        }
+        println!("Timing communication with {port}...");
+        let (mut conn, mut total) = (Vec::new(), Vec::new());
+        for i in 1..=10 {
+            let t0 = std::time::Instant::now();
+            let c = ns
+                .query(port)
+                .await?
+                .ok_or_else(|| anyhow!("{port} disappeared"))?;
+            let t1 = std::time::Instant::now();
+            network::admin_text_ack(&c, "<ping>", &[]).await?;
+            let t2 = std::time::Instant::now();
+            conn.push((t2 - t1).as_secs_f64());
+            total.push((t2 - t0).as_secs_f64());
+            println!("[INFO] |yarp.os.Ping| Ping #{i}:");
+            println!(
+                "[INFO] |yarp.os.Ping|   {} connection time ({} with name lookup)",
+                fmt_secs(conn[conn.len() - 1]),
+                fmt_secs(total[total.len() - 1])
+            );
+            if i > 1 {
+                let (m1, s1) = mean_sd(&conn);
+                let (m2, s2) = mean_sd(&total);
+                println!(
+                    "[INFO] |yarp.os.Ping|   {} +/- {} on average ({} +/- {} with name lookup)",
+                    fmt_secs(m1),
+                    fmt_secs(s1),
+                    fmt_secs(m2),
+                    fmt_secs(s2)
+                );
+            }
+        }
+        Ok(())
+    })
+}
+
+fn mean_sd(x: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let m = x.iter().sum::<f64>() / n;
+    let v = x.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / n;
+    (m, v.sqrt())
+}
+
+/// `494.71855 us` / `1.59192 ms`, as C++ Ping prints durations.
+fn fmt_secs(s: f64) -> String {
+    if s < 1e-3 {
+        format!("{:.5} us", s * 1e6)
+    } else if s < 1.0 {
+        format!("{:.5} ms", s * 1e3)
+    } else {
+        format!("{s:.5} s")
+    }
+}
+
 /// Prints an RPC reply as `yarp rpc` does (`Response:` or `Responses:` for `[many]`).
 fn print_response(reply: &Bottle) {
     if reply.get(0) == Some(&Value::vocab("many")) {
