@@ -1370,3 +1370,101 @@ fn zz_print_interop_matrix() {
     }
     loud(text.trim_end());
 }
+
+// ---------------------------------------------------------------------------------------
+// Multicast discovery (`yarp detect`): each side finds the other's name server through
+// the fallback group 224.2.1.1 at the port number `YARP_PORT_RANGE` names (unique here,
+// so that the other tests' servers do not answer).
+// ---------------------------------------------------------------------------------------
+
+fn detect_found(out: &Out, port: u16) -> bool {
+    out.stdout.contains(&format!(
+        "== /root is available at ip 127.0.0.1 port {port}"
+    ))
+}
+
+#[test]
+fn detect_rust_finds_cpp_server_by_multicast() {
+    let Some(cpp) = cpp_bin() else {
+        skipped("detect_rust_finds_cpp_server");
+        return;
+    };
+    let dir = TempDir::new("detect_rust_finds_cpp");
+    let port = server_port();
+    let range = port.to_string();
+    std::fs::write(dir.0.join("yarp.conf"), format!("127.0.0.1 {port} yarp\n")).unwrap();
+    let mut c = Command::new(cpp_program(&cpp, "yarpserver"));
+    c.args(["--ip", "127.0.0.1", "--socket", &range, "--read"])
+        .env("YARP_CONFIG_HOME", &dir.0)
+        .env("YARP_PORT_RANGE", &range);
+    let _server = Proc::spawn("C++ yarpserver", c);
+    // the server reads yarp.conf (--read) at start: wait for it before hiding the file
+    let t0 = Instant::now();
+    while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+        assert!(t0.elapsed() < WAIT, "C++ yarpserver never listened");
+        thread::sleep(Duration::from_millis(50));
+    }
+    thread::sleep(Duration::from_millis(300));
+    loop {
+        let _ = std::fs::remove_file(dir.0.join("yarp.conf"));
+        let mut ours = Command::new(env!("CARGO_BIN_EXE_yarp"));
+        ours.args(["detect", "--write"])
+            .env("YARP_CONFIG_HOME", &dir.0)
+            .env("YARP_PORT_RANGE", &range)
+            .env_remove("YARP_NAMESPACE");
+        let out = run_cmd(ours, "", WAIT);
+        if out.ok && detect_found(&out, port) {
+            let conf = std::fs::read_to_string(dir.0.join("yarp.conf")).unwrap_or_default();
+            assert_eq!(conf, format!("127.0.0.1 {port} yarp\n"));
+            break;
+        }
+        assert!(
+            t0.elapsed() < WAIT * 2,
+            "never found the C++ server: {out:?}"
+        );
+        thread::sleep(Duration::from_millis(200));
+    }
+    report("rust `yarp detect --write` finds the C++ yarpserver by multicast");
+}
+
+#[test]
+fn detect_cpp_finds_rust_server_by_multicast() {
+    let Some(cpp) = cpp_bin() else {
+        skipped("detect_cpp_finds_rust_server");
+        return;
+    };
+    let dir = TempDir::new("detect_cpp_finds_rust");
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    let port = server_port();
+    let mut cfg = yarp_net::nameserver::ServerConfig::new("127.0.0.1");
+    cfg.fallback_port = i32::from(port);
+    let ns = rt
+        .block_on(yarp_net::nameserver::NameServer::bind_with(
+            ("127.0.0.1", port),
+            cfg,
+        ))
+        .expect("bind our name server");
+    rt.spawn(ns.serve());
+    let range = port.to_string();
+    let t0 = Instant::now();
+    loop {
+        let _ = std::fs::remove_file(dir.0.join("yarp.conf"));
+        let mut c = Command::new(cpp_program(&cpp, "yarp"));
+        c.args(["detect", "--write"])
+            .env("YARP_CONFIG_HOME", &dir.0)
+            .env("YARP_PORT_RANGE", &range)
+            .env_remove("YARP_NAMESPACE");
+        let out = run_cmd(c, "", WAIT);
+        if detect_found(&out, port) {
+            let conf = std::fs::read_to_string(dir.0.join("yarp.conf")).unwrap_or_default();
+            assert!(conf.starts_with(&format!("127.0.0.1 {port}")), "{conf:?}");
+            break;
+        }
+        assert!(
+            t0.elapsed() < WAIT * 2,
+            "C++ never found our server: {out:?}"
+        );
+        thread::sleep(Duration::from_millis(200));
+    }
+    report("C++ `yarp detect --write` finds our name server by multicast");
+}
