@@ -63,6 +63,52 @@ fn put_i32(out: &mut Vec<u8>, x: i32) {
     out.extend_from_slice(&x.to_le_bytes());
 }
 
+/// Strings and blobs at least this long are lent, not copied, by [`encode_segments`].
+pub const LEND_MIN: usize = 16 * 1024;
+
+/// The encoding of a top-level Bottle as a list of byte segments whose concatenation is
+/// exactly [`encode`]'s output: large strings and blobs are borrowed from the Bottle, so
+/// a vectored write sends them without a copy.
+pub fn encode_segments(b: &Bottle) -> Vec<std::borrow::Cow<'_, [u8]>> {
+    let mut segs = Vec::new();
+    let mut cur = Vec::with_capacity(64);
+    let sub = b.homogeneous_tag();
+    put_i32(&mut cur, tags::LIST | sub);
+    segment_content(b, sub, &mut cur, &mut segs);
+    if !cur.is_empty() {
+        segs.push(std::borrow::Cow::Owned(cur));
+    }
+    segs
+}
+
+fn segment_content<'a>(
+    b: &'a Bottle,
+    sub: i32,
+    cur: &mut Vec<u8>,
+    segs: &mut Vec<std::borrow::Cow<'a, [u8]>>,
+) {
+    put_i32(cur, b.len() as i32);
+    for v in b.iter() {
+        if sub == 0 {
+            put_i32(cur, v.tag());
+        }
+        match v {
+            Value::String(s) | Value::Blob(s) if s.len() >= LEND_MIN => {
+                put_i32(cur, s.len() as i32);
+                segs.push(std::borrow::Cow::Owned(std::mem::take(cur)));
+                segs.push(std::borrow::Cow::Borrowed(s.as_slice()));
+            }
+            Value::List(inner) => segment_content(inner, inner.homogeneous_tag(), cur, segs),
+            Value::Dict(inner) => {
+                let isub = inner.homogeneous_tag();
+                put_i32(cur, tags::LIST | isub);
+                segment_content(inner, isub, cur, segs);
+            }
+            other => write_raw(other, cur),
+        }
+    }
+}
+
 /// Decodes a top-level Bottle; returns it with the number of bytes it used.
 pub fn decode(bytes: &[u8]) -> Result<(Bottle, usize), DecodeError> {
     let mut r = Reader::new(bytes);
@@ -404,5 +450,35 @@ mod tests {
 
     fn hex(b: &[u8]) -> String {
         b.iter().map(|x| format!("{x:02x}")).collect()
+    }
+}
+
+#[cfg(test)]
+mod segment_tests {
+    use super::*;
+    use crate::bottle;
+
+    #[test]
+    fn segments_concatenate_to_the_encoding() {
+        let big = vec![7u8; LEND_MIN + 3];
+        let mut nested = Bottle::new();
+        nested.push(Value::Blob(big.clone())).push("x");
+        let mut dict = Bottle::new();
+        dict.add_list().push("k").push(Value::String(big.clone()));
+        let cases = [
+            bottle![1, 2, 3],
+            bottle![Value::Blob(big.clone())],
+            bottle![
+                Value::Blob(big.clone()),
+                4,
+                Value::List(nested),
+                Value::Dict(dict)
+            ],
+            Bottle::new(),
+        ];
+        for b in cases {
+            let joined: Vec<u8> = encode_segments(&b).concat();
+            assert_eq!(joined, b.encode());
+        }
     }
 }

@@ -1,7 +1,7 @@
 //! Input side: accepting connections, reading the carrier header, and serving each
 //! connection's messages (data to the owner, admin commands, text-mode commands).
 
-use super::output::{self, next_event_buf, read_buffer, write_all_2, OutputError};
+use super::output::{self, next_event_buf, read_buffer, write_all_2, write_all_parts, OutputError};
 use super::{Incoming, Shared};
 use std::sync::Arc;
 use tokio::io::AsyncWriteExt;
@@ -286,13 +286,21 @@ impl Conn<'_> {
                     None => None,
                 };
                 match reply {
+                    Some(b) if text => {
+                        self.reply_and_ack(stream, &port_admin::reply_text_line(&b))
+                            .await?;
+                    }
                     Some(b) => {
-                        let bytes = if text {
-                            port_admin::reply_text_line(&b)
-                        } else {
-                            b.encode()
-                        };
-                        self.reply_and_ack(stream, &bytes).await?;
+                        // large blobs in the reply go out straight from the Bottle
+                        let segs = yarp_proto::binary::encode_segments(&b);
+                        let mut parts: Vec<&[u8]> = segs.iter().map(|s| s.as_ref()).collect();
+                        parts.push(self.ack_bytes().unwrap_or_default());
+                        write_all_parts(stream, &parts).await.map_err(|source| {
+                            OutputError::Io {
+                                target: self.from.clone(),
+                                source,
+                            }
+                        })?;
                     }
                     None => self.ack(stream).await?,
                 }

@@ -127,6 +127,42 @@ impl Outgoing {
     }
 }
 
+/// Writes every part in order with vectored writes (`writev`), so that large parts lent by
+/// `binary::encode_segments` go out without being copied into one buffer.
+pub(crate) async fn write_all_parts(
+    stream: &mut TcpStream,
+    parts: &[&[u8]],
+) -> std::io::Result<()> {
+    let mut idx = 0;
+    let mut off = 0;
+    while idx < parts.len() {
+        if parts[idx].len() == off {
+            idx += 1;
+            off = 0;
+            continue;
+        }
+        let slices: Vec<IoSlice<'_>> = std::iter::once(IoSlice::new(&parts[idx][off..]))
+            .chain(parts[idx + 1..].iter().take(63).map(|p| IoSlice::new(p)))
+            .collect();
+        let mut n = stream.write_vectored(&slices).await?;
+        if n == 0 {
+            return Err(std::io::ErrorKind::WriteZero.into());
+        }
+        while n > 0 && idx < parts.len() {
+            let left = parts[idx].len() - off;
+            if n >= left {
+                n -= left;
+                idx += 1;
+                off = 0;
+            } else {
+                off += n;
+                n = 0;
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Writes `a` then `b` with as few system calls as the socket allows (`writev`).
 pub(crate) async fn write_all_2(stream: &mut TcpStream, a: &[u8], b: &[u8]) -> std::io::Result<()> {
     let (mut a, mut b) = (a, b);
