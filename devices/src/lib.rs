@@ -1,3 +1,15 @@
-//! YARP device layer: drivers, interface families and network wrappers.
-//!
-//! Not implemented yet; see the project's issue tracker (device layer issue).
+//! YARP device layer: the driver framework (`DeviceDriver`, `Registry`, `PolyDriver`),
+//! the motor-control interface traits, the `fakeMotionControl` device and the
+//! `controlBoard_nws_yarp` RPC server, wire-compatible with C++ YARP 3.12.
+
+pub mod controlboard;
+pub mod driver;
+pub mod error;
+pub mod fake_motion_control;
+pub mod interfaces;
+pub mod vocabs;
+
+pub use driver::{DeviceDriver, Params, PolyDriver, Registry};
+pub use error::{DevResult, DeviceError};
+pub use fake_motion_control::FakeMotionControl;
+pub use interfaces::*;

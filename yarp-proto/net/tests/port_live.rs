@@ -127,6 +127,12 @@ async fn telnet_style_text_session_and_admin() {
     );
     assert!(desc.contains("There is an input connection from /rawtext to /rd using text"));
 
+    // the paper's session: a sender name without a slash
+    let mut p = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
+    p.write_all(b"CONNECT foo\n").await.unwrap();
+    assert_eq!(read_until(&mut p, b"\r\n").await, b"Welcome foo\r\n");
+    drop(p);
+
     let mut a = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
     a.write_all(b"CONNACK /rawadm\n").await.unwrap();
     read_until(&mut a, b"Welcome /rawadm\r\n").await;

@@ -53,6 +53,7 @@ pub(crate) async fn serve(shared: &Arc<Shared>, stream: &mut TcpStream, mut head
             stamp: None,
             from: "http".to_string(),
             reply: None,
+            decoded: None,
         };
         if shared.deliver.send(incoming).await.is_ok() {
             note = format!("<p>Sent: {}</p>\n", escape(&b.to_string()));

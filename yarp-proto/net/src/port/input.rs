@@ -277,6 +277,7 @@ impl Conn<'_> {
                     is_text: text,
                     from: self.from.clone(),
                     reply: tx,
+                    decoded: None,
                 };
                 if self.shared.deliver.send(incoming).await.is_err() {
                     return Ok(Some(End::Closed));
@@ -529,6 +530,7 @@ async fn datagram_input(
             is_text: false,
             from: from.clone(),
             reply: None,
+            decoded: None,
         };
         if shared.deliver.send(incoming).await.is_err() {
             break;

@@ -80,11 +80,12 @@ async fn run(
         match job {
             Job::Data(msg) => {
                 let incoming = Incoming {
-                    payload: msg.payload().to_vec(),
+                    payload: Vec::new(),
                     is_text: false,
                     stamp: msg.stamp(),
                     from: from.clone(),
                     reply: None,
+                    decoded: Some(msg.bottle().clone()),
                 };
                 if shared.deliver.send(incoming).await.is_err() {
                     break;
@@ -93,11 +94,12 @@ async fn run(
             Job::Rpc(msg, reply_tx) => {
                 let (tx, rx) = oneshot::channel();
                 let incoming = Incoming {
-                    payload: msg.payload().to_vec(),
+                    payload: Vec::new(),
                     is_text: false,
                     stamp: msg.stamp(),
                     from: from.clone(),
                     reply: Some(tx),
+                    decoded: Some(msg.bottle().clone()),
                 };
                 if shared.deliver.send(incoming).await.is_err() {
                     break;

@@ -70,7 +70,8 @@ pub enum PortError {
 /// A message received by a port.
 #[derive(Debug)]
 pub struct Incoming {
-    /// The payload: Bottle bytes (binary carriers) or Bottle text (text carriers).
+    /// The payload: Bottle bytes (binary carriers) or Bottle text (text carriers). Empty
+    /// for messages from a port of this process over `local`: use [`Incoming::bottle`].
     pub payload: Vec<u8>,
     /// The payload is text (from a text carrier), not binary.
     pub is_text: bool,
@@ -79,11 +80,16 @@ pub struct Incoming {
     /// The sending port's name.
     pub from: String,
     reply: Option<oneshot::Sender<Bottle>>,
+    /// The Bottle itself, when it never left this process (`local`).
+    pub(crate) decoded: Option<Bottle>,
 }
 
 impl Incoming {
     /// The payload as a Bottle.
     pub fn bottle(&self) -> Result<Bottle, DecodeError> {
+        if let Some(b) = &self.decoded {
+            return Ok(b.clone());
+        }
         if self.is_text {
             Ok(Bottle::from_text(&self.payload))
         } else {

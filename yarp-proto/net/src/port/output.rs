@@ -49,12 +49,12 @@ pub enum OutputError {
 
 /// A message ready to go out on any carrier.
 ///
-/// The Bottle is encoded once, when the message is made; every binary connection writes
-/// those bytes directly after its own index and port command (one vectored write, no
-/// copy into a message buffer). The text form is made only if a text connection needs
-/// it, from the encoded bytes (the binary codec round-trips exactly).
+/// It keeps the Bottle; binary connections write it as index + port command + the
+/// Bottle's encoding segments in one vectored write (large strings and blobs lent, not
+/// copied); the text form and the flat encoding (datagrams) are made once, on demand.
 pub(crate) struct Outgoing {
-    binary: Vec<u8>,
+    bottle: Bottle,
+    binary: OnceLock<Vec<u8>>,
     text: OnceLock<Vec<u8>>,
     stamp: Option<Stamp>,
 }
@@ -62,7 +62,8 @@ pub(crate) struct Outgoing {
 impl Outgoing {
     pub(crate) fn new(bottle: &Bottle, stamp: Option<Stamp>) -> Outgoing {
         Outgoing {
-            binary: bottle.encode(),
+            bottle: bottle.clone(),
+            binary: OnceLock::new(),
             text: OnceLock::new(),
             stamp,
         }
@@ -76,16 +77,17 @@ impl Outgoing {
     }
 
     fn text(&self) -> &[u8] {
-        self.text.get_or_init(|| {
-            Bottle::decode(&self.binary)
-                .map(|b| b.to_text())
-                .unwrap_or_default()
-        })
+        self.text.get_or_init(|| self.bottle.to_text())
+    }
+
+    /// The Bottle being sent.
+    pub(crate) fn bottle(&self) -> &Bottle {
+        &self.bottle
     }
 
     /// The encoded Bottle.
     pub(crate) fn payload(&self) -> &[u8] {
-        &self.binary
+        self.binary.get_or_init(|| self.bottle.encode())
     }
 
     /// The envelope, if any.
@@ -96,8 +98,9 @@ impl Outgoing {
     /// The whole binary message (index, port command `D`, payload), as datagram carriers
     /// send it.
     pub(crate) fn binary_message(&self) -> Vec<u8> {
-        let mut out = Vec::with_capacity(self.binary.len() + 64);
-        wire::encode_message(&self.command(false), &[&self.binary], &mut out);
+        let payload = self.payload();
+        let mut out = Vec::with_capacity(payload.len() + 64);
+        wire::encode_message(&self.command(false), &[payload], &mut out);
         out
     }
 
@@ -115,13 +118,17 @@ impl Outgoing {
                 stream.write_all(&out).await
             }
             _ => {
-                // the bytes of `wire::encode_message(cmd, &[&self.binary])`: index, port
-                // command, payload
+                // the bytes of `wire::encode_message(cmd, &[&encoding])`: index, port
+                // command, payload; the payload straight from the Bottle's segments
+                let segs = yarp_proto::binary::encode_segments(&self.bottle);
+                let len: usize = segs.iter().map(|s| s.len()).sum();
                 let mut head = Vec::with_capacity(64);
-                Index::new(vec![cmd.binary_len() as u32, self.binary.len() as u32])
-                    .encode(&mut head);
+                Index::new(vec![cmd.binary_len() as u32, len as u32]).encode(&mut head);
                 cmd.encode_binary(&mut head);
-                write_all_2(stream, &head, &self.binary).await
+                let mut parts: Vec<&[u8]> = Vec::with_capacity(segs.len() + 1);
+                parts.push(&head);
+                parts.extend(segs.iter().map(|s| s.as_ref()));
+                write_all_parts(stream, &parts).await
             }
         }
     }

@@ -1,0 +1,561 @@
+//! `controlBoard_nws_yarp`: the control-board RPC protocol (C++ `RPCMessagesParser`)
+//! as a pure function, `handle_rpc`, plus a tokio server on `/<name>/rpc:i`.
+//!
+//! Replies: `set` commands answer `[ok]`/`[fail]`; most `get` commands answer
+//! `[is] <echoed token> <value> [tsta] <count> <time> [ok]`; commands shorter than two
+//! elements answer `[nak]`; anything not understood (or failing) answers `[fail]`.
+
+use crate::driver::{DeviceDriver, PolyDriver};
+use crate::vocabs::*;
+use std::sync::{Arc, Mutex};
+use std::time::{SystemTime, UNIX_EPOCH};
+use yarp_net::port::{Port, PortError};
+use yarp_proto::{Bottle, Stamp, Value, Vocab32};
+
+/// The stamp appended to `get` replies; its count increases with each one.
+#[derive(Debug, Default, Clone)]
+pub struct RpcStamp {
+    next: i32,
+}
+
+impl RpcStamp {
+    pub fn new() -> Self {
+        Self::default()
+    }
+    /// Next stamp with the current wall-clock time.
+    pub fn update(&mut self) -> Stamp {
+        let t = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .map(|d| d.as_secs_f64())
+            .unwrap_or(0.0);
+        let s = Stamp::new(self.next, t);
+        self.next = self.next.wrapping_add(1);
+        s
+    }
+}
+
+/// C++ `Value::asVocab32`: vocabs, and strings (packed) as in `get axes`.
+fn vocab(v: Option<&Value>) -> i32 {
+    match v {
+        Some(Value::Vocab32(x)) => x.0,
+        Some(Value::String(s)) => Vocab32::encode(s).0,
+        _ => 0,
+    }
+}
+
+fn int(cmd: &Bottle, i: usize) -> i32 {
+    cmd.get(i).and_then(Value::as_i32).unwrap_or(0)
+}
+fn joint(cmd: &Bottle, i: usize) -> Option<usize> {
+    usize::try_from(int(cmd, i)).ok()
+}
+fn float(cmd: &Bottle, i: usize) -> f64 {
+    cmd.get(i).and_then(Value::as_f64).unwrap_or(0.0)
+}
+fn floats(cmd: &Bottle, i: usize) -> Option<Vec<f64>> {
+    Some(
+        cmd.get(i)?
+            .as_list()?
+            .iter()
+            .map(|v| v.as_f64().unwrap_or(0.0))
+            .collect(),
+    )
+}
+fn joints(cmd: &Bottle, i: usize) -> Option<Vec<usize>> {
+    cmd.get(i)?
+        .as_list()?
+        .iter()
+        .map(|v| v.as_i64().and_then(|x| usize::try_from(x).ok()))
+        .collect()
+}
+/// `n (joints) (values)` group arguments with matching sizes.
+fn group(cmd: &Bottle, i: usize) -> Option<(Vec<usize>, Vec<f64>)> {
+    let n = usize::try_from(int(cmd, i)).ok()?;
+    let js = joints(cmd, i + 1)?;
+    let vs = floats(cmd, i + 2)?;
+    (js.len() == n && vs.len() == n).then_some((js, vs))
+}
+fn float_list(v: &[f64]) -> Value {
+    Value::List(v.iter().copied().collect())
+}
+fn vocab_list(v: &[Vocab32]) -> Value {
+    Value::List(v.iter().copied().collect())
+}
+fn stamp_into(resp: &mut Bottle, stamp: &mut RpcStamp) {
+    let s = stamp.update();
+    resp.push(Vocab32(TIMESTAMP)).push(s.count).push(s.time);
+}
+
+/// Serves one control-board RPC command against `dev` and returns the reply.
+pub fn handle_rpc(cmd: &Bottle, dev: &mut dyn DeviceDriver, stamp: &mut RpcStamp) -> Bottle {
+    let mut resp = Bottle::new();
+    if cmd.len() < 2 {
+        resp.push(Vocab32(NAK));
+        return resp;
+    }
+    let ok = dispatch(cmd, dev, stamp, &mut resp).unwrap_or(false);
+    if ok {
+        resp.push(Vocab32(OK));
+    } else {
+        resp.clear();
+        resp.push(Vocab32(FAILED));
+    }
+    resp
+}
+
+/// `None` or `Some(false)`: failed / not understood.
+fn dispatch(
+    cmd: &Bottle,
+    dev: &mut dyn DeviceDriver,
+    stamp: &mut RpcStamp,
+    resp: &mut Bottle,
+) -> Option<bool> {
+    let action = vocab(cmd.get(0));
+    let family = vocab(cmd.get(1));
+    match family {
+        TORQUE => return torque(cmd, action, dev, stamp, resp),
+        INTERACTION_MODE_IFACE => return interaction(cmd, action, dev, stamp, resp),
+        PID => return pid(cmd, action, dev, resp),
+        CURRENT_IFACE | PWM_IFACE => {
+            if action != GET || vocab(cmd.get(2)) != REF {
+                return Some(false);
+            }
+            let j = joint(cmd, 3)?;
+            let v = if family == CURRENT_IFACE {
+                dev.as_current_control()?.get_ref_current(j).ok()?
+            } else {
+                dev.as_pwm_control()?.get_ref_duty_cycle(j).ok()?
+            };
+            resp.push(Vocab32(IS)).push(cmd[1].clone()).push(v);
+            return Some(true);
+        }
+        _ => {}
+    }
+    match action {
+        SET => set(cmd, dev).map(|r| r.is_some()),
+        GET => {
+            resp.push(Vocab32(IS));
+            if family == ICONTROLMODE {
+                resp.push(cmd.get(2)?.clone());
+            } else {
+                resp.push(cmd[1].clone());
+            }
+            get(cmd, dev, resp)?;
+            stamp_into(resp, stamp);
+            Some(true)
+        }
+        _ => Some(false),
+    }
+}
+
+fn set(cmd: &Bottle, dev: &mut dyn DeviceDriver) -> Option<Option<()>> {
+    let r = match vocab(cmd.get(1)) {
+        POSITION_MOVE => dev
+            .as_position_control()?
+            .position_move(joint(cmd, 2)?, float(cmd, 3)),
+        POSITION_MOVES => dev.as_position_control()?.position_moves(&floats(cmd, 2)?),
+        POSITION_MOVE_GROUP => {
+            let (js, vs) = group(cmd, 2)?;
+            dev.as_position_control()?.position_move_group(&js, &vs)
+        }
+        RELATIVE_MOVE => dev
+            .as_position_control()?
+            .relative_move(joint(cmd, 2)?, float(cmd, 3)),
+        RELATIVE_MOVES => dev.as_position_control()?.relative_moves(&floats(cmd, 2)?),
+        RELATIVE_MOVE_GROUP => {
+            let (js, vs) = group(cmd, 2)?;
+            dev.as_position_control()?.relative_move_group(&js, &vs)
+        }
+        REF_SPEED => dev
+            .as_position_control()?
+            .set_ref_speed(joint(cmd, 2)?, float(cmd, 3)),
+        REF_SPEEDS => dev.as_position_control()?.set_ref_speeds(&floats(cmd, 2)?),
+        REF_SPEED_GROUP => {
+            let (js, vs) = group(cmd, 2)?;
+            dev.as_position_control()?.set_ref_speed_group(&js, &vs)
+        }
+        REF_ACCELERATION => dev
+            .as_position_control()?
+            .set_ref_acceleration(joint(cmd, 2)?, float(cmd, 3)),
+        REF_ACCELERATIONS => dev
+            .as_position_control()?
+            .set_ref_accelerations(&floats(cmd, 2)?),
+        REF_ACCELERATION_GROUP => {
+            let (js, vs) = group(cmd, 2)?;
+            dev.as_position_control()?
+                .set_ref_acceleration_group(&js, &vs)
+        }
+        STOP => dev.as_position_control()?.stop(joint(cmd, 2)?),
+        STOPS => dev.as_position_control()?.stops(),
+        STOP_GROUP => {
+            let n = usize::try_from(int(cmd, 2)).ok()?;
+            let js = joints(cmd, 3)?;
+            if js.len() != n {
+                return None;
+            }
+            dev.as_position_control()?.stop_group(&js)
+        }
+        // single-joint velocity moves only travel on command:i in C++
+        VELOCITY_MOVES => dev.as_velocity_control()?.velocity_moves(&floats(cmd, 2)?),
+        E_RESET => dev.as_encoders()?.reset_encoder(joint(cmd, 2)?),
+        E_RESETS => dev.as_encoders()?.reset_encoders(),
+        ENCODER => dev
+            .as_encoders()?
+            .set_encoder(joint(cmd, 2)?, float(cmd, 3)),
+        ENCODERS => dev.as_encoders()?.set_encoders(&floats(cmd, 2)?),
+        LIMITS => dev
+            .as_control_limits()?
+            .set_limits(joint(cmd, 2)?, float(cmd, 3), float(cmd, 4)),
+        VEL_LIMITS => {
+            dev.as_control_limits()?
+                .set_vel_limits(joint(cmd, 2)?, float(cmd, 3), float(cmd, 4))
+        }
+        AMP_ENABLE => dev.as_amplifier_control()?.enable_amp(joint(cmd, 2)?),
+        AMP_DISABLE => dev.as_amplifier_control()?.disable_amp(joint(cmd, 2)?),
+        ICONTROLMODE => {
+            let cm = dev.as_control_mode()?;
+            let modes = |i: usize| -> Option<Vec<Vocab32>> {
+                Some(
+                    cmd.get(i)?
+                        .as_list()?
+                        .iter()
+                        .map(|v| Vocab32(vocab(Some(v))))
+                        .collect(),
+                )
+            };
+            match vocab(cmd.get(2)) {
+                CM_CONTROL_MODE => cm.set_control_mode(joint(cmd, 3)?, Vocab32(vocab(cmd.get(4)))),
+                CM_CONTROL_MODES => cm.set_control_modes(&modes(3)?),
+                CM_CONTROL_MODE_GROUP => {
+                    let n = usize::try_from(int(cmd, 3)).ok()?;
+                    let js = joints(cmd, 4)?;
+                    let ms = modes(5)?;
+                    if js.len() != n || ms.len() != n {
+                        return None;
+                    }
+                    cm.set_control_modes_group(&js, &ms)
+                }
+                _ => return None,
+            }
+        }
+        _ => return None,
+    };
+    Some(r.ok())
+}
+
+fn get(cmd: &Bottle, dev: &mut dyn DeviceDriver, resp: &mut Bottle) -> Option<()> {
+    let _ = match vocab(cmd.get(1)) {
+        AXES => {
+            let n = dev.as_encoders()?.get_axes().ok()?;
+            resp.push(n as i32)
+        }
+        ENCODER => resp.push(dev.as_encoders()?.get_encoder(joint(cmd, 2)?).ok()?),
+        ENCODERS => resp.push(float_list(&dev.as_encoders()?.get_encoders().ok()?)),
+        ENCODER_SPEED => resp.push(dev.as_encoders()?.get_encoder_speed(joint(cmd, 2)?).ok()?),
+        ENCODER_SPEEDS => resp.push(float_list(&dev.as_encoders()?.get_encoder_speeds().ok()?)),
+        ENCODER_ACCELERATION => resp.push(
+            dev.as_encoders()?
+                .get_encoder_acceleration(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        ENCODER_ACCELERATIONS => resp.push(float_list(
+            &dev.as_encoders()?.get_encoder_accelerations().ok()?,
+        )),
+        MOTION_DONE => {
+            let d = dev
+                .as_position_control()?
+                .check_motion_done(joint(cmd, 2)?)
+                .ok()?;
+            resp.push(i32::from(d))
+        }
+        MOTION_DONES => {
+            let d = dev.as_position_control()?.check_motion_dones().ok()?;
+            resp.push(i32::from(d))
+        }
+        MOTION_DONE_GROUP => {
+            let js = joints(cmd, 3)?;
+            let d = dev
+                .as_position_control()?
+                .check_motion_done_group(&js)
+                .ok()?;
+            resp.push(i32::from(d))
+        }
+        POSITION_MOVE => resp.push(
+            dev.as_position_control()?
+                .get_target_position(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        POSITION_MOVES => resp.push(float_list(
+            &dev.as_position_control()?.get_target_positions().ok()?,
+        )),
+        POSITION_MOVE_GROUP => {
+            let js = joints(cmd, 3)?;
+            let v = dev
+                .as_position_control()?
+                .get_target_position_group(&js)
+                .ok()?;
+            resp.push(float_list(&v))
+        }
+        REF_SPEED => resp.push(
+            dev.as_position_control()?
+                .get_ref_speed(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        REF_SPEEDS => resp.push(float_list(
+            &dev.as_position_control()?.get_ref_speeds().ok()?,
+        )),
+        REF_ACCELERATION => resp.push(
+            dev.as_position_control()?
+                .get_ref_acceleration(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        REF_ACCELERATIONS => resp.push(float_list(
+            &dev.as_position_control()?.get_ref_accelerations().ok()?,
+        )),
+        VELOCITY_MOVE => resp.push(
+            dev.as_velocity_control()?
+                .get_ref_velocity(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        VELOCITY_MOVES => resp.push(float_list(
+            &dev.as_velocity_control()?.get_ref_velocities().ok()?,
+        )),
+        LIMITS => {
+            let (a, b) = dev.as_control_limits()?.get_limits(joint(cmd, 2)?).ok()?;
+            resp.push(a).push(b)
+        }
+        VEL_LIMITS => {
+            let (a, b) = dev
+                .as_control_limits()?
+                .get_vel_limits(joint(cmd, 2)?)
+                .ok()?;
+            resp.push(a).push(b)
+        }
+        INFO_NAME => {
+            let n = dev.as_axis_info()?.get_axis_name(joint(cmd, 2)?).ok()?;
+            resp.push(n)
+        }
+        INFO_TYPE => {
+            let t = dev.as_axis_info()?.get_joint_type(joint(cmd, 2)?).ok()?;
+            resp.push(t.0)
+        }
+        MOTOR_ENCODER_NUMBER => {
+            let n = dev.as_motor_encoders()?.get_num_of_motor_encoders().ok()?;
+            resp.push(n as i32)
+        }
+        MOTOR_ENCODER => resp.push(
+            dev.as_motor_encoders()?
+                .get_motor_encoder(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        MOTOR_ENCODERS => resp.push(float_list(
+            &dev.as_motor_encoders()?.get_motor_encoders().ok()?,
+        )),
+        AMP_STATUS => {
+            let s = dev.as_amplifier_control()?.get_amp_statuses().ok()?;
+            resp.push(Value::List(s.into_iter().collect()))
+        }
+        AMP_CURRENT => resp.push(
+            dev.as_amplifier_control()?
+                .get_current(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        AMP_MAXCURRENT => resp.push(
+            dev.as_amplifier_control()?
+                .get_max_current(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        TEMPERATURE => resp.push(dev.as_motor()?.get_temperature(joint(cmd, 2)?).ok()?),
+        ICONTROLMODE => {
+            let cm = dev.as_control_mode()?;
+            match vocab(cmd.get(2)) {
+                CM_CONTROL_MODE => resp.push(cm.get_control_mode(joint(cmd, 3)?).ok()?),
+                CM_CONTROL_MODES => resp.push(vocab_list(&cm.get_control_modes().ok()?)),
+                CM_CONTROL_MODE_GROUP => {
+                    let n = usize::try_from(int(cmd, 3)).ok()?;
+                    let js = joints(cmd, 4)?;
+                    if js.len() != n {
+                        return None;
+                    }
+                    resp.push(vocab_list(&cm.get_control_modes_group(&js).ok()?))
+                }
+                _ => return None,
+            }
+        }
+        _ => return None,
+    };
+    Some(())
+}
+
+fn torque(
+    cmd: &Bottle,
+    action: i32,
+    dev: &mut dyn DeviceDriver,
+    stamp: &mut RpcStamp,
+    resp: &mut Bottle,
+) -> Option<bool> {
+    let t = dev.as_torque_control()?;
+    match action {
+        SET => Some(match vocab(cmd.get(2)) {
+            REF => t.set_ref_torque(joint(cmd, 3)?, float(cmd, 4)).is_ok(),
+            _ => false,
+        }),
+        GET => {
+            resp.push(Vocab32(IS)).push(cmd[1].clone());
+            match vocab(cmd.get(2)) {
+                TRQ => resp.push(t.get_torque(joint(cmd, 3)?).ok()?),
+                TRQS => resp.push(float_list(&t.get_torques().ok()?)),
+                REF => resp.push(t.get_ref_torque(joint(cmd, 3)?).ok()?),
+                _ => return Some(false),
+            };
+            stamp_into(resp, stamp);
+            Some(true)
+        }
+        _ => Some(false),
+    }
+}
+
+fn interaction(
+    cmd: &Bottle,
+    action: i32,
+    dev: &mut dyn DeviceDriver,
+    stamp: &mut RpcStamp,
+    resp: &mut Bottle,
+) -> Option<bool> {
+    let im = dev.as_interaction_mode()?;
+    let modes = |i: usize| -> Option<Vec<Vocab32>> {
+        Some(
+            cmd.get(i)?
+                .as_list()?
+                .iter()
+                .map(|v| Vocab32(vocab(Some(v))))
+                .collect(),
+        )
+    };
+    match action {
+        SET => Some(
+            match vocab(cmd.get(2)) {
+                INTERACTION_MODE => {
+                    im.set_interaction_mode(joint(cmd, 3)?, Vocab32(vocab(cmd.get(4))))
+                }
+                INTERACTION_MODES => im.set_interaction_modes(&modes(3)?),
+                INTERACTION_MODE_GROUP => {
+                    let js = joints(cmd, 4)?;
+                    im.set_interaction_modes_group(&js, &modes(5)?)
+                }
+                _ => return Some(false),
+            }
+            .is_ok(),
+        ),
+        GET => {
+            // no [is] and no echo here, as in C++
+            match vocab(cmd.get(2)) {
+                INTERACTION_MODE => resp.push(im.get_interaction_mode(joint(cmd, 3)?).ok()?),
+                INTERACTION_MODES => resp.push(vocab_list(&im.get_interaction_modes().ok()?)),
+                INTERACTION_MODE_GROUP => {
+                    let js = joints(cmd, 4)?;
+                    resp.push(vocab_list(&im.get_interaction_modes_group(&js).ok()?))
+                }
+                _ => return Some(false),
+            };
+            stamp_into(resp, stamp);
+            Some(true)
+        }
+        _ => Some(false),
+    }
+}
+
+/// `[set|get] [pid] <what> <pid type> <joint> ...` (no timestamp in these replies).
+fn pid(cmd: &Bottle, action: i32, dev: &mut dyn DeviceDriver, resp: &mut Bottle) -> Option<bool> {
+    let p = dev.as_pid_control()?;
+    let ty = Vocab32(vocab(cmd.get(3)));
+    let j = joint(cmd, 4)?;
+    match action {
+        SET => Some(
+            match vocab(cmd.get(2)) {
+                PID => p.set_pid(ty, j, crate::interfaces::Pid::from_slice(&floats(cmd, 5)?)),
+                PID_ENABLE => p.enable_pid(ty, j),
+                PID_DISABLE => p.disable_pid(ty, j),
+                REF => p.set_pid_reference(ty, j, float(cmd, 5)),
+                _ => return Some(false),
+            }
+            .is_ok(),
+        ),
+        GET => {
+            resp.push(Vocab32(IS)).push(cmd[1].clone());
+            match vocab(cmd.get(2)) {
+                PID => resp.push(float_list(&p.get_pid(ty, j).ok()?.to_array())),
+                PID_ENABLE => resp.push(i32::from(p.is_pid_enabled(ty, j).ok()?)),
+                REF => resp.push(p.get_pid_reference(ty, j).ok()?),
+                _ => return Some(false),
+            };
+            Some(true)
+        }
+        _ => Some(false),
+    }
+}
+
+/// A running `controlBoard_nws_yarp` RPC server on `/<name>/rpc:i`.
+pub struct ControlBoardNws {
+    rpc_name: String,
+    contact: yarp_proto::Contact,
+    task: tokio::task::JoinHandle<()>,
+}
+
+impl ControlBoardNws {
+    /// Opens `/<name>/rpc:i` (name given with or without leading `/`) and serves the
+    /// control-board protocol for `device`.
+    pub async fn open(
+        name: &str,
+        ns: yarp_net::nameserver::NameClient,
+        device: Arc<Mutex<PolyDriver>>,
+    ) -> Result<ControlBoardNws, PortError> {
+        let base = name.trim_end_matches('/');
+        let rpc_name = if base.starts_with('/') {
+            format!("{base}/rpc:i")
+        } else {
+            format!("/{base}/rpc:i")
+        };
+        let port = Port::open(&rpc_name, ns).await?;
+        let contact = port.contact().clone();
+        let task = tokio::spawn(async move {
+            let mut stamp = RpcStamp::new();
+            while let Some(mut msg) = port.read().await {
+                let cmd = match msg.bottle() {
+                    Ok(b) => b,
+                    Err(e) => {
+                        tracing::debug!("controlBoard rpc: undecodable message: {e}");
+                        continue;
+                    }
+                };
+                let reply = {
+                    let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+                    handle_rpc(&cmd, pd.device(), &mut stamp)
+                };
+                if msg.wants_reply() {
+                    msg.reply(reply);
+                }
+            }
+        });
+        Ok(ControlBoardNws {
+            rpc_name,
+            contact,
+            task,
+        })
+    }
+
+    /// The RPC port's name.
+    pub fn rpc_name(&self) -> &str {
+        &self.rpc_name
+    }
+
+    /// Where the RPC port listens.
+    pub fn contact(&self) -> &yarp_proto::Contact {
+        &self.contact
+    }
+
+    /// Stops serving (the port closes with the task).
+    pub fn close(self) {
+        self.task.abort();
+    }
+}

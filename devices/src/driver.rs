@@ -1,0 +1,283 @@
+//! The device framework: `DeviceDriver`, the `Registry` of known drivers (C++ names) and
+//! `PolyDriver`, which opens a driver from a `Property` by its `device` key.
+//!
+//! Interface access is through `as_*` methods on `DeviceDriver` that return `None` unless
+//! the driver implements that interface (the Rust form of C++ `PolyDriver::view`).
+
+use crate::error::{DevResult, DeviceError};
+use crate::interfaces::*;
+use yarp_proto::{Bottle, Property, Value};
+
+/// A device driver, as C++ `yarp::dev::DeviceDriver`.
+pub trait DeviceDriver: Send {
+    /// Configures and starts the device.
+    fn open(&mut self, config: &Property) -> DevResult<()>;
+    /// Stops the device; it may be reopened.
+    fn close(&mut self) -> DevResult<()> {
+        Ok(())
+    }
+    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
+        None
+    }
+    fn as_position_control(&mut self) -> Option<&mut dyn IPositionControl> {
+        None
+    }
+    fn as_velocity_control(&mut self) -> Option<&mut dyn IVelocityControl> {
+        None
+    }
+    fn as_control_mode(&mut self) -> Option<&mut dyn IControlMode> {
+        None
+    }
+    fn as_axis_info(&mut self) -> Option<&mut dyn IAxisInfo> {
+        None
+    }
+    fn as_control_limits(&mut self) -> Option<&mut dyn IControlLimits> {
+        None
+    }
+    fn as_interaction_mode(&mut self) -> Option<&mut dyn IInteractionMode> {
+        None
+    }
+    fn as_torque_control(&mut self) -> Option<&mut dyn ITorqueControl> {
+        None
+    }
+    fn as_motor_encoders(&mut self) -> Option<&mut dyn IMotorEncoders> {
+        None
+    }
+    fn as_amplifier_control(&mut self) -> Option<&mut dyn IAmplifierControl> {
+        None
+    }
+    fn as_motor(&mut self) -> Option<&mut dyn IMotor> {
+        None
+    }
+    fn as_pid_control(&mut self) -> Option<&mut dyn IPidControl> {
+        None
+    }
+    fn as_current_control(&mut self) -> Option<&mut dyn ICurrentControl> {
+        None
+    }
+    fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
+        None
+    }
+}
+
+type Factory = fn() -> Box<dyn DeviceDriver>;
+
+/// The drivers this crate knows, by their C++ names.
+const DRIVERS: &[(&str, Factory)] = &[("fakeMotionControl", || {
+    Box::new(crate::fake_motion_control::FakeMotionControl::new())
+})];
+
+/// Lookup of drivers by C++ name.
+pub struct Registry;
+
+impl Registry {
+    /// Every known device name.
+    pub fn names() -> Vec<&'static str> {
+        DRIVERS.iter().map(|(n, _)| *n).collect()
+    }
+
+    /// A fresh (unopened) driver; an unknown name lists the closest known names.
+    pub fn get(name: &str) -> DevResult<Box<dyn DeviceDriver>> {
+        if let Some((_, f)) = DRIVERS.iter().find(|(n, _)| *n == name) {
+            return Ok(f());
+        }
+        let mut scored: Vec<(usize, &str)> = DRIVERS
+            .iter()
+            .map(|(n, _)| (distance(&name.to_lowercase(), &n.to_lowercase()), *n))
+            .collect();
+        scored.sort();
+        let limit = (name.len().max(3)) * 2 / 3 + 1;
+        let mut closest: Vec<String> = scored
+            .iter()
+            .filter(|(d, _)| *d <= limit)
+            .take(3)
+            .map(|(_, n)| n.to_string())
+            .collect();
+        if closest.is_empty() {
+            closest = scored.iter().take(3).map(|(_, n)| n.to_string()).collect();
+        }
+        Err(DeviceError::UnknownDevice {
+            name: name.to_string(),
+            closest,
+        })
+    }
+}
+
+/// Levenshtein distance.
+fn distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut cur = vec![i + 1];
+        for (j, cb) in b.iter().enumerate() {
+            let sub = prev[j] + usize::from(ca != *cb);
+            cur.push(sub.min(prev[j + 1] + 1).min(cur[j] + 1));
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+/// An opened device chosen by the `device` key of its configuration (C++ `PolyDriver`).
+pub struct PolyDriver {
+    name: String,
+    driver: Box<dyn DeviceDriver>,
+    open: bool,
+}
+
+impl PolyDriver {
+    /// Opens the driver named by `config`'s `device` key with the whole `config`.
+    pub fn open(config: &Property) -> DevResult<PolyDriver> {
+        let name = match config.find("device") {
+            None => return Err(DeviceError::NoDeviceName),
+            Some(v) => value_text(v),
+        };
+        let mut driver = Registry::get(&name)?;
+        driver.open(config)?;
+        Ok(PolyDriver {
+            name,
+            driver,
+            open: true,
+        })
+    }
+
+    /// The driver's C++ name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The driver, to reach its interfaces (`pd.device().as_encoders()`).
+    pub fn device(&mut self) -> &mut dyn DeviceDriver {
+        self.driver.as_mut()
+    }
+
+    pub fn is_open(&self) -> bool {
+        self.open
+    }
+
+    pub fn close(&mut self) -> DevResult<()> {
+        if self.open {
+            self.open = false;
+            self.driver.close()
+        } else {
+            Ok(())
+        }
+    }
+}
+
+impl Drop for PolyDriver {
+    fn drop(&mut self) {
+        let _ = self.close();
+    }
+}
+
+fn value_text(v: &Value) -> String {
+    match v.as_str() {
+        Some(s) => s.to_string(),
+        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
+    }
+}
+
+/// Typed access to a device's configuration, with errors naming parameter and device.
+/// Keys may be `name` (top level) or `GROUP::name` (inside a `[GROUP]` section).
+pub struct Params<'a> {
+    pub device: &'a str,
+    pub config: &'a Property,
+}
+
+impl<'a> Params<'a> {
+    pub fn new(device: &'a str, config: &'a Property) -> Self {
+        Params { device, config }
+    }
+
+    /// The raw value of `key` (`GROUP::name` looks inside the group).
+    pub fn find(&self, key: &str) -> Option<&'a Value> {
+        match key.split_once("::") {
+            Some((group, name)) => self.config.find_group(group)?.find(name),
+            None => self.config.find(key),
+        }
+    }
+
+    fn bad(&self, key: &str, expected: &'static str, got: &Value) -> DeviceError {
+        DeviceError::BadParam {
+            device: self.device.to_string(),
+            param: key.to_string(),
+            expected,
+            got: got.to_string(),
+        }
+    }
+
+    pub fn missing(&self, key: &str) -> DeviceError {
+        DeviceError::MissingParam {
+            device: self.device.to_string(),
+            param: key.to_string(),
+        }
+    }
+
+    /// An integer parameter; `None` when absent, an error when of another type.
+    pub fn int(&self, key: &str) -> DevResult<Option<i64>> {
+        match self.find(key) {
+            None => Ok(None),
+            Some(v) if v.is_int() => Ok(v.as_i64()),
+            Some(v) => Err(self.bad(key, "an integer", v)),
+        }
+    }
+
+    /// A float parameter (integers accepted).
+    pub fn float(&self, key: &str) -> DevResult<Option<f64>> {
+        match self.find(key) {
+            None => Ok(None),
+            Some(v) if v.is_int() || v.is_float() => Ok(v.as_f64()),
+            Some(v) => Err(self.bad(key, "a number", v)),
+        }
+    }
+
+    /// A string parameter (vocabs accepted).
+    pub fn string(&self, key: &str) -> DevResult<Option<String>> {
+        match self.find(key) {
+            None => Ok(None),
+            Some(v) if v.is_string() || v.is_vocab() => Ok(Some(value_text(v))),
+            Some(v) => Err(self.bad(key, "a string", v)),
+        }
+    }
+
+    /// A vector parameter: either a list value or the rest of the group line
+    /// (`AxisName "a" "b"` in a section), each element checked with `f`.
+    pub fn vector<T>(
+        &self,
+        key: &str,
+        expected: &'static str,
+        f: impl Fn(&Value) -> Option<T>,
+    ) -> DevResult<Option<Vec<T>>> {
+        let items: Vec<Value> = match key.split_once("::") {
+            Some((group, name)) => match self
+                .config
+                .find_group(group)
+                .and_then(|g| g.find_group(name))
+            {
+                None => return Ok(None),
+                Some(line) => flatten_line(line),
+            },
+            None => match self.config.find_group(key) {
+                None => return Ok(None),
+                Some(line) => flatten_line(line),
+            },
+        };
+        items
+            .iter()
+            .map(|v| f(v).ok_or_else(|| self.bad(key, expected, v)))
+            .collect::<DevResult<Vec<T>>>()
+            .map(Some)
+    }
+}
+
+/// `(key a b c)` or `(key (a b c))` -> `[a, b, c]`.
+fn flatten_line(line: &Bottle) -> Vec<Value> {
+    let rest: Vec<Value> = line.iter().skip(1).cloned().collect();
+    if rest.len() == 1 {
+        if let Some(l) = rest[0].as_list() {
+            return l.iter().cloned().collect();
+        }
+    }
+    rest
+}

@@ -1,0 +1,39 @@
+//! Errors of the device layer.
+
+use thiserror::Error;
+
+/// What can go wrong when opening a device or calling one of its interfaces.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DeviceError {
+    #[error("no `device` parameter given")]
+    NoDeviceName,
+    #[error("unknown device `{name}`{}", suggest(.closest))]
+    UnknownDevice { name: String, closest: Vec<String> },
+    #[error("device `{device}`: missing required parameter `{param}`")]
+    MissingParam { device: String, param: String },
+    #[error("device `{device}`: parameter `{param}` should be {expected}, got `{got}`")]
+    BadParam {
+        device: String,
+        param: String,
+        expected: &'static str,
+        got: String,
+    },
+    #[error("joint {joint} out of range (the device has {axes} axes)")]
+    InvalidJoint { joint: i64, axes: usize },
+    #[error("expected {expected} values, got {got}")]
+    WrongSize { expected: usize, got: usize },
+    #[error("operation not supported: {0}")]
+    Unsupported(&'static str),
+    #[error("device is not open")]
+    NotOpen,
+}
+
+fn suggest(closest: &[String]) -> String {
+    if closest.is_empty() {
+        String::new()
+    } else {
+        format!("; closest known devices: {}", closest.join(", "))
+    }
+}
+
+pub type DevResult<T> = Result<T, DeviceError>;

@@ -1,0 +1,506 @@
+//! `fakeMotionControl`: a simulated N-joint control board.
+//!
+//! Parameters (as the C++ device): `GENERAL::joints` (also `GENERAL::Joints`, or a
+//! top-level `axes`/`joints`), default 1; optional `GENERAL::AxisName`,
+//! `GENERAL::AxisType` (`revolute`/`prismatic`), `LIMITS::Min`, `LIMITS::Max`.
+//!
+//! Dynamics, advanced lazily by elapsed wall time on every call: in position mode a joint
+//! moves toward its target at its reference speed (instantly if the speed is 0); in
+//! velocity mode it integrates the commanded velocity. Motor encoders read 10x the joint.
+
+use crate::driver::{DeviceDriver, Params};
+use crate::error::{DevResult, DeviceError};
+use crate::interfaces::*;
+use crate::vocabs::*;
+use std::collections::HashMap;
+use std::time::{Instant, SystemTime, UNIX_EPOCH};
+use yarp_proto::{Property, Vocab32};
+
+const NAME: &str = "fakeMotionControl";
+const GEARBOX: f64 = 10.0;
+
+#[derive(Debug, Clone)]
+struct Joint {
+    pos: f64,
+    speed: f64,
+    acc: f64,
+    target: f64,
+    ref_speed: f64,
+    ref_acc: f64,
+    ref_vel: f64,
+    mode: Vocab32,
+    interaction: Vocab32,
+    name: String,
+    jtype: Vocab32,
+    limits: (f64, f64),
+    vel_limits: (f64, f64),
+    ref_torque: f64,
+    amp_enabled: bool,
+}
+
+/// The simulated control board.
+#[derive(Debug)]
+pub struct FakeMotionControl {
+    joints: Vec<Joint>,
+    pids: HashMap<(i32, usize), (Pid, bool, f64)>,
+    last: Instant,
+}
+
+impl Default for FakeMotionControl {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+fn now() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0)
+}
+
+impl FakeMotionControl {
+    /// An unopened device with no joints.
+    pub fn new() -> Self {
+        FakeMotionControl {
+            joints: Vec::new(),
+            pids: HashMap::new(),
+            last: Instant::now(),
+        }
+    }
+
+    /// Shortcut: a device opened with `n` joints.
+    pub fn with_joints(n: usize) -> Self {
+        let mut d = Self::new();
+        d.setup(n);
+        d
+    }
+
+    fn setup(&mut self, n: usize) {
+        self.joints = (0..n)
+            .map(|i| Joint {
+                pos: 0.0,
+                speed: 0.0,
+                acc: 0.0,
+                target: 0.0,
+                ref_speed: 0.0,
+                ref_acc: 0.0,
+                ref_vel: 0.0,
+                mode: CM_POSITION,
+                // the C++ fake starts with zeroed (unknown) interaction modes
+                interaction: IM_UNKNOWN,
+                name: format!("joint{i}"),
+                jtype: JOINTTYPE_REVOLUTE,
+                limits: (-180.0, 180.0),
+                vel_limits: (0.0, 100.0),
+                ref_torque: 0.0,
+                amp_enabled: false,
+            })
+            .collect();
+        self.pids.clear();
+        self.last = Instant::now();
+    }
+
+    /// Advances the simulation to now.
+    fn update(&mut self) {
+        let t = Instant::now();
+        let dt = t.duration_since(self.last).as_secs_f64();
+        self.last = t;
+        if dt <= 0.0 {
+            return;
+        }
+        for j in &mut self.joints {
+            let old = j.pos;
+            let old_speed = j.speed;
+            if j.mode == CM_VELOCITY {
+                j.pos += j.ref_vel * dt;
+            } else if j.mode == CM_POSITION {
+                let err = j.target - j.pos;
+                let step = j.ref_speed.abs() * dt;
+                if j.ref_speed <= 0.0 || err.abs() <= step {
+                    j.pos = j.target;
+                } else {
+                    j.pos += step * err.signum();
+                }
+            }
+            j.speed = (j.pos - old) / dt;
+            j.acc = (j.speed - old_speed) / dt;
+        }
+    }
+
+    fn joint(&mut self, j: usize) -> DevResult<&mut Joint> {
+        let axes = self.joints.len();
+        self.joints.get_mut(j).ok_or(DeviceError::InvalidJoint {
+            joint: j as i64,
+            axes,
+        })
+    }
+
+    fn updated(&mut self, j: usize) -> DevResult<&mut Joint> {
+        self.update();
+        self.joint(j)
+    }
+}
+
+impl DeviceDriver for FakeMotionControl {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let mut n = None;
+        for key in ["GENERAL::joints", "GENERAL::Joints", "axes", "joints"] {
+            if let Some(v) = p.int(key)? {
+                n = Some((key, v));
+                break;
+            }
+        }
+        let n = match n {
+            None => 1,
+            Some((key, v)) if !(1..=1024).contains(&v) => {
+                return Err(DeviceError::BadParam {
+                    device: NAME.into(),
+                    param: key.into(),
+                    expected: "an integer in 1..=1024",
+                    got: v.to_string(),
+                })
+            }
+            Some((_, v)) => v as usize,
+        };
+        self.setup(n);
+        let size_check = |key: &str, len: usize| -> DevResult<()> {
+            if len == n {
+                Ok(())
+            } else {
+                Err(DeviceError::BadParam {
+                    device: NAME.into(),
+                    param: key.into(),
+                    expected: "one value per joint",
+                    got: format!("{len} values for {n} joints"),
+                })
+            }
+        };
+        if let Some(names) = p.vector("GENERAL::AxisName", "a list of strings", |v| {
+            v.as_str().map(str::to_string)
+        })? {
+            size_check("GENERAL::AxisName", names.len())?;
+            for (j, name) in self.joints.iter_mut().zip(names) {
+                j.name = name;
+            }
+        }
+        if let Some(types) = p.vector("GENERAL::AxisType", "revolute or prismatic", |v| match v
+            .as_str()?
+        {
+            "revolute" => Some(JOINTTYPE_REVOLUTE),
+            "prismatic" => Some(JOINTTYPE_PRISMATIC),
+            _ => None,
+        })? {
+            size_check("GENERAL::AxisType", types.len())?;
+            for (j, t) in self.joints.iter_mut().zip(types) {
+                j.jtype = t;
+            }
+        }
+        let num = |v: &yarp_proto::Value| {
+            if v.is_int() || v.is_float() {
+                v.as_f64()
+            } else {
+                None
+            }
+        };
+        if let Some(mins) = p.vector("LIMITS::Min", "a list of numbers", num)? {
+            size_check("LIMITS::Min", mins.len())?;
+            for (j, m) in self.joints.iter_mut().zip(mins) {
+                j.limits.0 = m;
+            }
+        }
+        if let Some(maxs) = p.vector("LIMITS::Max", "a list of numbers", num)? {
+            size_check("LIMITS::Max", maxs.len())?;
+            for (j, m) in self.joints.iter_mut().zip(maxs) {
+                j.limits.1 = m;
+            }
+        }
+        Ok(())
+    }
+
+    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
+        Some(self)
+    }
+    fn as_position_control(&mut self) -> Option<&mut dyn IPositionControl> {
+        Some(self)
+    }
+    fn as_velocity_control(&mut self) -> Option<&mut dyn IVelocityControl> {
+        Some(self)
+    }
+    fn as_control_mode(&mut self) -> Option<&mut dyn IControlMode> {
+        Some(self)
+    }
+    fn as_axis_info(&mut self) -> Option<&mut dyn IAxisInfo> {
+        Some(self)
+    }
+    fn as_control_limits(&mut self) -> Option<&mut dyn IControlLimits> {
+        Some(self)
+    }
+    fn as_interaction_mode(&mut self) -> Option<&mut dyn IInteractionMode> {
+        Some(self)
+    }
+    fn as_torque_control(&mut self) -> Option<&mut dyn ITorqueControl> {
+        Some(self)
+    }
+    fn as_motor_encoders(&mut self) -> Option<&mut dyn IMotorEncoders> {
+        Some(self)
+    }
+    fn as_amplifier_control(&mut self) -> Option<&mut dyn IAmplifierControl> {
+        Some(self)
+    }
+    fn as_motor(&mut self) -> Option<&mut dyn IMotor> {
+        Some(self)
+    }
+    fn as_pid_control(&mut self) -> Option<&mut dyn IPidControl> {
+        Some(self)
+    }
+    fn as_current_control(&mut self) -> Option<&mut dyn ICurrentControl> {
+        Some(self)
+    }
+    fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
+        Some(self)
+    }
+}
+
+impl IEncoders for FakeMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn get_encoder(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.updated(j)?.pos)
+    }
+    fn get_encoder_speed(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.updated(j)?.speed)
+    }
+    fn get_encoder_acceleration(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.updated(j)?.acc)
+    }
+    fn get_encoder_timed(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        Ok((self.updated(j)?.pos, now()))
+    }
+    fn set_encoder(&mut self, j: usize, value: f64) -> DevResult<()> {
+        let jt = self.updated(j)?;
+        jt.pos = value;
+        jt.target = value;
+        Ok(())
+    }
+}
+
+impl IPositionControl for FakeMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn position_move(&mut self, j: usize, target: f64) -> DevResult<()> {
+        self.updated(j)?.target = target;
+        Ok(())
+    }
+    fn relative_move(&mut self, j: usize, delta: f64) -> DevResult<()> {
+        self.updated(j)?.target += delta;
+        Ok(())
+    }
+    fn check_motion_done(&mut self, j: usize) -> DevResult<bool> {
+        let jt = self.updated(j)?;
+        Ok(jt.mode != CM_POSITION || (jt.pos - jt.target).abs() < 1e-9)
+    }
+    fn set_ref_speed(&mut self, j: usize, speed: f64) -> DevResult<()> {
+        self.joint(j)?.ref_speed = speed;
+        Ok(())
+    }
+    fn set_ref_acceleration(&mut self, j: usize, acc: f64) -> DevResult<()> {
+        self.joint(j)?.ref_acc = acc;
+        Ok(())
+    }
+    fn get_ref_speed(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.joint(j)?.ref_speed)
+    }
+    fn get_ref_acceleration(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.joint(j)?.ref_acc)
+    }
+    fn stop(&mut self, j: usize) -> DevResult<()> {
+        let jt = self.updated(j)?;
+        jt.target = jt.pos;
+        jt.ref_vel = 0.0;
+        Ok(())
+    }
+    fn get_target_position(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.joint(j)?.target)
+    }
+}
+
+impl IVelocityControl for FakeMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn velocity_move(&mut self, j: usize, speed: f64) -> DevResult<()> {
+        self.updated(j)?.ref_vel = speed;
+        Ok(())
+    }
+    fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.joint(j)?.ref_vel)
+    }
+}
+
+impl IControlMode for FakeMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
+        Ok(self.joint(j)?.mode)
+    }
+    fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
+        let jt = self.updated(j)?;
+        if mode == CM_POSITION && jt.mode != CM_POSITION {
+            jt.target = jt.pos;
+        }
+        jt.mode = mode;
+        Ok(())
+    }
+}
+
+impl IAxisInfo for FakeMotionControl {
+    fn get_axis_name(&mut self, j: usize) -> DevResult<String> {
+        Ok(self.joint(j)?.name.clone())
+    }
+    fn get_joint_type(&mut self, j: usize) -> DevResult<Vocab32> {
+        Ok(self.joint(j)?.jtype)
+    }
+}
+
+impl IControlLimits for FakeMotionControl {
+    fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
+        self.joint(j)?.limits = (min, max);
+        Ok(())
+    }
+    fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        Ok(self.joint(j)?.limits)
+    }
+    fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
+        self.joint(j)?.vel_limits = (min, max);
+        Ok(())
+    }
+    fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        Ok(self.joint(j)?.vel_limits)
+    }
+}
+
+impl IInteractionMode for FakeMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn get_interaction_mode(&mut self, j: usize) -> DevResult<Vocab32> {
+        Ok(self.joint(j)?.interaction)
+    }
+    fn set_interaction_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
+        self.joint(j)?.interaction = mode;
+        Ok(())
+    }
+}
+
+impl ITorqueControl for FakeMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn get_torque(&mut self, j: usize) -> DevResult<f64> {
+        self.joint(j)?;
+        Ok(0.0)
+    }
+    fn set_ref_torque(&mut self, j: usize, t: f64) -> DevResult<()> {
+        self.joint(j)?.ref_torque = t;
+        Ok(())
+    }
+    fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.joint(j)?.ref_torque)
+    }
+}
+
+impl IMotorEncoders for FakeMotionControl {
+    fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
+        Ok(self.updated(m)?.pos * GEARBOX)
+    }
+}
+
+impl IAmplifierControl for FakeMotionControl {
+    fn enable_amp(&mut self, j: usize) -> DevResult<()> {
+        self.joint(j)?.amp_enabled = true;
+        Ok(())
+    }
+    fn disable_amp(&mut self, j: usize) -> DevResult<()> {
+        self.joint(j)?.amp_enabled = false;
+        Ok(())
+    }
+    fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>> {
+        // the C++ fake reports 0 for every amplifier
+        Ok(vec![0; self.joints.len()])
+    }
+    fn get_current(&mut self, j: usize) -> DevResult<f64> {
+        Ok(3300.0 * (j as f64 + 1.0))
+    }
+    fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
+        self.joint(j)?;
+        Ok(33000.0)
+    }
+}
+
+impl IMotor for FakeMotionControl {
+    fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
+        self.joint(m)?;
+        Ok(37.5)
+    }
+}
+
+impl IPidControl for FakeMotionControl {
+    fn get_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<Pid> {
+        self.joint(j)?;
+        Ok(self
+            .pids
+            .get(&(pid_type.0, j))
+            .map(|p| p.0)
+            .unwrap_or_default())
+    }
+    fn set_pid(&mut self, pid_type: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
+        self.joint(j)?;
+        self.pids.entry((pid_type.0, j)).or_default().0 = pid;
+        Ok(())
+    }
+    fn enable_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<()> {
+        self.joint(j)?;
+        self.pids.entry((pid_type.0, j)).or_default().1 = true;
+        Ok(())
+    }
+    fn disable_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<()> {
+        self.joint(j)?;
+        self.pids.entry((pid_type.0, j)).or_default().1 = false;
+        Ok(())
+    }
+    fn is_pid_enabled(&mut self, pid_type: Vocab32, j: usize) -> DevResult<bool> {
+        self.joint(j)?;
+        Ok(self.pids.get(&(pid_type.0, j)).is_some_and(|p| p.1))
+    }
+    fn set_pid_reference(&mut self, pid_type: Vocab32, j: usize, r: f64) -> DevResult<()> {
+        self.joint(j)?;
+        self.pids.entry((pid_type.0, j)).or_default().2 = r;
+        Ok(())
+    }
+    fn get_pid_reference(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        self.joint(j)?;
+        Ok(self.pids.get(&(pid_type.0, j)).map(|p| p.2).unwrap_or(0.0))
+    }
+}
+
+impl ICurrentControl for FakeMotionControl {
+    fn get_ref_current(&mut self, j: usize) -> DevResult<f64> {
+        self.joint(j)?;
+        Ok(0.0)
+    }
+}
+
+impl IPwmControl for FakeMotionControl {
+    fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64> {
+        self.joint(j)?;
+        Ok(0.0)
+    }
+}

@@ -1,0 +1,400 @@
+//! Motor-control interface traits, named after their C++ counterparts
+//! (`yarp::dev::IEncodersTimed`, `IPositionControl`, ...). Methods return
+//! `DevResult` where C++ returns `bool`; joints are `usize`, control modes vocabs.
+//! The "all joints" and "group" variants have default implementations in terms of
+//! the single-joint methods.
+
+use crate::error::{DevResult, DeviceError};
+use yarp_proto::Vocab32;
+
+fn check_len(expected: usize, got: usize) -> DevResult<()> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(DeviceError::WrongSize { expected, got })
+    }
+}
+
+/// `IEncodersTimed`.
+pub trait IEncoders {
+    fn get_axes(&mut self) -> DevResult<usize>;
+    fn get_encoder(&mut self, j: usize) -> DevResult<f64>;
+    fn get_encoder_speed(&mut self, j: usize) -> DevResult<f64>;
+    fn get_encoder_acceleration(&mut self, j: usize) -> DevResult<f64>;
+    /// Position and the time it was read.
+    fn get_encoder_timed(&mut self, j: usize) -> DevResult<(f64, f64)>;
+    fn set_encoder(&mut self, j: usize, value: f64) -> DevResult<()>;
+    fn reset_encoder(&mut self, j: usize) -> DevResult<()> {
+        self.set_encoder(j, 0.0)
+    }
+    fn reset_encoders(&mut self) -> DevResult<()> {
+        (0..self.get_axes()?).try_for_each(|j| self.reset_encoder(j))
+    }
+    fn set_encoders(&mut self, values: &[f64]) -> DevResult<()> {
+        check_len(self.get_axes()?, values.len())?;
+        values
+            .iter()
+            .enumerate()
+            .try_for_each(|(j, v)| self.set_encoder(j, *v))
+    }
+    fn get_encoders(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?).map(|j| self.get_encoder(j)).collect()
+    }
+    fn get_encoder_speeds(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_encoder_speed(j))
+            .collect()
+    }
+    fn get_encoder_accelerations(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_encoder_acceleration(j))
+            .collect()
+    }
+    /// (positions, times).
+    fn get_encoders_timed(&mut self) -> DevResult<(Vec<f64>, Vec<f64>)> {
+        let mut p = Vec::new();
+        let mut t = Vec::new();
+        for j in 0..self.get_axes()? {
+            let (a, b) = self.get_encoder_timed(j)?;
+            p.push(a);
+            t.push(b);
+        }
+        Ok((p, t))
+    }
+}
+
+/// `IPositionControl` (trajectory generation toward a target at a reference speed).
+pub trait IPositionControl {
+    fn get_axes(&mut self) -> DevResult<usize>;
+    fn position_move(&mut self, j: usize, target: f64) -> DevResult<()>;
+    fn relative_move(&mut self, j: usize, delta: f64) -> DevResult<()>;
+    fn check_motion_done(&mut self, j: usize) -> DevResult<bool>;
+    fn set_ref_speed(&mut self, j: usize, speed: f64) -> DevResult<()>;
+    fn set_ref_acceleration(&mut self, j: usize, acc: f64) -> DevResult<()>;
+    fn get_ref_speed(&mut self, j: usize) -> DevResult<f64>;
+    fn get_ref_acceleration(&mut self, j: usize) -> DevResult<f64>;
+    fn stop(&mut self, j: usize) -> DevResult<()>;
+    fn get_target_position(&mut self, j: usize) -> DevResult<f64>;
+
+    fn position_moves(&mut self, targets: &[f64]) -> DevResult<()> {
+        check_len(self.get_axes()?, targets.len())?;
+        targets
+            .iter()
+            .enumerate()
+            .try_for_each(|(j, v)| self.position_move(j, *v))
+    }
+    fn position_move_group(&mut self, joints: &[usize], targets: &[f64]) -> DevResult<()> {
+        check_len(joints.len(), targets.len())?;
+        joints
+            .iter()
+            .zip(targets)
+            .try_for_each(|(j, v)| self.position_move(*j, *v))
+    }
+    fn relative_moves(&mut self, deltas: &[f64]) -> DevResult<()> {
+        check_len(self.get_axes()?, deltas.len())?;
+        deltas
+            .iter()
+            .enumerate()
+            .try_for_each(|(j, v)| self.relative_move(j, *v))
+    }
+    fn relative_move_group(&mut self, joints: &[usize], deltas: &[f64]) -> DevResult<()> {
+        check_len(joints.len(), deltas.len())?;
+        joints
+            .iter()
+            .zip(deltas)
+            .try_for_each(|(j, v)| self.relative_move(*j, *v))
+    }
+    fn check_motion_dones(&mut self) -> DevResult<bool> {
+        let mut all = true;
+        for j in 0..self.get_axes()? {
+            all &= self.check_motion_done(j)?;
+        }
+        Ok(all)
+    }
+    fn check_motion_done_group(&mut self, joints: &[usize]) -> DevResult<bool> {
+        let mut all = true;
+        for j in joints {
+            all &= self.check_motion_done(*j)?;
+        }
+        Ok(all)
+    }
+    fn set_ref_speeds(&mut self, speeds: &[f64]) -> DevResult<()> {
+        check_len(self.get_axes()?, speeds.len())?;
+        speeds
+            .iter()
+            .enumerate()
+            .try_for_each(|(j, v)| self.set_ref_speed(j, *v))
+    }
+    fn set_ref_speed_group(&mut self, joints: &[usize], speeds: &[f64]) -> DevResult<()> {
+        check_len(joints.len(), speeds.len())?;
+        joints
+            .iter()
+            .zip(speeds)
+            .try_for_each(|(j, v)| self.set_ref_speed(*j, *v))
+    }
+    fn set_ref_accelerations(&mut self, accs: &[f64]) -> DevResult<()> {
+        check_len(self.get_axes()?, accs.len())?;
+        accs.iter()
+            .enumerate()
+            .try_for_each(|(j, v)| self.set_ref_acceleration(j, *v))
+    }
+    fn set_ref_acceleration_group(&mut self, joints: &[usize], accs: &[f64]) -> DevResult<()> {
+        check_len(joints.len(), accs.len())?;
+        joints
+            .iter()
+            .zip(accs)
+            .try_for_each(|(j, v)| self.set_ref_acceleration(*j, *v))
+    }
+    fn get_ref_speeds(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_ref_speed(j))
+            .collect()
+    }
+    fn get_ref_speed_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
+        joints.iter().map(|j| self.get_ref_speed(*j)).collect()
+    }
+    fn get_ref_accelerations(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_ref_acceleration(j))
+            .collect()
+    }
+    fn get_ref_acceleration_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
+        joints
+            .iter()
+            .map(|j| self.get_ref_acceleration(*j))
+            .collect()
+    }
+    fn stops(&mut self) -> DevResult<()> {
+        (0..self.get_axes()?).try_for_each(|j| self.stop(j))
+    }
+    fn stop_group(&mut self, joints: &[usize]) -> DevResult<()> {
+        joints.iter().try_for_each(|j| self.stop(*j))
+    }
+    fn get_target_positions(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_target_position(j))
+            .collect()
+    }
+    fn get_target_position_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
+        joints
+            .iter()
+            .map(|j| self.get_target_position(*j))
+            .collect()
+    }
+}
+
+/// `IVelocityControl`.
+pub trait IVelocityControl {
+    fn get_axes(&mut self) -> DevResult<usize>;
+    fn velocity_move(&mut self, j: usize, speed: f64) -> DevResult<()>;
+    fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64>;
+    fn velocity_moves(&mut self, speeds: &[f64]) -> DevResult<()> {
+        check_len(self.get_axes()?, speeds.len())?;
+        speeds
+            .iter()
+            .enumerate()
+            .try_for_each(|(j, v)| self.velocity_move(j, *v))
+    }
+    fn velocity_move_group(&mut self, joints: &[usize], speeds: &[f64]) -> DevResult<()> {
+        check_len(joints.len(), speeds.len())?;
+        joints
+            .iter()
+            .zip(speeds)
+            .try_for_each(|(j, v)| self.velocity_move(*j, *v))
+    }
+    fn get_ref_velocities(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_ref_velocity(j))
+            .collect()
+    }
+}
+
+/// `IControlMode`: modes are vocabs (`crate::vocabs::CM_*`).
+pub trait IControlMode {
+    fn get_axes(&mut self) -> DevResult<usize>;
+    fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32>;
+    fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()>;
+    fn get_control_modes(&mut self) -> DevResult<Vec<Vocab32>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_control_mode(j))
+            .collect()
+    }
+    fn get_control_modes_group(&mut self, joints: &[usize]) -> DevResult<Vec<Vocab32>> {
+        joints.iter().map(|j| self.get_control_mode(*j)).collect()
+    }
+    fn set_control_modes(&mut self, modes: &[Vocab32]) -> DevResult<()> {
+        check_len(self.get_axes()?, modes.len())?;
+        modes
+            .iter()
+            .enumerate()
+            .try_for_each(|(j, m)| self.set_control_mode(j, *m))
+    }
+    fn set_control_modes_group(&mut self, joints: &[usize], modes: &[Vocab32]) -> DevResult<()> {
+        check_len(joints.len(), modes.len())?;
+        joints
+            .iter()
+            .zip(modes)
+            .try_for_each(|(j, m)| self.set_control_mode(*j, *m))
+    }
+}
+
+/// `IAxisInfo`.
+pub trait IAxisInfo {
+    fn get_axis_name(&mut self, j: usize) -> DevResult<String>;
+    /// `crate::vocabs::JOINTTYPE_*`.
+    fn get_joint_type(&mut self, j: usize) -> DevResult<Vocab32>;
+}
+
+/// `IControlLimits`.
+pub trait IControlLimits {
+    fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()>;
+    fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)>;
+    fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()>;
+    fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)>;
+}
+
+/// `IInteractionMode`: modes are vocabs (`IM_STIFF`, `IM_COMPLIANT`).
+pub trait IInteractionMode {
+    fn get_axes(&mut self) -> DevResult<usize>;
+    fn get_interaction_mode(&mut self, j: usize) -> DevResult<Vocab32>;
+    fn set_interaction_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()>;
+    fn get_interaction_modes(&mut self) -> DevResult<Vec<Vocab32>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_interaction_mode(j))
+            .collect()
+    }
+    fn get_interaction_modes_group(&mut self, joints: &[usize]) -> DevResult<Vec<Vocab32>> {
+        joints
+            .iter()
+            .map(|j| self.get_interaction_mode(*j))
+            .collect()
+    }
+    fn set_interaction_modes(&mut self, modes: &[Vocab32]) -> DevResult<()> {
+        check_len(self.get_axes()?, modes.len())?;
+        modes
+            .iter()
+            .enumerate()
+            .try_for_each(|(j, m)| self.set_interaction_mode(j, *m))
+    }
+    fn set_interaction_modes_group(
+        &mut self,
+        joints: &[usize],
+        modes: &[Vocab32],
+    ) -> DevResult<()> {
+        check_len(joints.len(), modes.len())?;
+        joints
+            .iter()
+            .zip(modes)
+            .try_for_each(|(j, m)| self.set_interaction_mode(*j, *m))
+    }
+}
+
+/// `ITorqueControl` (subset).
+pub trait ITorqueControl {
+    fn get_axes(&mut self) -> DevResult<usize>;
+    fn get_torque(&mut self, j: usize) -> DevResult<f64>;
+    fn set_ref_torque(&mut self, j: usize, t: f64) -> DevResult<()>;
+    fn get_ref_torque(&mut self, j: usize) -> DevResult<f64>;
+    fn get_torques(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?).map(|j| self.get_torque(j)).collect()
+    }
+    fn get_ref_torques(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_ref_torque(j))
+            .collect()
+    }
+}
+
+/// `IMotorEncoders` (subset).
+pub trait IMotorEncoders {
+    fn get_num_of_motor_encoders(&mut self) -> DevResult<usize>;
+    fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64>;
+    fn get_motor_encoders(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_num_of_motor_encoders()?)
+            .map(|m| self.get_motor_encoder(m))
+            .collect()
+    }
+}
+
+/// `IAmplifierControl` (subset).
+pub trait IAmplifierControl {
+    fn enable_amp(&mut self, j: usize) -> DevResult<()>;
+    fn disable_amp(&mut self, j: usize) -> DevResult<()>;
+    fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>>;
+    fn get_current(&mut self, j: usize) -> DevResult<f64>;
+    fn get_max_current(&mut self, j: usize) -> DevResult<f64>;
+}
+
+/// `IMotor` (subset).
+pub trait IMotor {
+    fn get_temperature(&mut self, m: usize) -> DevResult<f64>;
+}
+
+/// `yarp::dev::Pid`: the 10 gains in their wire order.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Pid {
+    pub kp: f64,
+    pub kd: f64,
+    pub ki: f64,
+    pub max_int: f64,
+    pub scale: f64,
+    pub max_output: f64,
+    pub offset: f64,
+    pub stiction_up: f64,
+    pub stiction_down: f64,
+    pub kff: f64,
+}
+
+impl Pid {
+    pub fn to_array(&self) -> [f64; 10] {
+        [
+            self.kp,
+            self.kd,
+            self.ki,
+            self.max_int,
+            self.scale,
+            self.max_output,
+            self.offset,
+            self.stiction_up,
+            self.stiction_down,
+            self.kff,
+        ]
+    }
+    /// From the wire order; missing values are 0.
+    pub fn from_slice(v: &[f64]) -> Pid {
+        let g = |i: usize| v.get(i).copied().unwrap_or(0.0);
+        Pid {
+            kp: g(0),
+            kd: g(1),
+            ki: g(2),
+            max_int: g(3),
+            scale: g(4),
+            max_output: g(5),
+            offset: g(6),
+            stiction_up: g(7),
+            stiction_down: g(8),
+            kff: g(9),
+        }
+    }
+}
+
+/// `IPidControl` (subset); `pid_type` is a vocab such as `PIDTYPE_POSITION`.
+pub trait IPidControl {
+    fn get_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<Pid>;
+    fn set_pid(&mut self, pid_type: Vocab32, j: usize, pid: Pid) -> DevResult<()>;
+    fn enable_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<()>;
+    fn disable_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<()>;
+    fn is_pid_enabled(&mut self, pid_type: Vocab32, j: usize) -> DevResult<bool>;
+    fn set_pid_reference(&mut self, pid_type: Vocab32, j: usize, r: f64) -> DevResult<()>;
+    fn get_pid_reference(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64>;
+}
+
+/// `ICurrentControl` (subset).
+pub trait ICurrentControl {
+    fn get_ref_current(&mut self, j: usize) -> DevResult<f64>;
+}
+
+/// `IPWMControl` (subset).
+pub trait IPwmControl {
+    fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64>;
+}

@@ -1,0 +1,114 @@
+//! Vocab codes used by the control-board interfaces and protocol (as in C++ YARP).
+#![allow(missing_docs)]
+
+use yarp_proto::Vocab32;
+
+const fn v(s: &str) -> i32 {
+    Vocab32::new(s).0
+}
+
+// generic
+pub const SET: i32 = v("set");
+pub const GET: i32 = v("get");
+pub const IS: i32 = v("is");
+pub const OK: i32 = v("ok");
+pub const FAILED: i32 = v("fail");
+pub const NAK: i32 = v("nak");
+pub const TIMESTAMP: i32 = v("tsta");
+pub const PROTOCOL_VERSION: i32 = v("prot");
+
+// encoders
+pub const AXES: i32 = v("axes");
+pub const ENCODER: i32 = v("enc");
+pub const ENCODERS: i32 = v("encs");
+pub const ENCODER_SPEED: i32 = v("esp");
+pub const ENCODER_SPEEDS: i32 = v("esps");
+pub const ENCODER_ACCELERATION: i32 = v("eac");
+pub const ENCODER_ACCELERATIONS: i32 = v("eacs");
+pub const E_RESET: i32 = v("ere");
+pub const E_RESETS: i32 = v("eres");
+
+// position / velocity control
+pub const POSITION_MOVE: i32 = v("pos");
+pub const POSITION_MOVES: i32 = v("poss");
+pub const POSITION_MOVE_GROUP: i32 = v("posg");
+pub const RELATIVE_MOVE: i32 = v("rel");
+pub const RELATIVE_MOVES: i32 = v("rels");
+pub const RELATIVE_MOVE_GROUP: i32 = v("relg");
+pub const MOTION_DONE: i32 = v("don");
+pub const MOTION_DONES: i32 = v("dons");
+pub const MOTION_DONE_GROUP: i32 = v("dong");
+pub const REF_SPEED: i32 = v("vel");
+pub const REF_SPEEDS: i32 = v("vels");
+pub const REF_SPEED_GROUP: i32 = v("velg");
+pub const REF_ACCELERATION: i32 = v("acc");
+pub const REF_ACCELERATIONS: i32 = v("accs");
+pub const REF_ACCELERATION_GROUP: i32 = v("accg");
+pub const STOP: i32 = v("sto");
+pub const STOPS: i32 = v("stos");
+pub const STOP_GROUP: i32 = v("stog");
+pub const VELOCITY_MOVE: i32 = v("vmo");
+pub const VELOCITY_MOVES: i32 = v("vmos");
+pub const VELOCITY_MOVE_GROUP: i32 = v("vmog");
+pub const POSITION_DIRECT: i32 = v("dpo");
+
+// limits / info
+pub const LIMITS: i32 = v("llim");
+pub const VEL_LIMITS: i32 = v("vlim");
+pub const INFO_NAME: i32 = v("name");
+pub const INFO_TYPE: i32 = v("type");
+
+// motor encoders, amplifiers, motors
+pub const MOTOR_ENCODER_NUMBER: i32 = v("mnum");
+pub const MOTOR_ENCODER: i32 = v("mnc");
+pub const MOTOR_ENCODERS: i32 = v("mncs");
+pub const AMP_ENABLE: i32 = v("aen");
+pub const AMP_DISABLE: i32 = v("adi");
+pub const AMP_STATUS: i32 = v("asta");
+pub const AMP_CURRENT: i32 = v("acu");
+pub const AMP_MAXCURRENT: i32 = v("maxc");
+pub const TEMPERATURE: i32 = v("tmp");
+
+// interface families (second element of the command)
+pub const ICONTROLMODE: i32 = v("icmd");
+pub const CM_CONTROL_MODE: i32 = v("cmod");
+pub const CM_CONTROL_MODES: i32 = v("cmds");
+pub const CM_CONTROL_MODE_GROUP: i32 = v("cmog");
+pub const INTERACTION_MODE_IFACE: i32 = v("intm");
+pub const INTERACTION_MODE: i32 = v("mode");
+pub const INTERACTION_MODES: i32 = v("mods");
+pub const INTERACTION_MODE_GROUP: i32 = v("mobg");
+pub const TORQUE: i32 = v("torq");
+pub const TRQ: i32 = v("trq");
+pub const TRQS: i32 = v("trqs");
+pub const REF: i32 = v("ref");
+pub const PID: i32 = v("pid");
+pub const PID_ENABLE: i32 = v("ena");
+pub const PID_DISABLE: i32 = v("dis");
+pub const CURRENT_IFACE: i32 = v("icur");
+pub const PWM_IFACE: i32 = v("ipwm");
+
+// control mode values
+pub const CM_IDLE: Vocab32 = Vocab32::new("idl");
+pub const CM_POSITION: Vocab32 = Vocab32::new("pos");
+pub const CM_POSITION_DIRECT: Vocab32 = Vocab32::new("posd");
+pub const CM_VELOCITY: Vocab32 = Vocab32::new("vel");
+pub const CM_TORQUE: Vocab32 = Vocab32::new("torq");
+pub const CM_CURRENT: Vocab32 = Vocab32::new("icur");
+pub const CM_PWM: Vocab32 = Vocab32::new("ipwm");
+pub const CM_MIXED: Vocab32 = Vocab32::new("mixd");
+pub const CM_HW_FAULT: Vocab32 = Vocab32::new("hwf");
+pub const CM_UNKNOWN: Vocab32 = Vocab32::new("unk");
+
+// interaction mode values
+pub const IM_STIFF: Vocab32 = Vocab32::new("stif");
+pub const IM_COMPLIANT: Vocab32 = Vocab32::new("comp");
+pub const IM_UNKNOWN: Vocab32 = Vocab32(0);
+
+// joint types (the recorded C++ fake answers 1987212385 = "aerv" for revolute)
+pub const JOINTTYPE_REVOLUTE: Vocab32 = Vocab32::new("aerv");
+pub const JOINTTYPE_PRISMATIC: Vocab32 = Vocab32::new("apri");
+pub const JOINTTYPE_UNKNOWN: Vocab32 = Vocab32::new("aunk");
+
+// PID types
+pub const PIDTYPE_POSITION: Vocab32 = Vocab32::new("pos");
