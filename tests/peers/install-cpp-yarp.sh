@@ -7,11 +7,11 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 venv=${YARP_CPP_VENV:-$PWD/.venv-yarp}
 if [[ -x $venv/bin/yarpserver ]]; then echo "$venv/bin"; exit 0; fi
-if ! command -v swig >/dev/null && [[ -e /usr/include/ace/ACE.h ]]; then
+if ! command -v swig >/dev/null || [[ ! -e /usr/include/ace/ACE.h ]]; then
     if [[ $(id -u) == 0 ]]; then
         (apt-get install -y swig libace-dev || { apt-get update && apt-get install -y swig libace-dev; }) >&2
     else
-        echo "install-cpp-yarp: swig is required" >&2; exit 1
+        echo "install-cpp-yarp: swig and libace-dev are required" >&2; exit 1
     fi
 fi
 # The 2021 sources need these on a current toolchain (see ../shared/cpp-yarp-peer.md).
