@@ -264,7 +264,12 @@ impl Conn<'_> {
         let text = self.is_text();
         match m.command.kind() {
             CommandKind::Data { reply } => {
-                let wants_reply = reply && self.spec.is_some_and(|s| s.supports_reply);
+                // C++ answers a `d` whenever the owner replies, also on plain text
+                // connections (the paper's telnet session: CONNECT, d, [get] [axes])
+                let wants_reply = reply
+                    && self
+                        .spec
+                        .is_some_and(|s| s.supports_reply || s.framing == Framing::Text);
                 let (tx, rx) = if wants_reply {
                     let (tx, rx) = oneshot::channel();
                     (Some(tx), Some(rx))
