@@ -37,6 +37,21 @@ fn info(msg: &str) {
     println!("[INFO] |yarp.os.Network| {msg}");
 }
 
+/// Stdin lines, read on a thread of their own so that the async side can also watch
+/// ports and signals; the channel closes at end of input.
+fn stdin_lines() -> tokio::sync::mpsc::Receiver<String> {
+    let (tx, rx) = tokio::sync::mpsc::channel::<String>(16);
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lock().lines() {
+            let Ok(line) = line else { break };
+            if tx.blocking_send(line).is_err() {
+                break;
+            }
+        }
+    });
+    rx
+}
+
 /// `yarp read <port> [envelope] [source...]`
 pub fn read(port: &str, rest: &[String]) -> Result<()> {
     let envelope = rest.iter().any(|a| a == "envelope");
@@ -86,15 +101,7 @@ pub fn write(port: &str, targets: &[String]) -> Result<()> {
                 .await
                 .with_context(|| format!("connecting {port} to {t}"))?;
         }
-        let (tx, mut rx) = tokio::sync::mpsc::channel::<String>(16);
-        std::thread::spawn(move || {
-            for line in std::io::stdin().lock().lines() {
-                let Ok(line) = line else { break };
-                if tx.blocking_send(line).is_err() {
-                    break;
-                }
-            }
-        });
+        let mut rx = stdin_lines();
         loop {
             tokio::select! {
                 _ = stop_signal() => break,
@@ -118,15 +125,7 @@ pub fn readwrite(read_port: &str, write_port: &str) -> Result<()> {
         let ns = network::name_client()?;
         let r = Port::open(read_port, ns.clone()).await?;
         let w = Port::open(write_port, ns).await?;
-        let (tx, mut rx) = tokio::sync::mpsc::channel::<String>(16);
-        std::thread::spawn(move || {
-            for line in std::io::stdin().lock().lines() {
-                let Ok(line) = line else { break };
-                if tx.blocking_send(line).is_err() {
-                    break;
-                }
-            }
-        });
+        let mut rx = stdin_lines();
         loop {
             tokio::select! {
                 _ = stop_signal() => break,
