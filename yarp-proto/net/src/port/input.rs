@@ -1,7 +1,7 @@
 //! Input side: accepting connections, reading the carrier header, and serving each
 //! connection's messages (data to the owner, admin commands, text-mode commands).
 
-use super::output::{self, next_event_buf, read_buffer, write_all_2, write_all_parts, OutputError};
+use super::output::{self, next_event, write_all_parts, OutputError};
 use super::{Incoming, Shared};
 use std::sync::Arc;
 use tokio::io::AsyncWriteExt;
@@ -73,7 +73,6 @@ async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
         spec: None,
         dgram: None,
         from: String::new(),
-        rbuf: read_buffer(),
     };
     let end = tokio::select! {
         _ = shutdown.changed() => Ok(End::Closed),
@@ -135,19 +134,16 @@ struct Conn<'a> {
     /// The connection is the TCP handshake of a datagram carrier.
     dgram: Option<Carrier>,
     from: String,
-    /// Reused for every socket read.
-    rbuf: Vec<u8>,
 }
 
 impl Conn<'_> {
     async fn run(&mut self, stream: &mut TcpStream) -> Result<End, OutputError> {
         loop {
-            let ev =
-                match next_event_buf(stream, &mut self.decoder, &self.from, &mut self.rbuf).await {
-                    Ok(ev) => ev,
-                    Err(OutputError::PeerClosed(_)) => return Ok(End::Closed),
-                    Err(e) => return Err(e),
-                };
+            let ev = match next_event(stream, &mut self.decoder, &self.from).await {
+                Ok(ev) => ev,
+                Err(OutputError::PeerClosed(_)) => return Ok(End::Closed),
+                Err(e) => return Err(e),
+            };
             match ev {
                 Event::Header(h) => {
                     let spec = h.carrier().spec();
@@ -248,7 +244,7 @@ impl Conn<'_> {
     /// Writes a reply followed by the acknowledgement (if any) in one go.
     async fn reply_and_ack(&self, stream: &mut TcpStream, reply: &[u8]) -> Result<(), OutputError> {
         let ack = self.ack_bytes().unwrap_or_default();
-        write_all_2(stream, reply, ack)
+        write_all_parts(stream, &[reply, ack])
             .await
             .map_err(|source| OutputError::Io {
                 target: self.from.clone(),
@@ -481,7 +477,7 @@ impl Conn<'_> {
     async fn mcast_group(&mut self, stream: &mut TcpStream) -> Result<End, OutputError> {
         let mut got = Vec::with_capacity(6);
         while got.len() < 6 {
-            match next_event_buf(stream, &mut self.decoder, &self.from, &mut self.rbuf).await? {
+            match next_event(stream, &mut self.decoder, &self.from).await? {
                 Event::Raw(bytes) => got.extend_from_slice(&bytes),
                 _ => return Ok(End::Closed),
             }

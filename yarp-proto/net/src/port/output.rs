@@ -170,26 +170,6 @@ pub(crate) async fn write_all_parts(
     Ok(())
 }
 
-/// Writes `a` then `b` with as few system calls as the socket allows (`writev`).
-pub(crate) async fn write_all_2(stream: &mut TcpStream, a: &[u8], b: &[u8]) -> std::io::Result<()> {
-    let (mut a, mut b) = (a, b);
-    while !a.is_empty() {
-        let n = stream
-            .write_vectored(&[IoSlice::new(a), IoSlice::new(b)])
-            .await?;
-        if n == 0 {
-            return Err(std::io::ErrorKind::WriteZero.into());
-        }
-        if n < a.len() {
-            a = &a[n..];
-        } else {
-            b = &b[n - a.len()..];
-            a = &[];
-        }
-    }
-    stream.write_all(b).await
-}
-
 pub(crate) type RpcResult = Result<Bottle, PortError>;
 
 pub(crate) enum Job {
@@ -442,12 +422,6 @@ fn drain(decoder: &mut Decoder, target: &str) -> Result<(), OutputError> {
 /// arrives in few system calls and is not copied on its way to its event.
 pub(crate) const READ_CHUNK: usize = 64 * 1024;
 
-/// Kept for callers of [`next_event_buf`]: reads no longer go through a separate buffer,
-/// so this allocates nothing.
-pub(crate) fn read_buffer() -> Vec<u8> {
-    Vec::new()
-}
-
 pub(crate) async fn await_ack(
     stream: &mut TcpStream,
     decoder: &mut Decoder,
@@ -526,14 +500,4 @@ pub(crate) async fn next_event(
             return Err(OutputError::PeerClosed(target.to_string()));
         }
     }
-}
-
-/// [`next_event`], for callers that kept a read buffer: `_buf` is no longer used.
-pub(crate) async fn next_event_buf(
-    stream: &mut TcpStream,
-    decoder: &mut Decoder,
-    target: &str,
-    _buf: &mut Vec<u8>,
-) -> Result<Event, OutputError> {
-    next_event(stream, decoder, target).await
 }
