@@ -98,18 +98,7 @@ pub async fn admin_command(contact: &Contact, cmd: &Bottle) -> Result<Bottle, Ne
 /// Sends text-mode port commands (`~/port`, `!/port`...) over a `CONNECT admin` session,
 /// then `q`; returns what the port wrote back after its welcome line.
 pub async fn admin_text(contact: &Contact, lines: &[&str]) -> Result<String, NetworkError> {
-    let mut req = b"CONNECT admin\r\n".to_vec();
-    for l in lines {
-        req.extend_from_slice(l.as_bytes());
-        req.extend_from_slice(b"\r\n");
-    }
-    req.extend_from_slice(b"q\r\n");
-    let reply = session(contact, &req, b"").await?;
-    let text = String::from_utf8_lossy(&reply).into_owned();
-    Ok(text
-        .split_once("\r\n")
-        .map(|(_, rest)| rest.to_string())
-        .unwrap_or_default())
+    text_session(contact, "CONNECT admin", lines).await
 }
 
 /// A text_ack session as `sender` (C++ `yarp ping` uses `<ping>`): sends each line, then
@@ -120,16 +109,29 @@ pub async fn admin_text_ack(
     sender: &str,
     lines: &[&str],
 ) -> Result<String, NetworkError> {
-    let mut req = format!("CONNACK {sender}\r\n").into_bytes();
+    let body = text_session(contact, &format!("CONNACK {sender}"), lines).await?;
+    Ok(body.replace("<ACK>\r\n", ""))
+}
+
+/// Opens a text-carrier connection with `header` (`CONNECT name` / `CONNACK name`), sends
+/// `lines` then `q`, and returns everything after the welcome line.
+async fn text_session(
+    contact: &Contact,
+    header: &str,
+    lines: &[&str],
+) -> Result<String, NetworkError> {
+    let mut req = format!("{header}\r\n").into_bytes();
     for l in lines {
         req.extend_from_slice(l.as_bytes());
         req.extend_from_slice(b"\r\n");
     }
     req.extend_from_slice(b"q\r\n");
     let reply = session(contact, &req, b"").await?;
-    let text = String::from_utf8_lossy(&reply).into_owned();
-    let body = text.split_once("\r\n").map(|(_, r)| r).unwrap_or("");
-    Ok(body.replace("<ACK>\r\n", ""))
+    let text = String::from_utf8_lossy(&reply);
+    Ok(text
+        .split_once("\r\n")
+        .map(|(_, rest)| rest.to_string())
+        .unwrap_or_default())
 }
 
 /// Writes `req`, reads until `until` appears (or the port closes), bounded in time.
