@@ -495,6 +495,9 @@ fn pid(cmd: &Bottle, action: i32, dev: &mut dyn DeviceDriver, resp: &mut Bottle)
     }
 }
 
+/// Drivers of this family, by C++ name.
+pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] = &[];
+
 /// A running `controlBoard_nws_yarp` RPC server on `/<name>/rpc:i`.
 pub struct ControlBoardNws {
     rpc_name: String,

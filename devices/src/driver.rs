@@ -5,8 +5,46 @@
 //! the driver implements that interface (the Rust form of C++ `PolyDriver::view`).
 
 use crate::error::{DevResult, DeviceError};
+use crate::framegrabber::{IFrameGrabberControls, IFrameGrabberImage};
 use crate::interfaces::*;
+use crate::sensors::*;
+use std::sync::{Arc, Mutex};
 use yarp_proto::{Bottle, Property, Value};
+
+/// A device shared between its owner and the wrappers attached to it.
+pub type SharedDevice = Arc<Mutex<PolyDriver>>;
+
+/// Wraps `pd` for sharing with wrappers.
+pub fn shared(pd: PolyDriver) -> SharedDevice {
+    Arc::new(Mutex::new(pd))
+}
+
+/// A wrapper that serves one device (C++ `IWrapper`).
+pub trait IWrapper {
+    fn attach(&mut self, device: SharedDevice) -> DevResult<()>;
+    fn detach(&mut self) -> DevResult<()>;
+}
+
+/// A wrapper that serves several devices, each under a key (C++ `IMultipleWrapper`,
+/// whose `attachAll` takes a `PolyDriverList`; the keys are the `networks` names of a
+/// robotinterface `attach` action, or the device names).
+pub trait IMultipleWrapper {
+    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()>;
+    fn detach_all(&mut self) -> DevResult<()>;
+}
+
+/// A calibrator device (C++ `ICalibrator` as used by robotinterface's `calibrate` and
+/// `park` actions on their `target`).
+pub trait ICalibrator {
+    fn calibrate(&mut self, target: SharedDevice) -> DevResult<()>;
+    fn park(&mut self, target: SharedDevice, wait: bool) -> DevResult<()>;
+    fn quit_calibrate(&mut self) -> DevResult<()> {
+        Ok(())
+    }
+    fn quit_park(&mut self) -> DevResult<()> {
+        Ok(())
+    }
+}
 
 /// A device driver, as C++ `yarp::dev::DeviceDriver`.
 pub trait DeviceDriver: Send {
@@ -58,14 +96,69 @@ pub trait DeviceDriver: Send {
     fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
         None
     }
+
+    // Frame grabbers.
+    fn as_frame_grabber_image(&mut self) -> Option<&mut dyn IFrameGrabberImage> {
+        None
+    }
+    fn as_frame_grabber_controls(&mut self) -> Option<&mut dyn IFrameGrabberControls> {
+        None
+    }
+
+    // Sensors.
+    fn as_three_axis_gyroscopes(&mut self) -> Option<&mut dyn IThreeAxisGyroscopes> {
+        None
+    }
+    fn as_three_axis_linear_accelerometers(
+        &mut self,
+    ) -> Option<&mut dyn IThreeAxisLinearAccelerometers> {
+        None
+    }
+    fn as_three_axis_magnetometers(&mut self) -> Option<&mut dyn IThreeAxisMagnetometers> {
+        None
+    }
+    fn as_orientation_sensors(&mut self) -> Option<&mut dyn IOrientationSensors> {
+        None
+    }
+    fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
+        None
+    }
+    fn as_skin_patches(&mut self) -> Option<&mut dyn ISkinPatches> {
+        None
+    }
+    fn as_temperature_sensors(&mut self) -> Option<&mut dyn ITemperatureSensors> {
+        None
+    }
+    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
+        None
+    }
+
+    // Wrappers and calibrators.
+    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
+        None
+    }
+    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
+        None
+    }
+    fn as_calibrator(&mut self) -> Option<&mut dyn ICalibrator> {
+        None
+    }
 }
 
-type Factory = fn() -> Box<dyn DeviceDriver>;
+/// Makes a fresh, unopened driver.
+pub type Factory = fn() -> Box<dyn DeviceDriver>;
 
-/// The drivers this crate knows, by their C++ names.
-const DRIVERS: &[(&str, Factory)] = &[("fakeMotionControl", || {
-    Box::new(crate::fake_motion_control::FakeMotionControl::new())
-})];
+/// The drivers this crate knows, by their C++ names; each family module lists its own.
+const FAMILIES: &[&[(&str, Factory)]] = &[
+    crate::fake_motion_control::DRIVERS,
+    crate::controlboard::DRIVERS,
+    crate::framegrabber::DRIVERS,
+    crate::sensors::DRIVERS,
+];
+
+fn drivers() -> impl Iterator<Item = &'static (&'static str, Factory)> {
+    FAMILIES.iter().flat_map(|f| f.iter())
+}
 
 /// Lookup of drivers by C++ name.
 pub struct Registry;
@@ -73,16 +166,17 @@ pub struct Registry;
 impl Registry {
     /// Every known device name.
     pub fn names() -> Vec<&'static str> {
-        DRIVERS.iter().map(|(n, _)| *n).collect()
+        let mut names: Vec<&'static str> = drivers().map(|(n, _)| *n).collect();
+        names.sort_unstable_by_key(|n| n.to_lowercase());
+        names
     }
 
     /// A fresh (unopened) driver; an unknown name lists the closest known names.
     pub fn get(name: &str) -> DevResult<Box<dyn DeviceDriver>> {
-        if let Some((_, f)) = DRIVERS.iter().find(|(n, _)| *n == name) {
+        if let Some((_, f)) = drivers().find(|(n, _)| *n == name) {
             return Ok(f());
         }
-        let mut scored: Vec<(usize, &str)> = DRIVERS
-            .iter()
+        let mut scored: Vec<(usize, &str)> = drivers()
             .map(|(n, _)| (distance(&name.to_lowercase(), &n.to_lowercase()), *n))
             .collect();
         scored.sort();
@@ -123,10 +217,15 @@ pub struct PolyDriver {
     name: String,
     driver: Box<dyn DeviceDriver>,
     open: bool,
+    /// The device a wrapper opened through its `subdevice` key; closed after the wrapper.
+    subdevice: Option<SharedDevice>,
 }
 
 impl PolyDriver {
     /// Opens the driver named by `config`'s `device` key with the whole `config`.
+    ///
+    /// A wrapper given a `subdevice` key first opens that device with the same
+    /// configuration and attaches to it, as C++ `yarpdev --device W --subdevice D` does.
     pub fn open(config: &Property) -> DevResult<PolyDriver> {
         let name = match config.find("device") {
             None => return Err(DeviceError::NoDeviceName),
@@ -134,11 +233,47 @@ impl PolyDriver {
         };
         let mut driver = Registry::get(&name)?;
         driver.open(config)?;
-        Ok(PolyDriver {
+        let mut pd = PolyDriver {
             name,
             driver,
             open: true,
-        })
+            subdevice: None,
+        };
+        if let Some(sub) = config.find("subdevice").map(value_text) {
+            if pd.driver.as_wrapper().is_none() && pd.driver.as_multiple_wrapper().is_none() {
+                return Err(DeviceError::BadParam {
+                    device: pd.name.clone(),
+                    param: "subdevice".into(),
+                    expected: "absent (this device is not a wrapper)",
+                    got: sub,
+                });
+            }
+            let mut sub_config = config.clone();
+            sub_config.put("device", Value::from(sub.as_str()));
+            sub_config.unput("subdevice");
+            let sub = shared(PolyDriver::open(&sub_config)?);
+            match pd.driver.as_wrapper() {
+                Some(w) => w.attach(sub.clone())?,
+                None => {
+                    let key = sub.lock().unwrap_or_else(|e| e.into_inner()).name.clone();
+                    if let Some(w) = pd.driver.as_multiple_wrapper() {
+                        w.attach_all(&[(key, sub.clone())])?;
+                    }
+                }
+            }
+            pd.subdevice = Some(sub);
+        }
+        Ok(pd)
+    }
+
+    /// Wraps an already-made driver (opened by the caller) in a `PolyDriver`.
+    pub fn from_driver(name: &str, driver: Box<dyn DeviceDriver>) -> PolyDriver {
+        PolyDriver {
+            name: name.to_string(),
+            driver,
+            open: true,
+            subdevice: None,
+        }
     }
 
     /// The driver's C++ name.
@@ -156,12 +291,22 @@ impl PolyDriver {
     }
 
     pub fn close(&mut self) -> DevResult<()> {
-        if self.open {
-            self.open = false;
-            self.driver.close()
-        } else {
-            Ok(())
+        if !self.open {
+            return Ok(());
         }
+        self.open = false;
+        if self.subdevice.is_some() {
+            if let Some(w) = self.driver.as_wrapper() {
+                let _ = w.detach();
+            } else if let Some(w) = self.driver.as_multiple_wrapper() {
+                let _ = w.detach_all();
+            }
+        }
+        let result = self.driver.close();
+        if let Some(sub) = self.subdevice.take() {
+            let _ = sub.lock().unwrap_or_else(|e| e.into_inner()).close();
+        }
+        result
     }
 }
 

@@ -17,6 +17,9 @@ use std::time::{Instant, SystemTime, UNIX_EPOCH};
 use yarp_proto::{Property, Vocab32};
 
 const NAME: &str = "fakeMotionControl";
+
+pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] =
+    &[(NAME, || Box::new(FakeMotionControl::new()))];
 const GEARBOX: f64 = 10.0;
 
 #[derive(Debug, Clone)]

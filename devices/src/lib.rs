@@ -6,10 +6,16 @@ pub mod controlboard;
 pub mod driver;
 pub mod error;
 pub mod fake_motion_control;
+pub mod framegrabber;
 pub mod interfaces;
+pub mod runtime;
+pub mod sensors;
 pub mod vocabs;
 
-pub use driver::{DeviceDriver, Params, PolyDriver, Registry};
+pub use driver::{
+    shared, DeviceDriver, ICalibrator, IMultipleWrapper, IWrapper, Params, PolyDriver, Registry,
+    SharedDevice,
+};
 pub use error::{DevResult, DeviceError};
 pub use fake_motion_control::FakeMotionControl;
 pub use interfaces::*;

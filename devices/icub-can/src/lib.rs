@@ -1,0 +1,1 @@
+//! The iCub CAN protocol and CAN bus backends.

@@ -1,0 +1,1 @@
+//! iCub kinematics (iKin equivalent).
