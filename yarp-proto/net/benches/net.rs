@@ -224,12 +224,19 @@ impl Bench {
         let rname = format!("/bench/r{}", self.next);
         let w = Port::open(&wname, self.ns.clone()).await.unwrap();
         let r = Arc::new(Port::open(&rname, self.ns.clone()).await.unwrap());
-        w.connect(&rname, Some(carrier)).await.unwrap();
+        // the writer shares its Bottle (no copy per write); `local+copy` lends it instead,
+        // as `write(&Bottle)` does, to show the cost of the one copy that makes
+        let (carrier_name, copy) = match carrier.strip_suffix("+copy") {
+            Some(c) => (c, true),
+            None => (carrier, false),
+        };
+        w.connect(&rname, Some(carrier_name)).await.unwrap();
         let mut msg = Bottle::new();
         msg.push(Value::Blob(vec![b'p'; size]));
+        let msg = Arc::new(msg);
         // warm up
         for _ in 0..3 {
-            w.write_strict(&msg, None).await;
+            w.write_shared(msg.clone(), None).await;
             r.read().await.unwrap();
         }
         let n_max = (STREAM_BYTES / size).clamp(16, 50_000);
@@ -260,7 +267,11 @@ impl Bench {
         let mut sent = 0usize;
         while sent < n_max && start.elapsed() < CASE_TIME {
             // waits for room in the output queue instead of dropping
-            sent += w.write_strict(&msg, None).await;
+            sent += if copy {
+                w.write_strict(&msg, None).await
+            } else {
+                w.write_shared(msg.clone(), None).await
+            };
         }
         let _ = target_tx.send(sent);
         let (n, end) = reader.await.unwrap();
@@ -279,8 +290,13 @@ impl Bench {
             p99_ms: None,
             mbps,
             note: format!(
-                "sent {sent}, {:.3} ms/msg (Port::write_strict)",
-                secs * 1e3 / n.max(1) as f64
+                "sent {sent}, {:.3} ms/msg ({})",
+                secs * 1e3 / n.max(1) as f64,
+                if copy {
+                    "Port::write_strict, one copy"
+                } else {
+                    "Port::write_shared"
+                }
             ),
         });
     }
@@ -395,7 +411,7 @@ fn main() {
         if want("rtt text 1000") {
             b.round_trip("text", KB).await;
         }
-        for carrier in ["tcp", "fast_tcp", "local"] {
+        for carrier in ["tcp", "fast_tcp", "local", "local+copy"] {
             for size in [KB, 64 * KB, MB, 8 * MB] {
                 if want(&format!("stream {carrier} {size}")) {
                     b.stream(carrier, size).await;

@@ -51,7 +51,7 @@ pub struct Message {
 
 impl Message {
     fn from_incoming(mut inc: Incoming) -> Result<Message, DecodeError> {
-        let bottle = inc.bottle()?;
+        let bottle = inc.take_bottle()?;
         Ok(Message {
             bottle,
             stamp: inc.stamp,

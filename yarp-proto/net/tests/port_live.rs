@@ -411,6 +411,11 @@ async fn local_carrier_between_ports_of_one_process() {
     let m = timeout(T, r.read()).await.unwrap().unwrap();
     assert_eq!(m.stamp, Some(Stamp::new(3, 1.5)));
     assert_eq!(m.bottle().unwrap(), big);
+    // a shared Bottle reaches the reader itself, not a copy
+    let shared = std::sync::Arc::new(big.clone());
+    w.write_shared(shared.clone(), None).await;
+    let m = timeout(T, r.read()).await.unwrap().unwrap();
+    assert!(std::sync::Arc::ptr_eq(&m.shared_bottle().unwrap(), &shared));
     // RPC over local
     let r2 = std::sync::Arc::new(r);
     let server = r2.clone();

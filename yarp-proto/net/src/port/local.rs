@@ -85,7 +85,7 @@ async fn run(
                     stamp: msg.stamp(),
                     from: from.clone(),
                     reply: None,
-                    decoded: Some(msg.bottle().clone()),
+                    decoded: Some(Arc::clone(msg.bottle())),
                 };
                 if shared.deliver.send(incoming).await.is_err() {
                     break;
@@ -99,7 +99,7 @@ async fn run(
                     stamp: msg.stamp(),
                     from: from.clone(),
                     reply: Some(tx),
-                    decoded: Some(msg.bottle().clone()),
+                    decoded: Some(Arc::clone(msg.bottle())),
                 };
                 if shared.deliver.send(incoming).await.is_err() {
                     break;

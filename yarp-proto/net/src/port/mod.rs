@@ -81,15 +81,37 @@ pub struct Incoming {
     pub from: String,
     reply: Option<oneshot::Sender<Bottle>>,
     /// The Bottle itself, when it never left this process (`local`).
-    pub(crate) decoded: Option<Bottle>,
+    pub(crate) decoded: Option<Arc<Bottle>>,
 }
 
 impl Incoming {
     /// The payload as a Bottle.
     pub fn bottle(&self) -> Result<Bottle, DecodeError> {
         if let Some(b) = &self.decoded {
-            return Ok(b.clone());
+            return Ok(Bottle::clone(b));
         }
+        self.decode_payload()
+    }
+
+    /// The payload as a shared Bottle: over `local` this is the sender's own Bottle,
+    /// with no copy (large images and blobs stay where they are).
+    pub fn shared_bottle(&self) -> Result<Arc<Bottle>, DecodeError> {
+        match &self.decoded {
+            Some(b) => Ok(Arc::clone(b)),
+            None => self.decode_payload().map(Arc::new),
+        }
+    }
+
+    /// The payload as a Bottle, moved out of the message when it came over `local` and
+    /// nobody else holds it (no copy), decoded otherwise.
+    pub fn take_bottle(&mut self) -> Result<Bottle, DecodeError> {
+        match self.decoded.take() {
+            Some(b) => Ok(Arc::try_unwrap(b).unwrap_or_else(|b| Bottle::clone(&b))),
+            None => self.decode_payload(),
+        }
+    }
+
+    fn decode_payload(&self) -> Result<Bottle, DecodeError> {
         if self.is_text {
             Ok(Bottle::from_text(&self.payload))
         } else {
@@ -376,6 +398,13 @@ impl Port {
     /// Sends a Bottle (with an optional envelope) to every output, waiting for room in
     /// each output's queue (bounded by [`ACK_TIMEOUT`] per output) instead of dropping.
     pub async fn write_strict(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
+        self.write_shared(Arc::new(b.clone()), stamp).await
+    }
+
+    /// As [`Port::write_strict`], for a Bottle the caller shares instead of lending: no
+    /// copy is made, and readers in this process (`local` carrier) receive this very
+    /// Bottle through [`Incoming::shared_bottle`].
+    pub async fn write_shared(&self, b: Arc<Bottle>, stamp: Option<Stamp>) -> usize {
         let msg = Arc::new(output::Outgoing::new(b, stamp));
         let outs: Vec<_> = self
             .shared
@@ -395,7 +424,7 @@ impl Port {
     }
 
     fn send(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
-        let msg = Arc::new(output::Outgoing::new(b, stamp));
+        let msg = Arc::new(output::Outgoing::new(Arc::new(b.clone()), stamp));
         let outs: Vec<_> = self
             .shared
             .lock()
@@ -424,7 +453,7 @@ impl Port {
             .map(|o| o.sender())
             .ok_or_else(|| PortError::NotConnected(self.shared.name.clone()))?;
         let (rtx, rrx) = oneshot::channel();
-        let msg = Arc::new(output::Outgoing::new(b, None));
+        let msg = Arc::new(output::Outgoing::new(Arc::new(b.clone()), None));
         tx.send(output::Job::Rpc(msg, rtx))
             .await
             .map_err(|_| PortError::Closed)?;

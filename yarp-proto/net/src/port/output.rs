@@ -53,16 +53,17 @@ pub enum OutputError {
 /// Bottle's encoding segments in one vectored write (large strings and blobs lent, not
 /// copied); the text form and the flat encoding (datagrams) are made once, on demand.
 pub(crate) struct Outgoing {
-    bottle: Bottle,
+    /// Shared, so that `local` connections hand the same Bottle to readers uncopied.
+    bottle: Arc<Bottle>,
     binary: OnceLock<Vec<u8>>,
     text: OnceLock<Vec<u8>>,
     stamp: Option<Stamp>,
 }
 
 impl Outgoing {
-    pub(crate) fn new(bottle: &Bottle, stamp: Option<Stamp>) -> Outgoing {
+    pub(crate) fn new(bottle: Arc<Bottle>, stamp: Option<Stamp>) -> Outgoing {
         Outgoing {
-            bottle: bottle.clone(),
+            bottle,
             binary: OnceLock::new(),
             text: OnceLock::new(),
             stamp,
@@ -81,7 +82,7 @@ impl Outgoing {
     }
 
     /// The Bottle being sent.
-    pub(crate) fn bottle(&self) -> &Bottle {
+    pub(crate) fn bottle(&self) -> &Arc<Bottle> {
         &self.bottle
     }
 
