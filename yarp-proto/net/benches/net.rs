@@ -364,6 +364,13 @@ fn opt(x: Option<f64>) -> String {
 }
 
 fn main() {
+    if std::env::var_os("YARP_RUNTIME_DIR").is_none() {
+        // unix_stream sockets go here (netns-run may leave USER unset)
+        std::env::set_var(
+            "YARP_RUNTIME_DIR",
+            std::env::temp_dir().join("yarp-rs-bench"),
+        );
+    }
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with("--"));
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -411,7 +418,7 @@ fn main() {
         if want("rtt text 1000") {
             b.round_trip("text", KB).await;
         }
-        for carrier in ["tcp", "fast_tcp", "local", "local+copy"] {
+        for carrier in ["tcp", "fast_tcp", "unix_stream", "local", "local+copy"] {
             for size in [KB, 64 * KB, MB, 8 * MB] {
                 if want(&format!("stream {carrier} {size}")) {
                     b.stream(carrier, size).await;

@@ -474,3 +474,44 @@ async fn name_server_found_by_multicast() {
     );
     stop.shutdown();
 }
+
+#[tokio::test]
+async fn unix_stream_between_ports_with_envelopes_and_acks() {
+    let dir = std::env::temp_dir().join(format!("yarp-rs-unix-{}", std::process::id()));
+    std::env::set_var("YARP_RUNTIME_DIR", &dir);
+    let (ns, stop) = name_server().await;
+    let w = Port::open("/wu", ns.clone()).await.unwrap();
+    let r = Port::open("/ru", ns.clone()).await.unwrap();
+    for carrier in ["unix_stream", "unix_stream_ack"] {
+        w.connect("/ru", Some(carrier)).await.expect(carrier);
+        timeout(T, async {
+            while r.inputs().is_empty() {
+                tokio::time::sleep(Duration::from_millis(5)).await;
+            }
+        })
+        .await
+        .expect("input appears");
+        let big = Bottle::from_text(format!("{carrier} {{{}}}", "7 ".repeat(50_000)));
+        for i in 0..3 {
+            assert_eq!(w.write_stamped(&big, Stamp::new(i, 0.25)).await, 1);
+            let m = timeout(T, r.read()).await.unwrap().unwrap();
+            assert_eq!(m.stamp, Some(Stamp::new(i, 0.25)));
+            assert_eq!(m.bottle().unwrap(), big);
+        }
+        // no replies on this carrier: the RPC is refused, not hung
+        assert!(timeout(T, w.rpc(&bottle![1])).await.unwrap().is_err());
+        assert!(w.disconnect("/ru"));
+        timeout(T, async {
+            while !r.inputs().is_empty() {
+                tokio::time::sleep(Duration::from_millis(5)).await;
+            }
+        })
+        .await
+        .expect("input removed after q");
+    }
+    // the sockets are gone once connected
+    let left: Vec<_> = std::fs::read_dir(&dir).map_or(Vec::new(), |d| d.collect());
+    assert!(left.is_empty(), "left-over sockets: {left:?}");
+    stop.shutdown();
+    let _ = std::fs::remove_dir_all(&dir);
+}

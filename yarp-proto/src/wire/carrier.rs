@@ -55,6 +55,11 @@ pub enum Carrier {
     Shmem,
     /// `local`: in-process (`LOCALITY` header, then object references).
     Local,
+    /// `unix_stream` (plugin): `UNIX_STR` and the sender name on TCP, then index-less
+    /// messages over a Unix socket.
+    UnixStream,
+    /// `unix_stream_ack` (plugin): as `unix_stream` (`UNIX_ACK`), with `ACK\0` answers.
+    UnixStreamAck,
     /// `text`: line-based, `CONNECT ` header.
     Text,
     /// `text_ack`: line-based with `<ACK>` lines, `CONNACK ` header.
@@ -77,6 +82,8 @@ impl Carrier {
             Carrier::Mcast => "mcast",
             Carrier::Shmem => "shmem",
             Carrier::Local => "local",
+            Carrier::UnixStream => "unix_stream",
+            Carrier::UnixStreamAck => "unix_stream_ack",
             Carrier::Text => "text",
             Carrier::TextAck => "text_ack",
             Carrier::NameSer => "name_ser",
@@ -128,7 +135,7 @@ pub enum Framing {
     /// udp / mcast / shmem: the tcp-family handshake (sender name, header reply with the
     /// data port); afterwards the data leaves this TCP stream (bytes pass through raw).
     Handshake,
-    /// local: sender name only, no reply; afterwards bytes pass through raw.
+    /// local / unix_stream: sender name only, no reply; afterwards bytes pass through raw.
     Local,
     /// text / text_ack: `CONNECT <name>` line, `Welcome <name>` line, command lines.
     Text,
@@ -198,8 +205,8 @@ fn http_header(h: &[u8; 8]) -> bool {
 }
 
 /// The built-in carriers in C++ `Carriers` order (http, name_ser, local, tcp, fast_tcp,
-/// mcast, udp, text, text_ack), then the `shmem` plugin.
-pub static BUILTIN: [CarrierSpec; 10] = [
+/// mcast, udp, text, text_ack), then the `shmem` and `unix_stream` plugins.
+pub static BUILTIN: [CarrierSpec; 12] = [
     CarrierSpec {
         carrier: Carrier::Http,
         header: *b"GET / HT",
@@ -294,6 +301,22 @@ pub static BUILTIN: [CarrierSpec; 10] = [
         framing: Framing::Handshake,
         requires_ack: true,
         supports_reply: true,
+    },
+    CarrierSpec {
+        carrier: Carrier::UnixStream,
+        header: *b"UNIX_STR",
+        pattern: HeaderPattern::Exact(*b"UNIX_STR"),
+        framing: Framing::Local,
+        requires_ack: false,
+        supports_reply: false,
+    },
+    CarrierSpec {
+        carrier: Carrier::UnixStreamAck,
+        header: *b"UNIX_ACK",
+        pattern: HeaderPattern::Exact(*b"UNIX_ACK"),
+        framing: Framing::Local,
+        requires_ack: true,
+        supports_reply: false,
     },
 ];
 
@@ -479,6 +502,8 @@ mod tests {
         assert_eq!(c(*b"CONNACK "), Ok(Carrier::TextAck));
         assert_eq!(c(*b"NAME_SER"), Ok(Carrier::NameSer));
         assert_eq!(c(*b"LOCALITY"), Ok(Carrier::Local));
+        assert_eq!(c(*b"UNIX_STR"), Ok(Carrier::UnixStream));
+        assert_eq!(c(*b"UNIX_ACK"), Ok(Carrier::UnixStreamAck));
         assert_eq!(c(*b"GET /foo"), Ok(Carrier::Http));
         assert_eq!(c(*b"POST /fo"), Ok(Carrier::Http));
         assert!(c(*b"GET /?ac").is_err());

@@ -43,6 +43,7 @@ pub mod command;
 pub mod datagram;
 pub mod decoder;
 pub mod error;
+pub mod indexless;
 pub mod line;
 pub mod message;
 pub mod number;
@@ -59,6 +60,7 @@ pub use decoder::{
     Decoder, DecoderConfig, Event, ReadSpace, DEFAULT_MAX_LINE_LEN, DEFAULT_MAX_MESSAGE_SIZE,
 };
 pub use error::WireError;
+pub use indexless::{encode_indexless, IndexlessDecoder, UNIX_ACK};
 pub use message::{
     ack, admin_message, close_message, command_message, data_message, encode_message,
     envelope_message, reply_message, BinaryFrame, Index, Message,

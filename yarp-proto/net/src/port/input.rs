@@ -59,6 +59,8 @@ enum End {
     Mcast(std::net::SocketAddrV4),
     /// An http request (its first bytes).
     Http(Vec<u8>),
+    /// A unix_stream handshake: continue on a Unix socket.
+    Unix(Carrier),
 }
 
 async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
@@ -92,6 +94,15 @@ async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
             let _ = stream.shutdown().await;
         }
         Ok(End::Http(head)) => super::http::serve(&shared, &mut stream, head).await,
+        Ok(End::Unix(carrier)) => {
+            let ports = (
+                stream.local_addr().map_or(0, |a| a.port()),
+                stream.peer_addr().map_or(0, |a| a.port()),
+            );
+            drop(stream);
+            let from = conn_from(&conn_name);
+            super::unix::serve_input(&shared, id, kill, from, carrier, ports).await;
+        }
         Ok(End::Udp) => {
             let local = stream.local_addr().map(|a| a.ip());
             match crate::dgram::udp_handshake_accept(&mut stream, unspecified(local)).await {
@@ -148,7 +159,10 @@ impl Conn<'_> {
                 Event::Header(h) => {
                     let spec = h.carrier().spec();
                     match h.carrier() {
-                        Carrier::Udp | Carrier::Mcast => {
+                        Carrier::Udp
+                        | Carrier::Mcast
+                        | Carrier::UnixStream
+                        | Carrier::UnixStreamAck => {
                             self.dgram = Some(h.carrier());
                             self.spec = Some(spec);
                             continue;
@@ -179,6 +193,9 @@ impl Conn<'_> {
                     self.from = String::from_utf8_lossy(&name).into_owned();
                     match self.dgram {
                         Some(Carrier::Udp) => return Ok(End::Udp),
+                        Some(c @ (Carrier::UnixStream | Carrier::UnixStreamAck)) => {
+                            return Ok(End::Unix(c))
+                        }
                         Some(_) => return self.mcast_group(stream).await,
                         None => {}
                     }

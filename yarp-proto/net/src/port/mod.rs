@@ -21,6 +21,7 @@ mod http;
 mod input;
 mod local;
 pub(crate) mod output;
+pub mod unix;
 
 use crate::nameserver::{NameClient, NameClientError};
 use std::collections::BTreeMap;

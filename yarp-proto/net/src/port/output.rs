@@ -70,7 +70,7 @@ impl Outgoing {
         }
     }
 
-    fn command(&self, reply: bool) -> PortCommand {
+    pub(crate) fn command(&self, reply: bool) -> PortCommand {
         match &self.stamp {
             Some(s) => PortCommand::with_stamp(s, reply),
             None => PortCommand::data(reply),
@@ -137,8 +137,8 @@ impl Outgoing {
 
 /// Writes every part in order with vectored writes (`writev`), so that large parts lent by
 /// `binary::encode_segments` go out without being copied into one buffer.
-pub(crate) async fn write_all_parts(
-    stream: &mut TcpStream,
+pub(crate) async fn write_all_parts<W: tokio::io::AsyncWrite + Unpin>(
+    stream: &mut W,
     parts: &[&[u8]],
 ) -> std::io::Result<()> {
     let mut idx = 0;
@@ -222,8 +222,14 @@ pub(crate) async fn connect(
     if carrier == "local" {
         return super::local::connect(shared, target);
     }
-    if let Some(c @ (Carrier::Udp | Carrier::Mcast)) = super::carrier_by_name(carrier) {
-        return super::dgram_out::connect(shared, target, contact, c).await;
+    match super::carrier_by_name(carrier) {
+        Some(c @ (Carrier::Udp | Carrier::Mcast)) => {
+            return super::dgram_out::connect(shared, target, contact, c).await;
+        }
+        Some(c @ (Carrier::UnixStream | Carrier::UnixStreamAck)) => {
+            return super::unix::connect(shared, target, contact, c).await;
+        }
+        _ => {}
     }
     let spec = super::carrier_by_name(carrier)
         .map(|c| c.spec())
