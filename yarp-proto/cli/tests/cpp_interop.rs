@@ -997,6 +997,70 @@ fn rpc_rust_client_to_cpp_rpcserver() {
 }
 
 // ---------------------------------------------------------------------------------------
+// `yarp latency-test`, either side the server
+// ---------------------------------------------------------------------------------------
+
+fn latency_case(test: &str, server: Side, client: Side, extra: &[&str]) {
+    let Some(w) = World::new(test, Side::Cpp) else {
+        return;
+    };
+    let _srv = w.spawn_port(server, &["latency-test", "--server"], "/latencyTest/server");
+    let prefix = w.dir.0.join("log_");
+    let prefix = prefix.to_string_lossy();
+    let mut args = vec![
+        "latency-test",
+        "--client",
+        "--nframes",
+        "20",
+        "--payload_size",
+        "100",
+        "--client_wait",
+        "0.01",
+        "--logfile",
+        &prefix,
+    ];
+    args.extend_from_slice(extra);
+    let out = w.run(client, &args);
+    assert!(out.ok, "{out:?}");
+    // one `latency copytime` line per frame, as C++ writes them
+    let log = std::fs::read_to_string(format!("{prefix}100.txt")).expect("latency log");
+    let lines: Vec<&str> = log.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 20, "{log}");
+    for l in &lines {
+        let v: Vec<f64> = l
+            .split_whitespace()
+            .filter_map(|x| x.parse().ok())
+            .collect();
+        assert_eq!(v.len(), 2, "{l}");
+        assert!(v[0] >= 0.0 && v[0] < 1000.0, "latency {l}");
+    }
+    report(&format!(
+        "{} `yarp latency-test --client {}` -> {} server: 20 frames",
+        client.label(),
+        extra.join(" "),
+        server.label()
+    ));
+}
+
+#[test]
+fn latency_test_cpp_client_rust_server() {
+    latency_case("latency_cpp_client", Side::Rust, Side::Cpp, &[]);
+}
+
+// Reply mode (`--client` without `--no-reply`) needs a C++ 3.12 server: 3.5's server only
+// writes on its output, so only the no-reply mode is tested against it.
+
+#[test]
+fn latency_test_rust_client_cpp_server_no_reply() {
+    latency_case(
+        "latency_rust_client_noreply",
+        Side::Cpp,
+        Side::Rust,
+        &["--no-reply"],
+    );
+}
+
+// ---------------------------------------------------------------------------------------
 // Bottle contents, bursts, `yarp read /r /source`
 // ---------------------------------------------------------------------------------------
 

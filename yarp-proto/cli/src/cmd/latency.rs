@@ -458,6 +458,12 @@ async fn client(ns: &NameClient, cfg: &ClientConfig, carrier: Carrier, size: i32
             m.bottle()?
         };
         let final_time = now();
+        if reply.is_empty() && use_reply {
+            bail!(
+                "the server answered frame {frame} with an empty reply: servers older than \
+                 C++ YARP 3.12 (e.g. 3.5) answer on their output only; use --no-reply"
+            );
+        }
         let sent = reply.get(1).and_then(Value::as_f64).unwrap_or(0.0);
         let received = reply
             .get(2)
