@@ -1,0 +1,3 @@
+//! `yarp-launch`: runs a launch config.
+
+fn main() {}
