@@ -1,0 +1,261 @@
+//! Emulated iCub boards on a CAN bus.
+//!
+//! A [`Board`] is a pure state machine: it reacts to decoded messages and, on every
+//! [`Board::tick`], advances its simulation and emits broadcasts. [`BusEmulator`] runs a
+//! set of boards on one bus in a thread with a fixed tick (1 ms by default): frames are
+//! decoded as they arrive (malformed ones are counted and ignored) and replies are sent
+//! at once; broadcasts produced during a tick are sent as one batch.
+//! [`preset`] builds a whole 53-DOF iCub from the CAN layout of iCubGenova01.
+
+pub mod mc;
+pub mod preset;
+pub mod sensors;
+
+use std::sync::atomic::{AtomicBool, AtomicU16, AtomicU64, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use crate::bus::{BusError, CanBus};
+use crate::frame::CanFrame;
+use crate::proto::Message;
+
+pub use mc::{McBoard, McBoardConfig};
+pub use sensors::{MaisBoard, MtbBoard, StrainBoard};
+
+/// One emulated board.
+pub trait Board: Send {
+    /// CAN address (1..=14).
+    fn address(&self) -> u8;
+    /// Short kind name (`mc`, `strain`, `mais`, `skin`, `mtb`).
+    fn kind(&self) -> &'static str;
+    /// Reacts to a message seen on the bus; replies go to `out`.
+    fn on_message(&mut self, msg: &Message, out: &mut Vec<CanFrame>);
+    /// Advances the simulation by `dt`; broadcasts go to `out`.
+    fn tick(&mut self, dt: Duration, out: &mut Vec<CanFrame>);
+    /// Starts streaming as if a host had configured the board (sensors wait for a
+    /// host command otherwise); used for benchmarks and host-less demos.
+    fn start_streaming(&mut self) {}
+}
+
+/// Errors building boards from a textual description.
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    #[error("board spec {0:?}: expected ADDRESS:KIND (KIND = mc, strain, mais, skin, mtb)")]
+    Syntax(String),
+    #[error("board spec {0:?}: address must be 1..=14")]
+    Address(String),
+    #[error("{path}:{line}: {msg}")]
+    File {
+        path: String,
+        line: usize,
+        msg: String,
+    },
+    #[error(transparent)]
+    Bus(#[from] BusError),
+}
+
+/// Builds a board from `ADDRESS:KIND` (address decimal or 0x-hex).
+pub fn board_from_spec(spec: &str) -> Result<Box<dyn Board>, SpecError> {
+    let (addr, kind) = spec
+        .split_once(':')
+        .ok_or_else(|| SpecError::Syntax(spec.into()))?;
+    let addr = addr.trim();
+    let address = match addr.strip_prefix("0x").or_else(|| addr.strip_prefix("0X")) {
+        Some(hex) => u8::from_str_radix(hex, 16),
+        None => addr.parse(),
+    }
+    .map_err(|_| SpecError::Address(spec.into()))?;
+    if !(1..=14).contains(&address) {
+        return Err(SpecError::Address(spec.into()));
+    }
+    Ok(match kind.trim() {
+        "mc" => Box::new(McBoard::new(McBoardConfig::new(address))),
+        "strain" => Box::new(StrainBoard::new(address)),
+        "mais" => Box::new(MaisBoard::new(address)),
+        "skin" => Box::new(MtbBoard::new(address, true)),
+        "mtb" => Box::new(MtbBoard::new(address, false)),
+        _ => return Err(SpecError::Syntax(spec.into())),
+    })
+}
+
+/// Counters of a running bus emulator.
+#[derive(Debug, Default)]
+pub struct EmulatorStats {
+    pub frames_in: AtomicU64,
+    pub frames_out: AtomicU64,
+    pub malformed: AtomicU64,
+    pub ticks: AtomicU64,
+    pub send_errors: AtomicU64,
+}
+
+/// Boards on one bus, ready to run.
+pub struct BusEmulator {
+    bus: Arc<dyn CanBus>,
+    boards: Vec<Box<dyn Board>>,
+    tick: Duration,
+}
+
+impl BusEmulator {
+    pub fn new(bus: Arc<dyn CanBus>, boards: Vec<Box<dyn Board>>) -> Self {
+        Self {
+            bus,
+            boards,
+            tick: Duration::from_millis(1),
+        }
+    }
+
+    /// Starts every sensor board streaming without waiting for a host.
+    pub fn start_streaming(mut self) -> Self {
+        self.boards.iter_mut().for_each(|b| b.start_streaming());
+        self
+    }
+
+    /// Changes the simulation step (default 1 ms).
+    pub fn with_tick(mut self, tick: Duration) -> Self {
+        self.tick = tick.max(Duration::from_micros(100));
+        self
+    }
+
+    /// Starts the emulator thread.
+    pub fn spawn(self) -> std::io::Result<EmulatorHandle> {
+        let stop = Arc::new(AtomicBool::new(false));
+        let stats = Arc::new(EmulatorStats::default());
+        // Bit n set: board n neither replies nor broadcasts (to test board timeouts).
+        let controls = Arc::new(AtomicU16::new(0));
+        let (s, st, c) = (stop.clone(), stats.clone(), controls.clone());
+        let name = self.bus.name().to_string();
+        let thread = std::thread::Builder::new()
+            .name(format!("emu {name}"))
+            .spawn(move || self.run(&s, &st, &c))?;
+        Ok(EmulatorHandle {
+            name,
+            stop,
+            stats,
+            controls,
+            thread: Some(thread),
+        })
+    }
+
+    fn run(mut self, stop: &AtomicBool, stats: &EmulatorStats, silent: &AtomicU16) {
+        let mut out = Vec::with_capacity(256);
+        let mut next = Instant::now() + self.tick;
+        while !stop.load(Ordering::Relaxed) {
+            let now = Instant::now();
+            if now < next {
+                match self.bus.recv(next - now) {
+                    Ok(frame) => {
+                        stats.frames_in.fetch_add(1, Ordering::Relaxed);
+                        let msg = match Message::decode(&frame) {
+                            Ok(m) => m,
+                            Err(e) => {
+                                stats.malformed.fetch_add(1, Ordering::Relaxed);
+                                tracing::debug!(bus = self.bus.name(), %frame, "ignoring malformed frame: {e}");
+                                continue;
+                            }
+                        };
+                        let mute = silent.load(Ordering::Relaxed);
+                        out.clear();
+                        for b in self
+                            .boards
+                            .iter_mut()
+                            .filter(|b| mute & (1 << (b.address() & 0xF)) == 0)
+                        {
+                            b.on_message(&msg, &mut out);
+                        }
+                        self.flush(&out, stats);
+                    }
+                    Err(BusError::Timeout(_)) => {}
+                    Err(BusError::Closed(_)) => return,
+                    Err(e) => {
+                        tracing::warn!(bus = self.bus.name(), "emulator receive error: {e}");
+                        std::thread::sleep(self.tick);
+                    }
+                }
+                continue;
+            }
+            let mute = silent.load(Ordering::Relaxed);
+            out.clear();
+            for b in self.boards.iter_mut() {
+                let start = out.len();
+                b.tick(self.tick, &mut out);
+                if mute & (1 << (b.address() & 0xF)) != 0 {
+                    // A silent board keeps simulating; its output is dropped.
+                    out.truncate(start);
+                }
+            }
+            self.flush(&out, stats);
+            stats.ticks.fetch_add(1, Ordering::Relaxed);
+            next += self.tick;
+            // After a stall (e.g. a suspended process) resynchronise instead of bursting.
+            if Instant::now() > next + Duration::from_millis(100) {
+                next = Instant::now() + self.tick;
+            }
+        }
+    }
+
+    fn flush(&self, out: &[CanFrame], stats: &EmulatorStats) {
+        if out.is_empty() {
+            return;
+        }
+        match self.bus.send_all(out) {
+            Ok(()) => {
+                stats
+                    .frames_out
+                    .fetch_add(out.len() as u64, Ordering::Relaxed);
+            }
+            Err(e) => {
+                stats.send_errors.fetch_add(1, Ordering::Relaxed);
+                tracing::debug!(bus = self.bus.name(), "emulator send failed: {e}");
+            }
+        }
+    }
+}
+
+/// A running bus emulator; stops (and joins its thread) when dropped.
+pub struct EmulatorHandle {
+    name: String,
+    stop: Arc<AtomicBool>,
+    stats: Arc<EmulatorStats>,
+    controls: Arc<AtomicU16>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl EmulatorHandle {
+    /// The bus name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// Live counters.
+    pub fn stats(&self) -> &EmulatorStats {
+        &self.stats
+    }
+    /// Makes a board go silent (no replies, no broadcasts) or speak again.
+    pub fn set_silent(&self, address: u8, silent: bool) {
+        let bit = 1u16 << (address & 0xF);
+        if silent {
+            self.controls.fetch_or(bit, Ordering::Relaxed);
+        } else {
+            self.controls.fetch_and(!bit, Ordering::Relaxed);
+        }
+    }
+    /// Stops the thread and waits for it.
+    pub fn stop(mut self) {
+        self.shutdown();
+    }
+    fn shutdown(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+impl Drop for EmulatorHandle {
+    fn drop(&mut self) {
+        self.shutdown();
+    }
+}
+
+#[cfg(test)]
+mod tests;
