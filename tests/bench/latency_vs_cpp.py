@@ -54,7 +54,10 @@ def run_pair(server_bin, client_bin, size, frames, env, workdir, ours_client):
                 "--payload_size", str(size), "--client_wait", "0", "--logfile", prefix]
         if ours_client:
             args.append("--no-reply")
-        subprocess.run(args, env=env, capture_output=True, timeout=300)
+        try:
+            subprocess.run(args, env=env, capture_output=True, timeout=120)
+        except subprocess.TimeoutExpired:
+            return None
         path = f"{prefix}{size}.txt"
         if not os.path.exists(path):
             return None
@@ -69,6 +72,9 @@ def run_pair(server_bin, client_bin, size, frames, env, workdir, ours_client):
         except subprocess.TimeoutExpired:
             srv.kill()
             srv.wait()
+        # a killed port may stay registered: the next pair must not find it
+        for name in ("/latencyTest/server", "/latencyTest/client"):
+            subprocess.run([OURS, "name", "unregister", name], env=env, capture_output=True, timeout=10)
 
 
 def main():

@@ -309,7 +309,7 @@ async fn serve_test(p: &Port, wait: f64, verbose: bool) -> ServerEnd {
         let Some(mut m) = p.read().await else {
             return ServerEnd::Interrupted;
         };
-        let mut b = m.bottle().unwrap_or_default();
+        let mut b = m.take_bottle().unwrap_or_default();
         if verbose {
             println!("Received: \"{b}\"");
         }
@@ -335,7 +335,7 @@ async fn serve_test(p: &Port, wait: f64, verbose: bool) -> ServerEnd {
             m.reply(b);
         } else {
             drop(m);
-            p.write(&b).await;
+            p.write_shared(std::sync::Arc::new(b), None).await;
         }
         if wait > 0.0 {
             tokio::time::sleep(Duration::from_secs_f64(wait)).await;
@@ -467,8 +467,8 @@ async fn client(ns: &NameClient, cfg: &ClientConfig, carrier: Carrier, size: i32
             p.rpc(&datum).await?
         } else {
             p.write(&datum).await;
-            let m = p.read().await.ok_or_else(|| anyhow!("port closed"))?;
-            m.bottle()?
+            let mut m = p.read().await.ok_or_else(|| anyhow!("port closed"))?;
+            m.take_bottle()?
         };
         let final_time = now();
         if reply.is_empty() && use_reply {

@@ -103,11 +103,13 @@ impl Incoming {
         }
     }
 
-    /// The payload as a Bottle, moved out of the message when it came over `local` and
-    /// nobody else holds it (no copy), decoded otherwise.
+    /// The payload as a Bottle, taken out of the message without copying where possible:
+    /// over `local` the sender's Bottle itself (when nobody else holds it); over binary
+    /// carriers a large string or blob takes over the received buffer.
     pub fn take_bottle(&mut self) -> Result<Bottle, DecodeError> {
         match self.decoded.take() {
             Some(b) => Ok(Arc::try_unwrap(b).unwrap_or_else(|b| Bottle::clone(&b))),
+            None if !self.is_text => Bottle::decode_owned(std::mem::take(&mut self.payload)),
             None => self.decode_payload(),
         }
     }
