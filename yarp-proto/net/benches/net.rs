@@ -418,7 +418,14 @@ fn main() {
         if want("rtt text 1000") {
             b.round_trip("text", KB).await;
         }
-        for carrier in ["tcp", "fast_tcp", "udp", "unix_stream", "local", "local+copy"] {
+        for carrier in [
+            "tcp",
+            "fast_tcp",
+            "udp",
+            "unix_stream",
+            "local",
+            "local+copy",
+        ] {
             for size in [KB, 64 * KB, MB, 8 * MB] {
                 if want(&format!("stream {carrier} {size}")) {
                     b.stream(carrier, size).await;

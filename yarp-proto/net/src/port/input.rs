@@ -2,7 +2,7 @@
 //! connection's messages (data to the owner, admin commands, text-mode commands).
 
 use super::output::{self, next_event, write_all_parts, OutputError};
-use super::{Incoming, Shared};
+use super::{Incoming, ReplyBody, Shared};
 use std::sync::Arc;
 use tokio::io::AsyncWriteExt;
 use tokio::net::{TcpListener, TcpStream};
@@ -306,10 +306,20 @@ impl Conn<'_> {
                 };
                 match reply {
                     Some(b) if text => {
+                        let b = b.into_bottle();
                         self.reply_and_ack(stream, &port_admin::reply_text_line(&b))
                             .await?;
                     }
-                    Some(b) => {
+                    Some(ReplyBody::Encoded(bytes)) => {
+                        let parts: [&[u8]; 2] = [&bytes, self.ack_bytes().unwrap_or_default()];
+                        write_all_parts(stream, &parts).await.map_err(|source| {
+                            OutputError::Io {
+                                target: self.from.clone(),
+                                source,
+                            }
+                        })?;
+                    }
+                    Some(ReplyBody::Bottle(b)) => {
                         // large blobs in the reply go out straight from the Bottle
                         let segs = yarp_proto::binary::encode_segments(&b);
                         let mut parts: Vec<&[u8]> = segs.iter().map(|s| s.as_ref()).collect();

@@ -106,7 +106,8 @@ async fn run(
                 }
                 drop(shared);
                 // no reply from the owner: an empty Bottle, as over tcp
-                let _ = reply_tx.send(Ok(rx.await.unwrap_or_default()));
+                let reply = rx.await.map(super::ReplyBody::into_bottle);
+                let _ = reply_tx.send(Ok(reply.unwrap_or_default()));
             }
             Job::Close(done) => {
                 if let Some(done) = done {

@@ -80,7 +80,7 @@ pub struct Incoming {
     pub stamp: Option<Stamp>,
     /// The sending port's name.
     pub from: String,
-    reply: Option<oneshot::Sender<Bottle>>,
+    reply: Option<oneshot::Sender<ReplyBody>>,
     /// The Bottle itself, when it never left this process (`local`).
     pub(crate) decoded: Option<Arc<Bottle>>,
 }
@@ -131,7 +131,16 @@ impl Incoming {
     /// replying lets the sender go on without a reply, as C++ does.
     pub fn reply(&mut self, b: Bottle) {
         if let Some(tx) = self.reply.take() {
-            let _ = tx.send(b);
+            let _ = tx.send(ReplyBody::Bottle(b));
+        }
+    }
+
+    /// Sends a reply already encoded (binary Bottle bytes, e.g. the element-tagged lists a
+    /// thrift-generated C++ server writes): binary connections carry these bytes exactly;
+    /// text connections get them decoded and printed.
+    pub fn reply_encoded(&mut self, bytes: Vec<u8>) {
+        if let Some(tx) = self.reply.take() {
+            let _ = tx.send(ReplyBody::Encoded(bytes));
         }
     }
 
@@ -141,13 +150,39 @@ impl Incoming {
     }
 }
 
+/// A reply on its way back to an RPC caller.
+#[derive(Debug)]
+pub(crate) enum ReplyBody {
+    Bottle(Bottle),
+    /// Binary Bottle bytes, sent as they are.
+    Encoded(Vec<u8>),
+}
+
+impl ReplyBody {
+    /// The reply as a Bottle (undecodable bytes give an empty one, logged).
+    pub(crate) fn into_bottle(self) -> Bottle {
+        match self {
+            ReplyBody::Bottle(b) => b,
+            ReplyBody::Encoded(bytes) => Bottle::decode(&bytes).unwrap_or_else(|e| {
+                tracing::warn!("dropping an undecodable encoded reply: {e}");
+                Bottle::new()
+            }),
+        }
+    }
+}
+
 /// A pending RPC reply.
 #[derive(Debug)]
-pub struct Replier(oneshot::Sender<Bottle>);
+pub struct Replier(oneshot::Sender<ReplyBody>);
 
 impl Replier {
     pub fn send(self, b: Bottle) {
-        let _ = self.0.send(b);
+        let _ = self.0.send(ReplyBody::Bottle(b));
+    }
+
+    /// As [`Incoming::reply_encoded`].
+    pub fn send_encoded(self, bytes: Vec<u8>) {
+        let _ = self.0.send(ReplyBody::Encoded(bytes));
     }
 }
 

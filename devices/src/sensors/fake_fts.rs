@@ -1,0 +1,140 @@
+//! `fakeFTs`: simulated six-axis force/torque sensors, each with a temperature sensor,
+//! as the C++ device of that name.
+//!
+//! Parameters: `sensorNames` (required list, one sensor per name; the frame of each is
+//! named like the sensor), `period` (ms, default 10). Every channel of every sensor
+//! reads a counter that starts at 10 and advances by one every period (wrapping to 0
+//! at 360); the timestamp is the time of the latest step.
+
+use super::interfaces::*;
+use super::params::{bool_param, now, period_ms};
+use crate::driver::{DeviceDriver, Params};
+use crate::error::DevResult;
+use yarp_proto::{Property, Value};
+
+const NAME: &str = "fakeFTs";
+
+/// The simulated F/T sensors.
+#[derive(Debug, Clone)]
+pub struct FakeFts {
+    names: Vec<String>,
+    period: f64,
+    constant: bool,
+    start: f64,
+}
+
+impl Default for FakeFts {
+    fn default() -> Self {
+        FakeFts {
+            names: Vec::new(),
+            period: 0.01,
+            constant: false,
+            start: now(),
+        }
+    }
+}
+
+impl FakeFts {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The counter value and the time of the step that set it, at wall time `t`.
+    fn state_at(&self, t: f64) -> (f64, f64) {
+        let steps = ((t - self.start) / self.period).floor().max(0.0);
+        let stamp = self.start + steps * self.period;
+        let c = if self.constant {
+            10.0
+        } else {
+            (10.0 + steps) % 360.0
+        };
+        (c, stamp)
+    }
+
+    fn check(&self, i: usize) -> DevResult<()> {
+        if i < self.names.len() {
+            Ok(())
+        } else {
+            Err(no_sensor(NAME, i, self.names.len()))
+        }
+    }
+
+    fn status(&self, i: usize) -> MasStatus {
+        if i < self.names.len() {
+            MasStatus::Ok
+        } else {
+            MasStatus::Error
+        }
+    }
+
+    fn name(&self, i: usize) -> DevResult<String> {
+        self.check(i).map(|_| self.names[i].clone())
+    }
+
+    fn measure(&self, i: usize, channels: usize) -> DevResult<SensorMeasurement> {
+        self.check(i)?;
+        let (c, t) = self.state_at(now());
+        Ok(SensorMeasurement::new(vec![c; channels], t))
+    }
+}
+
+impl DeviceDriver for FakeFts {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        self.period = period_ms(&p, "period")?.unwrap_or(0.01);
+        self.constant = bool_param(&p, "constantValue")?.unwrap_or(false);
+        self.names = p
+            .vector("sensorNames", "a list of sensor names", |v| match v {
+                Value::String(_) | Value::Vocab32(_) => {
+                    Some(String::from_utf8_lossy(&v.to_text_bare()).into_owned())
+                }
+                _ => None,
+            })?
+            .ok_or_else(|| p.missing("sensorNames"))?;
+        self.start = now();
+        Ok(())
+    }
+
+    fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
+        Some(self)
+    }
+    fn as_temperature_sensors(&mut self) -> Option<&mut dyn ITemperatureSensors> {
+        Some(self)
+    }
+}
+
+impl ISixAxisForceTorqueSensors for FakeFts {
+    fn get_nr_of_six_axis_force_torque_sensors(&self) -> usize {
+        self.names.len()
+    }
+    fn get_six_axis_force_torque_sensor_status(&self, i: usize) -> MasStatus {
+        self.status(i)
+    }
+    fn get_six_axis_force_torque_sensor_name(&self, i: usize) -> DevResult<String> {
+        self.name(i)
+    }
+    fn get_six_axis_force_torque_sensor_frame_name(&self, i: usize) -> DevResult<String> {
+        self.name(i)
+    }
+    fn get_six_axis_force_torque_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+        self.measure(i, 6)
+    }
+}
+
+impl ITemperatureSensors for FakeFts {
+    fn get_nr_of_temperature_sensors(&self) -> usize {
+        self.names.len()
+    }
+    fn get_temperature_sensor_status(&self, i: usize) -> MasStatus {
+        self.status(i)
+    }
+    fn get_temperature_sensor_name(&self, i: usize) -> DevResult<String> {
+        self.name(i)
+    }
+    fn get_temperature_sensor_frame_name(&self, i: usize) -> DevResult<String> {
+        self.name(i)
+    }
+    fn get_temperature_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+        self.measure(i, 1)
+    }
+}

@@ -1,0 +1,171 @@
+//! Devices that serve every MAS family from one place (the network client, the
+//! remapper) implement [`FamilySource`]; `impl_mas_interfaces!` then gives them all
+//! the per-family interface traits, and `mas_views!()` the matching `as_*` methods.
+
+use super::family::SensorFamily;
+use super::interfaces::{MasStatus, SensorMeasurement};
+use crate::error::DevResult;
+
+/// Per-family access to sensors, the shape every MAS interface shares.
+pub trait FamilySource {
+    fn family_count(&self, family: SensorFamily) -> usize;
+    fn family_status(&self, family: SensorFamily, i: usize) -> MasStatus;
+    fn family_name(&self, family: SensorFamily, i: usize) -> DevResult<String>;
+    fn family_frame_name(&self, family: SensorFamily, i: usize) -> DevResult<String>;
+    fn family_measure(&self, family: SensorFamily, i: usize) -> DevResult<SensorMeasurement>;
+}
+
+/// Implements one MAS interface trait for `$ty: FamilySource`.
+macro_rules! forward_interface {
+    ($ty:ty, $trait:ident, $family:ident,
+     $nr:ident, $status:ident, $name:ident, $frame:ident, $measure:ident) => {
+        impl $crate::sensors::interfaces::$trait for $ty {
+            fn $nr(&self) -> usize {
+                FamilySource::family_count(self, SensorFamily::$family)
+            }
+            fn $status(&self, i: usize) -> MasStatus {
+                FamilySource::family_status(self, SensorFamily::$family, i)
+            }
+            fn $name(&self, i: usize) -> DevResult<String> {
+                FamilySource::family_name(self, SensorFamily::$family, i)
+            }
+            fn $frame(&self, i: usize) -> DevResult<String> {
+                FamilySource::family_frame_name(self, SensorFamily::$family, i)
+            }
+            fn $measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+                FamilySource::family_measure(self, SensorFamily::$family, i)
+            }
+        }
+    };
+}
+
+/// Implements every MAS interface trait for `$ty: FamilySource`.
+macro_rules! impl_mas_interfaces {
+    ($ty:ty) => {
+        $crate::sensors::forward::forward_interface!(
+            $ty,
+            IThreeAxisGyroscopes,
+            ThreeAxisGyroscopes,
+            get_nr_of_three_axis_gyroscopes,
+            get_three_axis_gyroscope_status,
+            get_three_axis_gyroscope_name,
+            get_three_axis_gyroscope_frame_name,
+            get_three_axis_gyroscope_measure
+        );
+        $crate::sensors::forward::forward_interface!(
+            $ty,
+            IThreeAxisLinearAccelerometers,
+            ThreeAxisLinearAccelerometers,
+            get_nr_of_three_axis_linear_accelerometers,
+            get_three_axis_linear_accelerometer_status,
+            get_three_axis_linear_accelerometer_name,
+            get_three_axis_linear_accelerometer_frame_name,
+            get_three_axis_linear_accelerometer_measure
+        );
+        $crate::sensors::forward::forward_interface!(
+            $ty,
+            IThreeAxisMagnetometers,
+            ThreeAxisMagnetometers,
+            get_nr_of_three_axis_magnetometers,
+            get_three_axis_magnetometer_status,
+            get_three_axis_magnetometer_name,
+            get_three_axis_magnetometer_frame_name,
+            get_three_axis_magnetometer_measure
+        );
+        $crate::sensors::forward::forward_interface!(
+            $ty,
+            IOrientationSensors,
+            OrientationSensors,
+            get_nr_of_orientation_sensors,
+            get_orientation_sensor_status,
+            get_orientation_sensor_name,
+            get_orientation_sensor_frame_name,
+            get_orientation_sensor_measure_as_roll_pitch_yaw
+        );
+        $crate::sensors::forward::forward_interface!(
+            $ty,
+            ISixAxisForceTorqueSensors,
+            SixAxisForceTorqueSensors,
+            get_nr_of_six_axis_force_torque_sensors,
+            get_six_axis_force_torque_sensor_status,
+            get_six_axis_force_torque_sensor_name,
+            get_six_axis_force_torque_sensor_frame_name,
+            get_six_axis_force_torque_sensor_measure
+        );
+        $crate::sensors::forward::forward_interface!(
+            $ty,
+            ITemperatureSensors,
+            TemperatureSensors,
+            get_nr_of_temperature_sensors,
+            get_temperature_sensor_status,
+            get_temperature_sensor_name,
+            get_temperature_sensor_frame_name,
+            get_temperature_sensor_measure
+        );
+
+        impl $crate::sensors::interfaces::ISkinPatches for $ty {
+            fn get_nr_of_skin_patches(&self) -> usize {
+                FamilySource::family_count(self, SensorFamily::SkinPatches)
+            }
+            fn get_skin_patch_status(&self, i: usize) -> MasStatus {
+                FamilySource::family_status(self, SensorFamily::SkinPatches, i)
+            }
+            fn get_skin_patch_name(&self, i: usize) -> DevResult<String> {
+                FamilySource::family_name(self, SensorFamily::SkinPatches, i)
+            }
+            fn get_skin_patch_size(&self, i: usize) -> usize {
+                FamilySource::family_measure(self, SensorFamily::SkinPatches, i)
+                    .map(|m| m.values.len())
+                    .unwrap_or(0)
+            }
+            fn get_skin_patch_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+                FamilySource::family_measure(self, SensorFamily::SkinPatches, i)
+            }
+        }
+    };
+}
+
+/// The `as_*` methods of `DeviceDriver` for a type given `impl_mas_interfaces!`.
+macro_rules! mas_views {
+    () => {
+        fn as_three_axis_gyroscopes(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::interfaces::IThreeAxisGyroscopes> {
+            Some(self)
+        }
+        fn as_three_axis_linear_accelerometers(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::interfaces::IThreeAxisLinearAccelerometers> {
+            Some(self)
+        }
+        fn as_three_axis_magnetometers(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::interfaces::IThreeAxisMagnetometers> {
+            Some(self)
+        }
+        fn as_orientation_sensors(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::interfaces::IOrientationSensors> {
+            Some(self)
+        }
+        fn as_six_axis_force_torque_sensors(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::interfaces::ISixAxisForceTorqueSensors> {
+            Some(self)
+        }
+        fn as_temperature_sensors(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::interfaces::ITemperatureSensors> {
+            Some(self)
+        }
+        fn as_skin_patches(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::interfaces::ISkinPatches> {
+            Some(self)
+        }
+    };
+}
+
+pub(crate) use forward_interface;
+pub(crate) use impl_mas_interfaces;
+pub(crate) use mas_views;

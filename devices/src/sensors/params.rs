@@ -1,0 +1,55 @@
+//! Parameter and clock helpers shared by the sensor devices.
+
+use crate::driver::Params;
+use crate::error::{DevResult, DeviceError};
+use std::time::{SystemTime, UNIX_EPOCH};
+use yarp_proto::Value;
+
+/// Wall-clock time in seconds (C++ `yarp::os::Time::now`).
+pub(crate) fn now() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0)
+}
+
+/// A boolean parameter as C++ `Value::asBool` reads it (`true`/`false`, 0/1); a key
+/// given without a value (`--constantValue`) counts as true.
+pub(crate) fn bool_param(p: &Params<'_>, key: &str) -> DevResult<Option<bool>> {
+    let Some(v) = p.find(key) else {
+        return Ok(p.config.check(key).then_some(true));
+    };
+    let b = match v {
+        Value::String(_) => match v.as_str() {
+            Some("true") | Some("1") => Some(true),
+            Some("false") | Some("0") => Some(false),
+            _ => None,
+        },
+        other => other.as_bool(),
+    };
+    b.map(Some).ok_or_else(|| DeviceError::BadParam {
+        device: p.device.to_string(),
+        param: key.to_string(),
+        expected: "true or false",
+        got: v.to_string(),
+    })
+}
+
+/// A period given in milliseconds (C++ `int`, floats accepted), as seconds.
+pub(crate) fn period_ms(p: &Params<'_>, key: &str) -> DevResult<Option<f64>> {
+    match p.float(key)? {
+        None => Ok(None),
+        Some(ms) if ms > 0.0 && ms.is_finite() => Ok(Some(ms / 1000.0)),
+        Some(ms) => Err(DeviceError::BadParam {
+            device: p.device.to_string(),
+            param: key.to_string(),
+            expected: "a positive period in ms",
+            got: ms.to_string(),
+        }),
+    }
+}
+
+/// A required string parameter.
+pub(crate) fn required_string(p: &Params<'_>, key: &str) -> DevResult<String> {
+    p.string(key)?.ok_or_else(|| p.missing(key))
+}

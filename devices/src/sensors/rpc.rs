@@ -1,0 +1,133 @@
+//! The `MultipleAnalogSensorsMetadata` thrift service served on `/<name>/rpc:o`, as a
+//! pure function from the request Bottle to the reply bytes.
+//!
+//! Commands (the C++ generated `read`): `getMetadata` (no arguments) and
+//! `help [function]`, optionally behind `__direct__`. Anything else, or extra arguments,
+//! gets `[fail]`, as C++ `WireReader::fail` answers.
+
+use super::wire::{SensorRpcData, WireWriter};
+use yarp_proto::{Bottle, Value, Vocab32};
+
+/// The one service method.
+pub const GET_METADATA: &str = "getMetadata";
+const HELP: &str = "help";
+const PROTOTYPE: &str = "SensorRPCData MultipleAnalogSensorsMetadata::getMetadata()";
+const METHOD_HELP: &str =
+    "Read the sensor metadata necessary to configure the MultipleAnalogSensorsClient device.";
+
+/// The `[fail]` reply (a plain Bottle, compact vocab list, as C++ writes it).
+pub fn fail_reply() -> Vec<u8> {
+    Bottle::new().with(Vocab32::new("fail")).encode()
+}
+
+/// A command word: thrift tags may be strings or vocabs.
+fn tag(v: Option<&Value>) -> Option<String> {
+    match v? {
+        Value::String(s) => Some(String::from_utf8_lossy(s).into_owned()),
+        Value::Vocab32(v) => Some(v.as_string()),
+        _ => None,
+    }
+}
+
+/// Lines of C++ `MultipleAnalogSensorsMetadata::help(functionName)`.
+fn help_lines(function: &str) -> Vec<&'static str> {
+    let lines = match function {
+        "--all" => vec!["*** Available commands:", GET_METADATA, HELP],
+        GET_METADATA => vec![PROTOTYPE, METHOD_HELP],
+        HELP => vec![
+            "std::vector<std::string> help(const std::string& functionName = \"--all\")",
+            "Return list of available commands, or help message for a specific function",
+            "@param functionName name of command for which to get a detailed description. If none or '--all' is provided, print list of available commands",
+            "@return list of strings (one string per line)",
+        ],
+        _ => vec![],
+    };
+    if lines.is_empty() {
+        vec!["Command not found"]
+    } else {
+        lines
+    }
+}
+
+/// The `help` reply: `[many] ("line" ...)`, every string tagged.
+fn help_reply(function: &str) -> Vec<u8> {
+    let lines = help_lines(function);
+    let mut w = WireWriter::new();
+    w.list_header(2).vocab(Vocab32::new("many"));
+    w.list_header(lines.len());
+    for l in lines {
+        w.string(l);
+    }
+    w.into_bytes()
+}
+
+/// Serves one request against the server's metadata; returns the reply bytes.
+pub fn handle_rpc(cmd: &Bottle, metadata: &SensorRpcData) -> Vec<u8> {
+    let mut args = cmd.iter().peekable();
+    let mut word = tag(args.next());
+    if word.as_deref() == Some("__direct__") {
+        word = tag(args.next());
+    }
+    match word.as_deref() {
+        Some(GET_METADATA) if args.peek().is_none() => metadata.encode_reply(),
+        Some(HELP) => {
+            let function = match args.next() {
+                Some(Value::String(s)) => String::from_utf8_lossy(s).into_owned(),
+                _ => "--all".to_string(),
+            };
+            help_reply(&function)
+        }
+        other => {
+            tracing::warn!("multipleanalogsensorsserver rpc: cannot serve {cmd} ({other:?})");
+            fail_reply()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sensors::wire::SensorMetadata;
+
+    fn md() -> SensorRpcData {
+        let mut d = SensorRpcData::default();
+        d.families[5].push(SensorMetadata::new("ft", "ft_frame"));
+        d
+    }
+
+    fn reply(text: &str) -> String {
+        Bottle::decode(&handle_rpc(&Bottle::from_text(text), &md()))
+            .unwrap()
+            .to_string()
+    }
+
+    #[test]
+    fn get_metadata_in_every_spelling() {
+        let want = "() () () () () ((ft ft_frame \"\")) () () () () () ()";
+        assert_eq!(reply("getMetadata"), want);
+        assert_eq!(reply("\"getMetadata\""), want);
+        assert_eq!(reply("__direct__ getMetadata"), want);
+        assert_eq!(reply("getMetadata 3"), "[fail]");
+    }
+
+    #[test]
+    fn help_for_each_function() {
+        assert!(reply("help getMetadata").contains("SensorRPCData"));
+        assert!(reply("help help").contains("@return list of strings"));
+        assert_eq!(reply("help nothing"), "[many] (\"Command not found\")");
+        assert_eq!(reply("[help]"), reply("help"));
+    }
+
+    #[test]
+    fn anything_else_fails() {
+        for text in [
+            "",
+            "42",
+            "(getMetadata)",
+            "getRemoteProtocolVersion",
+            "[zzz] 1",
+        ] {
+            assert_eq!(reply(text), "[fail]", "{text:?}");
+        }
+    }
+}

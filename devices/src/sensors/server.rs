@@ -1,0 +1,304 @@
+//! `multipleanalogsensorsserver`: serves an attached device's sensors on
+//! `/<name>/measures:o` (a measurement message every `period` ms, with an envelope) and
+//! answers the metadata service on `/<name>/rpc:o` (the C++ name, although it is an input).
+//!
+//! Parameters (both required, as C++ 3.12): `name` (port prefix, starting with `/`) and
+//! `period` (ms). The ports open when a device is attached, as in C++.
+
+use super::family::{access, SensorFamily};
+use super::interfaces::{MasStatus, SensorMeasurement};
+use super::params::{now, period_ms, required_string};
+use super::rpc::{fail_reply, handle_rpc};
+use super::wire::{SensorMetadata, SensorRpcData, SensorStreamingData};
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::error::{DevResult, DeviceError};
+use crate::runtime;
+use std::sync::Arc;
+use std::time::Duration;
+use thiserror::Error;
+use yarp_net::nameserver::NameClient;
+use yarp_net::port::{Port, PortError};
+use yarp_proto::{Property, Stamp};
+
+const NAME: &str = "multipleanalogsensorsserver";
+
+/// Why a measurement message could not be made (C++ then sends nothing that period).
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum CollectError {
+    #[error("sensor {sensor} of type {family} has status {status:?}, no data will be sent")]
+    Status {
+        family: &'static str,
+        sensor: String,
+        status: MasStatus,
+    },
+    #[error("the device no longer offers the {0} interface")]
+    Gone(&'static str),
+}
+
+/// Reads the metadata of every sensor `dev` offers (C++ `populateAllSensorsMetadata`).
+pub fn collect_metadata(dev: &mut dyn DeviceDriver) -> DevResult<SensorRpcData> {
+    let mut data = SensorRpcData::default();
+    for family in SensorFamily::ALL {
+        let Some(view) = access(dev, family) else {
+            continue;
+        };
+        let list = &mut data.families[family.index()];
+        for i in 0..view.count() {
+            let name = view.name(i)?;
+            let frame = match family {
+                // C++ sends no frame for these families
+                SensorFamily::ContactLoadCellArrays
+                | SensorFamily::EncoderArrays
+                | SensorFamily::SkinPatches => String::new(),
+                _ => view.frame_name(i)?,
+            };
+            list.push(SensorMetadata::new(name, frame));
+        }
+    }
+    Ok(data)
+}
+
+/// Reads one measurement of every sensor listed in `metadata` (C++ `run`). A sensor
+/// whose status is not OK cancels the whole message; a failed read leaves NaNs.
+pub fn collect_measurements(
+    dev: &mut dyn DeviceDriver,
+    metadata: &SensorRpcData,
+) -> Result<SensorStreamingData, CollectError> {
+    let mut data = SensorStreamingData::default();
+    for family in SensorFamily::ALL {
+        let sensors = metadata.family(family);
+        if sensors.is_empty() {
+            continue;
+        }
+        let view = access(dev, family).ok_or(CollectError::Gone(family.tag()))?;
+        let out = &mut data.families[family.index()];
+        for (i, md) in sensors.iter().enumerate() {
+            let status = view.status(i);
+            if status != MasStatus::Ok {
+                return Err(CollectError::Status {
+                    family: family.tag(),
+                    sensor: md.name.clone(),
+                    status,
+                });
+            }
+            let m = view.measure(i).unwrap_or_else(|_| {
+                SensorMeasurement::new(vec![f64::NAN; family.measure_size().unwrap_or(0)], 0.0)
+            });
+            out.push(m);
+        }
+    }
+    Ok(data)
+}
+
+/// The ports and tasks of a server with a device attached.
+struct Serving {
+    rpc: Arc<Port>,
+    stream: Arc<Port>,
+    tasks: Vec<tokio::task::JoinHandle<()>>,
+}
+
+impl Serving {
+    async fn start(
+        prefix: &str,
+        period: Duration,
+        ns: NameClient,
+        device: SharedDevice,
+        metadata: SensorRpcData,
+    ) -> Result<Serving, PortError> {
+        let stream = Arc::new(Port::open(&format!("{prefix}/measures:o"), ns.clone()).await?);
+        let rpc = match Port::open(&format!("{prefix}/rpc:o"), ns).await {
+            Ok(p) => Arc::new(p),
+            Err(e) => {
+                close_port(stream).await;
+                return Err(e);
+            }
+        };
+        let metadata = Arc::new(metadata);
+        let tasks = vec![
+            tokio::spawn(serve_rpc(rpc.clone(), metadata.clone())),
+            tokio::spawn(stream_measurements(
+                stream.clone(),
+                period,
+                device,
+                metadata,
+            )),
+        ];
+        Ok(Serving { rpc, stream, tasks })
+    }
+
+    async fn stop(self) {
+        for t in &self.tasks {
+            t.abort();
+        }
+        for t in self.tasks {
+            let _ = t.await;
+        }
+        close_port(self.rpc).await;
+        close_port(self.stream).await;
+    }
+}
+
+/// Closes a port once the tasks that shared it are gone (unregistering it).
+async fn close_port(port: Arc<Port>) {
+    if let Ok(p) = Arc::try_unwrap(port) {
+        p.close().await;
+    }
+}
+
+async fn serve_rpc(port: Arc<Port>, metadata: Arc<SensorRpcData>) {
+    while let Some(mut msg) = port.read().await {
+        let reply = match msg.bottle() {
+            Ok(cmd) => handle_rpc(&cmd, &metadata),
+            Err(e) => {
+                tracing::warn!("{NAME}: undecodable request from {}: {e}", msg.from);
+                fail_reply()
+            }
+        };
+        if msg.wants_reply() {
+            // the exact bytes of C++'s WireWriter, which tags list elements one by one
+            msg.reply_encoded(reply);
+        }
+    }
+}
+
+async fn stream_measurements(
+    port: Arc<Port>,
+    period: Duration,
+    device: SharedDevice,
+    metadata: Arc<SensorRpcData>,
+) {
+    let mut ticker = super::periodic::Ticker::new(period);
+    let mut count: i32 = 0;
+    let mut failing = false;
+    loop {
+        ticker.tick().await;
+        let data = {
+            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            collect_measurements(pd.device(), &metadata)
+        };
+        match data {
+            Ok(data) => {
+                failing = false;
+                let stamp = Stamp::new(count, now());
+                count = count.wrapping_add(1);
+                port.write_nowait(&data.to_bottle(), Some(stamp));
+            }
+            Err(e) => {
+                // log once per failure streak, not every period
+                if !failing {
+                    tracing::error!("{NAME}: {e}");
+                }
+                failing = true;
+            }
+        }
+    }
+}
+
+/// The `multipleanalogsensorsserver` device.
+#[derive(Default)]
+pub struct MultipleAnalogSensorsServer {
+    name: String,
+    period: Duration,
+    serving: Option<Serving>,
+}
+
+impl MultipleAnalogSensorsServer {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The measurement port's name (`/<name>/measures:o`).
+    pub fn streaming_port_name(&self) -> String {
+        format!("{}/measures:o", self.name)
+    }
+
+    /// The metadata RPC port's name (`/<name>/rpc:o`).
+    pub fn rpc_port_name(&self) -> String {
+        format!("{}/rpc:o", self.name)
+    }
+
+    fn network_error(&self, e: impl std::fmt::Display) -> DeviceError {
+        DeviceError::BadParam {
+            device: NAME.into(),
+            param: "name".into(),
+            expected: "a port prefix that can be registered (is the name server running?)",
+            got: format!("{}: {e}", self.name),
+        }
+    }
+}
+
+impl DeviceDriver for MultipleAnalogSensorsServer {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let name = required_string(&p, "name")?;
+        if !name.starts_with('/') {
+            return Err(DeviceError::BadParam {
+                device: NAME.into(),
+                param: "name".into(),
+                expected: "a port prefix starting with '/'",
+                got: name,
+            });
+        }
+        let period = period_ms(&p, "period")?.ok_or_else(|| p.missing("period"))?;
+        self.name = name.trim_end_matches('/').to_string();
+        self.period = Duration::from_secs_f64(period);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        IWrapper::detach(self)
+    }
+
+    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
+        Some(self)
+    }
+
+    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
+        Some(self)
+    }
+}
+
+impl IWrapper for MultipleAnalogSensorsServer {
+    fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
+        if self.name.is_empty() {
+            return Err(DeviceError::NotOpen);
+        }
+        IWrapper::detach(self)?;
+        let metadata = {
+            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            collect_metadata(pd.device())?
+        };
+        let ns = yarp_net::network::name_client().map_err(|e| self.network_error(e))?;
+        let (prefix, period) = (self.name.clone(), self.period);
+        let serving = runtime::block_on(async move {
+            Serving::start(&prefix, period, ns, device, metadata)
+                .await
+                .map_err(|e| e.to_string())
+        })
+        .map_err(|e| self.network_error(e))?;
+        self.serving = Some(serving);
+        Ok(())
+    }
+
+    fn detach(&mut self) -> DevResult<()> {
+        if let Some(s) = self.serving.take() {
+            runtime::block_on(s.stop());
+        }
+        Ok(())
+    }
+}
+
+impl IMultipleWrapper for MultipleAnalogSensorsServer {
+    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
+        match devices {
+            [(_, d)] => self.attach(d.clone()),
+            _ => Err(DeviceError::Unsupported(
+                "multipleanalogsensorsserver attaches exactly one device (join several with multipleanalogsensorsremapper)",
+            )),
+        }
+    }
+
+    fn detach_all(&mut self) -> DevResult<()> {
+        IWrapper::detach(self)
+    }
+}

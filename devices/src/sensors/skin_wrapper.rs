@@ -1,0 +1,76 @@
+//! `skinWrapper` (icub-main): an `analogServer` for a skin part, as the iCub
+//! configurations declare it (`wrappers/skin/left_arm_skin_wrapper.xml`).
+//!
+//! Parameters: `robotName` (given by yarprobotinterface), `period` (ms, default 20),
+//! `total_taxels`, and the `ports` paramlist (`left_hand 0 191 0 191` ...). As the C++
+//! device, it opens an `analogServer` named `/<robot>/skin` with `channels` =
+//! `total_taxels`, so the ports are `/<robot>/skin/<port>` (e.g. `/icub/skin/left_hand`;
+//! a leading `/` in `robotName`, as a port prefix has, is not doubled).
+
+use super::analog_server::AnalogServer;
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::error::DevResult;
+use yarp_proto::{Property, Value};
+
+const NAME: &str = "skinWrapper";
+
+/// The `skinWrapper` device.
+#[derive(Default)]
+pub struct SkinWrapper {
+    server: AnalogServer,
+}
+
+impl SkinWrapper {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The analog server doing the work (its ports).
+    pub fn server(&self) -> &AnalogServer {
+        &self.server
+    }
+}
+
+impl DeviceDriver for SkinWrapper {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let robot = p
+            .string("robotName")?
+            .ok_or_else(|| p.missing("robotName"))?;
+        let period = p.float("period")?.unwrap_or(20.0);
+        let mut option = config.clone();
+        option.put(
+            "name",
+            Value::from(format!("/{}/skin", robot.trim_matches('/')).as_str()),
+        );
+        option.put("period", Value::Float64(period));
+        if let Some(total) = p.int("total_taxels")? {
+            option.put("channels", Value::Int64(total));
+            option.unput("total_taxels");
+        }
+        option.put("device", Value::from("analogServer"));
+        self.server.open(&option)
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        self.server.close()
+    }
+
+    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
+        Some(&mut self.server)
+    }
+
+    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
+        Some(self)
+    }
+}
+
+impl IMultipleWrapper for SkinWrapper {
+    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
+        self.server.attach_all(devices)
+    }
+
+    fn detach_all(&mut self) -> DevResult<()> {
+        self.server.detach_all()
+    }
+}
