@@ -318,7 +318,8 @@ impl Port {
             Ok(l) => l,
             Err(_) => {
                 // the allocated number is taken by something else: take any free one and
-                // register it explicitly
+                // register it explicitly, replacing the entry at once (no unregister in
+                // between, so a client never finds the name missing)
                 let l =
                     TcpListener::bind(("0.0.0.0", 0))
                         .await
@@ -327,7 +328,6 @@ impl Port {
                             source,
                         })?;
                 let port = l.local_addr().map(|a| a.port()).unwrap_or(0);
-                ns.unregister(&contact.name).await?;
                 let req = RegisterRequest::explicit(name, "tcp", &contact.host, port);
                 contact = ns.register_port(&req, &[ip.as_str()], pid).await?;
                 l
