@@ -1,3 +1,21 @@
 //! YARP <-> ROS 2 gateway.
 //!
-//! Not implemented yet; see the project's issue tracker (gateway issue).
+//! Pure logic lives in its own modules and is unit-tested without sockets: the ROS type
+//! catalog ([`types`]), REP-2016 hashes ([`hash`]), dynamic CDR messages ([`dynmsg`]),
+//! Bottle conversions ([`convert`], [`image`], [`mas`]), service mapping ([`service`],
+//! [`axis_info`]), counters ([`counters`]) and mapping files ([`mapping`]). The tokio/DDS
+//! runtime ([`gateway`], over one ros2-client node from [`ros`]) only moves messages.
+
+pub mod axis_info;
+pub mod convert;
+pub mod counters;
+pub mod dynmsg;
+pub mod gateway;
+pub mod hash;
+pub mod image;
+pub mod mapping;
+pub mod mas;
+pub mod pattern;
+pub mod ros;
+pub mod service;
+pub mod types;

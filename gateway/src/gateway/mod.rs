@@ -1,0 +1,594 @@
+//! The running gateway: one tokio task per bridged mapping over one DDS participant (the
+//! main ROS node, plus one node per dynamic-mode entry) and the YARP network. Conversions live in [`crate::convert`] and
+//! [`crate::service`]; this module only moves messages and counts them.
+
+mod dynamic;
+mod services;
+mod topics;
+mod yarp_rpc;
+
+use self::services::{call_ros, serve_ros, text_rpc};
+use self::topics::{keep_connected, ros_to_yarp, yarp_to_ros, JointNameSource};
+use self::yarp_rpc::YarpRpc;
+use crate::counters::{self, Counters, Row};
+use crate::dynmsg::Value as Ros;
+use crate::mapping::{Direction, Mappings, ServiceConversion, ServiceEntry, TopicEntry};
+use crate::ros::{self, RosError};
+use crate::service::{self, EmptyMsg, OutcomeResponse, SetBoolRequest, StdSrv};
+use ros2_client::{Client, Context, Node, Publisher, Server, ServiceMapping, Subscription};
+use std::net::IpAddr;
+use std::sync::Arc;
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use tokio::task::JoinHandle;
+use tracing::{debug, warn};
+use yarp_net::nameserver::NameClient;
+use yarp_net::port::{Port, PortError};
+use yarp_proto::Bottle;
+
+/// How long a bridged RPC or service call may take before it fails.
+pub const CALL_TIMEOUT: Duration = Duration::from_secs(5);
+/// How often `yarp_source` / `yarp_sink` connections are checked and restored.
+pub const RECONNECT_PERIOD: Duration = Duration::from_millis(500);
+
+/// Runtime settings (the mapping files say what to bridge; these say how).
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// ROS domain id (ROS_DOMAIN_ID).
+    pub domain_id: u16,
+    /// Interface addresses DDS may use; empty means all.
+    pub networks: Vec<IpAddr>,
+    pub namespace: String,
+    pub node_name: String,
+    /// Period of the `/diagnostics` DiagnosticArray; `None` disables it.
+    pub diagnostics_period: Option<Duration>,
+    /// YARP port carrying the same counters as Bottles; `None` disables it.
+    pub diagnostics_port: Option<String>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            domain_id: 0,
+            networks: Vec::new(),
+            namespace: "/".into(),
+            node_name: "yarp_ros2_gateway".into(),
+            diagnostics_period: Some(Duration::from_secs(1)),
+            diagnostics_port: None,
+        }
+    }
+}
+
+/// Why the gateway could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum StartError {
+    #[error(transparent)]
+    Ros(#[from] RosError),
+    #[error("YARP port {name}: {source}")]
+    Port { name: String, source: PortError },
+}
+
+/// One bridged mapping, as shown in the startup table and the diagnostics.
+#[derive(Debug, Clone)]
+pub struct Bridge {
+    pub name: String,
+    pub direction: Direction,
+    pub yarp: String,
+    pub ros: String,
+    pub ros_type: String,
+    pub detail: String,
+    pub counters: Arc<Counters>,
+}
+
+impl Bridge {
+    fn row(&self) -> Row {
+        Row {
+            name: self.name.clone(),
+            route: format!(
+                "{} {} <-> {} ({})",
+                self.direction, self.yarp, self.ros, self.ros_type
+            ),
+            snapshot: self.counters.snapshot(),
+        }
+    }
+}
+
+/// A running gateway. Dropping it stops every bridge.
+pub struct Gateway {
+    bridges: Vec<Bridge>,
+    tasks: Vec<JoinHandle<()>>,
+    ports: Vec<Arc<Port>>,
+    node: Option<Arc<Node>>,
+    /// The node's spinner: not aborted but stopped by dropping the node (ros2-client logs
+    /// an error when a node outlives its spinner).
+    spinner: Option<JoinHandle<()>>,
+}
+
+/// Tasks that can only start once the node is shared (after all entities exist).
+type Deferred = Box<dyn FnOnce(Arc<Node>) -> JoinHandle<()> + Send>;
+
+impl Gateway {
+    /// Creates every endpoint of `m` and starts bridging.
+    pub async fn start(m: &Mappings, ns: NameClient, opt: Options) -> Result<Gateway, StartError> {
+        let (ctx, mut node) =
+            ros::start_node(opt.domain_id, &opt.networks, &opt.namespace, &opt.node_name)?;
+        let spinner = node
+            .spinner()
+            .map_err(|e| entity_err("spinner", &opt.node_name, e))?;
+        let spinner = tokio::spawn(async move {
+            if let Err(e) = spinner.spin().await {
+                warn!("ROS spinner stopped: {e:?}");
+            }
+        });
+        let mut g = Builder {
+            ns,
+            ctx,
+            namespace: opt.namespace.clone(),
+            node_name: opt.node_name.clone(),
+            tasks: Vec::new(),
+            deferred: Vec::new(),
+            bridges: Vec::new(),
+            ports: Vec::new(),
+        };
+        for t in &m.topics {
+            g.topic(&mut node, t).await?;
+        }
+        for s in &m.services {
+            g.service(&mut node, s).await?;
+        }
+        g.diagnostics(&mut node, &opt).await?;
+        let node = Arc::new(node);
+        let mut tasks = std::mem::take(&mut g.tasks);
+        tasks.extend(g.deferred.drain(..).map(|d| d(node.clone())));
+        Ok(Gateway {
+            bridges: std::mem::take(&mut g.bridges),
+            tasks,
+            ports: std::mem::take(&mut g.ports),
+            node: Some(node),
+            spinner: Some(spinner),
+        })
+    }
+
+    pub fn bridges(&self) -> &[Bridge] {
+        &self.bridges
+    }
+
+    /// The node's DDS domain.
+    pub fn domain_id(&self) -> u16 {
+        self.node.as_ref().map_or(0, |n| n.domain_id())
+    }
+
+    /// The startup table: one line per bridged mapping.
+    pub fn table(&self) -> String {
+        let head = ["name", "dir", "yarp", "ros", "type", "how"];
+        let rows: Vec<[String; 6]> = self
+            .bridges
+            .iter()
+            .map(|b| {
+                [
+                    b.name.clone(),
+                    b.direction.to_string(),
+                    b.yarp.clone(),
+                    b.ros.clone(),
+                    b.ros_type.clone(),
+                    b.detail.clone(),
+                ]
+            })
+            .collect();
+        let mut w = head.map(str::len);
+        for r in &rows {
+            for (i, c) in r.iter().enumerate() {
+                w[i] = w[i].max(c.len());
+            }
+        }
+        let line = |cells: &[&str]| {
+            let mut s = String::new();
+            for (i, c) in cells.iter().enumerate() {
+                s.push_str(&format!("{c:<width$}  ", width = w[i]));
+            }
+            s.trim_end().to_string() + "\n"
+        };
+        let mut out = line(&head);
+        for r in &rows {
+            out.push_str(&line(&r.each_ref().map(String::as_str)));
+        }
+        out
+    }
+
+    /// Stops every bridge and closes the YARP ports (unregistering them).
+    pub async fn shutdown(mut self) {
+        for t in &self.tasks {
+            t.abort();
+        }
+        for t in self.tasks.drain(..) {
+            let _ = t.await;
+        }
+        for p in self.ports.drain(..) {
+            if let Ok(p) = Arc::try_unwrap(p) {
+                p.close().await;
+            }
+        }
+        // Endpoints are gone with their tasks; now the node, which stops its spinner.
+        self.node = None;
+        if let Some(s) = self.spinner.take() {
+            if tokio::time::timeout(Duration::from_secs(2), s)
+                .await
+                .is_err()
+            {
+                warn!("ROS spinner did not stop");
+            }
+        }
+    }
+}
+
+impl Drop for Gateway {
+    fn drop(&mut self) {
+        for t in &self.tasks {
+            t.abort();
+        }
+        // Without `shutdown`, the spinner stops when the last task releases the node.
+        if let Some(s) = self.spinner.take() {
+            drop(s);
+        }
+    }
+}
+
+fn entity_err(what: &'static str, name: &str, e: impl std::fmt::Debug) -> RosError {
+    RosError::Entity {
+        what,
+        name: name.to_string(),
+        message: format!("{e:?}"),
+    }
+}
+
+struct Builder {
+    ns: NameClient,
+    /// For the extra nodes of dynamic mode (same participant).
+    ctx: Context,
+    namespace: String,
+    node_name: String,
+    tasks: Vec<JoinHandle<()>>,
+    deferred: Vec<Deferred>,
+    bridges: Vec<Bridge>,
+    ports: Vec<Arc<Port>>,
+}
+
+/// A start that fails half-way must not leave bridges running behind the caller's back.
+impl Drop for Builder {
+    fn drop(&mut self) {
+        for t in &self.tasks {
+            t.abort();
+        }
+    }
+}
+
+impl Builder {
+    async fn open_port(&mut self, name: &str) -> Result<Arc<Port>, StartError> {
+        let p = Port::open(name, self.ns.clone())
+            .await
+            .map_err(|source| StartError::Port {
+                name: name.to_string(),
+                source,
+            })?;
+        let p = Arc::new(p);
+        self.ports.push(p.clone());
+        Ok(p)
+    }
+
+    async fn topic(&mut self, node: &mut Node, t: &TopicEntry) -> Result<(), StartError> {
+        let Some(port_name) = &t.yarp_port else {
+            return self.pattern(t);
+        };
+        let conv = t.conversion();
+        let port = self.open_port(port_name).await?;
+        let qos = ros::qos(&t.qos);
+        let topic = node
+            .create_topic(
+                &ros::name(&t.ros_topic)?,
+                ros::message_type(&t.ros_type),
+                &qos,
+            )
+            .map_err(|e| entity_err("topic", &t.ros_topic, e))?;
+        let counters = Arc::new(Counters::default());
+        let mut own = None;
+        if t.direction.to_ros() {
+            let publisher: Publisher<Ros> = node
+                .create_publisher(&topic, None)
+                .map_err(|e| entity_err("publisher", &t.ros_topic, e))?;
+            own = Some(publisher.gid());
+            let (port, t2, c) = (port.clone(), t.clone(), counters.clone());
+            let names = JointNameSource::new(t, &self.ns, &node.fully_qualified_name());
+            self.tasks
+                .push(tokio::spawn(yarp_to_ros(port, publisher, t2, names, c)));
+        }
+        if t.direction.to_yarp() {
+            let sub: Subscription<Ros> = node
+                .create_subscription(&topic, None)
+                .map_err(|e| entity_err("subscription", &t.ros_topic, e))?;
+            let (port, t2, c) = (port.clone(), t.clone(), counters.clone());
+            self.tasks
+                .push(tokio::spawn(ros_to_yarp(sub, port, own, t2, c)));
+        }
+        if t.yarp_source.is_some() || t.yarp_sink.is_some() {
+            let (ns, port) = (self.ns.clone(), port.clone());
+            let (src, sink) = (t.yarp_source.clone(), t.yarp_sink.clone());
+            self.tasks
+                .push(tokio::spawn(keep_connected(ns, port, src, sink)));
+        }
+        let mut yarp = port_name.clone();
+        if let Some(s) = &t.yarp_source {
+            yarp = format!("{s} -> {yarp}");
+        }
+        if let Some(s) = &t.yarp_sink {
+            yarp = format!("{yarp} -> {s}");
+        }
+        let mut detail = format!("{conv:?} {:?}/{}", t.qos.reliability, t.qos.depth);
+        if let Some(r) = t.rate_limit_hz {
+            detail.push_str(&format!(" <={r}Hz"));
+        }
+        self.bridges.push(Bridge {
+            name: t.name.clone(),
+            direction: t.direction,
+            yarp,
+            ros: t.ros_topic.clone(),
+            ros_type: t.ros_type.clone(),
+            detail,
+            counters,
+        });
+        Ok(())
+    }
+
+    /// A `yarp_pattern` entry: its own node, bridging matching ports as they come and go.
+    fn pattern(&mut self, t: &TopicEntry) -> Result<(), StartError> {
+        let k = self.bridges.len();
+        let node = ros::new_node(
+            &self.ctx,
+            &self.namespace,
+            &format!("{}_dyn{k}", self.node_name),
+        )?;
+        let counters = Arc::new(Counters::default());
+        let own_prefix = format!("/{}/{}", self.node_name, t.name);
+        self.tasks.push(tokio::spawn(dynamic::run(
+            node,
+            self.ns.clone(),
+            t.clone(),
+            own_prefix.clone(),
+            format!("/{}/", self.node_name),
+            counters.clone(),
+        )));
+        self.bridges.push(Bridge {
+            name: t.name.clone(),
+            direction: t.direction,
+            yarp: t.yarp_pattern.clone().unwrap_or_default(),
+            ros: format!("{}/<port>", t.ros_topic.trim_end_matches('/')),
+            ros_type: t.ros_type.clone(),
+            detail: format!("{:?} dynamic, ports {own_prefix}/...", t.conversion()),
+            counters,
+        });
+        Ok(())
+    }
+
+    async fn service(&mut self, node: &mut Node, s: &ServiceEntry) -> Result<(), StartError> {
+        let counters = Arc::new(Counters::default());
+        let sq = ros::service_qos();
+        let name = ros::name(&s.ros_service)?;
+        let stype = ros::service_type(&s.ros_type);
+        let mut detail = format!("{:?}", s.conversion());
+        match (s.conversion(), s.direction) {
+            (ServiceConversion::TextRpc, _) => {
+                let q = ros::qos(&Default::default());
+                let req_name = format!("{}/request", s.ros_service);
+                let rep_name = format!("{}/reply", s.ros_service);
+                let ty = ros::message_type("std_msgs/msg/String");
+                let rq = node
+                    .create_topic(&ros::name(&req_name)?, ty.clone(), &q)
+                    .map_err(|e| entity_err("topic", &req_name, e))?;
+                let rp = node
+                    .create_topic(&ros::name(&rep_name)?, ty, &q)
+                    .map_err(|e| entity_err("topic", &rep_name, e))?;
+                let sub: Subscription<Ros> = node
+                    .create_subscription(&rq, None)
+                    .map_err(|e| entity_err("subscription", &req_name, e))?;
+                let publisher: Publisher<Ros> = node
+                    .create_publisher(&rp, None)
+                    .map_err(|e| entity_err("publisher", &rep_name, e))?;
+                let rpc = YarpRpc::new(self.ns.clone(), &s.yarp_port, &node.fully_qualified_name());
+                self.tasks.push(tokio::spawn(text_rpc(
+                    sub,
+                    publisher,
+                    rpc,
+                    counters.clone(),
+                )));
+                detail = format!("TextRpc {req_name} -> {rep_name}");
+            }
+            (ServiceConversion::Command, Direction::RosToYarp) => {
+                let rpc = YarpRpc::new(self.ns.clone(), &s.yarp_port, &node.fully_qualified_name());
+                let c = counters.clone();
+                let cmd = |t: &Option<String>| Bottle::from_text(t.as_deref().unwrap_or_default());
+                let task = match StdSrv::from_type(&s.ros_type) {
+                    Some(StdSrv::Trigger) => {
+                        let server: Server<EmptyMsg, OutcomeResponse> = node
+                            .create_server(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
+                            .map_err(|e| entity_err("service", &s.ros_service, e))?;
+                        let command = cmd(&s.command);
+                        tokio::spawn(serve_ros(
+                            server,
+                            rpc,
+                            c,
+                            move |_| command.clone(),
+                            |r| {
+                                r.map(|b| service::outcome_from_reply(&b))
+                                    .unwrap_or_else(|e| OutcomeResponse {
+                                        success: false,
+                                        message: e,
+                                    })
+                            },
+                        ))
+                    }
+                    Some(StdSrv::SetBool) => {
+                        let server: Server<SetBoolRequest, OutcomeResponse> = node
+                            .create_server(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
+                            .map_err(|e| entity_err("service", &s.ros_service, e))?;
+                        let (on, off) = (cmd(&s.command_true), cmd(&s.command_false));
+                        tokio::spawn(serve_ros(
+                            server,
+                            rpc,
+                            c,
+                            move |r: &SetBoolRequest| if r.data { on.clone() } else { off.clone() },
+                            |r| {
+                                r.map(|b| service::outcome_from_reply(&b))
+                                    .unwrap_or_else(|e| OutcomeResponse {
+                                        success: false,
+                                        message: e,
+                                    })
+                            },
+                        ))
+                    }
+                    Some(StdSrv::Empty) | None => {
+                        let server: Server<EmptyMsg, EmptyMsg> = node
+                            .create_server(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
+                            .map_err(|e| entity_err("service", &s.ros_service, e))?;
+                        let command = cmd(&s.command);
+                        tokio::spawn(serve_ros(
+                            server,
+                            rpc,
+                            c,
+                            move |_| command.clone(),
+                            |_| EmptyMsg::default(),
+                        ))
+                    }
+                };
+                self.tasks.push(task);
+            }
+            (ServiceConversion::Command, _) => {
+                let port = self.open_port(&s.yarp_port).await?;
+                let c = counters.clone();
+                let service_name = s.ros_service.clone();
+                let deferred: Deferred = match StdSrv::from_type(&s.ros_type) {
+                    Some(StdSrv::Trigger) => {
+                        let client: Client<EmptyMsg, OutcomeResponse> = node
+                            .create_client(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
+                            .map_err(|e| entity_err("client", &s.ros_service, e))?;
+                        Box::new(move |node| {
+                            tokio::spawn(call_ros(
+                                port,
+                                client,
+                                node,
+                                c,
+                                service_name,
+                                |_| Some(EmptyMsg::default()),
+                                |r| service::reply_from_outcome(&r),
+                            ))
+                        })
+                    }
+                    Some(StdSrv::SetBool) => {
+                        let client: Client<SetBoolRequest, OutcomeResponse> = node
+                            .create_client(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
+                            .map_err(|e| entity_err("client", &s.ros_service, e))?;
+                        Box::new(move |node| {
+                            tokio::spawn(call_ros(
+                                port,
+                                client,
+                                node,
+                                c,
+                                service_name,
+                                |b| {
+                                    service::setbool_from_command(b)
+                                        .map(|data| SetBoolRequest { data })
+                                },
+                                |r| service::reply_from_outcome(&r),
+                            ))
+                        })
+                    }
+                    Some(StdSrv::Empty) | None => {
+                        let client: Client<EmptyMsg, EmptyMsg> = node
+                            .create_client(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
+                            .map_err(|e| entity_err("client", &s.ros_service, e))?;
+                        Box::new(move |node| {
+                            tokio::spawn(call_ros(
+                                port,
+                                client,
+                                node,
+                                c,
+                                service_name,
+                                |_| Some(EmptyMsg::default()),
+                                |_| service::ok_reply(),
+                            ))
+                        })
+                    }
+                };
+                self.deferred.push(deferred);
+            }
+        }
+        self.bridges.push(Bridge {
+            name: s.name.clone(),
+            direction: s.direction,
+            yarp: s.yarp_port.clone(),
+            ros: s.ros_service.clone(),
+            ros_type: s.ros_type.clone(),
+            detail,
+            counters,
+        });
+        Ok(())
+    }
+
+    async fn diagnostics(&mut self, node: &mut Node, opt: &Options) -> Result<(), StartError> {
+        let Some(period) = opt.diagnostics_period else {
+            return Ok(());
+        };
+        let q = ros::qos(&Default::default());
+        let topic = node
+            .create_topic(
+                &ros::name("/diagnostics")?,
+                ros::message_type("diagnostic_msgs/msg/DiagnosticArray"),
+                &q,
+            )
+            .map_err(|e| entity_err("topic", "/diagnostics", e))?;
+        let publisher: Publisher<Ros> = node
+            .create_publisher(&topic, None)
+            .map_err(|e| entity_err("publisher", "/diagnostics", e))?;
+        let port = match &opt.diagnostics_port {
+            Some(p) => Some(self.open_port(p).await?),
+            None => None,
+        };
+        let bridges = self.bridges.clone();
+        let hw = node.fully_qualified_name();
+        self.tasks.push(tokio::spawn(async move {
+            let mut tick = tokio::time::interval(period);
+            loop {
+                tick.tick().await;
+                let rows: Vec<Row> = bridges.iter().map(Bridge::row).collect();
+                let msg = counters::diagnostic_array(now_ns(), &hw, &rows);
+                if let Err(e) = publisher.async_publish(msg).await {
+                    debug!("/diagnostics: {e:?}");
+                }
+                if let Some(p) = &port {
+                    p.write_nowait(&diagnostics_bottle(&rows), None);
+                }
+            }
+        }));
+        Ok(())
+    }
+}
+
+/// The YARP form of the counters: one `(name messages drops mean_us max_us)` per mapping.
+pub fn diagnostics_bottle(rows: &[Row]) -> Bottle {
+    let mut b = Bottle::new();
+    for r in rows {
+        let s = r.snapshot;
+        let mut e = Bottle::new();
+        e.push(r.name.as_str());
+        e.push(s.messages as i64);
+        e.push(s.drops as i64);
+        e.push(s.latency_mean.as_secs_f64() * 1e6);
+        e.push(s.latency_max.as_secs_f64() * 1e6);
+        b.push(e);
+    }
+    b
+}
+
+pub(crate) fn now_ns() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_nanos() as u64)
+        .unwrap_or(0)
+}

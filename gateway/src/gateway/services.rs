@@ -1,0 +1,137 @@
+//! Service bridges: ROS service servers calling YARP RPC ports, YARP RPC ports calling
+//! ROS services, and the generic text RPC over String topics.
+
+use super::yarp_rpc::YarpRpc;
+use super::CALL_TIMEOUT;
+use crate::counters::Counters;
+use crate::dynmsg::{MsgSeed, Value as Ros};
+use crate::service;
+use futures::{pin_mut, StreamExt};
+use ros2_client::{Client, Message, Node, Publisher, Server, Subscription};
+use std::sync::Arc;
+use std::time::Instant;
+use tracing::{debug, warn};
+use yarp_net::port::Port;
+use yarp_proto::Bottle;
+
+/// ROS service server -> YARP RPC: each request sends `cmd(request)` to the YARP port and
+/// answers with `resp(reply or error)`.
+pub(super) async fn serve_ros<Req, Resp>(
+    server: Server<Req, Resp>,
+    mut rpc: YarpRpc,
+    c: Arc<Counters>,
+    cmd: impl Fn(&Req) -> Bottle,
+    resp: impl Fn(Result<Bottle, String>) -> Resp,
+) where
+    Req: Message + Clone + 'static,
+    Resp: Message + 'static,
+{
+    loop {
+        let (id, req) = match server.async_receive_request().await {
+            Ok(x) => x,
+            Err(e) => {
+                debug!("service request: {e:?}");
+                c.dropped();
+                continue;
+            }
+        };
+        let t0 = Instant::now();
+        let reply = rpc.call(&cmd(&req)).await;
+        let failed = reply.is_err();
+        if let Err(e) = &reply {
+            warn!("{e}");
+        }
+        match server.async_send_response(id, resp(reply)).await {
+            Ok(()) if !failed => c.forwarded(t0.elapsed()),
+            _ => c.dropped(),
+        }
+    }
+}
+
+/// YARP RPC port -> ROS service client: each YARP request calls the ROS service.
+pub(super) async fn call_ros<Req, Resp>(
+    port: Arc<Port>,
+    client: Client<Req, Resp>,
+    node: Arc<Node>,
+    c: Arc<Counters>,
+    service_name: String,
+    req: impl Fn(&Bottle) -> Option<Req>,
+    reply: impl Fn(Resp) -> Bottle,
+) where
+    Req: Message + Clone + 'static,
+    Resp: Message + 'static,
+{
+    while let Some(mut inc) = port.read().await {
+        let t0 = Instant::now();
+        let Some(replier) = inc.take_replier() else {
+            continue; // a plain write: nobody waits for an answer
+        };
+        let Some(r) = inc.bottle().ok().and_then(|b| req(&b)) else {
+            replier.send(service::fail_reply(
+                "cannot build the ROS request from this Bottle",
+            ));
+            c.dropped();
+            continue;
+        };
+        let call = async {
+            client.wait_for_service(&node).await;
+            client.async_call_service(r).await
+        };
+        match tokio::time::timeout(CALL_TIMEOUT, call).await {
+            Ok(Ok(resp)) => {
+                replier.send(reply(resp));
+                c.forwarded(t0.elapsed());
+            }
+            Ok(Err(e)) => {
+                replier.send(service::fail_reply(&format!("{service_name}: {e:?}")));
+                c.dropped();
+            }
+            Err(_) => {
+                replier.send(service::fail_reply(&format!(
+                    "{service_name}: no answer within {CALL_TIMEOUT:?}"
+                )));
+                c.dropped();
+            }
+        }
+    }
+}
+
+/// Generic text RPC: each `<service>/request` String is sent to the YARP port as a
+/// Bottle; the reply's text is published on `<service>/reply`.
+pub(super) async fn text_rpc(
+    sub: Subscription<Ros>,
+    publisher: Publisher<Ros>,
+    mut rpc: YarpRpc,
+    c: Arc<Counters>,
+) {
+    let Some(seed) = MsgSeed::new("std_msgs/msg/String") else {
+        return;
+    };
+    let stream = sub.async_stream_seed(seed);
+    pin_mut!(stream);
+    while let Some(r) = stream.next().await {
+        let t0 = Instant::now();
+        let Ok((Ros::Struct(f), _)) = r else {
+            c.dropped();
+            continue;
+        };
+        let [Ros::Str(text)] = f.as_slice() else {
+            c.dropped();
+            continue;
+        };
+        let reply = match rpc.call(&Bottle::from_text(text)).await {
+            Ok(b) => String::from_utf8_lossy(&b.to_text()).into_owned(),
+            Err(e) => {
+                c.dropped();
+                service::fail_reply(&e).to_string()
+            }
+        };
+        match publisher
+            .async_publish(Ros::Struct(vec![Ros::Str(reply)]))
+            .await
+        {
+            Ok(()) => c.forwarded(t0.elapsed()),
+            Err(_) => c.dropped(),
+        }
+    }
+}

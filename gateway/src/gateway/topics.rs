@@ -1,0 +1,207 @@
+//! Topic bridges: YARP port <-> ROS topic tasks, and keeping YARP connections up.
+
+use super::yarp_rpc::YarpRpc;
+use super::{now_ns, RECONNECT_PERIOD};
+use crate::axis_info;
+use crate::convert;
+use crate::counters::{Counters, RateLimit};
+use crate::dynmsg::{MsgSeed, Value as Ros};
+use crate::mapping::{Conversion, JointNames, TopicEntry};
+use futures::{pin_mut, StreamExt};
+use ros2_client::{Gid, Publisher, Subscription};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use tracing::{debug, info};
+use yarp_net::nameserver::NameClient;
+use yarp_net::network;
+use yarp_net::port::Port;
+
+/// Where a joint_state bridge gets its joint names; asked again (at most once a second)
+/// until the control board answers.
+pub(super) enum JointNameSource {
+    Known(Vec<String>),
+    AxisInfo {
+        rpc: Box<YarpRpc>,
+        next_try: Instant,
+    },
+}
+
+impl JointNameSource {
+    pub(super) fn new(t: &TopicEntry, ns: &NameClient, me: &str) -> JointNameSource {
+        match &t.joint_names {
+            Some(JointNames::AxisInfo { rpc_port }) => JointNameSource::AxisInfo {
+                rpc: Box::new(YarpRpc::new(ns.clone(), rpc_port, me)),
+                next_try: Instant::now(),
+            },
+            Some(JointNames::List { names }) => JointNameSource::Known(names.clone()),
+            None => JointNameSource::Known(Vec::new()),
+        }
+    }
+
+    /// The names, once known.
+    async fn get(&mut self) -> Option<&[String]> {
+        if let JointNameSource::AxisInfo { rpc, next_try } = self {
+            if Instant::now() < *next_try {
+                return None;
+            }
+            *next_try = Instant::now() + Duration::from_secs(1);
+            match ask_joint_names(rpc).await {
+                Ok(names) => {
+                    info!("joint names from {}: {names:?}", rpc.target);
+                    *self = JointNameSource::Known(names);
+                }
+                Err(e) => {
+                    debug!("joint names: {e}");
+                    return None;
+                }
+            }
+        }
+        match self {
+            JointNameSource::Known(n) => Some(n),
+            JointNameSource::AxisInfo { .. } => None,
+        }
+    }
+}
+
+async fn ask_joint_names(rpc: &mut YarpRpc) -> Result<Vec<String>, String> {
+    let reply = rpc.call(&axis_info::axes_request()).await?;
+    let n = axis_info::parse_axes(&reply).ok_or_else(|| format!("bad axes reply {reply}"))?;
+    let mut names = Vec::with_capacity(n);
+    for j in 0..n {
+        let reply = rpc.call(&axis_info::name_request(j)).await?;
+        names.push(axis_info::parse_name(&reply).ok_or_else(|| format!("bad name reply {reply}"))?);
+    }
+    Ok(names)
+}
+
+/// YARP -> ROS: every Bottle read on the gateway's port becomes one ROS message.
+pub(super) async fn yarp_to_ros(
+    port: Arc<Port>,
+    publisher: Publisher<Ros>,
+    t: TopicEntry,
+    mut names: JointNameSource,
+    c: Arc<Counters>,
+) {
+    let conv = t.conversion();
+    let mut limit = t.rate_limit_hz.map(RateLimit::new);
+    let frame_id = t.frame_id.clone().unwrap_or_default();
+    while let Some(inc) = port.read().await {
+        let t0 = Instant::now();
+        let joint_names: &[String] = if conv == Conversion::JointState {
+            match names.get().await {
+                Some(n) => n,
+                None => {
+                    c.dropped();
+                    continue;
+                }
+            }
+        } else {
+            &[]
+        };
+        let ctx = convert::Ctx {
+            frame_id: &frame_id,
+            joint_names,
+            sensor_index: t.sensor_index.unwrap_or(0),
+            stamp_ns: inc
+                .stamp
+                .and_then(|s| (s.time > 0.0).then_some((s.time * 1e9) as u64))
+                .unwrap_or_else(now_ns),
+        };
+        if limit.as_mut().is_some_and(|l| !l.admit(t0)) {
+            c.dropped();
+            continue;
+        }
+        let msg = inc.bottle().map_err(|e| e.to_string()).and_then(|b| {
+            convert::to_ros_owned(conv, &t.ros_type, b, &ctx).map_err(|e| e.to_string())
+        });
+        match msg {
+            Ok(m) => match publisher.async_publish(m).await {
+                Ok(()) => c.forwarded(t0.elapsed()),
+                Err(e) => {
+                    debug!("{}: publish: {e:?}", t.name);
+                    c.dropped();
+                }
+            },
+            Err(e) => {
+                debug!("{}: {e}", t.name);
+                c.dropped();
+            }
+        }
+    }
+}
+
+/// ROS -> YARP: every ROS message becomes one Bottle written on the gateway's port.
+/// Messages from the gateway's own publisher (direction `both`) are skipped.
+pub(super) async fn ros_to_yarp(
+    sub: Subscription<Ros>,
+    port: Arc<Port>,
+    own: Option<Gid>,
+    t: TopicEntry,
+    c: Arc<Counters>,
+) {
+    let conv = t.conversion();
+    let Some(seed) = MsgSeed::new(&t.ros_type) else {
+        return;
+    };
+    let mut limit = t.rate_limit_hz.map(RateLimit::new);
+    let stream = sub.async_stream_seed(seed);
+    pin_mut!(stream);
+    while let Some(r) = stream.next().await {
+        let t0 = Instant::now();
+        let (m, info) = match r {
+            Ok(x) => x,
+            Err(e) => {
+                debug!("{}: take: {e:?}", t.name);
+                c.dropped();
+                continue;
+            }
+        };
+        if own.is_some_and(|g| g == info.publisher_gid()) {
+            continue;
+        }
+        if limit.as_mut().is_some_and(|l| !l.admit(t0)) {
+            c.dropped();
+            continue;
+        }
+        match convert::to_yarp(conv, &t.ros_type, &m) {
+            Ok(b) => {
+                port.write_nowait(&b, None);
+                c.forwarded(t0.elapsed());
+            }
+            Err(e) => {
+                debug!("{}: {e}", t.name);
+                c.dropped();
+            }
+        }
+    }
+}
+
+/// Keeps `source -> port` and `port -> sink` connected while those ports exist.
+pub(super) async fn keep_connected(
+    ns: NameClient,
+    port: Arc<Port>,
+    source: Option<String>,
+    sink: Option<String>,
+) {
+    let mut tick = tokio::time::interval(RECONNECT_PERIOD);
+    loop {
+        tick.tick().await;
+        if let Some(src) = &source {
+            if !port.inputs().iter().any(|i| i == src) {
+                match network::connect(&ns, src, port.name(), None).await {
+                    Ok((true, _)) => info!("connected {src} -> {}", port.name()),
+                    Ok((false, why)) => debug!("connect {src} -> {}: {why}", port.name()),
+                    Err(e) => debug!("connect {src} -> {}: {e}", port.name()),
+                }
+            }
+        }
+        if let Some(dst) = &sink {
+            if !port.outputs().iter().any(|o| o == dst) {
+                match port.connect(dst, None).await {
+                    Ok(()) => info!("connected {} -> {dst}", port.name()),
+                    Err(e) => debug!("connect {} -> {dst}: {e}", port.name()),
+                }
+            }
+        }
+    }
+}

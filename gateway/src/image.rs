@@ -1,0 +1,164 @@
+//! YARP images (C++ `yarp::sig::FlexImage` on the wire) as `sensor_msgs/Image` (pure).
+//!
+//! A YARP image travels as a Bottle (C++ `ImageNetworkHeader` followed by the pixels):
+//! `[mat] [<pixel code>] (depth imgSize quantum width height) {pixels}`. Rows are padded to
+//! a multiple of `quantum` bytes; since YARP 3.5 the third int carries `quantum` in its low
+//! 16 bits and "top is NOT the low index" in its high 16 bits.
+
+use crate::convert::ConvertError;
+use crate::counters::header;
+use crate::dynmsg::Value as Ros;
+use yarp_proto::{Bottle, Value, Vocab32};
+
+/// A YARP pixel code and the ROS encoding it becomes (bytes per pixel).
+const ENCODINGS: [(&str, &str, usize); 6] = [
+    ("rgb", "rgb8", 3),
+    ("bgr", "bgr8", 3),
+    ("mono", "mono8", 1),
+    ("mo16", "mono16", 2),
+    ("rgba", "rgba8", 4),
+    ("bgra", "bgra8", 4),
+];
+
+/// Converts a YARP image Bottle (taken by value: the pixels move, not copy) into a
+/// `sensor_msgs/msg/Image`.
+pub fn to_ros(b: Bottle, frame_id: &str, stamp_ns: u64) -> Result<Ros, ConvertError> {
+    let bad = |what: &str| ConvertError::Shape(format!("YARP image: {what}"));
+    let mut items = b.into_items();
+    if items.len() != 4 || items[0] != Value::Vocab32(Vocab32::encode("mat")) {
+        return Err(bad("not [mat] [code] (params) {pixels}"));
+    }
+    let code = items[1].as_vocab().ok_or_else(|| bad("no pixel code"))?;
+    let (_, encoding, depth) = ENCODINGS
+        .iter()
+        .find(|(c, ..)| Vocab32::encode(c) == code)
+        .ok_or_else(|| {
+            bad(&format!(
+                "pixel code [{}] has no ROS encoding",
+                code.as_string()
+            ))
+        })?;
+    let params: Vec<i64> = items[2]
+        .as_list()
+        .map(|l| l.iter().filter_map(Value::as_i64).collect())
+        .unwrap_or_default();
+    let [d, size, q, w, h] = params[..] else {
+        return Err(bad("parameters are not 5 integers"));
+    };
+    let (quantum, bottom_up) = (q & 0xffff, (q >> 16) & 0xffff == 1);
+    let (w, h) = (
+        usize::try_from(w).map_err(|_| bad("negative width"))?,
+        usize::try_from(h).map_err(|_| bad("negative height"))?,
+    );
+    if d != *depth as i64 {
+        return Err(bad(&format!("depth {d} for {encoding}")));
+    }
+    let row = w * depth;
+    let step = if quantum > 1 {
+        row.div_ceil(quantum as usize) * quantum as usize
+    } else {
+        row
+    };
+    let Some(Value::Blob(mut pixels)) = items.pop() else {
+        return Err(bad("pixels are not a blob"));
+    };
+    if pixels.len() != step * h || size != pixels.len() as i64 {
+        return Err(bad(&format!(
+            "{} pixel bytes for {w}x{h}, step {step} (header says {size})",
+            pixels.len()
+        )));
+    }
+    if bottom_up {
+        let rows: Vec<Vec<u8>> = pixels
+            .chunks(step.max(1))
+            .rev()
+            .map(<[u8]>::to_vec)
+            .collect();
+        pixels = rows.concat();
+    }
+    Ok(Ros::Struct(vec![
+        header(stamp_ns, frame_id),
+        Ros::U32(h as u32),
+        Ros::U32(w as u32),
+        Ros::Str((*encoding).to_string()),
+        Ros::U8(0),
+        Ros::U32(step as u32),
+        Ros::Bytes(pixels),
+    ]))
+}
+
+/// Builds the YARP image Bottle for `pixels` (rows of `width * depth` bytes, quantum 1),
+/// as C++ writes it (tests, tools).
+pub fn yarp_image(
+    code: &str,
+    depth: usize,
+    width: usize,
+    height: usize,
+    pixels: Vec<u8>,
+) -> Bottle {
+    let mut params = Bottle::new();
+    for v in [depth, pixels.len(), 1, width, height] {
+        params.push(v as i32);
+    }
+    let mut b = Bottle::new();
+    b.add_vocab("mat").add_vocab(code);
+    b.push(params);
+    b.push(Value::Blob(pixels));
+    b
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rgb_image_with_its_layout() {
+        let px: Vec<u8> = (0..2 * 3 * 3).map(|i| i as u8).collect();
+        let b = yarp_image("rgb", 3, 3, 2, px.clone());
+        // the Bottle's binary form starts like C++'s ImageNetworkHeader
+        let wire = b.encode();
+        assert_eq!(&wire[..8], &[0, 1, 0, 0, 4, 0, 0, 0], "list tag, 4 items");
+        let m = to_ros(b, "cam", 5).unwrap();
+        assert!(m.conforms_to("sensor_msgs/msg/Image"));
+        let f = m.fields().unwrap();
+        assert_eq!(
+            f[1..6],
+            [
+                Ros::U32(2),
+                Ros::U32(3),
+                Ros::Str("rgb8".into()),
+                Ros::U8(0),
+                Ros::U32(9)
+            ]
+        );
+        assert_eq!(f[6], Ros::Bytes(px));
+    }
+
+    #[test]
+    fn padded_rows_and_bottom_up_images() {
+        // mono 3x2 with quantum 4: rows of 4 bytes; high half of the quantum int = 1
+        let mut params = Bottle::new();
+        for v in [1, 8, 4 | (1 << 16), 3, 2] {
+            params.push(v);
+        }
+        let mut b = Bottle::new();
+        b.add_vocab("mat").add_vocab("mono");
+        b.push(params);
+        b.push(Value::Blob(vec![1, 2, 3, 0, 4, 5, 6, 0]));
+        let m = to_ros(b, "", 0).unwrap();
+        let f = m.fields().unwrap();
+        assert_eq!(f[5], Ros::U32(4));
+        assert_eq!(f[6], Ros::Bytes(vec![4, 5, 6, 0, 1, 2, 3, 0]));
+    }
+
+    #[test]
+    fn inconsistent_images_are_errors() {
+        let short = yarp_image("rgb", 3, 3, 2, vec![0; 17]);
+        assert!(matches!(to_ros(short, "", 0), Err(ConvertError::Shape(_))));
+        let odd = yarp_image("yuv", 3, 1, 1, vec![0; 3]);
+        assert!(matches!(to_ros(odd, "", 0), Err(ConvertError::Shape(_))));
+        let depth = yarp_image("mono", 3, 1, 1, vec![0; 3]);
+        assert!(matches!(to_ros(depth, "", 0), Err(ConvertError::Shape(_))));
+        assert!(to_ros(Bottle::from_text("1 2 3 4"), "", 0).is_err());
+    }
+}

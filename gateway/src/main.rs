@@ -1,0 +1,178 @@
+//! `yarp-ros2-gateway`: bridges YARP ports and RPC to ROS 2 topics and services as the
+//! mapping files say (format: `mappings/README.md`).
+
+use anyhow::{bail, Context as _};
+use clap::Parser;
+use std::net::{IpAddr, SocketAddr, ToSocketAddrs};
+use std::path::PathBuf;
+use std::time::Duration;
+use yarp_net::nameserver::{NameClient, NameServer};
+use yarp_net::network;
+use yarp_ros2_gateway::gateway::{Gateway, Options};
+use yarp_ros2_gateway::mapping::Mappings;
+
+#[derive(Parser, Debug)]
+#[command(name = "yarp-ros2-gateway", version, about)]
+struct Args {
+    /// Mapping files (TOML) to load; entry names must be unique across them.
+    #[arg(long, num_args = 1.., required = true)]
+    mappings: Vec<PathBuf>,
+    /// ROS domain id (default: $ROS_DOMAIN_ID, else 0).
+    #[arg(long)]
+    domain_id: Option<u16>,
+    /// Interface addresses DDS may use (repeatable; default: all). Use 127.0.0.1 to stay
+    /// on this machine.
+    #[arg(long = "network")]
+    networks: Vec<IpAddr>,
+    /// The YARP name server (default: the one in yarp.conf).
+    #[arg(long)]
+    name_server: Option<String>,
+    /// When no name server answers, start one here (host:port) instead of failing.
+    #[arg(long, default_value = "127.0.0.1:10000")]
+    embedded_name_server: String,
+    /// Never start an embedded name server.
+    #[arg(long)]
+    no_embedded_name_server: bool,
+    /// ROS node name and namespace.
+    #[arg(long, default_value = "yarp_ros2_gateway")]
+    node_name: String,
+    #[arg(long, default_value = "/")]
+    namespace: String,
+    /// Seconds between /diagnostics messages (0 disables them).
+    #[arg(long, default_value_t = 1.0)]
+    diagnostics_period: f64,
+    /// YARP port that carries the same counters as Bottles.
+    #[arg(long, default_value = "/yarp_ros2_gateway/diagnostics:o")]
+    diagnostics_port: String,
+    /// Only load and check the mapping files, print what would be bridged, and exit.
+    #[arg(long)]
+    check: bool,
+}
+
+fn main() -> std::process::ExitCode {
+    let args = Args::parse();
+    // RustDDS and ros2-client log many harmless warnings (and errors while a node shuts
+    // down); show them only when RUST_LOG asks, e.g. RUST_LOG=info,rustdds=warn.
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info,rustdds=off,ros2_client=off"));
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .init();
+    let rt = match tokio::runtime::Runtime::new() {
+        Ok(rt) => rt,
+        Err(e) => {
+            eprintln!("yarp-ros2-gateway: cannot start tokio: {e}");
+            return std::process::ExitCode::FAILURE;
+        }
+    };
+    match rt.block_on(run(args)) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("yarp-ros2-gateway: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+async fn run(args: Args) -> anyhow::Result<()> {
+    let mappings = Mappings::load(&args.mappings)?;
+    if args.check {
+        for t in &mappings.topics {
+            println!(
+                "topic   {:<20} {:<10} {}",
+                t.name,
+                t.direction.to_string(),
+                t.ros_topic
+            );
+        }
+        for s in &mappings.services {
+            println!(
+                "service {:<20} {:<10} {}",
+                s.name,
+                s.direction.to_string(),
+                s.ros_service
+            );
+        }
+        return Ok(());
+    }
+    let domain_id = match args.domain_id {
+        Some(d) => d,
+        None => match std::env::var("ROS_DOMAIN_ID") {
+            Ok(s) if !s.trim().is_empty() => s
+                .trim()
+                .parse()
+                .with_context(|| format!("ROS_DOMAIN_ID `{s}` is not a number"))?,
+            _ => 0,
+        },
+    };
+    let (ns, _embedded) = name_server(&args).await?;
+    let opt = Options {
+        domain_id,
+        networks: args.networks.clone(),
+        namespace: args.namespace.clone(),
+        node_name: args.node_name.clone(),
+        diagnostics_period: (args.diagnostics_period > 0.0)
+            .then(|| Duration::from_secs_f64(args.diagnostics_period)),
+        diagnostics_port: Some(args.diagnostics_port.clone()),
+    };
+    let gw = Gateway::start(&mappings, ns.clone(), opt).await?;
+    println!(
+        "yarp-ros2-gateway: ROS domain {domain_id}, YARP name server {}, {} mapping(s):",
+        ns.server(),
+        gw.bridges().len()
+    );
+    print!("{}", gw.table());
+    tokio::signal::ctrl_c().await.ok();
+    println!("yarp-ros2-gateway: shutting down");
+    gw.shutdown().await;
+    Ok(())
+}
+
+fn resolve(s: &str) -> anyhow::Result<SocketAddr> {
+    s.to_socket_addrs()
+        .ok()
+        .and_then(|mut a| a.next())
+        .with_context(|| format!("`{s}` is not host:port"))
+}
+
+/// The name server to use: the configured one if it answers, else an embedded one.
+async fn name_server(
+    args: &Args,
+) -> anyhow::Result<(NameClient, Option<tokio::task::JoinHandle<()>>)> {
+    let configured = match &args.name_server {
+        Some(s) => Some(NameClient::new(resolve(s)?)),
+        None => network::name_client().ok(),
+    };
+    if let Some(ns) = configured {
+        let probe = ns.clone().with_timeout(Duration::from_secs(2));
+        if probe.list(None).await.is_ok() {
+            return Ok((ns, None));
+        }
+        eprintln!(
+            "yarp-ros2-gateway: no YARP name server answers at {}",
+            ns.server()
+        );
+    }
+    if args.no_embedded_name_server {
+        bail!("no YARP name server reachable (and --no-embedded-name-server)");
+    }
+    let addr = resolve(&args.embedded_name_server)?;
+    let server = NameServer::bind(addr, &addr.ip().to_string())
+        .await
+        .with_context(|| format!("embedded name server on {addr}"))?;
+    let addr = server.local_addr();
+    // Other YARP programs find it through yarp.conf; write one only on a first run.
+    if network::read_conf().is_err() {
+        if let Ok(path) = network::write_conf(&addr.ip().to_string(), addr.port()) {
+            eprintln!("yarp-ros2-gateway: wrote {}", path.display());
+        }
+    }
+    eprintln!("yarp-ros2-gateway: embedded YARP name server on {addr}");
+    let task = tokio::spawn(async move {
+        if let Err(e) = server.serve().await {
+            eprintln!("yarp-ros2-gateway: embedded name server stopped: {e}");
+        }
+    });
+    Ok((NameClient::new(addr), Some(task)))
+}

@@ -1,0 +1,866 @@
+//! Mapping files: what the gateway bridges, as data (TOML; format in `mappings/README.md`).
+//!
+//! Loading is strict: unknown keys, unknown ROS types and impossible combinations are
+//! [`LoadError`]s that name the file, the entry and the key.
+
+use crate::types;
+use serde::Deserialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Which way data flows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Direction {
+    YarpToRos,
+    RosToYarp,
+    Both,
+}
+
+impl Direction {
+    pub fn to_ros(self) -> bool {
+        matches!(self, Direction::YarpToRos | Direction::Both)
+    }
+    pub fn to_yarp(self) -> bool {
+        matches!(self, Direction::RosToYarp | Direction::Both)
+    }
+}
+
+impl fmt::Display for Direction {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Direction::YarpToRos => "yarp->ros",
+            Direction::RosToYarp => "ros->yarp",
+            Direction::Both => "both",
+        })
+    }
+}
+
+/// How a Bottle and a ROS message correspond (see [`crate::convert`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Conversion {
+    /// `std_msgs/String` holding the Bottle's text form.
+    Text,
+    /// One number or bool: `std_msgs/Bool`, `Int32`, `Int64`, `Float32`, `Float64`.
+    Scalar,
+    /// A flat Bottle of numbers (or a list of equal-length lists) <-> `*MultiArray`.
+    MultiArray,
+    /// Six floats `lx ly lz ax ay az` <-> `geometry_msgs/Twist`.
+    Twist,
+    /// A control board's state -> `sensor_msgs/JointState`.
+    JointState,
+    /// A frame grabber's YARP image -> `sensor_msgs/Image` (rgb8, bgr8, mono8, mono16).
+    Image,
+    /// Multiple-analog-sensors IMU Bottle -> `sensor_msgs/Imu`.
+    Imu,
+    /// Multiple-analog-sensors F/T Bottle -> `geometry_msgs/WrenchStamped`.
+    Wrench,
+}
+
+impl Conversion {
+    /// The conversion used when an entry names none.
+    pub fn default_for(ros_type: &str) -> Option<Conversion> {
+        Some(match ros_type {
+            "std_msgs/msg/String" => Conversion::Text,
+            "std_msgs/msg/Bool"
+            | "std_msgs/msg/Int32"
+            | "std_msgs/msg/Int64"
+            | "std_msgs/msg/Float32"
+            | "std_msgs/msg/Float64" => Conversion::Scalar,
+            "std_msgs/msg/Float64MultiArray"
+            | "std_msgs/msg/Float32MultiArray"
+            | "std_msgs/msg/Int32MultiArray"
+            | "std_msgs/msg/Int64MultiArray" => Conversion::MultiArray,
+            "geometry_msgs/msg/Twist" => Conversion::Twist,
+            "sensor_msgs/msg/JointState" => Conversion::JointState,
+            "sensor_msgs/msg/Imu" => Conversion::Imu,
+            "sensor_msgs/msg/Image" => Conversion::Image,
+            "geometry_msgs/msg/WrenchStamped" => Conversion::Wrench,
+            _ => return None,
+        })
+    }
+
+    /// Whether this conversion can carry `ros_type`.
+    pub fn fits(self, ros_type: &str) -> bool {
+        Conversion::default_for(ros_type) == Some(self)
+    }
+
+    /// Whether this conversion works in `dir`.
+    pub fn supports(self, dir: Direction) -> bool {
+        match self {
+            Conversion::Text | Conversion::Scalar | Conversion::MultiArray | Conversion::Twist => {
+                true
+            }
+            Conversion::JointState | Conversion::Image | Conversion::Imu | Conversion::Wrench => {
+                dir == Direction::YarpToRos
+            }
+        }
+    }
+
+    /// Whether the ROS message carries a `std_msgs/Header` (and so a `frame_id`).
+    pub fn has_header(self) -> bool {
+        matches!(
+            self,
+            Conversion::JointState | Conversion::Image | Conversion::Imu | Conversion::Wrench
+        )
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Reliability {
+    #[default]
+    Reliable,
+    BestEffort,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Durability {
+    #[default]
+    Volatile,
+    TransientLocal,
+}
+
+/// ROS QoS of an entry's DDS endpoints (history is always keep-last `depth`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Qos {
+    pub reliability: Reliability,
+    pub durability: Durability,
+    pub depth: u32,
+}
+
+impl Default for Qos {
+    fn default() -> Self {
+        Qos {
+            reliability: Reliability::Reliable,
+            durability: Durability::Volatile,
+            depth: 10,
+        }
+    }
+}
+
+/// Where a control board's joint names come from.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(tag = "from", rename_all = "snake_case", deny_unknown_fields)]
+pub enum JointNames {
+    /// Asked over the board's RPC port (`[get] [axes]`, then `[get] [name] i`).
+    AxisInfo { rpc_port: String },
+    /// Given in the mapping file.
+    List { names: Vec<String> },
+}
+
+/// A `[[topic]]` entry: a YARP stream bridged to a ROS topic.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TopicEntry {
+    /// Unique name of the entry (errors, startup table, diagnostics).
+    pub name: String,
+    pub direction: Direction,
+    /// The port the gateway opens.
+    pub yarp_port: Option<String>,
+    /// Bridge every port matching this name-server pattern (`*` wildcards); yarp_to_ros only.
+    pub yarp_pattern: Option<String>,
+    /// An existing port the gateway connects into `yarp_port` (kept connected).
+    pub yarp_source: Option<String>,
+    /// An existing port the gateway connects `yarp_port` to (kept connected).
+    pub yarp_sink: Option<String>,
+    pub ros_topic: String,
+    pub ros_type: String,
+    pub conversion: Option<Conversion>,
+    #[serde(default)]
+    pub qos: Qos,
+    /// At most this many messages per second are forwarded (the rest are counted as drops).
+    pub rate_limit_hz: Option<f64>,
+    pub frame_id: Option<String>,
+    pub joint_names: Option<JointNames>,
+    /// Which sensor of its family (imu, wrench; default 0).
+    pub sensor_index: Option<usize>,
+}
+
+impl TopicEntry {
+    /// The conversion in force (explicit or the type's default; valid after loading).
+    pub fn conversion(&self) -> Conversion {
+        self.conversion
+            .or_else(|| Conversion::default_for(&self.ros_type))
+            .expect("validated at load time")
+    }
+}
+
+/// How a service entry maps requests and replies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ServiceConversion {
+    /// std_srvs Trigger / SetBool / Empty <-> configured command Bottles.
+    Command,
+    /// Generic text RPC: `<ros_service>/request` and `<ros_service>/reply` std_msgs/String
+    /// topics carry Bottle text to and from a YARP RPC port.
+    TextRpc,
+}
+
+/// A `[[service]]` entry: a YARP RPC port bridged to a ROS service.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServiceEntry {
+    pub name: String,
+    /// `ros_to_yarp`: ROS clients call the gateway's ROS service, which calls the YARP RPC
+    /// port `yarp_port`. `yarp_to_ros`: YARP clients call the gateway's RPC port
+    /// `yarp_port`, which calls the ROS service.
+    pub direction: Direction,
+    pub yarp_port: String,
+    pub ros_service: String,
+    pub ros_type: String,
+    pub conversion: Option<ServiceConversion>,
+    /// Trigger/Empty, ros_to_yarp: the Bottle (text form) sent to YARP.
+    pub command: Option<String>,
+    /// SetBool, ros_to_yarp: the Bottles sent for `data = true` / `false`.
+    pub command_true: Option<String>,
+    pub command_false: Option<String>,
+}
+
+impl ServiceEntry {
+    pub fn conversion(&self) -> ServiceConversion {
+        self.conversion
+            .unwrap_or(if self.ros_type == "std_msgs/msg/String" {
+                ServiceConversion::TextRpc
+            } else {
+                ServiceConversion::Command
+            })
+    }
+}
+
+/// Everything loaded from one or more mapping files.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Mappings {
+    pub topics: Vec<TopicEntry>,
+    pub services: Vec<ServiceEntry>,
+}
+
+/// A mapping file that cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    #[error("{file}: cannot read: {source}")]
+    Io {
+        file: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{file}: not valid TOML: {message}")]
+    Syntax { file: PathBuf, message: String },
+    #[error("{file}: top-level key `{key}` is unknown (expected `topic` or `service`)")]
+    UnknownSection { file: PathBuf, key: String },
+    #[error("{file}: entry {entry}: key `{key}`: {message}")]
+    Entry {
+        file: PathBuf,
+        entry: String,
+        key: String,
+        message: String,
+    },
+}
+
+impl LoadError {
+    /// The key an entry error is about (tests and tools).
+    pub fn key(&self) -> Option<&str> {
+        match self {
+            LoadError::Entry { key, .. } | LoadError::UnknownSection { key, .. } => Some(key),
+            _ => None,
+        }
+    }
+}
+
+impl Mappings {
+    /// Loads and validates mapping files; entry names must be unique across all of them.
+    pub fn load(files: &[impl AsRef<Path>]) -> Result<Mappings, LoadError> {
+        let mut all = Mappings::default();
+        for f in files {
+            let f = f.as_ref();
+            let text = std::fs::read_to_string(f).map_err(|source| LoadError::Io {
+                file: f.to_path_buf(),
+                source,
+            })?;
+            let one = Mappings::parse(&text, f)?;
+            for t in one.topics {
+                check_unique(&all, &t.name, f)?;
+                all.topics.push(t);
+            }
+            for s in one.services {
+                check_unique(&all, &s.name, f)?;
+                all.services.push(s);
+            }
+        }
+        Ok(all)
+    }
+
+    /// Parses and validates one file's text (`file` only names it in errors).
+    pub fn parse(text: &str, file: &Path) -> Result<Mappings, LoadError> {
+        let table: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| LoadError::Syntax {
+                file: file.to_path_buf(),
+                message: e.message().to_string(),
+            })?;
+        let mut out = Mappings::default();
+        for (key, value) in table {
+            let entries = match (key.as_str(), value) {
+                ("topic" | "service", toml::Value::Array(a)) => a,
+                ("topic" | "service", _) => {
+                    return Err(LoadError::Entry {
+                        file: file.to_path_buf(),
+                        entry: key.clone(),
+                        key,
+                        message: "must be an array of tables ([[...]])".into(),
+                    })
+                }
+                _ => {
+                    return Err(LoadError::UnknownSection {
+                        file: file.to_path_buf(),
+                        key,
+                    })
+                }
+            };
+            for (i, v) in entries.into_iter().enumerate() {
+                let label = entry_label(&key, i, &v);
+                let err = |k: &str, message: String| LoadError::Entry {
+                    file: file.to_path_buf(),
+                    entry: label.clone(),
+                    key: k.to_string(),
+                    message,
+                };
+                if key == "topic" {
+                    let t: TopicEntry = deserialize(v).map_err(|(k, m)| err(&k, m))?;
+                    validate_topic(&t).map_err(|(k, m)| err(k, m))?;
+                    check_unique(&out, &t.name, file)?;
+                    out.topics.push(t);
+                } else {
+                    let s: ServiceEntry = deserialize(v).map_err(|(k, m)| err(&k, m))?;
+                    validate_service(&s).map_err(|(k, m)| err(k, m))?;
+                    check_unique(&out, &s.name, file)?;
+                    out.services.push(s);
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+fn entry_label(section: &str, i: usize, v: &toml::Value) -> String {
+    match v.get("name").and_then(|n| n.as_str()) {
+        Some(n) => format!("{section}[{i}] \"{n}\""),
+        None => format!("{section}[{i}]"),
+    }
+}
+
+fn check_unique(m: &Mappings, name: &str, file: &Path) -> Result<(), LoadError> {
+    let taken =
+        m.topics.iter().any(|t| t.name == name) || m.services.iter().any(|s| s.name == name);
+    if taken {
+        return Err(LoadError::Entry {
+            file: file.to_path_buf(),
+            entry: format!("\"{name}\""),
+            key: "name".into(),
+            message: "another entry already has this name".into(),
+        });
+    }
+    Ok(())
+}
+
+/// Deserializes an entry, reporting the offending key (serde_path_to_error tracks it).
+fn deserialize<T: serde::de::DeserializeOwned>(v: toml::Value) -> Result<T, (String, String)> {
+    serde_path_to_error::deserialize(v).map_err(|e| {
+        let message = e.inner().message().to_string();
+        let mut key = e.path().to_string();
+        // serde reports a missing field at the parent; name the field itself.
+        if let Some(rest) = message.strip_prefix("missing field `") {
+            let field = rest.split('`').next().unwrap_or_default();
+            key = if key == "." {
+                field.to_string()
+            } else {
+                format!("{key}.{field}")
+            };
+        }
+        (key, message)
+    })
+}
+
+type Invalid = (&'static str, String);
+
+fn validate_topic(t: &TopicEntry) -> Result<(), Invalid> {
+    check_ros_name("ros_topic", &t.ros_topic)?;
+    if types::lookup(&t.ros_type).is_none() || !t.ros_type.contains("/msg/") {
+        return Err(("ros_type", format!("unknown message type `{}`", t.ros_type)));
+    }
+    let conv = match t.conversion {
+        Some(c) if !c.fits(&t.ros_type) => {
+            return Err((
+                "conversion",
+                format!("conversion {c:?} cannot carry {}", t.ros_type),
+            ))
+        }
+        Some(c) => c,
+        None => Conversion::default_for(&t.ros_type)
+            .ok_or(("ros_type", format!("no conversion carries {}", t.ros_type)))?,
+    };
+    if !conv.supports(t.direction) {
+        return Err((
+            "direction",
+            format!("conversion {conv:?} only works yarp_to_ros"),
+        ));
+    }
+    match (&t.yarp_port, &t.yarp_pattern) {
+        (Some(p), None) => check_port("yarp_port", p)?,
+        (None, Some(p)) => {
+            check_port("yarp_pattern", p)?;
+            if t.direction != Direction::YarpToRos {
+                return Err((
+                    "yarp_pattern",
+                    "patterns bridge existing YARP outputs, so only yarp_to_ros".into(),
+                ));
+            }
+            if t.yarp_source.is_some() {
+                return Err(("yarp_source", "not allowed with yarp_pattern".into()));
+            }
+            if conv == Conversion::JointState {
+                return Err((
+                    "yarp_pattern",
+                    "joint names differ per control board: give each its entry".into(),
+                ));
+            }
+        }
+        (Some(_), Some(_)) => {
+            return Err((
+                "yarp_pattern",
+                "give either yarp_port or yarp_pattern, not both".into(),
+            ))
+        }
+        (None, None) => return Err(("yarp_port", "missing (or give yarp_pattern)".into())),
+    }
+    if let Some(s) = &t.yarp_source {
+        check_port("yarp_source", s)?;
+        if !t.direction.to_ros() {
+            return Err((
+                "yarp_source",
+                "only for yarp_to_ros or both (data comes from YARP)".into(),
+            ));
+        }
+    }
+    if let Some(s) = &t.yarp_sink {
+        check_port("yarp_sink", s)?;
+        if !t.direction.to_yarp() {
+            return Err((
+                "yarp_sink",
+                "only for ros_to_yarp or both (data goes to YARP)".into(),
+            ));
+        }
+    }
+    if t.qos.depth == 0 {
+        return Err(("qos.depth", "must be at least 1".into()));
+    }
+    if let Some(r) = t.rate_limit_hz {
+        if !(r.is_finite() && r > 0.0) {
+            return Err((
+                "rate_limit_hz",
+                format!("must be a positive number, not {r}"),
+            ));
+        }
+    }
+    if t.frame_id.is_some() && !conv.has_header() {
+        return Err((
+            "frame_id",
+            format!("{} has no header to carry a frame_id", t.ros_type),
+        ));
+    }
+    if t.sensor_index.is_some() && !matches!(conv, Conversion::Imu | Conversion::Wrench) {
+        return Err(("sensor_index", "only for imu and wrench".into()));
+    }
+    match (&t.joint_names, conv) {
+        (None, Conversion::JointState) => {
+            return Err((
+                "joint_names",
+                "required for sensor_msgs/msg/JointState".into(),
+            ))
+        }
+        (Some(_), c) if c != Conversion::JointState => {
+            return Err(("joint_names", "only for sensor_msgs/msg/JointState".into()))
+        }
+        (Some(JointNames::AxisInfo { rpc_port }), _) => {
+            check_port("joint_names.rpc_port", rpc_port)?
+        }
+        (Some(JointNames::List { names }), _) if names.is_empty() => {
+            return Err(("joint_names.names", "must name at least one joint".into()))
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+const COMMAND_SERVICES: [&str; 3] = [
+    "std_srvs/srv/Trigger",
+    "std_srvs/srv/SetBool",
+    "std_srvs/srv/Empty",
+];
+
+fn validate_service(s: &ServiceEntry) -> Result<(), Invalid> {
+    check_ros_name("ros_service", &s.ros_service)?;
+    check_port("yarp_port", &s.yarp_port)?;
+    if s.direction == Direction::Both {
+        return Err((
+            "direction",
+            "a service has one server: choose ros_to_yarp or yarp_to_ros".into(),
+        ));
+    }
+    let setbool = s.ros_type == "std_srvs/srv/SetBool";
+    match s.conversion() {
+        ServiceConversion::Command => {
+            if !COMMAND_SERVICES.contains(&s.ros_type.as_str()) {
+                return Err((
+                    "ros_type",
+                    format!(
+                        "unknown service type `{}` (expected one of {})",
+                        s.ros_type,
+                        COMMAND_SERVICES.join(", ")
+                    ),
+                ));
+            }
+            let to_yarp = s.direction == Direction::RosToYarp;
+            match (setbool, to_yarp) {
+                (false, true) if s.command.is_none() => {
+                    return Err(("command", "required: the Bottle sent to YARP".into()))
+                }
+                (true, true) if s.command_true.is_none() => {
+                    return Err(("command_true", "required for SetBool".into()))
+                }
+                (true, true) if s.command_false.is_none() => {
+                    return Err(("command_false", "required for SetBool".into()))
+                }
+                (true, _) if s.command.is_some() => {
+                    return Err(("command", "SetBool uses command_true/command_false".into()))
+                }
+                (false, _) if s.command_true.is_some() || s.command_false.is_some() => {
+                    return Err((
+                        "command_true",
+                        "only SetBool has command_true/command_false".into(),
+                    ))
+                }
+                (_, false) if s.command.is_some() || s.command_true.is_some() => {
+                    return Err((
+                        "command",
+                        "yarp_to_ros forwards any Bottle to the ROS service; no command".into(),
+                    ))
+                }
+                _ => {}
+            }
+        }
+        ServiceConversion::TextRpc => {
+            if s.ros_type != "std_msgs/msg/String" {
+                return Err(("ros_type", "text_rpc uses std_msgs/msg/String".into()));
+            }
+            if s.direction != Direction::RosToYarp {
+                return Err(("direction", "text_rpc is ros_to_yarp".into()));
+            }
+            if s.command.is_some() || s.command_true.is_some() || s.command_false.is_some() {
+                return Err((
+                    "command",
+                    "text_rpc forwards the request text itself".into(),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_port(key: &'static str, p: &str) -> Result<(), Invalid> {
+    if !p.starts_with('/') || p.len() < 2 || p.chars().any(char::is_whitespace) {
+        return Err((
+            key,
+            format!("`{p}` is not a YARP port name (/name, no spaces)"),
+        ));
+    }
+    Ok(())
+}
+
+/// ROS names: `/`-separated tokens of letters, digits and `_`, not starting with a digit,
+/// without `__`.
+fn check_ros_name(key: &'static str, n: &str) -> Result<(), Invalid> {
+    let body = n.strip_prefix('/').unwrap_or(n);
+    let ok = !body.is_empty()
+        && !body.contains("__")
+        && body.split('/').all(|tok| {
+            !tok.is_empty()
+                && !tok.starts_with(|c: char| c.is_ascii_digit())
+                && tok.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        });
+    if ok {
+        Ok(())
+    } else {
+        Err((key, format!("`{n}` is not a valid ROS name")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Mappings, LoadError> {
+        Mappings::parse(s, Path::new("m.toml"))
+    }
+
+    fn entry_error(s: &str) -> (String, String, String) {
+        match parse(s) {
+            Err(LoadError::Entry {
+                entry,
+                key,
+                message,
+                ..
+            }) => (entry, key, message),
+            other => panic!("expected an entry error, got {other:?}"),
+        }
+    }
+
+    const OK: &str = r#"
+[[topic]]
+name = "counter"
+direction = "yarp_to_ros"
+yarp_port = "/gw/counter:i"
+yarp_source = "/counter:o"
+ros_topic = "/counter"
+ros_type = "std_msgs/msg/Int32"
+qos = { reliability = "best_effort", depth = 5 }
+rate_limit_hz = 10
+
+[[topic]]
+name = "cmd_vel"
+direction = "ros_to_yarp"
+yarp_port = "/base/cmd_vel:o"
+ros_topic = "cmd_vel"
+ros_type = "geometry_msgs/msg/Twist"
+
+[[service]]
+name = "home"
+direction = "ros_to_yarp"
+yarp_port = "/arm/rpc:i"
+ros_service = "/arm/home"
+ros_type = "std_srvs/srv/Trigger"
+command = "[home]"
+"#;
+
+    #[test]
+    fn a_valid_file_loads_with_defaults() {
+        let m = parse(OK).unwrap();
+        assert_eq!(m.topics.len(), 2);
+        assert_eq!(m.services.len(), 1);
+        let c = &m.topics[0];
+        assert_eq!(c.conversion(), Conversion::Scalar);
+        assert_eq!(c.qos.reliability, Reliability::BestEffort);
+        assert_eq!(c.qos.durability, Durability::Volatile);
+        assert_eq!(c.qos.depth, 5);
+        assert_eq!(c.rate_limit_hz, Some(10.0));
+        assert_eq!(m.topics[1].conversion(), Conversion::Twist);
+        assert_eq!(m.services[0].conversion(), ServiceConversion::Command);
+    }
+
+    #[test]
+    fn unknown_key_names_file_entry_and_key() {
+        let err = parse(&OK.replace("rate_limit_hz = 10", "rate_limt_hz = 10")).unwrap_err();
+        let text = err.to_string();
+        assert!(
+            text.starts_with("m.toml: entry topic[0] \"counter\": key `rate_limt_hz`"),
+            "{text}"
+        );
+        assert_eq!(err.key(), Some("rate_limt_hz"));
+    }
+
+    #[test]
+    fn unknown_nested_key_is_named_with_its_path() {
+        let (_, key, _) = entry_error(&OK.replace("depth = 5", "dept = 5"));
+        assert_eq!(key, "qos.dept");
+    }
+
+    #[test]
+    fn bad_value_names_the_key() {
+        let (entry, key, msg) = entry_error(&OK.replace("\"best_effort\"", "\"sometimes\""));
+        assert_eq!(entry, "topic[0] \"counter\"");
+        assert_eq!(key, "qos.reliability");
+        assert!(msg.contains("sometimes"), "{msg}");
+        let (_, key, _) = entry_error(&OK.replace("\"yarp_to_ros\"", "\"sideways\""));
+        assert_eq!(key, "direction");
+    }
+
+    #[test]
+    fn missing_key_is_named() {
+        let (_, key, _) = entry_error(&OK.replace("ros_topic = \"/counter\"", ""));
+        assert_eq!(key, "ros_topic");
+    }
+
+    #[test]
+    fn unknown_type_is_an_error() {
+        let (_, key, msg) = entry_error(&OK.replace("std_msgs/msg/Int32", "std_msgs/msg/Int33"));
+        assert_eq!(key, "ros_type");
+        assert!(msg.contains("Int33"));
+        let (_, key, _) = entry_error(&OK.replace("std_srvs/srv/Trigger", "std_srvs/srv/Nope"));
+        assert_eq!(key, "ros_type");
+    }
+
+    #[test]
+    fn unknown_section_is_an_error() {
+        let err = parse("[[topics]]\nname = \"x\"").unwrap_err();
+        assert!(matches!(err, LoadError::UnknownSection { ref key, .. } if key == "topics"));
+    }
+
+    #[test]
+    fn syntax_error_names_the_file() {
+        let err = parse("[[topic]\n").unwrap_err();
+        assert!(matches!(err, LoadError::Syntax { .. }));
+        assert!(err.to_string().starts_with("m.toml: "));
+    }
+
+    #[test]
+    fn impossible_combinations() {
+        let cases = [
+            // conversion that cannot carry the type
+            (
+                OK.replace("qos = {", "conversion = \"text\"\nqos = {"),
+                "conversion",
+            ),
+            // a header-less type cannot carry a frame_id
+            (
+                OK.replace("rate_limit_hz = 10", "frame_id = \"base\""),
+                "frame_id",
+            ),
+            // joint names only with JointState
+            (
+                OK.replace(
+                    "rate_limit_hz = 10",
+                    "joint_names = { from = \"list\", names = [\"a\"] }",
+                ),
+                "joint_names",
+            ),
+            // a source port only when data comes from YARP
+            (
+                OK.replace(
+                    "ros_topic = \"cmd_vel\"",
+                    "ros_topic = \"cmd_vel\"\nyarp_source = \"/x\"",
+                ),
+                "yarp_source",
+            ),
+            // port and pattern together
+            (
+                OK.replace(
+                    "yarp_port = \"/gw/counter:i\"",
+                    "yarp_port = \"/a\"\nyarp_pattern = \"/b*\"",
+                ),
+                "yarp_pattern",
+            ),
+            // no port at all
+            (OK.replace("yarp_port = \"/gw/counter:i\"", ""), "yarp_port"),
+            // bad rate, bad depth, bad names
+            (
+                OK.replace("rate_limit_hz = 10", "rate_limit_hz = -1"),
+                "rate_limit_hz",
+            ),
+            (OK.replace("depth = 5", "depth = 0"), "qos.depth"),
+            (OK.replace("\"/counter\"", "\"/1counter\""), "ros_topic"),
+            (OK.replace("\"/counter\"", "\"/a__b\""), "ros_topic"),
+            (OK.replace("\"/gw/counter:i\"", "\"gw\""), "yarp_port"),
+            // a service has one server
+            (
+                OK.replace(
+                    "direction = \"ros_to_yarp\"\nyarp_port = \"/arm",
+                    "direction = \"both\"\nyarp_port = \"/arm",
+                ),
+                "direction",
+            ),
+            // Trigger towards YARP needs its command
+            (OK.replace("command = \"[home]\"", ""), "command"),
+        ];
+        for (text, want) in cases {
+            let (_, key, msg) = entry_error(&text);
+            assert_eq!(key, want, "{msg}");
+        }
+    }
+
+    #[test]
+    fn imu_only_from_yarp() {
+        let text = r#"
+[[topic]]
+name = "imu"
+direction = "ros_to_yarp"
+yarp_port = "/imu"
+ros_topic = "/imu"
+ros_type = "sensor_msgs/msg/Imu"
+"#;
+        assert_eq!(entry_error(text).1, "direction");
+        let ok = text.replace("ros_to_yarp", "yarp_to_ros") + "frame_id = \"imu_link\"\n";
+        assert_eq!(
+            parse(&ok).unwrap().topics[0].frame_id.as_deref(),
+            Some("imu_link")
+        );
+    }
+
+    #[test]
+    fn joint_state_needs_names() {
+        let text = r#"
+[[topic]]
+name = "arm"
+direction = "yarp_to_ros"
+yarp_port = "/gw/arm/state:i"
+yarp_source = "/icub/left_arm/state:o"
+ros_topic = "/left_arm/joint_states"
+ros_type = "sensor_msgs/msg/JointState"
+"#;
+        assert_eq!(entry_error(text).1, "joint_names");
+        let with = format!(
+            "{text}joint_names = {{ from = \"axis_info\", rpc_port = \"/icub/left_arm/rpc:i\" }}\n"
+        );
+        assert!(parse(&with).is_ok());
+        let bad = format!("{text}joint_names = {{ from = \"guess\" }}\n");
+        assert_eq!(entry_error(&bad).1, "joint_names.from");
+        let dynamic = with
+            .replace(
+                "yarp_port = \"/gw/arm/state:i\"",
+                "yarp_pattern = \"/*/state:o\"",
+            )
+            .replace("yarp_source = \"/icub/left_arm/state:o\"\n", "");
+        assert_eq!(entry_error(&dynamic).1, "yarp_pattern");
+    }
+
+    #[test]
+    fn setbool_commands() {
+        let text = r#"
+[[service]]
+name = "enable"
+direction = "ros_to_yarp"
+yarp_port = "/arm/rpc:i"
+ros_service = "/arm/enable"
+ros_type = "std_srvs/srv/SetBool"
+command_true = "[on]"
+"#;
+        assert_eq!(entry_error(text).1, "command_false");
+        assert!(parse(&format!("{text}command_false = \"[off]\"\n")).is_ok());
+    }
+
+    #[test]
+    fn duplicate_names_are_rejected() {
+        let text = format!("{OK}\n{}", &OK[OK.find("[[service]]").unwrap()..]);
+        let (_, key, _) = entry_error(&text);
+        assert_eq!(key, "name");
+    }
+
+    #[test]
+    fn text_rpc_pattern() {
+        let text = r#"
+[[service]]
+name = "board"
+direction = "ros_to_yarp"
+yarp_port = "/board/rpc:i"
+ros_service = "/board/rpc"
+ros_type = "std_msgs/msg/String"
+"#;
+        let m = parse(text).unwrap();
+        assert_eq!(m.services[0].conversion(), ServiceConversion::TextRpc);
+        assert_eq!(
+            entry_error(&text.replace("ros_to_yarp", "yarp_to_ros")).1,
+            "direction"
+        );
+    }
+}

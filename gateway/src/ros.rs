@@ -1,0 +1,129 @@
+//! The DDS side: one participant restricted to the configured networks, one node, and
+//! helpers turning mapping data into ros2-client names and QoS.
+
+use crate::mapping;
+use ros2_client::dds::rustdds::DomainParticipantBuilder;
+use ros2_client::qos::{Durability, History, Reliability, WhenFull};
+use ros2_client::{
+    Context, MessageTypeName, Name, Node, NodeName, NodeOptions, QosProfile, ServiceTypeName,
+};
+use std::net::IpAddr;
+use std::time::Duration;
+
+/// Why the ROS side could not be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum RosError {
+    #[error("DDS participant for domain {domain}: {message}")]
+    Participant { domain: u16, message: String },
+    #[error("ROS node {name}: {message}")]
+    Node { name: String, message: String },
+    #[error("ROS name `{name}`: {message}")]
+    Name { name: String, message: String },
+    #[error("{what} on {name}: {message}")]
+    Entity {
+        what: &'static str,
+        name: String,
+        message: String,
+    },
+}
+
+/// Starts the gateway's single DDS participant (as a ros2-client context) and its node.
+///
+/// `domain` is passed explicitly (ros2-client's `Context::new` ignores ROS_DOMAIN_ID);
+/// `networks` limits RustDDS to those interface addresses (empty: all interfaces).
+pub fn start_node(
+    domain: u16,
+    networks: &[IpAddr],
+    namespace: &str,
+    node_name: &str,
+) -> Result<(Context, Node), RosError> {
+    let mut b = DomainParticipantBuilder::new(domain);
+    if !networks.is_empty() {
+        b = b.with_only_networks(networks.iter().copied());
+    }
+    let dp = b.build().map_err(|e| RosError::Participant {
+        domain,
+        message: e.to_string(),
+    })?;
+    let ctx = Context::from_domain_participant(dp).map_err(|e| RosError::Participant {
+        domain,
+        message: format!("{e:?}"),
+    })?;
+    let node = new_node(&ctx, namespace, node_name)?;
+    Ok((ctx, node))
+}
+
+/// Another node on the same participant (dynamic mode creates endpoints at run time on
+/// its own node, so the main node can be shared read-only).
+pub fn new_node(ctx: &Context, namespace: &str, node_name: &str) -> Result<Node, RosError> {
+    let err = |e: &dyn std::fmt::Debug| RosError::Node {
+        name: node_name.to_string(),
+        message: format!("{e:?}"),
+    };
+    let name = NodeName::new(namespace, node_name).map_err(|e| err(&e))?;
+    ctx.new_node(name, NodeOptions::new().enable_rosout(false))
+        .map_err(|e| err(&e))
+}
+
+/// A publisher of dynamic messages of `ros_type` on `topic`.
+pub fn publisher(
+    node: &mut Node,
+    topic: &str,
+    ros_type: &str,
+    q: &mapping::Qos,
+) -> Result<ros2_client::Publisher<crate::dynmsg::Value>, RosError> {
+    let err = |what, e: &dyn std::fmt::Debug| RosError::Entity {
+        what,
+        name: topic.to_string(),
+        message: format!("{e:?}"),
+    };
+    let t = node
+        .create_topic(&name(topic)?, message_type(ros_type), &qos(q))
+        .map_err(|e| err("topic", &e))?;
+    node.create_publisher(&t, None)
+        .map_err(|e| err("publisher", &e))
+}
+
+/// A ROS topic or service name (`/a/b`, or relative `b`).
+pub fn name(n: &str) -> Result<Name, RosError> {
+    Name::parse(n).map_err(|e| RosError::Name {
+        name: n.to_string(),
+        message: format!("{e:?}"),
+    })
+}
+
+/// `pkg/msg/Name` as ros2-client's message type name.
+pub fn message_type(ros_type: &str) -> MessageTypeName {
+    let (pkg, _, name) = crate::types::split_name(ros_type).unwrap_or(("", "", ros_type));
+    MessageTypeName::new(pkg, name)
+}
+
+/// `pkg/srv/Name` as ros2-client's service type name.
+pub fn service_type(ros_type: &str) -> ServiceTypeName {
+    let (pkg, _, name) = crate::types::split_name(ros_type).unwrap_or(("", "", ros_type));
+    ServiceTypeName::new(pkg, name)
+}
+
+/// The mapping's QoS as a ros2-client profile. A full reliable send window waits at most
+/// 20 ms (then the message counts as a drop) so one slow reader cannot stall a bridge.
+pub fn qos(q: &mapping::Qos) -> QosProfile {
+    let p = QosProfile::publisher_default()
+        .durability(match q.durability {
+            mapping::Durability::Volatile => Durability::Volatile,
+            mapping::Durability::TransientLocal => Durability::TransientLocal,
+        })
+        .history(History::KeepLast {
+            depth: q.depth as usize,
+        });
+    match q.reliability {
+        mapping::Reliability::Reliable => p.reliability(Reliability::Reliable {
+            when_full: WhenFull::Wait(Duration::from_millis(20)),
+        }),
+        mapping::Reliability::BestEffort => p.reliability_best_effort(),
+    }
+}
+
+/// QoS of service endpoints (reliable, volatile, depth 10: rclpy's service default).
+pub fn service_qos() -> QosProfile {
+    qos(&mapping::Qos::default())
+}

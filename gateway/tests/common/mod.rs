@@ -1,0 +1,239 @@
+//! Shared harness for the gateway's integration tests: finds the rclpy venv, gives every
+//! test its own ROS domain, and runs rclpy peer scripts as bounded, always-reaped children.
+#![allow(dead_code)] // each test binary uses a different part of the harness
+
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// How long any single wait in a test may take.
+pub const T: Duration = Duration::from_secs(20);
+
+/// The rclpy venv (`ROS_VENV`, default `<repo>/.venv-ros`), if it holds a Python.
+pub fn ros_venv() -> Option<PathBuf> {
+    let dir = std::env::var_os("ROS_VENV")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../.venv-ros"));
+    dir.join("bin/python").exists().then_some(dir)
+}
+
+/// Returns the venv, or prints a loud skip notice and returns `None` (the test passes).
+pub fn venv_or_skip(test: &str) -> Option<PathBuf> {
+    let v = ros_venv();
+    if v.is_none() {
+        eprintln!(
+            "\n*** SKIPPED: rclpy venv not found ({test}); run tests/peers/install-ros2.sh \
+             or set ROS_VENV ***\n"
+        );
+    }
+    v
+}
+
+/// A ROS domain id unique to this test within this test run.
+///
+/// `index` is the test's own number (unique across the gateway's tests, < 25). The run
+/// picks one of 8 slots of 25 domains from nextest's run id (or the process id under plain
+/// `cargo test`), so two suites running at once rarely share a domain either; the slots
+/// stay below 232, the highest domain RTPS's port formula allows.
+pub fn domain_id(index: u16) -> u16 {
+    assert!(index < 25, "domain index {index} out of range");
+    let seed = std::env::var("NEXTEST_RUN_ID").unwrap_or_else(|_| std::process::id().to_string());
+    let h = seed.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
+    });
+    20 + (h % 8) as u16 * 25 + index
+}
+
+/// A running rclpy peer (`gateway/tests/peers/peer.py`); killed and reaped on drop.
+pub struct Peer {
+    child: Child,
+    lines: mpsc::Receiver<String>,
+    name: String,
+}
+
+impl Peer {
+    /// Starts `peer.py <args>` in `domain`.
+    pub fn start(venv: &std::path::Path, domain: u16, args: &[&str]) -> Peer {
+        Peer::start_with_profile(venv, domain, args, None)
+    }
+
+    /// Like [`Peer::start`], with a Fast DDS XML profile from `tests/peers/` (which then
+    /// chooses the transports).
+    pub fn start_with_profile(
+        venv: &std::path::Path,
+        domain: u16,
+        args: &[&str],
+        profile: Option<&str>,
+    ) -> Peer {
+        let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/peers/peer.py");
+        let mut cmd = Command::new(venv.join("bin/python"));
+        cmd.arg("-u")
+            .arg(script)
+            .args(args)
+            .env("ROS_DOMAIN_ID", domain.to_string())
+            .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+            .env("ROS_DISTRO", "kilted")
+            // UDP only: Fast DDS's /dev/shm segments are not isolated by netns-run.
+            .env("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4");
+        if let Some(p) = profile {
+            let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+                .join("tests/peers")
+                .join(p);
+            cmd.env_remove("FASTDDS_BUILTIN_TRANSPORTS")
+                .env("FASTDDS_DEFAULT_PROFILES_FILE", path);
+        }
+        Peer::spawn(cmd, &args.join(" "))
+    }
+
+    /// Runs any program with its stdout lines collected (killed and reaped on drop).
+    pub fn spawn(mut cmd: Command, name: &str) -> Peer {
+        let mut child = cmd
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .unwrap_or_else(|e| panic!("start {name}: {e}"));
+        let out = child.stdout.take().expect("child stdout");
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(out).lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        Peer {
+            child,
+            lines: rx,
+            name: name.to_string(),
+        }
+    }
+
+    /// The child's process id.
+    pub fn id(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// The next line starting with `prefix` (others are skipped), within `timeout`.
+    pub fn expect(&self, prefix: &str, timeout: Duration) -> String {
+        let end = Instant::now() + timeout;
+        loop {
+            let left = end.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(l) if l.starts_with(prefix) => return l[prefix.len()..].trim().to_string(),
+                Ok(_) => continue,
+                Err(_) => panic!(
+                    "peer `{}`: no `{prefix}` line within {timeout:?}",
+                    self.name
+                ),
+            }
+        }
+    }
+
+    /// Like [`Peer::expect`] but without blocking the async runtime.
+    pub async fn expect_async(&self, prefix: &str, timeout: Duration) -> String {
+        let end = Instant::now() + timeout;
+        loop {
+            match self.lines.try_recv() {
+                Ok(l) if l.starts_with(prefix) => return l[prefix.len()..].trim().to_string(),
+                Ok(_) => continue,
+                Err(mpsc::TryRecvError::Empty) if Instant::now() < end => {
+                    tokio::time::sleep(Duration::from_millis(2)).await
+                }
+                Err(_) => panic!(
+                    "peer `{}`: no `{prefix}` line within {timeout:?}",
+                    self.name
+                ),
+            }
+        }
+    }
+
+    /// Waits (bounded) for the peer to exit by itself; kills it when it does not.
+    pub fn finish(mut self, timeout: Duration) -> bool {
+        let end = Instant::now() + timeout;
+        while Instant::now() < end {
+            if let Ok(Some(st)) = self.child.try_wait() {
+                return st.success();
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        false
+    }
+}
+
+impl Drop for Peer {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+        }
+        let _ = self.child.wait();
+    }
+}
+
+impl Peer {
+    /// The next line starting with `prefix`, if one is already there (never blocks).
+    pub fn try_line(&self, prefix: &str) -> Option<String> {
+        while let Ok(l) = self.lines.try_recv() {
+            if let Some(rest) = l.strip_prefix(prefix) {
+                return Some(rest.trim().to_string());
+            }
+        }
+        None
+    }
+}
+
+/// An in-test YARP name server on 127.0.0.1 (any free port).
+pub async fn name_server() -> (
+    yarp_net::nameserver::NameClient,
+    yarp_net::nameserver::ShutdownHandle,
+) {
+    let ns = yarp_net::nameserver::NameServer::bind("127.0.0.1:0", "127.0.0.1")
+        .await
+        .expect("bind name server");
+    let addr = ns.local_addr();
+    let stop = ns.shutdown_handle();
+    tokio::spawn(ns.serve());
+    (
+        yarp_net::nameserver::NameClient::new(addr).with_timeout(T),
+        stop,
+    )
+}
+
+/// Starts a gateway for the mapping text `toml` in `domain`, DDS on loopback only.
+pub async fn gateway(
+    toml: &str,
+    ns: &yarp_net::nameserver::NameClient,
+    domain: u16,
+) -> yarp_ros2_gateway::gateway::Gateway {
+    std::env::set_var("ROS_DISTRO", "kilted");
+    let m = yarp_ros2_gateway::mapping::Mappings::parse(toml, std::path::Path::new("test.toml"))
+        .expect("test mapping");
+    let opt = yarp_ros2_gateway::gateway::Options {
+        domain_id: domain,
+        networks: vec!["127.0.0.1".parse().unwrap()],
+        ..Default::default()
+    };
+    yarp_ros2_gateway::gateway::Gateway::start(&m, ns.clone(), opt)
+        .await
+        .expect("gateway starts")
+}
+
+/// Repeats `step` every `every` until `done` yields a value (bounded by `T`).
+pub async fn repeat_until<R>(
+    what: &str,
+    every: Duration,
+    mut step: impl AsyncFnMut(),
+    mut done: impl FnMut() -> Option<R>,
+) -> R {
+    let end = Instant::now() + T;
+    loop {
+        step().await;
+        if let Some(r) = done() {
+            return r;
+        }
+        assert!(Instant::now() < end, "timed out waiting for {what}");
+        tokio::time::sleep(every).await;
+    }
+}

@@ -1,0 +1,192 @@
+//! YARP images -> sensor_msgs/Image into rclpy, checked by SHA-256 (run under netns-run).
+//! Domain indices: 15, 18.
+
+mod common;
+
+use common::{Peer, T};
+use sha2::{Digest, Sha256};
+use std::collections::HashMap;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use yarp_net::port::Port;
+use yarp_proto::Stamp;
+use yarp_ros2_gateway::image::yarp_image;
+
+fn frame(w: usize, h: usize, i: usize) -> Vec<u8> {
+    (0..w * h * 3)
+        .map(|k| ((k / 7 + i * 31) % 251) as u8)
+        .collect()
+}
+
+fn hex(d: &[u8]) -> String {
+    d.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// What one image stream run measured.
+struct Run {
+    sent: usize,
+    /// Indices of the frames that arrived intact, in arrival order.
+    got: Vec<usize>,
+    /// Age of each arrived frame at the subscriber (stamp to receipt), sorted, ms.
+    ages: Vec<f64>,
+}
+
+/// Streams `n` `w`x`h` rgb8 frames at `hz` from a YARP port through the gateway to an
+/// rclpy subscriber that reports each frame's SHA-256.
+async fn stream(venv: &std::path::Path, index: u16, w: usize, h: usize, hz: f64, n: usize) -> Run {
+    let domain = common::domain_id(index);
+    let (ns, stop) = common::name_server().await;
+    let port = Port::open("/test/cam:o", ns.clone()).await.unwrap();
+    let gw = common::gateway(
+        r#"
+[[topic]]
+name = "cam"
+direction = "yarp_to_ros"
+yarp_port = "/gw/cam:i"
+yarp_source = "/test/cam:o"
+ros_topic = "/cam/image_raw"
+ros_type = "sensor_msgs/msg/Image"
+frame_id = "camera"
+qos = { depth = 10 }
+"#,
+        &ns,
+        domain,
+    )
+    .await;
+    let sub = Peer::start_with_profile(
+        venv,
+        domain,
+        &[
+            "sub",
+            "sensor_msgs/msg/Image",
+            "/cam/image_raw",
+            "--summary",
+            "--count",
+            "100000",
+            "--timeout",
+            "60",
+        ],
+        Some("fastdds_large_data.xml"),
+    );
+    sub.expect_async("READY", T).await;
+    // Warm up with one frame until it arrives (discovery, connections).
+    let warm = frame(w, h, 100_000);
+    let warm_sha = hex(&Sha256::digest(&warm));
+    common::repeat_until(
+        "the first image",
+        Duration::from_millis(100),
+        async || {
+            port.write(&yarp_image("rgb", 3, w, h, warm.clone())).await;
+        },
+        || sub.try_line("MSG"),
+    )
+    .await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    while sub.try_line("MSG").is_some() {}
+
+    // Frames and digests are prepared before the timed loop.
+    let frames: Vec<Vec<u8>> = (0..n).map(|i| frame(w, h, i)).collect();
+    let sent: HashMap<String, usize> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, px)| (hex(&Sha256::digest(px)), i))
+        .collect();
+    let mut tick = tokio::time::interval(Duration::from_secs_f64(1.0 / hz));
+    let t0 = Instant::now();
+    for (i, px) in frames.into_iter().enumerate() {
+        tick.tick().await;
+        let now = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .unwrap()
+            .as_secs_f64();
+        port.write_stamped(&yarp_image("rgb", 3, w, h, px), Stamp::new(i as i32, now))
+            .await;
+    }
+    let send_time = t0.elapsed();
+    let (mut got, mut ages) = (Vec::new(), Vec::new());
+    let end = Instant::now() + Duration::from_secs(5);
+    while got.len() < n && Instant::now() < end {
+        let Some(l) = sub.try_line("MSG") else {
+            tokio::time::sleep(Duration::from_millis(5)).await;
+            continue;
+        };
+        let m: serde_json::Value = serde_json::from_str(&l).unwrap();
+        assert_eq!(m["width"], w);
+        assert_eq!(m["height"], h);
+        assert_eq!(m["encoding"], "rgb8");
+        assert_eq!(m["step"], w * 3);
+        assert_eq!(m["frame_id"], "camera");
+        let sha = m["sha256"].as_str().unwrap();
+        if sha == warm_sha {
+            continue; // a late warm-up frame
+        }
+        let i = *sent
+            .get(sha)
+            .unwrap_or_else(|| panic!("image not as sent: {l}"));
+        got.push(i);
+        ages.push(m["age_ms"].as_f64().unwrap_or(f64::NAN));
+    }
+    ages.sort_by(f64::total_cmp);
+    let snap = gw.bridges()[0].counters.snapshot();
+    eprintln!(
+        "images {w}x{h} rgb8 at {hz} Hz: sent {n} in {send_time:?}, received {} intact, \
+         gateway drops {}, age p50 {:.1} ms p99 {:.1} ms max {:.1} ms; inside the gateway \
+         mean {:?} max {:?}",
+        got.len(),
+        snap.drops,
+        ages.get(ages.len() / 2).copied().unwrap_or(f64::NAN),
+        ages.get(ages.len() * 99 / 100).copied().unwrap_or(f64::NAN),
+        ages.last().copied().unwrap_or(f64::NAN),
+        snap.latency_mean,
+        snap.latency_max
+    );
+    gw.shutdown().await;
+    stop.shutdown();
+    Run { sent: n, got, ages }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn rgb8_images_at_30_hz_arrive_intact() {
+    let Some(venv) = common::venv_or_skip("rgb8_images_at_30_hz_arrive_intact") else {
+        return;
+    };
+    let r = stream(&venv, 15, 640, 480, 30.0, 60).await;
+    assert!(
+        r.got.windows(2).all(|p| p[0] < p[1]),
+        "in order: {:?}",
+        r.got
+    );
+    if cfg!(debug_assertions) {
+        // Unoptimized RustDDS (256-byte fragments, ~3600 per frame) and Bottle codecs cannot
+        // keep 30 Hz of 640x480; the rate is checked in optimized builds.
+        eprintln!(
+            "*** debug build: integrity and order checked; the 30 Hz rate needs --release ***"
+        );
+        assert!(!r.got.is_empty(), "no image arrived");
+    } else {
+        assert!(
+            r.got.len() >= r.sent * 9 / 10,
+            "only {} of {} images arrived",
+            r.got.len(),
+            r.sent
+        );
+    }
+}
+
+/// The benchmark of the issue: 1280x720 rgb8 at 60 fps end to end (a measurement: run
+/// with `--release --ignored --nocapture`).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+#[ignore = "measurement; run explicitly with --release"]
+async fn rgb8_720p_at_60_hz() {
+    let Some(venv) = common::venv_or_skip("rgb8_720p_at_60_hz") else {
+        return;
+    };
+    let r = stream(&venv, 18, 1280, 720, 60.0, 300).await;
+    eprintln!(
+        "720p60: {} of {} arrived ({} dropped), age p50 {:.1} ms",
+        r.got.len(),
+        r.sent,
+        r.sent - r.got.len(),
+        r.ages.get(r.ages.len() / 2).copied().unwrap_or(f64::NAN)
+    );
+    assert!(!r.got.is_empty());
+}

@@ -1,0 +1,161 @@
+//! The `yarp-ros2-gateway` program end to end: embedded name server, startup table,
+//! bridging and /diagnostics, against rclpy (run under netns-run). Domain index: 9.
+
+mod common;
+
+use common::{Peer, T};
+use std::process::Command;
+use std::time::Duration;
+use yarp_net::nameserver::NameClient;
+use yarp_net::port::Port;
+use yarp_proto::Bottle;
+
+const MAPPING: &str = r#"
+[[topic]]
+name = "count"
+direction = "yarp_to_ros"
+yarp_port = "/gw/count:i"
+ros_topic = "/count"
+ros_type = "std_msgs/msg/Int32"
+"#;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn program_bridges_and_reports_diagnostics() {
+    let Some(venv) = common::venv_or_skip("program_bridges_and_reports_diagnostics") else {
+        return;
+    };
+    let domain = common::domain_id(9);
+    let dir = std::env::temp_dir().join(format!("yarp-ros2-gateway-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("m.toml");
+    std::fs::write(&file, MAPPING).unwrap();
+    let ns_port = {
+        let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        l.local_addr().unwrap().port()
+    };
+    let ns_addr = format!("127.0.0.1:{ns_port}");
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_yarp-ros2-gateway"));
+    cmd.args(["--mappings", file.to_str().unwrap()])
+        .args(["--domain-id", &domain.to_string()])
+        .args(["--network", "127.0.0.1"])
+        .args([
+            "--name-server",
+            &ns_addr,
+            "--embedded-name-server",
+            &ns_addr,
+        ])
+        .args(["--diagnostics-period", "0.2"])
+        .env("YARP_CONFIG_HOME", &dir)
+        .env("ROS_DISTRO", "kilted");
+    let gw = Peer::spawn(cmd, "yarp-ros2-gateway");
+    let banner = gw.expect_async("yarp-ros2-gateway: ROS domain", T).await;
+    assert!(banner.contains(&format!("{domain},")), "{banner}");
+    let row = gw.expect_async("count", T).await;
+    assert!(
+        row.contains("/gw/count:i") && row.contains("/count"),
+        "{row}"
+    );
+    assert!(dir.join("yarp.conf").exists(), "first run writes yarp.conf");
+
+    let diag = Peer::start(
+        &venv,
+        domain,
+        &[
+            "sub",
+            "diagnostic_msgs/msg/DiagnosticArray",
+            "/diagnostics",
+            "--count",
+            "1000",
+        ],
+    );
+    let sub = Peer::start(&venv, domain, &["sub", "std_msgs/msg/Int32", "/count"]);
+    sub.expect_async("READY", T).await;
+    let ns = NameClient::new(ns_addr.parse().unwrap()).with_timeout(T);
+    let w = Port::open("/test/count:o", ns.clone()).await.unwrap();
+    w.connect("/gw/count:i", None).await.unwrap();
+    let got = common::repeat_until(
+        "the count on ROS",
+        Duration::from_millis(50),
+        async || {
+            w.write(&Bottle::from_text("5")).await;
+        },
+        || sub.try_line("MSG"),
+    )
+    .await;
+    assert_eq!(got, r#"{"data": 5}"#);
+
+    // The diagnostics soon count the forwarded messages.
+    let end = std::time::Instant::now() + T;
+    loop {
+        let line = diag.expect_async("MSG", T).await;
+        let m: serde_json::Value = serde_json::from_str(&line).unwrap();
+        let st = &m["status"][0];
+        assert_eq!(st["name"], "yarp-ros2-gateway: count");
+        let messages = st["values"][0]["value"]
+            .as_str()
+            .unwrap()
+            .parse::<u64>()
+            .unwrap();
+        if messages >= 1 {
+            break;
+        }
+        assert!(
+            std::time::Instant::now() < end,
+            "diagnostics never counted: {line}"
+        );
+    }
+
+    // The same counters as Bottles on the YARP diagnostics port.
+    let r = yarp_net::buffered::BufferedPort::open("/test/diag:i", ns.clone())
+        .await
+        .unwrap();
+    yarp_net::network::connect(
+        &ns,
+        "/yarp_ros2_gateway/diagnostics:o",
+        "/test/diag:i",
+        None,
+    )
+    .await
+    .unwrap();
+    let b = tokio::time::timeout(T, r.read())
+        .await
+        .unwrap()
+        .unwrap()
+        .bottle;
+    let row = b
+        .get(0)
+        .and_then(|v| v.as_list())
+        .expect("one row per mapping");
+    assert_eq!(row.get(0).and_then(|v| v.as_str()), Some("count"), "{b}");
+    assert!(row.get(1).and_then(|v| v.as_i64()).unwrap() >= 1, "{b}");
+    r.close().await;
+
+    // SIGINT stops it cleanly (unregistering its ports).
+    let ok = Command::new("kill")
+        .args(["-INT", &gw.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(ok.success());
+    assert!(gw.finish(T), "exits with success after SIGINT");
+    w.close().await;
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn check_mode_reports_mapping_errors_with_file_entry_and_key() {
+    let dir = std::env::temp_dir().join(format!("yarp-ros2-gateway-check-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("bad.toml");
+    std::fs::write(&file, MAPPING.replace("ros_type", "ros_typ")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_yarp-ros2-gateway"))
+        .args(["--check", "--mappings", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.toml: entry topic[0] \"count\": key `ros_typ`"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
