@@ -152,8 +152,12 @@ pub type Factory = fn() -> Box<dyn DeviceDriver>;
 const FAMILIES: &[&[(&str, Factory)]] = &[
     crate::fake_motion_control::DRIVERS,
     crate::controlboard::DRIVERS,
+    crate::remote_controlboard::DRIVERS,
+    crate::remapper::DRIVERS,
     crate::framegrabber::DRIVERS,
     crate::sensors::DRIVERS,
+    crate::bundler::DRIVERS,
+    crate::icub::DRIVERS,
 ];
 
 fn drivers() -> impl Iterator<Item = &'static (&'static str, Factory)> {

@@ -61,5 +61,5 @@ async fn text_session_get_axes() {
     let got = read_until(&mut s, b"[ok]\r\n").await;
     let line = String::from_utf8_lossy(&got);
     assert!(line.starts_with("[is] [axes] 4 [tsta] 0 "), "{line}");
-    nws.close();
+    nws.close().await;
 }

@@ -4,92 +4,36 @@
 //! says SKIPPED loudly and passes. Run under netns-run.
 
 use std::io::{Read, Write};
-use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::OnceLock;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use yarp_devices::PolyDriver;
-use yarp_net::nameserver::NameServer;
+use yarp_interop_tests::{cpp_program, name_server, Reaped};
 use yarp_proto::Property;
 
 const WAIT: Duration = Duration::from_secs(10);
 
-/// The real C++ `yarp` program (pip installs a Python wrapper beside it).
-fn cpp_yarp() -> Option<PathBuf> {
-    let mut dirs = Vec::new();
-    if let Some(d) = std::env::var_os("YARP_CPP_BIN") {
-        dirs.push(PathBuf::from(d));
-    }
-    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../.venv-yarp");
-    if let Ok(libs) = std::fs::read_dir(venv.join("lib")) {
-        for d in libs.flatten() {
-            dirs.push(d.path().join("site-packages/yarp/bin"));
-        }
-    }
-    dirs.push(venv.join("bin"));
-    dirs.into_iter()
-        .map(|d| d.join("yarp"))
-        .find(|p| p.is_file())
-}
-
-/// Kills and reaps the child when dropped.
-struct Reaped(Child);
-impl Drop for Reaped {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-fn name_server() -> SocketAddr {
-    static NS: OnceLock<(SocketAddr, tempfile::TempDir)> = OnceLock::new();
-    NS.get_or_init(|| {
-        let dir = tempfile::tempdir().expect("temp dir");
-        std::env::set_var("YARP_CONFIG_HOME", dir.path());
-        let addr = yarp_devices::runtime::block_on(async {
-            let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
-                .await
-                .expect("bind name server");
-            let addr = ns.local_addr();
-            tokio::spawn(ns.serve());
-            addr
-        });
-        yarp_net::network::write_conf("127.0.0.1", addr.port()).expect("yarp.conf");
-        (addr, dir)
-    })
-    .0
-}
-
-fn recorded_rpc() -> Option<Vec<(String, Vec<String>)>> {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../shared/yarp-vectors/imu.jsonl"
-    );
-    let text = std::fs::read_to_string(path).ok()?;
-    Some(
-        text.lines()
-            .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-            .filter(|r| r["kind"] == "yarp_rpc")
-            .map(|r| {
-                let lines = r["stdout_lines"]
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .map(|l| l.as_str().unwrap().to_string())
-                    .collect();
-                (r["text_in"].as_str().unwrap().to_string(), lines)
-            })
-            .collect(),
-    )
+fn recorded_rpc() -> Vec<(String, Vec<String>)> {
+    yarp_interop_tests::load_records("imu.jsonl")
+        .into_iter()
+        .filter(|r| r["kind"] == "yarp_rpc")
+        .map(|r| {
+            let lines = r["stdout_lines"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|l| l.as_str().unwrap().to_string())
+                .collect();
+            (r["text_in"].as_str().unwrap().to_string(), lines)
+        })
+        .collect()
 }
 
 #[test]
 fn cpp_yarp_rpc_prints_what_it_printed_against_cpp() {
-    let (Some(yarp), Some(cases)) = (cpp_yarp(), recorded_rpc()) else {
-        eprintln!("SKIPPED: C++ YARP not found (or no imu.jsonl): sensors_cpp");
+    let Some(yarp) = cpp_program("sensors_cpp", "yarp") else {
         return;
     };
+    let cases = recorded_rpc();
     name_server();
     let mut server = PolyDriver::open(
         &Property::from_config_text(

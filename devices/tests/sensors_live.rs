@@ -3,46 +3,16 @@
 //! back; the stream checked on the wire against the C++ recording's layout; bad RPC
 //! requests answered `[fail]` without harm. Every wait is bounded.
 
-use std::net::SocketAddr;
-use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::{TcpListener, TcpStream};
 use yarp_devices::sensors::{MasStatus, SensorStreamingData};
 use yarp_devices::{DeviceError, PolyDriver};
-use yarp_net::nameserver::{NameClient, NameServer};
+use yarp_interop_tests::{name_client, wait_for, T};
 use yarp_net::rpc::RpcClient;
 use yarp_proto::nameserver::RegisterRequest;
 use yarp_proto::wire::{Carrier, PortCommand};
 use yarp_proto::{Bottle, Property, Stamp, Vocab32};
-
-/// How long any single wait may take.
-const T: Duration = Duration::from_secs(10);
-
-struct Net {
-    addr: SocketAddr,
-    _dir: tempfile::TempDir,
-}
-
-/// One name server per test process, announced through a private yarp.conf.
-fn name_client() -> NameClient {
-    static NET: OnceLock<Net> = OnceLock::new();
-    let net = NET.get_or_init(|| {
-        let dir = tempfile::tempdir().expect("temp dir");
-        std::env::set_var("YARP_CONFIG_HOME", dir.path());
-        let addr = yarp_devices::runtime::block_on(async {
-            let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
-                .await
-                .expect("bind name server");
-            let addr = ns.local_addr();
-            tokio::spawn(ns.serve());
-            addr
-        });
-        yarp_net::network::write_conf("127.0.0.1", addr.port()).expect("write yarp.conf");
-        Net { addr, _dir: dir }
-    });
-    NameClient::new(net.addr).with_timeout(T)
-}
 
 fn run<F>(fut: F) -> F::Output
 where
@@ -52,17 +22,6 @@ where
     yarp_devices::runtime::block_on(async move {
         tokio::time::timeout(T, fut).await.expect("timed out")
     })
-}
-
-fn wait_for<R>(what: &str, mut f: impl FnMut() -> Option<R>) -> R {
-    let start = Instant::now();
-    loop {
-        if let Some(r) = f() {
-            return r;
-        }
-        assert!(start.elapsed() < T, "timed out waiting for {what}");
-        std::thread::sleep(Duration::from_millis(10));
-    }
 }
 
 fn open(text: &str) -> PolyDriver {

@@ -12,24 +12,9 @@ use yarp_devices::DeviceDriver;
 use yarp_proto::wire::{ack, PortCommand};
 use yarp_proto::{Bottle, Property, Stamp};
 
-/// `../shared/yarp-vectors` beside the repository (or `YARP_VECTORS_DIR`).
+/// The recorded IMU vectors (panics clearly when `../shared` is missing).
 fn records() -> Option<Vec<Json>> {
-    let dir = std::env::var("YARP_VECTORS_DIR").unwrap_or_else(|_| {
-        concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/yarp-vectors").to_string()
-    });
-    let path = format!("{dir}/imu.jsonl");
-    match std::fs::read_to_string(&path) {
-        Ok(t) => Some(
-            t.lines()
-                .filter(|l| !l.trim().is_empty())
-                .map(|l| serde_json::from_str(l).expect("valid json"))
-                .collect(),
-        ),
-        Err(e) => {
-            eprintln!("SKIPPED: {path}: {e}");
-            None
-        }
-    }
+    Some(yarp_interop_tests::load_records("imu.jsonl"))
 }
 
 fn hex_of(v: &Json) -> Vec<u8> {

@@ -1,7 +1,16 @@
-//! Shared helpers for the integration tests: locating and loading the recorded C++ YARP
-//! vectors in `../shared/yarp-vectors/`.
+//! Shared helpers for the tests of every crate: the recorded C++ YARP vectors in
+//! `../shared/yarp-vectors/`, a name server per test process, the C++ YARP peer, bounded
+//! waits and child processes that are always reaped.
 
-use std::path::PathBuf;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::process::Child;
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+use yarp_net::nameserver::{NameClient, NameServer};
+
+/// How long any single wait in a test may take.
+pub const T: Duration = Duration::from_secs(10);
 
 /// Directory of the recorded vectors: `$YARP_VECTORS_DIR`, else `../shared/yarp-vectors`
 /// beside the repository. Panics with a clear message if missing: these tests must never
@@ -46,4 +55,101 @@ pub fn hex_field(rec: &serde_json::Value, key: &str) -> Vec<u8> {
 /// A record's `id`, for messages.
 pub fn id(rec: &serde_json::Value) -> &str {
     rec["id"].as_str().unwrap_or("?")
+}
+
+/// Polls `f` every 10 ms until it gives `Some`, at most [`T`] (then panics naming `what`).
+pub fn wait_for<R>(what: &str, mut f: impl FnMut() -> Option<R>) -> R {
+    let start = Instant::now();
+    loop {
+        if let Some(r) = f() {
+            return r;
+        }
+        assert!(start.elapsed() < T, "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+struct Net {
+    addr: SocketAddr,
+    _dir: tempfile::TempDir,
+    _rt: tokio::runtime::Runtime,
+}
+
+/// The address of this test process's name server, started on first use on 127.0.0.1
+/// and announced through a private `yarp.conf` (`YARP_CONFIG_HOME` points at a temp dir,
+/// so child processes and `yarp_net::network::name_client()` find it too).
+pub fn name_server() -> SocketAddr {
+    static NET: OnceLock<Net> = OnceLock::new();
+    NET.get_or_init(|| {
+        let dir = tempfile::tempdir().expect("temp dir");
+        std::env::set_var("YARP_CONFIG_HOME", dir.path());
+        let rt = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(1)
+            .enable_all()
+            .build()
+            .expect("name-server runtime");
+        let addr = rt.block_on(async {
+            let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
+                .await
+                .expect("bind name server (run under netns-run)");
+            let addr = ns.local_addr();
+            tokio::spawn(ns.serve());
+            addr
+        });
+        yarp_net::network::write_conf("127.0.0.1", addr.port()).expect("write yarp.conf");
+        Net {
+            addr,
+            _dir: dir,
+            _rt: rt,
+        }
+    })
+    .addr
+}
+
+/// A client of [`name_server`] (starting it if needed).
+pub fn name_client() -> NameClient {
+    NameClient::new(name_server()).with_timeout(T)
+}
+
+/// The directory holding the real C++ YARP programs: `$YARP_CPP_BIN`, else the pip-built
+/// peer in `.venv-yarp` (pip puts Python wrappers in `bin/` that do not forward signals,
+/// so the real binaries in `site-packages/yarp/bin` come first).
+pub fn cpp_bin_dir() -> Option<PathBuf> {
+    let mut dirs = Vec::new();
+    if let Some(d) = std::env::var_os("YARP_CPP_BIN") {
+        dirs.push(PathBuf::from(d));
+    }
+    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../.venv-yarp");
+    if let Ok(libs) = std::fs::read_dir(venv.join("lib")) {
+        for d in libs.flatten() {
+            dirs.push(d.path().join("site-packages/yarp/bin"));
+        }
+    }
+    dirs.push(venv.join("bin"));
+    dirs.into_iter().find(|d| d.join("yarp").is_file())
+}
+
+/// A C++ YARP program (`yarp`, `yarpdev`, ...), or `None` after saying loudly that
+/// `test` is skipped.
+pub fn cpp_program(test: &str, name: &str) -> Option<PathBuf> {
+    match cpp_bin_dir().map(|d| d.join(name)).filter(|p| p.is_file()) {
+        Some(p) => Some(p),
+        None => {
+            eprintln!(
+                "SKIPPED: {test}: C++ YARP `{name}` not found (set YARP_CPP_BIN or run \
+                 tests/peers/install-cpp-yarp.sh)"
+            );
+            None
+        }
+    }
+}
+
+/// A child process killed and reaped when dropped, so no test leaves one behind.
+pub struct Reaped(pub Child);
+
+impl Drop for Reaped {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
 }

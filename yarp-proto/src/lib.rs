@@ -17,6 +17,7 @@
 pub mod binary;
 pub mod contact;
 pub mod error;
+pub mod image;
 pub mod nameserver;
 pub mod number;
 pub mod port_admin;

@@ -1,16 +1,17 @@
-//! `controlBoard_nws_yarp`: the control-board RPC protocol (C++ `RPCMessagesParser`)
-//! as a pure function, `handle_rpc`, plus a tokio server on `/<name>/rpc:i`.
+//! The control-board RPC protocol served on `/<name>/rpc:i` (C++ `RPCMessagesParser`),
+//! as a pure function of the command and the device: `handle_rpc`.
 //!
 //! Replies: `set` commands answer `[ok]`/`[fail]`; most `get` commands answer
 //! `[is] <echoed token> <value> [tsta] <count> <time> [ok]`; commands shorter than two
 //! elements answer `[nak]`; anything not understood (or failing) answers `[fail]`.
 
-use crate::driver::{DeviceDriver, PolyDriver};
+use crate::driver::DeviceDriver;
 use crate::vocabs::*;
-use std::sync::{Arc, Mutex};
 use std::time::{SystemTime, UNIX_EPOCH};
-use yarp_net::port::{Port, PortError};
 use yarp_proto::{Bottle, Stamp, Value, Vocab32};
+
+/// The control-board protocol version this server speaks (`[get] [prot]`), as C++ 3.12.
+pub const PROTOCOL_VERSION_NUMBER: (i32, i32, i32) = (1, 9, 0);
 
 /// The stamp appended to `get` replies; its count increases with each one.
 #[derive(Debug, Default, Clone)]
@@ -87,16 +88,30 @@ fn stamp_into(resp: &mut Bottle, stamp: &mut RpcStamp) {
 }
 
 /// Serves one control-board RPC command against `dev` and returns the reply.
+///
+/// Malformed commands (wrong arity or types) and commands the device cannot serve get
+/// `[fail]` (or `[nak]` when shorter than two elements), as in C++, plus a log line.
 pub fn handle_rpc(cmd: &Bottle, dev: &mut dyn DeviceDriver, stamp: &mut RpcStamp) -> Bottle {
     let mut resp = Bottle::new();
     if cmd.len() < 2 {
+        tracing::warn!("controlBoard rpc: `{cmd}` is too short: replying [nak]");
         resp.push(Vocab32(NAK));
+        return resp;
+    }
+    if vocab(cmd.get(0)) == GET && vocab(cmd.get(1)) == PROTOCOL_VERSION {
+        let (major, minor, tweak) = PROTOCOL_VERSION_NUMBER;
+        resp.push(Vocab32(PROTOCOL_VERSION))
+            .push(major)
+            .push(minor)
+            .push(tweak)
+            .push(Vocab32(OK));
         return resp;
     }
     let ok = dispatch(cmd, dev, stamp, &mut resp).unwrap_or(false);
     if ok {
         resp.push(Vocab32(OK));
     } else {
+        tracing::warn!("controlBoard rpc: cannot serve `{cmd}` (unknown, malformed or refused by the device): replying [fail]");
         resp.clear();
         resp.push(Vocab32(FAILED));
     }
@@ -492,73 +507,5 @@ fn pid(cmd: &Bottle, action: i32, dev: &mut dyn DeviceDriver, resp: &mut Bottle)
             Some(true)
         }
         _ => Some(false),
-    }
-}
-
-/// Drivers of this family, by C++ name.
-pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] = &[];
-
-/// A running `controlBoard_nws_yarp` RPC server on `/<name>/rpc:i`.
-pub struct ControlBoardNws {
-    rpc_name: String,
-    contact: yarp_proto::Contact,
-    task: tokio::task::JoinHandle<()>,
-}
-
-impl ControlBoardNws {
-    /// Opens `/<name>/rpc:i` (name given with or without leading `/`) and serves the
-    /// control-board protocol for `device`.
-    pub async fn open(
-        name: &str,
-        ns: yarp_net::nameserver::NameClient,
-        device: Arc<Mutex<PolyDriver>>,
-    ) -> Result<ControlBoardNws, PortError> {
-        let base = name.trim_end_matches('/');
-        let rpc_name = if base.starts_with('/') {
-            format!("{base}/rpc:i")
-        } else {
-            format!("/{base}/rpc:i")
-        };
-        let port = Port::open(&rpc_name, ns).await?;
-        let contact = port.contact().clone();
-        let task = tokio::spawn(async move {
-            let mut stamp = RpcStamp::new();
-            while let Some(mut msg) = port.read().await {
-                let cmd = match msg.bottle() {
-                    Ok(b) => b,
-                    Err(e) => {
-                        tracing::debug!("controlBoard rpc: undecodable message: {e}");
-                        continue;
-                    }
-                };
-                let reply = {
-                    let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
-                    handle_rpc(&cmd, pd.device(), &mut stamp)
-                };
-                if msg.wants_reply() {
-                    msg.reply(reply);
-                }
-            }
-        });
-        Ok(ControlBoardNws {
-            rpc_name,
-            contact,
-            task,
-        })
-    }
-
-    /// The RPC port's name.
-    pub fn rpc_name(&self) -> &str {
-        &self.rpc_name
-    }
-
-    /// Where the RPC port listens.
-    pub fn contact(&self) -> &yarp_proto::Contact {
-        &self.contact
-    }
-
-    /// Stops serving (the port closes with the task).
-    pub fn close(self) {
-        self.task.abort();
     }
 }

@@ -1,0 +1,19 @@
+//! The control-board network wrapper `controlBoard_nws_yarp`, wire-compatible with C++
+//! YARP 3.12: the RPC protocol (`rpc`), streaming commands (`streaming`), the published
+//! state (`state`) and the ports and tasks that serve them (`nws`).
+
+mod nws;
+mod rpc;
+mod state;
+mod streaming;
+
+pub use nws::{port_prefix, ControlBoardNws, ControlBoardNwsDevice, DEFAULT_PERIOD};
+pub use rpc::{handle_rpc, RpcStamp, PROTOCOL_VERSION_NUMBER};
+pub use state::{
+    envelope_time, positions_bottle, positions_from_bottle, Channel, JointData, StateError,
+};
+pub use streaming::{handle_command, CommandError, CommandMessage};
+
+/// Drivers of this family, by C++ name.
+pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] =
+    &[(nws::NAME, || Box::new(ControlBoardNwsDevice::new()))];

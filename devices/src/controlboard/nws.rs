@@ -1,0 +1,440 @@
+//! `controlBoard_nws_yarp`: the four ports of a control-board network wrapper and the
+//! tasks serving them (the thin tokio layer over `rpc`, `streaming` and `state`).
+//!
+//! * `/<name>/rpc:i` — RPC (`handle_rpc`);
+//! * `/<name>/command:i` — streaming commands (`handle_command`), no replies;
+//! * `/<name>/state:o` — joint positions every `period`, with an envelope;
+//! * `/<name>/stateExt:o` — the whole `jointData`, same envelope.
+//!
+//! As in C++, the ports open first and the device comes later through `attach`;
+//! publishing starts at attach and stops at detach.
+
+use super::rpc::{handle_rpc, RpcStamp};
+use super::state::{envelope_time, positions_bottle, JointData};
+use super::streaming::{handle_command, CommandMessage};
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::error::{DevResult, DeviceError};
+use crate::runtime;
+use crate::vocabs::FAILED;
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::Duration;
+use tokio::runtime::Handle;
+use tokio::task::JoinHandle;
+use yarp_net::nameserver::NameClient;
+use yarp_net::port::{Port, PortError};
+use yarp_proto::{Bottle, Contact, Stamp, Vocab32};
+
+/// The C++ device name.
+pub const NAME: &str = "controlBoard_nws_yarp";
+/// Publishing period when none is configured (C++ default 0.02 s).
+pub const DEFAULT_PERIOD: Duration = Duration::from_millis(20);
+
+/// The attached device and its joint count.
+#[derive(Clone)]
+struct Attached {
+    device: SharedDevice,
+    axes: usize,
+}
+
+type Slot = Arc<Mutex<Option<Attached>>>;
+
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    // the guarded data stays consistent even if a holder panicked
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The port prefix C++ derives from `name`: a leading `/` added if missing.
+pub fn port_prefix(name: &str) -> String {
+    let base = name.trim_end_matches('/');
+    if base.starts_with('/') {
+        base.to_string()
+    } else {
+        format!("/{base}")
+    }
+}
+
+/// A running `controlBoard_nws_yarp` server.
+pub struct ControlBoardNws {
+    prefix: String,
+    rpc_name: String,
+    rpc_contact: Contact,
+    /// rpc:i, command:i, state:o, stateExt:o
+    ports: Vec<Arc<Port>>,
+    slot: Slot,
+    period: Duration,
+    handle: Handle,
+    tasks: Vec<JoinHandle<()>>,
+    publisher: Option<JoinHandle<()>>,
+}
+
+impl ControlBoardNws {
+    /// Opens the ports under `name` and serves `device`, publishing every 20 ms
+    /// (the C++ default period).
+    pub async fn open(
+        name: &str,
+        ns: NameClient,
+        device: SharedDevice,
+    ) -> Result<ControlBoardNws, PortError> {
+        let mut nws = Self::open_ports(name, ns, DEFAULT_PERIOD).await?;
+        if let Err(e) = nws.attach(device) {
+            // the caller asked for a served device; an unusable one is reported on rpc
+            tracing::warn!("{NAME} {}: cannot attach: {e}", nws.prefix);
+        }
+        Ok(nws)
+    }
+
+    /// Opens the four ports under `name` (with or without a leading `/`); nothing is
+    /// served until [`ControlBoardNws::attach`] (RPCs answer `[fail]`).
+    pub async fn open_ports(
+        name: &str,
+        ns: NameClient,
+        period: Duration,
+    ) -> Result<ControlBoardNws, PortError> {
+        let prefix = port_prefix(name);
+        let rpc_name = format!("{prefix}/rpc:i");
+        let rpc = Arc::new(Port::open(&rpc_name, ns.clone()).await?);
+        let command = Arc::new(Port::open(&format!("{prefix}/command:i"), ns.clone()).await?);
+        let state = Arc::new(Port::open(&format!("{prefix}/state:o"), ns.clone()).await?);
+        let state_ext = Arc::new(Port::open(&format!("{prefix}/stateExt:o"), ns).await?);
+        let slot: Slot = Arc::new(Mutex::new(None));
+        let tasks = vec![
+            tokio::spawn(serve_rpc(rpc.clone(), slot.clone())),
+            tokio::spawn(serve_commands(command.clone(), slot.clone())),
+        ];
+        Ok(ControlBoardNws {
+            rpc_contact: rpc.contact().clone(),
+            rpc_name,
+            prefix,
+            ports: vec![rpc, command, state, state_ext],
+            slot,
+            period,
+            handle: Handle::current(),
+            tasks,
+            publisher: None,
+        })
+    }
+
+    /// The port prefix (`/icub/left_arm`).
+    pub fn prefix(&self) -> &str {
+        &self.prefix
+    }
+
+    /// The RPC port's name.
+    pub fn rpc_name(&self) -> &str {
+        &self.rpc_name
+    }
+
+    /// Where the RPC port listens.
+    pub fn contact(&self) -> &Contact {
+        &self.rpc_contact
+    }
+
+    /// The publishing period.
+    pub fn period(&self) -> Duration {
+        self.period
+    }
+
+    /// Serves `device` and starts publishing its state; fails if a device is attached
+    /// already or the device reports no joints.
+    pub fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
+        if lock(&self.slot).is_some() {
+            return Err(DeviceError::Unsupported(
+                "controlBoard_nws_yarp already serves a device (detach it first)",
+            ));
+        }
+        let axes = {
+            let mut pd = lock(&device);
+            axes_of(pd.device())?
+        };
+        *lock(&self.slot) = Some(Attached { device, axes });
+        self.publisher = Some(self.handle.spawn(publish(
+            self.slot.clone(),
+            self.ports[2].clone(),
+            self.ports[3].clone(),
+            self.period,
+        )));
+        Ok(())
+    }
+
+    /// Stops serving the device (the ports stay open).
+    pub fn detach(&mut self) {
+        if let Some(p) = self.publisher.take() {
+            p.abort();
+        }
+        *lock(&self.slot) = None;
+    }
+
+    /// Stops serving and closes the ports (unregistering them).
+    pub async fn close(mut self) {
+        self.detach();
+        for t in self.tasks.drain(..) {
+            t.abort();
+            let _ = t.await;
+        }
+        for p in std::mem::take(&mut self.ports) {
+            if let Ok(port) = Arc::try_unwrap(p) {
+                port.close().await;
+            }
+        }
+    }
+}
+
+impl Drop for ControlBoardNws {
+    fn drop(&mut self) {
+        if let Some(p) = self.publisher.take() {
+            p.abort();
+        }
+        for t in &self.tasks {
+            t.abort();
+        }
+    }
+}
+
+/// The joint count of a device, from the first motor interface it has (as C++).
+fn axes_of(dev: &mut dyn DeviceDriver) -> DevResult<usize> {
+    let n = if let Some(e) = dev.as_encoders() {
+        e.get_axes()?
+    } else if let Some(p) = dev.as_position_control() {
+        p.get_axes()?
+    } else if let Some(v) = dev.as_velocity_control() {
+        v.get_axes()?
+    } else if let Some(t) = dev.as_torque_control() {
+        t.get_axes()?
+    } else {
+        return Err(DeviceError::Unsupported(
+            "controlBoard_nws_yarp needs a device with encoders, position, velocity or torque control",
+        ));
+    };
+    if n == 0 {
+        return Err(DeviceError::Unsupported(
+            "controlBoard_nws_yarp: the attached device has no joints",
+        ));
+    }
+    Ok(n)
+}
+
+/// Runs a device call from a serving task. Device calls may block (a
+/// `remote_controlboard` attached here waits for its own RPC on the device runtime), so
+/// on a multi-thread runtime the worker is handed over to other tasks meanwhile.
+fn device_call<R>(f: impl FnOnce() -> R) -> R {
+    let multi = Handle::try_current()
+        .is_ok_and(|h| h.runtime_flavor() == tokio::runtime::RuntimeFlavor::MultiThread);
+    if multi {
+        tokio::task::block_in_place(f)
+    } else {
+        f()
+    }
+}
+
+fn attached(slot: &Slot) -> Option<Attached> {
+    lock(slot).clone()
+}
+
+async fn serve_rpc(port: Arc<Port>, slot: Slot) {
+    let mut stamp = RpcStamp::new();
+    while let Some(mut msg) = port.read().await {
+        let reply = match msg.bottle() {
+            Err(e) => {
+                tracing::warn!(
+                    "{}: undecodable command from {}: {e}",
+                    port.name(),
+                    msg.from
+                );
+                fail()
+            }
+            Ok(cmd) => match attached(&slot) {
+                Some(a) => device_call(|| handle_rpc(&cmd, lock(&a.device).device(), &mut stamp)),
+                None => {
+                    tracing::warn!("{}: `{cmd}` but no device is attached", port.name());
+                    fail()
+                }
+            },
+        };
+        msg.reply(reply);
+    }
+}
+
+fn fail() -> Bottle {
+    let mut b = Bottle::new();
+    b.push(Vocab32(FAILED));
+    b
+}
+
+async fn serve_commands(port: Arc<Port>, slot: Slot) {
+    while let Some(msg) = port.read().await {
+        let cmd = msg
+            .bottle()
+            .map_err(|e| e.to_string())
+            .and_then(|b| CommandMessage::from_bottle(&b).map_err(|e| e.to_string()));
+        let result = match (cmd, attached(&slot)) {
+            (Err(e), _) => Err(e),
+            (Ok(_), None) => Err("no device is attached".to_string()),
+            (Ok(cmd), Some(a)) => {
+                device_call(|| handle_command(&cmd, lock(&a.device).device(), a.axes))
+                    .map_err(|e| e.to_string())
+            }
+        };
+        if let Err(e) = result {
+            tracing::warn!(
+                "{}: streaming command from {} ignored: {e}",
+                port.name(),
+                msg.from
+            );
+        }
+    }
+}
+
+/// Publishes `state:o` and `stateExt:o` every `period` (C++ `ControlBoard_nws_yarp::run`).
+async fn publish(slot: Slot, state: Arc<Port>, state_ext: Arc<Port>, period: Duration) {
+    let mut tick = tokio::time::interval(period);
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+    let mut count: i32 = 0;
+    let mut warned = false;
+    loop {
+        tick.tick().await;
+        let Some(a) = attached(&slot) else { return };
+        let (to_state, to_ext) = (!state.outputs().is_empty(), !state_ext.outputs().is_empty());
+        if !to_state && !to_ext {
+            // nobody listens: keep the sequence going without reading the board
+            count = if count == i32::MAX { 0 } else { count + 1 };
+            continue;
+        }
+        let (data, times) = device_call(|| JointData::read(lock(&a.device).device(), a.axes));
+        // without encoder timestamps C++ averages its zero-initialised times
+        let time = if times.is_empty() {
+            Some(0.0)
+        } else {
+            envelope_time(&times)
+        };
+        let Some(time) = time else {
+            if !warned {
+                tracing::error!(
+                    "{}: encoder timestamps are not consistent; state not published",
+                    state.name()
+                );
+                warned = true;
+            }
+            continue;
+        };
+        let stamp = Stamp::new(count, time);
+        count = if count == i32::MAX { 0 } else { count + 1 };
+        if to_ext {
+            state_ext.write_nowait(&data.to_bottle(), Some(stamp));
+        }
+        if to_state {
+            state.write_nowait(&positions_bottle(&data.joint_position.values), Some(stamp));
+        }
+    }
+}
+
+/// `controlBoard_nws_yarp` as a registered device: `name` (port prefix, required) and
+/// `period` (seconds, a float as C++ requires, default 0.02); serves the device given
+/// by `attach` / `attach_all` (exactly one) or by `subdevice`.
+#[derive(Default)]
+pub struct ControlBoardNwsDevice {
+    server: Option<ControlBoardNws>,
+}
+
+impl ControlBoardNwsDevice {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The running server, once opened.
+    pub fn server(&self) -> Option<&ControlBoardNws> {
+        self.server.as_ref()
+    }
+
+    fn server_mut(&mut self) -> DevResult<&mut ControlBoardNws> {
+        self.server.as_mut().ok_or(DeviceError::NotOpen)
+    }
+}
+
+/// Reads `period` as C++ does: a float number of seconds, greater than zero.
+fn period_param(p: &Params) -> DevResult<Duration> {
+    let Some(v) = p.find("period") else {
+        return Ok(DEFAULT_PERIOD);
+    };
+    let bad = |expected| DeviceError::BadParam {
+        device: NAME.into(),
+        param: "period".into(),
+        expected,
+        got: v.to_string(),
+    };
+    if !v.is_float() {
+        return Err(bad(
+            "a float number of seconds such as 0.02 (C++ rejects integers)",
+        ));
+    }
+    match v.as_f64() {
+        Some(s) if s > 0.0 && s.is_finite() => Ok(Duration::from_secs_f64(s)),
+        _ => Err(bad("a period in seconds greater than 0")),
+    }
+}
+
+impl DeviceDriver for ControlBoardNwsDevice {
+    fn open(&mut self, config: &yarp_proto::Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let name = p.string("name")?.ok_or_else(|| p.missing("name"))?;
+        let period = period_param(&p)?;
+        let network = |e: String| DeviceError::BadParam {
+            device: NAME.into(),
+            param: "name".into(),
+            expected: "a port prefix that can be registered (is the name server running?)",
+            got: format!("{name}: {e}"),
+        };
+        let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
+        let prefix = name.clone();
+        let server = runtime::block_on(async move {
+            ControlBoardNws::open_ports(&prefix, ns, period)
+                .await
+                .map_err(|e| e.to_string())
+        })
+        .map_err(network)?;
+        if let Some(old) = self.server.replace(server) {
+            runtime::block_on(old.close());
+        }
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        if let Some(s) = self.server.take() {
+            runtime::block_on(s.close());
+        }
+        Ok(())
+    }
+
+    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
+        Some(self)
+    }
+
+    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
+        Some(self)
+    }
+}
+
+impl IWrapper for ControlBoardNwsDevice {
+    fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
+        self.server_mut()?.attach(device)
+    }
+
+    fn detach(&mut self) -> DevResult<()> {
+        self.server_mut()?.detach();
+        Ok(())
+    }
+}
+
+impl IMultipleWrapper for ControlBoardNwsDevice {
+    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
+        match devices {
+            [(_, d)] => self.attach(d.clone()),
+            _ => Err(DeviceError::Unsupported(
+                "controlBoard_nws_yarp attaches exactly one device (join several with controlboardremapper)",
+            )),
+        }
+    }
+
+    fn detach_all(&mut self) -> DevResult<()> {
+        IWrapper::detach(self)
+    }
+}

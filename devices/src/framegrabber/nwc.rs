@@ -1,0 +1,478 @@
+//! `frameGrabber_nwc_yarp`: a camera on the network, seen as a local device.
+//!
+//! Parameters (C++ 3.12): `remote` (the server's port prefix, e.g. `/grabber`), `local`
+//! (this client's prefix), `carrier` (for the image stream, default `fast_tcp`),
+//! `no_stream` (ask for each image over RPC instead of streaming).
+//!
+//! Ports: `<local>` receives the stream from `<remote>` (connected by the server's
+//! port, through its admin protocol, as C++ does); `<local>/rpc_client` talks to
+//! `<remote>/rpc`. `height`/`width`/`get_image` come from the last streamed image;
+//! controls and visual parameters are RPCs, built and read by the pure functions below.
+
+use super::image::{decode_image, Image};
+use super::protocol::*;
+use super::{CameraConfig, CameraDescriptor, IFrameGrabberControls, IFrameGrabberImage};
+use super::{IRgbVisualParams, PixelCode};
+use crate::driver::{DeviceDriver, Params};
+use crate::error::{DevResult, DeviceError};
+use crate::runtime;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use yarp_net::nameserver::NameClient;
+use yarp_net::port::{Incoming, Port};
+use yarp_proto::{Bottle, Property, Stamp, Value, Vocab32};
+
+const NAME: &str = "frameGrabber_nwc_yarp";
+/// How long an RPC to the server may take.
+pub const RPC_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// `[iface] [verb] [what] args...`, the form of every request the C++ client sends.
+pub fn request(iface: i32, verb: i32, what: i32, args: &[Value]) -> Bottle {
+    let mut b = Bottle::with_capacity(3 + args.len());
+    b.push(Vocab32(iface))
+        .push(Vocab32(verb))
+        .push(Vocab32(what));
+    for a in args {
+        b.push(a.clone());
+    }
+    b
+}
+
+fn refused(reply: &Bottle) -> bool {
+    matches!(reply.get(0), Some(Value::Vocab32(v)) if v.0 == FAILED || v.0 == NAK)
+        || reply.is_empty()
+}
+
+fn bad_reply(reply: &Bottle) -> DeviceError {
+    tracing::debug!("{NAME}: unexpected reply {reply}");
+    DeviceError::Unsupported("the remote frame grabber refused or gave an unexpected reply")
+}
+
+/// Element `i` of a reply as an int.
+pub fn reply_int(reply: &Bottle, i: usize) -> DevResult<i32> {
+    if refused(reply) {
+        return Err(bad_reply(reply));
+    }
+    reply
+        .get(i)
+        .and_then(Value::as_i32)
+        .ok_or_else(|| bad_reply(reply))
+}
+
+/// Element `i` of a reply as a float.
+pub fn reply_float(reply: &Bottle, i: usize) -> DevResult<f64> {
+    if refused(reply) {
+        return Err(bad_reply(reply));
+    }
+    reply
+        .get(i)
+        .and_then(Value::as_f64)
+        .ok_or_else(|| bad_reply(reply))
+}
+
+/// `[fgc] [camd] [is] <bus> "<description>"`.
+pub fn parse_camera_description(reply: &Bottle) -> DevResult<CameraDescriptor> {
+    Ok(CameraDescriptor {
+        bus_type: reply_int(reply, 3)?,
+        description: reply
+            .get(4)
+            .and_then(Value::as_str)
+            .unwrap_or_default()
+            .to_string(),
+    })
+}
+
+/// `[visr] [conf] [is] n (w h fps code)*n`, flattened.
+pub fn parse_configurations(reply: &Bottle) -> DevResult<Vec<CameraConfig>> {
+    let n = usize::try_from(reply_int(reply, 3)?).map_err(|_| bad_reply(reply))?;
+    if reply.len() < 4 + 4 * n {
+        return Err(bad_reply(reply));
+    }
+    (0..n)
+        .map(|k| {
+            let at = 4 + 4 * k;
+            Ok(CameraConfig {
+                width: reply_int(reply, at)?,
+                height: reply_int(reply, at + 1)?,
+                framerate: reply_float(reply, at + 2)?,
+                pixel_code: PixelCode(match reply.get(at + 3) {
+                    Some(Value::Vocab32(v)) => v.0,
+                    _ => reply_int(reply, at + 3)?,
+                }),
+            })
+        })
+        .collect()
+}
+
+/// The latest streamed image and its envelope.
+#[derive(Default)]
+struct Latest {
+    image: Option<Image>,
+    stamp: Option<Stamp>,
+}
+
+/// Reads one streamed message as an image.
+fn image_of(msg: &Incoming) -> Result<Image, String> {
+    if !msg.is_text && !msg.payload.is_empty() {
+        return decode_image(&msg.payload).map_err(|e| e.to_string());
+    }
+    let b = msg.shared_bottle().map_err(|e| e.to_string())?;
+    Image::from_bottle(&b).map_err(|e| e.to_string())
+}
+
+struct Client {
+    stream: Option<(Arc<Port>, tokio::task::JoinHandle<()>)>,
+    rpc: Arc<Port>,
+    latest: Arc<Mutex<Latest>>,
+    rejected: Arc<AtomicU64>,
+}
+
+impl Client {
+    async fn open(
+        ns: NameClient,
+        local: String,
+        remote: String,
+        carrier: String,
+        no_stream: bool,
+    ) -> Result<Client, String> {
+        let latest = Arc::new(Mutex::new(Latest::default()));
+        let rejected = Arc::new(AtomicU64::new(0));
+        let mut stream = None;
+        if !no_stream {
+            let port = Arc::new(
+                Port::open(&local, ns.clone())
+                    .await
+                    .map_err(|e| format!("{local}: {e}"))?,
+            );
+            let (ok, msg) = yarp_net::network::connect(&ns, &remote, &local, Some(&carrier))
+                .await
+                .map_err(|e| format!("connecting {remote} to {local}: {e}"))?;
+            if !ok {
+                return Err(format!("connecting {remote} to {local}: {msg}"));
+            }
+            let task = tokio::spawn(receive(port.clone(), latest.clone(), rejected.clone()));
+            stream = Some((port, task));
+        }
+        let rpc_name = format!("{local}/rpc_client");
+        let rpc = Port::open(&rpc_name, ns)
+            .await
+            .map_err(|e| format!("{rpc_name}: {e}"))?;
+        rpc.connect(&format!("{remote}/rpc"), None)
+            .await
+            .map_err(|e| format!("connecting {rpc_name} to {remote}/rpc: {e}"))?;
+        Ok(Client {
+            stream,
+            rpc: Arc::new(rpc),
+            latest,
+            rejected,
+        })
+    }
+
+    async fn close(self) {
+        if let Some((port, task)) = self.stream {
+            task.abort();
+            let _ = task.await;
+            if let Ok(p) = Arc::try_unwrap(port) {
+                p.close().await;
+            }
+        }
+        if let Ok(p) = Arc::try_unwrap(self.rpc) {
+            p.close().await;
+        }
+    }
+}
+
+async fn receive(port: Arc<Port>, latest: Arc<Mutex<Latest>>, rejected: Arc<AtomicU64>) {
+    while let Some(msg) = port.read().await {
+        match image_of(&msg) {
+            Ok(img) => {
+                let mut l = latest.lock().unwrap_or_else(|e| e.into_inner());
+                l.image = Some(img);
+                l.stamp = msg.stamp;
+            }
+            Err(e) => {
+                rejected.fetch_add(1, Ordering::Relaxed);
+                tracing::warn!("{NAME}: ignoring a message that is not an image: {e}");
+            }
+        }
+    }
+}
+
+/// The `frameGrabber_nwc_yarp` device.
+#[derive(Default)]
+pub struct FrameGrabberNwc {
+    client: Option<Client>,
+}
+
+impl FrameGrabberNwc {
+    pub fn new() -> FrameGrabberNwc {
+        FrameGrabberNwc::default()
+    }
+
+    /// Streamed messages dropped because they were not valid images.
+    pub fn rejected_messages(&self) -> u64 {
+        self.client
+            .as_ref()
+            .map_or(0, |c| c.rejected.load(Ordering::Relaxed))
+    }
+
+    fn rpc(&self, cmd: Bottle) -> DevResult<Bottle> {
+        let port = self
+            .client
+            .as_ref()
+            .ok_or(DeviceError::NotOpen)?
+            .rpc
+            .clone();
+        runtime::block_on(async move {
+            match tokio::time::timeout(RPC_TIMEOUT, port.rpc(&cmd)).await {
+                Ok(Ok(reply)) => Ok(reply),
+                Ok(Err(e)) => {
+                    tracing::error!("{NAME}: {cmd}: {e}");
+                    Err(DeviceError::Unsupported(
+                        "RPC to the remote frame grabber failed",
+                    ))
+                }
+                Err(_) => {
+                    tracing::error!("{NAME}: {cmd}: no reply in {RPC_TIMEOUT:?}");
+                    Err(DeviceError::Unsupported(
+                        "the remote frame grabber did not answer",
+                    ))
+                }
+            }
+        })
+    }
+
+    fn streaming(&self) -> bool {
+        self.client.as_ref().is_some_and(|c| c.stream.is_some())
+    }
+
+    fn latest<R>(&self, f: impl FnOnce(&Latest) -> R) -> Option<R> {
+        let c = self.client.as_ref()?;
+        let l = c.latest.lock().unwrap_or_else(|e| e.into_inner());
+        Some(f(&l))
+    }
+
+    fn visr(&self, verb: i32, what: i32, args: &[Value]) -> DevResult<Bottle> {
+        self.rpc(request(RGB_VISUAL_PARAMS, verb, what, args))
+    }
+
+    fn fgc(&self, verb: i32, what: i32, feature: i32, extra: &[Value]) -> DevResult<Bottle> {
+        let mut args = vec![Value::Int32(feature)];
+        args.extend_from_slice(extra);
+        self.rpc(request(FRAMEGRABBER_CONTROL, verb, what, &args))
+    }
+
+    /// `[fgc] [set] ...` is answered `[nak]` by C++ whatever happens: only the
+    /// transport can fail.
+    fn fgc_set(&self, what: i32, feature: i32, extra: &[Value]) -> DevResult<()> {
+        self.fgc(SET, what, feature, extra).map(|_| ())
+    }
+
+    fn fgc_has(&self, what: i32, feature: i32) -> DevResult<bool> {
+        Ok(reply_int(&self.fgc(HAS, what, feature, &[])?, 4)? != 0)
+    }
+
+    /// `[visr] [set] ...` answers `[visr] [set] <1|0>`.
+    fn visr_set(&self, what: i32, args: &[Value]) -> DevResult<()> {
+        match reply_int(&self.visr(SET, what, args)?, 2)? {
+            0 => Err(DeviceError::Unsupported(
+                "the remote camera refused the setting",
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl DeviceDriver for FrameGrabberNwc {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let local = p.string("local")?.ok_or_else(|| p.missing("local"))?;
+        let remote = p.string("remote")?.ok_or_else(|| p.missing("remote"))?;
+        let carrier = p.string("carrier")?.unwrap_or_else(|| "fast_tcp".into());
+        let no_stream = p
+            .find("no_stream")
+            .is_some_and(|v| v.as_bool().unwrap_or(true));
+        let network = |e: String| DeviceError::BadParam {
+            device: NAME.into(),
+            param: "remote".into(),
+            expected: "a running frameGrabber_nws_yarp prefix (is the name server running?)",
+            got: e,
+        };
+        let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
+        let client = runtime::block_on(Client::open(ns, local, remote, carrier, no_stream))
+            .map_err(network)?;
+        self.close()?;
+        self.client = Some(client);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        if let Some(c) = self.client.take() {
+            runtime::block_on(c.close());
+        }
+        Ok(())
+    }
+
+    fn as_frame_grabber_image(&mut self) -> Option<&mut dyn IFrameGrabberImage> {
+        Some(self)
+    }
+
+    fn as_frame_grabber_controls(&mut self) -> Option<&mut dyn IFrameGrabberControls> {
+        Some(self)
+    }
+}
+
+impl Drop for FrameGrabberNwc {
+    fn drop(&mut self) {
+        let _ = self.close();
+    }
+}
+
+impl IFrameGrabberImage for FrameGrabberNwc {
+    fn get_image(&mut self) -> DevResult<Image> {
+        if self.client.is_none() {
+            return Err(DeviceError::NotOpen);
+        }
+        if !self.streaming() {
+            let reply = self.rpc(request(FRAMEGRABBER_IMAGE, GET, RGB_IMAGE, &[]))?;
+            if refused(&reply) {
+                return Err(bad_reply(&reply));
+            }
+            let b = reply
+                .get(3)
+                .and_then(Value::as_list)
+                .ok_or_else(|| bad_reply(&reply))?;
+            return Image::from_bottle(b).map_err(|e| {
+                tracing::error!("{NAME}: bad image in RPC reply: {e}");
+                DeviceError::Unsupported("the remote frame grabber sent a malformed image")
+            });
+        }
+        self.latest(|l| l.image.clone())
+            .flatten()
+            .ok_or(DeviceError::Unsupported("no image received yet"))
+    }
+
+    fn height(&mut self) -> usize {
+        if !self.streaming() {
+            let r = self.rpc(request(FRAMEGRABBER_IMAGE, GET, HEIGHT, &[]));
+            return r
+                .and_then(|r| reply_int(&r, 3))
+                .map_or(0, |v| v.max(0) as usize);
+        }
+        self.latest(|l| l.image.as_ref().map_or(0, Image::height))
+            .unwrap_or(0)
+    }
+
+    fn width(&mut self) -> usize {
+        if !self.streaming() {
+            let r = self.rpc(request(FRAMEGRABBER_IMAGE, GET, WIDTH, &[]));
+            return r
+                .and_then(|r| reply_int(&r, 3))
+                .map_or(0, |v| v.max(0) as usize);
+        }
+        self.latest(|l| l.image.as_ref().map_or(0, Image::width))
+            .unwrap_or(0)
+    }
+
+    fn last_input_stamp(&mut self) -> Option<Stamp> {
+        self.latest(|l| l.stamp).flatten()
+    }
+
+    fn rgb_visual_params(&mut self) -> Option<&mut dyn IRgbVisualParams> {
+        Some(self)
+    }
+}
+
+impl IRgbVisualParams for FrameGrabberNwc {
+    fn rgb_height(&mut self) -> i32 {
+        self.visr(GET, HEIGHT, &[])
+            .and_then(|r| reply_int(&r, 3))
+            .unwrap_or(0)
+    }
+    fn rgb_width(&mut self) -> i32 {
+        self.visr(GET, WIDTH, &[])
+            .and_then(|r| reply_int(&r, 3))
+            .unwrap_or(0)
+    }
+    fn rgb_supported_configurations(&mut self) -> DevResult<Vec<CameraConfig>> {
+        parse_configurations(&self.visr(GET, SUPPORTED_CONF, &[])?)
+    }
+    fn rgb_resolution(&mut self) -> DevResult<(i32, i32)> {
+        let r = self.visr(GET, RESOLUTION, &[])?;
+        Ok((reply_int(&r, 3)?, reply_int(&r, 4)?))
+    }
+    fn set_rgb_resolution(&mut self, width: i32, height: i32) -> DevResult<()> {
+        self.visr_set(RESOLUTION, &[Value::Int32(width), Value::Int32(height)])
+    }
+    fn rgb_fov(&mut self) -> DevResult<(f64, f64)> {
+        let r = self.visr(GET, FOV, &[])?;
+        Ok((reply_float(&r, 3)?, reply_float(&r, 4)?))
+    }
+    fn set_rgb_fov(&mut self, horizontal: f64, vertical: f64) -> DevResult<()> {
+        self.visr_set(FOV, &[Value::Float64(horizontal), Value::Float64(vertical)])
+    }
+    fn rgb_intrinsic_param(&mut self) -> DevResult<Property> {
+        let r = self.visr(GET, INTRINSIC_PARAM, &[])?;
+        match r.get(3).and_then(Value::as_list) {
+            Some(l) if !refused(&r) => Ok(Property::from_bottle(l)),
+            _ => Err(bad_reply(&r)),
+        }
+    }
+    fn rgb_mirroring(&mut self) -> DevResult<bool> {
+        Ok(reply_int(&self.visr(GET, MIRROR, &[])?, 3)? != 0)
+    }
+    fn set_rgb_mirroring(&mut self, mirror: bool) -> DevResult<()> {
+        self.visr_set(MIRROR, &[Value::Int32(i32::from(mirror))])
+    }
+}
+
+impl IFrameGrabberControls for FrameGrabberNwc {
+    fn camera_description(&mut self) -> DevResult<CameraDescriptor> {
+        let r = self.rpc(request(FRAMEGRABBER_CONTROL, GET, CAMERA_DESCRIPTION, &[]))?;
+        parse_camera_description(&r)
+    }
+    fn has_feature(&mut self, feature: i32) -> DevResult<bool> {
+        self.fgc_has(FEATURE, feature)
+    }
+    fn set_feature(&mut self, feature: i32, value: f64) -> DevResult<()> {
+        self.fgc_set(FEATURE, feature, &[Value::Float64(value)])
+    }
+    fn get_feature(&mut self, feature: i32) -> DevResult<f64> {
+        reply_float(&self.fgc(GET, FEATURE, feature, &[])?, 3)
+    }
+    fn set_feature2(&mut self, feature: i32, v1: f64, v2: f64) -> DevResult<()> {
+        self.fgc_set(FEATURE2, feature, &[Value::Float64(v1), Value::Float64(v2)])
+    }
+    fn get_feature2(&mut self, feature: i32) -> DevResult<(f64, f64)> {
+        let r = self.fgc(GET, FEATURE2, feature, &[])?;
+        Ok((reply_float(&r, 3)?, reply_float(&r, 4)?))
+    }
+    fn has_on_off(&mut self, feature: i32) -> DevResult<bool> {
+        self.fgc_has(ONOFF, feature)
+    }
+    fn set_active(&mut self, feature: i32, on: bool) -> DevResult<()> {
+        self.fgc_set(ACTIVE, feature, &[Value::Int32(i32::from(on))])
+    }
+    fn get_active(&mut self, feature: i32) -> DevResult<bool> {
+        Ok(reply_int(&self.fgc(GET, ACTIVE, feature, &[])?, 3)? != 0)
+    }
+    fn has_auto(&mut self, feature: i32) -> DevResult<bool> {
+        self.fgc_has(AUTO, feature)
+    }
+    fn has_manual(&mut self, feature: i32) -> DevResult<bool> {
+        self.fgc_has(MANUAL, feature)
+    }
+    fn has_one_push(&mut self, feature: i32) -> DevResult<bool> {
+        self.fgc_has(ONEPUSH, feature)
+    }
+    fn set_mode(&mut self, feature: i32, mode: i32) -> DevResult<()> {
+        self.fgc_set(MODE, feature, &[Value::Int32(mode)])
+    }
+    fn get_mode(&mut self, feature: i32) -> DevResult<i32> {
+        reply_int(&self.fgc(GET, MODE, feature, &[])?, 3)
+    }
+    fn set_one_push(&mut self, feature: i32) -> DevResult<()> {
+        self.fgc_set(ONEPUSH, feature, &[])
+    }
+}

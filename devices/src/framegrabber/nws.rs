@@ -1,0 +1,320 @@
+//! `frameGrabber_nws_yarp`: serves a camera on the network as C++ 3.12 does.
+//!
+//! Parameters: `name` (port prefix, default `/grabber`), `period` (seconds between
+//! images, default 0.033), `capabilities` (`COLOR`, the default; `RAW` needs a raw
+//! grabber, which no device here has), `no_drop` (wait for slow readers instead of
+//! dropping images).
+//!
+//! Ports: `<name>` streams images (with the device's stamp as envelope, only while
+//! something is connected, as C++ skips `getImage` otherwise); `<name>/rpc` answers the
+//! frame-grabber RPC protocol ([`super::protocol::handle_rpc`]).
+
+use super::protocol::handle_rpc;
+use crate::driver::{DeviceDriver, IWrapper, Params, SharedDevice};
+use crate::error::{DevResult, DeviceError};
+use crate::runtime;
+use std::sync::mpsc;
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use yarp_net::nameserver::NameClient;
+use yarp_net::port::{Port, PortError};
+use yarp_proto::{Property, Stamp, Value};
+
+const NAME: &str = "frameGrabber_nws_yarp";
+/// C++ `DEFAULT_THREAD_PERIOD` of this wrapper.
+pub const DEFAULT_PERIOD: f64 = 0.033;
+
+/// The device the RPC server talks to (none until attached).
+type Target = Arc<Mutex<Option<SharedDevice>>>;
+
+/// The open ports and their serving work.
+struct Server {
+    image_port: Arc<Port>,
+    rpc_port: Arc<Port>,
+    rpc_task: tokio::task::JoinHandle<()>,
+    target: Target,
+}
+
+impl Server {
+    async fn open(name: &str, ns: NameClient, target: Target) -> Result<Server, PortError> {
+        let rpc_port = Arc::new(Port::open(&format!("{name}/rpc"), ns.clone()).await?);
+        let image_port = match Port::open(name, ns).await {
+            Ok(p) => Arc::new(p),
+            Err(e) => {
+                if let Ok(p) = Arc::try_unwrap(rpc_port) {
+                    p.close().await;
+                }
+                return Err(e);
+            }
+        };
+        let rpc_task = tokio::spawn(serve_rpc(rpc_port.clone(), target.clone()));
+        Ok(Server {
+            image_port,
+            rpc_port,
+            rpc_task,
+            target,
+        })
+    }
+
+    async fn close(self) {
+        self.rpc_task.abort();
+        let _ = self.rpc_task.await;
+        for port in [self.rpc_port, self.image_port] {
+            if let Ok(p) = Arc::try_unwrap(port) {
+                p.close().await;
+            }
+        }
+    }
+}
+
+/// A device with no interfaces: what the responders see before anything is attached.
+struct Nothing;
+impl DeviceDriver for Nothing {
+    fn open(&mut self, _: &Property) -> DevResult<()> {
+        Ok(())
+    }
+}
+
+async fn serve_rpc(port: Arc<Port>, target: Target) {
+    while let Some(mut msg) = port.read().await {
+        let cmd = match msg.bottle() {
+            Ok(b) => b,
+            Err(e) => {
+                tracing::warn!("{NAME}: undecodable RPC message: {e}");
+                continue;
+            }
+        };
+        let dev = target.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let reply = match dev {
+            Some(dev) => {
+                let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+                handle_rpc(&cmd, pd.device())
+            }
+            None => handle_rpc(&cmd, &mut Nothing),
+        };
+        if msg.wants_reply() {
+            msg.reply(reply);
+        }
+    }
+}
+
+/// The periodic image publisher (C++ `PeriodicThread::run`).
+struct Streamer {
+    stop: mpsc::Sender<()>,
+    thread: JoinHandle<()>,
+}
+
+fn now() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0)
+}
+
+fn stream(
+    port: Arc<Port>,
+    dev: SharedDevice,
+    period: Duration,
+    no_drop: bool,
+    stop: mpsc::Receiver<()>,
+) {
+    let mut own_count: i32 = 0;
+    let mut next = Instant::now();
+    loop {
+        next += period;
+        let wait = next.saturating_duration_since(Instant::now());
+        match stop.recv_timeout(wait) {
+            Err(mpsc::RecvTimeoutError::Timeout) => {}
+            _ => return,
+        }
+        if next < Instant::now() {
+            // fell behind (slow device): start counting again from now
+            next = Instant::now();
+        }
+        if port.outputs().is_empty() {
+            continue;
+        }
+        let got = {
+            let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+            pd.device()
+                .as_frame_grabber_image()
+                .map(|fg| (fg.get_image(), fg.last_input_stamp()))
+        };
+        let (img, stamp) = match got {
+            Some((Ok(img), stamp)) => (img, stamp),
+            Some((Err(e), _)) => {
+                tracing::error!("{NAME}: image not captured (getImage failed: {e})");
+                continue;
+            }
+            None => {
+                tracing::error!("{NAME}: image not captured (invalid interface)");
+                continue;
+            }
+        };
+        let stamp = stamp.unwrap_or_else(|| {
+            let s = Stamp::new(own_count, now());
+            own_count = own_count.wrapping_add(1);
+            s
+        });
+        let bottle = img.to_bottle();
+        if no_drop {
+            let port = port.clone();
+            runtime::block_on(async move {
+                port.write_shared(Arc::new(bottle), Some(stamp)).await;
+            });
+        } else {
+            port.write_nowait(&bottle, Some(stamp));
+        }
+    }
+}
+
+/// The `frameGrabber_nws_yarp` device.
+pub struct FrameGrabberNws {
+    name: String,
+    period: f64,
+    no_drop: bool,
+    server: Option<Server>,
+    streamer: Option<Streamer>,
+}
+
+impl FrameGrabberNws {
+    pub fn new() -> FrameGrabberNws {
+        FrameGrabberNws {
+            name: "/grabber".into(),
+            period: DEFAULT_PERIOD,
+            no_drop: false,
+            server: None,
+            streamer: None,
+        }
+    }
+
+    /// The image port's name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn stop_streaming(&mut self) {
+        if let Some(s) = self.streamer.take() {
+            let _ = s.stop.send(());
+            let _ = s.thread.join();
+        }
+    }
+}
+
+impl DeviceDriver for FrameGrabberNws {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        self.name = p.string("name")?.unwrap_or_else(|| "/grabber".into());
+        // C++ takes `period` only when it is a float
+        self.period = match p.find("period") {
+            Some(Value::Float64(s)) if *s > 0.0 && s.is_finite() => *s,
+            Some(Value::Float64(s)) => {
+                return Err(DeviceError::BadParam {
+                    device: NAME.into(),
+                    param: "period".into(),
+                    expected: "a period in seconds greater than 0",
+                    got: s.to_string(),
+                })
+            }
+            Some(other) => {
+                tracing::info!("{NAME}: `period {other}` is not a float: using {DEFAULT_PERIOD} s, as C++ does");
+                DEFAULT_PERIOD
+            }
+            None => DEFAULT_PERIOD,
+        };
+        match p.string("capabilities")?.as_deref() {
+            None | Some("COLOR") => {}
+            Some(other) => {
+                return Err(DeviceError::BadParam {
+                    device: NAME.into(),
+                    param: "capabilities".into(),
+                    expected: "COLOR (RAW streaming is not available)",
+                    got: other.into(),
+                })
+            }
+        }
+        self.no_drop = match p.find("no_drop") {
+            None => false,
+            Some(v) => v.as_bool().unwrap_or(true),
+        };
+        let network = |e: String| DeviceError::BadParam {
+            device: NAME.into(),
+            param: "name".into(),
+            expected: "a port name that can be registered (is the name server running?)",
+            got: e,
+        };
+        let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
+        let name = self.name.clone();
+        let server = runtime::block_on(async move {
+            Server::open(&name, ns, Target::default())
+                .await
+                .map_err(|e| format!("{name}: {e}"))
+        })
+        .map_err(network)?;
+        self.close()?;
+        self.server = Some(server);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        self.stop_streaming();
+        if let Some(s) = self.server.take() {
+            runtime::block_on(s.close());
+        }
+        Ok(())
+    }
+
+    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
+        Some(self)
+    }
+}
+
+impl IWrapper for FrameGrabberNws {
+    fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
+        if self.server.is_none() {
+            return Err(DeviceError::NotOpen);
+        }
+        {
+            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            if pd.device().as_frame_grabber_image().is_none() {
+                return Err(DeviceError::Unsupported(
+                    "frameGrabber_nws_yarp: the attached device has no IFrameGrabberImage (capability COLOR)",
+                ));
+            }
+        }
+        self.stop_streaming();
+        let server = self.server.as_ref().ok_or(DeviceError::NotOpen)?;
+        *server.target.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
+        let (stop, rx) = mpsc::channel();
+        let port = server.image_port.clone();
+        let period = Duration::from_secs_f64(self.period);
+        let no_drop = self.no_drop;
+        let thread = std::thread::Builder::new()
+            .name("frameGrabber_nws".into())
+            .spawn(move || stream(port, device, period, no_drop, rx))
+            .map_err(|_| DeviceError::Unsupported("cannot start the streaming thread"))?;
+        self.streamer = Some(Streamer { stop, thread });
+        Ok(())
+    }
+
+    fn detach(&mut self) -> DevResult<()> {
+        self.stop_streaming();
+        if let Some(s) = &self.server {
+            *s.target.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        }
+        Ok(())
+    }
+}
+
+impl Default for FrameGrabberNws {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Drop for FrameGrabberNws {
+    fn drop(&mut self) {
+        let _ = self.close();
+    }
+}

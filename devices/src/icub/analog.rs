@@ -1,0 +1,174 @@
+//! `canBusAnalogSensor` and `canBusFtSensor` (icub-main): a strain F/T board or a MAIS
+//! hall-effect board on CAN.
+//!
+//! Parameters (top level, as `hardware/FT/*.xml` and `hardware/MAIS/*.xml` give them):
+//! `canAddress`, `format` (16 strain, 8 MAIS), `channels`, `period` (ms),
+//! `useCalibration` (full-scale-scaled N / N·m), `sensorName` and `frameName`
+//! (`canBusFtSensor`), bus keys `canBackend` / `physDevice` + `canDeviceNum`.
+//! `canbusDevice` and `diagnostic` are accepted and ignored.
+//!
+//! Both names serve `IAnalogSensor`; a 6-channel 16-bit board also serves
+//! `ISixAxisForceTorqueSensors` (one sensor). A board silent for 100 ms reads as
+//! `Timeout`.
+
+use icub_can::client::{SensorStatus, StrainClient, StrainParams};
+use yarp_proto::Property;
+
+use super::common::{lookup_one, now, open_bus, open_error, text};
+use crate::driver::DeviceDriver;
+use crate::error::{DevResult, DeviceError};
+use crate::sensors::{AnalogStatus, IAnalogSensor, ISixAxisForceTorqueSensors};
+use crate::sensors::{MasStatus, SensorMeasurement};
+
+/// `canBusAnalogSensor` / `canBusFtSensor`.
+pub struct CanBusAnalogSensor {
+    kind: &'static str,
+    id: String,
+    sensor_name: String,
+    frame_name: String,
+    client: Option<StrainClient>,
+}
+
+impl CanBusAnalogSensor {
+    /// `kind` is the device name it was created under.
+    pub fn new(kind: &'static str) -> Self {
+        Self {
+            kind,
+            id: kind.to_string(),
+            sensor_name: String::new(),
+            frame_name: String::new(),
+            client: None,
+        }
+    }
+
+    fn is_ft(&self) -> bool {
+        self.client.as_ref().is_some_and(|c| c.channels() == 6)
+    }
+
+    fn check_sensor(&self, i: usize) -> DevResult<&StrainClient> {
+        let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
+        if i == 0 && self.is_ft() {
+            Ok(c)
+        } else {
+            Err(DeviceError::BadParam {
+                device: self.id.clone(),
+                param: "sens_index".into(),
+                expected: "0 (one F/T sensor per board)",
+                got: i.to_string(),
+            })
+        }
+    }
+}
+
+fn analog_status(s: SensorStatus) -> AnalogStatus {
+    match s {
+        SensorStatus::Ok => AnalogStatus::Ok,
+        SensorStatus::Overflow => AnalogStatus::Overflow,
+        SensorStatus::Timeout => AnalogStatus::Timeout,
+        SensorStatus::Error => AnalogStatus::Error,
+    }
+}
+
+/// The multiple-analog-sensors status of a reading.
+pub fn mas_status(s: SensorStatus) -> MasStatus {
+    match s {
+        SensorStatus::Ok => MasStatus::Ok,
+        SensorStatus::Overflow => MasStatus::Overflow,
+        SensorStatus::Timeout => MasStatus::Timeout,
+        SensorStatus::Error => MasStatus::Error,
+    }
+}
+
+impl DeviceDriver for CanBusAnalogSensor {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        self.close()?;
+        self.id = config
+            .find("id")
+            .map_or_else(|| self.kind.to_string(), text);
+        let get = |k: &str| lookup_one(config, None, k);
+        let params = StrainParams::from_lookup(&get).map_err(|e| open_error(&self.id, &e))?;
+        self.sensor_name = get("sensorName").unwrap_or_else(|| self.id.clone());
+        self.frame_name = get("frameName").unwrap_or_else(|| self.sensor_name.clone());
+        let bus = open_bus(&self.id, config, None)?;
+        self.client = Some(StrainClient::open(bus, params).map_err(|e| open_error(&self.id, &e))?);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        self.client = None;
+        Ok(())
+    }
+
+    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
+        Some(self)
+    }
+
+    fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
+        if self.client.is_none() || self.is_ft() {
+            Some(self)
+        } else {
+            None
+        }
+    }
+}
+
+impl IAnalogSensor for CanBusAnalogSensor {
+    fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
+        match &self.client {
+            None => AnalogStatus::Error,
+            Some(c) => {
+                let (values, status) = c.read();
+                *out = values;
+                analog_status(status)
+            }
+        }
+    }
+    fn get_state(&mut self, _ch: usize) -> AnalogStatus {
+        match &self.client {
+            None => AnalogStatus::Error,
+            Some(c) => analog_status(c.read().1),
+        }
+    }
+    fn get_channels(&mut self) -> usize {
+        self.client.as_ref().map_or(0, |c| c.channels())
+    }
+    fn calibrate_sensor(&mut self) -> DevResult<()> {
+        Err(DeviceError::Unsupported(
+            "canBusAnalogSensor calibration (offsets are set on the board)",
+        ))
+    }
+    fn calibrate_sensor_with(&mut self, _values: &[f64]) -> DevResult<()> {
+        self.calibrate_sensor()
+    }
+    fn calibrate_channel(&mut self, _ch: usize) -> DevResult<()> {
+        self.calibrate_sensor()
+    }
+    fn calibrate_channel_with(&mut self, _ch: usize, _value: f64) -> DevResult<()> {
+        self.calibrate_sensor()
+    }
+}
+
+impl ISixAxisForceTorqueSensors for CanBusAnalogSensor {
+    fn get_nr_of_six_axis_force_torque_sensors(&self) -> usize {
+        usize::from(self.is_ft())
+    }
+    fn get_six_axis_force_torque_sensor_status(&self, i: usize) -> MasStatus {
+        match self.check_sensor(i) {
+            Ok(c) => mas_status(c.read().1),
+            Err(_) => MasStatus::Error,
+        }
+    }
+    fn get_six_axis_force_torque_sensor_name(&self, i: usize) -> DevResult<String> {
+        self.check_sensor(i).map(|_| self.sensor_name.clone())
+    }
+    fn get_six_axis_force_torque_sensor_frame_name(&self, i: usize) -> DevResult<String> {
+        self.check_sensor(i).map(|_| self.frame_name.clone())
+    }
+    fn get_six_axis_force_torque_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+        let c = self.check_sensor(i)?;
+        let values = c
+            .read_checked()
+            .map_err(|e| super::common::call_error(&self.id, e))?;
+        Ok(SensorMeasurement::new(values, now()))
+    }
+}

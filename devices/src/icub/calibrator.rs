@@ -1,0 +1,344 @@
+//! `parametricCalibrator` (icub-main): calibrates a robot part at startup and parks it
+//! at shutdown, driving its target (usually a `controlboardremapper` over
+//! `canmotioncontrol` devices) through the motor interfaces.
+//!
+//! Parameters, as `calibrators/*_calib.xml`: `GENERAL::deviceName`, `GENERAL::joints`
+//! (or `Joints`), `GENERAL::skipCalibration`; `CALIBRATION::calibrationType`,
+//! `calibration1`..`calibration3`, `startupPosition`, `startupVelocity`,
+//! `startupPosThreshold` (used), `startupMaxPwm`, `calibration4`, `calibration5`,
+//! `calibrationZero`, `calibrationDelta` (accepted, unused); `HOME::positionHome`,
+//! `HOME::velocityHome` (the park pose); `CALIB_ORDER` (sets of joints calibrated
+//! together, in order).
+//!
+//! `calibrate`, per set: joints of calibration type 0, 2 or 4 go to position mode; each
+//! joint's board gets its calibration command (found through [`super::registry`] by axis
+//! name; joints of other devices are taken as calibrated); the set waits for motion
+//! done (20 s), then moves to `startupPosition` at `startupVelocity` and waits (10 s)
+//! until every joint is within `startupPosThreshold`. `park` moves the calibrated
+//! joints that are not idle or faulted to `positionHome` (waiting up to 30 s when asked).
+//! Any board error stops the sequence with that error; no step waits without a bound.
+
+use std::time::{Duration, Instant};
+
+use yarp_proto::Property;
+
+use super::common::{lookup, text};
+use crate::driver::{DeviceDriver, ICalibrator, SharedDevice};
+use crate::error::{DevResult, DeviceError};
+use crate::vocabs::{CM_HW_FAULT, CM_IDLE, CM_POSITION};
+
+pub(crate) const NAME: &str = "parametricCalibrator";
+
+const CALIBRATE_JOINT_TIMEOUT: Duration = Duration::from_secs(20);
+const GO_TO_ZERO_TIMEOUT: Duration = Duration::from_secs(10);
+const PARK_TIMEOUT: Duration = Duration::from_secs(30);
+const POLL: Duration = Duration::from_millis(20);
+
+/// Per-joint calibration parameters.
+#[derive(Debug, Clone, Default)]
+struct JointCalib {
+    kind: u8,
+    params: [f64; 3],
+    startup_pos: f64,
+    startup_vel: f64,
+    threshold: f64,
+    home_pos: f64,
+    home_vel: f64,
+}
+
+/// The `parametricCalibrator` device.
+#[derive(Debug, Default)]
+pub struct ParametricCalibrator {
+    name: String,
+    skip: bool,
+    joints: Vec<JointCalib>,
+    order: Vec<Vec<usize>>,
+    calibrated: bool,
+}
+
+impl ParametricCalibrator {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Whether the last `calibrate` succeeded.
+    pub fn is_calibrated(&self) -> bool {
+        self.calibrated
+    }
+
+    fn fail(&self, param: &str, expected: &'static str, got: String) -> DeviceError {
+        tracing::error!(device = %self.name, "{param}: {got}");
+        DeviceError::BadParam {
+            device: self.name.clone(),
+            param: param.to_string(),
+            expected,
+            got,
+        }
+    }
+
+    fn calib_joints(&self) -> impl Iterator<Item = usize> + '_ {
+        self.order.iter().flatten().copied()
+    }
+
+    /// Sends the board calibration command of joint `j` of `target`.
+    fn calibrate_joint(&self, target: &SharedDevice, j: usize) -> DevResult<()> {
+        let name = with(target, |d| {
+            d.as_axis_info()
+                .ok_or(DeviceError::Unsupported("target without IAxisInfo"))?
+                .get_axis_name(j)
+        })?;
+        let c = &self.joints[j];
+        match super::registry::find(&name) {
+            Some((client, jj)) => client
+                .calibrate(jj, c.kind, c.params[0], c.params[1], c.params[2])
+                .map_err(|e| super::common::call_error(&self.name, e)),
+            None => {
+                tracing::warn!(device = %self.name, axis = %name,
+                    "no CAN board drives this axis; taking it as calibrated");
+                Ok(())
+            }
+        }
+    }
+
+    /// Waits until every joint of `set` reports motion done, or fails after `timeout`.
+    fn wait_done(&self, target: &SharedDevice, set: &[usize], timeout: Duration) -> DevResult<()> {
+        let start = Instant::now();
+        loop {
+            let done = with(target, |d| {
+                let p = d
+                    .as_position_control()
+                    .ok_or(DeviceError::Unsupported("target without IPositionControl"))?;
+                set.iter()
+                    .try_fold(true, |all, j| Ok(all & p.check_motion_done(*j)?))
+            })?;
+            if done {
+                return Ok(());
+            }
+            if start.elapsed() > timeout {
+                return Err(self.fail(
+                    "CALIB_ORDER",
+                    "joints that finish moving in time",
+                    format!("joints {set:?} still moving after {timeout:?}"),
+                ));
+            }
+            std::thread::sleep(POLL);
+        }
+    }
+
+    /// Position mode, then a move of `set` to `pos(j)` at `vel(j)`.
+    fn move_set(
+        &self,
+        target: &SharedDevice,
+        set: &[usize],
+        pos: impl Fn(&JointCalib) -> f64,
+        vel: impl Fn(&JointCalib) -> f64,
+    ) -> DevResult<()> {
+        with(target, |d| {
+            for &j in set {
+                d.as_control_mode()
+                    .ok_or(DeviceError::Unsupported("target without IControlMode"))?
+                    .set_control_mode(j, CM_POSITION)?;
+            }
+            let p = d
+                .as_position_control()
+                .ok_or(DeviceError::Unsupported("target without IPositionControl"))?;
+            for &j in set {
+                p.set_ref_speed(j, vel(&self.joints[j]))?;
+                p.position_move(j, pos(&self.joints[j]))?;
+            }
+            Ok(())
+        })
+    }
+
+    fn calibrate_set(&self, target: &SharedDevice, set: &[usize]) -> DevResult<()> {
+        with(target, |d| {
+            let cm = d
+                .as_control_mode()
+                .ok_or(DeviceError::Unsupported("target without IControlMode"))?;
+            for &j in set {
+                if matches!(self.joints[j].kind, 0 | 2 | 4) {
+                    cm.set_control_mode(j, CM_POSITION)?;
+                }
+            }
+            Ok(())
+        })?;
+        for &j in set {
+            self.calibrate_joint(target, j)?;
+        }
+        self.wait_done(target, set, CALIBRATE_JOINT_TIMEOUT)?;
+        self.move_set(target, set, |c| c.startup_pos, |c| c.startup_vel)?;
+        self.wait_done(target, set, GO_TO_ZERO_TIMEOUT)?;
+        for &j in set {
+            let at = with(target, |d| {
+                d.as_encoders()
+                    .ok_or(DeviceError::Unsupported("target without IEncoders"))?
+                    .get_encoder(j)
+            })?;
+            let c = &self.joints[j];
+            if (at - c.startup_pos).abs() > c.threshold {
+                return Err(self.fail(
+                    "CALIBRATION::startupPosThreshold",
+                    "joints that reach their startup position",
+                    format!(
+                        "joint {j} at {at:.2}, startup position {:.2}",
+                        c.startup_pos
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Runs `f` on the locked target.
+fn with<T>(
+    target: &SharedDevice,
+    f: impl FnOnce(&mut dyn DeviceDriver) -> DevResult<T>,
+) -> DevResult<T> {
+    let mut pd = target.lock().unwrap_or_else(|e| e.into_inner());
+    f(pd.device())
+}
+
+impl DeviceDriver for ParametricCalibrator {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let missing = |param: &str| DeviceError::MissingParam {
+            device: NAME.to_string(),
+            param: param.to_string(),
+        };
+        let general = |k: &str| lookup(config, Some("GENERAL"), k).and_then(|v| v.first().cloned());
+        self.name = general("deviceName").ok_or_else(|| missing("GENERAL::deviceName"))?;
+        self.skip = general("skipCalibration").is_some_and(|v| v == "true" || v == "1");
+        let n: usize = general("joints")
+            .or_else(|| general("Joints"))
+            .ok_or_else(|| missing("GENERAL::joints"))?
+            .parse()
+            .map_err(|_| missing("GENERAL::joints"))?;
+        let vector = |group: &str, key: &str| -> DevResult<Vec<f64>> {
+            let v = lookup(config, Some(group), key)
+                .ok_or_else(|| missing(&format!("{group}::{key}")))?;
+            let nums: Vec<f64> = v.iter().filter_map(|s| s.parse().ok()).collect();
+            if nums.len() == n && v.len() == n {
+                Ok(nums)
+            } else {
+                Err(DeviceError::BadParam {
+                    device: self.name.clone(),
+                    param: format!("{group}::{key}"),
+                    expected: "one number per joint",
+                    got: v.join(" "),
+                })
+            }
+        };
+        let kind = vector("CALIBRATION", "calibrationType")?;
+        let (p1, p2, p3) = (
+            vector("CALIBRATION", "calibration1")?,
+            vector("CALIBRATION", "calibration2")?,
+            vector("CALIBRATION", "calibration3")?,
+        );
+        let (pos, vel) = (
+            vector("CALIBRATION", "startupPosition")?,
+            vector("CALIBRATION", "startupVelocity")?,
+        );
+        let thr = vector("CALIBRATION", "startupPosThreshold")?;
+        let (hpos, hvel) = (
+            vector("HOME", "positionHome")?,
+            vector("HOME", "velocityHome")?,
+        );
+        self.joints = (0..n)
+            .map(|j| JointCalib {
+                kind: kind[j] as u8,
+                params: [p1[j], p2[j], p3[j]],
+                startup_pos: pos[j],
+                startup_vel: vel[j],
+                threshold: thr[j],
+                home_pos: hpos[j],
+                home_vel: hvel[j],
+            })
+            .collect();
+        let order = config
+            .find_group("CALIB_ORDER")
+            .ok_or_else(|| missing("CALIB_ORDER"))?;
+        self.order = order
+            .iter()
+            .skip(1)
+            .map(|set| {
+                let joints: Option<Vec<usize>> = set.as_list().and_then(|l| {
+                    l.iter()
+                        .map(|v| v.as_i64().and_then(|j| usize::try_from(j).ok()))
+                        .collect()
+                });
+                joints
+                    .filter(|js| js.iter().all(|j| *j < n))
+                    .ok_or_else(|| DeviceError::BadParam {
+                        device: self.name.clone(),
+                        param: "CALIB_ORDER".into(),
+                        expected: "lists of joint indices below `joints`",
+                        got: text(set),
+                    })
+            })
+            .collect::<DevResult<_>>()?;
+        if self.order.is_empty() {
+            return Err(missing("CALIB_ORDER"));
+        }
+        self.calibrated = false;
+        Ok(())
+    }
+
+    fn as_calibrator(&mut self) -> Option<&mut dyn ICalibrator> {
+        Some(self)
+    }
+}
+
+impl ICalibrator for ParametricCalibrator {
+    fn calibrate(&mut self, target: SharedDevice) -> DevResult<()> {
+        tracing::info!(device = %self.name, "starting calibration");
+        self.calibrated = false;
+        let axes = with(&target, |d| {
+            d.as_encoders()
+                .ok_or(DeviceError::Unsupported("target without IEncoders"))?
+                .get_axes()
+        })?;
+        if let Some(j) = self.calib_joints().find(|j| *j >= axes) {
+            return Err(self.fail(
+                "CALIB_ORDER",
+                "joints of the target",
+                format!("joint {j}, target has {axes}"),
+            ));
+        }
+        if self.skip {
+            tracing::warn!(device = %self.name, "skipCalibration is on: not calibrating");
+        } else {
+            for set in &self.order {
+                self.calibrate_set(&target, set)?;
+            }
+        }
+        self.calibrated = true;
+        tracing::info!(device = %self.name, "calibration done");
+        Ok(())
+    }
+
+    fn park(&mut self, target: SharedDevice, wait: bool) -> DevResult<()> {
+        if !self.calibrated || self.skip {
+            tracing::warn!(device = %self.name, "park without calibration: skipping");
+            return Ok(());
+        }
+        let mut movable = Vec::new();
+        for j in self.calib_joints() {
+            let mode = with(&target, |d| {
+                d.as_control_mode()
+                    .ok_or(DeviceError::Unsupported("target without IControlMode"))?
+                    .get_control_mode(j)
+            })?;
+            if mode == CM_IDLE || mode == CM_HW_FAULT {
+                tracing::warn!(device = %self.name, joint = j, "joint idle or faulted: not parking");
+            } else {
+                movable.push(j);
+            }
+        }
+        self.move_set(&target, &movable, |c| c.home_pos, |c| c.home_vel)?;
+        if wait {
+            self.wait_done(&target, &movable, PARK_TIMEOUT)?;
+        }
+        tracing::info!(device = %self.name, "park done");
+        Ok(())
+    }
+}

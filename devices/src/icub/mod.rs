@@ -1,0 +1,45 @@
+//! The iCub CAN devices of icub-main, over the driver cores of crate `icub_can`:
+//!
+//! | device | module | interfaces |
+//! |--------|--------|------------|
+//! | `canmotioncontrol` | [`motion_control`] | encoders, position, velocity, torque, PIDs, control/interaction modes, limits, axis info, motor encoders, amplifiers, PWM |
+//! | `canBusAnalogSensor`, `canBusFtSensor` | [`analog`] | `IAnalogSensor`, `ISixAxisForceTorqueSensors` (strain) |
+//! | `canBusSkin` | [`skin`] | `IAnalogSensor`, `ISkinPatches` |
+//! | `canBusInertialMTB` | [`inertial`] | `IAnalogSensor`, accelerometers, gyroscopes |
+//! | `parametricCalibrator` | [`calibrator`] | `ICalibrator` |
+//!
+//! Each device reads the parameters of the robots-configuration XML files unchanged; the
+//! bus is chosen by `canBackend` (e.g. `udp://127.0.0.1:20000+n`, one port per
+//! `CanDeviceNum`), by the `YARP_ICUB_CAN_BACKEND` environment variable, or by
+//! `physDevice socketcan` (see [`common::open_bus`]). Board faults are errors or
+//! statuses: a silent board fails a call within its timeout, never hangs it.
+
+pub mod analog;
+pub mod calibrator;
+pub mod common;
+pub mod inertial;
+pub mod motion_control;
+pub mod registry;
+pub mod skin;
+
+pub use analog::CanBusAnalogSensor;
+pub use calibrator::ParametricCalibrator;
+pub use inertial::CanBusInertialMtb;
+pub use motion_control::CanMotionControl;
+pub use skin::CanBusSkin;
+
+use crate::driver::Factory;
+
+/// The iCub drivers, by C++ name.
+pub(crate) const DRIVERS: &[(&str, Factory)] = &[
+    (motion_control::NAME, || Box::new(CanMotionControl::new())),
+    ("canBusAnalogSensor", || {
+        Box::new(CanBusAnalogSensor::new("canBusAnalogSensor"))
+    }),
+    ("canBusFtSensor", || {
+        Box::new(CanBusAnalogSensor::new("canBusFtSensor"))
+    }),
+    (skin::NAME, || Box::new(CanBusSkin::new())),
+    (inertial::NAME, || Box::new(CanBusInertialMtb::new())),
+    (calibrator::NAME, || Box::new(ParametricCalibrator::new())),
+];

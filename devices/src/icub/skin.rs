@@ -1,0 +1,152 @@
+//! `canBusSkin` (icub-main `CanBusSkin`): the skin patches (MTB boards) of one CAN network.
+//!
+//! Parameters (as `hardware/skin/*.xml`): `skinCanIds` (board addresses, in taxel
+//! order: 192 taxels per board), `period` (ms), bus keys `canBackend` / `canDeviceNum`
+//! with `canbusDevice` naming the adapter. The `skinSpec` settings (`patches`,
+//! `defaultCfgBoard`, `specialCfgBoards`, ...) are accepted and not sent to the boards:
+//! the emulated MTBs stream with their defaults.
+//!
+//! Served as `IAnalogSensor` (what `skinWrapper` publishes) and as one `ISkinPatches`
+//! patch. A board silent for 5 periods (at least 200 ms) makes the status `Timeout`.
+
+use std::time::Duration;
+
+use icub_can::client::SkinClient;
+use yarp_proto::Property;
+
+use super::analog::mas_status;
+use super::common::{lookup, lookup_one, now, open_bus, open_error, text};
+use crate::driver::DeviceDriver;
+use crate::error::{DevResult, DeviceError};
+use crate::sensors::{AnalogStatus, IAnalogSensor, ISkinPatches, MasStatus, SensorMeasurement};
+
+pub(crate) const NAME: &str = "canBusSkin";
+
+/// The `canBusSkin` device.
+#[derive(Default)]
+pub struct CanBusSkin {
+    id: String,
+    timeout: Duration,
+    client: Option<SkinClient>,
+}
+
+impl CanBusSkin {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn c(&self) -> DevResult<&SkinClient> {
+        self.client.as_ref().ok_or(DeviceError::NotOpen)
+    }
+
+    fn check(&self, i: usize) -> DevResult<&SkinClient> {
+        let c = self.c()?;
+        if i == 0 {
+            Ok(c)
+        } else {
+            Err(DeviceError::BadParam {
+                device: self.id.clone(),
+                param: "sens_index".into(),
+                expected: "0 (one patch per device)",
+                got: i.to_string(),
+            })
+        }
+    }
+}
+
+impl DeviceDriver for CanBusSkin {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        self.close()?;
+        self.id = config.find("id").map_or_else(|| NAME.to_string(), text);
+        let bad = |got: String| DeviceError::BadParam {
+            device: self.id.clone(),
+            param: "skinCanIds".into(),
+            expected: "a list of board addresses 1..14",
+            got,
+        };
+        let ids = lookup(config, None, "skinCanIds").ok_or_else(|| DeviceError::MissingParam {
+            device: self.id.clone(),
+            param: "skinCanIds".into(),
+        })?;
+        let boards = ids
+            .iter()
+            .map(|s| s.parse::<u8>().map_err(|_| bad(s.clone())))
+            .collect::<DevResult<Vec<u8>>>()?;
+        let period_ms = lookup_one(config, None, "period")
+            .and_then(|p| p.parse::<f64>().ok())
+            .unwrap_or(20.0);
+        self.timeout = Duration::from_secs_f64((5.0 * period_ms / 1000.0).max(0.2));
+        let bus = open_bus(&self.id, config, None)?;
+        self.client = Some(SkinClient::open(bus, &boards).map_err(|e| open_error(&self.id, &e))?);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        self.client = None;
+        Ok(())
+    }
+
+    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
+        Some(self)
+    }
+
+    fn as_skin_patches(&mut self) -> Option<&mut dyn ISkinPatches> {
+        Some(self)
+    }
+}
+
+impl IAnalogSensor for CanBusSkin {
+    fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
+        let Ok(c) = self.c() else {
+            return AnalogStatus::Error;
+        };
+        let (values, status) = c.read(self.timeout);
+        *out = values;
+        match mas_status(status) {
+            MasStatus::Ok => AnalogStatus::Ok,
+            MasStatus::Timeout => AnalogStatus::Timeout,
+            _ => AnalogStatus::Error,
+        }
+    }
+    fn get_state(&mut self, _ch: usize) -> AnalogStatus {
+        let mut v = Vec::new();
+        self.read(&mut v)
+    }
+    fn get_channels(&mut self) -> usize {
+        self.c().map_or(0, |c| c.channels())
+    }
+    fn calibrate_sensor(&mut self) -> DevResult<()> {
+        Err(DeviceError::Unsupported("canBusSkin calibration"))
+    }
+    fn calibrate_sensor_with(&mut self, _values: &[f64]) -> DevResult<()> {
+        self.calibrate_sensor()
+    }
+    fn calibrate_channel(&mut self, _ch: usize) -> DevResult<()> {
+        self.calibrate_sensor()
+    }
+    fn calibrate_channel_with(&mut self, _ch: usize, _value: f64) -> DevResult<()> {
+        self.calibrate_sensor()
+    }
+}
+
+impl ISkinPatches for CanBusSkin {
+    fn get_nr_of_skin_patches(&self) -> usize {
+        usize::from(self.client.is_some())
+    }
+    fn get_skin_patch_status(&self, i: usize) -> MasStatus {
+        match self.check(i) {
+            Ok(c) => mas_status(c.read(self.timeout).1),
+            Err(_) => MasStatus::Error,
+        }
+    }
+    fn get_skin_patch_name(&self, i: usize) -> DevResult<String> {
+        self.check(i).map(|_| self.id.clone())
+    }
+    fn get_skin_patch_size(&self, i: usize) -> usize {
+        self.check(i).map_or(0, |c| c.channels())
+    }
+    fn get_skin_patch_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+        let (values, _) = self.check(i)?.read(self.timeout);
+        Ok(SensorMeasurement::new(values, now()))
+    }
+}

@@ -1,0 +1,760 @@
+//! `controlboardremapper`: several control boards joined into one virtual part, each of
+//! its joints delegated to a joint of one attached board (C++ `ControlBoardRemapper`).
+//!
+//! Two configurations, as in C++ (exactly one of them):
+//! * `axesNames (n0 n1 ...)`: the part's joints, found by name among the axes of the
+//!   devices given to `attach_all` (each needs encoders and axis info);
+//! * `networks (net1 net2 ...)`, `joints N`, and per network
+//!   `net1 (partFirst partLast boardFirst boardLast)` (or the four numbers without
+//!   parentheses): joints `partFirst..=partLast` of the part are joints
+//!   `boardFirst..=boardLast` of the device attached under the key `net1`.
+//!
+//! The mapping is computed by the pure [`Layout::resolve`]; the device then forwards every
+//! interface call to the owning board.
+
+use crate::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
+use crate::error::{DevResult, DeviceError};
+use crate::interfaces::*;
+use std::collections::HashMap;
+use std::sync::MutexGuard;
+use yarp_proto::{Bottle, Property, Value, Vocab32};
+
+/// The C++ device name.
+pub const NAME: &str = "controlboardremapper";
+
+/// Drivers of this family, by C++ name.
+pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] =
+    &[(NAME, || Box::new(ControlBoardRemapper::new()))];
+
+/// One `networks` entry: part joints `part_first..=part_last` are board joints
+/// `board_first..=board_last` of the device attached as `name`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Network {
+    pub name: String,
+    pub part_first: usize,
+    pub part_last: usize,
+    pub board_first: usize,
+    pub board_last: usize,
+}
+
+/// How the part's joints are found among the attached boards.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Layout {
+    AxesNames(Vec<String>),
+    Networks {
+        joints: usize,
+        networks: Vec<Network>,
+    },
+}
+
+/// What `resolve` needs to know about one attached board.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoardInfo {
+    pub key: String,
+    pub axes: usize,
+    /// Axis names (only needed for the `axesNames` layout).
+    pub names: Vec<String>,
+}
+
+/// Where a part joint lives: index of the board in the attached list, joint on it.
+pub type Lut = Vec<(usize, usize)>;
+
+/// Why the layout cannot be built from the attached boards.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RemapError {
+    #[error("axis `{0}` is on no attached board")]
+    UnknownAxis(String),
+    #[error("axis name `{name}` is on two boards (`{first}` and `{second}`)")]
+    DuplicateAxis {
+        name: String,
+        first: String,
+        second: String,
+    },
+    #[error("network `{0}` is not among the attached devices")]
+    MissingNetwork(String),
+    #[error("network `{name}`: board joints {first}..={last} but the board has {axes} axes")]
+    BoardRange {
+        name: String,
+        first: usize,
+        last: usize,
+        axes: usize,
+    },
+    #[error("part joint {0} is covered by no network")]
+    Uncovered(usize),
+}
+
+impl Layout {
+    /// Reads the layout from the device configuration (C++ parameter names).
+    pub fn from_config(config: &Property) -> DevResult<Layout> {
+        let p = Params::new(NAME, config);
+        let bad = |param: &str, expected: &'static str, got: String| DeviceError::BadParam {
+            device: NAME.into(),
+            param: param.into(),
+            expected,
+            got,
+        };
+        match (p.find("axesNames"), p.find("networks")) {
+            (Some(_), Some(_)) => Err(bad(
+                "networks",
+                "absent when axesNames is given (use one of them)",
+                "both".into(),
+            )),
+            (None, None) => Err(p.missing("axesNames")),
+            (Some(v), None) => {
+                let names = v
+                    .as_list()
+                    .and_then(|l| l.iter().map(|n| n.as_str().map(str::to_string)).collect())
+                    .ok_or_else(|| bad("axesNames", "a list of axis names", v.to_string()))?;
+                Ok(Layout::AxesNames(names))
+            }
+            (None, Some(v)) => {
+                let nets: Vec<String> = v
+                    .as_list()
+                    .and_then(|l| l.iter().map(|n| n.as_str().map(str::to_string)).collect())
+                    .ok_or_else(|| bad("networks", "a list of network names", v.to_string()))?;
+                let joints = p.int("joints")?.ok_or_else(|| p.missing("joints"))?;
+                let joints = usize::try_from(joints)
+                    .map_err(|_| bad("joints", "a non-negative integer", joints.to_string()))?;
+                let networks = nets
+                    .iter()
+                    .map(|name| network(config, name))
+                    .collect::<DevResult<Vec<_>>>()?;
+                for n in &networks {
+                    if n.part_last >= joints {
+                        return Err(bad(
+                            &n.name,
+                            "part joints below `joints`",
+                            format!("{}..={} with joints {joints}", n.part_first, n.part_last),
+                        ));
+                    }
+                }
+                Ok(Layout::Networks { joints, networks })
+            }
+        }
+    }
+
+    /// Maps every part joint to (board index, board joint) for the boards attached.
+    pub fn resolve(&self, boards: &[BoardInfo]) -> Result<Lut, RemapError> {
+        match self {
+            Layout::AxesNames(names) => {
+                let mut at: HashMap<&str, (usize, usize)> = HashMap::new();
+                for (b, info) in boards.iter().enumerate() {
+                    for (j, name) in info.names.iter().enumerate() {
+                        if let Some((b0, _)) = at.insert(name, (b, j)) {
+                            return Err(RemapError::DuplicateAxis {
+                                name: name.clone(),
+                                first: boards[b0].key.clone(),
+                                second: info.key.clone(),
+                            });
+                        }
+                    }
+                }
+                names
+                    .iter()
+                    .map(|n| {
+                        at.get(n.as_str())
+                            .copied()
+                            .ok_or_else(|| RemapError::UnknownAxis(n.clone()))
+                    })
+                    .collect()
+            }
+            Layout::Networks { joints, networks } => {
+                let mut lut: Vec<Option<(usize, usize)>> = vec![None; *joints];
+                for n in networks {
+                    let b = boards
+                        .iter()
+                        .position(|i| i.key == n.name)
+                        .ok_or_else(|| RemapError::MissingNetwork(n.name.clone()))?;
+                    if n.board_last >= boards[b].axes {
+                        return Err(RemapError::BoardRange {
+                            name: n.name.clone(),
+                            first: n.board_first,
+                            last: n.board_last,
+                            axes: boards[b].axes,
+                        });
+                    }
+                    for (k, slot) in lut[n.part_first..=n.part_last].iter_mut().enumerate() {
+                        *slot = Some((b, n.board_first + k));
+                    }
+                }
+                lut.into_iter()
+                    .enumerate()
+                    .map(|(j, s)| s.ok_or(RemapError::Uncovered(j)))
+                    .collect()
+            }
+        }
+    }
+}
+
+/// Reads `name (a b c d)` or `name a b c d` from the configuration.
+fn network(config: &Property, name: &str) -> DevResult<Network> {
+    let bad = |got: String| DeviceError::BadParam {
+        device: NAME.into(),
+        param: name.into(),
+        expected: "four joint indices (partFirst partLast boardFirst boardLast), with equal spans",
+        got,
+    };
+    let line = config
+        .find_group(name)
+        .ok_or_else(|| DeviceError::MissingParam {
+            device: NAME.into(),
+            param: name.into(),
+        })?;
+    let numbers: Vec<Value> = match line.len() {
+        2 => match &line[1] {
+            Value::List(l) => l.iter().cloned().collect(),
+            v => match v.as_str() {
+                Some(text) => Bottle::from_text(text).into_items(),
+                None => return Err(bad(line.to_string())),
+            },
+        },
+        5 => line.iter().skip(1).cloned().collect(),
+        _ => return Err(bad(line.to_string())),
+    };
+    let n: Vec<usize> = numbers
+        .iter()
+        .map(|v| {
+            v.as_i64()
+                .filter(|_| v.is_int())
+                .and_then(|x| usize::try_from(x).ok())
+        })
+        .collect::<Option<Vec<_>>>()
+        .filter(|n| n.len() == 4)
+        .ok_or_else(|| bad(line.to_string()))?;
+    if n[1] < n[0] || n[3] < n[2] || n[1] - n[0] != n[3] - n[2] {
+        return Err(bad(line.to_string()));
+    }
+    Ok(Network {
+        name: name.to_string(),
+        part_first: n[0],
+        part_last: n[1],
+        board_first: n[2],
+        board_last: n[3],
+    })
+}
+
+/// The remapper device.
+#[derive(Default)]
+pub struct ControlBoardRemapper {
+    layout: Option<Layout>,
+    boards: Vec<SharedDevice>,
+    lut: Lut,
+}
+
+const NOT_ATTACHED: &str = "controlboardremapper: no boards attached yet";
+
+fn lock(d: &SharedDevice) -> MutexGuard<'_, crate::driver::PolyDriver> {
+    d.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl ControlBoardRemapper {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The (board index, board joint) of every part joint, once attached.
+    pub fn lut(&self) -> &[(usize, usize)] {
+        &self.lut
+    }
+
+    fn axes(&self) -> DevResult<usize> {
+        if self.boards.is_empty() {
+            return Err(DeviceError::Unsupported(NOT_ATTACHED));
+        }
+        Ok(self.lut.len())
+    }
+
+    /// Runs `f` on the board owning part joint `j`, with the board's joint index.
+    fn on<R>(
+        &self,
+        j: usize,
+        f: impl FnOnce(&mut dyn DeviceDriver, usize) -> DevResult<R>,
+    ) -> DevResult<R> {
+        let axes = self.axes()?;
+        let (b, local) = *self.lut.get(j).ok_or(DeviceError::InvalidJoint {
+            joint: j as i64,
+            axes,
+        })?;
+        let mut pd = lock(&self.boards[b]);
+        f(pd.device(), local)
+    }
+}
+
+/// The interface `$view` of the board owning joint `$j`, as `$i` with board joint `$l`.
+macro_rules! on {
+    ($self:ident, $j:expr, $view:ident, $what:literal, |$i:ident, $l:ident| $body:expr) => {
+        $self.on($j, |d, $l| {
+            let $i = d.$view().ok_or(DeviceError::Unsupported(concat!(
+                "a board of the remapper lacks ",
+                $what
+            )))?;
+            $body
+        })
+    };
+}
+
+impl DeviceDriver for ControlBoardRemapper {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        self.layout = Some(Layout::from_config(config)?);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        self.detach_all()
+    }
+
+    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
+        Some(self)
+    }
+    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
+        Some(self)
+    }
+    fn as_position_control(&mut self) -> Option<&mut dyn IPositionControl> {
+        Some(self)
+    }
+    fn as_velocity_control(&mut self) -> Option<&mut dyn IVelocityControl> {
+        Some(self)
+    }
+    fn as_control_mode(&mut self) -> Option<&mut dyn IControlMode> {
+        Some(self)
+    }
+    fn as_axis_info(&mut self) -> Option<&mut dyn IAxisInfo> {
+        Some(self)
+    }
+    fn as_control_limits(&mut self) -> Option<&mut dyn IControlLimits> {
+        Some(self)
+    }
+    fn as_interaction_mode(&mut self) -> Option<&mut dyn IInteractionMode> {
+        Some(self)
+    }
+    fn as_torque_control(&mut self) -> Option<&mut dyn ITorqueControl> {
+        Some(self)
+    }
+    fn as_motor_encoders(&mut self) -> Option<&mut dyn IMotorEncoders> {
+        Some(self)
+    }
+    fn as_amplifier_control(&mut self) -> Option<&mut dyn IAmplifierControl> {
+        Some(self)
+    }
+    fn as_motor(&mut self) -> Option<&mut dyn IMotor> {
+        Some(self)
+    }
+    fn as_pid_control(&mut self) -> Option<&mut dyn IPidControl> {
+        Some(self)
+    }
+    fn as_current_control(&mut self) -> Option<&mut dyn ICurrentControl> {
+        Some(self)
+    }
+    fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
+        Some(self)
+    }
+}
+
+/// What the layout needs to know about an attached device.
+fn board_info(key: &str, dev: &SharedDevice, with_names: bool) -> DevResult<BoardInfo> {
+    let mut pd = lock(dev);
+    let d = pd.device();
+    let axes = d
+        .as_encoders()
+        .ok_or(DeviceError::Unsupported(
+            "controlboardremapper: an attached device has no encoders",
+        ))?
+        .get_axes()?;
+    let names = if with_names {
+        let info = d.as_axis_info().ok_or(DeviceError::Unsupported(
+            "controlboardremapper: axesNames needs devices with axis info",
+        ))?;
+        (0..axes)
+            .map(|j| info.get_axis_name(j))
+            .collect::<DevResult<Vec<_>>>()?
+    } else {
+        Vec::new()
+    };
+    Ok(BoardInfo {
+        key: key.to_string(),
+        axes,
+        names,
+    })
+}
+
+impl IMultipleWrapper for ControlBoardRemapper {
+    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
+        let layout = self.layout.as_ref().ok_or(DeviceError::NotOpen)?;
+        let with_names = matches!(layout, Layout::AxesNames(_));
+        // as C++, a device keyed "calibrator" is not a board
+        let boards: Vec<&(String, SharedDevice)> = devices
+            .iter()
+            .filter(|(k, _)| !k.eq_ignore_ascii_case("calibrator"))
+            .collect();
+        let infos = boards
+            .iter()
+            .map(|(k, d)| board_info(k, d, with_names))
+            .collect::<DevResult<Vec<_>>>()?;
+        let lut = layout.resolve(&infos).map_err(|e| DeviceError::BadParam {
+            device: NAME.into(),
+            param: if with_names { "axesNames" } else { "networks" }.into(),
+            expected: "a layout the attached boards provide",
+            got: e.to_string(),
+        })?;
+        self.boards = boards.into_iter().map(|(_, d)| d.clone()).collect();
+        self.lut = lut;
+        Ok(())
+    }
+
+    fn detach_all(&mut self) -> DevResult<()> {
+        self.boards.clear();
+        self.lut.clear();
+        Ok(())
+    }
+}
+
+impl IEncoders for ControlBoardRemapper {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_encoder(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_encoders, "IEncoders", |e, l| e.get_encoder(l))
+    }
+    fn get_encoder_speed(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_encoders, "IEncoders", |e, l| e
+            .get_encoder_speed(l))
+    }
+    fn get_encoder_acceleration(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_encoders, "IEncoders", |e, l| e
+            .get_encoder_acceleration(l))
+    }
+    fn get_encoder_timed(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        on!(self, j, as_encoders, "IEncoders", |e, l| e
+            .get_encoder_timed(l))
+    }
+    fn set_encoder(&mut self, j: usize, value: f64) -> DevResult<()> {
+        on!(self, j, as_encoders, "IEncoders", |e, l| e
+            .set_encoder(l, value))
+    }
+    fn reset_encoder(&mut self, j: usize) -> DevResult<()> {
+        on!(self, j, as_encoders, "IEncoders", |e, l| e.reset_encoder(l))
+    }
+}
+
+impl IPositionControl for ControlBoardRemapper {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn position_move(&mut self, j: usize, target: f64) -> DevResult<()> {
+        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+            .position_move(l, target))
+    }
+    fn relative_move(&mut self, j: usize, delta: f64) -> DevResult<()> {
+        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+            .relative_move(l, delta))
+    }
+    fn check_motion_done(&mut self, j: usize) -> DevResult<bool> {
+        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+            .check_motion_done(l))
+    }
+    fn set_ref_speed(&mut self, j: usize, speed: f64) -> DevResult<()> {
+        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+            .set_ref_speed(l, speed))
+    }
+    fn set_ref_acceleration(&mut self, j: usize, acc: f64) -> DevResult<()> {
+        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+            .set_ref_acceleration(l, acc))
+    }
+    fn get_ref_speed(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+            .get_ref_speed(l))
+    }
+    fn get_ref_acceleration(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+            .get_ref_acceleration(l))
+    }
+    fn stop(&mut self, j: usize) -> DevResult<()> {
+        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+            .stop(l))
+    }
+    fn get_target_position(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+            .get_target_position(l))
+    }
+}
+
+impl IVelocityControl for ControlBoardRemapper {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn velocity_move(&mut self, j: usize, speed: f64) -> DevResult<()> {
+        on!(self, j, as_velocity_control, "IVelocityControl", |v, l| v
+            .velocity_move(l, speed))
+    }
+    fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_velocity_control, "IVelocityControl", |v, l| v
+            .get_ref_velocity(l))
+    }
+}
+
+impl IControlMode for ControlBoardRemapper {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
+        on!(self, j, as_control_mode, "IControlMode", |c, l| c
+            .get_control_mode(l))
+    }
+    fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
+        on!(self, j, as_control_mode, "IControlMode", |c, l| c
+            .set_control_mode(l, mode))
+    }
+}
+
+impl IInteractionMode for ControlBoardRemapper {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_interaction_mode(&mut self, j: usize) -> DevResult<Vocab32> {
+        on!(self, j, as_interaction_mode, "IInteractionMode", |i, l| i
+            .get_interaction_mode(l))
+    }
+    fn set_interaction_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
+        on!(self, j, as_interaction_mode, "IInteractionMode", |i, l| i
+            .set_interaction_mode(l, mode))
+    }
+}
+
+impl IAxisInfo for ControlBoardRemapper {
+    fn get_axis_name(&mut self, j: usize) -> DevResult<String> {
+        on!(self, j, as_axis_info, "IAxisInfo", |a, l| a
+            .get_axis_name(l))
+    }
+    fn get_joint_type(&mut self, j: usize) -> DevResult<Vocab32> {
+        on!(self, j, as_axis_info, "IAxisInfo", |a, l| a
+            .get_joint_type(l))
+    }
+}
+
+impl IControlLimits for ControlBoardRemapper {
+    fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
+        on!(self, j, as_control_limits, "IControlLimits", |c, l| c
+            .set_limits(l, min, max))
+    }
+    fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        on!(self, j, as_control_limits, "IControlLimits", |c, l| c
+            .get_limits(l))
+    }
+    fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
+        on!(self, j, as_control_limits, "IControlLimits", |c, l| c
+            .set_vel_limits(l, min, max))
+    }
+    fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        on!(self, j, as_control_limits, "IControlLimits", |c, l| c
+            .get_vel_limits(l))
+    }
+}
+
+impl ITorqueControl for ControlBoardRemapper {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_torque(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_torque_control, "ITorqueControl", |t, l| t
+            .get_torque(l))
+    }
+    fn set_ref_torque(&mut self, j: usize, v: f64) -> DevResult<()> {
+        on!(self, j, as_torque_control, "ITorqueControl", |t, l| t
+            .set_ref_torque(l, v))
+    }
+    fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_torque_control, "ITorqueControl", |t, l| t
+            .get_ref_torque(l))
+    }
+}
+
+impl IMotorEncoders for ControlBoardRemapper {
+    fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
+        on!(self, m, as_motor_encoders, "IMotorEncoders", |e, l| e
+            .get_motor_encoder(l))
+    }
+}
+
+impl IAmplifierControl for ControlBoardRemapper {
+    fn enable_amp(&mut self, j: usize) -> DevResult<()> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.enable_amp(l)
+        )
+    }
+    fn disable_amp(&mut self, j: usize) -> DevResult<()> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.disable_amp(l)
+        )
+    }
+    fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>> {
+        (0..self.axes()?)
+            .map(|j| {
+                on!(
+                    self,
+                    j,
+                    as_amplifier_control,
+                    "IAmplifierControl",
+                    |a, l| a
+                        .get_amp_statuses()?
+                        .get(l)
+                        .copied()
+                        .ok_or(DeviceError::Unsupported(
+                            "a board of the remapper reported too few amplifier statuses"
+                        ))
+                )
+            })
+            .collect()
+    }
+    fn get_current(&mut self, j: usize) -> DevResult<f64> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.get_current(l)
+        )
+    }
+    fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.get_max_current(l)
+        )
+    }
+}
+
+impl IMotor for ControlBoardRemapper {
+    fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
+        on!(self, m, as_motor, "IMotor", |x, l| x.get_temperature(l))
+    }
+}
+
+impl IPidControl for ControlBoardRemapper {
+    fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
+        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+            .get_pid(ty, l))
+    }
+    fn set_pid(&mut self, ty: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
+        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+            .set_pid(ty, l, pid))
+    }
+    fn enable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
+        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+            .enable_pid(ty, l))
+    }
+    fn disable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
+        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+            .disable_pid(ty, l))
+    }
+    fn is_pid_enabled(&mut self, ty: Vocab32, j: usize) -> DevResult<bool> {
+        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+            .is_pid_enabled(ty, l))
+    }
+    fn set_pid_reference(&mut self, ty: Vocab32, j: usize, r: f64) -> DevResult<()> {
+        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+            .set_pid_reference(ty, l, r))
+    }
+    fn get_pid_reference(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
+        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+            .get_pid_reference(ty, l))
+    }
+}
+
+impl ICurrentControl for ControlBoardRemapper {
+    fn get_ref_current(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_current_control, "ICurrentControl", |c, l| c
+            .get_ref_current(l))
+    }
+}
+
+impl IPwmControl for ControlBoardRemapper {
+    fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_pwm_control, "IPWMControl", |c, l| c
+            .get_ref_duty_cycle(l))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn board(key: &str, names: &[&str]) -> BoardInfo {
+        BoardInfo {
+            key: key.into(),
+            axes: names.len(),
+            names: names.iter().map(|s| s.to_string()).collect(),
+        }
+    }
+
+    fn layout(text: &str) -> DevResult<Layout> {
+        Layout::from_config(&Property::from_config_text(text).unwrap())
+    }
+
+    #[test]
+    fn axes_names_resolve_across_boards() {
+        let l = layout("axesNames (b1 a0 a2)\n").unwrap();
+        let boards = [board("a", &["a0", "a1", "a2"]), board("b", &["b0", "b1"])];
+        assert_eq!(l.resolve(&boards).unwrap(), [(1, 1), (0, 0), (0, 2)]);
+        let l = layout("axesNames (zz)\n").unwrap();
+        assert_eq!(
+            l.resolve(&boards),
+            Err(RemapError::UnknownAxis("zz".into()))
+        );
+        let dup = [board("a", &["x"]), board("b", &["x"])];
+        assert!(matches!(
+            layout("axesNames (x)\n").unwrap().resolve(&dup),
+            Err(RemapError::DuplicateAxis { .. })
+        ));
+    }
+
+    #[test]
+    fn networks_in_both_syntaxes() {
+        let l = layout("networks (arm hand)\njoints 5\narm (0 2 1 3)\nhand 3 4 0 1\n").unwrap();
+        let boards = [
+            board("hand", &["h0", "h1"]),
+            board("arm", &["a0", "a1", "a2", "a3"]),
+        ];
+        assert_eq!(
+            l.resolve(&boards).unwrap(),
+            [(1, 1), (1, 2), (1, 3), (0, 0), (0, 1)]
+        );
+        assert_eq!(
+            l.resolve(&boards[..1]),
+            Err(RemapError::MissingNetwork("arm".into()))
+        );
+        let gap = layout("networks (arm)\njoints 4\narm (0 2 0 2)\n").unwrap();
+        assert_eq!(gap.resolve(&boards[1..]), Err(RemapError::Uncovered(3)));
+        let wide = layout("networks (hand)\njoints 3\nhand (0 2 0 2)\n").unwrap();
+        assert!(matches!(
+            wide.resolve(&boards),
+            Err(RemapError::BoardRange { .. })
+        ));
+    }
+
+    #[test]
+    fn bad_configurations_name_the_parameter() {
+        let err = |t: &str| layout(t).unwrap_err().to_string();
+        assert!(err("").contains("`axesNames`"));
+        assert!(err("axesNames (a)\nnetworks (n)\n").contains("`networks`"));
+        assert!(err("axesNames 3\n").contains("`axesNames`"));
+        assert!(err("networks (n)\n").contains("`joints`"));
+        assert!(err("networks (n)\njoints 2\n").contains("`n`"));
+        assert!(err("networks (n)\njoints 2\nn (0 1 0)\n").contains("`n`"));
+        assert!(err("networks (n)\njoints 2\nn (0 1 0 2)\n").contains("`n`"));
+        assert!(err("networks (n)\njoints 2\nn (0 3 0 3)\n").contains("`n`"));
+        assert!(err("networks (n)\njoints -1\nn (0 0 0 0)\n").contains("`joints`"));
+    }
+}

@@ -1,0 +1,1102 @@
+//! `remote_controlboard`: the client side of `controlBoard_nws_yarp`, a device whose
+//! motor interfaces talk to a remote board as the C++ 3.12 client does.
+//!
+//! Parameters (C++ names): `remote` (the server's port prefix, required), `local` (this
+//! device's port prefix, required), `carrier` (for the streamed state and commands,
+//! default `udp` as C++), `timeout` (seconds after which the streamed state is stale,
+//! default 0.5), `writeStrict` (`on`/`off`), `ignoreProtocolCheck`.
+//!
+//! Opening follows the recorded C++ sequence: ports `<local>/rpc:o`, `<local>/command:o`
+//! and `<local>/stateExt:i`; rpc connected over tcp, command over `carrier`; the state
+//! connected by the server port's admin protocol (`[list] [out]`, then `[add]
+//! "<carrier>:/<local>/stateExt:i"`); then `[get] [prot]` (major version must match)
+//! and `[get] [axes]`.
+//!
+//! Reads of positions, speeds, accelerations, motor positions, torques, currents and
+//! modes come from the last `stateExt` message (no RPC); velocity, torque references go
+//! out on `command:o` as `(head) (values)`; everything else is an RPC on `rpc:o`.
+
+use crate::controlboard::{CommandMessage, JointData, PROTOCOL_VERSION_NUMBER};
+use crate::driver::{DeviceDriver, Params};
+use crate::error::{DevResult, DeviceError};
+use crate::interfaces::*;
+use crate::runtime;
+use crate::vocabs::*;
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+use yarp_net::nameserver::NameClient;
+use yarp_net::port::Port;
+use yarp_proto::{bottle, Bottle, Property, Stamp, Value, Vocab32};
+
+/// The C++ device name.
+pub const NAME: &str = "remote_controlboard";
+
+/// Drivers of this family, by C++ name.
+pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] =
+    &[(NAME, || Box::new(RemoteControlBoard::new()))];
+
+/// How long an RPC may wait for its reply before the call fails.
+pub const RPC_TIMEOUT: Duration = Duration::from_secs(5);
+/// Default staleness limit of the streamed state (C++ `timeout`).
+pub const DEFAULT_TIMEOUT: Duration = Duration::from_millis(500);
+
+const fn v(s: &str) -> i32 {
+    Vocab32::new(s).0
+}
+const TORQUES_DIRECT: i32 = v("dtq");
+const STATE_ERR: &str = "no fresh state from the remote control board (stateExt:i)";
+const REFUSED: &str = "the remote control board refused the command";
+const UNREACHABLE: &str = "the remote control board did not answer";
+
+/// The last state received on `<local>/stateExt:i`.
+#[derive(Debug, Clone)]
+struct Received {
+    data: JointData,
+    stamp: Option<Stamp>,
+    at: Instant,
+}
+
+/// What `open` established.
+struct Link {
+    rpc: Arc<Port>,
+    command: Arc<Port>,
+    state: Arc<Port>,
+    reader: tokio::task::JoinHandle<()>,
+    latest: Arc<Mutex<Option<Received>>>,
+    axes: usize,
+    timeout: Duration,
+    write_strict: bool,
+}
+
+/// The `remote_controlboard` device.
+#[derive(Default)]
+pub struct RemoteControlBoard {
+    link: Option<Link>,
+}
+
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// The settings read from the configuration.
+struct Settings {
+    remote: String,
+    local: String,
+    carrier: String,
+    timeout: Duration,
+    write_strict: bool,
+    ignore_protocol: bool,
+}
+
+fn settings(config: &Property) -> DevResult<Settings> {
+    let p = Params::new(NAME, config);
+    let prefix = |key: &str| -> DevResult<String> {
+        let s = p.string(key)?.ok_or_else(|| p.missing(key))?;
+        Ok(crate::controlboard::port_prefix(&s))
+    };
+    let remote = prefix("remote")?;
+    let local = prefix("local")?;
+    let carrier = p.string("carrier")?.unwrap_or_else(|| "udp".to_string());
+    let timeout = match p.float("timeout")? {
+        None => DEFAULT_TIMEOUT,
+        Some(t) if t > 0.0 && t.is_finite() => Duration::from_secs_f64(t),
+        Some(t) => {
+            return Err(DeviceError::BadParam {
+                device: NAME.into(),
+                param: "timeout".into(),
+                expected: "a number of seconds greater than 0",
+                got: t.to_string(),
+            })
+        }
+    };
+    let write_strict = match p.string("writeStrict")?.as_deref() {
+        None | Some("off") => false,
+        Some("on") => true,
+        Some(other) => {
+            return Err(DeviceError::BadParam {
+                device: NAME.into(),
+                param: "writeStrict".into(),
+                expected: "on or off",
+                got: other.to_string(),
+            })
+        }
+    };
+    let ignore_protocol = p
+        .find("ignoreProtocolCheck")
+        .is_some_and(|v| v.as_bool().unwrap_or(true));
+    Ok(Settings {
+        remote,
+        local,
+        carrier,
+        timeout,
+        write_strict,
+        ignore_protocol,
+    })
+}
+
+/// C++ `CHECK_FAIL`: a reply is a failure when it is empty or starts with `[fail]`
+/// (`[nak]` too: the command was not understood).
+fn reply_ok(reply: &Bottle) -> bool {
+    match reply.get(0) {
+        None => false,
+        Some(Value::Vocab32(x)) => x.0 != FAILED && x.0 != NAK,
+        Some(_) => true,
+    }
+}
+
+/// Opens the ports and runs the C++ connection sequence; returns the link. On failure
+/// the ports opened so far are closed (unregistered) again.
+async fn connect(s: Settings, ns: NameClient) -> Result<Link, String> {
+    let local = &s.local;
+    let mut ports: Vec<Arc<Port>> = Vec::new();
+    for suffix in ["rpc:o", "command:o", "stateExt:i"] {
+        let name = format!("{local}/{suffix}");
+        match Port::open(&name, ns.clone()).await {
+            Ok(p) => ports.push(Arc::new(p)),
+            Err(e) => {
+                close_ports(ports).await;
+                return Err(format!("cannot open {name}: {e}"));
+            }
+        }
+    }
+    let (rpc, command, state) = (ports[0].clone(), ports[1].clone(), ports[2].clone());
+    let latest = Arc::new(Mutex::new(None));
+    let reader = tokio::spawn(read_state(state.clone(), latest.clone()));
+    match handshake(&s, &ns, &rpc, &command, &state).await {
+        Ok(axes) => Ok(Link {
+            rpc,
+            command,
+            state,
+            reader,
+            latest,
+            axes,
+            timeout: s.timeout,
+            write_strict: s.write_strict,
+        }),
+        Err(e) => {
+            reader.abort();
+            let _ = reader.await;
+            drop((rpc, command, state));
+            close_ports(ports).await;
+            Err(e)
+        }
+    }
+}
+
+/// Closes ports no task holds any more.
+async fn close_ports(ports: Vec<Arc<Port>>) {
+    for p in ports {
+        if let Ok(p) = Arc::try_unwrap(p) {
+            p.close().await;
+        }
+    }
+}
+
+/// Connects the three ports to the server and checks protocol and axes; returns the
+/// number of axes.
+async fn handshake(
+    s: &Settings,
+    ns: &NameClient,
+    rpc: &Arc<Port>,
+    command: &Port,
+    state: &Port,
+) -> Result<usize, String> {
+    let Settings {
+        remote,
+        local,
+        carrier,
+        ..
+    } = s;
+    let remote_rpc = format!("{remote}/rpc:i");
+    rpc.connect(&remote_rpc, Some("tcp"))
+        .await
+        .map_err(|e| format!("cannot connect to {remote_rpc}: {e}"))?;
+    let remote_cmd = format!("{remote}/command:i");
+    command
+        .connect(&remote_cmd, Some(carrier))
+        .await
+        .map_err(|e| format!("cannot connect to {remote_cmd} ({carrier}): {e}"))?;
+    connect_state(ns, &format!("{remote}/stateExt:o"), state.name(), carrier).await?;
+    let call = |cmd: Bottle| {
+        let rpc = rpc.clone();
+        let remote_rpc = remote_rpc.clone();
+        async move {
+            match tokio::time::timeout(RPC_TIMEOUT, rpc.rpc(&cmd)).await {
+                Ok(Ok(r)) if reply_ok(&r) => Ok(r),
+                Ok(Ok(r)) => Err(format!("{remote_rpc}: `{cmd}` answered `{r}`")),
+                Ok(Err(e)) => Err(format!("{remote_rpc}: `{cmd}`: {e}")),
+                Err(_) => Err(format!(
+                    "{remote_rpc}: `{cmd}`: no reply in {RPC_TIMEOUT:?}"
+                )),
+            }
+        }
+    };
+    let prot = call(bottle![Vocab32(GET), Vocab32(PROTOCOL_VERSION)]).await?;
+    let (major, minor) = (
+        prot.get(1).and_then(Value::as_i32),
+        prot.get(2).and_then(Value::as_i32),
+    );
+    if major != Some(PROTOCOL_VERSION_NUMBER.0) {
+        let msg = format!(
+            "protocol version mismatch: the server speaks {prot}, this client {}.{}",
+            PROTOCOL_VERSION_NUMBER.0, PROTOCOL_VERSION_NUMBER.1
+        );
+        if !s.ignore_protocol {
+            return Err(msg);
+        }
+        tracing::warn!("{NAME} {local}: {msg} (ignored: ignoreProtocolCheck)");
+    } else if minor != Some(PROTOCOL_VERSION_NUMBER.1) {
+        tracing::warn!("{NAME} {local}: the server speaks protocol {prot}; minor versions differ");
+    }
+    let axes = call(bottle![Vocab32(GET), Vocab32(AXES)]).await?;
+    axes.get(2)
+        .and_then(Value::as_i64)
+        .and_then(|n| usize::try_from(n).ok())
+        .filter(|n| *n > 0)
+        .ok_or_else(|| format!("{remote}: bad number of axes in `{axes}`"))
+}
+
+/// Connects `from` to our `to` as C++ `Network::connect` does: through `from`'s admin
+/// port, asking first whether the connection exists (`[list] [out] "<to>"`).
+async fn connect_state(ns: &NameClient, from: &str, to: &str, carrier: &str) -> Result<(), String> {
+    let contact = ns
+        .query(from)
+        .await
+        .map_err(|e| format!("name server: {e}"))?
+        .ok_or_else(|| format!("{from} is not registered"))?;
+    let list = bottle![Vocab32::new("list"), Vocab32::new("out"), to];
+    let existing = yarp_net::network::admin_command(&contact, &list)
+        .await
+        .map_err(|e| format!("{from}: {e}"))?;
+    if !existing.is_empty() {
+        return Ok(());
+    }
+    let add = bottle![Vocab32::new("add"), format!("{carrier}:/{to}")];
+    let reply = yarp_net::network::admin_command(&contact, &add)
+        .await
+        .map_err(|e| format!("{from}: {e}"))?;
+    match reply.get(0).and_then(Value::as_i64) {
+        Some(0) => Ok(()),
+        _ => Err(format!("{from} refused the connection to {to}: {reply}")),
+    }
+}
+
+/// Keeps the last valid `jointData` received.
+async fn read_state(port: Arc<Port>, latest: Arc<Mutex<Option<Received>>>) {
+    let mut warned = false;
+    while let Some(msg) = port.read().await {
+        let data = msg
+            .bottle()
+            .map_err(|e| e.to_string())
+            .and_then(|b| JointData::from_bottle(&b).map_err(|e| e.to_string()));
+        match data {
+            Ok(data) => {
+                *lock(&latest) = Some(Received {
+                    data,
+                    stamp: msg.stamp,
+                    at: Instant::now(),
+                })
+            }
+            Err(e) if !warned => {
+                tracing::warn!(
+                    "{}: ignoring a state message from {}: {e}",
+                    port.name(),
+                    msg.from
+                );
+                warned = true;
+            }
+            Err(_) => {}
+        }
+    }
+}
+
+impl RemoteControlBoard {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn link(&self) -> DevResult<&Link> {
+        self.link.as_ref().ok_or(DeviceError::NotOpen)
+    }
+
+    fn joint(&self, j: usize) -> DevResult<usize> {
+        let axes = self.link()?.axes;
+        if j < axes {
+            Ok(j)
+        } else {
+            Err(DeviceError::InvalidJoint {
+                joint: j as i64,
+                axes,
+            })
+        }
+    }
+
+    /// Sends `cmd` on the RPC connection and returns the reply (C++ `rpc_p.write`);
+    /// a `[fail]` reply or no reply is an error.
+    pub fn call(&self, cmd: &Bottle) -> DevResult<Bottle> {
+        let port = self.link()?.rpc.clone();
+        let c = cmd.clone();
+        let r =
+            runtime::block_on(async move { tokio::time::timeout(RPC_TIMEOUT, port.rpc(&c)).await });
+        match r {
+            Ok(Ok(reply)) if reply_ok(&reply) => Ok(reply),
+            Ok(Ok(reply)) => {
+                tracing::debug!("{NAME}: `{cmd}` answered `{reply}`");
+                Err(DeviceError::Unsupported(REFUSED))
+            }
+            Ok(Err(e)) => {
+                tracing::warn!("{NAME}: `{cmd}`: {e}");
+                Err(DeviceError::Unsupported(UNREACHABLE))
+            }
+            Err(_) => {
+                tracing::warn!("{NAME}: `{cmd}`: no reply within {RPC_TIMEOUT:?}");
+                Err(DeviceError::Unsupported(UNREACHABLE))
+            }
+        }
+    }
+
+    /// The number of axes, asked over RPC as C++ `getAxes` does (`[get] [axes]`).
+    pub fn axes(&self) -> DevResult<usize> {
+        let v = self.get_value(bottle![Vocab32(GET), Vocab32(AXES)])?;
+        v.as_i64()
+            .and_then(|n| usize::try_from(n).ok())
+            .ok_or(DeviceError::Unsupported(REFUSED))
+    }
+
+    fn set(&self, cmd: Bottle) -> DevResult<()> {
+        self.call(&cmd).map(|_| ())
+    }
+
+    /// A `get` whose value is the reply's third element (`[is] [xxx] value ...`).
+    fn get_value(&self, cmd: Bottle) -> DevResult<Value> {
+        let r = self.call(&cmd)?;
+        r.get(2).cloned().ok_or(DeviceError::Unsupported(REFUSED))
+    }
+
+    fn get_f64(&self, cmd: Bottle) -> DevResult<f64> {
+        self.get_value(cmd)?
+            .as_f64()
+            .ok_or(DeviceError::Unsupported(REFUSED))
+    }
+
+    fn get_f64s(&self, cmd: Bottle) -> DevResult<Vec<f64>> {
+        let v = self.get_value(cmd)?;
+        v.as_list()
+            .and_then(|l| l.iter().map(Value::as_f64).collect())
+            .ok_or(DeviceError::Unsupported(REFUSED))
+    }
+
+    fn get_bool(&self, cmd: Bottle) -> DevResult<bool> {
+        Ok(self.get_f64(cmd)? != 0.0)
+    }
+
+    /// Sends a streaming command on `command:o` (dropped if the connection is busy,
+    /// unless `writeStrict on`).
+    fn stream(&self, head: Bottle, body: Vec<f64>) -> DevResult<()> {
+        let link = self.link()?;
+        let msg = CommandMessage::new(head, body).to_bottle();
+        if link.write_strict {
+            let port = link.command.clone();
+            runtime::block_on(async move { port.write_strict(&msg, None).await });
+        } else {
+            link.command.write_nowait(&msg, None);
+        }
+        Ok(())
+    }
+
+    /// Reads from the last fresh state; `f` picks the value (None = not valid).
+    fn state<T>(&self, f: impl FnOnce(&JointData, Option<Stamp>) -> Option<T>) -> DevResult<T> {
+        let link = self.link()?;
+        let latest = lock(&link.latest);
+        let r = latest
+            .as_ref()
+            .filter(|r| r.at.elapsed() <= link.timeout)
+            .ok_or(DeviceError::Unsupported(STATE_ERR))?;
+        f(&r.data, r.stamp).ok_or(DeviceError::Unsupported(STATE_ERR))
+    }
+
+    fn state_vec(
+        &self,
+        pick: fn(&JointData) -> &crate::controlboard::Channel<f64>,
+    ) -> DevResult<Vec<f64>> {
+        self.state(|d, _| {
+            let c = pick(d);
+            c.valid.then(|| c.values.clone())
+        })
+    }
+
+    fn state_one(
+        &self,
+        j: usize,
+        pick: fn(&JointData) -> &crate::controlboard::Channel<f64>,
+    ) -> DevResult<f64> {
+        let j = self.joint(j)?;
+        self.state(|d, _| {
+            let c = pick(d);
+            c.values.get(j).copied().filter(|_| c.valid)
+        })
+    }
+
+    /// The stamp of the last state received (C++ `IPreciselyTimed::getLastInputStamp`).
+    pub fn last_input_stamp(&self) -> Option<Stamp> {
+        let link = self.link.as_ref()?;
+        lock(&link.latest).as_ref().and_then(|r| r.stamp)
+    }
+}
+
+fn joints_value(joints: &[usize]) -> Value {
+    Value::List(joints.iter().map(|j| *j as i32).collect())
+}
+fn floats_value(v: &[f64]) -> Value {
+    Value::List(v.iter().copied().collect())
+}
+fn vocabs_value(v: &[Vocab32]) -> Value {
+    Value::List(v.iter().copied().collect())
+}
+fn j32(j: usize) -> i32 {
+    j as i32
+}
+
+impl DeviceDriver for RemoteControlBoard {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let s = settings(config)?;
+        let remote = s.remote.clone();
+        let unreachable = |e: String| DeviceError::BadParam {
+            device: NAME.into(),
+            param: "remote".into(),
+            expected: "the port prefix of a running controlBoard_nws_yarp",
+            got: format!("{remote}: {e}"),
+        };
+        let ns = yarp_net::network::name_client().map_err(|e| unreachable(e.to_string()))?;
+        let link = runtime::block_on(connect(s, ns)).map_err(unreachable)?;
+        self.close()?;
+        self.link = Some(link);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        if let Some(link) = self.link.take() {
+            link.reader.abort();
+            runtime::block_on(async move {
+                let _ = link.reader.await;
+                close_ports(vec![link.rpc, link.command, link.state]).await;
+            });
+        }
+        Ok(())
+    }
+
+    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
+        Some(self)
+    }
+    fn as_position_control(&mut self) -> Option<&mut dyn IPositionControl> {
+        Some(self)
+    }
+    fn as_velocity_control(&mut self) -> Option<&mut dyn IVelocityControl> {
+        Some(self)
+    }
+    fn as_control_mode(&mut self) -> Option<&mut dyn IControlMode> {
+        Some(self)
+    }
+    fn as_axis_info(&mut self) -> Option<&mut dyn IAxisInfo> {
+        Some(self)
+    }
+    fn as_control_limits(&mut self) -> Option<&mut dyn IControlLimits> {
+        Some(self)
+    }
+    fn as_interaction_mode(&mut self) -> Option<&mut dyn IInteractionMode> {
+        Some(self)
+    }
+    fn as_torque_control(&mut self) -> Option<&mut dyn ITorqueControl> {
+        Some(self)
+    }
+    fn as_motor_encoders(&mut self) -> Option<&mut dyn IMotorEncoders> {
+        Some(self)
+    }
+    fn as_amplifier_control(&mut self) -> Option<&mut dyn IAmplifierControl> {
+        Some(self)
+    }
+    fn as_motor(&mut self) -> Option<&mut dyn IMotor> {
+        Some(self)
+    }
+    fn as_pid_control(&mut self) -> Option<&mut dyn IPidControl> {
+        Some(self)
+    }
+    fn as_current_control(&mut self) -> Option<&mut dyn ICurrentControl> {
+        Some(self)
+    }
+    fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
+        Some(self)
+    }
+}
+
+impl Drop for RemoteControlBoard {
+    fn drop(&mut self) {
+        let _ = self.close();
+    }
+}
+
+impl IEncoders for RemoteControlBoard {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_encoder(&mut self, j: usize) -> DevResult<f64> {
+        self.state_one(j, |d| &d.joint_position)
+    }
+    fn get_encoder_speed(&mut self, j: usize) -> DevResult<f64> {
+        self.state_one(j, |d| &d.joint_velocity)
+    }
+    fn get_encoder_acceleration(&mut self, j: usize) -> DevResult<f64> {
+        self.state_one(j, |d| &d.joint_acceleration)
+    }
+    fn get_encoder_timed(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        let j = self.joint(j)?;
+        self.state(|d, stamp| {
+            let c = &d.joint_position;
+            let t = stamp.map_or(0.0, |s| s.time);
+            c.values.get(j).copied().filter(|_| c.valid).map(|p| (p, t))
+        })
+    }
+    fn set_encoder(&mut self, j: usize, value: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(ENCODER), j32(j), value])
+    }
+    fn reset_encoder(&mut self, j: usize) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(E_RESET), j32(j)])
+    }
+    fn reset_encoders(&mut self) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(E_RESETS)])
+    }
+    fn set_encoders(&mut self, values: &[f64]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(ENCODERS),
+            floats_value(values)
+        ])
+    }
+    fn get_encoders(&mut self) -> DevResult<Vec<f64>> {
+        self.state_vec(|d| &d.joint_position)
+    }
+    fn get_encoder_speeds(&mut self) -> DevResult<Vec<f64>> {
+        self.state_vec(|d| &d.joint_velocity)
+    }
+    fn get_encoder_accelerations(&mut self) -> DevResult<Vec<f64>> {
+        self.state_vec(|d| &d.joint_acceleration)
+    }
+    fn get_encoders_timed(&mut self) -> DevResult<(Vec<f64>, Vec<f64>)> {
+        self.state(|d, stamp| {
+            let c = &d.joint_position;
+            let t = stamp.map_or(0.0, |s| s.time);
+            c.valid.then(|| (c.values.clone(), vec![t; c.values.len()]))
+        })
+    }
+}
+
+impl IPositionControl for RemoteControlBoard {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn position_move(&mut self, j: usize, target: f64) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(POSITION_MOVE),
+            j32(j),
+            target
+        ])
+    }
+    fn relative_move(&mut self, j: usize, delta: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(RELATIVE_MOVE), j32(j), delta])
+    }
+    fn check_motion_done(&mut self, j: usize) -> DevResult<bool> {
+        self.get_bool(bottle![Vocab32(GET), Vocab32(MOTION_DONE), j32(j)])
+    }
+    fn set_ref_speed(&mut self, j: usize, speed: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(REF_SPEED), j32(j), speed])
+    }
+    fn set_ref_acceleration(&mut self, j: usize, acc: f64) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(REF_ACCELERATION),
+            j32(j),
+            acc
+        ])
+    }
+    fn get_ref_speed(&mut self, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(REF_SPEED), j32(j)])
+    }
+    fn get_ref_acceleration(&mut self, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(REF_ACCELERATION), j32(j)])
+    }
+    fn stop(&mut self, j: usize) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(STOP), j32(j)])
+    }
+    fn get_target_position(&mut self, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(POSITION_MOVE), j32(j)])
+    }
+    fn position_moves(&mut self, targets: &[f64]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(POSITION_MOVES),
+            floats_value(targets)
+        ])
+    }
+    fn position_move_group(&mut self, joints: &[usize], targets: &[f64]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(POSITION_MOVE_GROUP),
+            joints.len() as i32,
+            joints_value(joints),
+            floats_value(targets)
+        ])
+    }
+    fn relative_moves(&mut self, deltas: &[f64]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(RELATIVE_MOVES),
+            floats_value(deltas)
+        ])
+    }
+    fn relative_move_group(&mut self, joints: &[usize], deltas: &[f64]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(RELATIVE_MOVE_GROUP),
+            joints.len() as i32,
+            joints_value(joints),
+            floats_value(deltas)
+        ])
+    }
+    fn check_motion_dones(&mut self) -> DevResult<bool> {
+        self.get_bool(bottle![Vocab32(GET), Vocab32(MOTION_DONES)])
+    }
+    fn check_motion_done_group(&mut self, joints: &[usize]) -> DevResult<bool> {
+        self.get_bool(bottle![
+            Vocab32(GET),
+            Vocab32(MOTION_DONE_GROUP),
+            joints.len() as i32,
+            joints_value(joints)
+        ])
+    }
+    fn set_ref_speeds(&mut self, speeds: &[f64]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(REF_SPEEDS),
+            floats_value(speeds)
+        ])
+    }
+    fn set_ref_speed_group(&mut self, joints: &[usize], speeds: &[f64]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(REF_SPEED_GROUP),
+            joints.len() as i32,
+            joints_value(joints),
+            floats_value(speeds)
+        ])
+    }
+    fn set_ref_accelerations(&mut self, accs: &[f64]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(REF_ACCELERATIONS),
+            floats_value(accs)
+        ])
+    }
+    fn set_ref_acceleration_group(&mut self, joints: &[usize], accs: &[f64]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(REF_ACCELERATION_GROUP),
+            joints.len() as i32,
+            joints_value(joints),
+            floats_value(accs)
+        ])
+    }
+    fn get_ref_speeds(&mut self) -> DevResult<Vec<f64>> {
+        self.get_f64s(bottle![Vocab32(GET), Vocab32(REF_SPEEDS)])
+    }
+    fn get_ref_accelerations(&mut self) -> DevResult<Vec<f64>> {
+        self.get_f64s(bottle![Vocab32(GET), Vocab32(REF_ACCELERATIONS)])
+    }
+    fn stops(&mut self) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(STOPS)])
+    }
+    fn stop_group(&mut self, joints: &[usize]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(STOP_GROUP),
+            joints.len() as i32,
+            joints_value(joints)
+        ])
+    }
+    fn get_target_positions(&mut self) -> DevResult<Vec<f64>> {
+        self.get_f64s(bottle![Vocab32(GET), Vocab32(POSITION_MOVES)])
+    }
+    fn get_target_position_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
+        self.get_f64s(bottle![
+            Vocab32(GET),
+            Vocab32(POSITION_MOVE_GROUP),
+            joints.len() as i32,
+            joints_value(joints)
+        ])
+    }
+}
+
+impl IVelocityControl for RemoteControlBoard {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn velocity_move(&mut self, j: usize, speed: f64) -> DevResult<()> {
+        let j = self.joint(j)?;
+        self.stream(bottle![Vocab32(VELOCITY_MOVE), j32(j)], vec![speed])
+    }
+    fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(VELOCITY_MOVE), j32(j)])
+    }
+    fn velocity_moves(&mut self, speeds: &[f64]) -> DevResult<()> {
+        let axes = self.link()?.axes;
+        if speeds.len() != axes {
+            return Err(DeviceError::WrongSize {
+                expected: axes,
+                got: speeds.len(),
+            });
+        }
+        self.stream(bottle![Vocab32(VELOCITY_MOVES)], speeds.to_vec())
+    }
+    fn velocity_move_group(&mut self, joints: &[usize], speeds: &[f64]) -> DevResult<()> {
+        if joints.len() != speeds.len() {
+            return Err(DeviceError::WrongSize {
+                expected: joints.len(),
+                got: speeds.len(),
+            });
+        }
+        self.stream(
+            bottle![
+                Vocab32(VELOCITY_MOVE_GROUP),
+                joints.len() as i32,
+                joints_value(joints)
+            ],
+            speeds.to_vec(),
+        )
+    }
+    fn get_ref_velocities(&mut self) -> DevResult<Vec<f64>> {
+        self.get_f64s(bottle![Vocab32(GET), Vocab32(VELOCITY_MOVES)])
+    }
+}
+
+impl IControlMode for RemoteControlBoard {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
+        let j = self.joint(j)?;
+        self.state(|d, _| {
+            let c = &d.control_mode;
+            c.values.get(j).copied().filter(|_| c.valid).map(Vocab32)
+        })
+    }
+    fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(ICONTROLMODE),
+            Vocab32(CM_CONTROL_MODE),
+            j32(j),
+            mode
+        ])
+    }
+    fn get_control_modes(&mut self) -> DevResult<Vec<Vocab32>> {
+        self.state(|d, _| {
+            let c = &d.control_mode;
+            c.valid
+                .then(|| c.values.iter().copied().map(Vocab32).collect())
+        })
+    }
+    fn set_control_modes(&mut self, modes: &[Vocab32]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(ICONTROLMODE),
+            Vocab32(CM_CONTROL_MODES),
+            vocabs_value(modes)
+        ])
+    }
+    fn set_control_modes_group(&mut self, joints: &[usize], modes: &[Vocab32]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(ICONTROLMODE),
+            Vocab32(CM_CONTROL_MODE_GROUP),
+            joints.len() as i32,
+            joints_value(joints),
+            vocabs_value(modes)
+        ])
+    }
+}
+
+impl IInteractionMode for RemoteControlBoard {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_interaction_mode(&mut self, j: usize) -> DevResult<Vocab32> {
+        let j = self.joint(j)?;
+        self.state(|d, _| {
+            let c = &d.interaction_mode;
+            c.values.get(j).copied().filter(|_| c.valid).map(Vocab32)
+        })
+    }
+    fn set_interaction_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(INTERACTION_MODE_IFACE),
+            Vocab32(INTERACTION_MODE),
+            j32(j),
+            mode
+        ])
+    }
+    fn get_interaction_modes(&mut self) -> DevResult<Vec<Vocab32>> {
+        self.state(|d, _| {
+            let c = &d.interaction_mode;
+            c.valid
+                .then(|| c.values.iter().copied().map(Vocab32).collect())
+        })
+    }
+    fn set_interaction_modes(&mut self, modes: &[Vocab32]) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(INTERACTION_MODE_IFACE),
+            Vocab32(INTERACTION_MODES),
+            vocabs_value(modes)
+        ])
+    }
+    fn set_interaction_modes_group(
+        &mut self,
+        joints: &[usize],
+        modes: &[Vocab32],
+    ) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(INTERACTION_MODE_IFACE),
+            Vocab32(INTERACTION_MODE_GROUP),
+            joints.len() as i32,
+            joints_value(joints),
+            vocabs_value(modes)
+        ])
+    }
+}
+
+impl IAxisInfo for RemoteControlBoard {
+    fn get_axis_name(&mut self, j: usize) -> DevResult<String> {
+        let v = self.get_value(bottle![Vocab32(GET), Vocab32(INFO_NAME), j32(j)])?;
+        v.as_str()
+            .map(str::to_string)
+            .ok_or(DeviceError::Unsupported(REFUSED))
+    }
+    fn get_joint_type(&mut self, j: usize) -> DevResult<Vocab32> {
+        let v = self.get_value(bottle![Vocab32(GET), Vocab32(INFO_TYPE), j32(j)])?;
+        v.as_i32()
+            .or_else(|| v.as_vocab().map(|x| x.0))
+            .map(Vocab32)
+            .ok_or(DeviceError::Unsupported(REFUSED))
+    }
+}
+
+impl IControlLimits for RemoteControlBoard {
+    fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(LIMITS), j32(j), min, max])
+    }
+    fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        let r = self.call(&bottle![Vocab32(GET), Vocab32(LIMITS), j32(j)])?;
+        two_numbers(&r)
+    }
+    fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(VEL_LIMITS), j32(j), min, max])
+    }
+    fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        let r = self.call(&bottle![Vocab32(GET), Vocab32(VEL_LIMITS), j32(j)])?;
+        two_numbers(&r)
+    }
+}
+
+/// `[is] [xxx] a b ...` -> (a, b).
+fn two_numbers(r: &Bottle) -> DevResult<(f64, f64)> {
+    match (
+        r.get(2).and_then(Value::as_f64),
+        r.get(3).and_then(Value::as_f64),
+    ) {
+        (Some(a), Some(b)) => Ok((a, b)),
+        _ => Err(DeviceError::Unsupported(REFUSED)),
+    }
+}
+
+impl ITorqueControl for RemoteControlBoard {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_torque(&mut self, j: usize) -> DevResult<f64> {
+        self.state_one(j, |d| &d.torque)
+    }
+    fn set_ref_torque(&mut self, j: usize, t: f64) -> DevResult<()> {
+        let j = self.joint(j)?;
+        self.stream(bottle![Vocab32(TORQUES_DIRECT), j32(j)], vec![t])
+    }
+    fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(TORQUE), Vocab32(REF), j32(j)])
+    }
+    fn get_torques(&mut self) -> DevResult<Vec<f64>> {
+        self.state_vec(|d| &d.torque)
+    }
+}
+
+impl IMotorEncoders for RemoteControlBoard {
+    fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
+        let v = self.get_value(bottle![Vocab32(GET), Vocab32(MOTOR_ENCODER_NUMBER)])?;
+        v.as_i64()
+            .and_then(|n| usize::try_from(n).ok())
+            .ok_or(DeviceError::Unsupported(REFUSED))
+    }
+    fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
+        self.state_one(m, |d| &d.motor_position)
+    }
+    fn get_motor_encoders(&mut self) -> DevResult<Vec<f64>> {
+        self.state_vec(|d| &d.motor_position)
+    }
+}
+
+impl IAmplifierControl for RemoteControlBoard {
+    fn enable_amp(&mut self, j: usize) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(AMP_ENABLE), j32(j)])
+    }
+    fn disable_amp(&mut self, j: usize) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(AMP_DISABLE), j32(j)])
+    }
+    fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>> {
+        let v = self.get_value(bottle![Vocab32(GET), Vocab32(AMP_STATUS)])?;
+        v.as_list()
+            .and_then(|l| l.iter().map(Value::as_i32).collect())
+            .ok_or(DeviceError::Unsupported(REFUSED))
+    }
+    fn get_current(&mut self, j: usize) -> DevResult<f64> {
+        self.state_one(j, |d| &d.current)
+    }
+    fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_MAXCURRENT), j32(j)])
+    }
+}
+
+impl IMotor for RemoteControlBoard {
+    fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(TEMPERATURE), j32(m)])
+    }
+}
+
+impl IPidControl for RemoteControlBoard {
+    fn get_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<Pid> {
+        let gains = self.get_f64s(bottle![
+            Vocab32(GET),
+            Vocab32(PID),
+            Vocab32(PID),
+            pid_type,
+            j32(j)
+        ])?;
+        Ok(Pid::from_slice(&gains))
+    }
+    fn set_pid(&mut self, pid_type: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(PID),
+            Vocab32(PID),
+            pid_type,
+            j32(j),
+            floats_value(&pid.to_array())
+        ])
+    }
+    fn enable_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(PID),
+            Vocab32(PID_ENABLE),
+            pid_type,
+            j32(j)
+        ])
+    }
+    fn disable_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(PID),
+            Vocab32(PID_DISABLE),
+            pid_type,
+            j32(j)
+        ])
+    }
+    fn is_pid_enabled(&mut self, pid_type: Vocab32, j: usize) -> DevResult<bool> {
+        self.get_bool(bottle![
+            Vocab32(GET),
+            Vocab32(PID),
+            Vocab32(PID_ENABLE),
+            pid_type,
+            j32(j)
+        ])
+    }
+    fn set_pid_reference(&mut self, pid_type: Vocab32, j: usize, r: f64) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(PID),
+            Vocab32(REF),
+            pid_type,
+            j32(j),
+            r
+        ])
+    }
+    fn get_pid_reference(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![
+            Vocab32(GET),
+            Vocab32(PID),
+            Vocab32(REF),
+            pid_type,
+            j32(j)
+        ])
+    }
+}
+
+impl ICurrentControl for RemoteControlBoard {
+    fn get_ref_current(&mut self, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![
+            Vocab32(GET),
+            Vocab32(CURRENT_IFACE),
+            Vocab32(REF),
+            j32(j)
+        ])
+    }
+}
+
+impl IPwmControl for RemoteControlBoard {
+    fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![
+            Vocab32(GET),
+            Vocab32(PWM_IFACE),
+            Vocab32(REF),
+            j32(j)
+        ])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_follow_cpp_defaults_and_reject_bad_values() {
+        let p = |t: &str| Property::from_config_text(t).unwrap();
+        let s = settings(&p("remote /r\nlocal l\n")).unwrap();
+        assert_eq!((s.remote.as_str(), s.local.as_str()), ("/r", "/l"));
+        assert_eq!(s.carrier, "udp");
+        assert_eq!(s.timeout, DEFAULT_TIMEOUT);
+        assert!(!s.write_strict && !s.ignore_protocol);
+        let err = |t: &str| settings(&p(t)).err().unwrap().to_string();
+        assert!(err("local /l\n").contains("`remote`"));
+        assert!(err("remote /r\n").contains("`local`"));
+        assert!(err("remote /r\nlocal /l\ntimeout -1\n").contains("`timeout`"));
+        assert!(err("remote /r\nlocal /l\nwriteStrict maybe\n").contains("`writeStrict`"));
+    }
+
+    #[test]
+    fn failure_replies() {
+        assert!(!reply_ok(&Bottle::new()));
+        assert!(!reply_ok(&Bottle::from_text("[fail]")));
+        assert!(!reply_ok(&Bottle::from_text("[nak]")));
+        assert!(reply_ok(&Bottle::from_text("[ok]")));
+        assert!(reply_ok(&Bottle::from_text("[is] [axes] 4 [ok]")));
+    }
+}

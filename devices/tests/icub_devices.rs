@@ -1,0 +1,472 @@
+//! The iCub CAN devices against the board emulator, configured with the unmodified
+//! iCubGenova01 files (read through the robotinterface XML loader), plus one
+//! `canBackend` line. In-process and cannelloni/UDP buses; every wait is bounded.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use icub_can::bus::inproc::VirtualBus;
+use icub_can::bus::udp::UdpBus;
+use icub_can::emulator::{preset, BusEmulator, EmulatorHandle};
+use icub_can::CanBus;
+use yarp_devices::robotinterface::{read_robot_str, Param};
+use yarp_devices::sensors::{AnalogStatus, MasStatus};
+use yarp_devices::vocabs::{CM_IDLE, CM_POSITION, IM_STIFF, JOINTTYPE_REVOLUTE, PIDTYPE_POSITION};
+use yarp_devices::{shared, DeviceError, PolyDriver, Registry, SharedDevice};
+use yarp_proto::Property;
+
+fn icub_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/robots-configuration/iCubGenova01")
+}
+
+/// The `Property` of device `name` from iCubGenova01 file `file`, with `canBackend`.
+fn icub_params(file: &str, name: &str, backend: &str) -> Option<Property> {
+    let dir = icub_dir();
+    if !dir.join(file).exists() {
+        eprintln!("SKIPPED: {} not found", dir.join(file).display());
+        return None;
+    }
+    let xml = format!(
+        r#"<?xml version="1.0" encoding="UTF-8" ?>
+<!DOCTYPE robot PUBLIC "-//YARP//DTD yarprobotinterface 3.0//EN" "http://www.yarp.it/DTD/yarprobotinterfaceV3.0.dtd">
+<robot name="iCubGenova01" portprefix="/icub" build="0" xmlns:xi="http://www.w3.org/2001/XInclude">
+<devices><xi:include href="{file}" /></devices></robot>"#
+    );
+    let mut robot = read_robot_str(&xml, &dir, &Property::new())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .robot;
+    let dev = robot
+        .devices
+        .iter_mut()
+        .find(|d| d.name == name)
+        .unwrap_or_else(|| panic!("{name} not in {file}"));
+    dev.params.push(Param::new("canBackend", backend));
+    Some(dev.to_property().unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// Emulates preset network `num` on a fresh in-process bus; returns its URL.
+fn inproc_network(num: u32, tag: &str) -> (String, EmulatorHandle) {
+    let name = format!("icub-test-{tag}-{}", std::process::id());
+    let bus: Arc<dyn CanBus> = Arc::new(VirtualBus::named(&name).endpoint());
+    (format!("inproc://{name}"), emulate(bus, num))
+}
+
+/// Emulates preset network `num` behind a cannelloni hub on 127.0.0.1; returns its URL.
+fn udp_network(num: u32) -> (String, EmulatorHandle) {
+    let hub = UdpBus::hub("127.0.0.1:0").expect("hub");
+    let url = format!("udp://{}", hub.local_addr().expect("addr"));
+    (url, emulate(Arc::new(hub), num))
+}
+
+fn emulate(bus: Arc<dyn CanBus>, num: u32) -> EmulatorHandle {
+    let dir = icub_dir();
+    let net = preset::icub_networks(dir.exists().then_some(dir.as_path()))
+        .into_iter()
+        .find(|n| n.num == num)
+        .expect("network");
+    BusEmulator::new(bus, preset::build(&net))
+        .spawn()
+        .expect("emulator")
+}
+
+/// Polls `f` until it holds, for at most `limit`.
+fn eventually(limit: Duration, mut f: impl FnMut() -> bool) -> bool {
+    let start = Instant::now();
+    while start.elapsed() < limit {
+        if f() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    false
+}
+
+fn open_left_arm(backend: &str) -> Option<PolyDriver> {
+    let p = icub_params(
+        "hardware/motorControl/icub_left_arm.xml",
+        "left_arm_mc",
+        backend,
+    )?;
+    Some(PolyDriver::open(&p).unwrap_or_else(|e| panic!("{e}")))
+}
+
+/// Position mode, a move of the elbow to 50°, and encoders that follow.
+fn move_elbow(pd: &mut PolyDriver) {
+    let dev = pd.device();
+    let enc = dev.as_encoders().unwrap();
+    assert_eq!(enc.get_axes().unwrap(), 8);
+    // the emulator starts every joint at 0° clamped into its limits: the elbow at 15°
+    assert!(eventually(Duration::from_secs(2), || enc
+        .get_encoder(3)
+        .is_ok()));
+    let start = enc.get_encoder(3).unwrap();
+    assert!((start - 15.0).abs() < 0.5, "elbow starts at {start}");
+    let info = dev.as_axis_info().unwrap();
+    assert_eq!(info.get_axis_name(3).unwrap(), "l_elbow");
+    assert_eq!(info.get_joint_type(3).unwrap(), JOINTTYPE_REVOLUTE);
+    let (lo, hi) = dev.as_control_limits().unwrap().get_limits(3).unwrap();
+    assert!(
+        (lo - 15.0).abs() < 0.2 && (hi - 106.0).abs() < 0.2,
+        "{lo} {hi}"
+    );
+
+    let cm = dev.as_control_mode().unwrap();
+    assert_eq!(cm.get_control_mode(3).unwrap(), CM_IDLE);
+    cm.set_control_mode(3, CM_POSITION).unwrap();
+    assert!(eventually(Duration::from_secs(1), || cm
+        .get_control_mode(3)
+        .unwrap()
+        == CM_POSITION));
+    assert_eq!(
+        dev.as_interaction_mode()
+            .unwrap()
+            .get_interaction_mode(3)
+            .unwrap(),
+        IM_STIFF
+    );
+    let pos = dev.as_position_control().unwrap();
+    pos.set_ref_speed(3, 40.0).unwrap();
+    pos.position_move(3, 50.0).unwrap();
+    assert_eq!(pos.get_target_position(3).unwrap(), 50.0);
+    let pos_ok = eventually(Duration::from_secs(5), || {
+        pos.check_motion_done(3).unwrap_or(false)
+    });
+    assert!(pos_ok, "motion not done");
+    let at = dev.as_encoders().unwrap().get_encoder(3).unwrap();
+    assert!((at - 50.0).abs() < 1.0, "elbow at {at}");
+    let (all, stamps) = dev.as_encoders().unwrap().get_encoders_timed().unwrap();
+    assert_eq!(all.len(), 8);
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64();
+    assert!(stamps.iter().all(|t| (now - t).abs() < 1.0));
+}
+
+#[test]
+fn registry_names_the_icub_devices() {
+    let names = Registry::names();
+    for n in [
+        "canmotioncontrol",
+        "canBusAnalogSensor",
+        "canBusFtSensor",
+        "canBusSkin",
+        "canBusInertialMTB",
+        "parametricCalibrator",
+    ] {
+        assert!(names.contains(&n), "{n} missing");
+    }
+}
+
+#[test]
+fn left_arm_moves_a_joint_on_the_inproc_bus() {
+    let (url, _emu) = inproc_network(1, "move");
+    let Some(mut pd) = open_left_arm(&url) else {
+        return;
+    };
+    move_elbow(&mut pd);
+    // the configured PIDs reached the board
+    let pid = pd
+        .device()
+        .as_pid_control()
+        .unwrap()
+        .get_pid(PIDTYPE_POSITION, 0)
+        .unwrap();
+    assert_eq!(
+        (pid.kp, pid.kd, pid.ki, pid.scale),
+        (32000.0, 50.0, 60.0, 13.0)
+    );
+}
+
+#[test]
+fn left_arm_moves_a_joint_over_udp() {
+    let (url, _emu) = udp_network(1);
+    let Some(mut pd) = open_left_arm(&url) else {
+        return;
+    };
+    move_elbow(&mut pd);
+}
+
+#[test]
+fn velocity_and_group_moves() {
+    let (url, _emu) = inproc_network(1, "vel");
+    let Some(mut pd) = open_left_arm(&url) else {
+        return;
+    };
+    let dev = pd.device();
+    assert!(eventually(Duration::from_secs(2), || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoders()
+        .is_ok()));
+    let cm = dev.as_control_mode().unwrap();
+    cm.set_control_modes(&[CM_POSITION; 8]).unwrap();
+    let start = dev.as_encoders().unwrap().get_encoders().unwrap();
+    let mut target = start.clone();
+    target[0] -= 5.0;
+    target[1] += 5.0;
+    let pos = dev.as_position_control().unwrap();
+    pos.set_ref_speeds(&[50.0; 8]).unwrap();
+    pos.position_moves(&target).unwrap();
+    assert!(eventually(Duration::from_secs(5), || pos
+        .check_motion_dones()
+        .unwrap_or(false)));
+    let now = dev.as_encoders().unwrap().get_encoders().unwrap();
+    for j in 0..2 {
+        assert!((now[j] - target[j]).abs() < 1.0, "joint {j}: {now:?}");
+    }
+    // a wrong-sized command is refused, not sent
+    let pos = dev.as_position_control().unwrap();
+    assert!(matches!(
+        pos.position_moves(&[0.0; 3]),
+        Err(DeviceError::WrongSize { .. })
+    ));
+}
+
+#[test]
+fn strain_streams_forces_and_torques() {
+    let (url, _emu) = inproc_network(1, "ft");
+    let Some(p) = icub_params("hardware/FT/left_arm_strain.xml", "left_arm_strain", &url) else {
+        return;
+    };
+    assert_eq!(
+        p.find("device").and_then(|v| v.as_str()),
+        Some("canBusFtSensor")
+    );
+    let mut pd = PolyDriver::open(&p).unwrap_or_else(|e| panic!("{e}"));
+    let dev = pd.device();
+    let ft = dev.as_six_axis_force_torque_sensors().unwrap();
+    assert_eq!(ft.get_nr_of_six_axis_force_torque_sensors(), 1);
+    assert_eq!(
+        ft.get_six_axis_force_torque_sensor_name(0).unwrap(),
+        "l_arm_ft"
+    );
+    assert!(eventually(Duration::from_secs(2), || ft
+        .get_six_axis_force_torque_sensor_status(0)
+        == MasStatus::Ok));
+    let m = ft.get_six_axis_force_torque_sensor_measure(0).unwrap();
+    assert_eq!(m.values.len(), 6);
+    // the emulated wrench: fz = 10 ± 5 N, tx = 0.1 ± 0.2 N·m
+    assert!((5.0..=15.0).contains(&m.values[2]), "{:?}", m.values);
+    assert!((-0.15..=0.35).contains(&m.values[3]), "{:?}", m.values);
+    let analog = dev.as_analog_sensor().unwrap();
+    assert_eq!(analog.get_channels(), 6);
+    let mut v = Vec::new();
+    assert_eq!(analog.read(&mut v), AnalogStatus::Ok);
+    assert_eq!(v.len(), 6);
+}
+
+#[test]
+fn silent_boards_fail_calls_within_their_timeouts() {
+    let (url, emu) = inproc_network(1, "silent");
+    let Some(mut pd) = open_left_arm(&url) else {
+        return;
+    };
+    let dev = pd.device();
+    let enc = dev.as_encoders().unwrap();
+    assert!(eventually(Duration::from_secs(2), || enc
+        .get_encoder(2)
+        .is_ok()));
+    emu.set_silent(2, true); // joints 2 and 3
+    let t = Instant::now();
+    assert!(eventually(Duration::from_secs(2), || enc
+        .get_encoder(2)
+        .is_err()));
+    assert!(
+        t.elapsed() < Duration::from_millis(1500),
+        "{:?}",
+        t.elapsed()
+    );
+    assert!(enc.get_encoders().is_err());
+    assert!(enc.get_encoder(0).is_ok(), "other boards unaffected");
+    let t = Instant::now();
+    let done = dev.as_position_control().unwrap().check_motion_done(3);
+    assert!(done.is_err());
+    assert!(t.elapsed() < Duration::from_secs(2), "{:?}", t.elapsed());
+
+    // opening with a board already silent fails at once, naming the board
+    let t = Instant::now();
+    let p = icub_params(
+        "hardware/motorControl/icub_left_arm.xml",
+        "left_arm_mc",
+        &url,
+    )
+    .unwrap();
+    let err = PolyDriver::open(&p).err().expect("open must fail");
+    assert!(t.elapsed() < Duration::from_secs(3), "{:?}", t.elapsed());
+    assert!(err.to_string().contains("[2]"), "{err}");
+
+    // the strain of a network nobody emulates: a clear error, no hang
+    let (quiet, _) = (format!("inproc://nobody-{}", std::process::id()), ());
+    let p = icub_params("hardware/FT/left_arm_strain.xml", "left_arm_strain", &quiet).unwrap();
+    let t = Instant::now();
+    assert!(PolyDriver::open(&p).is_err());
+    assert!(t.elapsed() < Duration::from_secs(3));
+}
+
+#[test]
+fn missing_backend_is_a_clear_error() {
+    let Some(mut p) = icub_params(
+        "hardware/motorControl/icub_left_arm.xml",
+        "left_arm_mc",
+        "inproc://unused",
+    ) else {
+        return;
+    };
+    p.unput("canBackend");
+    if std::env::var_os(yarp_devices::icub::common::BACKEND_ENV).is_some() {
+        return;
+    }
+    let err = PolyDriver::open(&p).err().expect("cfw2can has no driver");
+    assert!(err.to_string().contains("canBackend"), "{err}");
+    assert!(err.to_string().contains("cfw2can"), "{err}");
+}
+
+#[test]
+fn skin_and_inertial_of_the_left_arm() {
+    let (url, _emu) = inproc_network(7, "skin");
+    let Some(p) = icub_params("hardware/skin/left_arm.xml", "left_arm_skin", &url) else {
+        return;
+    };
+    let mut skin = PolyDriver::open(&p).unwrap_or_else(|e| panic!("{e}"));
+    let analog = skin.device().as_analog_sensor().unwrap();
+    assert_eq!(analog.get_channels(), 7 * 192);
+    let mut v = Vec::new();
+    assert!(eventually(Duration::from_secs(2), || analog.read(&mut v)
+        == AnalogStatus::Ok));
+    assert_eq!(v.len(), 1344);
+    let patches = skin.device().as_skin_patches().unwrap();
+    assert_eq!(patches.get_skin_patch_size(0), 1344);
+
+    let p = icub_params(
+        "hardware/skin/left_hand_inertial_mtb.xml",
+        "left_hand_inertial_mtb",
+        &url,
+    )
+    .unwrap();
+    let mut imu = PolyDriver::open(&p).unwrap_or_else(|e| panic!("{e}"));
+    let dev = imu.device();
+    let analog = dev.as_analog_sensor().unwrap();
+    assert_eq!(analog.get_channels(), 6);
+    assert!(eventually(Duration::from_secs(2), || analog.read(&mut v)
+        == AnalogStatus::Ok));
+    let acc = dev.as_three_axis_linear_accelerometers().unwrap();
+    assert_eq!(acc.get_nr_of_three_axis_linear_accelerometers(), 1);
+    assert_eq!(
+        acc.get_three_axis_linear_accelerometer_measure(0)
+            .unwrap()
+            .values
+            .len(),
+        3
+    );
+    let gyro = dev.as_three_axis_gyroscopes().unwrap();
+    assert_eq!(
+        gyro.get_three_axis_gyroscope_measure(0)
+            .unwrap()
+            .values
+            .len(),
+        3
+    );
+}
+
+fn calibrator() -> Option<PolyDriver> {
+    let p = icub_params(
+        "calibrators/left_arm_calib.xml",
+        "left_arm_calibrator",
+        "unused",
+    )?;
+    Some(PolyDriver::open(&p).unwrap_or_else(|e| panic!("{e}")))
+}
+
+#[test]
+fn parametric_calibrator_calibrates_and_parks_the_left_arm() {
+    let (url, _emu) = inproc_network(1, "calib");
+    let Some(pd) = open_left_arm(&url) else {
+        return;
+    };
+    let target: SharedDevice = shared(pd);
+    let mut cal = calibrator().unwrap();
+    let c = cal.device().as_calibrator().unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    c.calibrate(target.clone())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let startup = [-30.0, 30.0, 0.0, 45.0, 0.0, 0.0, 0.0, 30.0];
+    let mut t = target.lock().unwrap();
+    let enc = t.device().as_encoders().unwrap().get_encoders().unwrap();
+    for j in 0..8 {
+        assert!((enc[j] - startup[j]).abs() < 2.0, "joint {j}: {enc:?}");
+    }
+    assert_eq!(
+        t.device()
+            .as_control_mode()
+            .unwrap()
+            .get_control_modes()
+            .unwrap(),
+        vec![CM_POSITION; 8]
+    );
+    drop(t);
+    c.park(target.clone(), true)
+        .unwrap_or_else(|e| panic!("{e}"));
+    // positionHome, with the wrist yaw's 40° clamped by the board to jntPosMax 25°
+    let home = [-30.0, 30.0, 0.0, 45.0, 0.0, 0.0, 25.0, 30.0];
+    let mut t = target.lock().unwrap();
+    let enc = t.device().as_encoders().unwrap().get_encoders().unwrap();
+    for j in 0..8 {
+        assert!((enc[j] - home[j]).abs() < 2.0, "joint {j}: {enc:?}");
+    }
+}
+
+#[test]
+fn calibrator_reports_a_silent_board() {
+    let (url, emu) = inproc_network(1, "calib-silent");
+    let Some(pd) = open_left_arm(&url) else {
+        return;
+    };
+    let target: SharedDevice = shared(pd);
+    let mut cal = calibrator().unwrap();
+    emu.set_silent(1, true);
+    let t = Instant::now();
+    let c = cal.device().as_calibrator().unwrap();
+    assert!(c.calibrate(target).is_err());
+    assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
+}
+
+#[test]
+fn malformed_frames_are_counted_and_ignored() {
+    use icub_can::proto::{make_id, mc::per, MsgClass};
+    use yarp_devices::icub::CanMotionControl;
+    use yarp_devices::DeviceDriver;
+    let (url, _emu) = inproc_network(1, "malformed");
+    let Some(p) = icub_params(
+        "hardware/motorControl/icub_left_arm.xml",
+        "left_arm_mc",
+        &url,
+    ) else {
+        return;
+    };
+    let mut mc = CanMotionControl::new();
+    mc.open(&p).unwrap_or_else(|e| panic!("{e}"));
+    let enc = mc.as_encoders().unwrap();
+    assert!(eventually(Duration::from_secs(2), || enc
+        .get_encoders()
+        .is_ok()));
+    // a position broadcast of board 1 carries 8 bytes: 3 is malformed
+    let bad = icub_can::CanFrame::new(
+        make_id(MsgClass::PeriodicMotorControl, 1, per::POSITION),
+        &[1, 2, 3],
+    )
+    .unwrap();
+    let name = url.trim_start_matches("inproc://");
+    let injector = VirtualBus::named(name).endpoint();
+    for _ in 0..5 {
+        injector.send(&bad).unwrap();
+    }
+    let client = mc.client().unwrap().clone();
+    assert!(eventually(Duration::from_secs(1), || client
+        .malformed_frames()
+        >= 5));
+    let enc = mc.as_encoders().unwrap();
+    assert!(enc.get_encoders().is_ok());
+    assert!(mc.client().unwrap().board_health().iter().all(|b| b.alive));
+}

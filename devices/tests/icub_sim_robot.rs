@@ -1,0 +1,420 @@
+//! The simulated iCub of `launch-configs/icub-sim/robot/icub_all.xml`, brought up in
+//! process by the robotinterface runner against the board emulator (every network on an
+//! in-process bus instead of the file's UDP ports), with an in-process name server
+//! (run under netns-run). A remote client moves a left-arm joint through
+//! controlBoard_nws_yarp -> controlboardremapper -> canmotioncontrol -> CAN -> emulator,
+//! and reads the F/T sensor from /icub/left_arm/analog:o. Every wait is bounded.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use icub_can::bus::inproc::VirtualBus;
+use icub_can::emulator::{preset, BusEmulator, EmulatorHandle};
+use icub_can::CanBus;
+use yarp_devices::robotinterface::{read_robot_file, ActionPhase, Robot, RobotRunner};
+use yarp_devices::sensors::AnalogStatus;
+use yarp_devices::vocabs::CM_POSITION;
+use yarp_devices::PolyDriver;
+use yarp_net::nameserver::NameServer;
+use yarp_proto::Property;
+
+const T: Duration = Duration::from_secs(30);
+
+fn robot_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../launch-configs/icub-sim/robot")
+}
+
+fn genova_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/robots-configuration/iCubGenova01")
+}
+
+/// A name server for this test process, announced through a private yarp.conf.
+fn start_name_server() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::env::set_var("YARP_CONFIG_HOME", dir.path());
+    let addr = yarp_devices::runtime::block_on(async {
+        let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
+            .await
+            .expect("bind name server");
+        let addr = ns.local_addr();
+        tokio::spawn(ns.serve());
+        addr
+    });
+    yarp_net::network::write_conf("127.0.0.1", addr.port()).expect("write yarp.conf");
+    dir
+}
+
+/// The whole emulated robot, one in-process bus per network: `inproc://<tag>-<n>`.
+fn emulate_icub(tag: &str) -> Vec<EmulatorHandle> {
+    let dir = genova_dir();
+    preset::icub_networks(dir.exists().then_some(dir.as_path()))
+        .iter()
+        .map(|net| {
+            let bus: Arc<dyn CanBus> =
+                Arc::new(VirtualBus::named(&format!("{tag}-{}", net.num)).endpoint());
+            BusEmulator::new(bus, preset::build(net))
+                .spawn()
+                .expect("emulator")
+        })
+        .collect()
+}
+
+/// Points every `canBackend` of `robot` (top-level params and inside the motor-control
+/// `CAN` groups) at the in-process buses; returns how many were changed.
+fn use_inproc(robot: &mut Robot, tag: &str) -> usize {
+    const FILE_BACKEND: &str = "udp://127.0.0.1:20000+n";
+    let mut n = 0;
+    for d in &mut robot.devices {
+        for p in d
+            .params
+            .iter_mut()
+            .filter(|p| p.value.contains(FILE_BACKEND))
+        {
+            p.value = p
+                .value
+                .replace(FILE_BACKEND, &format!("inproc://{tag}-{{n}}"));
+            n += 1;
+        }
+    }
+    n
+}
+
+/// C++ `yarp` from `YARP_CPP_BIN`, else the repository's `.venv-yarp`.
+fn cpp_yarp() -> Option<PathBuf> {
+    yarp_interop_tests::cpp_bin_dir().map(|d| d.join("yarp"))
+}
+
+/// Runs C++ `yarp rpc PORT` with `input` on stdin; its output, bounded by `T`.
+fn cpp_rpc(yarp: &std::path::Path, port: &str, input: &str) -> String {
+    use std::io::{Read, Write};
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(yarp)
+        .args(["rpc", port])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn C++ yarp");
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.as_bytes())
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() && start.elapsed() < T {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    let mut out = String::new();
+    child
+        .stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut out)
+        .unwrap();
+    out
+}
+
+fn eventually(limit: Duration, mut f: impl FnMut() -> bool) -> bool {
+    let start = Instant::now();
+    while start.elapsed() < limit {
+        if f() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    false
+}
+
+#[test]
+fn simulated_icub_comes_up_moves_and_shuts_down() {
+    let file = robot_dir().join("icub_all.xml");
+    if !genova_dir().exists() {
+        eprintln!("SKIPPED: {} not found", genova_dir().display());
+        return;
+    }
+    let mut robot = read_robot_file(&file, &Property::new())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .robot;
+    let tag = format!("sim{}", std::process::id());
+    // 8 motor-control parts, 6 strains, 2 MAIS, 3 skins, 2 hand MTBs
+    assert_eq!(use_inproc(&mut robot, &tag), 21);
+    let _emulators = emulate_icub(&tag);
+    let _conf = start_name_server();
+
+    let mut runner = RobotRunner::new(robot);
+    assert!(
+        runner.unavailable_devices().is_empty(),
+        "{:?}",
+        runner.unavailable_devices()
+    );
+    let start = Instant::now();
+    runner
+        .enter_phase(ActionPhase::Startup)
+        .unwrap_or_else(|e| panic!("{e}"));
+    println!(
+        "startup (open, attach, calibrate 8 parts): {:?}",
+        start.elapsed()
+    );
+    runner.enter_phase(ActionPhase::Run).unwrap();
+
+    // a remote client, as `yarp rpc` / iCub modules would use
+    let cfg =
+        "device remote_controlboard\nremote /icub/left_arm\nlocal /test/left_arm\ncarrier tcp\n";
+    let mut arm = PolyDriver::open(&Property::from_config_text(cfg).unwrap())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let dev = arm.device();
+    assert_eq!(dev.as_encoders().unwrap().get_axes().unwrap(), 16);
+    // calibrated: the elbow at its startupPosition
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - 45.0).abs() < 2.0)));
+    assert_eq!(
+        dev.as_control_mode().unwrap().get_control_mode(3).unwrap(),
+        CM_POSITION
+    );
+    let pos = dev.as_position_control().unwrap();
+    pos.set_ref_speed(3, 60.0).unwrap();
+    let before = dev.as_encoders().unwrap().get_encoder(3).unwrap();
+    let t = Instant::now();
+    dev.as_position_control()
+        .unwrap()
+        .position_move(3, 60.0)
+        .unwrap();
+    // command -> rpc:i -> CAN -> emulator -> broadcast -> state:o -> client
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - before).abs() > 0.05)));
+    println!(
+        "command-to-encoder latency (first change on state:o): {:?}",
+        t.elapsed()
+    );
+    let reached = eventually(T, || {
+        dev.as_encoders()
+            .unwrap()
+            .get_encoder(3)
+            .is_ok_and(|q| (q - 60.0).abs() < 1.0)
+    });
+    assert!(reached, "elbow did not reach 60");
+    println!("elbow 45 -> 60 deg seen on state:o after {:?}", t.elapsed());
+
+    let cfg = "device analogsensorclient\nremote /icub/left_arm/analog:o\nlocal /test/left_arm_ft\ncarrier tcp\n";
+    let mut ft = PolyDriver::open(&Property::from_config_text(cfg).unwrap())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let sensor = ft.device().as_analog_sensor().unwrap();
+    let mut v = Vec::new();
+    assert!(eventually(T, || sensor.read(&mut v) == AnalogStatus::Ok
+        && v.len() == 6));
+    assert!((4.0..=16.0).contains(&v[2]), "fz {v:?}");
+    drop(ft);
+
+    // C++ `yarp rpc` drives the same joint
+    match cpp_yarp() {
+        None => eprintln!("SKIPPED: C++ YARP not found (C++ yarp rpc step)"),
+        Some(yarp) => {
+            let out = cpp_rpc(&yarp, "/icub/left_arm/rpc:i", "set pos 3 50\n");
+            assert!(out.contains("[ok]"), "{out}");
+            let dev = arm.device();
+            assert!(eventually(T, || dev
+                .as_encoders()
+                .unwrap()
+                .get_encoder(3)
+                .is_ok_and(|q| (q - 50.0).abs() < 1.0)));
+            let out = cpp_rpc(&yarp, "/icub/left_arm/rpc:i", "get enc 3\n");
+            assert!(
+                out.contains("[is] enc 49.") || out.contains("[is] enc 50."),
+                "{out}"
+            );
+        }
+    }
+    drop(arm);
+
+    runner
+        .enter_phase(ActionPhase::Interrupt1)
+        .unwrap_or_else(|e| panic!("{e}"));
+    runner
+        .enter_phase(ActionPhase::Shutdown)
+        .unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// iCubGenova01's own icub_all.xml, unmodified: the backend comes from the environment.
+/// Every CAN device it names opens against the emulator; the devices this build lacks are
+/// reported by name; what still stops the startup are two inconsistencies of the files
+/// themselves (see launch-configs/icub-sim/robot/README.md).
+#[test]
+fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
+    let file = genova_dir().join("icub_all.xml");
+    if !file.exists() {
+        eprintln!("SKIPPED: {} not found", file.display());
+        return;
+    }
+    let tag = format!("real{}", std::process::id());
+    std::env::set_var(
+        yarp_devices::icub::common::BACKEND_ENV,
+        format!("inproc://{tag}-{{n}}"),
+    );
+    let _emulators = emulate_icub(&tag);
+    let _conf = start_name_server();
+    let robot = read_robot_file(&file, &Property::new())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .robot;
+    let mut runner = RobotRunner::new(robot);
+    let mut missing: Vec<&str> = runner
+        .unavailable_devices()
+        .iter()
+        .map(|(_, k)| *k)
+        .collect();
+    missing.sort_unstable();
+    missing.dedup();
+    assert_eq!(
+        missing,
+        [
+            "canBusVirtualAnalogSensor",
+            "cartesiancontrollerserver",
+            "imuFilter",
+            "virtualAnalogServer",
+            "xsensmtx"
+        ]
+    );
+    let result = runner.enter_phase(ActionPhase::Startup);
+    if let Err(e) = &result {
+        for p in &e.problems {
+            println!("startup problem: {p}");
+            assert!(
+                p.contains("right_leg_oints")
+                    || p.contains("l_foot_sensor")
+                    || p.contains("right_leg"),
+                "unexpected startup problem: {p}"
+            );
+        }
+    }
+    for part in ["left_arm", "right_arm", "head", "torso", "left_leg"] {
+        let dev = runner
+            .device(&format!("{part}_mc_remapper"))
+            .unwrap_or_else(|| panic!("{part} remapper"));
+        let mut pd = dev.lock().unwrap();
+        let enc = pd.device().as_encoders().unwrap();
+        assert!(enc.get_encoders().is_ok(), "{part}");
+    }
+    let _ = runner.enter_phase(ActionPhase::Interrupt1);
+    let _ = runner.enter_phase(ActionPhase::Shutdown);
+}
+
+/// A child process killed and reaped when dropped.
+struct Reaped(std::process::Child);
+
+impl Drop for Reaped {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Waits for `child` to exit within `T`; its status.
+fn wait_exit(child: &mut Reaped) -> Option<std::process::ExitStatus> {
+    let start = Instant::now();
+    while start.elapsed() < T {
+        if let Some(s) = child.0.try_wait().unwrap() {
+            return Some(s);
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    None
+}
+
+/// The command lines of launch-configs/icub-sim/robot/README.md, as processes: the
+/// emulator binary on UDP ports 20000..20009 and `yarprobotinterface --config
+/// icub_all.xml` unchanged; a client moves the elbow; SIGINT parks and exits 0.
+#[test]
+fn readme_command_lines_bring_up_the_robot_over_udp() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let emulator = std::env::current_exe()
+        .ok()
+        .and_then(|exe| Some(exe.parent()?.parent()?.join("icub-board-emulator")))
+        .filter(|p| p.is_file());
+    let Some(emulator) = emulator else {
+        eprintln!("SKIPPED: icub-board-emulator not built (cargo build -p icub-can)");
+        return;
+    };
+    if !genova_dir().exists() {
+        eprintln!("SKIPPED: {} not found", genova_dir().display());
+        return;
+    }
+    let _conf = start_name_server();
+    let mut emu = Reaped(
+        Command::new(emulator)
+            .args(["--preset", "icub", "--bus", "udp-hub://127.0.0.1:20000+n"])
+            .arg("--robot-dir")
+            .arg(genova_dir())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn emulator"),
+    );
+    let stdout = emu.0.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if line == "ready" {
+                let _ = tx.send(());
+            }
+        }
+    });
+    rx.recv_timeout(T).expect("emulator ready");
+
+    let log = tempfile::NamedTempFile::new().unwrap();
+    let mut robot = Reaped(
+        Command::new(env!("CARGO_BIN_EXE_yarprobotinterface"))
+            .args(["--config", "icub_all.xml"])
+            .current_dir(robot_dir())
+            .stdout(Stdio::null())
+            .stderr(log.reopen().unwrap())
+            .spawn()
+            .expect("spawn yarprobotinterface"),
+    );
+    let cfg = Property::from_config_text(
+        "device remote_controlboard\nremote /icub/left_arm\nlocal /readme/left_arm\ncarrier tcp\n",
+    )
+    .unwrap();
+    let mut arm = None;
+    assert!(eventually(T, || {
+        arm = PolyDriver::open(&cfg).ok();
+        arm.is_some()
+    }));
+    let mut arm = arm.unwrap();
+    let dev = arm.device();
+    // wait for the calibrator (startupPosition 45) before commanding
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - 45.0).abs() < 1.0)));
+    std::thread::sleep(Duration::from_millis(500));
+    let pos = dev.as_position_control().unwrap();
+    pos.set_ref_speed(3, 60.0).unwrap();
+    pos.position_move(3, 70.0).unwrap();
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - 70.0).abs() < 1.0)));
+    drop(arm);
+
+    // interrupting a startup that is still calibrating other parts is a failure
+    assert!(eventually(T, || std::fs::read_to_string(log.path())
+        .is_ok_and(|t| t.contains("startup phase finished."))));
+    let pid = robot.0.id().to_string();
+    let _ = Command::new("kill").args(["-INT", &pid]).status();
+    let status = wait_exit(&mut robot).expect("yarprobotinterface exits after SIGINT");
+    let text = std::fs::read_to_string(log.path()).unwrap_or_default();
+    assert!(status.success(), "{status:?}\n{text}");
+    assert!(text.contains("shutdown phase finished"), "{text}");
+}

@@ -1,0 +1,117 @@
+//! The C++ `yarp rpc` tool (YARP 3.5 from `tests/peers/install-cpp-yarp.sh`, or the
+//! directory in `YARP_CPP_BIN`) against our `yarprobotinterface`: its
+//! `/robot/yarprobotinterface` service and the control board it brought up. Without a C++
+//! YARP the test says SKIPPED loudly and passes. Run under netns-run.
+
+#[path = "fixtures/robotinterface/live_support.rs"]
+mod support;
+
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::Stdio;
+use std::time::{Duration, Instant};
+use support::*;
+use yarp_devices::Registry;
+
+const BIN: &str = env!("CARGO_BIN_EXE_yarprobotinterface");
+
+/// The real C++ `yarp` program (pip installs a Python wrapper beside it).
+fn cpp_yarp() -> Option<PathBuf> {
+    yarp_interop_tests::cpp_bin_dir().map(|d| d.join("yarp"))
+}
+
+/// Runs `yarp rpc <port>` with `lines` on stdin; the `Response:` lines it printed.
+fn cpp_rpc(yarp: &Path, conf_home: &Path, port: &str, lines: &[&str]) -> Vec<String> {
+    let mut child = std::process::Command::new(yarp)
+        .args(["rpc", port])
+        .env("YARP_CONFIG_HOME", conf_home)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("run C++ yarp rpc");
+    let mut stdin = child.stdin.take().unwrap();
+    for l in lines {
+        writeln!(stdin, "{l}").unwrap();
+    }
+    drop(stdin); // yarp rpc stops at end of input
+    let mut stdout = child.stdout.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = stdout.read_to_string(&mut s);
+        s
+    });
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > T {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("C++ yarp rpc did not finish");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    reader
+        .join()
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("Response:"))
+        .map(str::to_string)
+        .collect()
+}
+
+#[tokio::test]
+async fn cpp_yarp_rpc_queries_the_robot() {
+    let Some(yarp) = cpp_yarp() else {
+        eprintln!("SKIPPED: C++ YARP not found");
+        return;
+    };
+    if !Registry::names().contains(&"controlBoard_nws_yarp") {
+        eprintln!("SKIPPED: controlBoard_nws_yarp is not a registered device yet");
+        return;
+    }
+    let net = start_network().await;
+    let fixtures = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/robotinterface");
+    let mut child = Child::spawn(
+        BIN,
+        &["--config", "robot_fake.xml"],
+        &fixtures,
+        Some(net.conf_home.path()),
+    );
+    let ri = "/robot/yarprobotinterface";
+    wait_reply(&net.client, ri, "is_ready", "[ok]", &mut child).await;
+
+    let home = net.conf_home.path().to_path_buf();
+    let y = yarp.clone();
+    let got = tokio::task::spawn_blocking(move || {
+        cpp_rpc(
+            &y,
+            &home,
+            ri,
+            &["is_ready", "get_robot", "get_phase", "get_level"],
+        )
+    })
+    .await
+    .unwrap();
+    assert_eq!(
+        got,
+        [
+            "Response: [ok]",
+            "Response: fakeRobot",
+            "Response: run",
+            "Response: 0"
+        ]
+    );
+
+    let home = net.conf_home.path().to_path_buf();
+    let got = tokio::task::spawn_blocking(move || {
+        cpp_rpc(&yarp, &home, "/robot/part/rpc:i", &["[get] [axes]"])
+    })
+    .await
+    .unwrap();
+    assert_eq!(got.len(), 1);
+    assert!(got[0].starts_with("Response: [is] [axes] 4"), "{got:?}");
+
+    child.signal("INT");
+    let status = child.wait_exit(T).await;
+    assert_eq!(status.and_then(|s| s.code()), Some(0), "{}", child.output());
+}
