@@ -20,5 +20,7 @@ echo "== fuzz targets (build + short smoke)"
 if [[ -x fuzz/smoke.sh ]]; then fuzz/smoke.sh; fi
 echo "== doc tests"
 cargo test --workspace --doc --quiet
+echo "== programs (yarp, yarpserver, yarpdev, yarprobotinterface, gateway, emulator, launcher)"
+cargo build --workspace --bins --quiet
 echo "== tests (under netns-run)"
 "$netns_run" cargo nextest run --workspace --no-fail-fast
