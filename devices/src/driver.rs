@@ -96,6 +96,9 @@ pub trait DeviceDriver: Send {
     fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
         None
     }
+    fn as_position_direct(&mut self) -> Option<&mut dyn IPositionDirect> {
+        None
+    }
 
     // Frame grabbers.
     fn as_frame_grabber_image(&mut self) -> Option<&mut dyn IFrameGrabberImage> {

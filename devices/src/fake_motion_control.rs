@@ -6,7 +6,17 @@
 //!
 //! Dynamics, advanced lazily by elapsed wall time on every call: in position mode a joint
 //! moves toward its target at its reference speed (instantly if the speed is 0); in
-//! velocity mode it integrates the commanded velocity. Motor encoders read 10x the joint.
+//! velocity mode it integrates the commanded velocity; in position-direct mode it sits at
+//! its last `set_position` reference; in PWM mode it moves at 0.1 x the duty cycle per
+//! second. Motor encoders read 10x the joint.
+//!
+//! The values the C++ fake reports without simulating them are copied from it: motor
+//! `m` starts with duty cycle `33 + m`, current `(33 + m) * 100`, maximum current
+//! `(33 + m) * 1000`, temperature `37.5 + m`; a current reference sets the current to
+//! half of it, a duty-cycle reference sets the duty cycle; PID errors are 0.1 / 0.2 /
+//! 0.3 / 0.4 and outputs `1.1 + 10 j` ... by loop type (position, velocity, current,
+//! torque); torque ranges and gearbox ratios read 0; a torque reference beyond +-1 puts
+//! the joint in `CM_HW_FAULT`.
 
 use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
@@ -21,6 +31,19 @@ const NAME: &str = "fakeMotionControl";
 pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] =
     &[(NAME, || Box::new(FakeMotionControl::new()))];
 const GEARBOX: f64 = 10.0;
+/// Joint speed per unit of duty cycle in PWM mode (C++ `PWM_CONSTANT`).
+const PWM_CONSTANT: f64 = 0.1;
+
+/// The C++ fake's PID error by loop type.
+fn pid_error_of(pid_type: Vocab32) -> f64 {
+    match pid_type {
+        PIDTYPE_POSITION => 0.1,
+        PIDTYPE_VELOCITY => 0.2,
+        PIDTYPE_CURRENT => 0.3,
+        PIDTYPE_TORQUE => 0.4,
+        _ => 0.0,
+    }
+}
 
 #[derive(Debug, Clone)]
 struct Joint {
@@ -39,6 +62,13 @@ struct Joint {
     vel_limits: (f64, f64),
     ref_torque: f64,
     amp_enabled: bool,
+    /// Position-direct reference.
+    pos_direct: f64,
+    ref_duty: f64,
+    duty: f64,
+    ref_current: f64,
+    current: f64,
+    max_current: f64,
 }
 
 /// The simulated control board.
@@ -94,10 +124,17 @@ impl FakeMotionControl {
                 interaction: IM_UNKNOWN,
                 name: format!("joint{i}"),
                 jtype: JOINTTYPE_REVOLUTE,
-                limits: (-180.0, 180.0),
-                vel_limits: (0.0, 100.0),
+                // the C++ defaults (LIMITS::Min 0, LIMITS::Max 100, max velocity 50)
+                limits: (0.0, 100.0),
+                vel_limits: (0.0, 50.0),
                 ref_torque: 0.0,
                 amp_enabled: false,
+                pos_direct: 0.0,
+                ref_duty: 0.0,
+                duty: 33.0 + i as f64,
+                ref_current: 0.0,
+                current: (33.0 + i as f64) * 100.0,
+                max_current: (33.0 + i as f64) * 1000.0,
             })
             .collect();
         self.pids.clear();
@@ -117,6 +154,10 @@ impl FakeMotionControl {
             let old_speed = j.speed;
             if j.mode == CM_VELOCITY {
                 j.pos += j.ref_vel * dt;
+            } else if j.mode == CM_POSITION_DIRECT {
+                j.pos = j.pos_direct;
+            } else if j.mode == CM_PWM {
+                j.pos += j.ref_duty * dt * PWM_CONSTANT;
             } else if j.mode == CM_POSITION {
                 let err = j.target - j.pos;
                 let step = j.ref_speed.abs() * dt;
@@ -264,6 +305,9 @@ impl DeviceDriver for FakeMotionControl {
     fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
         Some(self)
     }
+    fn as_position_direct(&mut self) -> Option<&mut dyn IPositionDirect> {
+        Some(self)
+    }
 }
 
 impl IEncoders for FakeMotionControl {
@@ -409,11 +453,23 @@ impl ITorqueControl for FakeMotionControl {
         Ok(0.0)
     }
     fn set_ref_torque(&mut self, j: usize, t: f64) -> DevResult<()> {
-        self.joint(j)?.ref_torque = t;
+        let jt = self.joint(j)?;
+        jt.ref_torque = t;
+        // as the C++ fake: a "high" torque puts the joint in hardware fault
+        if t.abs() > 1.0 {
+            tracing::error!(
+                "{NAME}: joint {j} received a high torque command ({t}): hardware fault"
+            );
+            jt.mode = CM_HW_FAULT;
+        }
         Ok(())
     }
     fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
         Ok(self.joint(j)?.ref_torque)
+    }
+    fn get_torque_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        self.joint(j)?;
+        Ok((0.0, 0.0))
     }
 }
 
@@ -423,6 +479,15 @@ impl IMotorEncoders for FakeMotionControl {
     }
     fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
         Ok(self.updated(m)?.pos * GEARBOX)
+    }
+    fn get_motor_encoder_speed(&mut self, m: usize) -> DevResult<f64> {
+        // the C++ fake reports 0 here (not the simulated speed)
+        self.joint(m)?;
+        Ok(0.0)
+    }
+    fn get_motor_encoder_acceleration(&mut self, m: usize) -> DevResult<f64> {
+        self.joint(m)?;
+        Ok(0.0)
     }
 }
 
@@ -440,18 +505,25 @@ impl IAmplifierControl for FakeMotionControl {
         Ok(vec![0; self.joints.len()])
     }
     fn get_current(&mut self, j: usize) -> DevResult<f64> {
-        Ok(3300.0 * (j as f64 + 1.0))
+        Ok(self.joint(j)?.current)
     }
     fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
-        self.joint(j)?;
-        Ok(33000.0)
+        Ok(self.joint(j)?.max_current)
     }
 }
 
 impl IMotor for FakeMotionControl {
     fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
         self.joint(m)?;
-        Ok(37.5)
+        Ok(37.5 + m as f64)
+    }
+    fn get_number_of_motors(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
+        // not implemented by the C++ fake, which answers 0
+        self.joint(m)?;
+        Ok(0.0)
     }
 }
 
@@ -492,18 +564,68 @@ impl IPidControl for FakeMotionControl {
         self.joint(j)?;
         Ok(self.pids.get(&(pid_type.0, j)).map(|p| p.2).unwrap_or(0.0))
     }
+    fn get_pid_error(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        self.joint(j)?;
+        Ok(pid_error_of(pid_type))
+    }
+    fn get_pid_output(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        self.joint(j)?;
+        let base = pid_error_of(pid_type);
+        // 1.1, 1.2, ... as C++ (base + 1.0), 0 for unknown loop types
+        Ok(if base == 0.0 {
+            0.0
+        } else {
+            base + 1.0 + 10.0 * j as f64
+        })
+    }
+    fn reset_pid(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<()> {
+        self.joint(j)?;
+        Ok(())
+    }
 }
 
 impl ICurrentControl for FakeMotionControl {
     fn get_ref_current(&mut self, j: usize) -> DevResult<f64> {
-        self.joint(j)?;
-        Ok(0.0)
+        Ok(self.joint(j)?.ref_current)
+    }
+    fn get_current_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        // "just for testing purposes" in C++ too
+        let r = self.joint(j)?.ref_current;
+        Ok((r / 100.0, r * 100.0))
+    }
+    fn set_ref_current(&mut self, j: usize, current: f64) -> DevResult<()> {
+        let jt = self.joint(j)?;
+        jt.ref_current = current;
+        jt.current = current / 2.0;
+        Ok(())
     }
 }
 
 impl IPwmControl for FakeMotionControl {
     fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64> {
-        self.joint(j)?;
-        Ok(0.0)
+        Ok(self.joint(j)?.ref_duty)
+    }
+    fn set_ref_duty_cycle(&mut self, j: usize, duty: f64) -> DevResult<()> {
+        self.update();
+        let jt = self.joint(j)?;
+        jt.ref_duty = duty;
+        jt.duty = duty;
+        Ok(())
+    }
+    fn get_duty_cycle(&mut self, m: usize) -> DevResult<f64> {
+        Ok(self.joint(m)?.duty)
+    }
+}
+
+impl IPositionDirect for FakeMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn set_position(&mut self, j: usize, reference: f64) -> DevResult<()> {
+        self.updated(j)?.pos_direct = reference;
+        Ok(())
+    }
+    fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.joint(j)?.pos_direct)
     }
 }

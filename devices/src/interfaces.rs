@@ -303,6 +303,10 @@ pub trait ITorqueControl {
             .map(|j| self.get_ref_torque(j))
             .collect()
     }
+    /// (min, max) torque of joint `j`.
+    fn get_torque_range(&mut self, _j: usize) -> DevResult<(f64, f64)> {
+        Err(DeviceError::Unsupported("getTorqueRange"))
+    }
 }
 
 /// `IMotorEncoders` (subset).
@@ -312,6 +316,22 @@ pub trait IMotorEncoders {
     fn get_motor_encoders(&mut self) -> DevResult<Vec<f64>> {
         (0..self.get_num_of_motor_encoders()?)
             .map(|m| self.get_motor_encoder(m))
+            .collect()
+    }
+    fn get_motor_encoder_speed(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getMotorEncoderSpeed"))
+    }
+    fn get_motor_encoder_acceleration(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getMotorEncoderAcceleration"))
+    }
+    fn get_motor_encoder_speeds(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_num_of_motor_encoders()?)
+            .map(|m| self.get_motor_encoder_speed(m))
+            .collect()
+    }
+    fn get_motor_encoder_accelerations(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_num_of_motor_encoders()?)
+            .map(|m| self.get_motor_encoder_acceleration(m))
             .collect()
     }
 }
@@ -328,9 +348,15 @@ pub trait IAmplifierControl {
 /// `IMotor` (subset).
 pub trait IMotor {
     fn get_temperature(&mut self, m: usize) -> DevResult<f64>;
+    fn get_number_of_motors(&mut self) -> DevResult<usize> {
+        Err(DeviceError::Unsupported("getNumberOfMotors"))
+    }
+    fn get_gearbox_ratio(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getGearboxRatio"))
+    }
 }
 
-/// `yarp::dev::Pid`: the 10 gains in their wire order.
+/// `yarp::dev::Pid`: the 10 gains.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Pid {
     pub kp: f64,
@@ -346,21 +372,24 @@ pub struct Pid {
 }
 
 impl Pid {
+    /// The gains in the order C++ puts them on the wire (`RPCMessagesParser`, PID
+    /// messages): kp, kd, ki, max_int, max_output, offset, scale, stiction up and down,
+    /// kff.
     pub fn to_array(&self) -> [f64; 10] {
         [
             self.kp,
             self.kd,
             self.ki,
             self.max_int,
-            self.scale,
             self.max_output,
             self.offset,
+            self.scale,
             self.stiction_up,
             self.stiction_down,
             self.kff,
         ]
     }
-    /// From the wire order; missing values are 0.
+    /// From the wire order (see `to_array`); missing values are 0.
     pub fn from_slice(v: &[f64]) -> Pid {
         let g = |i: usize| v.get(i).copied().unwrap_or(0.0);
         Pid {
@@ -368,9 +397,9 @@ impl Pid {
             kd: g(1),
             ki: g(2),
             max_int: g(3),
-            scale: g(4),
-            max_output: g(5),
-            offset: g(6),
+            max_output: g(4),
+            offset: g(5),
+            scale: g(6),
             stiction_up: g(7),
             stiction_down: g(8),
             kff: g(9),
@@ -387,14 +416,106 @@ pub trait IPidControl {
     fn is_pid_enabled(&mut self, pid_type: Vocab32, j: usize) -> DevResult<bool>;
     fn set_pid_reference(&mut self, pid_type: Vocab32, j: usize, r: f64) -> DevResult<()>;
     fn get_pid_reference(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64>;
+    /// The current error of the loop.
+    fn get_pid_error(&mut self, _pid_type: Vocab32, _j: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getPidError"))
+    }
+    /// The current output of the loop.
+    fn get_pid_output(&mut self, _pid_type: Vocab32, _j: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getPidOutput"))
+    }
+    /// Resets the loop (integral term).
+    fn reset_pid(&mut self, _pid_type: Vocab32, _j: usize) -> DevResult<()> {
+        Err(DeviceError::Unsupported("resetPid"))
+    }
 }
 
 /// `ICurrentControl` (subset).
 pub trait ICurrentControl {
     fn get_ref_current(&mut self, j: usize) -> DevResult<f64>;
+    fn set_ref_current(&mut self, _j: usize, _current: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setRefCurrent"))
+    }
+    /// (min, max) current reference of joint `j`.
+    fn get_current_range(&mut self, _j: usize) -> DevResult<(f64, f64)> {
+        Err(DeviceError::Unsupported("getCurrentRange"))
+    }
+    /// One reference per joint, in joint order.
+    fn set_ref_currents(&mut self, currents: &[f64]) -> DevResult<()> {
+        currents
+            .iter()
+            .enumerate()
+            .try_for_each(|(j, c)| self.set_ref_current(j, *c))
+    }
+    fn set_ref_current_group(&mut self, joints: &[usize], currents: &[f64]) -> DevResult<()> {
+        check_len(joints.len(), currents.len())?;
+        joints
+            .iter()
+            .zip(currents)
+            .try_for_each(|(j, c)| self.set_ref_current(*j, *c))
+    }
 }
 
 /// `IPWMControl` (subset).
 pub trait IPwmControl {
     fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64>;
+    fn set_ref_duty_cycle(&mut self, _j: usize, _duty: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setRefDutyCycle"))
+    }
+    /// One reference per joint, in joint order.
+    fn set_ref_duty_cycles(&mut self, duties: &[f64]) -> DevResult<()> {
+        duties
+            .iter()
+            .enumerate()
+            .try_for_each(|(j, d)| self.set_ref_duty_cycle(j, *d))
+    }
+    /// The measured duty cycle of motor `m`.
+    fn get_duty_cycle(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getDutyCycle"))
+    }
+}
+
+/// `IPositionDirect`: joints follow streamed position references directly (no
+/// trajectory), in the `CM_POSITION_DIRECT` control mode.
+pub trait IPositionDirect {
+    fn get_axes(&mut self) -> DevResult<usize>;
+    fn set_position(&mut self, j: usize, reference: f64) -> DevResult<()>;
+    /// The last reference given to joint `j`.
+    fn get_ref_position(&mut self, j: usize) -> DevResult<f64>;
+    fn set_positions(&mut self, references: &[f64]) -> DevResult<()> {
+        check_len(self.get_axes()?, references.len())?;
+        references
+            .iter()
+            .enumerate()
+            .try_for_each(|(j, r)| self.set_position(j, *r))
+    }
+    fn set_positions_group(&mut self, joints: &[usize], references: &[f64]) -> DevResult<()> {
+        check_len(joints.len(), references.len())?;
+        joints
+            .iter()
+            .zip(references)
+            .try_for_each(|(j, r)| self.set_position(*j, *r))
+    }
+    fn get_ref_positions(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_ref_position(j))
+            .collect()
+    }
+    fn get_ref_positions_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
+        joints.iter().map(|j| self.get_ref_position(*j)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pid_gains_travel_in_the_cpp_order() {
+        let wire = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0];
+        let p = Pid::from_slice(&wire);
+        assert_eq!((p.max_output, p.offset, p.scale), (5.0, 6.0, 7.0));
+        assert_eq!(p.to_array(), wire);
+        assert_eq!(Pid::from_slice(&[1.5]).kd, 0.0);
+    }
 }

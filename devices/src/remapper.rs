@@ -348,6 +348,9 @@ impl DeviceDriver for ControlBoardRemapper {
     fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
         Some(self)
     }
+    fn as_position_direct(&mut self) -> Option<&mut dyn IPositionDirect> {
+        Some(self)
+    }
 }
 
 /// What the layout needs to know about an attached device.
@@ -566,6 +569,10 @@ impl ITorqueControl for ControlBoardRemapper {
         on!(self, j, as_torque_control, "ITorqueControl", |t, l| t
             .get_ref_torque(l))
     }
+    fn get_torque_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        on!(self, j, as_torque_control, "ITorqueControl", |t, l| t
+            .get_torque_range(l))
+    }
 }
 
 impl IMotorEncoders for ControlBoardRemapper {
@@ -575,6 +582,14 @@ impl IMotorEncoders for ControlBoardRemapper {
     fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
         on!(self, m, as_motor_encoders, "IMotorEncoders", |e, l| e
             .get_motor_encoder(l))
+    }
+    fn get_motor_encoder_speed(&mut self, m: usize) -> DevResult<f64> {
+        on!(self, m, as_motor_encoders, "IMotorEncoders", |e, l| e
+            .get_motor_encoder_speed(l))
+    }
+    fn get_motor_encoder_acceleration(&mut self, m: usize) -> DevResult<f64> {
+        on!(self, m, as_motor_encoders, "IMotorEncoders", |e, l| e
+            .get_motor_encoder_acceleration(l))
     }
 }
 
@@ -640,6 +655,13 @@ impl IMotor for ControlBoardRemapper {
     fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
         on!(self, m, as_motor, "IMotor", |x, l| x.get_temperature(l))
     }
+    fn get_number_of_motors(&mut self) -> DevResult<usize> {
+        // one motor per joint of the part, as C++ (motors and joints are remapped alike)
+        self.axes()
+    }
+    fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
+        on!(self, m, as_motor, "IMotor", |x, l| x.get_gearbox_ratio(l))
+    }
 }
 
 impl IPidControl for ControlBoardRemapper {
@@ -671,6 +693,18 @@ impl IPidControl for ControlBoardRemapper {
         on!(self, j, as_pid_control, "IPidControl", |p, l| p
             .get_pid_reference(ty, l))
     }
+    fn get_pid_error(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
+        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+            .get_pid_error(ty, l))
+    }
+    fn get_pid_output(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
+        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+            .get_pid_output(ty, l))
+    }
+    fn reset_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
+        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+            .reset_pid(ty, l))
+    }
 }
 
 impl ICurrentControl for ControlBoardRemapper {
@@ -678,12 +712,42 @@ impl ICurrentControl for ControlBoardRemapper {
         on!(self, j, as_current_control, "ICurrentControl", |c, l| c
             .get_ref_current(l))
     }
+    fn get_current_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        on!(self, j, as_current_control, "ICurrentControl", |c, l| c
+            .get_current_range(l))
+    }
+    fn set_ref_current(&mut self, j: usize, current: f64) -> DevResult<()> {
+        on!(self, j, as_current_control, "ICurrentControl", |c, l| c
+            .set_ref_current(l, current))
+    }
 }
 
 impl IPwmControl for ControlBoardRemapper {
     fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64> {
         on!(self, j, as_pwm_control, "IPWMControl", |c, l| c
             .get_ref_duty_cycle(l))
+    }
+    fn set_ref_duty_cycle(&mut self, j: usize, duty: f64) -> DevResult<()> {
+        on!(self, j, as_pwm_control, "IPWMControl", |c, l| c
+            .set_ref_duty_cycle(l, duty))
+    }
+    fn get_duty_cycle(&mut self, m: usize) -> DevResult<f64> {
+        on!(self, m, as_pwm_control, "IPWMControl", |c, l| c
+            .get_duty_cycle(l))
+    }
+}
+
+impl IPositionDirect for ControlBoardRemapper {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn set_position(&mut self, j: usize, reference: f64) -> DevResult<()> {
+        on!(self, j, as_position_direct, "IPositionDirect", |p, l| p
+            .set_position(l, reference))
+    }
+    fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_position_direct, "IPositionDirect", |p, l| p
+            .get_ref_position(l))
     }
 }
 

@@ -12,9 +12,10 @@
 //! "<carrier>:/<local>/stateExt:i"`); then `[get] [prot]` (major version must match)
 //! and `[get] [axes]`.
 //!
-//! Reads of positions, speeds, accelerations, motor positions, torques, currents and
-//! modes come from the last `stateExt` message (no RPC); velocity, torque references go
-//! out on `command:o` as `(head) (values)`; everything else is an RPC on `rpc:o`.
+//! Reads of positions, speeds, accelerations, motor positions/speeds/accelerations,
+//! torques, duty cycles, currents and modes come from the last `stateExt` message (no
+//! RPC); velocity, position-direct, torque, current and duty-cycle references go out on
+//! `command:o` as `(head) (values)`; everything else is an RPC on `rpc:o`.
 
 use crate::controlboard::{CommandMessage, JointData, PROTOCOL_VERSION_NUMBER};
 use crate::driver::{DeviceDriver, Params};
@@ -404,6 +405,19 @@ impl RemoteControlBoard {
         Ok(())
     }
 
+    /// An "all joints" command needs one value per joint.
+    fn check_all(&self, values: &[f64]) -> DevResult<()> {
+        let axes = self.link()?.axes;
+        if values.len() == axes {
+            Ok(())
+        } else {
+            Err(DeviceError::WrongSize {
+                expected: axes,
+                got: values.len(),
+            })
+        }
+    }
+
     /// Reads from the last fresh state; `f` picks the value (None = not valid).
     fn state<T>(&self, f: impl FnOnce(&JointData, Option<Stamp>) -> Option<T>) -> DevResult<T> {
         let link = self.link()?;
@@ -525,6 +539,9 @@ impl DeviceDriver for RemoteControlBoard {
         Some(self)
     }
     fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
+        Some(self)
+    }
+    fn as_position_direct(&mut self) -> Option<&mut dyn IPositionDirect> {
         Some(self)
     }
 }
@@ -748,22 +765,11 @@ impl IVelocityControl for RemoteControlBoard {
         self.get_f64(bottle![Vocab32(GET), Vocab32(VELOCITY_MOVE), j32(j)])
     }
     fn velocity_moves(&mut self, speeds: &[f64]) -> DevResult<()> {
-        let axes = self.link()?.axes;
-        if speeds.len() != axes {
-            return Err(DeviceError::WrongSize {
-                expected: axes,
-                got: speeds.len(),
-            });
-        }
+        self.check_all(speeds)?;
         self.stream(bottle![Vocab32(VELOCITY_MOVES)], speeds.to_vec())
     }
     fn velocity_move_group(&mut self, joints: &[usize], speeds: &[f64]) -> DevResult<()> {
-        if joints.len() != speeds.len() {
-            return Err(DeviceError::WrongSize {
-                expected: joints.len(),
-                got: speeds.len(),
-            });
-        }
+        check_group(joints, speeds)?;
         self.stream(
             bottle![
                 Vocab32(VELOCITY_MOVE_GROUP),
@@ -937,6 +943,15 @@ impl ITorqueControl for RemoteControlBoard {
     fn get_torques(&mut self) -> DevResult<Vec<f64>> {
         self.state_vec(|d| &d.torque)
     }
+    fn get_torque_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        let r = self.call(&bottle![
+            Vocab32(GET),
+            Vocab32(TORQUE),
+            Vocab32(RANGE),
+            j32(j)
+        ])?;
+        two_numbers(&r)
+    }
 }
 
 impl IMotorEncoders for RemoteControlBoard {
@@ -951,6 +966,18 @@ impl IMotorEncoders for RemoteControlBoard {
     }
     fn get_motor_encoders(&mut self) -> DevResult<Vec<f64>> {
         self.state_vec(|d| &d.motor_position)
+    }
+    fn get_motor_encoder_speed(&mut self, m: usize) -> DevResult<f64> {
+        self.state_one(m, |d| &d.motor_velocity)
+    }
+    fn get_motor_encoder_acceleration(&mut self, m: usize) -> DevResult<f64> {
+        self.state_one(m, |d| &d.motor_acceleration)
+    }
+    fn get_motor_encoder_speeds(&mut self) -> DevResult<Vec<f64>> {
+        self.state_vec(|d| &d.motor_velocity)
+    }
+    fn get_motor_encoder_accelerations(&mut self) -> DevResult<Vec<f64>> {
+        self.state_vec(|d| &d.motor_acceleration)
     }
 }
 
@@ -978,6 +1005,15 @@ impl IAmplifierControl for RemoteControlBoard {
 impl IMotor for RemoteControlBoard {
     fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
         self.get_f64(bottle![Vocab32(GET), Vocab32(TEMPERATURE), j32(m)])
+    }
+    fn get_number_of_motors(&mut self) -> DevResult<usize> {
+        let v = self.get_value(bottle![Vocab32(GET), Vocab32(MOTORS_NUMBER)])?;
+        v.as_i64()
+            .and_then(|n| usize::try_from(n).ok())
+            .ok_or(DeviceError::Unsupported(REFUSED))
+    }
+    fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(GEARBOX_RATIO), j32(m)])
     }
 }
 
@@ -1048,6 +1084,33 @@ impl IPidControl for RemoteControlBoard {
             j32(j)
         ])
     }
+    fn get_pid_error(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![
+            Vocab32(GET),
+            Vocab32(PID),
+            Vocab32(PID_ERROR),
+            pid_type,
+            j32(j)
+        ])
+    }
+    fn get_pid_output(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![
+            Vocab32(GET),
+            Vocab32(PID),
+            Vocab32(PID_OUTPUT),
+            pid_type,
+            j32(j)
+        ])
+    }
+    fn reset_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(PID),
+            Vocab32(PID_RESET),
+            pid_type,
+            j32(j)
+        ])
+    }
 }
 
 impl ICurrentControl for RemoteControlBoard {
@@ -1059,6 +1122,41 @@ impl ICurrentControl for RemoteControlBoard {
             j32(j)
         ])
     }
+    fn get_current_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        let r = self.call(&bottle![
+            Vocab32(GET),
+            Vocab32(CURRENT_IFACE),
+            Vocab32(RANGE),
+            j32(j)
+        ])?;
+        two_numbers(&r)
+    }
+    fn set_ref_current(&mut self, j: usize, current: f64) -> DevResult<()> {
+        let j = self.joint(j)?;
+        self.stream(
+            bottle![Vocab32(CURRENT_IFACE), Vocab32(REF), j32(j)],
+            vec![current],
+        )
+    }
+    fn set_ref_currents(&mut self, currents: &[f64]) -> DevResult<()> {
+        self.check_all(currents)?;
+        self.stream(
+            bottle![Vocab32(CURRENT_IFACE), Vocab32(REFS)],
+            currents.to_vec(),
+        )
+    }
+    fn set_ref_current_group(&mut self, joints: &[usize], currents: &[f64]) -> DevResult<()> {
+        check_group(joints, currents)?;
+        self.stream(
+            bottle![
+                Vocab32(CURRENT_IFACE),
+                Vocab32(REF_GROUP),
+                joints.len() as i32,
+                joints_value(joints)
+            ],
+            currents.to_vec(),
+        )
+    }
 }
 
 impl IPwmControl for RemoteControlBoard {
@@ -1069,6 +1167,71 @@ impl IPwmControl for RemoteControlBoard {
             Vocab32(REF),
             j32(j)
         ])
+    }
+    fn set_ref_duty_cycle(&mut self, j: usize, duty: f64) -> DevResult<()> {
+        let j = self.joint(j)?;
+        self.stream(
+            bottle![Vocab32(PWM_IFACE), Vocab32(REF), j32(j)],
+            vec![duty],
+        )
+    }
+    fn set_ref_duty_cycles(&mut self, duties: &[f64]) -> DevResult<()> {
+        self.check_all(duties)?;
+        self.stream(bottle![Vocab32(PWM_IFACE), Vocab32(REFS)], duties.to_vec())
+    }
+    fn get_duty_cycle(&mut self, m: usize) -> DevResult<f64> {
+        self.state_one(m, |d| &d.pwm_duty_cycle)
+    }
+}
+
+impl IPositionDirect for RemoteControlBoard {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn set_position(&mut self, j: usize, reference: f64) -> DevResult<()> {
+        let j = self.joint(j)?;
+        self.stream(bottle![Vocab32(POSITION_DIRECT), j32(j)], vec![reference])
+    }
+    fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(POSITION_DIRECT), j32(j)])
+    }
+    fn set_positions(&mut self, references: &[f64]) -> DevResult<()> {
+        self.check_all(references)?;
+        self.stream(bottle![Vocab32(POSITION_DIRECTS)], references.to_vec())
+    }
+    fn set_positions_group(&mut self, joints: &[usize], references: &[f64]) -> DevResult<()> {
+        check_group(joints, references)?;
+        self.stream(
+            bottle![
+                Vocab32(POSITION_DIRECT_GROUP),
+                joints.len() as i32,
+                joints_value(joints)
+            ],
+            references.to_vec(),
+        )
+    }
+    fn get_ref_positions(&mut self) -> DevResult<Vec<f64>> {
+        self.get_f64s(bottle![Vocab32(GET), Vocab32(POSITION_DIRECTS)])
+    }
+    fn get_ref_positions_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
+        self.get_f64s(bottle![
+            Vocab32(GET),
+            Vocab32(POSITION_DIRECT_GROUP),
+            joints.len() as i32,
+            joints_value(joints)
+        ])
+    }
+}
+
+/// A group command needs one value per joint.
+fn check_group(joints: &[usize], values: &[f64]) -> DevResult<()> {
+    if joints.len() == values.len() {
+        Ok(())
+    } else {
+        Err(DeviceError::WrongSize {
+            expected: joints.len(),
+            got: values.len(),
+        })
     }
 }
 

@@ -51,6 +51,8 @@ pub const VELOCITY_MOVE: i32 = v("vmo");
 pub const VELOCITY_MOVES: i32 = v("vmos");
 pub const VELOCITY_MOVE_GROUP: i32 = v("vmog");
 pub const POSITION_DIRECT: i32 = v("dpo");
+pub const POSITION_DIRECTS: i32 = v("dpos");
+pub const POSITION_DIRECT_GROUP: i32 = v("dpog");
 
 // limits / info
 pub const LIMITS: i32 = v("llim");
@@ -68,6 +70,12 @@ pub const AMP_STATUS: i32 = v("asta");
 pub const AMP_CURRENT: i32 = v("acu");
 pub const AMP_MAXCURRENT: i32 = v("maxc");
 pub const TEMPERATURE: i32 = v("tmp");
+pub const MOTOR_ENCODER_SPEED: i32 = v("msp");
+pub const MOTOR_ENCODER_SPEEDS: i32 = v("msps");
+pub const MOTOR_ENCODER_ACCELERATION: i32 = v("mac");
+pub const MOTOR_ENCODER_ACCELERATIONS: i32 = v("macs");
+pub const MOTORS_NUMBER: i32 = v("mtnm");
+pub const GEARBOX_RATIO: i32 = v("gbxr");
 
 // interface families (second element of the command)
 pub const ICONTROLMODE: i32 = v("icmd");
@@ -85,6 +93,14 @@ pub const REF: i32 = v("ref");
 pub const PID: i32 = v("pid");
 pub const PID_ENABLE: i32 = v("ena");
 pub const PID_DISABLE: i32 = v("dis");
+pub const PID_ERROR: i32 = v("err");
+pub const PID_OUTPUT: i32 = v("out");
+pub const PID_RESET: i32 = v("res");
+pub const RANGE: i32 = v("rng");
+pub const REFS: i32 = v("refs");
+pub const REF_GROUP: i32 = v("refg");
+pub const PWM_OUTPUT: i32 = v("pwm");
+pub const PWM_OUTPUTS: i32 = v("pwms");
 pub const CURRENT_IFACE: i32 = v("icur");
 pub const PWM_IFACE: i32 = v("ipwm");
 
@@ -105,10 +121,13 @@ pub const IM_STIFF: Vocab32 = Vocab32::new("stif");
 pub const IM_COMPLIANT: Vocab32 = Vocab32::new("comp");
 pub const IM_UNKNOWN: Vocab32 = Vocab32(0);
 
-// joint types (the recorded C++ fake answers 1987212385 = "aerv" for revolute)
-pub const JOINTTYPE_REVOLUTE: Vocab32 = Vocab32::new("aerv");
-pub const JOINTTYPE_PRISMATIC: Vocab32 = Vocab32::new("apri");
-pub const JOINTTYPE_UNKNOWN: Vocab32 = Vocab32::new("aunk");
+// joint types (C++ `JointTypeEnum`; the recorded fake answers 1987212385 = "atrv")
+pub const JOINTTYPE_REVOLUTE: Vocab32 = Vocab32::new("atrv");
+pub const JOINTTYPE_PRISMATIC: Vocab32 = Vocab32::new("atpr");
+pub const JOINTTYPE_UNKNOWN: Vocab32 = Vocab32::new("unkn");
 
 // PID types
 pub const PIDTYPE_POSITION: Vocab32 = Vocab32::new("pos");
+pub const PIDTYPE_VELOCITY: Vocab32 = Vocab32::new("vel");
+pub const PIDTYPE_TORQUE: Vocab32 = Vocab32::new("trq");
+pub const PIDTYPE_CURRENT: Vocab32 = Vocab32::new("cur");

@@ -4,9 +4,11 @@
 
 mod controlboard_common;
 
-use controlboard_common::{name_client, run, T};
+use controlboard_common::{hex, name_client, records, run, same_bottle, with_recorded_stamps, T};
 use std::io::Write;
 use std::sync::{Arc, Mutex};
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::TcpStream;
 use yarp_devices::{shared, DeviceError, PolyDriver, Registry};
 use yarp_net::rpc::RpcClient;
 use yarp_proto::wire::Carrier;
@@ -201,4 +203,95 @@ fn malformed_rpcs_get_fail_and_a_log_line_never_a_crash() {
     assert!(logged >= bad.len(), "only {logged} log lines:\n{text}");
     assert!(text.contains("replying [nak]"), "{text}");
     let _ = T;
+}
+
+/// The whole recorded `yarp rpc` connection (cb-077: every command typed, including the
+/// ones kept back from the per-command records) replayed byte for byte into our wrapper
+/// serving a fresh fake: each reply has the recorded structure and is followed by the
+/// ack, and all but the known value differences are byte-exact apart from the stamp.
+#[test]
+fn recorded_yarp_rpc_connection_gets_the_recorded_replies() {
+    let Some(recs) = records() else { return };
+    let rec = recs
+        .iter()
+        .find(|r| r["kind"] == "yarp_rpc_connection")
+        .expect("yarp_rpc_connection record");
+    let c2s = rec["c2s_units"].as_array().unwrap().clone();
+    let s2c = rec["s2c_units"].as_array().unwrap().clone();
+    name_client();
+    let _pd = PolyDriver::open(&config(
+        "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname /rpcconn\n\
+         [GENERAL]\njoints 4\n",
+    ))
+    .expect("open wrapper");
+    let ns = name_client();
+    let messages: Vec<Vec<u8>> = c2s
+        .iter()
+        .filter(|u| u["unit"] == "message")
+        .map(|u| {
+            let mut m = hex(&u["index_hex"]);
+            for b in u["blocks_hex"].as_array().unwrap() {
+                m.extend(hex(b));
+            }
+            m
+        })
+        .collect();
+    let replies: Vec<Vec<u8>> = s2c
+        .iter()
+        .filter(|u| u["unit"] == "reply")
+        .map(|u| hex(&u["payload_hex"]))
+        .collect();
+    assert_eq!(messages.len(), replies.len());
+    let hello = [hex(&c2s[0]["hex"]), hex(&c2s[1]["hex"])].concat();
+    let got = run(async move {
+        let c = ns
+            .query("/rpcconn/rpc:i")
+            .await
+            .unwrap()
+            .expect("registered");
+        let mut s = TcpStream::connect((c.host.as_str(), c.port)).await.unwrap();
+        s.write_all(&hello).await.unwrap();
+        let mut header = [0u8; 8];
+        s.read_exact(&mut header).await.unwrap();
+        assert_eq!((&header[..2], &header[6..]), (&b"YA"[..], &b"RP"[..]));
+        assert_eq!(
+            i32::from_le_bytes([header[2], header[3], header[4], header[5]]),
+            i32::from(c.port),
+            "the header reply carries our own port"
+        );
+        let ack = hex::decode("5941000000005250").unwrap();
+        let mut got = Vec::new();
+        for m in messages {
+            s.write_all(&m).await.unwrap();
+            // the reply Bottle, then the ack
+            let mut r = Vec::new();
+            let mut buf = [0u8; 4096];
+            while !r.ends_with(&ack) {
+                let n = s.read(&mut buf).await.unwrap();
+                assert!(n > 0, "connection closed after {} replies", got.len());
+                r.extend_from_slice(&buf[..n]);
+            }
+            r.truncate(r.len() - ack.len());
+            got.push(r);
+        }
+        got
+    });
+    let (mut exact, mut failures) = (0, Vec::new());
+    for (k, (body, want)) in got.iter().zip(&replies).enumerate() {
+        let (gb, wb) = (Bottle::decode(body).unwrap(), Bottle::decode(want).unwrap());
+        if !same_bottle(&gb, &wb) {
+            failures.push(format!("reply {k}: {gb} vs {wb}"));
+        } else if with_recorded_stamps(&gb, &wb).encode() == *want {
+            exact += 1;
+        } else {
+            println!("  values differ: reply {k}: {gb} vs {wb}");
+        }
+    }
+    println!(
+        "yarp rpc connection: {} replies with the recorded structure, {exact} byte-exact apart from the stamp",
+        replies.len()
+    );
+    assert!(failures.is_empty(), "{failures:#?}");
+    // only the two checkMotionDone replies differ (see controlboard_vectors.rs)
+    assert_eq!(exact + 2, replies.len(), "{exact} of {}", replies.len());
 }

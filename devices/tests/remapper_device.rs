@@ -142,3 +142,59 @@ fn networks_joined_part_served_and_driven_remotely() {
     assert_eq!(q.len(), 4);
     assert_eq!(d.as_axis_info().unwrap().get_axis_name(2).unwrap(), "h0");
 }
+
+/// The interfaces added for the C++ 3.12 vectors (position direct, PID error/output/reset,
+/// torque and current ranges, motors, duty cycles, motor encoder speeds) reach the
+/// owning board with its own joint index.
+#[test]
+fn remapper_forwards_position_direct_pid_motor_and_pwm_calls() {
+    use yarp_devices::vocabs::PIDTYPE_POSITION;
+    let arm = fake(&["a0", "a1"]);
+    let hand = fake(&["h0", "h1", "h2"]);
+    let mut part = open("device controlboardremapper\naxesNames (h2 a1)\n");
+    let d = part.device();
+    d.as_multiple_wrapper()
+        .unwrap()
+        .attach_all(&[("arm".into(), arm.clone()), ("hand".into(), hand.clone())])
+        .unwrap();
+    let pdir = d.as_position_direct().unwrap();
+    pdir.set_positions(&[4.0, 5.0]).unwrap();
+    assert_eq!(pdir.get_ref_positions().unwrap(), [4.0, 5.0]);
+    let board_ref = |b: &SharedDevice, j: usize| {
+        let mut pd = b.lock().unwrap();
+        pd.device()
+            .as_position_direct()
+            .unwrap()
+            .get_ref_position(j)
+            .unwrap()
+    };
+    assert_eq!((board_ref(&hand, 2), board_ref(&arm, 1)), (4.0, 5.0));
+    let pid = d.as_pid_control().unwrap();
+    // the fake's PID output depends on the board joint: 1.1 + 10 j
+    assert_eq!(pid.get_pid_output(PIDTYPE_POSITION, 0).unwrap(), 21.1);
+    assert_eq!(pid.get_pid_error(PIDTYPE_POSITION, 1).unwrap(), 0.1);
+    pid.reset_pid(PIDTYPE_POSITION, 1).unwrap();
+    assert!(pid.reset_pid(PIDTYPE_POSITION, 2).is_err());
+    let m = d.as_motor().unwrap();
+    assert_eq!(m.get_number_of_motors().unwrap(), 2);
+    assert_eq!(m.get_temperature(0).unwrap(), 39.5);
+    assert_eq!(m.get_gearbox_ratio(1).unwrap(), 0.0);
+    assert_eq!(
+        d.as_torque_control().unwrap().get_torque_range(0).unwrap(),
+        (0.0, 0.0)
+    );
+    let pwm = d.as_pwm_control().unwrap();
+    assert_eq!(pwm.get_duty_cycle(0).unwrap(), 35.0);
+    pwm.set_ref_duty_cycle(1, 12.0).unwrap();
+    assert_eq!(pwm.get_duty_cycle(1).unwrap(), 12.0);
+    let cur = d.as_current_control().unwrap();
+    cur.set_ref_current(0, 2.0).unwrap();
+    assert_eq!(cur.get_current_range(0).unwrap(), (0.02, 200.0));
+    assert_eq!(
+        d.as_amplifier_control().unwrap().get_current(0).unwrap(),
+        1.0
+    );
+    let me = d.as_motor_encoders().unwrap();
+    assert_eq!(me.get_motor_encoder_speeds().unwrap(), [0.0, 0.0]);
+    assert_eq!(me.get_motor_encoder_accelerations().unwrap(), [0.0, 0.0]);
+}

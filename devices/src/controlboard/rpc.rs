@@ -131,19 +131,12 @@ fn dispatch(
         TORQUE => return torque(cmd, action, dev, stamp, resp),
         INTERACTION_MODE_IFACE => return interaction(cmd, action, dev, stamp, resp),
         PID => return pid(cmd, action, dev, resp),
-        CURRENT_IFACE | PWM_IFACE => {
-            if action != GET || vocab(cmd.get(2)) != REF {
-                return Some(false);
-            }
-            let j = joint(cmd, 3)?;
-            let v = if family == CURRENT_IFACE {
-                dev.as_current_control()?.get_ref_current(j).ok()?
-            } else {
-                dev.as_pwm_control()?.get_ref_duty_cycle(j).ok()?
-            };
-            resp.push(Vocab32(IS)).push(cmd[1].clone()).push(v);
-            return Some(true);
+        // references are set on command:i only; no timestamp in these replies
+        CURRENT_IFACE | PWM_IFACE if action == GET => {
+            resp.push(Vocab32(IS)).push(cmd[1].clone());
+            return open_loop(cmd, family, dev, resp);
         }
+        CURRENT_IFACE | PWM_IFACE => return Some(false),
         _ => {}
     }
     match action {
@@ -151,7 +144,11 @@ fn dispatch(
         GET => {
             resp.push(Vocab32(IS));
             if family == ICONTROLMODE {
-                resp.push(cmd.get(2)?.clone());
+                // C++: `[is] <axis> <mode>` for one joint, `[is] [cmds]|[cmog] ...` else
+                match vocab(cmd.get(2)) {
+                    CM_CONTROL_MODE => resp.push(int(cmd, 3)),
+                    v => resp.push(Vocab32(v)),
+                };
             } else {
                 resp.push(cmd[1].clone());
             }
@@ -381,6 +378,50 @@ fn get(cmd: &Bottle, dev: &mut dyn DeviceDriver, resp: &mut Bottle) -> Option<()
                 .ok()?,
         ),
         TEMPERATURE => resp.push(dev.as_motor()?.get_temperature(joint(cmd, 2)?).ok()?),
+        MOTORS_NUMBER => {
+            let n = dev.as_motor()?.get_number_of_motors().ok()?;
+            resp.push(i32::try_from(n).ok()?)
+        }
+        GEARBOX_RATIO => resp.push(dev.as_motor()?.get_gearbox_ratio(joint(cmd, 2)?).ok()?),
+        MOTOR_ENCODER_SPEED => resp.push(
+            dev.as_motor_encoders()?
+                .get_motor_encoder_speed(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        MOTOR_ENCODER_SPEEDS => resp.push(float_list(
+            &dev.as_motor_encoders()?.get_motor_encoder_speeds().ok()?,
+        )),
+        MOTOR_ENCODER_ACCELERATION => resp.push(
+            dev.as_motor_encoders()?
+                .get_motor_encoder_acceleration(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        MOTOR_ENCODER_ACCELERATIONS => resp.push(float_list(
+            &dev.as_motor_encoders()?
+                .get_motor_encoder_accelerations()
+                .ok()?,
+        )),
+        // position-direct references are set on command:i only
+        POSITION_DIRECT => resp.push(
+            dev.as_position_direct()?
+                .get_ref_position(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        POSITION_DIRECTS => resp.push(float_list(
+            &dev.as_position_direct()?.get_ref_positions().ok()?,
+        )),
+        POSITION_DIRECT_GROUP => {
+            let n = usize::try_from(int(cmd, 2)).ok()?;
+            let js = joints(cmd, 3)?;
+            if js.len() != n {
+                return None;
+            }
+            resp.push(float_list(
+                &dev.as_position_direct()?
+                    .get_ref_positions_group(&js)
+                    .ok()?,
+            ))
+        }
         ICONTROLMODE => {
             let cm = dev.as_control_mode()?;
             match vocab(cmd.get(2)) {
@@ -402,6 +443,70 @@ fn get(cmd: &Bottle, dev: &mut dyn DeviceDriver, resp: &mut Bottle) -> Option<()
     Some(())
 }
 
+/// The `[get] [icur]|[ipwm] ...` readings (C++ `handleCurrentMsg` / `handlePWMMsg`).
+fn open_loop(
+    cmd: &Bottle,
+    family: i32,
+    dev: &mut dyn DeviceDriver,
+    resp: &mut Bottle,
+) -> Option<bool> {
+    let what = vocab(cmd.get(2));
+    let all = |dev: &mut dyn DeviceDriver,
+               f: &mut dyn FnMut(&mut dyn DeviceDriver, usize) -> Option<f64>| {
+        let n = axes(dev)?;
+        (0..n).map(|j| f(dev, j)).collect::<Option<Vec<f64>>>()
+    };
+    let v = match (family, what) {
+        (CURRENT_IFACE, RANGE) => {
+            let (lo, hi) = dev
+                .as_current_control()?
+                .get_current_range(joint(cmd, 3)?)
+                .ok()?;
+            resp.push(lo).push(hi);
+            return Some(true);
+        }
+        (CURRENT_IFACE, REF) => dev
+            .as_current_control()?
+            .get_ref_current(joint(cmd, 3)?)
+            .ok()?
+            .into(),
+        (CURRENT_IFACE, REFS) => float_list(&all(dev, &mut |d, j| {
+            d.as_current_control()?.get_ref_current(j).ok()
+        })?),
+        (PWM_IFACE, REF) => dev
+            .as_pwm_control()?
+            .get_ref_duty_cycle(joint(cmd, 3)?)
+            .ok()?
+            .into(),
+        (PWM_IFACE, REFS) => float_list(&all(dev, &mut |d, j| {
+            d.as_pwm_control()?.get_ref_duty_cycle(j).ok()
+        })?),
+        (PWM_IFACE, PWM_OUTPUT) => dev
+            .as_pwm_control()?
+            .get_duty_cycle(joint(cmd, 3)?)
+            .ok()?
+            .into(),
+        // C++ answers the references here (sic), which we copy
+        (PWM_IFACE, PWM_OUTPUTS) => float_list(&all(dev, &mut |d, j| {
+            d.as_pwm_control()?.get_ref_duty_cycle(j).ok()
+        })?),
+        _ => return Some(false),
+    };
+    resp.push(v);
+    Some(true)
+}
+
+/// The number of controlled joints (C++ `controlledJoints`).
+fn axes(dev: &mut dyn DeviceDriver) -> Option<usize> {
+    if let Some(e) = dev.as_encoders() {
+        return e.get_axes().ok();
+    }
+    if let Some(p) = dev.as_position_control() {
+        return p.get_axes().ok();
+    }
+    dev.as_velocity_control()?.get_axes().ok()
+}
+
 fn torque(
     cmd: &Bottle,
     action: i32,
@@ -421,6 +526,10 @@ fn torque(
                 TRQ => resp.push(t.get_torque(joint(cmd, 3)?).ok()?),
                 TRQS => resp.push(float_list(&t.get_torques().ok()?)),
                 REF => resp.push(t.get_ref_torque(joint(cmd, 3)?).ok()?),
+                RANGE => {
+                    let (lo, hi) = t.get_torque_range(joint(cmd, 3)?).ok()?;
+                    resp.push(lo).push(hi)
+                }
                 _ => return Some(false),
             };
             stamp_into(resp, stamp);
@@ -492,6 +601,7 @@ fn pid(cmd: &Bottle, action: i32, dev: &mut dyn DeviceDriver, resp: &mut Bottle)
                 PID_ENABLE => p.enable_pid(ty, j),
                 PID_DISABLE => p.disable_pid(ty, j),
                 REF => p.set_pid_reference(ty, j, float(cmd, 5)),
+                PID_RESET => p.reset_pid(ty, j),
                 _ => return Some(false),
             }
             .is_ok(),
@@ -502,6 +612,8 @@ fn pid(cmd: &Bottle, action: i32, dev: &mut dyn DeviceDriver, resp: &mut Bottle)
                 PID => resp.push(float_list(&p.get_pid(ty, j).ok()?.to_array())),
                 PID_ENABLE => resp.push(i32::from(p.is_pid_enabled(ty, j).ok()?)),
                 REF => resp.push(p.get_pid_reference(ty, j).ok()?),
+                PID_ERROR => resp.push(p.get_pid_error(ty, j).ok()?),
+                PID_OUTPUT => resp.push(p.get_pid_output(ty, j).ok()?),
                 _ => return Some(false),
             };
             Some(true)

@@ -167,8 +167,7 @@ impl JointData {
     /// Returns the data and the encoder timestamps (empty when the device has no encoders).
     ///
     /// Channels whose interface the device lacks, or whose reading fails, are zeros marked
-    /// invalid. Motor-side speeds/accelerations and measured PWM duty cycles have no
-    /// interface methods in this crate yet, so they are always invalid.
+    /// invalid.
     pub fn read(dev: &mut dyn DeviceDriver, n: usize) -> (JointData, Vec<f64>) {
         let mut times = Vec::new();
         let positions = dev.as_encoders().map(|e| {
@@ -188,10 +187,22 @@ impl JointData {
                 n,
                 dev.as_motor_encoders().map(|m| m.get_motor_encoders()),
             ),
-            motor_velocity: Channel::read::<()>(n, None),
-            motor_acceleration: Channel::read::<()>(n, None),
+            motor_velocity: Channel::read(
+                n,
+                dev.as_motor_encoders()
+                    .map(|m| m.get_motor_encoder_speeds()),
+            ),
+            motor_acceleration: Channel::read(
+                n,
+                dev.as_motor_encoders()
+                    .map(|m| m.get_motor_encoder_accelerations()),
+            ),
             torque: Channel::read(n, dev.as_torque_control().map(|t| t.get_torques())),
-            pwm_duty_cycle: Channel::read::<()>(n, None),
+            pwm_duty_cycle: Channel::read(
+                n,
+                dev.as_pwm_control()
+                    .map(|p| (0..n).map(|m| p.get_duty_cycle(m)).collect()),
+            ),
             current: Channel::read(
                 n,
                 dev.as_amplifier_control()

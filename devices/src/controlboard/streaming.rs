@@ -4,25 +4,26 @@
 //! A command is C++ `CommandMessage` = `PortablePair<Bottle, Vector>`: a list of two, the
 //! head (`[vmo] 0`, `[vmos]`, `[dtq] 0`, `[icur] [ref] 0` ...) and a float64 vector of
 //! values (`(5.0)`, `(1.0 2.0 3.0 4.0)`). No reply is sent.
+//!
+//! Served heads: `[poss]`; velocity `[vmo] j`, `[vmos]`, `[vmog] n (joints)`; position
+//! direct `[dpo] j`, `[dpos]`, `[dpog] n (joints)`; torque `[dtq] j`, `[dtqs]`,
+//! `[dtqg] n (joints)`; current `[icur] [ref] j`, `[icur] [refs]`, `[icur] [refg] n
+//! (joints)`; duty cycle `[ipwm] [ref] j`, `[ipwm] [refs]`.
 
 use crate::driver::DeviceDriver;
 use crate::error::DeviceError;
 use crate::vocabs::{
-    CURRENT_IFACE, POSITION_DIRECT, POSITION_MOVES, PWM_IFACE, REF, VELOCITY_MOVE, VELOCITY_MOVES,
-    VELOCITY_MOVE_GROUP,
+    CURRENT_IFACE, POSITION_DIRECT, POSITION_DIRECTS, POSITION_DIRECT_GROUP, POSITION_MOVES,
+    PWM_IFACE, REF, REFS, REF_GROUP, VELOCITY_MOVE, VELOCITY_MOVES, VELOCITY_MOVE_GROUP,
 };
 use yarp_proto::{Bottle, Value, Vocab32};
 
 const fn v(s: &str) -> i32 {
     Vocab32::new(s).0
 }
-const POSITION_DIRECTS: i32 = v("dpos");
-const POSITION_DIRECT_GROUP: i32 = v("dpog");
 const TORQUES_DIRECT: i32 = v("dtq");
 const TORQUES_DIRECTS: i32 = v("dtqs");
 const TORQUES_DIRECT_GROUP: i32 = v("dtqg");
-const REFS: i32 = v("refs");
-const REF_GROUP: i32 = v("refg");
 
 /// One streaming command: the head Bottle and the values.
 #[derive(Debug, Clone, PartialEq)]
@@ -188,14 +189,47 @@ pub fn handle_command(
                 .zip(body)
                 .try_for_each(|(j, x)| t.set_ref_torque(*j, *x))
         }
-        POSITION_DIRECT | POSITION_DIRECTS | POSITION_DIRECT_GROUP => {
-            return Err(missing("IPositionDirect"))
+        POSITION_DIRECT => {
+            let (j, x) = (joint_at(1)?, first()?);
+            dev.as_position_direct()
+                .ok_or_else(|| missing("IPositionDirect"))?
+                .set_position(j, x)
         }
-        PWM_IFACE if matches!(vocab_at(head, 1), REF | REFS) => {
-            return Err(missing("IPWMControl::setRefDutyCycle"))
+        POSITION_DIRECTS => dev
+            .as_position_direct()
+            .ok_or_else(|| missing("IPositionDirect"))?
+            .set_positions(body),
+        POSITION_DIRECT_GROUP => {
+            let joints = group(1)?;
+            dev.as_position_direct()
+                .ok_or_else(|| missing("IPositionDirect"))?
+                .set_positions_group(&joints, body)
         }
-        CURRENT_IFACE if matches!(vocab_at(head, 1), REF | REFS | REF_GROUP) => {
-            return Err(missing("ICurrentControl::setRefCurrent"))
+        PWM_IFACE if vocab_at(head, 1) == REF => {
+            let (j, x) = (joint_at(2)?, first()?);
+            dev.as_pwm_control()
+                .ok_or_else(|| missing("IPWMControl"))?
+                .set_ref_duty_cycle(j, x)
+        }
+        PWM_IFACE if vocab_at(head, 1) == REFS => dev
+            .as_pwm_control()
+            .ok_or_else(|| missing("IPWMControl"))?
+            .set_ref_duty_cycles(body),
+        CURRENT_IFACE if vocab_at(head, 1) == REF => {
+            let (j, x) = (joint_at(2)?, first()?);
+            dev.as_current_control()
+                .ok_or_else(|| missing("ICurrentControl"))?
+                .set_ref_current(j, x)
+        }
+        CURRENT_IFACE if vocab_at(head, 1) == REFS => dev
+            .as_current_control()
+            .ok_or_else(|| missing("ICurrentControl"))?
+            .set_ref_currents(body),
+        CURRENT_IFACE if vocab_at(head, 1) == REF_GROUP => {
+            let joints = group(2)?;
+            dev.as_current_control()
+                .ok_or_else(|| missing("ICurrentControl"))?
+                .set_ref_current_group(&joints, body)
         }
         _ => return Err(CommandError::Unknown(head.to_string())),
     }
@@ -224,6 +258,29 @@ mod tests {
     }
 
     #[test]
+    fn position_direct_current_and_pwm_commands_reach_the_device() {
+        use crate::interfaces::{ICurrentControl, IPositionDirect, IPwmControl};
+        let mut dev = FakeMotionControl::with_joints(4);
+        handle_command(&msg("([dpo] 0) (1.5)"), &mut dev, 4).unwrap();
+        assert_eq!(dev.get_ref_position(0).unwrap(), 1.5);
+        handle_command(&msg("([dpos]) (1.0 2.0 3.0 4.0)"), &mut dev, 4).unwrap();
+        assert_eq!(dev.get_ref_positions().unwrap(), [1.0, 2.0, 3.0, 4.0]);
+        handle_command(&msg("([dpog] 2 (1 3)) (7.0 8.0)"), &mut dev, 4).unwrap();
+        assert_eq!(dev.get_ref_positions().unwrap(), [1.0, 7.0, 3.0, 8.0]);
+        handle_command(&msg("([icur] [ref] 0) (0.5)"), &mut dev, 4).unwrap();
+        assert_eq!(dev.get_ref_current(0).unwrap(), 0.5);
+        handle_command(&msg("([icur] [refs]) (1.0 2.0 3.0 4.0)"), &mut dev, 4).unwrap();
+        handle_command(&msg("([icur] [refg] 1 (2)) (9.0)"), &mut dev, 4).unwrap();
+        assert_eq!(dev.get_ref_current(2).unwrap(), 9.0);
+        assert_eq!(dev.get_ref_current(3).unwrap(), 4.0);
+        handle_command(&msg("([ipwm] [ref] 0) (10.0)"), &mut dev, 4).unwrap();
+        assert_eq!(dev.get_ref_duty_cycle(0).unwrap(), 10.0);
+        assert_eq!(dev.get_duty_cycle(0).unwrap(), 10.0);
+        handle_command(&msg("([ipwm] [refs]) (1.0 2.0 3.0 4.0)"), &mut dev, 4).unwrap();
+        assert_eq!(dev.get_duty_cycle(3).unwrap(), 4.0);
+    }
+
+    #[test]
     fn bad_commands_are_errors_not_panics() {
         let mut dev = FakeMotionControl::with_joints(2);
         for (text, want) in [
@@ -232,7 +289,8 @@ mod tests {
             ("([vmos]) (1.0 2.0 3.0)", "3 values"),
             ("([zzz] 0) (1.0)", "unrecognized"),
             ("([vmog] 2 (0)) (1.0 2.0)", "too few"),
-            ("([dpo] 0) (1.0)", "IPositionDirect"),
+            ("([dpo]) (1.0)", "malformed"),
+            ("([icur] [ref]) (1.0)", "malformed"),
             ("([vmo] 9) (1.0)", "refused"),
         ] {
             let e = handle_command(&msg(text), &mut dev, 2).unwrap_err();

@@ -47,3 +47,44 @@ pub fn records() -> Option<Vec<serde_json::Value>> {
 pub fn hex(v: &serde_json::Value) -> Vec<u8> {
     hex::decode(v.as_str().expect("hex string")).expect("hex")
 }
+
+/// Same structure: element types recursively, vocabs and strings equal; numbers are
+/// compared by type only.
+pub fn same_shape(a: &yarp_proto::Value, b: &yarp_proto::Value) -> bool {
+    use yarp_proto::Value;
+    if a.tag() != b.tag() {
+        return false;
+    }
+    match (a, b) {
+        (Value::Vocab32(x), Value::Vocab32(y)) => x == y,
+        (Value::String(x), Value::String(y)) => x == y,
+        (Value::List(x), Value::List(y)) => same_bottle(x, y),
+        _ => true,
+    }
+}
+
+/// `same_shape` for whole Bottles.
+pub fn same_bottle(a: &yarp_proto::Bottle, b: &yarp_proto::Bottle) -> bool {
+    a.len() == b.len() && a.iter().zip(b.iter()).all(|(x, y)| same_shape(x, y))
+}
+
+/// `got` with the values of its `[tsta] <count> <time>` taken from `want` (the stamp
+/// varies by run), so that the rest can be compared byte for byte.
+pub fn with_recorded_stamps(
+    got: &yarp_proto::Bottle,
+    want: &yarp_proto::Bottle,
+) -> yarp_proto::Bottle {
+    use yarp_proto::{Value, Vocab32};
+    let mut out = got.clone();
+    let tsta = Value::Vocab32(Vocab32::new("tsta"));
+    if let Some(i) = got.iter().position(|v| *v == tsta) {
+        if want.get(i) == Some(&tsta) {
+            for k in [i + 1, i + 2] {
+                if let (Some(slot), Some(w)) = (out.get_mut(k), want.get(k)) {
+                    *slot = w.clone();
+                }
+            }
+        }
+    }
+    out
+}
