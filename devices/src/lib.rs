@@ -3,6 +3,7 @@
 //! `controlBoard_nws_yarp` RPC server, wire-compatible with C++ YARP 3.12.
 
 pub mod bundler;
+pub mod cartesian;
 pub mod controlboard;
 pub mod driver;
 pub mod error;

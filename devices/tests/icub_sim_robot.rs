@@ -12,10 +12,12 @@ use std::time::{Duration, Instant};
 use icub_can::bus::inproc::VirtualBus;
 use icub_can::emulator::{preset, BusEmulator, EmulatorHandle};
 use icub_can::CanBus;
+use icub_ikin::Limb;
 use yarp_devices::robotinterface::{read_robot_file, ActionPhase, Robot, RobotRunner};
 use yarp_devices::sensors::AnalogStatus;
 use yarp_devices::vocabs::CM_POSITION;
 use yarp_devices::PolyDriver;
+use yarp_net::blocking::{BufferedPort, Network};
 use yarp_net::nameserver::NameServer;
 use yarp_proto::Property;
 
@@ -118,6 +120,40 @@ fn cpp_rpc(yarp: &std::path::Path, port: &str, input: &str) -> String {
     out
 }
 
+/// The encoders (degrees) of the opened device `name` of `runner`.
+fn encoders_of(runner: &RobotRunner, name: &str) -> Vec<f64> {
+    let dev = runner.device(name).unwrap_or_else(|| panic!("{name}"));
+    let mut pd = dev.lock().unwrap();
+    pd.device().as_encoders().unwrap().get_encoders().unwrap()
+}
+
+/// A fresh pose from `/icub/cartesianController/left_arm/state:o` (read by `reader`),
+/// checked against icub-ikin's `left_v2` arm at the torso and left-arm encoders read
+/// from the robot right after; the pose.
+fn left_arm_pose_matches_ikin(runner: &RobotRunner, reader: &BufferedPort) -> Vec<f64> {
+    while reader.try_read().is_some() {}
+    let msg = reader
+        .read_timeout(T)
+        .expect("a pose on the cartesian state:o");
+    let msg = reader.read_timeout(T).unwrap_or(msg);
+    assert!(msg.stamp.is_some(), "state:o has an envelope");
+    let pose: Vec<f64> = msg.bottle.iter().map(|v| v.as_f64().unwrap()).collect();
+    assert_eq!(pose.len(), 7, "{pose:?}");
+    let torso = encoders_of(runner, "torso_mc_remapper");
+    let arm = encoders_of(runner, "left_arm_mc_remapper");
+    let want = Limb::arm("left_v2")
+        .unwrap()
+        .pose_from_encoders(&torso, &arm)
+        .unwrap();
+    for i in 0..7 {
+        assert!(
+            (pose[i] - want[i]).abs() < 2e-3,
+            "pose {pose:?} vs iKin {want:?} (torso {torso:?}, arm {arm:?})"
+        );
+    }
+    pose
+}
+
 fn eventually(limit: Duration, mut f: impl FnMut() -> bool) -> bool {
     let start = Instant::now();
     while start.elapsed() < limit {
@@ -178,6 +214,18 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
         dev.as_control_mode().unwrap().get_control_mode(3).unwrap(),
         CM_POSITION
     );
+    // the cartesian state of the left arm, from the same encoders
+    let net = Network::from_conf().expect("network");
+    let cart = BufferedPort::open(&net, "/test/left_arm_cartesian:i").unwrap();
+    net.connect(
+        "/icub/cartesianController/left_arm/state:o",
+        "/test/left_arm_cartesian:i",
+        None,
+    )
+    .expect("connect to the cartesian state:o");
+    let pose_before = left_arm_pose_matches_ikin(&runner, &cart);
+
+    let dev = arm.device();
     let pos = dev.as_position_control().unwrap();
     pos.set_ref_speed(3, 60.0).unwrap();
     let before = dev.as_encoders().unwrap().get_encoder(3).unwrap();
@@ -204,6 +252,15 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
     });
     assert!(reached, "elbow did not reach 60");
     println!("elbow 45 -> 60 deg seen on state:o after {:?}", t.elapsed());
+    std::thread::sleep(Duration::from_millis(300));
+    let pose_after = left_arm_pose_matches_ikin(&runner, &cart);
+    let moved: f64 = (0..3)
+        .map(|i| (pose_after[i] - pose_before[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    println!("left hand moved {moved:.3} m: {pose_before:?} -> {pose_after:?}");
+    assert!(moved > 0.01, "the elbow motion moves the hand");
+    cart.close();
 
     let cfg = "device analogsensorclient\nremote /icub/left_arm/analog:o\nlocal /test/left_arm_ft\ncarrier tcp\n";
     let mut ft = PolyDriver::open(&Property::from_config_text(cfg).unwrap())
@@ -246,8 +303,10 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
 
 /// iCubGenova01's own icub_all.xml, unmodified: the backend comes from the environment.
 /// Every CAN device it names opens against the emulator; the devices this build lacks are
-/// reported by name; what still stops the startup are two inconsistencies of the files
-/// themselves (see launch-configs/icub-sim/robot/README.md).
+/// reported by name; with keep-going (`yarprobotinterface --keep-going`) the two
+/// inconsistencies of the files themselves (see launch-configs/icub-sim/robot/README.md)
+/// are reported by name and skipped, and the rest comes up: the left arm moves and its
+/// joint and cartesian `state:o` stream.
 #[test]
 fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
     let file = genova_dir().join("icub_all.xml");
@@ -277,24 +336,31 @@ fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
         missing,
         [
             "canBusVirtualAnalogSensor",
-            "cartesiancontrollerserver",
             "imuFilter",
             "virtualAnalogServer",
             "xsensmtx"
         ]
     );
-    let result = runner.enter_phase(ActionPhase::Startup);
-    if let Err(e) = &result {
-        for p in &e.problems {
-            println!("startup problem: {p}");
-            assert!(
-                p.contains("right_leg_oints")
-                    || p.contains("l_foot_sensor")
-                    || p.contains("right_leg"),
-                "unexpected startup problem: {p}"
-            );
-        }
+    runner.set_keep_going(true);
+    runner
+        .enter_phase(ActionPhase::Startup)
+        .unwrap_or_else(|e| panic!("keep-going startup failed: {e}"));
+    let failures = runner.failures().to_vec();
+    for f in &failures {
+        println!("kept going past: {f}");
     }
+    assert_eq!(failures.len(), 2, "{failures:?}");
+    assert!(
+        failures.iter().any(|f| f.contains("right_leg_oints")),
+        "{failures:?}"
+    );
+    assert!(
+        failures.iter().any(|f| f.contains("left_leg-FT_remapper")
+            || f.contains("left_leg_FT_remapper")
+            || f.contains("l_foot")),
+        "{failures:?}"
+    );
+    runner.enter_phase(ActionPhase::Run).unwrap();
     for part in ["left_arm", "right_arm", "head", "torso", "left_leg"] {
         let dev = runner
             .device(&format!("{part}_mc_remapper"))
@@ -303,8 +369,60 @@ fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
         let enc = pd.device().as_encoders().unwrap();
         assert!(enc.get_encoders().is_ok(), "{part}");
     }
-    let _ = runner.enter_phase(ActionPhase::Interrupt1);
-    let _ = runner.enter_phase(ActionPhase::Shutdown);
+
+    // the left arm moves through its wrapper, and its cartesian state follows
+    let net = Network::from_conf().expect("network");
+    let cart = BufferedPort::open(&net, "/real/left_arm_cartesian:i").unwrap();
+    net.connect(
+        "/icub/cartesianController/left_arm/state:o",
+        "/real/left_arm_cartesian:i",
+        None,
+    )
+    .expect("connect to the cartesian state:o");
+    let cfg =
+        "device remote_controlboard\nremote /icub/left_arm\nlocal /real/left_arm\ncarrier tcp\n";
+    let mut arm = PolyDriver::open(&Property::from_config_text(cfg).unwrap())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let dev = arm.device();
+    let mut start = 0.0;
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .map(|q| start = q)
+        .is_ok()));
+    let pose_before = left_arm_pose_matches_ikin(&runner, &cart);
+    let target = if start < 50.0 {
+        start + 15.0
+    } else {
+        start - 15.0
+    };
+    let pos = dev.as_position_control().unwrap();
+    pos.set_ref_speed(3, 60.0).unwrap();
+    pos.position_move(3, target).unwrap();
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - target).abs() < 1.0)));
+    std::thread::sleep(Duration::from_millis(300));
+    let pose_after = left_arm_pose_matches_ikin(&runner, &cart);
+    assert!(
+        (0..3)
+            .map(|i| (pose_after[i] - pose_before[i]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            > 0.01,
+        "{pose_before:?} -> {pose_after:?}"
+    );
+    drop(arm);
+    cart.close();
+    runner
+        .enter_phase(ActionPhase::Interrupt1)
+        .unwrap_or_else(|e| panic!("{e}"));
+    runner
+        .enter_phase(ActionPhase::Shutdown)
+        .unwrap_or_else(|e| panic!("{e}"));
 }
 
 /// A child process killed and reaped when dropped.
@@ -410,11 +528,136 @@ fn readme_command_lines_bring_up_the_robot_over_udp() {
 
     // interrupting a startup that is still calibrating other parts is a failure
     assert!(eventually(T, || std::fs::read_to_string(log.path())
-        .is_ok_and(|t| t.contains("startup phase finished."))));
+        .is_ok_and(|t| t.contains("running happily"))));
     let pid = robot.0.id().to_string();
     let _ = Command::new("kill").args(["-INT", &pid]).status();
     let status = wait_exit(&mut robot).expect("yarprobotinterface exits after SIGINT");
     let text = std::fs::read_to_string(log.path()).unwrap_or_default();
     assert!(status.success(), "{status:?}\n{text}");
     assert!(text.contains("shutdown phase finished"), "{text}");
+}
+
+/// `yarprobotinterface --keep-going` on iCubGenova01's own icub_all.xml, unmodified, as
+/// processes over UDP (ports 21000..21009, the backend from `YARP_ICUB_CAN_BACKEND`):
+/// the missing device types and the two failed attaches are named in the log, the rest
+/// comes up; the left arm moves, its cartesian `state:o` streams; SIGINT exits 0.
+#[test]
+fn keep_going_runs_the_real_genova01_config_as_processes() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let emulator = std::env::current_exe()
+        .ok()
+        .and_then(|exe| Some(exe.parent()?.parent()?.join("icub-board-emulator")))
+        .filter(|p| p.is_file());
+    let Some(emulator) = emulator else {
+        eprintln!("SKIPPED: icub-board-emulator not built (cargo build -p icub-can)");
+        return;
+    };
+    if !genova_dir().exists() {
+        eprintln!("SKIPPED: {} not found", genova_dir().display());
+        return;
+    }
+    let _conf = start_name_server();
+    let mut emu = Reaped(
+        Command::new(emulator)
+            .args(["--preset", "icub", "--bus", "udp-hub://127.0.0.1:21000+n"])
+            .arg("--robot-dir")
+            .arg(genova_dir())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn emulator"),
+    );
+    let stdout = emu.0.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if line == "ready" {
+                let _ = tx.send(());
+            }
+        }
+    });
+    rx.recv_timeout(T).expect("emulator ready");
+
+    let log = tempfile::NamedTempFile::new().unwrap();
+    let mut robot = Reaped(
+        Command::new(env!("CARGO_BIN_EXE_yarprobotinterface"))
+            .args(["--config", "icub_all.xml", "--keep-going"])
+            .env(
+                yarp_devices::icub::common::BACKEND_ENV,
+                "udp://127.0.0.1:21000+n",
+            )
+            .current_dir(genova_dir())
+            .stdout(Stdio::null())
+            .stderr(log.reopen().unwrap())
+            .spawn()
+            .expect("spawn yarprobotinterface"),
+    );
+    let read_log = || std::fs::read_to_string(log.path()).unwrap_or_default();
+    assert!(
+        eventually(T, || read_log().contains("running happily")),
+        "{}",
+        read_log()
+    );
+    let text = read_log();
+    for name in ["xsensmtx", "imuFilter", "canBusVirtualAnalogSensor"] {
+        assert!(text.contains(name), "{name} not reported:\n{text}");
+    }
+    assert!(
+        text.contains("the robot runs without 2 failed")
+            && text.contains("right_leg_oints")
+            && text.contains("l_foot_ft"),
+        "{text}"
+    );
+
+    let net = Network::from_conf().expect("network");
+    let cart = BufferedPort::open(&net, "/kg/left_arm_cartesian:i").unwrap();
+    net.connect(
+        "/icub/cartesianController/left_arm/state:o",
+        "/kg/left_arm_cartesian:i",
+        None,
+    )
+    .expect("connect to the cartesian state:o");
+    let first = cart.read_timeout(T).expect("a pose");
+    assert_eq!(first.bottle.len(), 7);
+
+    let cfg = Property::from_config_text(
+        "device remote_controlboard\nremote /icub/left_arm\nlocal /kg/left_arm\ncarrier tcp\n",
+    )
+    .unwrap();
+    let mut arm = PolyDriver::open(&cfg).unwrap_or_else(|e| panic!("{e}"));
+    let dev = arm.device();
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - 45.0).abs() < 1.0)));
+    let pos = dev.as_position_control().unwrap();
+    pos.set_ref_speed(3, 60.0).unwrap();
+    pos.position_move(3, 65.0).unwrap();
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - 65.0).abs() < 1.0)));
+    std::thread::sleep(Duration::from_millis(300));
+    while cart.try_read().is_some() {}
+    let last = cart.read_timeout(T).expect("a pose");
+    let moved: f64 = (0..3)
+        .map(|i| {
+            (last.bottle.get(i).unwrap().as_f64().unwrap()
+                - first.bottle.get(i).unwrap().as_f64().unwrap())
+            .powi(2)
+        })
+        .sum::<f64>()
+        .sqrt();
+    assert!(moved > 0.01, "{first:?} -> {last:?}");
+    drop(arm);
+    cart.close();
+
+    let pid = robot.0.id().to_string();
+    let _ = Command::new("kill").args(["-INT", &pid]).status();
+    let status = wait_exit(&mut robot).expect("yarprobotinterface exits after SIGINT");
+    assert!(status.success(), "{status:?}\n{}", read_log());
+    drop(emu);
 }

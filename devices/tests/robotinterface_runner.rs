@@ -29,6 +29,8 @@ struct Mock {
     kind: String,
     id: String,
     log: Log,
+    /// `fail_attach` in the configuration: every attach fails.
+    fail_attach: bool,
 }
 
 impl DeviceDriver for Mock {
@@ -38,6 +40,7 @@ impl DeviceDriver for Mock {
             .and_then(|v| v.as_str())
             .unwrap_or("")
             .into();
+        self.fail_attach = config.check("fail_attach");
         if config.check("fail") {
             return Err(DeviceError::MissingParam {
                 device: self.id.clone(),
@@ -78,6 +81,9 @@ impl IWrapper for Mock {
 
 impl IMultipleWrapper for Mock {
     fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
+        if self.fail_attach {
+            return Err(DeviceError::Unsupported("no such network"));
+        }
         let list: Vec<String> = devices
             .iter()
             .map(|(k, d)| format!("{k}={}", id_of(d)))
@@ -131,6 +137,7 @@ impl DeviceFactory for MockFactory {
             kind: kind.clone(),
             id: String::new(),
             log: self.log.clone(),
+            fail_attach: false,
         };
         m.open(config)?;
         self.configs.lock().unwrap().push(config.clone());
@@ -366,4 +373,61 @@ fn dry_run_opens_nothing() {
         runner.enter_phase(phase).unwrap();
     }
     assert!(take(&log).is_empty());
+}
+
+#[test]
+fn keep_going_skips_failed_devices_and_what_depends_on_them() {
+    // `bad` fails to open; `remap2` fails to attach (as a remapper naming a network no
+    // board provides): both are reported, their dependants skipped, the rest comes up.
+    let body = r#"<robot name="r"><device name="ok" type="mockBoard"/>
+           <device name="bad" type="mockBoard"><param name="fail">1</param></device>
+           <device name="remap1" type="mockMulti"><action phase="startup" level="5" type="attach">
+              <paramlist name="networks"><elem name="n">ok</elem></paramlist></action></device>
+           <device name="remap2" type="mockMulti"><param name="fail_attach">1</param>
+              <action phase="startup" level="5" type="attach">
+              <paramlist name="networks"><elem name="n">ok</elem></paramlist></action></device>
+           <device name="remap3" type="mockMulti"><action phase="startup" level="5" type="attach">
+              <paramlist name="networks"><elem name="n">bad</elem></paramlist></action></device>
+           <device name="server1" type="mockWrapper"><action phase="startup" level="10" type="attach">
+              <param name="device">remap1</param></action></device>
+           <device name="server2" type="mockWrapper"><action phase="startup" level="10" type="attach">
+              <param name="device">remap2</param></action></device>
+           <device name="calib" type="mockCalibrator"><action phase="startup" level="15" type="calibrate">
+              <param name="target">remap2</param></action></device></robot>"#;
+
+    // without keep-going the startup stops at the failed open, as C++
+    let (mut strict, _, _) = runner_for(robot(body));
+    assert!(strict.enter_phase(ActionPhase::Startup).is_err());
+    strict.enter_phase(ActionPhase::Shutdown).unwrap();
+
+    let (mut runner, log, _) = runner_for(robot(body));
+    runner.set_keep_going(true);
+    runner.enter_phase(ActionPhase::Startup).unwrap();
+    let failures = runner.failures().to_vec();
+    assert_eq!(failures.len(), 2, "{failures:?}");
+    assert!(
+        failures[0].contains("cannot open device bad"),
+        "{failures:?}"
+    );
+    assert!(
+        failures[1].contains("remap2") && failures[1].contains("no such network"),
+        "{failures:?}"
+    );
+    assert_eq!(
+        take(&log),
+        [
+            "open ok",
+            "open remap1",
+            "open remap2",
+            "open remap3",
+            "open server1",
+            "open server2",
+            "open calib",
+            "attach_all remap1 [n=ok]",
+            "attach server1 -> remap1",
+        ]
+    );
+    assert!(runner.device("bad").is_none());
+    runner.enter_phase(ActionPhase::Run).unwrap();
+    runner.enter_phase(ActionPhase::Shutdown).unwrap();
 }

@@ -4,12 +4,16 @@
 //!
 //! ```text
 //! yarprobotinterface --config icub_all.xml [--portprefix /icub] [--verbose] [--dryrun]
+//!                    [--keep-going]
 //! yarprobotinterface                # reads ./yarprobotinterface.ini (`config icub_all.xml`)
 //! yarprobotinterface --from robot.ini
 //! ```
 //!
 //! Devices whose type this build does not provide are named at startup and skipped, with
-//! the actions on them; the rest of the robot comes up. `/<portprefix>/yarprobotinterface`
+//! the actions on them; the rest of the robot comes up. With `--keep-going` (not in C++),
+//! devices that fail to open and actions that fail at startup (say, a remapper naming a
+//! network no board provides) are reported by name too and skipped with whatever depends
+//! on them, instead of stopping the robot. `/<portprefix>/yarprobotinterface`
 //! answers `get_phase`, `get_level`, `get_robot`, `is_ready` and `quit`, as in C++.
 //! A second signal during the interrupt phase adds `interrupt2`, a third `interrupt3`;
 //! a fourth aborts at once.
@@ -268,6 +272,8 @@ fn run() -> i32 {
 
     let mut runner = RobotRunner::new(robot);
     runner.set_dryrun(dryrun);
+    let keep_going = options.check("keep-going");
+    runner.set_keep_going(keep_going);
     let unavailable: Vec<String> = runner
         .unavailable_devices()
         .iter()
@@ -304,6 +310,13 @@ fn run() -> i32 {
         .and_then(|()| runner.enter_phase(ActionPhase::Run));
     match started {
         Ok(()) => {
+            if !runner.failures().is_empty() {
+                tracing::warn!(
+                    "--keep-going: the robot runs without {} failed device(s)/action(s): {}",
+                    runner.failures().len(),
+                    runner.failures().join("; ")
+                );
+            }
             tracing::info!(
                 "yarprobotinterface running happily: robot {} ({} devices)",
                 runner.robot().name,

@@ -7,6 +7,7 @@
 //! | `canBusSkin` | [`skin`] | `IAnalogSensor`, `ISkinPatches` |
 //! | `canBusInertialMTB` | [`inertial`] | `IAnalogSensor`, accelerometers, gyroscopes |
 //! | `parametricCalibrator` | [`calibrator`] | `ICalibrator` |
+//! | `cartesiancontrollerserver` | [`crate::cartesian`] | `IMultipleWrapper` (pose on `state:o`) |
 //!
 //! Each device reads the parameters of the robots-configuration XML files unchanged; the
 //! bus is chosen by `canBackend` (e.g. `udp://127.0.0.1:20000+n`, one port per
@@ -42,4 +43,7 @@ pub(crate) const DRIVERS: &[(&str, Factory)] = &[
     (skin::NAME, || Box::new(CanBusSkin::new())),
     (inertial::NAME, || Box::new(CanBusInertialMtb::new())),
     (calibrator::NAME, || Box::new(ParametricCalibrator::new())),
+    (crate::cartesian::NAME, || {
+        Box::new(crate::cartesian::CartesianControllerServer::new())
+    }),
 ];

@@ -5,7 +5,12 @@
 //!
 //! One deliberate difference, so that partial robots come up: a device whose type is not
 //! in the registry is reported by name and skipped, as are the actions on it or aimed at
-//! it. A device of a known type that fails to open still fails the startup, as in C++.
+//! it. A device of a known type that fails to open still fails the startup, as in C++,
+//! unless the runner is told to keep going ([`RobotRunner::set_keep_going`],
+//! `yarprobotinterface --keep-going`): then a device that fails to open, or a wrapper
+//! whose attach fails, is reported by name and treated like an unavailable one (skipped,
+//! with everything aimed at it), and the startup succeeds with what is left
+//! ([`RobotRunner::failures`] lists what was given up).
 
 use super::error::XmlError;
 use super::model::*;
@@ -42,6 +47,8 @@ enum Slot {
     NotOpened,
     /// Its type is not in the registry; reported and skipped.
     Unavailable,
+    /// It failed to open (only kept going past with `keep_going`).
+    Failed,
     Open(SharedDevice),
 }
 
@@ -74,6 +81,9 @@ pub struct RobotRunner {
     /// them are skipped in turn (a remapper of missing boards cannot be served).
     incomplete: Mutex<Vec<bool>>,
     dryrun: bool,
+    keep_going: bool,
+    /// What the startup gave up on when keeping going.
+    failures: Vec<String>,
     phase: Option<ActionPhase>,
     level: u32,
     interrupted: Arc<AtomicBool>,
@@ -102,6 +112,8 @@ impl RobotRunner {
             slots,
             incomplete,
             dryrun: false,
+            keep_going: false,
+            failures: Vec::new(),
             phase: None,
             level: 0,
             interrupted: Arc::new(AtomicBool::new(false)),
@@ -112,6 +124,18 @@ impl RobotRunner {
     /// In a dry run nothing is opened or executed; targets are still checked.
     pub fn set_dryrun(&mut self, dryrun: bool) {
         self.dryrun = dryrun;
+    }
+
+    /// Keeps the startup going past devices that fail to open and actions that fail:
+    /// each is reported by name (see [`RobotRunner::failures`]) and skipped together with
+    /// whatever depends on it, and the startup phase succeeds with the rest.
+    pub fn set_keep_going(&mut self, keep_going: bool) {
+        self.keep_going = keep_going;
+    }
+
+    /// The devices and actions the startup gave up on (with keep-going), by name.
+    pub fn failures(&self) -> &[String] {
+        &self.failures
     }
 
     pub fn robot(&self) -> &Robot {
@@ -178,7 +202,15 @@ impl RobotRunner {
         let mut problems = Vec::new();
 
         if phase == ActionPhase::Startup {
+            self.failures.clear();
             self.open_devices(&mut problems);
+            if self.keep_going && !problems.is_empty() {
+                tracing::warn!(
+                    "{} device(s) failed to open; keeping going without them",
+                    problems.len()
+                );
+                self.failures.append(&mut problems);
+            }
             if !problems.is_empty() {
                 tracing::error!("one or more devices failed opening; closing the others");
                 self.close_devices();
@@ -205,6 +237,15 @@ impl RobotRunner {
 
         if phase == ActionPhase::Shutdown {
             self.close_devices();
+        }
+        if phase == ActionPhase::Startup && self.keep_going && !problems.is_empty() {
+            let interrupted = problems.iter().any(|p| p == "interrupted");
+            if !interrupted {
+                for p in &problems {
+                    tracing::warn!("kept going past: {p}");
+                }
+                self.failures.append(&mut problems);
+            }
         }
         tracing::info!("{phase} phase finished.");
         if problems.is_empty() {
@@ -238,6 +279,7 @@ impl RobotRunner {
                 Err(e) => {
                     tracing::warn!("Cannot open device {}: {e}", dev.name);
                     problems.push(format!("cannot open device {}: {e}", dev.name));
+                    self.slots[i] = Slot::Failed;
                 }
             }
         }
@@ -292,6 +334,10 @@ impl RobotRunner {
                     }
                 };
                 if let Err(e) = outcome {
+                    if self.keep_going && action.kind == ActionType::Attach {
+                        // a wrapper that could not attach serves nothing: skip what needs it
+                        self.mark_incomplete(i);
+                    }
                     tracing::error!(
                         "Cannot run {} action on device {}: {e}",
                         action.kind,
@@ -323,8 +369,19 @@ impl RobotRunner {
                 );
                 None
             }
+            Slot::Failed => {
+                tracing::debug!(
+                    "skipping {what} action of device {} (it failed to open)",
+                    self.robot.devices[i].name
+                );
+                None
+            }
             Slot::NotOpened => None,
         }
+    }
+
+    fn mark_incomplete(&self, i: usize) {
+        self.incomplete.lock().unwrap_or_else(|e| e.into_inner())[i] = true;
     }
 
     /// The device a target name refers to: an error when no device has that name,
@@ -345,6 +402,10 @@ impl RobotRunner {
                     "target device {name} (type {}) is not available; skipping the action",
                     self.robot.devices[i].kind
                 );
+                Ok(None)
+            }
+            Slot::Failed => {
+                tracing::warn!("target device {name} failed to open; skipping the action");
                 Ok(None)
             }
             Slot::NotOpened => Ok(None),
@@ -389,7 +450,7 @@ impl RobotRunner {
                 "device {} left unattached: its target for {key} is not available",
                 self.robot.devices[i].name
             );
-            self.incomplete.lock().unwrap_or_else(|e| e.into_inner())[i] = true;
+            self.mark_incomplete(i);
             return Ok(());
         }
         let targets: Vec<(String, SharedDevice)> = targets
