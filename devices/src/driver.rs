@@ -148,6 +148,39 @@ pub trait DeviceDriver: Send {
     }
 }
 
+/// The `DeviceDriver` views of a driver that implements every motor-control interface
+/// (fakeMotionControl, remote_controlboard, controlboardremapper): use inside
+/// `impl DeviceDriver for T { ... }` as `crate::motor_control_views!();`.
+#[macro_export]
+macro_rules! motor_control_views {
+    () => {
+        $crate::motor_control_views!(
+            as_encoders: IEncoders,
+            as_position_control: IPositionControl,
+            as_velocity_control: IVelocityControl,
+            as_control_mode: IControlMode,
+            as_axis_info: IAxisInfo,
+            as_control_limits: IControlLimits,
+            as_interaction_mode: IInteractionMode,
+            as_torque_control: ITorqueControl,
+            as_motor_encoders: IMotorEncoders,
+            as_amplifier_control: IAmplifierControl,
+            as_motor: IMotor,
+            as_pid_control: IPidControl,
+            as_current_control: ICurrentControl,
+            as_pwm_control: IPwmControl,
+            as_position_direct: IPositionDirect,
+        );
+    };
+    ($($method:ident: $iface:ident),+ $(,)?) => {
+        $(
+            fn $method(&mut self) -> Option<&mut dyn $crate::interfaces::$iface> {
+                Some(self)
+            }
+        )+
+    };
+}
+
 /// Makes a fresh, unopened driver.
 pub type Factory = fn() -> Box<dyn DeviceDriver>;
 

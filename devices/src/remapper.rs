@@ -306,51 +306,8 @@ impl DeviceDriver for ControlBoardRemapper {
     fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
         Some(self)
     }
-    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
-        Some(self)
-    }
-    fn as_position_control(&mut self) -> Option<&mut dyn IPositionControl> {
-        Some(self)
-    }
-    fn as_velocity_control(&mut self) -> Option<&mut dyn IVelocityControl> {
-        Some(self)
-    }
-    fn as_control_mode(&mut self) -> Option<&mut dyn IControlMode> {
-        Some(self)
-    }
-    fn as_axis_info(&mut self) -> Option<&mut dyn IAxisInfo> {
-        Some(self)
-    }
-    fn as_control_limits(&mut self) -> Option<&mut dyn IControlLimits> {
-        Some(self)
-    }
-    fn as_interaction_mode(&mut self) -> Option<&mut dyn IInteractionMode> {
-        Some(self)
-    }
-    fn as_torque_control(&mut self) -> Option<&mut dyn ITorqueControl> {
-        Some(self)
-    }
-    fn as_motor_encoders(&mut self) -> Option<&mut dyn IMotorEncoders> {
-        Some(self)
-    }
-    fn as_amplifier_control(&mut self) -> Option<&mut dyn IAmplifierControl> {
-        Some(self)
-    }
-    fn as_motor(&mut self) -> Option<&mut dyn IMotor> {
-        Some(self)
-    }
-    fn as_pid_control(&mut self) -> Option<&mut dyn IPidControl> {
-        Some(self)
-    }
-    fn as_current_control(&mut self) -> Option<&mut dyn ICurrentControl> {
-        Some(self)
-    }
-    fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
-        Some(self)
-    }
-    fn as_position_direct(&mut self) -> Option<&mut dyn IPositionDirect> {
-        Some(self)
-    }
+
+    crate::motor_control_views!();
 }
 
 /// What the layout needs to know about an attached device.
