@@ -46,6 +46,8 @@ pub struct Ctx<'a> {
     pub sensor_index: usize,
     /// Joint names (joint_state), one per axis.
     pub joint_names: &'a [String],
+    /// Which axes are prismatic (joint_state: meters, not degrees); missing = revolute.
+    pub joint_prismatic: &'a [bool],
     /// The stamp used when the data carries none: the YARP envelope's time, else now
     /// (nanoseconds since the epoch).
     pub stamp_ns: u64,
@@ -94,25 +96,9 @@ pub fn to_ros(
             ])
         }
         Conversion::Imu => imu(b, ctx)?,
+        Conversion::JointCommand => return Err(ConvertError::Unsupported(conv)),
         Conversion::Image => crate::image::to_ros(b.clone(), ctx.frame_id, ctx.stamp_ns)?,
-        Conversion::JointState => {
-            count(b, ctx.joint_names.len())?;
-            let pos = (0..b.len())
-                .map(|i| number(b.items(), i).map(|d| Ros::F64(d.to_radians())))
-                .collect::<Result<Vec<_>, _>>()?;
-            Ros::Struct(vec![
-                header(ctx.stamp_ns, ctx.frame_id),
-                Ros::List(
-                    ctx.joint_names
-                        .iter()
-                        .map(|n| Ros::Str(n.clone()))
-                        .collect(),
-                ),
-                Ros::List(pos),
-                Ros::List(vec![]),
-                Ros::List(vec![]),
-            ])
-        }
+        Conversion::JointState => joint_state(b, ctx)?,
         Conversion::Wrench => {
             let m = mas::measurement(b, Family::SixAxisForceTorqueSensors, ctx.sensor_index, 6)?
                 .ok_or_else(|| ConvertError::Shape("no such force/torque sensor".into()))?;
@@ -158,6 +144,77 @@ pub fn to_yarp(conv: Conversion, ros_type: &str, m: &Ros) -> Result<Bottle, Conv
         }
         (c, _) => return Err(ConvertError::Unsupported(c)),
     })
+}
+
+/// A control board's `state:o` (positions) or `stateExt:o` (C++ `jointData`: positions,
+/// velocities and torques, each when valid) as `sensor_msgs/JointState`. Revolute
+/// joints go from degrees (deg/s) to radians (rad/s); prismatic ones stay in meters.
+fn joint_state(b: &Bottle, ctx: &Ctx) -> Result<Ros, ConvertError> {
+    let n = ctx.joint_names.len();
+    let si = |values: &[f64]| -> Ros {
+        Ros::List(
+            values
+                .iter()
+                .enumerate()
+                .map(|(j, &d)| {
+                    Ros::F64(if ctx.joint_prismatic.get(j).copied().unwrap_or(false) {
+                        d
+                    } else {
+                        d.to_radians()
+                    })
+                })
+                .collect(),
+        )
+    };
+    let flat = b.items().iter().all(|v| v.is_int() || v.is_float());
+    let (pos, vel, eff) = if flat {
+        count(b, n)?;
+        let pos = (0..b.len())
+            .map(|i| number(b.items(), i))
+            .collect::<Result<Vec<_>, _>>()?;
+        (si(&pos), Ros::List(vec![]), Ros::List(vec![]))
+    } else {
+        let d = yarp_devices::controlboard::JointData::from_bottle(b)
+            .map_err(|e| ConvertError::Shape(format!("stateExt: {e}")))?;
+        if !d.joint_position.valid {
+            return Err(ConvertError::Shape("stateExt: positions not valid".into()));
+        }
+        count_values(d.joint_position.values.len(), n)?;
+        let channel = |c: &yarp_devices::controlboard::Channel<f64>, conv: bool| {
+            if !c.valid || c.values.len() != n {
+                Ros::List(vec![])
+            } else if conv {
+                si(&c.values)
+            } else {
+                Ros::List(c.values.iter().map(|v| Ros::F64(*v)).collect())
+            }
+        };
+        (
+            si(&d.joint_position.values),
+            channel(&d.joint_velocity, true),
+            channel(&d.torque, false),
+        )
+    };
+    Ok(Ros::Struct(vec![
+        header(ctx.stamp_ns, ctx.frame_id),
+        Ros::List(
+            ctx.joint_names
+                .iter()
+                .map(|n| Ros::Str(n.clone()))
+                .collect(),
+        ),
+        pos,
+        vel,
+        eff,
+    ]))
+}
+
+fn count_values(got: usize, want: usize) -> Result<(), ConvertError> {
+    if got == want {
+        Ok(())
+    } else {
+        Err(ConvertError::Count { want, got })
+    }
 }
 
 fn vec3(x: f64, y: f64, z: f64) -> Ros {
@@ -562,9 +619,8 @@ mod tests {
         );
     }
 
-    const MAS: &str =
-        "((((0 0 90) 12.5))) ((((0.0 0.0 9.81) 12.5))) (()) ((((0 0 90) 12.5))) (()) \
-                       ((((1 2 3 0.1 0.2 0.3) 13.0)))";
+    const MAS: &str = "(((0 0 90) 12.5)) (((0.0 0.0 9.81) 12.5)) () (((0 0 90) 12.5)) () \
+                       (((1 2 3 0.1 0.2 0.3) 13.0))";
 
     #[test]
     fn imu_from_multiple_analog_sensors() {
@@ -573,6 +629,7 @@ mod tests {
             frame_id: "imu",
             sensor_index: 0,
             joint_names: &[],
+            joint_prismatic: &[],
             stamp_ns: 7,
         };
         let m = to_ros(Conversion::Imu, "sensor_msgs/msg/Imu", &t(MAS), &ctx).unwrap();
@@ -601,9 +658,10 @@ mod tests {
             frame_id: "",
             sensor_index: 0,
             joint_names: &[],
+            joint_prismatic: &[],
             stamp_ns: 42,
         };
-        let only_acc = t("(()) ((((0 0 9.81) 0.0)))");
+        let only_acc = t("() (((0 0 9.81) 0.0))");
         let m = to_ros(Conversion::Imu, "sensor_msgs/msg/Imu", &only_acc, &ctx).unwrap();
         let f = m.fields().unwrap();
         assert_eq!(f[0], header(42, ""));
@@ -613,12 +671,7 @@ mod tests {
             Ros::Array(c)
         });
         assert!(matches!(
-            to_ros(
-                Conversion::Imu,
-                "sensor_msgs/msg/Imu",
-                &t("(()) (())"),
-                &ctx
-            ),
+            to_ros(Conversion::Imu, "sensor_msgs/msg/Imu", &t("() ()"), &ctx),
             Err(ConvertError::Shape(_))
         ));
     }
@@ -662,6 +715,7 @@ mod tests {
         let ctx = Ctx {
             frame_id: "",
             joint_names: &names,
+            joint_prismatic: &[],
             stamp_ns: 1_000_000_001,
             ..Default::default()
         };
@@ -693,6 +747,75 @@ mod tests {
                 &ctx
             ),
             Err(ConvertError::Count { want: 2, got: 3 })
+        );
+    }
+
+    #[test]
+    fn joint_state_from_state_ext_with_a_prismatic_joint() {
+        use yarp_devices::controlboard::{Channel, JointData};
+        let ch = |v: &[f64], valid| Channel {
+            values: v.to_vec(),
+            valid,
+        };
+        let d = JointData {
+            joint_position: ch(&[90.0, 0.25], true),
+            joint_velocity: ch(&[-180.0, 0.5], true),
+            torque: ch(&[1.5, 2.5], true),
+            ..JointData::default()
+        };
+        let names = ["elbow".to_string(), "slide".to_string()];
+        let ctx = Ctx {
+            joint_names: &names,
+            joint_prismatic: &[false, true],
+            ..Default::default()
+        };
+        let m = to_ros(
+            Conversion::JointState,
+            "sensor_msgs/msg/JointState",
+            &d.to_bottle(),
+            &ctx,
+        )
+        .unwrap();
+        let f = m.fields().unwrap();
+        let pi = std::f64::consts::PI;
+        assert_eq!(f[2], Ros::List(vec![Ros::F64(pi / 2.0), Ros::F64(0.25)]));
+        assert_eq!(f[3], Ros::List(vec![Ros::F64(-pi), Ros::F64(0.5)]));
+        assert_eq!(f[4], Ros::List(vec![Ros::F64(1.5), Ros::F64(2.5)]));
+        // invalid channels are left empty; positions must be valid
+        let d2 = JointData {
+            joint_velocity: ch(&[0.0, 0.0], false),
+            ..d.clone()
+        };
+        let m = to_ros(
+            Conversion::JointState,
+            "sensor_msgs/msg/JointState",
+            &d2.to_bottle(),
+            &ctx,
+        )
+        .unwrap();
+        assert_eq!(m.fields().unwrap()[3], Ros::List(vec![]));
+        let d3 = JointData {
+            joint_position: ch(&[0.0, 0.0], false),
+            ..d
+        };
+        assert!(to_ros(
+            Conversion::JointState,
+            "sensor_msgs/msg/JointState",
+            &d3.to_bottle(),
+            &ctx
+        )
+        .is_err());
+        // the flat state:o form honours prismatic joints too
+        let m = to_ros(
+            Conversion::JointState,
+            "sensor_msgs/msg/JointState",
+            &t("90 0.25"),
+            &ctx,
+        )
+        .unwrap();
+        assert_eq!(
+            m.fields().unwrap()[2],
+            Ros::List(vec![Ros::F64(pi / 2.0), Ros::F64(0.25)])
         );
     }
 

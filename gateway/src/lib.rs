@@ -2,7 +2,7 @@
 //!
 //! Pure logic lives in its own modules and is unit-tested without sockets: the ROS type
 //! catalog ([`types`]), REP-2016 hashes ([`hash`]), dynamic CDR messages ([`dynmsg`]),
-//! Bottle conversions ([`convert`], [`image`], [`mas`]), service mapping ([`service`],
+//! Bottle conversions ([`convert`], [`image`], [`mas`]), joint commands ([`joint_command`]), service mapping ([`service`],
 //! [`axis_info`]), counters ([`counters`]) and mapping files ([`mapping`]). The tokio/DDS
 //! runtime ([`gateway`], over one ros2-client node from [`ros`]) only moves messages.
 
@@ -13,6 +13,7 @@ pub mod dynmsg;
 pub mod gateway;
 pub mod hash;
 pub mod image;
+pub mod joint_command;
 pub mod mapping;
 pub mod mas;
 pub mod pattern;

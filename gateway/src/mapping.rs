@@ -3,6 +3,7 @@
 //! Loading is strict: unknown keys, unknown ROS types and impossible combinations are
 //! [`LoadError`]s that name the file, the entry and the key.
 
+use crate::joint_command::Mode;
 use crate::types;
 use serde::Deserialize;
 use std::fmt;
@@ -56,6 +57,9 @@ pub enum Conversion {
     Imu,
     /// Multiple-analog-sensors F/T Bottle -> `geometry_msgs/WrenchStamped`.
     Wrench,
+    /// `sensor_msgs/JointState`, `std_msgs/Float64MultiArray` or
+    /// `trajectory_msgs/JointTrajectory` -> a control board (see [`crate::joint_command`]).
+    JointCommand,
 }
 
 impl Conversion {
@@ -77,13 +81,17 @@ impl Conversion {
             "sensor_msgs/msg/Imu" => Conversion::Imu,
             "sensor_msgs/msg/Image" => Conversion::Image,
             "geometry_msgs/msg/WrenchStamped" => Conversion::Wrench,
+            "trajectory_msgs/msg/JointTrajectory" => Conversion::JointCommand,
             _ => return None,
         })
     }
 
     /// Whether this conversion can carry `ros_type`.
     pub fn fits(self, ros_type: &str) -> bool {
-        Conversion::default_for(ros_type) == Some(self)
+        match self {
+            Conversion::JointCommand => JOINT_COMMAND_TYPES.contains(&ros_type),
+            _ => Conversion::default_for(ros_type) == Some(self),
+        }
     }
 
     /// Whether this conversion works in `dir`.
@@ -95,6 +103,7 @@ impl Conversion {
             Conversion::JointState | Conversion::Image | Conversion::Imu | Conversion::Wrench => {
                 dir == Direction::YarpToRos
             }
+            Conversion::JointCommand => dir == Direction::RosToYarp,
         }
     }
 
@@ -106,6 +115,13 @@ impl Conversion {
         )
     }
 }
+
+/// The ROS types a `joint_command` entry takes.
+pub const JOINT_COMMAND_TYPES: [&str; 3] = [
+    "sensor_msgs/msg/JointState",
+    "std_msgs/msg/Float64MultiArray",
+    "trajectory_msgs/msg/JointTrajectory",
+];
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -152,6 +168,20 @@ pub enum JointNames {
     List { names: Vec<String> },
 }
 
+/// The control board a `joint_command` entry drives, through a `remote_controlboard`
+/// whose local port prefix is the entry's `yarp_port`.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlBoard {
+    /// The board's port prefix (`controlBoard_nws_yarp`'s `name`), e.g. `/icub/left_arm`.
+    pub remote: String,
+    pub mode: Mode,
+    /// Axes (by name) an unnamed message such as Float64MultiArray addresses, in order;
+    /// default every axis.
+    #[serde(default)]
+    pub joints: Vec<String>,
+}
+
 /// A `[[topic]]` entry: a YARP stream bridged to a ROS topic.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -178,14 +208,19 @@ pub struct TopicEntry {
     pub joint_names: Option<JointNames>,
     /// Which sensor of its family (imu, wrench; default 0).
     pub sensor_index: Option<usize>,
+    /// Joint commands: the board driven (`joint_command` conversion).
+    pub control_board: Option<ControlBoard>,
 }
 
 impl TopicEntry {
+    /// Dynamic mode for ROS topics: `ros_topic` holds `*` / `?` wildcards.
+    pub fn is_ros_pattern(&self) -> bool {
+        self.ros_topic.contains(['*', '?'])
+    }
+
     /// The conversion in force (explicit or the type's default; valid after loading).
     pub fn conversion(&self) -> Conversion {
-        self.conversion
-            .or_else(|| Conversion::default_for(&self.ros_type))
-            .expect("validated at load time")
+        default_conversion(self).expect("validated at load time")
     }
 }
 
@@ -385,8 +420,24 @@ fn deserialize<T: serde::de::DeserializeOwned>(v: toml::Value) -> Result<T, (Str
 
 type Invalid = (&'static str, String);
 
+/// The explicit conversion, else `joint_command` when a control board is named, else the
+/// type's default.
+fn default_conversion(t: &TopicEntry) -> Option<Conversion> {
+    t.conversion.or_else(|| {
+        if t.control_board.is_some() {
+            Some(Conversion::JointCommand)
+        } else {
+            Conversion::default_for(&t.ros_type)
+        }
+    })
+}
+
 fn validate_topic(t: &TopicEntry) -> Result<(), Invalid> {
-    check_ros_name("ros_topic", &t.ros_topic)?;
+    if t.is_ros_pattern() {
+        validate_ros_pattern(t)?;
+    } else {
+        check_ros_name("ros_topic", &t.ros_topic)?;
+    }
     if types::lookup(&t.ros_type).is_none() || !t.ros_type.contains("/msg/") {
         return Err(("ros_type", format!("unknown message type `{}`", t.ros_type)));
     }
@@ -398,13 +449,28 @@ fn validate_topic(t: &TopicEntry) -> Result<(), Invalid> {
             ))
         }
         Some(c) => c,
-        None => Conversion::default_for(&t.ros_type)
+        None => default_conversion(t)
             .ok_or(("ros_type", format!("no conversion carries {}", t.ros_type)))?,
     };
+    if conv == Conversion::JointCommand && !conv.fits(&t.ros_type) {
+        return Err((
+            "ros_type",
+            format!(
+                "joint commands take {}, not {}",
+                JOINT_COMMAND_TYPES.join(", "),
+                t.ros_type
+            ),
+        ));
+    }
     if !conv.supports(t.direction) {
+        let only = if conv == Conversion::JointCommand {
+            "ros_to_yarp"
+        } else {
+            "yarp_to_ros"
+        };
         return Err((
             "direction",
-            format!("conversion {conv:?} only works yarp_to_ros"),
+            format!("conversion {conv:?} only works {only}"),
         ));
     }
     match (&t.yarp_port, &t.yarp_pattern) {
@@ -473,6 +539,7 @@ fn validate_topic(t: &TopicEntry) -> Result<(), Invalid> {
     if t.sensor_index.is_some() && !matches!(conv, Conversion::Imu | Conversion::Wrench) {
         return Err(("sensor_index", "only for imu and wrench".into()));
     }
+    validate_control_board(t, conv)?;
     match (&t.joint_names, conv) {
         (None, Conversion::JointState) => {
             return Err((
@@ -490,6 +557,87 @@ fn validate_topic(t: &TopicEntry) -> Result<(), Invalid> {
             return Err(("joint_names.names", "must name at least one joint".into()))
         }
         _ => {}
+    }
+    Ok(())
+}
+
+/// A `ros_topic` pattern mirrors matching ROS topics into ports under `yarp_port`.
+fn validate_ros_pattern(t: &TopicEntry) -> Result<(), Invalid> {
+    let as_name = t.ros_topic.replace(['*', '?'], "x");
+    if !as_name.starts_with('/') {
+        return Err((
+            "ros_topic",
+            "a topic pattern must be absolute (`/...`)".into(),
+        ));
+    }
+    check_ros_name("ros_topic", &as_name)?;
+    if t.direction != Direction::RosToYarp {
+        return Err((
+            "direction",
+            "a ros_topic pattern mirrors ROS topics into YARP: ros_to_yarp only".into(),
+        ));
+    }
+    if t.yarp_port.is_none() {
+        return Err((
+            "yarp_port",
+            "required with a ros_topic pattern: the prefix of the mirrored ports".into(),
+        ));
+    }
+    if t.yarp_sink.is_some() {
+        return Err((
+            "yarp_sink",
+            "not allowed with a ros_topic pattern (one port per topic)".into(),
+        ));
+    }
+    if t.control_board.is_some() {
+        return Err((
+            "control_board",
+            "a joint command entry drives one board: give one ros_topic".into(),
+        ));
+    }
+    Ok(())
+}
+
+fn validate_control_board(t: &TopicEntry, conv: Conversion) -> Result<(), Invalid> {
+    let Some(cb) = &t.control_board else {
+        if conv == Conversion::JointCommand {
+            return Err((
+                "control_board",
+                "required for joint commands: { remote = \"/robot/part\", mode = ... }".into(),
+            ));
+        }
+        return Ok(());
+    };
+    if conv != Conversion::JointCommand {
+        return Err((
+            "control_board",
+            format!("only for joint commands, not conversion {conv:?}"),
+        ));
+    }
+    check_port("control_board.remote", &cb.remote)?;
+    if t.yarp_pattern.is_some() {
+        return Err((
+            "yarp_pattern",
+            "a joint command entry drives one board: give yarp_port".into(),
+        ));
+    }
+    if t.yarp_sink.is_some() {
+        return Err((
+            "yarp_sink",
+            "joint commands go to control_board.remote, not to a sink".into(),
+        ));
+    }
+    if cb.mode == Mode::Velocity && t.ros_type == "trajectory_msgs/msg/JointTrajectory" {
+        return Err((
+            "control_board.mode",
+            "trajectories are followed in position or position_direct mode".into(),
+        ));
+    }
+    if let Some(i) = cb.joints.iter().position(|j| j.is_empty()) {
+        return Err((
+            "control_board.joints",
+            format!("joint {i} has an empty name"),
+        ));
     }
     Ok(())
 }
@@ -822,6 +970,111 @@ ros_type = "sensor_msgs/msg/JointState"
             )
             .replace("yarp_source = \"/icub/left_arm/state:o\"\n", "");
         assert_eq!(entry_error(&dynamic).1, "yarp_pattern");
+    }
+
+    #[test]
+    fn joint_commands_need_a_board_and_fit_their_type() {
+        let text = r#"
+[[topic]]
+name = "traj"
+direction = "ros_to_yarp"
+yarp_port = "/gw/arm"
+ros_topic = "/arm/joint_trajectory"
+ros_type = "trajectory_msgs/msg/JointTrajectory"
+control_board = { remote = "/robot/arm", mode = "position" }
+"#;
+        let m = parse(text).unwrap();
+        assert_eq!(m.topics[0].conversion(), Conversion::JointCommand);
+        let cb = m.topics[0].control_board.as_ref().unwrap();
+        assert_eq!(cb.mode, Mode::Position);
+        assert!(cb.joints.is_empty());
+        let no_board = text.replace(
+            "control_board = { remote = \"/robot/arm\", mode = \"position\" }",
+            "",
+        );
+        assert_eq!(entry_error(&no_board).1, "control_board");
+        assert_eq!(
+            entry_error(&text.replace("\"position\"", "\"velocity\"")).1,
+            "control_board.mode"
+        );
+        assert_eq!(
+            entry_error(&text.replace("\"position\"", "\"torque\"")).1,
+            "control_board.mode"
+        );
+        assert_eq!(
+            entry_error(&text.replace("ros_to_yarp", "yarp_to_ros")).1,
+            "direction"
+        );
+        assert_eq!(
+            entry_error(&text.replace("mode = ", "jionts = [], mode = ")).1,
+            "control_board.jionts"
+        );
+        // a multi-array with a board is a command; without, a plain Bottle stream
+        let multi = text.replace(
+            "trajectory_msgs/msg/JointTrajectory",
+            "std_msgs/msg/Float64MultiArray",
+        );
+        assert_eq!(
+            parse(&multi).unwrap().topics[0].conversion(),
+            Conversion::JointCommand
+        );
+        assert_eq!(
+            parse(&no_board.replace(
+                "trajectory_msgs/msg/JointTrajectory",
+                "std_msgs/msg/Float64MultiArray"
+            ))
+            .unwrap()
+            .topics[0]
+                .conversion(),
+            Conversion::MultiArray
+        );
+        // a board with a type commands cannot come from
+        assert_eq!(
+            entry_error(
+                &text.replace("trajectory_msgs/msg/JointTrajectory", "std_msgs/msg/String")
+            )
+            .1,
+            "ros_type"
+        );
+        assert_eq!(
+            entry_error(
+                &multi
+                    .replace("conversion", "x")
+                    .replace("ros_type = ", "conversion = \"multi_array\"\nros_type = ")
+            )
+            .1,
+            "control_board"
+        );
+    }
+
+    #[test]
+    fn ros_topic_patterns() {
+        let text = r#"
+[[topic]]
+name = "mirror"
+direction = "ros_to_yarp"
+yarp_port = "/ros"
+ros_topic = "/sensors/*"
+ros_type = "std_msgs/msg/Float64"
+"#;
+        let m = parse(text).unwrap();
+        assert!(m.topics[0].is_ros_pattern());
+        assert_eq!(
+            entry_error(&text.replace("ros_to_yarp", "both")).1,
+            "direction"
+        );
+        assert_eq!(
+            entry_error(&text.replace("/sensors/*", "sensors/*")).1,
+            "ros_topic"
+        );
+        assert_eq!(
+            entry_error(&text.replace("/sensors/*", "/9*")).1,
+            "ros_topic"
+        );
+        assert_eq!(
+            entry_error(&text.replace("yarp_port = \"/ros\"", "yarp_sink = \"/x\"")).1,
+            "yarp_port"
+        );
     }
 
     #[test]

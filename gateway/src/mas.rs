@@ -1,10 +1,10 @@
 //! The multiple-analog-sensors stream (`multipleanalogsensorsserver`'s `measures:o`).
 //!
 //! Each message is the thrift struct `SensorStreamingData` as a Bottle: one list per
-//! sensor family, in YARP 3.12's field order ([`Family`]); each family is
-//! `SensorMeasurements` = a one-element list holding the list of measurements; each
-//! measurement is `SensorMeasurement` = `((v0 v1 ...) timestamp)`. So gyroscope 0 is
-//! `msg[0][0][0]`, e.g. `((((0.1 0.2 0.3) 12.5)) ...)`.
+//! sensor family, in YARP 3.12's field order ([`Family`]), holding that family's
+//! measurements; each measurement is `SensorMeasurement` = `((v0 v1 ...) timestamp)`. So
+//! gyroscope 0 is `msg[0][0]`, e.g. what C++ `yarp read` shows for a fakeIMU:
+//! `(((75.0 75.0 75.0) 1795298120.55)) (((9.47 0.0 -2.54) 1795298120.55)) ... () ()`.
 
 use crate::convert::ConvertError;
 use yarp_proto::{Bottle, Value};
@@ -39,15 +39,9 @@ pub fn measurement(
     let Some(fam) = msg.get(family as usize) else {
         return Ok(None);
     };
-    let list = fam
+    let all = fam
         .as_list()
-        .ok_or_else(|| shape("not a SensorMeasurements list"))?;
-    let Some(all) = list.get(0) else {
-        return Ok(None);
-    };
-    let all = all
-        .as_list()
-        .ok_or_else(|| shape("measurements are not a list"))?;
+        .ok_or_else(|| shape("not a list of measurements"))?;
     let Some(m) = all.get(index) else {
         return Ok(None);
     };
@@ -94,8 +88,8 @@ mod tests {
     /// A stream with one gyro, one accelerometer, no magnetometer, one orientation.
     fn sample() -> Bottle {
         Bottle::from_text(
-            "((((1 2 3) 10.5))) ((((0.0 0.0 9.81) 10.5))) (()) ((((0 0 90) 10.5))) (()) \
-             ((((1 2 3 0.1 0.2 0.3) 11.0)))",
+            "(((1 2 3) 10.5)) (((0.0 0.0 9.81) 10.5)) () (((0 0 90) 10.5)) () \
+             (((1 2 3 0.1 0.2 0.3) 11.0))",
         )
     }
 
@@ -121,6 +115,14 @@ mod tests {
             Err(ConvertError::Count { want: 6, got: 3 })
         );
         assert!(measurement(&Bottle::from_text("1 2"), Family::ThreeAxisGyroscopes, 0, 3).is_err());
+        // the extra nesting level of a misread thrift struct is rejected, not misread
+        assert!(measurement(
+            &Bottle::from_text("((((1 2 3) 10.5)))"),
+            Family::ThreeAxisGyroscopes,
+            0,
+            3
+        )
+        .is_err());
     }
 
     #[test]

@@ -243,6 +243,28 @@ pub static MESSAGES: &[MsgType] = &[
         ],
     ),
     msg(
+        "builtin_interfaces/msg/Duration",
+        &[f("sec", Prim::I32), f("nanosec", Prim::U32)],
+    ),
+    msg(
+        "trajectory_msgs/msg/JointTrajectoryPoint",
+        &[
+            seq("positions", Prim::F64),
+            seq("velocities", Prim::F64),
+            seq("accelerations", Prim::F64),
+            seq("effort", Prim::F64),
+            nested("time_from_start", "builtin_interfaces/msg/Duration"),
+        ],
+    ),
+    msg(
+        "trajectory_msgs/msg/JointTrajectory",
+        &[
+            HEADER,
+            seq("joint_names", Prim::String),
+            nested_seq("points", "trajectory_msgs/msg/JointTrajectoryPoint"),
+        ],
+    ),
+    msg(
         "sensor_msgs/msg/Image",
         &[
             HEADER,

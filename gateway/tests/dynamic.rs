@@ -1,5 +1,6 @@
 //! Dynamic mode: YARP ports matching a pattern are bridged as they appear and unbridged
-//! as they disappear, against rclpy. Domain index: 17.
+//! as they disappear, and ROS topics matching a pattern are mirrored into YARP ports
+//! while rclpy publishes them. Domain indices: 17, 25.
 
 mod common;
 
@@ -69,6 +70,93 @@ ros_type = "std_msgs/msg/String"
         );
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
+    gw.shutdown().await;
+    stop.shutdown();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ros_topics_matching_a_pattern_are_mirrored_while_published() {
+    let Some(venv) =
+        common::venv_or_skip("ros_topics_matching_a_pattern_are_mirrored_while_published")
+    else {
+        return;
+    };
+    let domain = common::domain_id(25);
+    let (ns, stop) = common::name_server().await;
+    let gw = common::gateway(
+        r#"
+[[topic]]
+name = "sensors"
+direction = "ros_to_yarp"
+yarp_port = "/ros"
+ros_topic = "/sensors/*"
+ros_type = "std_msgs/msg/Float64"
+"#,
+        &ns,
+        domain,
+    )
+    .await;
+    // Three seconds of a matching topic, plus one of another type and one elsewhere.
+    let float = |topic: &str, data: &str| {
+        Peer::start(
+            &venv,
+            domain,
+            &[
+                "pub",
+                "std_msgs/msg/Float64",
+                topic,
+                data,
+                "--count",
+                "60",
+                "--rate",
+                "20",
+            ],
+        )
+    };
+    let temp = float("/sensors/temp_a", r#"{"data": 21.5}"#);
+    let _elsewhere = float("/other/temp", r#"{"data": 1.0}"#);
+    let _other_type = Peer::start(
+        &venv,
+        domain,
+        &[
+            "pub",
+            "std_msgs/msg/String",
+            "/sensors/label",
+            r#"{"data": "x"}"#,
+            "--count",
+            "60",
+            "--rate",
+            "20",
+        ],
+    );
+    let registered = |n: &'static str| {
+        let ns = ns.clone();
+        async move { ns.query(n).await.ok().flatten().is_some() }
+    };
+    let end = Instant::now() + T;
+    while !registered("/ros/sensors/temp_a").await {
+        assert!(Instant::now() < end, "/sensors/temp_a was never mirrored");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    let reader = Port::open("/t25/reader:i", ns.clone()).await.unwrap();
+    yarp_net::network::connect(&ns, "/ros/sensors/temp_a", "/t25/reader:i", None)
+        .await
+        .unwrap();
+    let got = tokio::time::timeout(T, reader.read())
+        .await
+        .expect("a mirrored message")
+        .unwrap();
+    assert_eq!(got.bottle().unwrap(), Bottle::from_text("21.5"));
+    assert!(!registered("/ros/other/temp").await);
+    assert!(!registered("/ros/sensors/label").await);
+    // The publisher ends (cleanly): the mirror goes away.
+    assert!(temp.finish(T));
+    let end = Instant::now() + T;
+    while registered("/ros/sensors/temp_a").await {
+        assert!(Instant::now() < end, "the mirror outlived its topic");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    reader.close().await;
     gw.shutdown().await;
     stop.shutdown();
 }

@@ -1,16 +1,14 @@
-//! Multiple-analog-sensors streams as sensor_msgs/Imu and geometry_msgs/WrenchStamped, and
+//! Multiple-analog-sensors streams of real devices (`fakeIMU`, `fakeFTs` behind
+//! `multipleanalogsensorsserver`) as sensor_msgs/Imu and geometry_msgs/WrenchStamped, and
 //! a YARP source that vanishes and returns, against rclpy. Domain indices: 12, 13.
 
 mod common;
 
-use common::{Peer, T};
+use common::{blocking, Peer, T};
 use serde_json::Value as Json;
 use std::time::Duration;
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Stamp};
-
-const MAS: &str = "((((0 0 90) 100.25))) ((((0.0 0.0 9.81) 100.25))) (()) ((((0 0 90) 100.25))) \
-                   (()) ((((1 2 3 0.1 0.2 0.3) 100.5)))";
 
 async fn write_until(w: &Port, b: &Bottle, peer: &Peer) -> Json {
     let line = common::repeat_until(
@@ -25,23 +23,55 @@ async fn write_until(w: &Port, b: &Bottle, peer: &Peer) -> Json {
     serde_json::from_str(&line).unwrap()
 }
 
+fn f(m: &Json, path: &[&str]) -> f64 {
+    path.iter()
+        .fold(m, |v, k| &v[*k])
+        .as_f64()
+        .unwrap_or_else(|| panic!("{path:?} in {m}"))
+}
+
+/// Seconds of a `header.stamp`.
+fn stamp(m: &Json) -> f64 {
+    f(m, &["header", "stamp", "sec"]) + f(m, &["header", "stamp", "nanosec"]) * 1e-9
+}
+
+fn now() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64()
+}
+
+/// Real devices: `fakeIMU` and `fakeFTs` (constant readings: every channel 10) each
+/// served by a `multipleanalogsensorsserver`.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn imu_and_wrench_from_multiple_analog_sensors() {
     let Some(venv) = common::venv_or_skip("imu_and_wrench_from_multiple_analog_sensors") else {
         return;
     };
     let domain = common::domain_id(12);
-    let (ns, stop) = common::name_server().await;
-    let w = Port::open("/test/inertials/measures:o", ns.clone())
-        .await
-        .unwrap();
+    let ns = common::device_name_server();
+    let _imu = blocking(|| {
+        common::open_device(
+            "device multipleanalogsensorsserver\nsubdevice fakeIMU\nname /t12/imu\nperiod 10\n\
+             constantValue true\nsensorName head_imu\nframeName head_frame\n",
+        )
+    })
+    .await;
+    let _fts = blocking(|| {
+        common::open_device(
+            "device multipleanalogsensorsserver\nsubdevice fakeFTs\nname /t12/ft\nperiod 10\n\
+             constantValue true\nsensorNames (l_arm_ft r_arm_ft)\n",
+        )
+    })
+    .await;
     let gw = common::gateway(
         r#"
 [[topic]]
 name = "imu"
 direction = "yarp_to_ros"
 yarp_port = "/gw/imu:i"
-yarp_source = "/test/inertials/measures:o"
+yarp_source = "/t12/imu/measures:o"
 ros_topic = "/imu"
 ros_type = "sensor_msgs/msg/Imu"
 frame_id = "imu_link"
@@ -50,10 +80,11 @@ frame_id = "imu_link"
 name = "ft"
 direction = "yarp_to_ros"
 yarp_port = "/gw/ft:i"
-yarp_source = "/test/inertials/measures:o"
+yarp_source = "/t12/ft/measures:o"
 ros_topic = "/wrench"
 ros_type = "geometry_msgs/msg/WrenchStamped"
-frame_id = "ft_link"
+frame_id = "r_arm_ft"
+sensor_index = 1
 qos = { reliability = "best_effort", depth = 5 }
 "#,
         &ns,
@@ -73,26 +104,43 @@ qos = { reliability = "best_effort", depth = 5 }
     );
     imu.expect_async("READY", T).await;
     ft.expect_async("READY", T).await;
-    let b = Bottle::from_text(MAS);
-    let m = write_until(&w, &b, &imu).await;
+    let m: Json = serde_json::from_str(&imu.expect_async("MSG", T).await).unwrap();
     assert_eq!(m["header"]["frame_id"], "imu_link");
-    assert_eq!(m["header"]["stamp"]["sec"], 100);
-    assert_eq!(m["header"]["stamp"]["nanosec"], 250_000_000);
-    let h = std::f64::consts::FRAC_1_SQRT_2;
-    assert!(
-        (m["orientation"]["z"].as_f64().unwrap() - h).abs() < 1e-9,
-        "{m}"
-    );
-    let wz = m["angular_velocity"]["z"].as_f64().unwrap();
-    assert!((wz - std::f64::consts::FRAC_PI_2).abs() < 1e-9, "{m}");
-    assert_eq!(m["linear_acceleration"]["z"], 9.81);
-    let m = write_until(&w, &b, &ft).await;
-    assert_eq!(m["header"]["frame_id"], "ft_link");
-    assert_eq!(m["header"]["stamp"]["sec"], 100);
-    assert_eq!(m["wrench"]["force"]["y"], 2.0);
-    assert_eq!(m["wrench"]["torque"]["z"], 0.3);
+    assert!((now() - stamp(&m)).abs() < 10.0, "stamp of {m}");
+    // gyroscope 10 deg/s on every axis
+    for k in ["x", "y", "z"] {
+        let w = f(&m, &["angular_velocity", k]);
+        assert!((w - 10f64.to_radians()).abs() < 1e-12, "{m}");
+    }
+    // the fake's gravity for a body pitched by 10 * 3.14 / 180 rad
+    let acc = yarp_devices::sensors::FakeImu::acceleration(10.0);
+    for (k, want) in ["x", "y", "z"].into_iter().zip(acc) {
+        assert!(
+            (f(&m, &["linear_acceleration", k]) - want).abs() < 1e-12,
+            "{m}"
+        );
+    }
+    // roll = pitch = yaw = 10 deg as a quaternion (ZYX convention)
+    let h = 5f64.to_radians();
+    let (c, s) = (h.cos(), h.sin());
+    let want = [
+        s * c * c - c * s * s,
+        c * s * c + s * c * s,
+        c * c * s - s * s * c,
+        c * c * c + s * s * s,
+    ];
+    for (k, want) in ["x", "y", "z", "w"].into_iter().zip(want) {
+        assert!((f(&m, &["orientation", k]) - want).abs() < 1e-9, "{k}: {m}");
+    }
+    let m: Json = serde_json::from_str(&ft.expect_async("MSG", T).await).unwrap();
+    assert_eq!(m["header"]["frame_id"], "r_arm_ft");
+    assert!((now() - stamp(&m)).abs() < 10.0, "stamp of {m}");
+    for part in ["force", "torque"] {
+        for k in ["x", "y", "z"] {
+            assert_eq!(f(&m, &["wrench", part, k]), 10.0, "{m}");
+        }
+    }
     gw.shutdown().await;
-    stop.shutdown();
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

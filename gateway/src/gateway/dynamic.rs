@@ -1,8 +1,10 @@
 //! Dynamic mode: every YARP port matching a name-server pattern is bridged to its own ROS
-//! topic while it exists (checked every [`SCAN_PERIOD`]), on a node of its own that shares
-//! the gateway's DDS participant.
+//! topic while it exists, and every ROS topic matching a topic pattern (as DDS discovery
+//! sees its publishers) is mirrored into its own YARP port while it is published; both
+//! are checked every [`SCAN_PERIOD`], on a node of their own that shares the gateway's
+//! DDS participant.
 
-use super::topics::{keep_connected, yarp_to_ros, JointNameSource};
+use super::topics::{keep_connected, ros_to_yarp, yarp_to_ros, JointNameSource};
 use crate::counters::Counters;
 use crate::mapping::TopicEntry;
 use crate::pattern;
@@ -123,4 +125,113 @@ async fn start_one(
         )),
     ];
     Ok(Live { tasks, port })
+}
+
+/// One mirrored ROS topic: its YARP port and the task feeding it.
+struct Mirror {
+    task: JoinHandle<()>,
+    port: Arc<Port>,
+}
+
+/// The ROS topics (absolute names) that some other participant publishes with the DDS
+/// type `dds_type` and whose names match `pat`.
+fn published_topics(
+    dp: &ros2_client::dds::rustdds::DomainParticipant,
+    pat: &str,
+    dds_type: &str,
+) -> HashSet<String> {
+    use ros2_client::dds::rustdds::RTPSEntity;
+    let me = dp.guid().prefix;
+    dp.discovered_writers()
+        .into_iter()
+        .filter(|w| w.writer_proxy.remote_writer_guid.prefix != me)
+        .filter(|w| w.publication_topic_data.type_name == dds_type)
+        .filter_map(|w| {
+            w.publication_topic_data
+                .topic_name
+                .strip_prefix("rt")
+                .filter(|n| n.starts_with('/'))
+                .map(str::to_string)
+        })
+        .filter(|n| pattern::matches(pat, n))
+        .collect()
+}
+
+/// Runs the ROS-pattern entry `t` until aborted: every ROS topic matching `t.ros_topic`
+/// (published by another participant, of type `t.ros_type`) is mirrored into the YARP
+/// port `<yarp_port><topic>` while it has publishers (checked every [`SCAN_PERIOD`]).
+pub(super) async fn run_ros(
+    mut node: Node,
+    dp: ros2_client::dds::rustdds::DomainParticipant,
+    ns: NameClient,
+    t: TopicEntry,
+    c: Arc<Counters>,
+) {
+    let Some(dds_type) = crate::types::dds_type_name(&t.ros_type) else {
+        return;
+    };
+    let prefix = t.yarp_port.clone().unwrap_or_default();
+    let mut live: HashMap<String, Mirror> = HashMap::new();
+    let mut tick = tokio::time::interval(SCAN_PERIOD);
+    loop {
+        tick.tick().await;
+        let topics = published_topics(&dp, &t.ros_topic, &dds_type);
+        let gone: Vec<String> = live
+            .keys()
+            .filter(|n| !topics.contains(*n))
+            .cloned()
+            .collect();
+        for n in gone {
+            if let Some(m) = live.remove(&n) {
+                info!(
+                    "{}: ROS topic {n} has no publisher left; mirror removed",
+                    t.name
+                );
+                m.task.abort();
+                let _ = m.task.await;
+                if let Ok(p) = Arc::try_unwrap(m.port) {
+                    p.close().await;
+                }
+            }
+        }
+        for n in topics {
+            if live.contains_key(&n) {
+                continue;
+            }
+            match mirror_one(&mut node, &ns, &t, &n, &prefix, c.clone()).await {
+                Ok(m) => {
+                    info!("{}: mirroring ROS topic {n}", t.name);
+                    live.insert(n, m);
+                }
+                Err(e) => debug!("{}: {n}: {e}", t.name),
+            }
+        }
+    }
+}
+
+async fn mirror_one(
+    node: &mut Node,
+    ns: &NameClient,
+    t: &TopicEntry,
+    topic: &str,
+    prefix: &str,
+    c: Arc<Counters>,
+) -> Result<Mirror, String> {
+    let rt = node
+        .create_topic(
+            &ros::name(topic).map_err(|e| e.to_string())?,
+            ros::message_type(&t.ros_type),
+            &ros::qos(&t.qos),
+        )
+        .map_err(|e| format!("{e:?}"))?;
+    let sub = node
+        .create_subscription(&rt, None)
+        .map_err(|e| format!("{e:?}"))?;
+    let port = Arc::new(
+        Port::open(&format!("{prefix}{topic}"), ns.clone())
+            .await
+            .map_err(|e| e.to_string())?,
+    );
+    let task = tokio::spawn(ros_to_yarp(sub, port.clone(), None, t.clone(), c));
+    Ok(Mirror { task, port })
 }

@@ -2,6 +2,7 @@
 //! main ROS node, plus one node per dynamic-mode entry) and the YARP network. Conversions live in [`crate::convert`] and
 //! [`crate::service`]; this module only moves messages and counts them.
 
+mod commands;
 mod dynamic;
 mod services;
 mod topics;
@@ -12,7 +13,9 @@ use self::topics::{keep_connected, ros_to_yarp, yarp_to_ros, JointNameSource};
 use self::yarp_rpc::YarpRpc;
 use crate::counters::{self, Counters, Row};
 use crate::dynmsg::Value as Ros;
-use crate::mapping::{Direction, Mappings, ServiceConversion, ServiceEntry, TopicEntry};
+use crate::mapping::{
+    Conversion, Direction, Mappings, ServiceConversion, ServiceEntry, TopicEntry,
+};
 use crate::ros::{self, RosError};
 use crate::service::{self, EmptyMsg, OutcomeResponse, SetBoolRequest, StdSrv};
 use ros2_client::{Client, Context, Node, Publisher, Server, ServiceMapping, Subscription};
@@ -65,6 +68,11 @@ pub enum StartError {
     Ros(#[from] RosError),
     #[error("YARP port {name}: {source}")]
     Port { name: String, source: PortError },
+    #[error("entry {name}: cannot start its control-board thread: {source}")]
+    Thread {
+        name: String,
+        source: std::io::Error,
+    },
 }
 
 /// One bridged mapping, as shown in the startup table and the diagnostics.
@@ -275,10 +283,16 @@ impl Builder {
     }
 
     async fn topic(&mut self, node: &mut Node, t: &TopicEntry) -> Result<(), StartError> {
+        if t.is_ros_pattern() {
+            return self.ros_pattern(t);
+        }
         let Some(port_name) = &t.yarp_port else {
             return self.pattern(t);
         };
         let conv = t.conversion();
+        if conv == Conversion::JointCommand {
+            return self.joint_command(node, t);
+        }
         let port = self.open_port(port_name).await?;
         let qos = ros::qos(&t.qos);
         let topic = node
@@ -332,6 +346,77 @@ impl Builder {
             ros: t.ros_topic.clone(),
             ros_type: t.ros_type.clone(),
             detail,
+            counters,
+        });
+        Ok(())
+    }
+
+    /// A joint-command entry: a ROS subscription feeding a control-board thread.
+    fn joint_command(&mut self, node: &mut Node, t: &TopicEntry) -> Result<(), StartError> {
+        let topic = node
+            .create_topic(
+                &ros::name(&t.ros_topic)?,
+                ros::message_type(&t.ros_type),
+                &ros::qos(&t.qos),
+            )
+            .map_err(|e| entity_err("topic", &t.ros_topic, e))?;
+        let sub: Subscription<Ros> = node
+            .create_subscription(&topic, None)
+            .map_err(|e| entity_err("subscription", &t.ros_topic, e))?;
+        let counters = Arc::new(Counters::default());
+        let tx =
+            commands::spawn_board(t, counters.clone()).map_err(|source| StartError::Thread {
+                name: t.name.clone(),
+                source,
+            })?;
+        self.tasks.push(tokio::spawn(commands::ros_to_board(
+            sub,
+            tx,
+            t.clone(),
+            counters.clone(),
+        )));
+        let cb = t.control_board.as_ref().expect("validated at load time");
+        self.bridges.push(Bridge {
+            name: t.name.clone(),
+            direction: t.direction,
+            yarp: format!(
+                "{} -> {}",
+                t.yarp_port.as_deref().unwrap_or_default(),
+                cb.remote
+            ),
+            ros: t.ros_topic.clone(),
+            ros_type: t.ros_type.clone(),
+            detail: format!("JointCommand {:?}", cb.mode),
+            counters,
+        });
+        Ok(())
+    }
+
+    /// A `ros_topic` pattern entry: its own node, mirroring matching ROS topics into YARP
+    /// ports as they come and go.
+    fn ros_pattern(&mut self, t: &TopicEntry) -> Result<(), StartError> {
+        let k = self.bridges.len();
+        let node = ros::new_node(
+            &self.ctx,
+            &self.namespace,
+            &format!("{}_dyn{k}", self.node_name),
+        )?;
+        let counters = Arc::new(Counters::default());
+        let prefix = t.yarp_port.clone().unwrap_or_default();
+        self.tasks.push(tokio::spawn(dynamic::run_ros(
+            node,
+            self.ctx.domain_participant(),
+            self.ns.clone(),
+            t.clone(),
+            counters.clone(),
+        )));
+        self.bridges.push(Bridge {
+            name: t.name.clone(),
+            direction: t.direction,
+            yarp: format!("{prefix}/<topic>"),
+            ros: t.ros_topic.clone(),
+            ros_type: t.ros_type.clone(),
+            detail: format!("{:?} dynamic, ROS topics as they appear", t.conversion()),
             counters,
         });
         Ok(())

@@ -16,14 +16,21 @@ use yarp_net::nameserver::NameClient;
 use yarp_net::network;
 use yarp_net::port::Port;
 
-/// Where a joint_state bridge gets its joint names; asked again (at most once a second)
-/// until the control board answers.
+/// Where a joint_state bridge gets its joint names (and which joints are prismatic);
+/// asked again (at most once a second) until the control board answers.
 pub(super) enum JointNameSource {
-    Known(Vec<String>),
+    Known(Joints),
     AxisInfo {
         rpc: Box<YarpRpc>,
         next_try: Instant,
     },
+}
+
+/// Joint names and, per joint, whether it is prismatic (meters, not degrees).
+#[derive(Debug, Clone, Default)]
+pub(super) struct Joints {
+    names: Vec<String>,
+    prismatic: Vec<bool>,
 }
 
 impl JointNameSource {
@@ -33,22 +40,25 @@ impl JointNameSource {
                 rpc: Box::new(YarpRpc::new(ns.clone(), rpc_port, me)),
                 next_try: Instant::now(),
             },
-            Some(JointNames::List { names }) => JointNameSource::Known(names.clone()),
-            None => JointNameSource::Known(Vec::new()),
+            Some(JointNames::List { names }) => JointNameSource::Known(Joints {
+                names: names.clone(),
+                prismatic: vec![false; names.len()],
+            }),
+            None => JointNameSource::Known(Joints::default()),
         }
     }
 
-    /// The names, once known.
-    async fn get(&mut self) -> Option<&[String]> {
+    /// The joints, once known.
+    async fn get(&mut self) -> Option<&Joints> {
         if let JointNameSource::AxisInfo { rpc, next_try } = self {
             if Instant::now() < *next_try {
                 return None;
             }
             *next_try = Instant::now() + Duration::from_secs(1);
-            match ask_joint_names(rpc).await {
-                Ok(names) => {
-                    info!("joint names from {}: {names:?}", rpc.target);
-                    *self = JointNameSource::Known(names);
+            match ask_joints(rpc).await {
+                Ok(joints) => {
+                    info!("joints from {}: {joints:?}", rpc.target);
+                    *self = JointNameSource::Known(joints);
                 }
                 Err(e) => {
                     debug!("joint names: {e}");
@@ -57,21 +67,28 @@ impl JointNameSource {
             }
         }
         match self {
-            JointNameSource::Known(n) => Some(n),
+            JointNameSource::Known(j) => Some(j),
             JointNameSource::AxisInfo { .. } => None,
         }
     }
 }
 
-async fn ask_joint_names(rpc: &mut YarpRpc) -> Result<Vec<String>, String> {
+async fn ask_joints(rpc: &mut YarpRpc) -> Result<Joints, String> {
     let reply = rpc.call(&axis_info::axes_request()).await?;
     let n = axis_info::parse_axes(&reply).ok_or_else(|| format!("bad axes reply {reply}"))?;
-    let mut names = Vec::with_capacity(n);
+    let mut joints = Joints::default();
     for j in 0..n {
         let reply = rpc.call(&axis_info::name_request(j)).await?;
-        names.push(axis_info::parse_name(&reply).ok_or_else(|| format!("bad name reply {reply}"))?);
+        joints
+            .names
+            .push(axis_info::parse_name(&reply).ok_or_else(|| format!("bad name reply {reply}"))?);
+        // A board that cannot tell the type is taken as revolute (the common case).
+        let reply = rpc.call(&axis_info::type_request(j)).await?;
+        joints
+            .prismatic
+            .push(axis_info::parse_prismatic(&reply).unwrap_or(false));
     }
-    Ok(names)
+    Ok(joints)
 }
 
 /// YARP -> ROS: every Bottle read on the gateway's port becomes one ROS message.
@@ -87,20 +104,22 @@ pub(super) async fn yarp_to_ros(
     let frame_id = t.frame_id.clone().unwrap_or_default();
     while let Some(inc) = port.read().await {
         let t0 = Instant::now();
-        let joint_names: &[String] = if conv == Conversion::JointState {
+        let none = Joints::default();
+        let joints: &Joints = if conv == Conversion::JointState {
             match names.get().await {
-                Some(n) => n,
+                Some(j) => j,
                 None => {
                     c.dropped();
                     continue;
                 }
             }
         } else {
-            &[]
+            &none
         };
         let ctx = convert::Ctx {
             frame_id: &frame_id,
-            joint_names,
+            joint_names: &joints.names,
+            joint_prismatic: &joints.prismatic,
             sensor_index: t.sensor_index.unwrap_or(0),
             stamp_ns: inc
                 .stamp

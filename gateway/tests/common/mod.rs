@@ -33,17 +33,17 @@ pub fn venv_or_skip(test: &str) -> Option<PathBuf> {
 
 /// A ROS domain id unique to this test within this test run.
 ///
-/// `index` is the test's own number (unique across the gateway's tests, < 25). The run
-/// picks one of 8 slots of 25 domains from nextest's run id (or the process id under plain
+/// `index` is the test's own number (unique across the gateway's tests, < 26). The run
+/// picks one of 8 slots of 26 domains from nextest's run id (or the process id under plain
 /// `cargo test`), so two suites running at once rarely share a domain either; the slots
 /// stay below 232, the highest domain RTPS's port formula allows.
 pub fn domain_id(index: u16) -> u16 {
-    assert!(index < 25, "domain index {index} out of range");
+    assert!(index < 26, "domain index {index} out of range");
     let seed = std::env::var("NEXTEST_RUN_ID").unwrap_or_else(|_| std::process::id().to_string());
     let h = seed.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
         (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
     });
-    20 + (h % 8) as u16 * 25 + index
+    20 + (h % 8) as u16 * 26 + index
 }
 
 /// A running rclpy peer (`gateway/tests/peers/peer.py`); killed and reaped on drop.
@@ -236,4 +236,52 @@ pub async fn repeat_until<R>(
         assert!(Instant::now() < end, "timed out waiting for {what}");
         tokio::time::sleep(every).await;
     }
+}
+
+/// A process-wide YARP name server for tests that open `yarp-devices` devices, which find
+/// it through `yarp.conf`: `YARP_CONFIG_HOME` points at a directory private to this test
+/// process. Runs on its own runtime so that it outlives every test's runtime.
+pub fn device_name_server() -> yarp_net::nameserver::NameClient {
+    use std::sync::OnceLock;
+    static NS: OnceLock<(std::net::SocketAddr, tokio::runtime::Runtime)> = OnceLock::new();
+    let (addr, _) = NS.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("gw-test-yarp-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("yarp config dir");
+        std::env::set_var("YARP_CONFIG_HOME", &dir);
+        // Built on a plain thread: tests call this from inside their own runtime.
+        let (addr, rt) = std::thread::spawn(|| {
+            let rt = tokio::runtime::Builder::new_multi_thread()
+                .worker_threads(1)
+                .enable_all()
+                .build()
+                .expect("name-server runtime");
+            let addr = rt.block_on(async {
+                let ns = yarp_net::nameserver::NameServer::bind("127.0.0.1:0", "127.0.0.1")
+                    .await
+                    .expect("bind name server (run under netns-run)");
+                let addr = ns.local_addr();
+                tokio::spawn(ns.serve());
+                addr
+            });
+            (addr, rt)
+        })
+        .join()
+        .expect("name-server thread");
+        yarp_net::network::write_conf("127.0.0.1", addr.port()).expect("write yarp.conf");
+        (addr, rt)
+    });
+    yarp_net::nameserver::NameClient::new(*addr).with_timeout(T)
+}
+
+/// Opens a `yarp-devices` device from configuration text (name server from
+/// [`device_name_server`]); panics with the device's error.
+pub fn open_device(text: &str) -> yarp_devices::PolyDriver {
+    device_name_server();
+    let prop = yarp_proto::Property::from_config_text(text).expect("device config");
+    yarp_devices::PolyDriver::open(&prop).unwrap_or_else(|e| panic!("open {text:?}: {e}"))
+}
+
+/// Runs blocking device calls off the async runtime.
+pub async fn blocking<R: Send + 'static>(f: impl FnOnce() -> R + Send + 'static) -> R {
+    tokio::task::spawn_blocking(f).await.expect("blocking task")
 }

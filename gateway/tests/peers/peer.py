@@ -5,7 +5,7 @@ and exits on its own after --timeout seconds at the latest, shutting rclpy down 
 (Fast DDS removes its shared-memory segments only then).
 
   peer.py sub  TYPE TOPIC [--count N] [--summary]  prints MSG <json> per message
-  peer.py pub  TYPE TOPIC JSON [--count N] [--rate HZ] [--wait-sub]
+  peer.py pub  TYPE TOPIC JSON [--count N] [--rate HZ] [--wait-sub] [--linger S]
   peer.py echo TYPE IN OUT                      re-publishes IN on OUT (latency reference)
   peer.py ping OUT IN [--count N] [--rate HZ]   String ping-pong, prints RTT p50/p99 in ms
   peer.py serve SRV NAME JSON_RESPONSE          prints REQ <json> per request
@@ -78,7 +78,8 @@ def summary(m):
     stamp = m.header.stamp.sec + m.header.stamp.nanosec * 1e-9
     return {"width": m.width, "height": m.height, "encoding": m.encoding, "step": m.step,
             "len": len(data), "sha256": hashlib.sha256(data).hexdigest(),
-            "frame_id": m.header.frame_id, "age_ms": (time.time() - stamp) * 1e3}
+            "frame_id": m.header.frame_id, "age_ms": (time.time() - stamp) * 1e3,
+            "sec": m.header.stamp.sec, "nanosec": m.header.stamp.nanosec}
 
 
 def qos(args):
@@ -112,6 +113,8 @@ def main():
     ap.add_argument("--rate", type=float, default=20.0)
     ap.add_argument("--timeout", type=float, default=20.0)
     ap.add_argument("--wait-sub", action="store_true")
+    ap.add_argument("--linger", type=float, default=0.5,
+                    help="pub: seconds to stay after the last message (transient_local late joiners)")
     ap.add_argument("--best-effort", action="store_true")
     ap.add_argument("--transient", action="store_true")
     ap.add_argument("--depth", type=int, default=10)
@@ -158,7 +161,7 @@ def run(node, args, deadline):
             pub.publish(msg)
             say("SENT", i)
             rclpy.spin_once(node, timeout_sec=1.0 / args.rate)
-        spin_until(node, lambda: False, min(deadline, time.monotonic() + 0.5))
+        spin_until(node, lambda: False, min(deadline, time.monotonic() + args.linger))
     elif mode == "echo":
         cls = load_type(a[0])
         pub = node.create_publisher(cls, a[2], qos(args))

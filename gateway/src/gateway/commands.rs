@@ -1,0 +1,348 @@
+//! Joint-command bridges: ROS messages -> a control board through `remote_controlboard`.
+//!
+//! Device interfaces are synchronous (as in C++), so each board is owned by a thread of
+//! its own; the tokio task only hands ROS messages over a bounded channel (a full channel
+//! counts a drop). The thread opens the board (retrying every second while it is not
+//! there), learns axis names and types from IAxisInfo, decodes each message with
+//! [`crate::joint_command`] and follows trajectories point by point. A board that stops
+//! answering is closed and opened again on the next command.
+
+use crate::counters::Counters;
+use crate::dynmsg::{MsgSeed, Value as Ros};
+use crate::joint_command::{self, BoardInfo, Command, Mode, Target, TrajectoryPoint};
+use crate::mapping::{ControlBoard, TopicEntry};
+use futures::{pin_mut, StreamExt};
+use ros2_client::Subscription;
+use std::collections::VecDeque;
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, SyncSender, TrySendError};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use tracing::{debug, info, warn};
+use yarp_devices::vocabs::{CM_POSITION, CM_POSITION_DIRECT, CM_VELOCITY, JOINTTYPE_PRISMATIC};
+use yarp_devices::PolyDriver;
+use yarp_proto::Property;
+
+/// How often an absent board is looked for again.
+const RETRY: Duration = Duration::from_secs(1);
+
+/// Starts the board thread for entry `t`; returns the sender the ROS task feeds.
+pub(super) fn spawn_board(t: &TopicEntry, c: Arc<Counters>) -> std::io::Result<SyncSender<Ros>> {
+    let (tx, rx) = mpsc::sync_channel(t.qos.depth.max(1) as usize);
+    let t = t.clone();
+    std::thread::Builder::new()
+        .name(format!("gw-board-{}", t.name))
+        .spawn(move || board_thread(rx, t, c))?;
+    Ok(tx)
+}
+
+/// ROS -> board: hands every received message to the board thread.
+pub(super) async fn ros_to_board(
+    sub: Subscription<Ros>,
+    tx: SyncSender<Ros>,
+    t: TopicEntry,
+    c: Arc<Counters>,
+) {
+    let Some(seed) = MsgSeed::new(&t.ros_type) else {
+        return;
+    };
+    let stream = sub.async_stream_seed(seed);
+    pin_mut!(stream);
+    while let Some(r) = stream.next().await {
+        match r {
+            Ok((m, _)) => match tx.try_send(m) {
+                Ok(()) => {}
+                Err(TrySendError::Full(_)) => {
+                    debug!("{}: board busy, command dropped", t.name);
+                    c.dropped();
+                }
+                Err(TrySendError::Disconnected(_)) => return,
+            },
+            Err(e) => {
+                debug!("{}: take: {e:?}", t.name);
+                c.dropped();
+            }
+        }
+    }
+}
+
+/// An open board and what the gateway learned about it.
+struct Board {
+    dev: PolyDriver,
+    info: BoardInfo,
+    /// Axes an unnamed message addresses.
+    default_axes: Vec<usize>,
+    /// Axes already switched to the entry's control mode.
+    in_mode: Vec<bool>,
+}
+
+/// Why a command was not applied.
+enum Failure {
+    /// The message does not fit the board (the board is fine).
+    Message(String),
+    /// The board refused or did not answer (it is reopened).
+    Board(String),
+}
+
+fn board_err(e: impl std::fmt::Display) -> Failure {
+    Failure::Board(e.to_string())
+}
+
+fn missing(what: &str) -> Failure {
+    Failure::Board(format!("remote_controlboard lacks {what}"))
+}
+
+impl Board {
+    fn open(local: &str, cb: &ControlBoard) -> Result<Board, String> {
+        let text = format!(
+            "device remote_controlboard\nremote {}\nlocal {local}\ncarrier tcp\n",
+            cb.remote
+        );
+        let prop = Property::from_config_text(&text).map_err(|e| e.to_string())?;
+        let mut dev = PolyDriver::open(&prop).map_err(|e| e.to_string())?;
+        let d = dev.device();
+        let axes = d
+            .as_encoders()
+            .ok_or("no IEncoders")?
+            .get_axes()
+            .map_err(|e| e.to_string())?;
+        let ai = d.as_axis_info().ok_or("no IAxisInfo")?;
+        let mut info = BoardInfo::default();
+        for j in 0..axes {
+            info.names
+                .push(ai.get_axis_name(j).map_err(|e| e.to_string())?);
+            info.prismatic
+                .push(ai.get_joint_type(j).map_err(|e| e.to_string())? == JOINTTYPE_PRISMATIC);
+        }
+        let default_axes = info.select(&cb.joints).map_err(|e| e.to_string())?;
+        Ok(Board {
+            dev,
+            info,
+            default_axes,
+            in_mode: vec![false; axes],
+        })
+    }
+
+    /// Switches `joints` to the control mode of `mode` (once per axis and connection).
+    fn ensure_mode(&mut self, mode: Mode, joints: &[usize]) -> Result<(), Failure> {
+        let todo: Vec<usize> = joints
+            .iter()
+            .copied()
+            .filter(|&j| !self.in_mode[j])
+            .collect();
+        if todo.is_empty() {
+            return Ok(());
+        }
+        let cm = match mode {
+            Mode::Position => CM_POSITION,
+            Mode::PositionDirect => CM_POSITION_DIRECT,
+            Mode::Velocity => CM_VELOCITY,
+        };
+        self.dev
+            .device()
+            .as_control_mode()
+            .ok_or_else(|| missing("IControlMode"))?
+            .set_control_modes_group(&todo, &vec![cm; todo.len()])
+            .map_err(board_err)?;
+        for j in todo {
+            self.in_mode[j] = true;
+        }
+        Ok(())
+    }
+
+    /// Sends one setpoint; `speeds` (position mode) first sets reference speeds.
+    fn apply(&mut self, mode: Mode, t: &Target, speeds: &[Option<f64>]) -> Result<(), Failure> {
+        self.ensure_mode(mode, &t.joints)?;
+        let d = self.dev.device();
+        match mode {
+            // Streamed on command:o (`[dpog]`), as the C++ client does.
+            Mode::PositionDirect => d
+                .as_position_direct()
+                .ok_or_else(|| missing("IPositionDirect"))?
+                .set_positions_group(&t.joints, &t.values)
+                .map_err(board_err),
+            Mode::Velocity => d
+                .as_velocity_control()
+                .ok_or_else(|| missing("IVelocityControl"))?
+                .velocity_move_group(&t.joints, &t.values)
+                .map_err(board_err),
+            _ => {
+                let p = d
+                    .as_position_control()
+                    .ok_or_else(|| missing("IPositionControl"))?;
+                let (js, vs): (Vec<usize>, Vec<f64>) = t
+                    .joints
+                    .iter()
+                    .zip(speeds)
+                    .filter_map(|(j, s)| s.map(|s| (*j, s)))
+                    .unzip();
+                if !js.is_empty() {
+                    p.set_ref_speed_group(&js, &vs).map_err(board_err)?;
+                }
+                p.position_move_group(&t.joints, &t.values)
+                    .map_err(board_err)
+            }
+        }
+    }
+
+    /// The board's positions now (YARP units), if the stream has them.
+    fn positions(&mut self) -> Option<Vec<f64>> {
+        self.dev.device().as_encoders()?.get_encoders().ok()
+    }
+}
+
+/// A trajectory being followed.
+struct Plan {
+    start: Instant,
+    points: VecDeque<TrajectoryPoint>,
+    /// When the point before the next one was due (position mode moves start then).
+    prev_at: Duration,
+    /// Where the axes were last sent (YARP units, one per axis), for segment speeds.
+    last: Vec<f64>,
+}
+
+impl Plan {
+    /// When the next point must be sent: position mode starts each segment when the
+    /// previous point is due (so the move ends on time); position-direct sends each
+    /// point at its own time.
+    fn due(&self, mode: Mode) -> Option<Instant> {
+        let p = self.points.front()?;
+        Some(
+            self.start
+                + if mode == Mode::Position {
+                    self.prev_at
+                } else {
+                    p.at
+                },
+        )
+    }
+}
+
+fn board_thread(rx: Receiver<Ros>, t: TopicEntry, c: Arc<Counters>) {
+    let Some(cb) = t.control_board.clone() else {
+        return;
+    };
+    let local = t.yarp_port.clone().unwrap_or_default();
+    let mut board: Option<Board> = None;
+    let mut next_open = Instant::now();
+    let mut plan: Option<Plan> = None;
+    let mut warned = false;
+    loop {
+        if board.is_none() && Instant::now() >= next_open {
+            match Board::open(&local, &cb) {
+                Ok(b) => {
+                    info!(
+                        "{}: driving {} ({} axes: {:?})",
+                        t.name,
+                        cb.remote,
+                        b.info.names.len(),
+                        b.info.names
+                    );
+                    board = Some(b);
+                    warned = false;
+                }
+                Err(e) => {
+                    if !warned {
+                        warn!("{}: control board {}: {e}", t.name, cb.remote);
+                        warned = true;
+                    }
+                    next_open = Instant::now() + RETRY;
+                }
+            }
+        }
+        let now = Instant::now();
+        let mut wait = RETRY;
+        if let Some(due) = plan.as_ref().and_then(|p| p.due(cb.mode)) {
+            wait = wait.min(due.saturating_duration_since(now));
+        }
+        match rx.recv_timeout(wait) {
+            Ok(m) => {
+                let t0 = Instant::now();
+                let Some(b) = board.as_mut() else {
+                    debug!("{}: no board yet, command dropped", t.name);
+                    c.dropped();
+                    continue;
+                };
+                let cmd = joint_command::decode(&t.ros_type, &m, cb.mode, &b.info, &b.default_axes);
+                let r = match cmd {
+                    Err(e) => Err(Failure::Message(e.to_string())),
+                    Ok(Command::Set(target)) => {
+                        plan = None;
+                        b.apply(cb.mode, &target, &[])
+                    }
+                    Ok(Command::Trajectory(points)) => {
+                        let last = b.positions().unwrap_or_default();
+                        plan = Some(Plan {
+                            start: t0,
+                            points: points.into(),
+                            prev_at: Duration::ZERO,
+                            last,
+                        });
+                        Ok(())
+                    }
+                };
+                settle(&t.name, r, &c, t0, &mut board, &mut plan);
+            }
+            Err(RecvTimeoutError::Timeout) => {
+                let (Some(b), Some(p)) = (board.as_mut(), plan.as_mut()) else {
+                    continue;
+                };
+                if p.due(cb.mode).is_none_or(|d| d > Instant::now()) {
+                    continue;
+                }
+                let Some(point) = p.points.pop_front() else {
+                    continue;
+                };
+                let speeds = if cb.mode == Mode::Position {
+                    joint_command::segment_speeds(&p.last, &point.target, point.at - p.prev_at)
+                } else {
+                    Vec::new()
+                };
+                let r = b.apply(cb.mode, &point.target, &speeds);
+                if r.is_ok() {
+                    for (&j, &x) in point.target.joints.iter().zip(&point.target.values) {
+                        if let Some(slot) = p.last.get_mut(j) {
+                            *slot = x;
+                        }
+                    }
+                    p.prev_at = point.at;
+                    if p.points.is_empty() {
+                        plan = None;
+                    }
+                    continue; // the trajectory message was counted when it arrived
+                }
+                settle(&t.name, r, &c, Instant::now(), &mut board, &mut plan);
+            }
+            Err(RecvTimeoutError::Disconnected) => break,
+        }
+    }
+    if let Some(mut b) = board {
+        let _ = b.dev.close();
+    }
+}
+
+/// Counts the outcome of one command; a board failure closes the board (reopened on
+/// the next try) and abandons the trajectory.
+fn settle(
+    name: &str,
+    r: Result<(), Failure>,
+    c: &Counters,
+    t0: Instant,
+    board: &mut Option<Board>,
+    plan: &mut Option<Plan>,
+) {
+    match r {
+        Ok(()) => c.forwarded(t0.elapsed()),
+        Err(Failure::Message(e)) => {
+            debug!("{name}: {e}");
+            c.dropped();
+        }
+        Err(Failure::Board(e)) => {
+            warn!("{name}: {e}; reconnecting");
+            c.dropped();
+            *plan = None;
+            if let Some(mut b) = board.take() {
+                let _ = b.dev.close();
+            }
+        }
+    }
+}
