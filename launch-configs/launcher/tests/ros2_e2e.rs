@@ -1,7 +1,8 @@
 //! The mission end to end: `yarp-launch` starts a robot config (`icub-sim.toml`, the
 //! emulated iCub, and `fake-devices.toml`), a real rclpy node reads
 //! `/icub/left_arm/joint_states` and commands a joint through the gateway, our `yarp read`
-//! reads a YARP port, and everything stops with no process left behind. Prints the time
+//! reads a YARP port, headless Chromium loads the dashboard, and everything stops with no
+//! process left behind. Prints the time
 //! from the command to the first JointState. Needs the rclpy venv
 //! (`tests/peers/install-ros2.sh`, `ROS_VENV`); skips loudly without it.
 
@@ -141,6 +142,24 @@ fn e2e(config: &str, extra: &[&str], joint: &str, target: f64, domain_offset: u3
         "joint {joint} at {value} on the YARP side"
     );
     drop(reader);
+
+    // The dashboard, in headless Chromium, shows this robot's ports and the joint plot.
+    if let Some(browser) = common::browser::chromium() {
+        let work = tempfile::tempdir().unwrap();
+        let dom = common::browser::run_chromium(
+            &browser,
+            &work.path().join("profile"),
+            &["--dump-dom".to_string(), url.clone()],
+            Duration::from_secs(60),
+        );
+        for needle in [
+            r#"id="port-graph""#,
+            r#"id="joint-plot""#,
+            r#"data-port="/icub/left_arm/state:o""#,
+        ] {
+            assert!(dom.contains(needle), "the dashboard's DOM lacks {needle}");
+        }
+    }
 
     let status = get_json(&format!("{url}api/status"));
     let pids: Vec<i32> = status["modules"]
