@@ -128,15 +128,23 @@ async fn rpc_until_answered(
         .await
         .unwrap()
         .expect("gateway port registered");
-    let mut c = RpcClient::connect(&contact, "/test/client", Carrier::Tcp)
-        .await
-        .unwrap();
-    let reply = tokio::time::timeout(T, c.call(&Bottle::from_text(cmd)))
-        .await
-        .expect("reply in time")
-        .unwrap();
-    c.close().await;
-    reply
+    // DDS discovery of each ROS service can take a while on a loaded machine: the gateway
+    // answers `[fail] "...: no answer within ..."` until it matched; ask again until then.
+    let deadline = tokio::time::Instant::now() + 2 * T;
+    loop {
+        let mut c = RpcClient::connect(&contact, "/test/client", Carrier::Tcp)
+            .await
+            .unwrap();
+        let reply = tokio::time::timeout(T, c.call(&Bottle::from_text(cmd)))
+            .await
+            .expect("reply in time")
+            .unwrap();
+        c.close().await;
+        let unmatched = reply.to_string().contains("no answer within");
+        if !unmatched || tokio::time::Instant::now() > deadline {
+            return reply;
+        }
+    }
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
