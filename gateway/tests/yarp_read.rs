@@ -25,29 +25,9 @@ fn our_yarp() -> Option<PathBuf> {
     None
 }
 
-/// C++ YARP's `yarp`: `$YARP_CPP_BIN/yarp`, else the pip-installed peer in `.venv-yarp`.
+/// C++ YARP's `yarp` (the shared lookup of the C++ peer; says SKIPPED when absent).
 fn cpp_yarp() -> Option<PathBuf> {
-    let mut dirs: Vec<PathBuf> = std::env::var_os("YARP_CPP_BIN")
-        .map(PathBuf::from)
-        .into_iter()
-        .collect();
-    let venv = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../.venv-yarp");
-    if let Ok(libs) = std::fs::read_dir(venv.join("lib")) {
-        dirs.extend(
-            libs.flatten()
-                .map(|d| d.path().join("site-packages/yarp/bin")),
-        );
-    }
-    let found = dirs
-        .into_iter()
-        .map(|d| d.join("yarp"))
-        .find(|p| p.is_file());
-    if found.is_none() {
-        eprintln!(
-            "\n*** C++ YARP not found (YARP_CPP_BIN or .venv-yarp): C++ reader skipped ***\n"
-        );
-    }
-    found
+    yarp_interop_tests::cpp_program("rclpy_twist_reaches_yarp_read (C++ reader)", "yarp")
 }
 
 /// `yarp read <port>`; its stdout lines are collected (killed and reaped on drop).
