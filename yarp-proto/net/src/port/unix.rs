@@ -90,11 +90,10 @@ pub(crate) async fn connect(
     let hello = wire::encode_connection_start(&carrier.spec(), shared.name.as_bytes());
     tcp.write_all(&hello).await.map_err(io_err(target))?;
     // C++ retries 5 times 10 ms apart while the receiver binds; we are more patient
-    let mut unix = None;
     let deadline = tokio::time::Instant::now() + Duration::from_secs(2);
-    while unix.is_none() {
+    let unix = loop {
         match UnixStream::connect(&path).await {
-            Ok(s) => unix = Some(s),
+            Ok(s) => break s,
             Err(e) if tokio::time::Instant::now() >= deadline => {
                 return Err(OutputError::Connect {
                     target: target.to_string(),
@@ -104,9 +103,8 @@ pub(crate) async fn connect(
             }
             Err(_) => tokio::time::sleep(Duration::from_millis(10)).await,
         }
-    }
+    };
     drop(tcp);
-    let unix = unix.expect("connected above");
     let route = Route::new(&shared.name, target, carrier.name());
     let (tx, rx) = mpsc::channel(OUTPUT_QUEUE);
     let task = tokio::spawn(run_output(
