@@ -32,9 +32,38 @@ pub fn rihs01(type_name: &str) -> Result<String, HashError> {
 
 /// The DDS USER_DATA QoS value rmw announces for an endpoint of `type_name`
 /// (`typehash=RIHS01_…;`, as `rmw_dds_common::encode_type_hash_for_user_data_qos`). rclpy
-/// reads the hash of remote endpoints from there; RustDDS 0.15 cannot send USER_DATA yet.
+/// reads the hash of remote endpoints from there.
 pub fn user_data(type_name: &str) -> Result<String, HashError> {
     Ok(format!("typehash={};", rihs01(type_name)?))
+}
+
+/// `(DDS type name, USER_DATA)` for every endpoint type of the catalog, as rmw announces
+/// them: a message's own hash, and for a service's request and response topics
+/// (`pkg::srv::dds_::Name_Request_`, `…_Response_`) the hash of the service `pkg/srv/Name`.
+pub fn endpoint_user_data() -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    for m in crate::types::MESSAGES {
+        let Some((_, kind, name)) = crate::types::split_name(m.name) else {
+            continue;
+        };
+        let hashed = if kind == "srv" {
+            // Only the request/response topics are endpoints; `_Event` and the service
+            // description itself are not published here.
+            match name
+                .strip_suffix("_Request")
+                .or_else(|| name.strip_suffix("_Response"))
+            {
+                Some(service) => m.name.replace(name, service),
+                None => continue,
+            }
+        } else {
+            m.name.to_string()
+        };
+        if let (Some(dds), Ok(ud)) = (crate::types::dds_type_name(m.name), user_data(&hashed)) {
+            out.push((dds, ud));
+        }
+    }
+    out
 }
 
 /// The exact text that is hashed (exposed for tests and debugging).

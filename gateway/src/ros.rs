@@ -45,6 +45,11 @@ pub fn start_node(
         domain,
         message: e.to_string(),
     })?;
+    // Every endpoint announces its REP-2016 type hash, as rmw does, so ROS tools show
+    // the same hash as for rclpy's endpoints rather than INVALID.
+    for (dds_type, user_data) in crate::hash::endpoint_user_data() {
+        dp.set_endpoint_user_data(&dds_type, user_data.into_bytes());
+    }
     let ctx = Context::from_domain_participant(dp).map_err(|e| RosError::Participant {
         domain,
         message: format!("{e:?}"),

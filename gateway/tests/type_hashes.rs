@@ -110,23 +110,98 @@ async fn rclpy_discovers_the_gateway_endpoints_with_their_types() {
     }
 }
 
-/// The acceptance check for REP-2016 hashes on the wire. It fails today: RustDDS 0.15
-/// has no USER_DATA QoS, so ros2-client cannot announce `typehash=…;` (see
-/// mappings/README.md, "Type hashes").
+/// The acceptance check for REP-2016 hashes on the wire: rclpy reads `typehash=…;` from
+/// the USER_DATA the gateway's endpoints announce (third_party/README.md), for topics in
+/// both directions and for both service directions (a service's request and reply topics
+/// carry the hash of the service type, as rmw announces them).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-#[ignore = "needs USER_DATA support in RustDDS / ros2-client"]
 async fn rclpy_sees_the_correct_type_hash_on_gateway_endpoints() {
-    let Some((info, want)) = gateway_endpoints_seen_by_rclpy(5).await else {
+    let Some(venv) = common::venv_or_skip("rclpy_sees_the_correct_type_hash_on_gateway_endpoints")
+    else {
         return;
     };
-    for side in ["pubs", "subs"] {
-        let got = info[side][0]["hash"]
-            .as_str()
-            .unwrap_or_default()
-            .to_string();
-        assert!(
-            got.contains(&want[7..]),
-            "{side}: rclpy sees {got}, want {want}"
-        );
+    let domain = common::domain_id(5);
+    let (ns, stop) = common::name_server().await;
+    let gw = common::gateway(
+        r#"
+[[topic]]
+name = "text"
+direction = "yarp_to_ros"
+yarp_port = "/gw/text:i"
+ros_topic = "/h/text"
+ros_type = "std_msgs/msg/String"
+
+[[topic]]
+name = "array"
+direction = "ros_to_yarp"
+yarp_port = "/gw/array:o"
+ros_topic = "/h/array"
+ros_type = "std_msgs/msg/Float64MultiArray"
+
+[[topic]]
+name = "twist"
+direction = "both"
+yarp_port = "/gw/twist"
+ros_topic = "/h/twist"
+ros_type = "geometry_msgs/msg/Twist"
+
+[[topic]]
+name = "flag"
+direction = "ros_to_yarp"
+yarp_port = "/gw/flag:o"
+ros_topic = "/h/flag"
+ros_type = "std_msgs/msg/Bool"
+
+[[service]]
+name = "home"
+direction = "ros_to_yarp"
+yarp_port = "/test/arm/rpc:i"
+ros_service = "/h/home"
+ros_type = "std_srvs/srv/Trigger"
+command = "[home]"
+
+[[service]]
+name = "motors"
+direction = "yarp_to_ros"
+yarp_port = "/gw/motors:rpc"
+ros_service = "/h/motors"
+ros_type = "std_srvs/srv/SetBool"
+"#,
+        &ns,
+        domain,
+    )
+    .await;
+    let want = [
+        ("/h/text", "std_msgs/msg/String"),
+        ("/h/array", "std_msgs/msg/Float64MultiArray"),
+        ("/h/twist", "geometry_msgs/msg/Twist"),
+        ("/h/flag", "std_msgs/msg/Bool"),
+        ("rq/h/homeRequest", "std_srvs/srv/Trigger"),
+        ("rr/h/homeReply", "std_srvs/srv/Trigger"),
+        ("rq/h/motorsRequest", "std_srvs/srv/SetBool"),
+        ("rr/h/motorsReply", "std_srvs/srv/SetBool"),
+    ];
+    let mut args = vec!["info_many"];
+    args.extend(want.iter().map(|(topic, _)| *topic));
+    args.extend(["--timeout", "15"]);
+    let peer = common::Peer::start(&venv, domain, &args);
+    let info: serde_json::Value =
+        serde_json::from_str(&peer.expect_async("INFO", common::T).await).unwrap();
+    assert!(peer.finish(common::T));
+    gw.shutdown().await;
+    stop.shutdown();
+    let mut checked = 0;
+    for (topic, ty) in want {
+        let hash = rihs01(ty).unwrap();
+        let endpoints = info[topic].as_array().cloned().unwrap_or_default();
+        assert!(!endpoints.is_empty(), "rclpy found no endpoint on {topic}: {info}");
+        for e in endpoints {
+            assert_eq!(e["node"], "yarp_ros2_gateway", "{topic}: {e}");
+            let got = e["hash"].as_str().unwrap_or_default();
+            assert!(got.contains(&hash[7..]), "{topic}: rclpy sees {got}, want {hash}");
+            checked += 1;
+        }
     }
+    // Topics in both directions, and each service's request and reply.
+    assert!(checked >= want.len() + 1, "{info}");
 }

@@ -11,6 +11,7 @@ and exits on its own after --timeout seconds at the latest, shutting rclpy down 
   peer.py serve SRV NAME JSON_RESPONSE          prints REQ <json> per request
   peer.py call SRV NAME JSON_REQUEST            prints RESP <json>
   peer.py info TOPIC [--pubs N] [--subs N] [--named]  prints INFO <json> with type hashes
+  peer.py info_many TOPIC...                     prints INFO {topic: [endpoint]} (rq/…: raw DDS)
   peer.py hash TYPE                             prints HASH <RIHS01 of rclpy's own endpoint>
 """
 import argparse
@@ -249,6 +250,22 @@ def run(node, args, deadline):
         spin_until(node, ready, deadline)
         say("INFO", json.dumps({"pubs": [endpoint_json(p) for p in pubs],
                                 "subs": [endpoint_json(s) for s in subs]}))
+    elif mode == "info_many":
+        # Every named topic (ROS names, or raw DDS names `rq/…`/`rr/…` of services)
+        # until each has an endpoint from a named node.
+        found = {}
+
+        def ready_all():
+            for topic in a:
+                raw = topic.startswith(("rq/", "rr/", "rt/"))
+                es = node.get_publishers_info_by_topic(topic, no_mangle=raw) + \
+                    node.get_subscriptions_info_by_topic(topic, no_mangle=raw)
+                found[topic] = [endpoint_json(e) for e in es]
+            return all(found[t] and all(e["node"] != "_CREATED_BY_BARE_DDS_APP_"
+                                        for e in found[t]) for t in a)
+
+        spin_until(node, ready_all, deadline)
+        say("INFO", json.dumps(found))
     elif mode == "hash":
         topic = "/gw_test_hash_probe"
         node.create_publisher(load_type(a[0]), topic, 10)

@@ -525,6 +525,32 @@ impl DomainParticipant {
     self.dpi.lock().unwrap().domain_id()
   }
 
+  // yarp-rs: endpoint USER_DATA by type (not in the 0.15.1 release).
+  /// Sets the USER_DATA QoS value (raw octets) that every data writer and data
+  /// reader of the topic type `type_name` created from now on announces in its
+  /// discovery data. ROS 2 uses it for REP-2016 type hashes
+  /// (`typehash=RIHS01_<hex>;`). Empty `user_data` removes the entry.
+  pub fn set_endpoint_user_data(&self, type_name: &str, user_data: Vec<u8>) {
+    if let Ok(mut dpd) = self.dpi.lock() {
+      if user_data.is_empty() {
+        dpd.endpoint_user_data.remove(type_name);
+      } else {
+        dpd.endpoint_user_data.insert(type_name.to_string(), user_data);
+      }
+    }
+  }
+
+  // yarp-rs: see `set_endpoint_user_data`.
+  /// The USER_DATA that local endpoints of `type_name` announce (empty if none).
+  pub fn endpoint_user_data(&self, type_name: &str) -> Vec<u8> {
+    self
+      .dpi
+      .lock()
+      .ok()
+      .and_then(|dpd| dpd.endpoint_user_data.get(type_name).cloned())
+      .unwrap_or_default()
+  }
+
   /// # Examples
   ///
   /// ```
@@ -958,6 +984,9 @@ pub(crate) struct DomainParticipantDisc {
   discovery_join_handle: std::sync::mpsc::Receiver<JoinHandle<()>>,
   // This allows deterministic generation of EntityIds for DataReader, DataWriter, etc.
   entity_id_generator: atomic::AtomicU32,
+  // yarp-rs: USER_DATA announced by every local endpoint of a type, by type name
+  // (ROS 2 puts `typehash=RIHS01_...;` there, REP-2016).
+  endpoint_user_data: HashMap<String, Vec<u8>>,
 }
 
 impl DomainParticipantDisc {
@@ -1003,6 +1032,7 @@ impl DomainParticipantDisc {
       discovery_command_sender,
       discovery_join_handle,
       entity_id_generator: atomic::AtomicU32::new(0),
+      endpoint_user_data: HashMap::new(),
     })
   }
 

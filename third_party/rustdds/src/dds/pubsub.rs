@@ -654,7 +654,9 @@ impl InnerPublisher {
     // overlapping. Taking `dpi` while holding `discovery_db` could deadlock
     // against `DomainParticipant::find_topic()`, which holds `dpi` while
     // reading the DB.
-    let dwd = DiscoveredWriterData::new(&data_writer, topic, &dp, security_info);
+    let mut dwd = DiscoveredWriterData::new(&data_writer, topic, &dp, security_info);
+    // yarp-rs: announce the type's USER_DATA (REP-2016 type hash), if any.
+    dwd.user_data = dp.endpoint_user_data(topic.get_type().name());
 
     // Add the topic & writer to Discovery DB. The write guard is scoped so
     // that it is released before the blocking `add_writer_sender.send` below:
@@ -1275,7 +1277,9 @@ impl InnerSubscriber {
     // the participant (`dpi`) for its locators and GUID. Keeping the two locks
     // from overlapping avoids the reverse of `DomainParticipant::find_topic()`'s
     // nested `dpi` -> `discovery_db` order.
-    let drd = DiscoveryDB::local_topic_reader_data(&dp, topic, &new_reader, security_info);
+    let mut drd = DiscoveryDB::local_topic_reader_data(&dp, topic, &new_reader, security_info);
+    // yarp-rs: announce the type's USER_DATA (REP-2016 type hash), if any.
+    drd.user_data = dp.endpoint_user_data(topic.get_type().name());
 
     // Add the topic & reader to Discovery DB
     {

@@ -418,10 +418,12 @@ impl PlCdrDeserialize for DiscoveredReaderData {
 
     let qos = QosPolicies::from_parameter_list(ctx, &pl_map)?;
 
+    // yarp-rs: USER_DATA is a CDR sequence<octet>; keep its octets, not the
+    // length prefix, so local and remote endpoints hold the same thing.
     let user_data = pl_map
       .get(&ParameterId::PID_USER_DATA)
       .and_then(|v| v.first())
-      .map(|p| p.value.clone())
+      .map(|p| user_data_octets(&p.value, ctx))
       .unwrap_or_default();
 
     Ok(DiscoveredReaderData {
@@ -498,7 +500,7 @@ impl ParameterListable for DiscoveredReaderData {
           security_info,
         },
       content_filter,
-      user_data: _,
+      user_data,
     } = self;
 
     let mut pl = ParameterList::new();
@@ -552,6 +554,10 @@ impl ParameterListable for DiscoveredReaderData {
     emit!(PID_TOPIC_NAME, &topic_name.clone().into(), StringWithNul);
     emit!(PID_TYPE_NAME, &type_name.clone().into(), StringWithNul);
     pl.parameters.append(&mut qos.to_parameter_list(ctx)?);
+    // yarp-rs: announce USER_DATA (ROS 2 carries the REP-2016 type hash in it).
+    if !user_data.is_empty() {
+      emit!(PID_USER_DATA, user_data, Vec<u8>);
+    }
     emit_option!(
       PID_SERVICE_INSTANCE_NAME,
       &service_instance_name.clone().map(|e| e.into()),
@@ -877,10 +883,12 @@ impl PlCdrDeserialize for DiscoveredWriterData {
 
     let qos = QosPolicies::from_parameter_list(ctx, &pl_map)?;
 
+    // yarp-rs: USER_DATA is a CDR sequence<octet>; keep its octets, not the
+    // length prefix, so local and remote endpoints hold the same thing.
     let user_data = pl_map
       .get(&ParameterId::PID_USER_DATA)
       .and_then(|v| v.first())
-      .map(|p| p.value.clone())
+      .map(|p| user_data_octets(&p.value, ctx))
       .unwrap_or_default();
 
     Ok(DiscoveredWriterData {
@@ -956,7 +964,7 @@ impl ParameterListable for DiscoveredWriterData {
           #[cfg(feature = "security")]
           security_info,
         },
-      user_data: _,
+      user_data,
     } = self;
 
     let mut pl = ParameterList::new();
@@ -1010,6 +1018,10 @@ impl ParameterListable for DiscoveredWriterData {
     emit!(PID_TOPIC_NAME, &topic_name.clone().into(), StringWithNul);
     emit!(PID_TYPE_NAME, &type_name.clone().into(), StringWithNul);
     pl.parameters.append(&mut qos.to_parameter_list(ctx)?);
+    // yarp-rs: announce USER_DATA (ROS 2 carries the REP-2016 type hash in it).
+    if !user_data.is_empty() {
+      emit!(PID_USER_DATA, user_data, Vec<u8>);
+    }
     emit_option!(
       PID_SERVICE_INSTANCE_NAME,
       &service_instance_name.clone().map(|e| e.into()),
@@ -1511,4 +1523,20 @@ mod tests {
 
   //   let _data2 = to_bytes::<ParticipantMessageData,
   // LittleEndian>(&rpi).unwrap(); }
+}
+
+// yarp-rs: the octets of a USER_DATA parameter value (CDR `sequence<octet>`:
+// u32 length, then the octets). A value too short for its length yields what is
+// there rather than an error: USER_DATA is informational.
+fn user_data_octets(value: &[u8], ctx: speedy::Endianness) -> Vec<u8> {
+  if value.len() < 4 {
+    return Vec::new();
+  }
+  let len_bytes = [value[0], value[1], value[2], value[3]];
+  let len = match ctx {
+    speedy::Endianness::LittleEndian => u32::from_le_bytes(len_bytes),
+    speedy::Endianness::BigEndian => u32::from_be_bytes(len_bytes),
+  } as usize;
+  let octets = &value[4..];
+  octets[..len.min(octets.len())].to_vec()
 }
