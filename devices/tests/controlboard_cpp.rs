@@ -18,7 +18,7 @@ use yarp_proto::Property;
 /// The real C++ program `prog` (see `yarp_interop_tests::cpp_bin_dir`).
 fn cpp_program(prog: &str) -> Option<PathBuf> {
     yarp_interop_tests::cpp_bin_dir()
-        .map(|d| d.join(prog))
+        .map(|d| yarp_interop_tests::real_cpp_program(&d, prog))
         .filter(|p| p.is_file())
 }
 

@@ -17,7 +17,7 @@ use yarp_proto::{Bottle, Property};
 const WAIT: Duration = Duration::from_secs(10);
 
 fn cpp_yarp() -> Option<PathBuf> {
-    yarp_interop_tests::cpp_bin_dir().map(|d| d.join("yarp"))
+    yarp_interop_tests::cpp_bin_dir().map(|d| yarp_interop_tests::real_cpp_program(&d, "yarp"))
 }
 
 /// Kills and reaps the child when dropped.

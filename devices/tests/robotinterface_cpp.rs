@@ -17,7 +17,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_yarprobotinterface");
 
 /// The real C++ `yarp` program (pip installs a Python wrapper beside it).
 fn cpp_yarp() -> Option<PathBuf> {
-    yarp_interop_tests::cpp_bin_dir().map(|d| d.join("yarp"))
+    yarp_interop_tests::cpp_bin_dir().map(|d| yarp_interop_tests::real_cpp_program(&d, "yarp"))
 }
 
 /// Runs `yarp rpc <port>` with `lines` on stdin; the `Response:` lines it printed.

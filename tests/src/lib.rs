@@ -132,7 +132,10 @@ pub fn cpp_bin_dir() -> Option<PathBuf> {
 /// A C++ YARP program (`yarp`, `yarpdev`, ...), or `None` after saying loudly that
 /// `test` is skipped.
 pub fn cpp_program(test: &str, name: &str) -> Option<PathBuf> {
-    match cpp_bin_dir().map(|d| d.join(name)).filter(|p| p.is_file()) {
+    match cpp_bin_dir()
+        .map(|d| real_cpp_program(&d, name))
+        .filter(|p| p.is_file())
+    {
         Some(p) => Some(p),
         None => {
             eprintln!(
@@ -142,6 +145,29 @@ pub fn cpp_program(test: &str, name: &str) -> Option<PathBuf> {
             None
         }
     }
+}
+
+/// The program to run for `prog` of the C++ bin directory `bin`. pip's
+/// `yarp-middleware` installs Python wrappers in `<venv>/bin` that run the real program of
+/// `lib/python*/site-packages/yarp/bin/` as a child and do not pass signals on: killing
+/// the wrapper would leave the C++ program (and its port) running. This returns the real
+/// program where `bin` holds such a wrapper, else `bin/prog`.
+pub fn real_cpp_program(bin: &Path, prog: &str) -> PathBuf {
+    let wrapper = bin.join(prog);
+    let is_wrapper = std::fs::read(&wrapper)
+        .map(|b| b.starts_with(b"#!") && b.windows(17).any(|w| w == b"yarp.bin.__main__"))
+        .unwrap_or(false);
+    if is_wrapper {
+        if let Ok(dirs) = std::fs::read_dir(bin.join("../lib")) {
+            for d in dirs.flatten() {
+                let real = d.path().join("site-packages/yarp/bin").join(prog);
+                if d.file_name().to_string_lossy().starts_with("python") && real.is_file() {
+                    return real;
+                }
+            }
+        }
+    }
+    wrapper
 }
 
 /// A child process killed and reaped when dropped, so no test leaves one behind.

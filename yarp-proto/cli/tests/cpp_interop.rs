@@ -31,6 +31,7 @@ use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
 use std::sync::{Arc, Mutex, OnceLock};
 use std::thread;
 use std::time::{Duration, Instant};
+use yarp_interop_tests::real_cpp_program;
 
 /// Upper bound for any single wait (a line, a port appearing, a command finishing).
 const WAIT: Duration = Duration::from_secs(10);
@@ -69,7 +70,7 @@ fn cpp_bin() -> Option<PathBuf> {
                 }
             }
             let tmp = TempDir::new("probe");
-            let mut c = Command::new(cpp_program(&dir, "yarp"));
+            let mut c = Command::new(real_cpp_program(&dir, "yarp"));
             c.arg("version").env("YARP_CONFIG_HOME", &tmp.0);
             let out = run_cmd(c, "", WAIT);
             if !out.ok || !out.stdout.contains("YARP version") {
@@ -92,28 +93,6 @@ fn cpp_bin() -> Option<PathBuf> {
         Ok(None) => None,
         Err(e) => panic!("{e}"),
     }
-}
-
-/// The program to run for `prog` in the C++ bin directory. pip's `yarp-middleware`
-/// installs Python wrappers there that run the real program in
-/// `lib/python*/site-packages/yarp/bin/` as a child and do not pass signals on; run the
-/// real program directly, so that stopping the child stops the C++ port.
-fn cpp_program(bin: &Path, prog: &str) -> PathBuf {
-    let wrapper = bin.join(prog);
-    let is_wrapper = std::fs::read(&wrapper)
-        .map(|b| b.starts_with(b"#!") && b.windows(17).any(|w| w == b"yarp.bin.__main__"))
-        .unwrap_or(false);
-    if is_wrapper {
-        if let Ok(dirs) = std::fs::read_dir(bin.join("../lib")) {
-            for d in dirs.flatten() {
-                let real = d.path().join("site-packages/yarp/bin").join(prog);
-                if d.file_name().to_string_lossy().starts_with("python") && real.is_file() {
-                    return real;
-                }
-            }
-        }
-    }
-    wrapper
 }
 
 fn skipped(test: &str) {
@@ -515,7 +494,7 @@ impl World {
     }
 
     fn cpp_cmd(&self, prog: &str) -> Command {
-        let mut c = Command::new(cpp_program(&self.cpp, prog));
+        let mut c = Command::new(real_cpp_program(&self.cpp, prog));
         self.env(&mut c);
         c
     }
@@ -1458,7 +1437,7 @@ fn detect_rust_finds_cpp_server_by_multicast() {
     let port = server_port();
     let range = port.to_string();
     std::fs::write(dir.0.join("yarp.conf"), format!("127.0.0.1 {port} yarp\n")).unwrap();
-    let mut c = Command::new(cpp_program(&cpp, "yarpserver"));
+    let mut c = Command::new(real_cpp_program(&cpp, "yarpserver"));
     c.args(["--ip", "127.0.0.1", "--socket", &range, "--read"])
         .env("YARP_CONFIG_HOME", &dir.0)
         .env("YARP_PORT_RANGE", &range);
@@ -1514,7 +1493,7 @@ fn detect_cpp_finds_rust_server_by_multicast() {
     let t0 = Instant::now();
     loop {
         let _ = std::fs::remove_file(dir.0.join("yarp.conf"));
-        let mut c = Command::new(cpp_program(&cpp, "yarp"));
+        let mut c = Command::new(real_cpp_program(&cpp, "yarp"));
         c.args(["detect", "--write"])
             .env("YARP_CONFIG_HOME", &dir.0)
             .env("YARP_PORT_RANGE", &range)
