@@ -135,6 +135,9 @@ pub trait DeviceDriver: Send {
     fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
         None
     }
+    fn as_virtual_analog_sensor(&mut self) -> Option<&mut dyn IVirtualAnalogSensor> {
+        None
+    }
 
     // Wrappers and calibrators.
     fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {

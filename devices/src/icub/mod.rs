@@ -6,6 +6,7 @@
 //! | `canBusAnalogSensor`, `canBusFtSensor` | [`analog`] | `IAnalogSensor`, `ISixAxisForceTorqueSensors` (strain) |
 //! | `canBusSkin` | [`skin`] | `IAnalogSensor`, `ISkinPatches` |
 //! | `canBusInertialMTB` | [`inertial`] | `IAnalogSensor`, accelerometers, gyroscopes |
+//! | `canBusVirtualAnalogSensor` | [`virtual_analog`] | `IVirtualAnalogSensor` (joint torques sent as strain messages) |
 //! | `parametricCalibrator` | [`calibrator`] | `ICalibrator` |
 //! | `cartesiancontrollerserver` | [`crate::cartesian`] | `IMultipleWrapper` (pose on `state:o`) |
 //!
@@ -22,12 +23,14 @@ pub mod inertial;
 pub mod motion_control;
 pub mod registry;
 pub mod skin;
+pub mod virtual_analog;
 
 pub use analog::CanBusAnalogSensor;
 pub use calibrator::ParametricCalibrator;
 pub use inertial::CanBusInertialMtb;
 pub use motion_control::CanMotionControl;
 pub use skin::CanBusSkin;
+pub use virtual_analog::CanBusVirtualAnalogSensor;
 
 use crate::driver::Factory;
 
@@ -42,6 +45,9 @@ pub(crate) const DRIVERS: &[(&str, Factory)] = &[
     }),
     (skin::NAME, || Box::new(CanBusSkin::new())),
     (inertial::NAME, || Box::new(CanBusInertialMtb::new())),
+    (virtual_analog::NAME, || {
+        Box::new(CanBusVirtualAnalogSensor::new())
+    }),
     (calibrator::NAME, || Box::new(ParametricCalibrator::new())),
     (crate::cartesian::NAME, || {
         Box::new(crate::cartesian::CartesianControllerServer::new())
