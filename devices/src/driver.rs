@@ -99,6 +99,15 @@ pub trait DeviceDriver: Send {
     fn as_position_direct(&mut self) -> Option<&mut dyn IPositionDirect> {
         None
     }
+    fn as_impedance_control(&mut self) -> Option<&mut dyn IImpedanceControl> {
+        None
+    }
+    fn as_control_calibration(&mut self) -> Option<&mut dyn IControlCalibration> {
+        None
+    }
+    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
+        None
+    }
 
     // Frame grabbers.
     fn as_frame_grabber_image(&mut self) -> Option<&mut dyn IFrameGrabberImage> {
@@ -173,6 +182,8 @@ macro_rules! motor_control_views {
             as_current_control: ICurrentControl,
             as_pwm_control: IPwmControl,
             as_position_direct: IPositionDirect,
+            as_impedance_control: IImpedanceControl,
+            as_control_calibration: IControlCalibration,
         );
     };
     ($($method:ident: $iface:ident),+ $(,)?) => {

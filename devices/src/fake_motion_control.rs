@@ -17,6 +17,11 @@
 //! 0.3 / 0.4 and outputs `1.1 + 10 j` ... by loop type (position, velocity, current,
 //! torque); torque ranges and gearbox ratios read 0; a torque reference beyond +-1 puts
 //! the joint in `CM_HW_FAULT`.
+//!
+//! Impedance, as the C++ fake: stiffness, damping and offset are stored (initially 0)
+//! and have no effect on the motion; every joint's limits are stiffness 1..10 and
+//! damping 2..20. Calibration, as the C++ fake: commands succeed at once and
+//! `calibrationDone` answers true (its "not yet implemented" helper returns true).
 
 use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
@@ -69,6 +74,9 @@ struct Joint {
     ref_current: f64,
     current: f64,
     max_current: f64,
+    stiffness: f64,
+    damping: f64,
+    impedance_offset: f64,
 }
 
 /// The simulated control board.
@@ -135,6 +143,9 @@ impl FakeMotionControl {
                 ref_current: 0.0,
                 current: (33.0 + i as f64) * 100.0,
                 max_current: (33.0 + i as f64) * 1000.0,
+                stiffness: 0.0,
+                damping: 0.0,
+                impedance_offset: 0.0,
             })
             .collect();
         self.pids.clear();
@@ -583,5 +594,65 @@ impl IPositionDirect for FakeMotionControl {
     }
     fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
         Ok(self.joint(j)?.pos_direct)
+    }
+}
+
+impl IImpedanceControl for FakeMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        let jt = self.joint(j)?;
+        Ok((jt.stiffness, jt.damping))
+    }
+    fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
+        let jt = self.joint(j)?;
+        jt.stiffness = stiffness;
+        jt.damping = damping;
+        Ok(())
+    }
+    fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.joint(j)?.impedance_offset)
+    }
+    fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
+        self.joint(j)?.impedance_offset = offset;
+        Ok(())
+    }
+    fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits> {
+        self.joint(j)?;
+        // the C++ fake's constants
+        Ok(ImpedanceLimits {
+            min_stiffness: 1.0,
+            max_stiffness: 10.0,
+            min_damping: 2.0,
+            max_damping: 20.0,
+        })
+    }
+}
+
+impl IControlCalibration for FakeMotionControl {
+    fn calibrate_axis_with_params(
+        &mut self,
+        j: usize,
+        kind: u32,
+        _p1: f64,
+        _p2: f64,
+        _p3: f64,
+    ) -> DevResult<()> {
+        self.joint(j)?;
+        tracing::debug!("{NAME}: calibrate joint {j} (type {kind}): done at once");
+        Ok(())
+    }
+    fn set_calibration_parameters(
+        &mut self,
+        j: usize,
+        _params: &CalibrationParameters,
+    ) -> DevResult<()> {
+        self.joint(j)?;
+        Ok(())
+    }
+    fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
+        self.joint(j)?;
+        Ok(true)
     }
 }

@@ -506,6 +506,90 @@ pub trait IPositionDirect {
     }
 }
 
+/// The stiffness and damping ranges a joint accepts (C++ `getCurrentImpedanceLimit`).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ImpedanceLimits {
+    pub min_stiffness: f64,
+    pub max_stiffness: f64,
+    pub min_damping: f64,
+    pub max_damping: f64,
+}
+
+/// `IImpedanceControl`: the joint's spring (stiffness, damping) and force offset used
+/// in the compliant interaction mode.
+pub trait IImpedanceControl {
+    fn get_axes(&mut self) -> DevResult<usize>;
+    /// (stiffness, damping).
+    fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)>;
+    fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()>;
+    fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64>;
+    fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()>;
+    fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits>;
+}
+
+/// `yarp::dev::CalibrationParameters` (only `type` and `param1..4` travel over RPC).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CalibrationParameters {
+    pub kind: u32,
+    pub param1: f64,
+    pub param2: f64,
+    pub param3: f64,
+    pub param4: f64,
+    pub param5: f64,
+    pub param_zero: f64,
+}
+
+const NO_CALIBRATOR: &str = "no calibrator set on this device (C++ setCalibrator)";
+
+/// `IControlCalibration`: per-joint calibration commands. The robot-wide ones go
+/// through a calibrator set on the device; C++ fails them when none is set, as the
+/// defaults here do.
+pub trait IControlCalibration {
+    fn calibrate_axis_with_params(
+        &mut self,
+        j: usize,
+        kind: u32,
+        p1: f64,
+        p2: f64,
+        p3: f64,
+    ) -> DevResult<()>;
+    fn set_calibration_parameters(
+        &mut self,
+        _j: usize,
+        _params: &CalibrationParameters,
+    ) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setCalibrationParameters"))
+    }
+    /// Whether joint `j` finished calibrating (non-blocking).
+    fn calibration_done(&mut self, j: usize) -> DevResult<bool>;
+    fn calibrate_robot(&mut self) -> DevResult<()> {
+        Err(DeviceError::Unsupported(NO_CALIBRATOR))
+    }
+    fn park(&mut self, _wait: bool) -> DevResult<()> {
+        Err(DeviceError::Unsupported(NO_CALIBRATOR))
+    }
+    fn abort_calibration(&mut self) -> DevResult<()> {
+        Err(DeviceError::Unsupported(NO_CALIBRATOR))
+    }
+    fn abort_park(&mut self) -> DevResult<()> {
+        Err(DeviceError::Unsupported(NO_CALIBRATOR))
+    }
+}
+
+/// `IRemoteCalibrator`: lets clients ask the part's calibrator device (which knows the
+/// procedure and parameters) to calibrate, home or park joints.
+pub trait IRemoteCalibrator {
+    fn is_calibrator_device_present(&mut self) -> DevResult<bool>;
+    fn calibrate_single_joint(&mut self, j: usize) -> DevResult<()>;
+    fn calibrate_whole_part(&mut self) -> DevResult<()>;
+    fn homing_single_joint(&mut self, j: usize) -> DevResult<()>;
+    fn homing_whole_part(&mut self) -> DevResult<()>;
+    fn park_single_joint(&mut self, j: usize, wait: bool) -> DevResult<()>;
+    fn park_whole_part(&mut self) -> DevResult<()>;
+    fn quit_calibrate(&mut self) -> DevResult<()>;
+    fn quit_park(&mut self) -> DevResult<()>;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -239,6 +239,8 @@ pub struct ControlBoardRemapper {
     layout: Option<Layout>,
     boards: Vec<SharedDevice>,
     lut: Lut,
+    /// The part's calibrator device (C++ `IRemoteCalibrator::setCalibratorDevice`).
+    calibrator: Option<SharedDevice>,
 }
 
 const NOT_ATTACHED: &str = "controlboardremapper: no boards attached yet";
@@ -262,6 +264,46 @@ impl ControlBoardRemapper {
             return Err(DeviceError::Unsupported(NOT_ATTACHED));
         }
         Ok(self.lut.len())
+    }
+
+    /// Sets (or clears) the calibrator device that `IRemoteCalibrator` calls go to; it
+    /// must offer `IRemoteCalibrator` and must not lock this remapper while serving them.
+    pub fn set_calibrator_device(&mut self, calibrator: Option<SharedDevice>) {
+        self.calibrator = calibrator;
+    }
+
+    /// Runs `f` on the calibrator device's `IRemoteCalibrator`, if one is set.
+    fn on_calibrator<R>(
+        &self,
+        f: impl FnOnce(&mut dyn IRemoteCalibrator) -> DevResult<R>,
+    ) -> Option<DevResult<R>> {
+        let c = self.calibrator.as_ref()?;
+        let mut pd = lock(c);
+        Some(match pd.device().as_remote_calibrator() {
+            Some(rc) => f(rc),
+            None => Err(DeviceError::Unsupported(
+                "the remapper's calibrator device lacks IRemoteCalibrator",
+            )),
+        })
+    }
+
+    /// Without a calibrator device, C++ asks every board's own `IRemoteCalibrator`.
+    fn on_every_board(
+        &self,
+        f: impl Fn(&mut dyn IRemoteCalibrator) -> DevResult<()>,
+    ) -> DevResult<()> {
+        self.axes()?;
+        for b in &self.boards {
+            let mut pd = lock(b);
+            let rc = pd
+                .device()
+                .as_remote_calibrator()
+                .ok_or(DeviceError::Unsupported(
+                    "a board of the remapper lacks IRemoteCalibrator",
+                ))?;
+            f(rc)?;
+        }
+        Ok(())
     }
 
     /// Runs `f` on the board owning part joint `j`, with the board's joint index.
@@ -308,6 +350,10 @@ impl DeviceDriver for ControlBoardRemapper {
     }
 
     crate::motor_control_views!();
+
+    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
+        Some(self)
+    }
 }
 
 /// What the layout needs to know about an attached device.
@@ -691,6 +737,172 @@ impl IPwmControl for ControlBoardRemapper {
     fn get_duty_cycle(&mut self, m: usize) -> DevResult<f64> {
         on!(self, m, as_pwm_control, "IPWMControl", |c, l| c
             .get_duty_cycle(l))
+    }
+}
+
+impl IImpedanceControl for ControlBoardRemapper {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        on!(
+            self,
+            j,
+            as_impedance_control,
+            "IImpedanceControl",
+            |i, l| i.get_impedance(l)
+        )
+    }
+    fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
+        on!(
+            self,
+            j,
+            as_impedance_control,
+            "IImpedanceControl",
+            |i, l| i.set_impedance(l, stiffness, damping)
+        )
+    }
+    fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
+        on!(
+            self,
+            j,
+            as_impedance_control,
+            "IImpedanceControl",
+            |i, l| i.get_impedance_offset(l)
+        )
+    }
+    fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
+        on!(
+            self,
+            j,
+            as_impedance_control,
+            "IImpedanceControl",
+            |i, l| i.set_impedance_offset(l, offset)
+        )
+    }
+    fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits> {
+        on!(
+            self,
+            j,
+            as_impedance_control,
+            "IImpedanceControl",
+            |i, l| i.get_current_impedance_limit(l)
+        )
+    }
+}
+
+impl IControlCalibration for ControlBoardRemapper {
+    fn calibrate_axis_with_params(
+        &mut self,
+        j: usize,
+        kind: u32,
+        p1: f64,
+        p2: f64,
+        p3: f64,
+    ) -> DevResult<()> {
+        on!(
+            self,
+            j,
+            as_control_calibration,
+            "IControlCalibration",
+            |c, l| c.calibrate_axis_with_params(l, kind, p1, p2, p3)
+        )
+    }
+    fn set_calibration_parameters(
+        &mut self,
+        j: usize,
+        params: &CalibrationParameters,
+    ) -> DevResult<()> {
+        on!(
+            self,
+            j,
+            as_control_calibration,
+            "IControlCalibration",
+            |c, l| c.set_calibration_parameters(l, params)
+        )
+    }
+    fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
+        on!(
+            self,
+            j,
+            as_control_calibration,
+            "IControlCalibration",
+            |c, l| c.calibration_done(l)
+        )
+    }
+}
+
+/// As C++ `ControlBoardRemapper`: calls go to the calibrator device when one is set,
+/// else to the boards' own remote calibrators.
+impl IRemoteCalibrator for ControlBoardRemapper {
+    fn is_calibrator_device_present(&mut self) -> DevResult<bool> {
+        Ok(self.calibrator.is_some())
+    }
+    fn calibrate_single_joint(&mut self, j: usize) -> DevResult<()> {
+        if let Some(r) = self.on_calibrator(|c| c.calibrate_single_joint(j)) {
+            return r;
+        }
+        on!(
+            self,
+            j,
+            as_remote_calibrator,
+            "IRemoteCalibrator",
+            |c, l| c.calibrate_single_joint(l)
+        )
+    }
+    fn calibrate_whole_part(&mut self) -> DevResult<()> {
+        if let Some(r) = self.on_calibrator(|c| c.calibrate_whole_part()) {
+            return r;
+        }
+        self.on_every_board(|c| c.calibrate_whole_part())
+    }
+    fn homing_single_joint(&mut self, j: usize) -> DevResult<()> {
+        if let Some(r) = self.on_calibrator(|c| c.homing_single_joint(j)) {
+            return r;
+        }
+        on!(
+            self,
+            j,
+            as_remote_calibrator,
+            "IRemoteCalibrator",
+            |c, l| c.homing_single_joint(l)
+        )
+    }
+    fn homing_whole_part(&mut self) -> DevResult<()> {
+        if let Some(r) = self.on_calibrator(|c| c.homing_whole_part()) {
+            return r;
+        }
+        self.on_every_board(|c| c.homing_whole_part())
+    }
+    fn park_single_joint(&mut self, j: usize, wait: bool) -> DevResult<()> {
+        if let Some(r) = self.on_calibrator(|c| c.park_single_joint(j, wait)) {
+            return r;
+        }
+        on!(
+            self,
+            j,
+            as_remote_calibrator,
+            "IRemoteCalibrator",
+            |c, l| c.park_single_joint(l, wait)
+        )
+    }
+    fn park_whole_part(&mut self) -> DevResult<()> {
+        if let Some(r) = self.on_calibrator(|c| c.park_whole_part()) {
+            return r;
+        }
+        self.on_every_board(|c| c.park_whole_part())
+    }
+    fn quit_calibrate(&mut self) -> DevResult<()> {
+        if let Some(r) = self.on_calibrator(|c| c.quit_calibrate()) {
+            return r;
+        }
+        self.on_every_board(|c| c.quit_calibrate())
+    }
+    fn quit_park(&mut self) -> DevResult<()> {
+        if let Some(r) = self.on_calibrator(|c| c.quit_park()) {
+            return r;
+        }
+        self.on_every_board(|c| c.quit_park())
     }
 }
 

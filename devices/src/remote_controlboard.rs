@@ -500,6 +500,10 @@ impl DeviceDriver for RemoteControlBoard {
     }
 
     crate::motor_control_views!();
+
+    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
+        Some(self)
+    }
 }
 
 impl Drop for RemoteControlBoard {
@@ -1176,6 +1180,170 @@ impl IPositionDirect for RemoteControlBoard {
             joints.len() as i32,
             joints_value(joints)
         ])
+    }
+}
+
+impl IImpedanceControl for RemoteControlBoard {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        let v = self.impedance_list(IMP_PARAM, j)?;
+        Ok((v[0], v[1]))
+    }
+    fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(IMPEDANCE),
+            Vocab32(IMP_PARAM),
+            j32(j),
+            floats_value(&[stiffness, damping])
+        ])
+    }
+    fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.impedance_list(IMP_OFFSET, j)?[0])
+    }
+    fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(IMPEDANCE),
+            Vocab32(IMP_OFFSET),
+            j32(j),
+            floats_value(&[offset])
+        ])
+    }
+    fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits> {
+        // C++ 3.12 asks with the generic `[llim]`
+        let v = self.impedance_list(LIMITS, j)?;
+        Ok(ImpedanceLimits {
+            min_stiffness: v[0],
+            max_stiffness: v[1],
+            min_damping: v[2],
+            max_damping: v[3],
+        })
+    }
+}
+
+impl RemoteControlBoard {
+    /// `[get] [iimp] <what> j` -> the reply's list, padded with 0 to 4 values as C++
+    /// reads missing items.
+    fn impedance_list(&self, what: i32, j: usize) -> DevResult<Vec<f64>> {
+        let mut v = self.get_f64s(bottle![
+            Vocab32(GET),
+            Vocab32(IMPEDANCE),
+            Vocab32(what),
+            j32(j)
+        ])?;
+        v.resize(4.max(v.len()), 0.0);
+        Ok(v)
+    }
+}
+
+impl IControlCalibration for RemoteControlBoard {
+    fn calibrate_axis_with_params(
+        &mut self,
+        j: usize,
+        kind: u32,
+        p1: f64,
+        p2: f64,
+        p3: f64,
+    ) -> DevResult<()> {
+        self.set(bottle![
+            Vocab32(CALIBRATE_JOINT),
+            j32(j),
+            kind as i32,
+            p1,
+            p2,
+            p3
+        ])
+    }
+    fn set_calibration_parameters(
+        &mut self,
+        j: usize,
+        params: &CalibrationParameters,
+    ) -> DevResult<()> {
+        // C++ sends type and param1..4 only
+        self.set(bottle![
+            Vocab32(CALIBRATE_JOINT_PARAMS),
+            j32(j),
+            params.kind as i32,
+            params.param1,
+            params.param2,
+            params.param3,
+            params.param4
+        ])
+    }
+    fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
+        // `[fail]` means "not done"; no answer stays an error
+        match self.call(&bottle![Vocab32(CALIBRATE_DONE), j32(j)]) {
+            Ok(_) => Ok(true),
+            Err(DeviceError::Unsupported(REFUSED)) => Ok(false),
+            Err(e) => Err(e),
+        }
+    }
+    // These four send a lone vocab, as C++ does; a 3.12 server refuses commands shorter
+    // than two elements, so they fail against it as they do in C++.
+    fn calibrate_robot(&mut self) -> DevResult<()> {
+        self.set(bottle![Vocab32(CALIBRATE)])
+    }
+    fn park(&mut self, _wait: bool) -> DevResult<()> {
+        self.set(bottle![Vocab32(PARK)])
+    }
+    fn abort_calibration(&mut self) -> DevResult<()> {
+        self.set(bottle![Vocab32(ABORTCALIB)])
+    }
+    fn abort_park(&mut self) -> DevResult<()> {
+        self.set(bottle![Vocab32(ABORTPARK)])
+    }
+}
+
+impl RemoteControlBoard {
+    /// `[set] [reca] <what> [j]`.
+    fn remote_calibrator(&self, what: i32, j: Option<usize>) -> DevResult<()> {
+        let mut cmd = bottle![
+            Vocab32(SET),
+            Vocab32(REMOTE_CALIBRATOR_IFACE),
+            Vocab32(what)
+        ];
+        if let Some(j) = j {
+            cmd.push(j32(j));
+        }
+        self.set(cmd)
+    }
+}
+
+impl IRemoteCalibrator for RemoteControlBoard {
+    fn is_calibrator_device_present(&mut self) -> DevResult<bool> {
+        self.get_bool(bottle![
+            Vocab32(GET),
+            Vocab32(REMOTE_CALIBRATOR_IFACE),
+            Vocab32(IS_CALIBRATOR_PRESENT)
+        ])
+    }
+    fn calibrate_single_joint(&mut self, j: usize) -> DevResult<()> {
+        self.remote_calibrator(CALIBRATE_SINGLE_JOINT, Some(j))
+    }
+    fn calibrate_whole_part(&mut self) -> DevResult<()> {
+        self.remote_calibrator(CALIBRATE_WHOLE_PART, None)
+    }
+    fn homing_single_joint(&mut self, j: usize) -> DevResult<()> {
+        self.remote_calibrator(HOMING_SINGLE_JOINT, Some(j))
+    }
+    fn homing_whole_part(&mut self) -> DevResult<()> {
+        self.remote_calibrator(HOMING_WHOLE_PART, None)
+    }
+    fn park_single_joint(&mut self, j: usize, _wait: bool) -> DevResult<()> {
+        // the wait flag does not travel (C++ drops it too)
+        self.remote_calibrator(PARK_SINGLE_JOINT, Some(j))
+    }
+    fn park_whole_part(&mut self) -> DevResult<()> {
+        self.remote_calibrator(PARK_WHOLE_PART, None)
+    }
+    fn quit_calibrate(&mut self) -> DevResult<()> {
+        self.remote_calibrator(QUIT_CALIBRATE, None)
+    }
+    fn quit_park(&mut self) -> DevResult<()> {
+        self.remote_calibrator(QUIT_PARK, None)
     }
 }
 

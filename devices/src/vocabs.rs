@@ -104,6 +104,33 @@ pub const PWM_OUTPUTS: i32 = v("pwms");
 pub const CURRENT_IFACE: i32 = v("icur");
 pub const PWM_IFACE: i32 = v("ipwm");
 
+// impedance (C++ `VOCAB_IMPEDANCE` is "iimp"; 3.12 asks the limits with `VOCAB_LIMITS`
+// "llim", later releases with "ilim")
+pub const IMPEDANCE: i32 = v("iimp");
+pub const IMP_PARAM: i32 = v("ipr");
+pub const IMP_OFFSET: i32 = v("iof");
+
+// IControlCalibration: commands without an interface vocab (`[calj] j ...`)
+pub const CALIBRATE_JOINT: i32 = v("calj");
+pub const CALIBRATE_JOINT_PARAMS: i32 = v("cljp");
+pub const CALIBRATE: i32 = v("cal");
+pub const CALIBRATE_DONE: i32 = v("cald");
+pub const ABORTCALIB: i32 = v("abca");
+pub const ABORTPARK: i32 = v("abpa");
+pub const PARK: i32 = v("park");
+
+// IRemoteCalibrator (C++ `CalibratorVocabs.h`)
+pub const REMOTE_CALIBRATOR_IFACE: i32 = v("reca");
+pub const IS_CALIBRATOR_PRESENT: i32 = v("isca");
+pub const CALIBRATE_SINGLE_JOINT: i32 = v("cal");
+pub const CALIBRATE_WHOLE_PART: i32 = v("cals");
+pub const HOMING_SINGLE_JOINT: i32 = v("hom");
+pub const HOMING_WHOLE_PART: i32 = v("homs");
+pub const PARK_SINGLE_JOINT: i32 = v("par");
+pub const PARK_WHOLE_PART: i32 = v("pars");
+pub const QUIT_CALIBRATE: i32 = v("quca");
+pub const QUIT_PARK: i32 = v("qupa");
+
 // control mode values
 pub const CM_IDLE: Vocab32 = Vocab32::new("idl");
 pub const CM_POSITION: Vocab32 = Vocab32::new("pos");

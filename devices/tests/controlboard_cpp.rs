@@ -94,6 +94,64 @@ fn cpp_yarp_rpc_drives_our_wrapper() {
     assert_eq!(lines[6], "Response: [fail]");
 }
 
+/// C++ `yarp rpc` text commands for impedance and calibration get the replies C++ 3.12's
+/// parser gives (plain words are packed into vocabs and echoed as typed).
+#[test]
+fn cpp_yarp_rpc_impedance_and_calibration() {
+    let Some(yarp) = cpp_program("yarp") else {
+        skip("C++ YARP not found (set YARP_CPP_BIN or install .venv-yarp)");
+        return;
+    };
+    name_client();
+    let _nws = PolyDriver::open(
+        &Property::from_config_text(
+            "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname /cppimp\n\
+             [GENERAL]\njoints 4\n",
+        )
+        .unwrap(),
+    )
+    .expect("open wrapper");
+    let mut child = Command::new(&yarp)
+        .args(["rpc", "/cppimp/rpc:i"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn C++ yarp rpc");
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(
+            b"set iimp ipr 0 (1.0 0.5)\nget iimp ipr 0\n[get] [iimp] [llim] 0\n\
+              [set] [iimp] [iof] 0 (2.5)\n[get] [iimp] [iof] 0\ncalj 0 3 1.0 2.0 3.0\n\
+              cald 0\nget reca isca\nset imp ipr 0 (1.0 0.5)\n",
+        )
+        .unwrap();
+    let out = finish(child);
+    let lines: Vec<&str> = out.lines().filter(|l| l.starts_with("Response")).collect();
+    assert_eq!(lines.len(), 9, "{out}");
+    let stamped = |line: &str, head: &str| {
+        assert!(
+            line.starts_with(head) && line.ends_with(" [ok]") && line.contains(" [tsta] "),
+            "{line} (want {head} [tsta] n t [ok])"
+        );
+    };
+    assert_eq!(lines[0], "Response: [ok]");
+    stamped(lines[1], "Response: [is] iimp (1.0 0.5) [tsta] ");
+    stamped(
+        lines[2],
+        "Response: [is] [iimp] (1.0 10.0 2.0 20.0) [tsta] ",
+    );
+    assert_eq!(lines[3], "Response: [ok]");
+    stamped(lines[4], "Response: [is] [iimp] (2.5) [tsta] ");
+    assert_eq!(lines[5], "Response: [ok]");
+    assert_eq!(lines[6], "Response: [ok]");
+    // the fake has no remote calibrator; `imp` is not the impedance vocab (`iimp` is)
+    assert_eq!(lines[7], "Response: [fail]");
+    assert_eq!(lines[8], "Response: [fail]");
+}
+
 /// The C++ devices this test needs, if the C++ build has them.
 fn cpp_devices() -> Option<String> {
     let yarpdev = cpp_program("yarpdev")?;

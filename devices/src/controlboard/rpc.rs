@@ -131,6 +131,8 @@ fn dispatch(
         TORQUE => return torque(cmd, action, dev, stamp, resp),
         INTERACTION_MODE_IFACE => return interaction(cmd, action, dev, stamp, resp),
         PID => return pid(cmd, action, dev, resp),
+        IMPEDANCE => return impedance(cmd, action, dev, stamp, resp),
+        REMOTE_CALIBRATOR_IFACE => return remote_calibrator(cmd, action, dev, resp),
         // references are set on command:i only; no timestamp in these replies
         CURRENT_IFACE | PWM_IFACE if action == GET => {
             resp.push(Vocab32(IS)).push(cmd[1].clone());
@@ -140,6 +142,9 @@ fn dispatch(
         _ => {}
     }
     match action {
+        CALIBRATE_JOINT | CALIBRATE_JOINT_PARAMS | CALIBRATE | CALIBRATE_DONE | PARK => {
+            calibration(cmd, action, dev)
+        }
         SET => set(cmd, dev).map(|r| r.is_some()),
         GET => {
             resp.push(Vocab32(IS));
@@ -618,6 +623,138 @@ fn pid(cmd: &Bottle, action: i32, dev: &mut dyn DeviceDriver, resp: &mut Bottle)
             };
             Some(true)
         }
+        _ => Some(false),
+    }
+}
+
+/// `[set|get] [iimp] <what> <joint> ...` (C++ `handleImpedanceMsg`): values travel in a
+/// list; `get` replies carry the timestamp.
+fn impedance(
+    cmd: &Bottle,
+    action: i32,
+    dev: &mut dyn DeviceDriver,
+    stamp: &mut RpcStamp,
+    resp: &mut Bottle,
+) -> Option<bool> {
+    let imp = dev.as_impedance_control()?;
+    let j = joint(cmd, 3)?;
+    match action {
+        SET => {
+            // C++ reads missing list items as 0 but needs the list itself
+            let v = floats(cmd, 4)?;
+            let at = |i: usize| v.get(i).copied().unwrap_or(0.0);
+            Some(
+                match vocab(cmd.get(2)) {
+                    IMP_PARAM => imp.set_impedance(j, at(0), at(1)),
+                    IMP_OFFSET => imp.set_impedance_offset(j, at(0)),
+                    _ => return Some(false),
+                }
+                .is_ok(),
+            )
+        }
+        GET => {
+            resp.push(Vocab32(IS)).push(cmd[1].clone());
+            let values = match vocab(cmd.get(2)) {
+                IMP_PARAM => {
+                    let (k, d) = imp.get_impedance(j).ok()?;
+                    vec![k, d]
+                }
+                IMP_OFFSET => vec![imp.get_impedance_offset(j).ok()?],
+                // 3.12 names the limits with the generic `[llim]`
+                LIMITS => {
+                    let l = imp.get_current_impedance_limit(j).ok()?;
+                    vec![
+                        l.min_stiffness,
+                        l.max_stiffness,
+                        l.min_damping,
+                        l.max_damping,
+                    ]
+                }
+                _ => return Some(false),
+            };
+            resp.push(float_list(&values));
+            stamp_into(resp, stamp);
+            Some(true)
+        }
+        _ => Some(false),
+    }
+}
+
+/// The `IControlCalibration` commands, which C++ recognises by their first vocab:
+/// `[calj] j type p1 p2 p3`, `[cljp] j type p1 p2 p3 p4`, `[cal] ...` (calibrate the
+/// robot), `[cald] j`, `[park] wait`. Replies are `[ok]` / `[fail]`.
+fn calibration(cmd: &Bottle, action: i32, dev: &mut dyn DeviceDriver) -> Option<bool> {
+    let c = dev.as_control_calibration()?;
+    let kind = || u32::try_from(int(cmd, 2)).ok();
+    Some(match action {
+        CALIBRATE_JOINT => c
+            .calibrate_axis_with_params(
+                joint(cmd, 1)?,
+                kind()?,
+                float(cmd, 3),
+                float(cmd, 4),
+                float(cmd, 5),
+            )
+            .is_ok(),
+        CALIBRATE_JOINT_PARAMS => {
+            let params = crate::interfaces::CalibrationParameters {
+                kind: kind()?,
+                param1: float(cmd, 3),
+                param2: float(cmd, 4),
+                param3: float(cmd, 5),
+                param4: float(cmd, 6),
+                ..Default::default()
+            };
+            c.set_calibration_parameters(joint(cmd, 1)?, &params)
+                .is_ok()
+        }
+        CALIBRATE => c.calibrate_robot().is_ok(),
+        CALIBRATE_DONE => c.calibration_done(joint(cmd, 1)?) == Ok(true),
+        PARK => {
+            if let Err(e) = c.park(int(cmd, 1) != 0) {
+                tracing::warn!("controlBoard rpc: park failed: {e}");
+            }
+            // as C++: "client would get stuck if returning false"
+            true
+        }
+        _ => false,
+    })
+}
+
+/// `[set|get] [reca] <what> ...` (C++ `handleRemoteCalibratorMsg`); no timestamp.
+fn remote_calibrator(
+    cmd: &Bottle,
+    action: i32,
+    dev: &mut dyn DeviceDriver,
+    resp: &mut Bottle,
+) -> Option<bool> {
+    let rc = dev.as_remote_calibrator()?;
+    match action {
+        SET => Some(
+            match vocab(cmd.get(2)) {
+                CALIBRATE_SINGLE_JOINT => rc.calibrate_single_joint(joint(cmd, 3)?),
+                CALIBRATE_WHOLE_PART => rc.calibrate_whole_part(),
+                HOMING_SINGLE_JOINT => rc.homing_single_joint(joint(cmd, 3)?),
+                HOMING_WHOLE_PART => rc.homing_whole_part(),
+                // C++ parks without waiting here
+                PARK_SINGLE_JOINT => rc.park_single_joint(joint(cmd, 3)?, false),
+                PARK_WHOLE_PART => rc.park_whole_part(),
+                QUIT_CALIBRATE => rc.quit_calibrate(),
+                QUIT_PARK => rc.quit_park(),
+                _ => return Some(false),
+            }
+            .is_ok(),
+        ),
+        GET => match vocab(cmd.get(2)) {
+            IS_CALIBRATOR_PRESENT => {
+                let present = rc.is_calibrator_device_present().ok()?;
+                resp.push(Vocab32(IS))
+                    .push(cmd[1].clone())
+                    .push(i32::from(present));
+                Some(true)
+            }
+            _ => Some(false),
+        },
         _ => Some(false),
     }
 }
