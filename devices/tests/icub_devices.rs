@@ -12,7 +12,9 @@ use icub_can::emulator::{preset, BusEmulator, EmulatorHandle};
 use icub_can::CanBus;
 use yarp_devices::robotinterface::{read_robot_str, Param};
 use yarp_devices::sensors::{AnalogStatus, MasStatus};
-use yarp_devices::vocabs::{CM_IDLE, CM_POSITION, IM_STIFF, JOINTTYPE_REVOLUTE, PIDTYPE_POSITION};
+use yarp_devices::vocabs::{
+    CM_IDLE, CM_POSITION, CM_TORQUE, IM_STIFF, JOINTTYPE_REVOLUTE, PIDTYPE_POSITION,
+};
 use yarp_devices::{shared, DeviceError, PolyDriver, Registry, SharedDevice};
 use yarp_proto::Property;
 
@@ -177,6 +179,104 @@ fn left_arm_moves_a_joint_on_the_inproc_bus() {
         (pid.kp, pid.kd, pid.ki, pid.scale),
         (32000.0, 50.0, 60.0, 13.0)
     );
+}
+
+/// Measured joint torques: iCubGenova01's left arm reads joints 0..4 from the virtual
+/// sensor 0x0C, channels 0..4 (`TorqueId`/`TorqueChan`), `TorqueMax` 8 N·m; the emulator
+/// broadcasts its simulated joint torques there.
+#[test]
+fn left_arm_reads_measured_torques_and_runs_torque_mode() {
+    let name = format!("icub-test-torque-{}", std::process::id());
+    let bus = VirtualBus::named(&name);
+    let _emu = emulate(Arc::new(bus.endpoint()), 1);
+    let Some(mut pd) = open_left_arm(&format!("inproc://{name}")) else {
+        return;
+    };
+    let dev = pd.device();
+    let trq = dev.as_torque_control().unwrap();
+    assert!(eventually(Duration::from_secs(2), || trq
+        .get_torque(3)
+        .is_ok()));
+    // At rest, idle: no torque; joints 5..7 have no sensor and read 0, as in icub-main.
+    let all = trq.get_torques().unwrap();
+    assert_eq!(all.len(), 8);
+    assert!(all.iter().all(|t| t.abs() < 0.05), "{all:?}");
+    assert_eq!(trq.get_torque(7).unwrap(), 0.0);
+
+    // Torque mode on the elbow (TRQ_PIDS kp -288 shift 14, proportional only): +1 N·m
+    // turns it toward 106°, where the stop holds it; the board's P loop leaves it at
+    // about half the reference (see the emulator's `torque_mode_tracks_a_torque_reference`).
+    let cm = dev.as_control_mode().unwrap();
+    cm.set_control_mode(3, CM_TORQUE).unwrap();
+    assert!(eventually(Duration::from_secs(1), || cm
+        .get_control_mode(3)
+        .unwrap()
+        == CM_TORQUE));
+    let trq = dev.as_torque_control().unwrap();
+    trq.set_ref_torque(3, 1.0).unwrap();
+    assert!((trq.get_ref_torque(3).unwrap() - 1.0).abs() < 1e-3);
+    let enc = |pd: &mut PolyDriver| pd.device().as_encoders().unwrap().get_encoder(3).unwrap();
+    let at_stop = |pd: &mut PolyDriver, deg: f64, nm: (f64, f64)| {
+        eventually(Duration::from_secs(5), || {
+            let t = pd
+                .device()
+                .as_torque_control()
+                .unwrap()
+                .get_torque(3)
+                .unwrap();
+            (enc(pd) - deg).abs() < 0.5 && t > nm.0 && t < nm.1
+        })
+    };
+    assert!(
+        at_stop(&mut pd, 106.0, (0.45, 0.65)),
+        "elbow at {}, torque {:?}",
+        enc(&mut pd),
+        pd.device().as_torque_control().unwrap().get_torque(3)
+    );
+    pd.device()
+        .as_torque_control()
+        .unwrap()
+        .set_ref_torque(3, -1.0)
+        .unwrap();
+    assert!(
+        at_stop(&mut pd, 15.0, (-0.65, -0.45)),
+        "elbow at {}, torque {:?}",
+        enc(&mut pd),
+        pd.device().as_torque_control().unwrap().get_torque(3)
+    );
+
+    // A host-side virtual sensor (canBusVirtualAnalogSensor) sending on 0x0C takes over:
+    // the emulator keeps quiet and every reader sees the host's values.
+    let dev = pd.device();
+    dev.as_control_mode()
+        .unwrap()
+        .set_control_mode(3, CM_POSITION)
+        .unwrap();
+    let host = bus.endpoint();
+    let frame = |v: i16| {
+        icub_can::proto::Message::AsPeriodic {
+            board: 0x0C,
+            msg: icub_can::proto::AsPeriodic::vector(
+                icub_can::proto::VectorKind::Torque,
+                [v, 0, 0],
+            ),
+        }
+        .encode()
+    };
+    let trq = dev.as_torque_control().unwrap();
+    let mut seen = Vec::new();
+    for _ in 0..40 {
+        // channel 3 = 0.5 N·m at TorqueMax 8: 0.5 · 0x8000 / 8 = 2048
+        host.send(&frame(2048)).unwrap();
+        std::thread::sleep(Duration::from_millis(10));
+        seen.push(trq.get_torque(3).unwrap());
+    }
+    assert!(
+        seen[10..].iter().all(|t| (t - 0.5).abs() < 1e-9),
+        "{seen:?}"
+    );
+    // joint 4 (channel 4) is on the same message: the host sent 0
+    assert_eq!(trq.get_torque(4).unwrap(), 0.0);
 }
 
 #[test]

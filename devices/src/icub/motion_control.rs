@@ -3,9 +3,12 @@
 //!
 //! Configuration: the icub-main groups `CAN`, `GENERAL`, `LIMITS`, `VELOCITY`,
 //! `POS_PIDS`, `TRQ_PIDS` as the iCub XML files give them (read by
-//! [`McParams::from_lookup`]; its docs list which keys are used). In addition:
-//! `GENERAL::AxisType` (joint types), `GENERAL::TorqueMax` (N·m at full sensor scale:
-//! torque references are sent as `τ · 0x8000 / TorqueMax`, as icub-main does),
+//! [`McParams::from_lookup`]; its docs list which keys are used, among them
+//! `GENERAL::TorqueMax`, N·m at full sensor scale: torque references are sent and
+//! measured torques read as `τ · 0x8000 / TorqueMax`, as icub-main does, and
+//! `GENERAL::TorqueId`/`TorqueChan`, the analog-sensor board and channel whose
+//! broadcasts carry each joint's measured torque, read by `getTorque`/`getTorques`). In
+//! addition: `GENERAL::AxisType` (joint types),
 //! `GENERAL::fullscalePWM` (for duty cycles), `LIMITS::motorOverloadCurrents` (reported
 //! as the maximum current), `LIMITS::jntVelMax` (velocity limits). The bus comes from
 //! `CAN::canBackend` (or `physDevice` + `CanDeviceNum`, see [`super::common::open_bus`]).
@@ -163,16 +166,8 @@ impl DeviceDriver for CanMotionControl {
         self.close()?;
         self.id = config.find("id").map_or_else(|| NAME.to_string(), text);
         let get = |g: &str, k: &str| lookup(config, Some(g), k);
-        let mut params = McParams::from_lookup(&get).map_err(|e| open_error(&self.id, &e))?;
+        let params = McParams::from_lookup(&get).map_err(|e| open_error(&self.id, &e))?;
         let n = params.joints();
-        for (j, max) in Self::per_joint(config, "GENERAL", "TorqueMax", n, 0.0)
-            .into_iter()
-            .enumerate()
-        {
-            if max > 0.0 {
-                params.torque_scale[j] = f64::from(0x8000u16) / max;
-            }
-        }
         let bus = open_bus(&self.id, config, Some("CAN"))?;
         let client =
             Arc::new(MotorControlClient::open(bus, params).map_err(|e| open_error(&self.id, &e))?);
@@ -426,11 +421,14 @@ impl ITorqueControl for CanMotionControl {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    /// The joint torque broadcast on the joint's `TorqueId`/`TorqueChan` (N·m); 0 for a
+    /// joint without a sensor (`TorqueId` 0), as icub-main's never-updated value.
     fn get_torque(&mut self, j: usize) -> DevResult<f64> {
         self.check(j)?;
-        Err(DeviceError::Unsupported(
-            "measured joint torques (TorqueId/TorqueChan) are not read yet",
-        ))
+        if self.c()?.params().torque_sensors[j].is_none() {
+            return Ok(0.0);
+        }
+        self.run(|c| c.torque(j))
     }
     fn set_ref_torque(&mut self, j: usize, t: f64) -> DevResult<()> {
         self.run(|c| c.set_ref_torque(j, t))

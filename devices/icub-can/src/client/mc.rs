@@ -10,14 +10,18 @@
 //! | group | supported | ignored (accepted, no effect yet) |
 //! |-------|-----------|-----------------------------------|
 //! | `CAN` | `CanAddresses`, `CanMyAddress`, `CanTimeout`, `broadcast_pos`, `broadcast_pid`, `broadcast_fault`, `broadcast_current`, `broadcast_overflow`, `broadcast_canprint`, `broadcast_vel_acc`, `broadcast_pid_err`, `broadcast_rotor_pos`, `broadcast_rotor_vel_acc` (bus keys: see [`crate::bus::config`]) | `CanPollingInterval`, `CanTxTimeout`, `CanRxTimeout`, `NetworkId`, `canbusdevice` |
-//! | `GENERAL` | `Joints`, `AxisMap`, `AxisName`, `Encoder`, `Zeros`, `Rotor` | `AxisType`, `fullscalePWM`, `ampsToSensor`, `TorqueId`, `TorqueChan`, `TorqueMax`, `Verbose`, `GearBox` |
+//! | `GENERAL` | `Joints`, `AxisMap`, `AxisName`, `Encoder`, `Zeros`, `Rotor`, `TorqueId`, `TorqueChan`, `TorqueMax` | `AxisType`, `fullscalePWM`, `ampsToSensor`, `Verbose`, `GearBox` |
 //! | `LIMITS` | `jntPosMin`, `jntPosMax` | `motorOverloadCurrents` |
 //! | `VELOCITY` | `Shifts`, `Timeout`, `JNT_speed_estimation`, `JNT_accel_estimation`, `MOT_speed_estimation`, `MOT_accel_estimation` | |
 //! | `POS_PIDS`, `TRQ_PIDS` | `kp`, `kd`, `ki`, `maxOutput`, `maxInt`, `shift`, `ko` | `stictionUp`, `stictionDwn`, `kff` |
 //!
-//! Torques use a per-joint scale ([`McParams::torque_scale`], sensor units per N·m)
-//! that the wrapper may derive from `TorqueMax`; impedance, debug parameters and
-//! motor-speed broadcasts are not exposed yet.
+//! Torques use a per-joint scale ([`McParams::torque_scale`], sensor units per N·m:
+//! `0x8000 / TorqueMax` as icub-main's `_newtonsToSensor`, 1 when `TorqueMax` is absent
+//! or 0). Measured joint torques come, as in icub-main `CanBusMotionControl`'s
+//! `handleBroadcasts`, from the analog-sensor broadcasts (class 3, types 0xA for channels
+//! 0..2 and 0xB for 3..5, values offset by 0x8000) of board `TorqueId` (0 = none),
+//! channel `TorqueChan`: `τ = (raw − 0x8000) / torque_scale` ([`MotorControlClient::torque`]).
+//! Impedance, debug parameters and motor-speed broadcasts are not exposed yet.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -29,8 +33,8 @@ use super::ClientError;
 use crate::bus::{CanBus, IdFilter};
 use crate::proto::mc::per;
 use crate::proto::{
-    make_id, ControlMode, McCommand, McPeriodic, McReply, Message, MsgClass, Pid, PidKind,
-    PidLimits,
+    make_id, AsPeriodic, ControlMode, McCommand, McPeriodic, McReply, Message, MsgClass, Pid,
+    PidKind, PidLimits, VectorKind,
 };
 
 /// PID gains in YARP's `Pid` terms; the board takes them as 16-bit integers.
@@ -110,8 +114,11 @@ pub struct McParams {
     pub encoder: Vec<f64>,
     /// Group `GENERAL`, `Zeros`: degrees.
     pub zeros: Vec<f64>,
-    /// Torque sensor units per N·m (1 when not configured).
+    /// Torque sensor units per N·m: group `GENERAL`, `0x8000 / TorqueMax` (1 when not configured).
     pub torque_scale: Vec<f64>,
+    /// Group `GENERAL`, `TorqueId` / `TorqueChan`: the analog-sensor board and channel
+    /// (0..=5) broadcasting the joint's measured torque (`None`: `TorqueId` 0).
+    pub torque_sensors: Vec<Option<(u8, u8)>>,
     /// Group `GENERAL`, `Rotor`: motor encoder ticks per degree (1 when absent).
     pub rotor: Vec<f64>,
     /// Group `LIMITS`, `jntPosMin` / `jntPosMax`, degrees.
@@ -144,6 +151,7 @@ impl McParams {
             encoder: vec![encoder; joints],
             zeros: vec![0.0; joints],
             torque_scale: vec![1.0; joints],
+            torque_sensors: vec![None; joints],
             rotor: vec![1.0; joints],
             limits: vec![(f64::NEG_INFINITY, f64::INFINITY); joints],
             vel_shifts: vec![0; joints],
@@ -290,6 +298,8 @@ impl McParams {
                     .map_or(default, |v| v.max(1.0) as u64),
             ))
         };
+        let lenient = |key: &str| nums("GENERAL", key).ok().flatten().unwrap_or_default();
+        let torque_max = lenient("TorqueMax");
         let params = Self {
             host_address: nums("CAN", "CanMyAddress")?
                 .and_then(|v| v.first().copied())
@@ -305,7 +315,34 @@ impl McParams {
                 .unwrap_or_else(|| (0..joints).map(|j| format!("joint{j}")).collect()),
             encoder: per_joint("GENERAL", "Encoder", None)?,
             zeros: per_joint("GENERAL", "Zeros", Some(0.0))?,
-            torque_scale: vec![1.0; joints],
+            // As icub-main, a missing or short list means "no sensor" / scale 1, not an error.
+            torque_scale: (0..joints)
+                .map(|j| match torque_max.get(j) {
+                    Some(&max) if max > 0.0 => f64::from(0x8000u16) / max,
+                    _ => 1.0,
+                })
+                .collect(),
+            torque_sensors: {
+                let (ids, chans) = (lenient("TorqueId"), lenient("TorqueChan"));
+                (0..joints)
+                    .map(|j| {
+                        let at = |v: &Vec<f64>| v.get(j).copied().unwrap_or(0.0);
+                        (j, (at(&ids), at(&chans)))
+                    })
+                    .map(|(j, (id, ch))| match (id, ch) {
+                        (1.0..=14.0, 0.0..=5.0) => Some((id as u8, ch as u8)),
+                        (0.0, _) => None,
+                        _ => {
+                            // icub-main does not check; such a sensor never matches.
+                            tracing::warn!(
+                                joint = j,
+                                "[GENERAL] TorqueId {id} / TorqueChan {ch}: not a CAN address 1..14 and a channel 0..5; no measured torque"
+                            );
+                            None
+                        }
+                    })
+                    .collect()
+            },
             rotor: per_joint("GENERAL", "Rotor", Some(1.0))?,
             limits: min.into_iter().zip(max).collect(),
             vel_shifts: per_joint("VELOCITY", "Shifts", Some(0.0))?
@@ -343,6 +380,7 @@ impl McParams {
             ("estimation shifts", self.estimation_shifts.len()),
             ("velocity Timeout", self.vel_timeouts.len()),
             ("torque scale", self.torque_scale.len()),
+            ("torque sensors", self.torque_sensors.len()),
             ("Rotor", self.rotor.len()),
         ] {
             if len != n {
@@ -406,6 +444,9 @@ struct JointState {
     motor_ticks: i32,
     motor_at: Option<Instant>,
     current: i16,
+    /// Measured torque, sensor units (value − 0x8000 of the analog broadcast).
+    torque_raw: i32,
+    torque_at: Option<Instant>,
     mode: Option<ControlMode>,
     faults: u8,
     can_status: u8,
@@ -452,6 +493,16 @@ impl MotorControlClient {
                 filter.add(make_id(MsgClass::PeriodicMotorControl, a, kind));
             }
         }
+        // Joint-torque sensors: (board, channel) -> joints reading that channel.
+        let mut torque_route: HashMap<(u8, u8), Vec<usize>> = HashMap::new();
+        for (j, s) in params.torque_sensors.iter().enumerate() {
+            if let Some((board, ch)) = *s {
+                torque_route.entry((board, ch)).or_default().push(j);
+                // ICUBCANPROTO_PER_AS_MSG__FORCE_VECTOR (0xA) / __TORQUE_VECTOR (0xB).
+                filter.add(make_id(MsgClass::PeriodicAnalogSensor, board, 0xA));
+                filter.add(make_id(MsgClass::PeriodicAnalogSensor, board, 0xB));
+            }
+        }
         bus.set_filter(filter);
         let state = Arc::new(Mutex::new(Shared {
             joints: vec![JointState::default(); n],
@@ -459,6 +510,30 @@ impl MotorControlClient {
         }));
         let st = state.clone();
         let (link, reader) = Link::start(bus, params.host_address, move |msg| {
+            if let Message::AsPeriodic {
+                board,
+                msg:
+                    AsPeriodic::Vector {
+                        kind: kind @ (VectorKind::Force | VectorKind::Torque),
+                        raw,
+                        ..
+                    },
+            } = msg
+            {
+                let now = Instant::now();
+                let mut s = st.lock().unwrap_or_else(|e| e.into_inner());
+                let first = kind.first_channel();
+                for (i, v) in AsPeriodic::signed(*raw).into_iter().enumerate() {
+                    for &j in torque_route
+                        .get(&(*board, (first + i) as u8))
+                        .map_or(&[][..], Vec::as_slice)
+                    {
+                        s.joints[j].torque_raw = v;
+                        s.joints[j].torque_at = Some(now);
+                    }
+                }
+                return;
+            }
             let Message::McPeriodic { board, msg } = msg else {
                 return;
             };
@@ -805,6 +880,34 @@ impl MotorControlClient {
             j,
             McCommand::SetDesiredTorque(Self::i16_of("torque", nm * self.params.torque_scale[j])?),
         )
+    }
+
+    /// Measured joint torque in N·m (`getTorque`), from the latest analog broadcast of
+    /// the joint's `TorqueId`/`TorqueChan`; fails for a joint without a sensor and when
+    /// no broadcast came within the broadcast timeout.
+    pub fn torque(&self, j: usize) -> Result<f64, ClientError> {
+        self.check(j)?;
+        let Some((board, ch)) = self.params.torque_sensors[j] else {
+            return Err(ClientError::Config(format!(
+                "joint {j} has no torque sensor (TorqueId 0)"
+            )));
+        };
+        let js = self.state.lock().unwrap_or_else(|e| e.into_inner()).joints[j];
+        let timeout = self.params.broadcast_timeout;
+        match js.torque_at.map(|t| t.elapsed()) {
+            Some(age) if age <= timeout => {
+                Ok(f64::from(js.torque_raw) / self.params.torque_scale[j])
+            }
+            age => {
+                tracing::debug!(joint = j, board, channel = ch, "no torque broadcast");
+                Err(ClientError::Stale {
+                    joint: j,
+                    board,
+                    age,
+                    timeout,
+                })
+            }
+        }
     }
 
     /// The board's torque reference in N·m (`getRefTorque`).

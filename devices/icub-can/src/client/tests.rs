@@ -77,6 +77,13 @@ fn params_from_the_real_left_arm_xml() {
         (32000.0, 13.0, 800.0)
     );
     assert_eq!(p.torque_pids.as_ref().unwrap()[3].kp, -288.0);
+    // TorqueId 0x0C, TorqueChan 0..4 for joints 0..4, TorqueId 0 after; TorqueMax 8 / 2.
+    let s = |ch| Some((0x0C, ch));
+    assert_eq!(
+        p.torque_sensors,
+        [s(0), s(1), s(2), s(3), s(4), None, None, None]
+    );
+    assert_eq!((p.torque_scale[0], p.torque_scale[4]), (4096.0, 16384.0));
     // broadcast_pid is set for axes 0..3 only: boards 1 and 2.
     let policy = p.broadcast_policy.as_ref().unwrap();
     assert_ne!(policy[0] & (1 << 2), 0);

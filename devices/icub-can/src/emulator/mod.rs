@@ -20,14 +20,15 @@ use crate::bus::{BusError, CanBus};
 use crate::frame::CanFrame;
 use crate::proto::Message;
 
-pub use mc::{McBoard, McBoardConfig};
+pub use mc::{JointPlant, JointTorqueSensor, McBoard, McBoardConfig, TorqueHub, TorqueLink};
 pub use sensors::{MaisBoard, MtbBoard, StrainBoard};
 
 /// One emulated board.
 pub trait Board: Send {
     /// CAN address (1..=14).
     fn address(&self) -> u8;
-    /// Short kind name (`mc`, `strain`, `mais`, `skin`, `mtb`).
+    /// Short kind name (`mc`, `strain`, `mais`, `skin`, `mtb`, `jts` for a virtual
+    /// joint-torque sensor).
     fn kind(&self) -> &'static str;
     /// Reacts to a message seen on the bus; replies go to `out`.
     fn on_message(&mut self, msg: &Message, out: &mut Vec<CanFrame>);

@@ -16,17 +16,33 @@
 //!
 //! Given the robot directory, initial encoder values are derived from each part's
 //! `hardware/motorControl/icub_*.xml` (`CanAddresses`, `AxisMap`, `Encoder`, `Zeros`,
-//! `jntPosMin`/`jntPosMax`) so every joint starts at 0° clamped into its limits.
+//! `jntPosMin`/`jntPosMax`) so every joint starts at 0° clamped into its limits, and the
+//! joint-torque sensors from `GENERAL::TorqueId`/`TorqueChan`/`TorqueMax` (iCubGenova01:
+//! arms 0x0C channels 0..4, legs 0x0C/0x0B channels 0..5, torso 0x0C channels 0..2):
+//! each joint with a `TorqueId` publishes its simulated torque (sensor units
+//! `τ·0x8000/TorqueMax`, sign of its `Encoder`, so positive torques turn the joint in
+//! its positive YARP direction) and the network gets a [`JointTorqueSensor`] at that
+//! address broadcasting them every 10 ms. Without the directory no joint torques are
+//! broadcast. Every motor board starts with [`super::mc::DEFAULT_POSITION_PID`] gains
+//! (the host's `POS_PIDS`/`TRQ_PIDS` replace them).
 
 use std::collections::HashMap;
 use std::path::Path;
 
+use super::mc::{JointPlant, JointTorqueSensor, TorqueHub, TorqueLink};
 use super::{Board, MaisBoard, McBoard, McBoardConfig, MtbBoard, SpecError, StrainBoard};
 
 /// A board of the preset.
 #[derive(Debug, Clone, PartialEq)]
 pub enum BoardKind {
-    Mc { address: u8, initial: [f64; 2] },
+    Mc {
+        address: u8,
+        initial: [f64; 2],
+        /// Plant and torque sensor of each axis.
+        plants: [JointPlant; 2],
+    },
+    /// A virtual joint-torque sensor (the `TorqueId` of some joints).
+    JointTorque(u8),
     Strain(u8),
     Mais(u8),
     Skin(u8),
@@ -94,7 +110,8 @@ pub fn xml_params(text: &str) -> HashMap<String, Vec<String>> {
     out
 }
 
-fn initial_ticks(robot_dir: &Path, part: &str) -> Option<HashMap<(u8, u8), f64>> {
+/// Per (board, axis): initial ticks and plant, from a part's motor-control file.
+fn part_joints(robot_dir: &Path, part: &str) -> Option<HashMap<(u8, u8), (f64, JointPlant)>> {
     let path = robot_dir.join(format!("hardware/motorControl/icub_{part}.xml"));
     let p = xml_params(&std::fs::read_to_string(path).ok()?);
     let nums =
@@ -103,15 +120,43 @@ fn initial_ticks(robot_dir: &Path, part: &str) -> Option<HashMap<(u8, u8), f64>>
     let axis_map = nums("AxisMap")?;
     let (enc, zeros) = (nums("Encoder")?, nums("Zeros")?);
     let (min, max) = (nums("jntPosMin")?, nums("jntPosMax")?);
+    // GENERAL::TorqueId / TorqueChan / TorqueMax (icub-main CanBusMotionControl); the
+    // hex ids (`0x0C`) are parsed here, 0 means no sensor.
+    let ids: Vec<u8> = p
+        .get("TorqueId")
+        .map(|v| {
+            v.iter()
+                .map(|s| {
+                    let s = s.trim();
+                    match s.strip_prefix("0x").or_else(|| s.strip_prefix("0X")) {
+                        Some(h) => u8::from_str_radix(h, 16).unwrap_or(0),
+                        None => s.parse().unwrap_or(0),
+                    }
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let chans = nums("TorqueChan").unwrap_or_default();
+    let tmax = nums("TorqueMax").unwrap_or_default();
     let mut out = HashMap::new();
     for (j, axis) in axis_map.iter().enumerate() {
         let axis = *axis as usize;
         let addr = *addrs.get(axis / 2)? as u8;
         let (lo, hi) = (*min.get(j)?, *max.get(j)?);
         let angle = if lo <= hi { 0f64.clamp(lo, hi) } else { 0.0 };
+        let e = *enc.get(j)?;
+        let mut plant = JointPlant::with_torque_max(tmax.get(j).copied().unwrap_or(0.0));
+        plant.sensor_sign = Some(if e < 0.0 { -1.0 } else { 1.0 });
+        let (id, ch) = (ids.get(j).copied().unwrap_or(0), chans.get(j).copied());
+        if let (1..=14, Some(ch @ 0.0..=5.0)) = (id, ch) {
+            plant.sensor = Some(TorqueLink {
+                address: id,
+                channel: ch as u8,
+            });
+        }
         out.insert(
             (addr, (axis % 2) as u8),
-            (angle + zeros.get(j)?) * enc.get(j)?,
+            ((angle + zeros.get(j)?) * e, plant),
         );
     }
     Some(out)
@@ -128,13 +173,23 @@ pub fn icub_networks(robot_dir: Option<&Path>) -> Vec<NetworkSpec> {
         .collect();
     for (part, net, addrs, _) in MC_PARTS.iter() {
         let init = robot_dir
-            .and_then(|d| initial_ticks(d, part))
+            .and_then(|d| part_joints(d, part))
             .unwrap_or_default();
         for &address in *addrs {
-            let initial = [0u8, 1].map(|ch| init.get(&(address, ch)).copied().unwrap_or(0.0));
-            nets[*net as usize]
-                .boards
-                .push(BoardKind::Mc { address, initial });
+            let joint = |ch: u8| init.get(&(address, ch)).copied().unwrap_or_default();
+            let initial = [0u8, 1].map(|ch| joint(ch).0);
+            let plants = [0u8, 1].map(|ch| joint(ch).1);
+            let boards = &mut nets[*net as usize].boards;
+            boards.push(BoardKind::Mc {
+                address,
+                initial,
+                plants,
+            });
+            for link in plants.iter().filter_map(|p| p.sensor) {
+                if !boards.contains(&BoardKind::JointTorque(link.address)) {
+                    boards.push(BoardKind::JointTorque(link.address));
+                }
+            }
         }
     }
     let push = |nets: &mut Vec<NetworkSpec>, net: usize, b: BoardKind| nets[net].boards.push(b);
@@ -160,15 +215,27 @@ pub fn icub_networks(robot_dir: Option<&Path>) -> Vec<NetworkSpec> {
 
 /// Instantiates the boards of one network.
 pub fn build(net: &NetworkSpec) -> Vec<Box<dyn Board>> {
+    let hub = TorqueHub::new();
     net.boards
         .iter()
         .map(|b| -> Box<dyn Board> {
             match b {
-                BoardKind::Mc { address, initial } => {
+                BoardKind::Mc {
+                    address,
+                    initial,
+                    plants,
+                } => {
                     let mut cfg = McBoardConfig::new(*address);
                     cfg.initial = *initial;
+                    cfg.plants = *plants;
+                    cfg.torque_hub = Some(hub.clone());
                     Box::new(McBoard::new(cfg))
                 }
+                BoardKind::JointTorque(a) => Box::new(JointTorqueSensor::new(
+                    *a,
+                    hub.clone(),
+                    std::time::Duration::from_millis(10),
+                )),
                 BoardKind::Strain(a) => Box::new(StrainBoard::new(*a)),
                 BoardKind::Mais(a) => Box::new(MaisBoard::new(*a)),
                 BoardKind::Skin(a) => Box::new(MtbBoard::new(*a, true)),

@@ -419,11 +419,65 @@ fn icub_preset_matches_the_robot_configuration() {
             "{initial:?}"
         );
         // Left leg user joint 2 is axis 0 (AxisMap 2 3 0 1 4 5) on board 5.
-        let preset::BoardKind::Mc { address, initial } = &nets[3].boards[0] else {
+        let preset::BoardKind::Mc {
+            address, initial, ..
+        } = &nets[3].boards[0]
+        else {
             panic!()
         };
         assert_eq!(*address, 5);
         assert!((initial[0] - 172.8 * 11.375).abs() < 1e-6, "{initial:?}");
+        // Joint torques: icub_left_arm.xml TorqueId 0x0C, TorqueChan 0..4, TorqueMax 8
+        // (2 for the wrist), Encoder -11.375 (706.67 for joint 4).
+        let preset::BoardKind::Mc { plants, .. } = &nets[1].boards[0] else {
+            panic!()
+        };
+        let link = |ch| {
+            Some(TorqueLink {
+                address: 0x0C,
+                channel: ch,
+            })
+        };
+        assert_eq!((plants[0].sensor, plants[1].sensor), (link(0), link(1)));
+        assert_eq!(plants[0].torque_max, 8.0);
+        assert_eq!(plants[0].sensor_sign, Some(-1.0));
+        // board 3 axis 0 is joint 4 (wrist pronosupination), axis 1 joint 5: no sensor
+        let Some(preset::BoardKind::Mc { plants: wrist, .. }) = nets[1]
+            .boards
+            .iter()
+            .find(|b| matches!(b, preset::BoardKind::Mc { address: 3, .. }))
+        else {
+            panic!()
+        };
+        assert_eq!(wrist[0].sensor, link(4));
+        assert_eq!(
+            (wrist[0].torque_max, wrist[0].sensor_sign),
+            (2.0, Some(1.0))
+        );
+        assert_eq!(wrist[1].sensor, None);
+        let sensors = |n: usize| -> Vec<u8> {
+            nets[n]
+                .boards
+                .iter()
+                .filter_map(|b| match b {
+                    preset::BoardKind::JointTorque(a) => Some(*a),
+                    _ => None,
+                })
+                .collect()
+        };
+        // torso 0x0C on network 0, arms and left leg 0x0C, right leg 0x0B, hands none.
+        assert_eq!(
+            (0..7).map(sensors).collect::<Vec<_>>(),
+            [
+                vec![0x0C],
+                vec![0x0C],
+                vec![0x0C],
+                vec![0x0C],
+                vec![0x0B],
+                vec![],
+                vec![]
+            ]
+        );
     }
     for n in &nets {
         assert_eq!(preset::build(n).len(), n.boards.len());
