@@ -588,6 +588,17 @@ pub trait IRemoteCalibrator {
     fn park_whole_part(&mut self) -> DevResult<()>;
     fn quit_calibrate(&mut self) -> DevResult<()>;
     fn quit_park(&mut self) -> DevResult<()>;
+    /// Points a wrapper's calls at `device`, a calibrator offering `IRemoteCalibrator`
+    /// (C++ `setCalibratorDevice`, called by yarprobotinterface on `calibrate`); devices
+    /// that serve the calls themselves refuse it.
+    fn set_calibrator_device(
+        &mut self,
+        _device: Option<crate::driver::SharedDevice>,
+    ) -> DevResult<()> {
+        Err(DeviceError::Unsupported(
+            "this device does not forward to a calibrator device",
+        ))
+    }
 }
 
 #[cfg(test)]

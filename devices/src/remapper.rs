@@ -272,13 +272,23 @@ impl ControlBoardRemapper {
         self.calibrator = calibrator;
     }
 
-    /// Runs `f` on the calibrator device's `IRemoteCalibrator`, if one is set.
+    /// Runs `f` on the calibrator device's `IRemoteCalibrator`, if one is set. A
+    /// calibrator that is busy (its own calibrate or park holds it, and may be waiting
+    /// for this remapper) answers an error instead of deadlocking.
     fn on_calibrator<R>(
         &self,
         f: impl FnOnce(&mut dyn IRemoteCalibrator) -> DevResult<R>,
     ) -> Option<DevResult<R>> {
         let c = self.calibrator.as_ref()?;
-        let mut pd = lock(c);
+        let mut pd = match c.try_lock() {
+            Ok(pd) => pd,
+            Err(std::sync::TryLockError::Poisoned(e)) => e.into_inner(),
+            Err(std::sync::TryLockError::WouldBlock) => {
+                return Some(Err(DeviceError::Unsupported(
+                    "the calibrator device is busy calibrating or parking",
+                )))
+            }
+        };
         Some(match pd.device().as_remote_calibrator() {
             Some(rc) => f(rc),
             None => Err(DeviceError::Unsupported(
@@ -387,7 +397,13 @@ impl IMultipleWrapper for ControlBoardRemapper {
     fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
         let layout = self.layout.as_ref().ok_or(DeviceError::NotOpen)?;
         let with_names = matches!(layout, Layout::AxesNames(_));
-        // as C++, a device keyed "calibrator" is not a board
+        // as C++, a device keyed "calibrator" is not a board but the calibrator device
+        if let Some((_, c)) = devices
+            .iter()
+            .find(|(k, _)| k.eq_ignore_ascii_case("calibrator"))
+        {
+            self.calibrator = Some(c.clone());
+        }
         let boards: Vec<&(String, SharedDevice)> = devices
             .iter()
             .filter(|(k, _)| !k.eq_ignore_ascii_case("calibrator"))
@@ -837,6 +853,10 @@ impl IControlCalibration for ControlBoardRemapper {
 impl IRemoteCalibrator for ControlBoardRemapper {
     fn is_calibrator_device_present(&mut self) -> DevResult<bool> {
         Ok(self.calibrator.is_some())
+    }
+    fn set_calibrator_device(&mut self, device: Option<SharedDevice>) -> DevResult<()> {
+        ControlBoardRemapper::set_calibrator_device(self, device);
+        Ok(())
     }
     fn calibrate_single_joint(&mut self, j: usize) -> DevResult<()> {
         if let Some(r) = self.on_calibrator(|c| c.calibrate_single_joint(j)) {

@@ -357,3 +357,40 @@ fn remote_round_trip_remote_calibrator_and_remapper() {
     cal.calibrate_axis_with_params(2, 0, 0.0, 0.0, 0.0).unwrap();
     assert!(cal.calibration_done(2).unwrap());
 }
+
+/// As C++ `attachAll`: a device keyed `calibrator` becomes the remapper's calibrator
+/// device; while that calibrator is busy (held by its own calibrate or park, which may
+/// wait for the remapper) remote calls fail at once instead of deadlocking.
+#[test]
+fn remapper_takes_its_calibrator_from_the_attach_list_and_never_waits_for_a_busy_one() {
+    let calls = Arc::new(Mutex::new(Vec::new()));
+    let fake = shared(PolyDriver::from_driver(
+        "fakeMotionControl",
+        Box::new(FakeMotionControl::with_joints(4)),
+    ));
+    let spy = shared(PolyDriver::from_driver(
+        "spyCalibrator",
+        Box::new(SpyCalibrator {
+            calls: calls.clone(),
+        }),
+    ));
+    let mut r = ControlBoardRemapper::new();
+    r.open(&Property::from_config_text("networks (a)\njoints 4\na (0 3 0 3)\n").unwrap())
+        .expect("open remapper");
+    r.as_multiple_wrapper()
+        .unwrap()
+        .attach_all(&[("a".into(), fake), ("Calibrator".into(), spy.clone())])
+        .expect("attach");
+    let rc = r.as_remote_calibrator().unwrap();
+    assert!(rc.is_calibrator_device_present().unwrap());
+    rc.homing_single_joint(2).unwrap();
+    {
+        let _busy = spy.lock().unwrap();
+        let err = rc.homing_whole_part().unwrap_err();
+        assert!(err.to_string().contains("busy"), "{err}");
+    }
+    rc.park_whole_part().unwrap();
+    assert_eq!(*calls.lock().unwrap(), ["hom 2", "pars"]);
+    rc.set_calibrator_device(None).unwrap();
+    assert!(!rc.is_calibrator_device_present().unwrap());
+}

@@ -15,7 +15,7 @@
 use super::error::XmlError;
 use super::model::*;
 use crate::driver::{shared, PolyDriver, Registry, SharedDevice};
-use crate::error::DevResult;
+use crate::error::{DevResult, DeviceError};
 use std::fmt;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -543,6 +543,9 @@ struct CalibratorJob {
 impl CalibratorJob {
     fn run(self) -> Result<(), String> {
         let kind = self.kind;
+        if kind == ActionType::Calibrate {
+            self.offer_remote_calibration();
+        }
         let mut pd = lock(&self.calibrator);
         let name = pd.name().to_string();
         let Some(c) = pd.device().as_calibrator() else {
@@ -555,6 +558,33 @@ impl CalibratorJob {
             _ => c.calibrate(self.target),
         };
         result.map_err(|e| format!("{kind} of {} by {name} failed: {e}", self.target_name))
+    }
+
+    /// As C++ `Device::calibrate`: when the calibrator offers `IRemoteCalibrator` and the
+    /// target forwards to one, the target's clients may then ask the calibrator to
+    /// calibrate, home or park (`[set] [reca] …` on the part's `rpc:i`). Otherwise that
+    /// is only logged: the robot runs without remote calibration.
+    fn offer_remote_calibration(&self) {
+        let remotable = lock(&self.calibrator)
+            .device()
+            .as_remote_calibrator()
+            .is_some();
+        if !remotable {
+            tracing::debug!(target_device = %self.target_name,
+                "the calibrator has no IRemoteCalibrator: no remote calibration or homing");
+            return;
+        }
+        let mut target = lock(&self.target);
+        let set = match target.device().as_remote_calibrator() {
+            Some(rc) => rc.set_calibrator_device(Some(self.calibrator.clone())),
+            None => Err(DeviceError::Unsupported(
+                "the target has no IRemoteCalibrator",
+            )),
+        };
+        if let Err(e) = set {
+            tracing::warn!(target_device = %self.target_name,
+                "no remote calibration or homing through this target: {e}");
+        }
     }
 }
 
