@@ -84,7 +84,7 @@ fn use_inproc(robot: &mut Robot, tag: &str) -> usize {
 
 /// C++ `yarp` from `YARP_CPP_BIN`, else the repository's `.venv-yarp`.
 fn cpp_yarp() -> Option<PathBuf> {
-    yarp_interop_tests::cpp_bin_dir().map(|d| d.join("yarp"))
+    yarp_interop_tests::cpp_bin_dir().map(|d| yarp_interop_tests::real_cpp_program(&d, "yarp"))
 }
 
 /// Runs C++ `yarp rpc PORT` with `input` on stdin; its output, bounded by `T`.
