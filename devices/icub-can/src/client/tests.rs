@@ -345,9 +345,11 @@ fn skin_and_inertial_clients() {
         .unwrap();
     let skin = SkinClient::open(Arc::new(bus.endpoint()), &[14, 13]).unwrap();
     assert_eq!(skin.channels(), 384);
+    // Patches arrive one CAN frame at a time: wait until every taxel has been heard
+    // (before that, unheard taxels read 0 with an Ok status, as icub-main's).
     let (taxels, _) = wait_for("skin", Duration::from_secs(2), || {
         let r = skin.read(Duration::from_millis(200));
-        (r.1 == SensorStatus::Ok).then_some(r)
+        (r.1 == SensorStatus::Ok && r.0.iter().all(|t| *t != 0.0)).then_some(r)
     });
     assert!(taxels.iter().all(|t| *t == 244.0));
     let imu = InertialClient::open(Arc::new(bus.endpoint()), &[14], "extAccAndGyro", 5).unwrap();
