@@ -7,7 +7,7 @@
 //!
 //! Every [`CONTROL_PERIOD`] (1 ms, the firmware's `CONTROLLER_PERIOD`), per joint:
 //!
-//! - position, velocity, position-direct, mixed and impedance modes run `compute_pid2` on
+//! - stiff position, velocity, position-direct and mixed modes run `compute_pid2` on
 //!   the encoder error `e = reference − encoder` (ticks): `P = e·kp >> shift`,
 //!   `D = (e − e_old)·kd >> shift` averaged over the last 10 periods (the firmware's
 //!   `DerPort` filter), `I = Σ e·ki >> shift` clamped to ±`maxInt` (the accumulator is
@@ -18,6 +18,14 @@
 //!   units (`0x8000` = `TorqueMax` N·m, as the host sends `SET_DESIRED_TORQUE`), same
 //!   P/D/I structure with the torque gains, `PWM = P + D + I + ko_torque`. The MC4 has no
 //!   torque feed-forward (`kff` exists only on the Ethernet boards), so none here.
+//! - compliant joints (interaction mode `COMPLIANT` in position, velocity,
+//!   position-direct or mixed mode, or the MC4's impedance modes) run the MC4 impedance
+//!   control: the reference trajectory above and the joint speed make a torque
+//!   reference `τref = k·(q_ref − q) − d·q̇ + offset` in sensor units (`k` sensor units
+//!   per tick, `d` per tick/s, as `SET_IMPEDANCE_PARAMS` carries them with `d` ×1000;
+//!   `offset` from `SET_IMPEDANCE_OFFSET`), which the torque PID tracks on the measured
+//!   joint torque as in torque mode. With `k` 0 nothing pulls the joint to its
+//!   reference; stiff joints use the position PID.
 //! - open loop outputs the position `ko`; idle, hardware fault and the other modes
 //!   output 0 and reset the PID state.
 //!
