@@ -570,3 +570,151 @@ fn malformed_frames_are_counted_and_ignored() {
     assert!(enc.get_encoders().is_ok());
     assert!(mc.client().unwrap().board_health().iter().all(|b| b.alive));
 }
+
+#[test]
+fn impedance_round_trips_and_a_compliant_elbow_follows_its_spring() {
+    let (url, _emu) = inproc_network(1, "impedance");
+    let Some(mut pd) = open_left_arm(&url) else {
+        return;
+    };
+    move_elbow(&mut pd);
+    let dev = pd.device();
+    let imp = dev.as_impedance_control().unwrap();
+    imp.set_impedance(3, 0.3, 0.003).unwrap();
+    let (k, d) = imp.get_impedance(3).unwrap();
+    // quantized to whole sensor units per tick: 0.3 N·m/° · 4096 / 11.375 ≈ 108
+    assert!(
+        (k - 0.3).abs() < 3e-3 && (d - 0.003).abs() < 3e-5,
+        "{k} {d}"
+    );
+    imp.set_impedance_offset(3, -0.25).unwrap();
+    assert!((imp.get_impedance_offset(3).unwrap() + 0.25).abs() < 1e-3);
+    imp.set_impedance_offset(3, 0.0).unwrap();
+    assert!(imp.get_impedance(8).is_err());
+    // Compliant in position mode: the MC4 impedance law through the torque PID pulls the
+    // joint to its reference.
+    dev.as_interaction_mode()
+        .unwrap()
+        .set_interaction_mode(3, yarp_devices::vocabs::IM_COMPLIANT)
+        .unwrap();
+    let pos = dev.as_position_control().unwrap();
+    pos.position_move(3, 40.0).unwrap();
+    let reached = eventually(Duration::from_secs(5), || {
+        dev.as_encoders()
+            .unwrap()
+            .get_encoder(3)
+            .is_ok_and(|q| (q - 40.0).abs() < 1.0)
+    });
+    assert!(reached, "compliant elbow did not reach 40°");
+    // Without stiffness (damping only) nothing holds the reference: the joint stays.
+    let imp = dev.as_impedance_control().unwrap();
+    imp.set_impedance(3, 0.0, 0.003).unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    let at = dev.as_encoders().unwrap().get_encoder(3).unwrap();
+    dev.as_position_control()
+        .unwrap()
+        .position_move(3, 60.0)
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(800));
+    let now = dev.as_encoders().unwrap().get_encoder(3).unwrap();
+    assert!((now - at).abs() < 2.0, "{at} -> {now}");
+}
+
+#[test]
+fn remote_calibrator_homes_parks_and_quits_without_locking_its_target() {
+    use yarp_devices::icub::ParametricCalibrator;
+    use yarp_devices::DeviceDriver;
+    let (url, _emu) = inproc_network(1, "remote-calib");
+    let Some(pd) = open_left_arm(&url) else {
+        return;
+    };
+    let target: SharedDevice = shared(pd);
+    let p = icub_params(
+        "calibrators/left_arm_calib.xml",
+        "left_arm_calibrator",
+        "unused",
+    )
+    .unwrap();
+    let mut cal = ParametricCalibrator::new();
+    cal.open(&p).unwrap_or_else(|e| panic!("{e}"));
+    use yarp_devices::interfaces::IRemoteCalibrator;
+    // nothing to drive before the target is known
+    assert!(cal.homing_single_joint(3).is_err());
+    std::thread::sleep(Duration::from_millis(100));
+    cal.as_calibrator()
+        .unwrap()
+        .calibrate(target.clone())
+        .unwrap_or_else(|e| panic!("{e}"));
+
+    // The remote calls come while the caller holds the target: hold it here too.
+    let mut t = target.lock().unwrap();
+    let dev = t.device();
+    dev.as_position_control()
+        .unwrap()
+        .position_move(3, 60.0)
+        .unwrap();
+    assert!(eventually(Duration::from_secs(5), || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - 60.0).abs() < 1.0)));
+    let start = Instant::now();
+    cal.homing_single_joint(3).unwrap_or_else(|e| panic!("{e}"));
+    assert!(start.elapsed() < Duration::from_secs(5));
+    let q = dev.as_encoders().unwrap().get_encoder(3).unwrap();
+    assert!((q - 45.0).abs() < 1.0, "elbow homed to {q}");
+    assert!(
+        cal.homing_single_joint(8).is_err(),
+        "only the calibrator's joints"
+    );
+
+    // calibrateSingleJoint: the board's calibration, then the startup position.
+    dev.as_position_control()
+        .unwrap()
+        .position_move(3, 70.0)
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    cal.calibrate_single_joint(3)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let q = dev.as_encoders().unwrap().get_encoder(3).unwrap();
+    assert!((q - 45.0).abs() < 2.0, "elbow back at startup: {q}");
+
+    // quitPark stops a running homing: the elbow far away, homing at 10°/s takes
+    // seconds; the quit flag ends the wait at once.
+    dev.as_position_control()
+        .unwrap()
+        .set_ref_speed(3, 100.0)
+        .unwrap();
+    dev.as_position_control()
+        .unwrap()
+        .position_move(3, 100.0)
+        .unwrap();
+    assert!(eventually(Duration::from_secs(5), || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - 100.0).abs() < 1.0)));
+    let quit = cal.quit_handle();
+    let stopper = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(300));
+        quit.store(true, std::sync::atomic::Ordering::SeqCst);
+    });
+    let start = Instant::now();
+    assert!(cal.homing_whole_part().is_err(), "stopped by the quit");
+    assert!(
+        start.elapsed() < Duration::from_secs(2),
+        "{:?}",
+        start.elapsed()
+    );
+    stopper.join().unwrap();
+    cal.quit_park().unwrap();
+
+    // parkWholePart: every calibrated joint at positionHome (wrist yaw clamped at 25°).
+    cal.park_whole_part().unwrap_or_else(|e| panic!("{e}"));
+    let home = [-30.0, 30.0, 0.0, 45.0, 0.0, 0.0, 25.0, 30.0];
+    let enc = dev.as_encoders().unwrap().get_encoders().unwrap();
+    for j in 0..8 {
+        assert!((enc[j] - home[j]).abs() < 2.0, "joint {j}: {enc:?}");
+    }
+    drop(t);
+}

@@ -3,7 +3,9 @@
 //! in-process bus instead of the file's UDP ports), with an in-process name server
 //! (run under netns-run). A remote client moves a left-arm joint through
 //! controlBoard_nws_yarp -> controlboardremapper -> canmotioncontrol -> CAN -> emulator,
-//! and reads the F/T sensor from /icub/left_arm/analog:o. Every wait is bounded.
+//! reads the F/T sensor from /icub/left_arm/analog:o, sets and reads a joint's impedance
+//! and asks the part's calibrator (through the remapper) to home the arm. Every wait is
+//! bounded.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -291,6 +293,69 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
             );
         }
     }
+
+    // Impedance through the network: `set iimp ipr 3 (stiff damp)` / `get iimp ipr 3` ->
+    // remapper -> canmotioncontrol -> SET/GET_IMPEDANCE_PARAMS -> the emulated board (the
+    // values come back quantized to the board's sensor-units-per-tick integers).
+    let dev = arm.device();
+    let imp = dev.as_impedance_control().unwrap();
+    imp.set_impedance(3, 0.2, 0.002).unwrap();
+    let (k, d) = imp.get_impedance(3).unwrap();
+    assert!(
+        (k - 0.2).abs() < 2e-3 && (d - 0.002).abs() < 2e-5,
+        "{k} {d}"
+    );
+    imp.set_impedance_offset(3, 0.5).unwrap();
+    let off = imp.get_impedance_offset(3).unwrap();
+    assert!((off - 0.5).abs() < 1e-2, "{off}");
+    let lim = imp.get_current_impedance_limit(3).unwrap();
+    assert_eq!((lim.min_stiffness, lim.max_stiffness), (0.002, 9.889));
+
+    // Remote homing: `[set] [reca] [homw]` / `[homs] 3` -> the remapper's calibrator device
+    // (left_arm_calib, attached by yarprobotinterface's calibrate) -> the boards, without
+    // locking the remapper the call came through. HOME::positionHome of left_arm_calib.xml.
+    const HOME: [f64; 8] = [-30.0, 30.0, 0.0, 45.0, 0.0, 0.0, 40.0, 30.0];
+    let dev = arm.device();
+    dev.as_position_control()
+        .unwrap()
+        .position_move(3, 55.0)
+        .unwrap();
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - 55.0).abs() < 1.0)));
+    let rc = dev.as_remote_calibrator().unwrap();
+    assert!(rc.is_calibrator_device_present().unwrap());
+    let t = Instant::now();
+    rc.homing_single_joint(3).unwrap();
+    println!("homing the elbow 55 -> 45 deg: {:?}", t.elapsed());
+    // (the state stream pauses while the call holds the remapper: wait for a fresh one)
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - 45.0).abs() < 1.0)));
+    let t = Instant::now();
+    dev.as_remote_calibrator()
+        .unwrap()
+        .homing_whole_part()
+        .unwrap();
+    println!("homing the left arm: {:?}", t.elapsed());
+    // (wrist yaw's positionHome 40 lies beyond its joint limit 25: the board stops there)
+    let home: Vec<f64> = (0..8)
+        .map(|j| {
+            let (lo, hi) = dev.as_control_limits().unwrap().get_limits(j).unwrap();
+            HOME[j].clamp(lo, hi)
+        })
+        .collect();
+    assert_eq!(home[6], 25.0);
+    assert!(eventually(T, || {
+        dev.as_encoders()
+            .unwrap()
+            .get_encoders()
+            .is_ok_and(|q| (0..8).all(|j| (q[j] - home[j]).abs() < 1.0))
+    }));
     drop(arm);
 
     runner

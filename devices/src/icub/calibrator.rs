@@ -17,14 +17,31 @@
 //! until every joint is within `startupPosThreshold`. `park` moves the calibrated
 //! joints that are not idle or faulted to `positionHome` (waiting up to 30 s when asked).
 //! Any board error stops the sequence with that error; no step waits without a bound.
+//!
+//! `IRemoteCalibrator` (what a client reaches with `[set] [reca] …` on the part's
+//! `rpc:i` once yarprobotinterface has made this the remapper's calibrator device), as
+//! icub-main's `parametricCalibrator`: `calibrateSingleJoint`/`calibrateWholePart` run
+//! the calibration above for that joint / every `CALIB_ORDER` set, `homingSingleJoint`/
+//! `homingWholePart` move to `HOME::positionHome` at `velocityHome` and wait (30 s),
+//! `parkSingleJoint`/`parkWholePart` are the park above, `quitCalibrate`/`quitPark` stop
+//! the running procedure. These calls arrive while the caller holds the target's lock,
+//! so they never lock the target: they drive the joints' boards directly, found in
+//! [`super::registry`] by the axis names read from the target at `calibrate`. Every
+//! wait is bounded and stops when a quit is asked.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
+
+use icub_can::client::MotorControlClient;
+use icub_can::proto::ControlMode;
 
 use yarp_proto::Property;
 
 use super::common::{lookup, text};
 use crate::driver::{DeviceDriver, ICalibrator, SharedDevice};
 use crate::error::{DevResult, DeviceError};
+use crate::interfaces::IRemoteCalibrator;
 use crate::vocabs::{CM_HW_FAULT, CM_IDLE, CM_POSITION};
 
 pub(crate) const NAME: &str = "parametricCalibrator";
@@ -54,6 +71,10 @@ pub struct ParametricCalibrator {
     joints: Vec<JointCalib>,
     order: Vec<Vec<usize>>,
     calibrated: bool,
+    /// The target's axis names, read at `calibrate` (for the remote calls).
+    axis_names: Vec<String>,
+    /// Set by `quitCalibrate`/`quitPark`: the running procedure's waits stop.
+    quit: Arc<AtomicBool>,
 }
 
 impl ParametricCalibrator {
@@ -100,6 +121,151 @@ impl ParametricCalibrator {
         }
     }
 
+    /// The flag `quitCalibrate`/`quitPark` raise; a procedure's waits stop when it is set.
+    pub fn quit_handle(&self) -> Arc<AtomicBool> {
+        self.quit.clone()
+    }
+
+    fn stopped(&self) -> DevResult<()> {
+        if self.quit.load(Ordering::SeqCst) {
+            tracing::warn!(device = %self.name, "stopped by quitCalibrate/quitPark");
+            Err(DeviceError::Unsupported(
+                "stopped by quitCalibrate / quitPark",
+            ))
+        } else {
+            Ok(())
+        }
+    }
+
+    // ---- IRemoteCalibrator: the boards directly, never the (locked) target ----
+
+    /// The board and board joint of target joint `j`.
+    fn board(&self, j: usize) -> DevResult<(Arc<MotorControlClient>, usize)> {
+        if j >= self.joints.len() {
+            return Err(DeviceError::InvalidJoint {
+                joint: j as i64,
+                axes: self.joints.len(),
+            });
+        }
+        let name = self.axis_names.get(j).ok_or(DeviceError::Unsupported(
+            "the calibrator has not calibrated its target yet",
+        ))?;
+        super::registry::find(name)
+            .ok_or(DeviceError::Unsupported("no CAN board drives this joint"))
+    }
+
+    fn direct<T>(
+        &self,
+        j: usize,
+        f: impl FnOnce(&MotorControlClient, usize) -> Result<T, icub_can::client::ClientError>,
+    ) -> DevResult<T> {
+        let (client, jj) = self.board(j)?;
+        f(&client, jj).map_err(|e| super::common::call_error(&self.name, e))
+    }
+
+    /// Position mode, then a move of `set` to `pos(j)` at `vel(j)`, on the boards.
+    fn move_direct(
+        &self,
+        set: &[usize],
+        pos: impl Fn(&JointCalib) -> f64,
+        vel: impl Fn(&JointCalib) -> f64,
+    ) -> DevResult<()> {
+        for &j in set {
+            let c = &self.joints[j];
+            self.direct(j, |b, jj| {
+                b.set_control_mode(jj, ControlMode::Position)?;
+                b.set_ref_speed(jj, vel(c))?;
+                b.position_move(jj, pos(c))
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Waits (bounded, stoppable) until the boards report `set` done moving.
+    fn wait_direct(&self, set: &[usize], timeout: Duration) -> DevResult<()> {
+        let start = Instant::now();
+        loop {
+            self.stopped()?;
+            let mut done = true;
+            for &j in set {
+                done &= self.direct(j, |b, jj| b.motion_done(jj))?;
+            }
+            if done {
+                return Ok(());
+            }
+            if start.elapsed() > timeout {
+                return Err(self.fail(
+                    "HOME",
+                    "joints that finish moving in time",
+                    format!("joints {set:?} still moving after {timeout:?}"),
+                ));
+            }
+            std::thread::sleep(POLL);
+        }
+    }
+
+    /// The calibration of one `CALIB_ORDER` set, on the boards.
+    fn calibrate_set_direct(&self, set: &[usize]) -> DevResult<()> {
+        for &j in set {
+            let c = &self.joints[j];
+            self.direct(j, |b, jj| {
+                if matches!(c.kind, 0 | 2 | 4) {
+                    b.set_control_mode(jj, ControlMode::Position)?;
+                }
+                b.calibrate(jj, c.kind, c.params[0], c.params[1], c.params[2])
+            })?;
+        }
+        self.wait_direct(set, CALIBRATE_JOINT_TIMEOUT)?;
+        self.move_direct(set, |c| c.startup_pos, |c| c.startup_vel)?;
+        self.wait_direct(set, GO_TO_ZERO_TIMEOUT)?;
+        for &j in set {
+            let at = self.direct(j, |b, jj| b.encoder(jj))?;
+            let c = &self.joints[j];
+            if (at - c.startup_pos).abs() > c.threshold {
+                return Err(self.fail(
+                    "CALIBRATION::startupPosThreshold",
+                    "joints that reach their startup position",
+                    format!(
+                        "joint {j} at {at:.2}, startup position {:.2}",
+                        c.startup_pos
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The joints of `set` that are neither idle nor faulted (a park leaves those alone).
+    fn movable_direct(&self, set: &[usize]) -> DevResult<Vec<usize>> {
+        let mut movable = Vec::new();
+        for &j in set {
+            let mode = self.direct(j, |b, jj| b.control_mode(jj))?;
+            if matches!(
+                mode,
+                ControlMode::Idle | ControlMode::ForceIdle | ControlMode::HwFault
+            ) {
+                tracing::warn!(device = %self.name, joint = j, "joint idle or faulted: not parking");
+            } else {
+                movable.push(j);
+            }
+        }
+        Ok(movable)
+    }
+
+    fn home_direct(&self, set: &[usize], park: bool, wait: bool) -> DevResult<()> {
+        self.quit.store(false, Ordering::SeqCst);
+        let set = if park {
+            self.movable_direct(set)?
+        } else {
+            set.to_vec()
+        };
+        self.move_direct(&set, |c| c.home_pos, |c| c.home_vel)?;
+        if wait {
+            self.wait_direct(&set, PARK_TIMEOUT)?;
+        }
+        Ok(())
+    }
+
     /// Waits until every joint of `set` reports motion done, or fails after `timeout`.
     fn wait_done(&self, target: &SharedDevice, set: &[usize], timeout: Duration) -> DevResult<()> {
         let start = Instant::now();
@@ -114,6 +280,7 @@ impl ParametricCalibrator {
             if done {
                 return Ok(());
             }
+            self.stopped()?;
             if start.elapsed() > timeout {
                 return Err(self.fail(
                     "CALIB_ORDER",
@@ -286,6 +453,53 @@ impl DeviceDriver for ParametricCalibrator {
     fn as_calibrator(&mut self) -> Option<&mut dyn ICalibrator> {
         Some(self)
     }
+    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
+        Some(self)
+    }
+}
+
+impl IRemoteCalibrator for ParametricCalibrator {
+    fn is_calibrator_device_present(&mut self) -> DevResult<bool> {
+        Ok(true)
+    }
+    fn calibrate_single_joint(&mut self, j: usize) -> DevResult<()> {
+        self.quit.store(false, Ordering::SeqCst);
+        self.board(j)?;
+        tracing::info!(device = %self.name, joint = j, "remote calibration of one joint");
+        self.calibrate_set_direct(&[j])
+    }
+    fn calibrate_whole_part(&mut self) -> DevResult<()> {
+        self.quit.store(false, Ordering::SeqCst);
+        tracing::info!(device = %self.name, "remote calibration of the whole part");
+        for set in &self.order {
+            self.calibrate_set_direct(set)?;
+        }
+        Ok(())
+    }
+    fn homing_single_joint(&mut self, j: usize) -> DevResult<()> {
+        self.board(j)?;
+        self.home_direct(&[j], false, true)
+    }
+    fn homing_whole_part(&mut self) -> DevResult<()> {
+        let all: Vec<usize> = self.calib_joints().collect();
+        self.home_direct(&all, false, true)
+    }
+    fn park_single_joint(&mut self, j: usize, wait: bool) -> DevResult<()> {
+        self.board(j)?;
+        self.home_direct(&[j], true, wait)
+    }
+    fn park_whole_part(&mut self) -> DevResult<()> {
+        let all: Vec<usize> = self.calib_joints().collect();
+        self.home_direct(&all, true, true)
+    }
+    fn quit_calibrate(&mut self) -> DevResult<()> {
+        self.quit.store(true, Ordering::SeqCst);
+        Ok(())
+    }
+    fn quit_park(&mut self) -> DevResult<()> {
+        self.quit.store(true, Ordering::SeqCst);
+        Ok(())
+    }
 }
 
 impl ICalibrator for ParametricCalibrator {
@@ -296,6 +510,13 @@ impl ICalibrator for ParametricCalibrator {
             d.as_encoders()
                 .ok_or(DeviceError::Unsupported("target without IEncoders"))?
                 .get_axes()
+        })?;
+        self.quit.store(false, Ordering::SeqCst);
+        self.axis_names = with(&target, |d| {
+            let info = d
+                .as_axis_info()
+                .ok_or(DeviceError::Unsupported("target without IAxisInfo"))?;
+            (0..axes).map(|j| info.get_axis_name(j)).collect()
         })?;
         if let Some(j) = self.calib_joints().find(|j| *j >= axes) {
             return Err(self.fail(
@@ -321,6 +542,7 @@ impl ICalibrator for ParametricCalibrator {
             tracing::warn!(device = %self.name, "park without calibration: skipping");
             return Ok(());
         }
+        self.quit.store(false, Ordering::SeqCst);
         let mut movable = Vec::new();
         for j in self.calib_joints() {
             let mode = with(&target, |d| {

@@ -2,12 +2,12 @@
 //!
 //! | device | module | interfaces |
 //! |--------|--------|------------|
-//! | `canmotioncontrol` | [`motion_control`] | encoders, position, velocity, torque, PIDs, control/interaction modes, limits, axis info, motor encoders, amplifiers, PWM |
+//! | `canmotioncontrol` | [`motion_control`] | encoders, position, velocity, torque, impedance, calibration, PIDs, control/interaction modes, limits, axis info, motor encoders, amplifiers, PWM |
 //! | `canBusAnalogSensor`, `canBusFtSensor` | [`analog`] | `IAnalogSensor`, `ISixAxisForceTorqueSensors` (strain) |
 //! | `canBusSkin` | [`skin`] | `IAnalogSensor`, `ISkinPatches` |
 //! | `canBusInertialMTB` | [`inertial`] | `IAnalogSensor`, accelerometers, gyroscopes |
 //! | `canBusVirtualAnalogSensor` | [`virtual_analog`] | `IVirtualAnalogSensor` (joint torques sent as strain messages) |
-//! | `parametricCalibrator` | [`calibrator`] | `ICalibrator` |
+//! | `parametricCalibrator` | [`calibrator`] | `ICalibrator`, `IRemoteCalibrator` |
 //! | `cartesiancontrollerserver` | [`crate::cartesian`] | `IMultipleWrapper` (pose on `state:o`) |
 //!
 //! Each device reads the parameters of the robots-configuration XML files unchanged; the

@@ -13,6 +13,14 @@
 //! as the maximum current), `LIMITS::jntVelMax` (velocity limits). The bus comes from
 //! `CAN::canBackend` (or `physDevice` + `CanDeviceNum`, see [`super::common::open_bus`]).
 //!
+//! `IMPEDANCE::stiffness`/`damping` (N·m/°, N·m·s/°, one per joint, as icub-main's
+//! `parseImpedanceGroup_NewFormat`; the iCubGenova01 legs have them) are sent to the
+//! boards at open when the group is present. `IImpedanceControl` sends
+//! `SET_IMPEDANCE_PARAMS`/`SET_IMPEDANCE_OFFSET` and polls the `GET_` ones; the limits are
+//! icub-main's fixed `_impedance_limits` (stiffness 0.002..9.889, damping 0.001..9.888).
+//! `IControlCalibration` sends `CALIBRATE_ENCODER`; a joint's calibration is done when
+//! its board no longer reports the calibration (or not-configured) mode.
+//!
 //! Positions, encoders and modes come from the boards' broadcasts; a board that stops
 //! broadcasting makes reads fail after 500 ms, one that does not answer a poll fails
 //! after `CanTimeout`. Nothing blocks longer.
@@ -185,6 +193,30 @@ impl DeviceDriver for CanMotionControl {
         self.targets = vec![0.0; n];
         self.ref_velocities = vec![0.0; n];
         self.mode_set_at = vec![None; n];
+        // icub-main `CanBusMotionControlParameters::fromConfig`: the IMPEDANCE group is
+        // optional; when present its two lists must have one value per joint.
+        if config.find_group("IMPEDANCE").is_some() {
+            let list = |k: &str| -> DevResult<Vec<f64>> {
+                let v = lookup(config, Some("IMPEDANCE"), k).unwrap_or_default();
+                let nums: Vec<f64> = v.iter().filter_map(|s| s.parse().ok()).collect();
+                if nums.len() == n && v.len() == n {
+                    Ok(nums)
+                } else {
+                    Err(DeviceError::BadParam {
+                        device: self.id.clone(),
+                        param: format!("IMPEDANCE::{k}"),
+                        expected: "one number per joint",
+                        got: v.join(" "),
+                    })
+                }
+            };
+            let (stiff, damp) = (list("stiffness")?, list("damping")?);
+            for j in 0..n {
+                client
+                    .set_impedance(j, stiff[j], damp[j])
+                    .map_err(|e| call_error(&self.id, e))?;
+            }
+        }
         self._registration = Some(registry::register(&client));
         self.client = Some(client);
         tracing::info!(device = %self.id, joints = n, "canmotioncontrol open");
@@ -232,6 +264,77 @@ impl DeviceDriver for CanMotionControl {
     }
     fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
         Some(self)
+    }
+    fn as_impedance_control(&mut self) -> Option<&mut dyn IImpedanceControl> {
+        Some(self)
+    }
+    fn as_control_calibration(&mut self) -> Option<&mut dyn IControlCalibration> {
+        Some(self)
+    }
+}
+
+/// icub-main `CanBusMotionControlParameters::fromConfig`, "IMPEDANCE LIMITS (UNDER
+/// TESTING)": the same fixed values for every joint, reported without asking the board.
+const IMPEDANCE_LIMITS: ImpedanceLimits = ImpedanceLimits {
+    min_stiffness: 0.002,
+    max_stiffness: 9.889,
+    min_damping: 0.001,
+    max_damping: 9.888,
+};
+
+impl IImpedanceControl for CanMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        self.run(|c| c.impedance(j))
+    }
+    fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
+        self.run(|c| c.set_impedance(j, stiffness, damping))
+    }
+    fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
+        self.run(|c| c.impedance_offset(j))
+    }
+    fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
+        self.run(|c| c.set_impedance_offset(j, offset))
+    }
+    fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits> {
+        self.check(j)?;
+        Ok(IMPEDANCE_LIMITS)
+    }
+}
+
+impl IControlCalibration for CanMotionControl {
+    /// `CALIBRATE_ENCODER` with the type and the three parameters (as
+    /// `calibrateAxisWithParamsRaw`), the command `parametricCalibrator` sends.
+    fn calibrate_axis_with_params(
+        &mut self,
+        j: usize,
+        kind: u32,
+        p1: f64,
+        p2: f64,
+        p3: f64,
+    ) -> DevResult<()> {
+        let kind = u8::try_from(kind)
+            .map_err(|_| DeviceError::Unsupported("calibration type above 255"))?;
+        self.run(|c| c.calibrate(j, kind, p1, p2, p3))?;
+        self.mode_set_at[j] = Some(Instant::now());
+        Ok(())
+    }
+    /// The same command with `params.kind` and `param1..3` (the CAN message has no room
+    /// for the others).
+    fn set_calibration_parameters(
+        &mut self,
+        j: usize,
+        params: &CalibrationParameters,
+    ) -> DevResult<()> {
+        self.calibrate_axis_with_params(j, params.kind, params.param1, params.param2, params.param3)
+    }
+    /// Done when the board's control mode (status broadcast, or asked) is no longer the
+    /// calibration or a not-yet-configured one.
+    fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
+        let mode = self.get_control_mode(j)?;
+        Ok(mode != CM_CALIBRATING && mode != CM_NOT_CONFIGURED && mode != CM_CONFIGURED)
     }
 }
 

@@ -1,10 +1,10 @@
 //! The open `canmotioncontrol` boards of this process, by axis name.
 //!
 //! C++ `parametricCalibrator` reaches `IControlCalibration` through the device it is
-//! given (usually a `controlboardremapper`). The Rust device layer has no calibration
-//! interface yet, so `canmotioncontrol` registers its joints here on open and the
-//! calibrator finds, for each joint of its target (by the target's `IAxisInfo` names),
-//! the board that drives it. Registrations end when their handle is dropped.
+//! given (usually a `controlboardremapper`). Here `canmotioncontrol` registers its
+//! joints on open and the calibrator finds, for each joint of its target (by the
+//! target's `IAxisInfo` names), the board that drives it: its `IRemoteCalibrator` calls
+//! arrive while the target is locked by their caller, so they cannot go through it. Registrations end when their handle is dropped.
 
 use std::sync::{Arc, Mutex, Weak};
 

@@ -21,7 +21,9 @@
 //! `handleBroadcasts`, from the analog-sensor broadcasts (class 3, types 0xA for channels
 //! 0..2 and 0xB for 3..5, values offset by 0x8000) of board `TorqueId` (0 = none),
 //! channel `TorqueChan`: `τ = (raw − 0x8000) / torque_scale` ([`MotorControlClient::torque`]).
-//! Impedance, debug parameters and motor-speed broadcasts are not exposed yet.
+//! Impedance (stiffness, damping, offset) uses the same torque scale over `Encoder`
+//! (sensor units per tick), as YARP's `ImplementImpedanceControl`. Debug parameters and
+//! motor-speed broadcasts are not exposed yet.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -990,6 +992,67 @@ impl MotorControlClient {
             p3: Self::i16_of("p3", p3)?,
         };
         self.send(j, cmd)
+    }
+
+    // ---- impedance ----
+
+    /// Sensor units per encoder tick for joint `j`: icub-main's `ImplementImpedanceControl`
+    /// conversion (`newtonsToSensor / angleToEncoder`), for N·m/° and N·m·s/°.
+    fn impedance_scale(&self, j: usize) -> f64 {
+        let e = self.params.encoder[j];
+        if e == 0.0 {
+            0.0
+        } else {
+            self.params.torque_scale[j] / e
+        }
+    }
+
+    /// Sets the joint's spring, stiffness N·m/°, damping N·m·s/° (`setImpedance`); sent
+    /// as `CanBusMotionControl::setImpedanceRaw` does: damping ×1000.
+    pub fn set_impedance(&self, j: usize, stiffness: f64, damping: f64) -> Result<(), ClientError> {
+        self.check(j)?;
+        let s = self.impedance_scale(j);
+        self.send(
+            j,
+            McCommand::SetImpedanceParams {
+                stiffness: Self::i16_of("stiffness", stiffness * s)?,
+                damping: Self::i16_of("damping", damping * s * 1000.0)?,
+            },
+        )
+    }
+
+    /// The board's (stiffness N·m/°, damping N·m·s/°) (`getImpedance`).
+    pub fn impedance(&self, j: usize) -> Result<(f64, f64), ClientError> {
+        match self.poll(j, McCommand::GetImpedanceParams)? {
+            McReply::ImpedanceParams { stiffness, damping } => {
+                let s = self.impedance_scale(j);
+                if s == 0.0 {
+                    return Ok((0.0, 0.0));
+                }
+                Ok((f64::from(stiffness) / s, f64::from(damping) / 1000.0 / s))
+            }
+            r => Err(self.unexpected(j, r)),
+        }
+    }
+
+    /// Sets the impedance law's torque offset, N·m (`setImpedanceOffset`).
+    pub fn set_impedance_offset(&self, j: usize, nm: f64) -> Result<(), ClientError> {
+        self.check(j)?;
+        self.send(
+            j,
+            McCommand::SetImpedanceOffset(Self::i16_of(
+                "impedance offset",
+                nm * self.params.torque_scale[j],
+            )?),
+        )
+    }
+
+    /// The board's impedance torque offset, N·m (`getImpedanceOffset`).
+    pub fn impedance_offset(&self, j: usize) -> Result<f64, ClientError> {
+        match self.poll(j, McCommand::GetImpedanceOffset)? {
+            McReply::ImpedanceOffset(v) => Ok(f64::from(v) / self.params.torque_scale[j]),
+            r => Err(self.unexpected(j, r)),
+        }
     }
 
     // ---- PIDs ----

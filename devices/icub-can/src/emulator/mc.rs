@@ -7,7 +7,7 @@
 //!
 //! Every [`CONTROL_PERIOD`] (1 ms, the firmware's `CONTROLLER_PERIOD`), per joint:
 //!
-//! - position, velocity, position-direct, mixed and impedance modes run `compute_pid2` on
+//! - stiff position, velocity, position-direct and mixed modes run `compute_pid2` on
 //!   the encoder error `e = reference − encoder` (ticks): `P = e·kp >> shift`,
 //!   `D = (e − e_old)·kd >> shift` averaged over the last 10 periods (the firmware's
 //!   `DerPort` filter), `I = Σ e·ki >> shift` clamped to ±`maxInt` (the accumulator is
@@ -18,6 +18,14 @@
 //!   units (`0x8000` = `TorqueMax` N·m, as the host sends `SET_DESIRED_TORQUE`), same
 //!   P/D/I structure with the torque gains, `PWM = P + D + I + ko_torque`. The MC4 has no
 //!   torque feed-forward (`kff` exists only on the Ethernet boards), so none here.
+//! - compliant joints (interaction mode `COMPLIANT` in position, velocity,
+//!   position-direct or mixed mode, or the MC4's impedance modes) run the MC4 impedance
+//!   control: the reference trajectory above and the joint speed make a torque
+//!   reference `τref = k·(q_ref − q) − d·q̇ + offset` in sensor units (`k` sensor units
+//!   per tick, `d` per tick/s, as `SET_IMPEDANCE_PARAMS` carries them with `d` ×1000;
+//!   `offset` from `SET_IMPEDANCE_OFFSET`), which the torque PID tracks on the measured
+//!   joint torque as in torque mode. With `k` 0 nothing pulls the joint to its
+//!   reference; stiff joints use the position PID.
 //! - open loop outputs the position `ko`; idle, hardware fault and the other modes
 //!   output 0 and reset the PID state.
 //!
@@ -285,7 +293,13 @@ pub struct JointSim {
     pid_limits: [PidLimits; 4],
     vel_shift: u16,
     estim: [u8; 4],
+    /// Impedance stiffness (sensor units per tick) and damping (sensor units per tick/s,
+    /// ×1000), as `SET_IMPEDANCE_PARAMS` carries them.
     impedance: (i16, i16),
+    /// Impedance torque offset, sensor units (`SET_IMPEDANCE_OFFSET`).
+    impedance_offset: i16,
+    /// Torque reference of the impedance law in the last control period, sensor units.
+    impedance_torque: f64,
     /// PWM output of the last control period (what the PID-value broadcast reports).
     output: f64,
     plant: JointPlant,
@@ -350,6 +364,8 @@ impl JointSim {
             vel_shift: 0,
             estim: [0; 4],
             impedance: (0, 0),
+            impedance_offset: 0,
+            impedance_torque: 0.0,
             output: 0.0,
             plant: JointPlant::default(),
             motor_sign: 1.0,
@@ -475,6 +491,25 @@ impl JointSim {
         )
     }
 
+    /// Whether the joint runs the impedance law: the compliant interaction mode in a
+    /// position or velocity mode (position-direct and mixed included), or the MC4's own
+    /// impedance modes.
+    pub fn compliant(&self) -> bool {
+        match self.mode {
+            ControlMode::ImpedancePos | ControlMode::ImpedanceVel => true,
+            ControlMode::Position
+            | ControlMode::Velocity
+            | ControlMode::Direct
+            | ControlMode::Mixed => self.interaction == 1,
+            _ => false,
+        }
+    }
+
+    /// The impedance law's torque reference of the last control period, sensor units.
+    pub fn impedance_torque(&self) -> f64 {
+        self.impedance_torque
+    }
+
     /// Whether the last position move has finished: the reference reached the target
     /// and the joint settled there (at rest, so no overshoot follows).
     pub fn motion_done(&self) -> bool {
@@ -534,7 +569,21 @@ impl JointSim {
     /// One firmware control period of `h` seconds: reference, PID, then the plant.
     fn control_period(&mut self, h: f64) {
         self.advance_reference(h);
-        let pwm = if self.tracks_reference() {
+        let pwm = if self.compliant() {
+            // MC4 impedance control: the position error and the joint speed make a torque
+            // reference, τ = k·(q_ref − q) − d·q̇ + offset (sensor units; d arrives ×1000),
+            // which the torque PID then tracks on the measured joint torque.
+            let (k, d) = (
+                f64::from(self.impedance.0),
+                f64::from(self.impedance.1) / 1000.0,
+            );
+            let tau = k * (self.reference - self.q.round()) - d * self.qd
+                + f64::from(self.impedance_offset);
+            self.impedance_torque = tau.clamp(-32768.0, 32767.0);
+            let err = self.impedance_torque - self.torque_feedback();
+            let g = self.gains(PidKind::Torque);
+            (self.trq_pid.run(g, err), g.1.max_output)
+        } else if self.tracks_reference() {
             // The firmware's error is in whole encoder ticks.
             let err = self.reference - self.q.round();
             let g = self.gains(PidKind::Position);
@@ -696,6 +745,8 @@ impl JointSim {
                     damping: self.impedance.1,
                 })
             }
+            SetImpedanceOffset(v) => self.impedance_offset = v,
+            GetImpedanceOffset => return Some(McReply::ImpedanceOffset(self.impedance_offset)),
             GetFirmwareVersion {
                 proto_major,
                 proto_minor,
@@ -710,7 +761,14 @@ impl JointSim {
                     compatible: proto_major == 1 && proto_minor <= 6,
                 }))
             }
-            SetInteractionMode(m) => self.interaction = m,
+            SetInteractionMode(m) => {
+                if m != self.interaction {
+                    // Switching between the position and the torque PID starts both afresh.
+                    self.pos_pid = PidState::default();
+                    self.trq_pid = PidState::default();
+                }
+                self.interaction = m;
+            }
             GetInteractionMode => return Some(McReply::InteractionMode(self.interaction)),
         }
         None

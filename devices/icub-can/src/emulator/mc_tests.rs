@@ -422,3 +422,109 @@ fn long_emulator_ticks_are_stable() {
         b.q
     );
 }
+
+/// The left elbow with iCubGenova01's torque gains, in position mode and compliant, with
+/// a spring of `stiffness` N·m/° and `damping` N·m·s/° converted as icub-main does
+/// (`ImplementImpedanceControl`: × `0x8000/TorqueMax` ÷ `Encoder`; damping sent ×1000).
+fn compliant_elbow(stiffness: f64, damping: f64) -> JointSim {
+    let mut sim = left_elbow_in_torque_mode(0);
+    let per_tick = 4096.0 / -11.375;
+    cmd(
+        &mut sim,
+        McCommand::SetImpedanceParams {
+            stiffness: (stiffness * per_tick).round() as i16,
+            damping: (damping * per_tick * 1000.0).round() as i16,
+        },
+    );
+    cmd(&mut sim, McCommand::SetControlMode(ControlMode::Position));
+    cmd(&mut sim, McCommand::SetInteractionMode(1));
+    assert!(sim.compliant());
+    sim
+}
+
+#[test]
+fn impedance_parameters_and_offset_are_stored_and_answered() {
+    let mut sim = JointSim::new(0.0);
+    cmd(
+        &mut sim,
+        McCommand::SetImpedanceParams {
+            stiffness: 72,
+            damping: -1800,
+        },
+    );
+    cmd(&mut sim, McCommand::SetImpedanceOffset(-50));
+    assert_eq!(
+        sim.apply(&McCommand::GetImpedanceParams),
+        Some(McReply::ImpedanceParams {
+            stiffness: 72,
+            damping: -1800
+        })
+    );
+    assert_eq!(
+        sim.apply(&McCommand::GetImpedanceOffset),
+        Some(McReply::ImpedanceOffset(-50))
+    );
+    // Stiff interaction, torque mode and idle do not run the impedance law.
+    assert!(!sim.compliant());
+    cmd(&mut sim, McCommand::SetInteractionMode(1));
+    cmd(&mut sim, McCommand::SetControlMode(ControlMode::Torque));
+    assert!(!sim.compliant());
+    cmd(&mut sim, McCommand::SetControlMode(ControlMode::Velocity));
+    assert!(sim.compliant());
+}
+
+#[test]
+fn a_compliant_joint_with_stiffness_settles_at_its_position_reference() {
+    let mut sim = compliant_elbow(0.3, 0.003);
+    // 10° toward positive degrees (fewer ticks: Encoder −11.375) at 50°/s.
+    let target = 1500.0 - 114.0;
+    cmd(
+        &mut sim,
+        McCommand::PositionMove {
+            position: target as i32,
+            speed: 57,
+        },
+    );
+    let r = run(&mut sim, target, 3.0, 12.0);
+    eprintln!("compliant 10° move: {r:?}, at {}", sim.q);
+    // The spring pulls the joint to the reference: within ~1° (12 ticks; the
+    // proportional torque loop and the Coulomb friction leave a small error) after 1.5 s,
+    // without oscillating.
+    assert!(r.settled.is_some_and(|t| t < 1.5), "{r:?}");
+    assert!(r.overshoot < 0.3, "{r:?}");
+    assert!(sim.qd.abs() < 20.0, "still moving at {} ticks/s", sim.qd);
+    assert!((sim.q - target).abs() <= 4.0, "{} vs {target}", sim.q);
+    // The law's torque then is the spring's, small.
+    assert!(sim.impedance_torque().abs() < 0.3 * 4096.0 * 1.2);
+}
+
+#[test]
+fn a_compliant_joint_without_stiffness_does_not_hold_a_position_reference() {
+    let mut sim = compliant_elbow(0.0, 0.003);
+    let start = sim.q;
+    cmd(
+        &mut sim,
+        McCommand::PositionMove {
+            position: (start - 114.0) as i32,
+            speed: 57,
+        },
+    );
+    for _ in 0..2000 {
+        sim.step(0.001);
+    }
+    // Only damping: nothing pulls the joint toward the reference, which has gone 10° away.
+    assert!((sim.q - start).abs() < 12.0, "{start} -> {}", sim.q);
+    assert!(sim.impedance_torque().abs() < 100.0);
+    // The same joint stiff follows the reference with the position PID.
+    cmd(&mut sim, McCommand::SetInteractionMode(0));
+    assert!(!sim.compliant());
+    cmd(
+        &mut sim,
+        McCommand::PositionMove {
+            position: (start - 114.0) as i32,
+            speed: 57,
+        },
+    );
+    let r = run(&mut sim, start - 114.0, 1.5, 3.0);
+    assert!(r.settled.is_some(), "{r:?}");
+}

@@ -39,6 +39,8 @@ pub mod op {
     pub const SET_VEL_TIMEOUT: u8 = 86;
     pub const SET_IMPEDANCE_PARAMS: u8 = 87;
     pub const GET_IMPEDANCE_PARAMS: u8 = 88;
+    pub const SET_IMPEDANCE_OFFSET: u8 = 89;
+    pub const GET_IMPEDANCE_OFFSET: u8 = 90;
     pub const GET_FIRMWARE_VERSION: u8 = 91;
     pub const SET_CURRENT_PID: u8 = 101;
     pub const SET_VELOCITY_PID: u8 = 105;
@@ -227,11 +229,19 @@ pub enum McCommand {
     GetPidLimits(PidKind),
     /// Milliseconds after which a velocity command expires.
     SetVelTimeout(u16),
+    /// Impedance spring as `CanBusMotionControl::setImpedanceRaw` sends it (8 bytes:
+    /// stiffness, damping, 0, 0): stiffness in torque-sensor units per encoder tick,
+    /// damping in sensor units per tick/s, times 1000 (icub-main sends `S_16(damp*1000)`
+    /// and divides the reply by 1000).
     SetImpedanceParams {
         stiffness: i16,
         damping: i16,
     },
     GetImpedanceParams,
+    /// Torque offset of the impedance law, sensor units (3 bytes, as
+    /// `setImpedanceOffsetRaw` and the firmware's `SET_IMPEDANCE_OFFSET` former).
+    SetImpedanceOffset(i16),
+    GetImpedanceOffset,
     GetFirmwareVersion {
         proto_major: u8,
         proto_minor: u8,
@@ -287,6 +297,8 @@ impl McCommand {
             SetVelTimeout(_) => op::SET_VEL_TIMEOUT,
             SetImpedanceParams { .. } => op::SET_IMPEDANCE_PARAMS,
             GetImpedanceParams => op::GET_IMPEDANCE_PARAMS,
+            SetImpedanceOffset(_) => op::SET_IMPEDANCE_OFFSET,
+            GetImpedanceOffset => op::GET_IMPEDANCE_OFFSET,
             GetFirmwareVersion { .. } => op::GET_FIRMWARE_VERSION,
             SetInteractionMode(_) => op::SET_INTERACTION_MODE,
             GetInteractionMode => op::GET_INTERACTION_MODE,
@@ -309,6 +321,7 @@ impl McCommand {
                 | GetPid(_)
                 | GetPidLimits(_)
                 | GetImpedanceParams
+                | GetImpedanceOffset
                 | GetFirmwareVersion { .. }
                 | GetInteractionMode
         )
@@ -366,7 +379,7 @@ impl McCommand {
                 b[1..5].copy_from_slice(&mask.to_le_bytes());
                 5
             }
-            SetPwmLimit(v) | SetMaxVelocity(v) => {
+            SetPwmLimit(v) | SetMaxVelocity(v) | SetImpedanceOffset(v) => {
                 put_i16(b, 1, v);
                 3
             }
@@ -410,7 +423,7 @@ impl McCommand {
             ControllerRun | ControllerIdle | EnablePwm | DisablePwm | GetControlMode
             | MotionDone | GetEncoderPosition | GetDesiredTorque | StopTrajectory | GetPwmLimit
             | GetMinPosition | GetMaxPosition | GetMaxVelocity | GetPid(_) | GetPidLimits(_)
-            | GetImpedanceParams | GetInteractionMode => 1,
+            | GetImpedanceParams | GetImpedanceOffset | GetInteractionMode => 1,
         }
     }
 
@@ -549,6 +562,11 @@ impl McCommand {
                 }
             }
             op::GET_IMPEDANCE_PARAMS => GetImpedanceParams,
+            op::SET_IMPEDANCE_OFFSET => {
+                n(3, "set impedance offset", "at least 3")?;
+                SetImpedanceOffset(i16_at(d, 1))
+            }
+            op::GET_IMPEDANCE_OFFSET => GetImpedanceOffset,
             op::GET_FIRMWARE_VERSION => {
                 n(3, "get firmware version", "at least 3")?;
                 GetFirmwareVersion {
@@ -597,7 +615,12 @@ pub enum McReply {
     MaxVelocity(i16),
     Pid(PidKind, Pid),
     PidLimits(PidKind, PidLimits),
-    ImpedanceParams { stiffness: i16, damping: i16 },
+    ImpedanceParams {
+        stiffness: i16,
+        damping: i16,
+    },
+    /// Sensor units, read as a 16-bit value at `data[1]` (`getImpedanceOffsetRaw`).
+    ImpedanceOffset(i16),
     FirmwareVersion(FirmwareInfo),
     InteractionMode(u8),
 }
@@ -617,6 +640,7 @@ impl McReply {
             Pid(k, _) => k.base() + 1,
             PidLimits(k, _) => k.base() + 3,
             ImpedanceParams { .. } => op::GET_IMPEDANCE_PARAMS,
+            ImpedanceOffset(_) => op::GET_IMPEDANCE_OFFSET,
             FirmwareVersion(_) => op::GET_FIRMWARE_VERSION,
             InteractionMode(_) => op::GET_INTERACTION_MODE,
         }
@@ -638,7 +662,7 @@ impl McReply {
                 put_i32(b, 1, v);
                 5
             }
-            DesiredTorque(v) | PwmLimit(v) | MaxVelocity(v) => {
+            DesiredTorque(v) | PwmLimit(v) | MaxVelocity(v) | ImpedanceOffset(v) => {
                 put_i16(b, 1, v);
                 3
             }
@@ -752,6 +776,10 @@ impl McReply {
                     stiffness: i16_at(d, 1),
                     damping: i16_at(d, 3),
                 }
+            }
+            op::GET_IMPEDANCE_OFFSET => {
+                n(3, "impedance offset reply", "at least 3")?;
+                ImpedanceOffset(i16_at(d, 1))
             }
             op::GET_FIRMWARE_VERSION => {
                 n(8, "firmware version reply", "8")?;

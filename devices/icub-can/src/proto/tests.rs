@@ -58,6 +58,8 @@ fn every_mc_command() -> Vec<McCommand> {
             damping: -3,
         },
         GetImpedanceParams,
+        SetImpedanceOffset(-300),
+        GetImpedanceOffset,
         GetFirmwareVersion {
             proto_major: 1,
             proto_minor: 6,
@@ -105,6 +107,7 @@ fn every_mc_reply() -> Vec<McReply> {
             stiffness: 1,
             damping: 2,
         },
+        ImpedanceOffset(-7),
         FirmwareVersion(mc::FirmwareInfo {
             board_type: 3,
             version: 1,
@@ -381,6 +384,67 @@ fn byte_layouts_match_the_cpp_driver() {
     }
     .encode();
     assert_eq!((f.id(), f.data()), (0x20E, &[0x4Fu8, 0x0C, 10][..]));
+}
+
+#[test]
+fn impedance_byte_layouts_match_can_bus_motion_control() {
+    // setImpedanceRaw: 8 bytes, opcode 87, stiffness and damping·1000 LE, then zeros.
+    let f = Message::McRequest {
+        src: 0,
+        dst: 5,
+        axis: 1,
+        cmd: McCommand::SetImpedanceParams {
+            stiffness: 0x0102,
+            damping: -2,
+        },
+    }
+    .encode();
+    assert_eq!(f.id(), 0x005);
+    assert_eq!(f.data(), &[0x80 | 87, 2, 1, 0xFE, 0xFF, 0, 0, 0]);
+    // setImpedanceOffsetRaw: 3 bytes, opcode 89, the offset LE.
+    let req = Message::McRequest {
+        src: 0,
+        dst: 5,
+        axis: 0,
+        cmd: McCommand::SetImpedanceOffset(-300),
+    };
+    let f = req.encode();
+    assert_eq!(f.data(), &[89, 0xD4, 0xFE]);
+    assert_eq!(Message::decode(&f), Ok(req));
+    // getImpedanceOffsetRaw: 1-byte request (90), the reply's data[1..3] is the offset.
+    let f = Message::McRequest {
+        src: 0,
+        dst: 5,
+        axis: 1,
+        cmd: McCommand::GetImpedanceOffset,
+    }
+    .encode();
+    assert_eq!(f.data(), &[0x80 | 90]);
+    let reply = Message::McReply {
+        src: 5,
+        dst: 0,
+        axis: 1,
+        reply: McReply::ImpedanceOffset(0x1234),
+    };
+    let f = reply.encode();
+    assert_eq!((f.id(), f.data()), (0x050, &[0x80 | 90, 0x34, 0x12][..]));
+    assert_eq!(Message::decode(&f), Ok(reply));
+    // getImpedanceRaw: data[1..3] stiffness, data[3..5] damping·1000.
+    let f = frame(0x050, &[88, 10, 0, 0xE8, 0x03]);
+    assert_eq!(
+        Message::decode(&f),
+        Ok(Message::McReply {
+            src: 5,
+            dst: 0,
+            axis: 0,
+            reply: McReply::ImpedanceParams {
+                stiffness: 10,
+                damping: 1000
+            }
+        })
+    );
+    // Too short an offset command is an error, not a guess.
+    assert!(Message::decode(&frame(0x005, &[89, 1])).is_err());
 }
 
 fn frame(id: u16, data: &[u8]) -> CanFrame {
