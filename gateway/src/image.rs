@@ -68,13 +68,12 @@ pub fn to_ros(b: Bottle, frame_id: &str, stamp_ns: u64) -> Result<Ros, ConvertEr
             pixels.len()
         )));
     }
-    if bottom_up {
-        let rows: Vec<Vec<u8>> = pixels
-            .chunks(step.max(1))
-            .rev()
-            .map(<[u8]>::to_vec)
-            .collect();
-        pixels = rows.concat();
+    if bottom_up && step > 0 {
+        // Rows swap in place: no second image-sized buffer.
+        for i in 0..h / 2 {
+            let (top, bottom) = pixels.split_at_mut((h - 1 - i) * step);
+            top[i * step..(i + 1) * step].swap_with_slice(&mut bottom[..step]);
+        }
     }
     Ok(Ros::Struct(vec![
         header(stamp_ns, frame_id),
@@ -149,6 +148,18 @@ mod tests {
         let f = m.fields().unwrap();
         assert_eq!(f[5], Ros::U32(4));
         assert_eq!(f[6], Ros::Bytes(vec![4, 5, 6, 0, 1, 2, 3, 0]));
+
+        // an odd number of rows: the middle one stays
+        let mut params = Bottle::new();
+        for v in [1, 3, 1 | (1 << 16), 1, 3] {
+            params.push(v);
+        }
+        let mut b = Bottle::new();
+        b.add_vocab("mat").add_vocab("mono");
+        b.push(params);
+        b.push(Value::Blob(vec![1, 2, 3]));
+        let m = to_ros(b, "", 0).unwrap();
+        assert_eq!(m.fields().unwrap()[6], Ros::Bytes(vec![3, 2, 1]));
     }
 
     #[test]

@@ -102,7 +102,7 @@ pub(super) async fn yarp_to_ros(
     let conv = t.conversion();
     let mut limit = t.rate_limit_hz.map(RateLimit::new);
     let frame_id = t.frame_id.clone().unwrap_or_default();
-    while let Some(inc) = port.read().await {
+    while let Some(mut inc) = port.read().await {
         let t0 = Instant::now();
         let none = Joints::default();
         let joints: &Joints = if conv == Conversion::JointState {
@@ -130,7 +130,9 @@ pub(super) async fn yarp_to_ros(
             c.dropped();
             continue;
         }
-        let msg = inc.bottle().map_err(|e| e.to_string()).and_then(|b| {
+        // Taken, not copied: a 2.7 MB image keeps the received buffer (or, over
+        // `local`, the sender's Bottle) on its way into the ROS message.
+        let msg = inc.take_bottle().map_err(|e| e.to_string()).and_then(|b| {
             convert::to_ros_owned(conv, &t.ros_type, b, &ctx).map_err(|e| e.to_string())
         });
         match msg {

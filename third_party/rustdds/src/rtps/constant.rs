@@ -109,6 +109,40 @@ pub const DATAGRAM_HEADER_OVERHEAD: usize = 48;
 // into each DATAFRAG submessage / datagram, never the fragment size itself.
 pub const FRAGMENT_SIZE: usize = 256;
 
+// yarp-rs: Fast DDS (the default ROS 2 middleware) receives UDP datagrams into
+// buffers of its transport's maxMessageSize, 65500 bytes by default, and
+// discards longer ones. The 65536-byte loopback MTU would allow 65508-byte
+// datagrams (65536 - 48 + RTPS header), so per-peer budgets are capped to keep
+// every datagram, RTPS header included, within 65500 bytes.
+pub const MAX_PEER_DATAGRAM_SIZE: usize = 65500;
+const RTPS_HEADER_SIZE: usize = 20;
+
+// yarp-rs: room left in a DATAFRAG datagram's budget for everything but the
+// fragment itself: INFO_TS (12) + INFO_DST (16) + DATA_FRAG fixed part (36),
+// with margin for inline QoS.
+const FRAGMENT_DATAGRAM_RESERVE: usize = 128;
+
+/// yarp-rs: the fragment size a Writer uses, chosen once from the datagram
+/// budget of its matched readers: the largest multiple of [`FRAGMENT_SIZE`]
+/// that fits one datagram with its headers (at least [`FRAGMENT_SIZE`]).
+/// With fixed 256-byte fragments a 1280x720 rgb8 image (2.7 MB) is 10800
+/// fragments, a NACK_FRAG bitmap (256 fragments) covers only 64 KB of it, and
+/// a repair round (8 fragments) only 2 KB, so one lost datagram took dozens of
+/// 10 ms repair rounds. Budget-sized fragments (65280 bytes on loopback, 1280
+/// on a 1500-byte MTU: the same bytes per datagram as 5 x 256) make each
+/// datagram one fragment. Fast DDS itself uses fragments of about 64 KB; it
+/// and RustDDS readers take the size from each DATA_FRAG (RustDDS per writer,
+/// hence chosen once per Writer).
+pub const fn fragment_size_for_budget(budget: usize) -> usize {
+  let room = budget.saturating_sub(FRAGMENT_DATAGRAM_RESERVE);
+  let size = room - room % FRAGMENT_SIZE;
+  if size < FRAGMENT_SIZE {
+    FRAGMENT_SIZE
+  } else {
+    size
+  }
+}
+
 /// Convert an interface MTU into the RTPS-message (UDP payload) budget usable
 /// for submessage/fragment packing: `mtu - DATAGRAM_HEADER_OVERHEAD`, floored
 /// so a pathologically small MTU still yields a usable (if tiny) budget. The
@@ -120,6 +154,9 @@ pub const fn payload_budget_for_mtu(mtu: u32) -> usize {
   if mtu <= DATAGRAM_HEADER_OVERHEAD {
     // Nonsensical / tiny MTU: fall back to a minimal but non-zero budget.
     64
+  } else if mtu - DATAGRAM_HEADER_OVERHEAD > MAX_PEER_DATAGRAM_SIZE - RTPS_HEADER_SIZE {
+    // yarp-rs: see MAX_PEER_DATAGRAM_SIZE.
+    MAX_PEER_DATAGRAM_SIZE - RTPS_HEADER_SIZE
   } else {
     mtu - DATAGRAM_HEADER_OVERHEAD
   }

@@ -28,7 +28,8 @@ use crate::{
   polling::SharedTimer,
   rtps::{
     constant::{
-      DEFAULT_WRITER_MAX_SAMPLES, FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE, FRAGMENT_SIZE,
+      fragment_size_for_budget, // yarp-rs: replaces FRAGMENT_SIZE
+      DEFAULT_WRITER_MAX_SAMPLES, FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE,
       HEARTBEAT_PERIOD_FAST, HEARTBEAT_PERIOD_SLOW, HEARTBEAT_SUBMESSAGE_SERIALIZED_SIZE,
       NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, REPAIR_BATCH_MAX_BYTES,
       REPAIR_INTERVAL_DEFAULT, REPAIR_INTERVAL_MAX, REPAIR_INTERVAL_MIN,
@@ -221,6 +222,12 @@ pub(crate) struct Writer {
   // to `FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE` when there are no matched readers.
   min_datagram_payload: usize,
 
+  // yarp-rs: this Writer's DATAFRAG fragment size, fixed by the first
+  // fragmented send that has a matched reader (RTPS v2.5 Section 8.4.14.1.1:
+  // constant per Writer; RustDDS readers keep the first size they see). See
+  // `fragment_size_for_budget`.
+  fragment_size: std::cell::Cell<Option<u16>>,
+
   // By default, this writer is a StatefulWriter (see RTPS spec section 8.4.9)
   // If like_stateless is true, then the writer mimics the behavior of a Best-Effort
   // StatelessWriter. This behavior is needed only for a single built-in discovery topic of
@@ -352,6 +359,7 @@ impl Writer {
       interface_observations,
       local_interfaces,
       min_datagram_payload: FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE,
+      fragment_size: std::cell::Cell::new(None), // yarp-rs
       my_topic_name: i.topic_name,
       send_buffer: i.send_buffer,
       last_sent: SequenceNumber::zero(),
@@ -606,8 +614,24 @@ impl Writer {
       .saturating_sub(DATA_SUBMESSAGE_OVERHEAD)
   }
 
+  // yarp-rs: the fragment size follows the matched readers' datagram budget
+  // (chosen once, see `fragment_size`) instead of the fixed FRAGMENT_SIZE.
+  fn fragment_size(&self) -> u16 {
+    if let Some(size) = self.fragment_size.get() {
+      return size;
+    }
+    let size =
+      fragment_size_for_budget(self.min_datagram_payload).min(usize::from(u16::MAX)) as u16;
+    // Without a matched reader nobody receives these fragments: do not fix the
+    // size before the readers' budget is known.
+    if !self.readers.is_empty() {
+      self.fragment_size.set(Some(size));
+    }
+    size
+  }
+
   fn num_frags_and_frag_size(&self, payload_size: usize) -> (u32, u16) {
-    let fragment_size = FRAGMENT_SIZE as u32;
+    let fragment_size = u32::from(self.fragment_size()); // yarp-rs: was FRAGMENT_SIZE
     let data_size = payload_size as u32; // TODO: overflow check
                                          // Formula from RTPS spec v2.5 Section "8.3.8.3.5 Logical Interpretation"
     let num_frags =
@@ -1613,7 +1637,7 @@ impl Writer {
           message_builder = message_builder.ts_msg(self.endianness, Some(src_ts));
         }
 
-        let fragment_size: u32 = FRAGMENT_SIZE as u32;
+        let fragment_size: u32 = u32::from(self.fragment_size()); // yarp-rs: was FRAGMENT_SIZE
         let data_size: u32 = cache_change.data_value.payload_size() as u32; // TODO: overflow check
 
         message_builder = message_builder.data_frag_msg(
@@ -2600,6 +2624,18 @@ mod tests {
   use log::info;
 
   use super::frags_per_datafrag;
+
+  // yarp-rs: fragments fill a datagram: loopback (65536-byte MTU) and Ethernet.
+  #[test]
+  fn fragment_size_follows_datagram_budget() {
+    use crate::rtps::constant::{fragment_size_for_budget, payload_budget_for_mtu};
+    let lo = payload_budget_for_mtu(65536);
+    assert_eq!(lo, 65480, "a datagram stays within Fast DDS's 65500 bytes");
+    assert_eq!(fragment_size_for_budget(lo), 65280);
+    assert_eq!(frags_per_datafrag(28, lo, 1, 43, 65280, 2_764_848), 1);
+    assert_eq!(fragment_size_for_budget(payload_budget_for_mtu(1500)), 1280);
+    assert_eq!(fragment_size_for_budget(100), 256);
+  }
 
   // At a 1500-byte-MTU budget, a two-fragment "1 KB" sample (its serialized form
   // is slightly over the 1024-byte fragment size) packs BOTH fragments into one
