@@ -45,36 +45,49 @@ fn finish(mut child: Child) -> String {
     out
 }
 
-#[test]
-fn cpp_yarp_rpc_drives_our_wrapper() {
+/// C++ `yarp rpc <name>/rpc:i` against our controlBoard_nws_yarp over a 4-joint
+/// fakeMotionControl: types `input`, returns the `Response` lines (or `None`, after a
+/// SKIPPED notice, without the C++ peer).
+fn cpp_rpc_session(name: &str, input: &[u8]) -> Option<Vec<String>> {
     let Some(yarp) = cpp_program("yarp") else {
         skip("C++ YARP not found (set YARP_CPP_BIN or install .venv-yarp)");
-        return;
+        return None;
     };
     name_client();
     let _nws = PolyDriver::open(
-        &Property::from_config_text(
-            "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname /cpp\n\
-             [GENERAL]\njoints 4\n",
-        )
+        &Property::from_config_text(format!(
+            "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname {name}\n\
+             [GENERAL]\njoints 4\n"
+        ))
         .unwrap(),
     )
     .expect("open wrapper");
     let mut child = Command::new(&yarp)
-        .args(["rpc", "/cpp/rpc:i"])
+        .args(["rpc", &format!("{name}/rpc:i")])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
         .expect("spawn C++ yarp rpc");
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(b"get axes\n[get] [axes]\n[set] [pos] 0 10.0\n[get] [pos] 0\n[get] [prot]\nfoo bar\n[set] [poss] 5\n")
-        .unwrap();
+    child.stdin.take().unwrap().write_all(input).unwrap();
     let out = finish(child);
-    let lines: Vec<&str> = out.lines().filter(|l| l.starts_with("Response")).collect();
+    Some(
+        out.lines()
+            .filter(|l| l.starts_with("Response"))
+            .map(str::to_string)
+            .collect(),
+    )
+}
+
+#[test]
+fn cpp_yarp_rpc_drives_our_wrapper() {
+    let Some(lines) = cpp_rpc_session(
+        "/cpp",
+        b"get axes\n[get] [axes]\n[set] [pos] 0 10.0\n[get] [pos] 0\n[get] [prot]\nfoo bar\n[set] [poss] 5\n",
+    ) else {
+        return;
+    };
+    let out = lines.join("\n");
     assert_eq!(lines.len(), 7, "{out}");
     assert!(
         lines[0].starts_with("Response: [is] axes 4 [tsta] 0 "),
@@ -98,38 +111,15 @@ fn cpp_yarp_rpc_drives_our_wrapper() {
 /// parser gives (plain words are packed into vocabs and echoed as typed).
 #[test]
 fn cpp_yarp_rpc_impedance_and_calibration() {
-    let Some(yarp) = cpp_program("yarp") else {
-        skip("C++ YARP not found (set YARP_CPP_BIN or install .venv-yarp)");
+    let Some(lines) = cpp_rpc_session(
+        "/cppimp",
+        b"set iimp ipr 0 (1.0 0.5)\nget iimp ipr 0\n[get] [iimp] [llim] 0\n\
+          [set] [iimp] [iof] 0 (2.5)\n[get] [iimp] [iof] 0\ncalj 0 3 1.0 2.0 3.0\n\
+          cald 0\nget reca isca\nset imp ipr 0 (1.0 0.5)\n",
+    ) else {
         return;
     };
-    name_client();
-    let _nws = PolyDriver::open(
-        &Property::from_config_text(
-            "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname /cppimp\n\
-             [GENERAL]\njoints 4\n",
-        )
-        .unwrap(),
-    )
-    .expect("open wrapper");
-    let mut child = Command::new(&yarp)
-        .args(["rpc", "/cppimp/rpc:i"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn C++ yarp rpc");
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(
-            b"set iimp ipr 0 (1.0 0.5)\nget iimp ipr 0\n[get] [iimp] [llim] 0\n\
-              [set] [iimp] [iof] 0 (2.5)\n[get] [iimp] [iof] 0\ncalj 0 3 1.0 2.0 3.0\n\
-              cald 0\nget reca isca\nset imp ipr 0 (1.0 0.5)\n",
-        )
-        .unwrap();
-    let out = finish(child);
-    let lines: Vec<&str> = out.lines().filter(|l| l.starts_with("Response")).collect();
+    let out = lines.join("\n");
     assert_eq!(lines.len(), 9, "{out}");
     let stamped = |line: &str, head: &str| {
         assert!(
@@ -138,13 +128,13 @@ fn cpp_yarp_rpc_impedance_and_calibration() {
         );
     };
     assert_eq!(lines[0], "Response: [ok]");
-    stamped(lines[1], "Response: [is] iimp (1.0 0.5) [tsta] ");
+    stamped(&lines[1], "Response: [is] iimp (1.0 0.5) [tsta] ");
     stamped(
-        lines[2],
+        &lines[2],
         "Response: [is] [iimp] (1.0 10.0 2.0 20.0) [tsta] ",
     );
     assert_eq!(lines[3], "Response: [ok]");
-    stamped(lines[4], "Response: [is] [iimp] (2.5) [tsta] ");
+    stamped(&lines[4], "Response: [is] [iimp] (2.5) [tsta] ");
     assert_eq!(lines[5], "Response: [ok]");
     assert_eq!(lines[6], "Response: [ok]");
     // the fake has no remote calibrator; `imp` is not the impedance vocab (`iimp` is)
