@@ -220,17 +220,23 @@ impl ParametricCalibrator {
         self.wait_direct(set, GO_TO_ZERO_TIMEOUT)?;
         for &j in set {
             let at = self.direct(j, |b, jj| b.encoder(jj))?;
-            let c = &self.joints[j];
-            if (at - c.startup_pos).abs() > c.threshold {
-                return Err(self.fail(
-                    "CALIBRATION::startupPosThreshold",
-                    "joints that reach their startup position",
-                    format!(
-                        "joint {j} at {at:.2}, startup position {:.2}",
-                        c.startup_pos
-                    ),
-                ));
-            }
+            self.check_startup_position(j, at)?;
+        }
+        Ok(())
+    }
+
+    /// Fails when joint `j`, at `at` after the move, missed its startup position.
+    fn check_startup_position(&self, j: usize, at: f64) -> DevResult<()> {
+        let c = &self.joints[j];
+        if (at - c.startup_pos).abs() > c.threshold {
+            return Err(self.fail(
+                "CALIBRATION::startupPosThreshold",
+                "joints that reach their startup position",
+                format!(
+                    "joint {j} at {at:.2}, startup position {:.2}",
+                    c.startup_pos
+                ),
+            ));
         }
         Ok(())
     }
@@ -341,17 +347,7 @@ impl ParametricCalibrator {
                     .ok_or(DeviceError::Unsupported("target without IEncoders"))?
                     .get_encoder(j)
             })?;
-            let c = &self.joints[j];
-            if (at - c.startup_pos).abs() > c.threshold {
-                return Err(self.fail(
-                    "CALIBRATION::startupPosThreshold",
-                    "joints that reach their startup position",
-                    format!(
-                        "joint {j} at {at:.2}, startup position {:.2}",
-                        c.startup_pos
-                    ),
-                ));
-            }
+            self.check_startup_position(j, at)?;
         }
         Ok(())
     }
