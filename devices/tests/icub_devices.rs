@@ -718,3 +718,39 @@ fn remote_calibrator_homes_parks_and_quits_without_locking_its_target() {
     }
     drop(t);
 }
+
+/// parametricCalibrator sends each joint's calibration through the target's
+/// `IControlCalibration` (C++ `calibrateAxisWithParams`), so it calibrates any board that
+/// offers it, here a fakeMotionControl, then moves the joints to their startup position.
+#[test]
+fn parametric_calibrator_calibrates_a_fake_board_through_icontrolcalibration() {
+    let fake = shared(PolyDriver::from_driver(
+        "fakeMotionControl",
+        Box::new(yarp_devices::FakeMotionControl::with_joints(2)),
+    ));
+    let mut cal = PolyDriver::open(
+        &Property::from_config_text(
+            "device parametricCalibrator\nCALIB_ORDER (0) (1)\n\
+             [GENERAL]\ndeviceName fake_calibrator\njoints 2\n\
+             [CALIBRATION]\ncalibrationType 3 3\ncalibration1 0 0\ncalibration2 0 0\n\
+             calibration3 0 0\nstartupPosition 10 -20\nstartupVelocity 10 10\n\
+             startupPosThreshold 2 2\n\
+             [HOME]\npositionHome 0 0\nvelocityHome 10 10\n\
+",
+        )
+        .unwrap(),
+    )
+    .expect("open parametricCalibrator");
+    cal.device()
+        .as_calibrator()
+        .unwrap()
+        .calibrate(fake.clone())
+        .expect("calibrate the fake");
+    let mut pd = fake.lock().unwrap();
+    let enc = pd.device().as_encoders().unwrap();
+    let (q0, q1) = (enc.get_encoder(0).unwrap(), enc.get_encoder(1).unwrap());
+    assert!(
+        (q0 - 10.0).abs() <= 2.0 && (q1 + 20.0).abs() <= 2.0,
+        "{q0} {q1}"
+    );
+}

@@ -11,8 +11,9 @@
 //! together, in order).
 //!
 //! `calibrate`, per set: joints of calibration type 0, 2 or 4 go to position mode; each
-//! joint's board gets its calibration command (found through [`super::registry`] by axis
-//! name; joints of other devices are taken as calibrated); the set waits for motion
+//! joint gets its calibration command through the target's `IControlCalibration` (as
+//! C++ `calibrateAxisWithParams`; the remapper forwards it to the joint's board); the set
+//! waits for motion
 //! done (20 s), then moves to `startupPosition` at `startupVelocity` and waits (10 s)
 //! until every joint is within `startupPosThreshold`. `park` moves the calibrated
 //! joints that are not idle or faulted to `positionHome` (waiting up to 30 s when asked).
@@ -102,23 +103,22 @@ impl ParametricCalibrator {
     }
 
     /// Sends the board calibration command of joint `j` of `target`.
+    /// The joint's calibration command, through the target's `IControlCalibration` as
+    /// C++ (`calibrateAxisWithParams`): a remapper forwards it to the board driving the
+    /// joint, whatever kind of board that is.
     fn calibrate_joint(&self, target: &SharedDevice, j: usize) -> DevResult<()> {
-        let name = with(target, |d| {
-            d.as_axis_info()
-                .ok_or(DeviceError::Unsupported("target without IAxisInfo"))?
-                .get_axis_name(j)
-        })?;
         let c = &self.joints[j];
-        match super::registry::find(&name) {
-            Some((client, jj)) => client
-                .calibrate(jj, c.kind, c.params[0], c.params[1], c.params[2])
-                .map_err(|e| super::common::call_error(&self.name, e)),
-            None => {
-                tracing::warn!(device = %self.name, axis = %name,
-                    "no CAN board drives this axis; taking it as calibrated");
-                Ok(())
-            }
-        }
+        with(target, |d| {
+            d.as_control_calibration()
+                .ok_or(DeviceError::Unsupported("target without IControlCalibration"))?
+                .calibrate_axis_with_params(
+                    j,
+                    u32::from(c.kind),
+                    c.params[0],
+                    c.params[1],
+                    c.params[2],
+                )
+        })
     }
 
     /// The flag `quitCalibrate`/`quitPark` raise; a procedure's waits stop when it is set.
