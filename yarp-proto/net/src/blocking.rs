@@ -79,6 +79,31 @@ where
     })
 }
 
+/// `close()` (blocking, bounded) and a `Drop` that closes in the background, for a
+/// blocking wrapper whose `inner: Option<_>` has an async `close()`.
+macro_rules! closes_when_dropped {
+    ($ty:ident, $doc:literal) => {
+        impl $ty {
+            #[doc = $doc]
+            pub fn close(mut self) {
+                if let Some(inner) = self.inner.take() {
+                    block(self.rt, async move {
+                        let _ = timeout(CLOSE_TIMEOUT, inner.close()).await;
+                    });
+                }
+            }
+        }
+
+        impl Drop for $ty {
+            fn drop(&mut self) {
+                if let Some(inner) = self.inner.take() {
+                    close_on_drop(self.rt, inner.close());
+                }
+            }
+        }
+    };
+}
+
 /// Closes in the background without blocking: from a runtime thread we must not wait,
 /// elsewhere we wait (bounded) so that the port is unregistered before the program ends.
 fn close_on_drop<F>(rt: &'static Runtime, close: F)
@@ -243,24 +268,12 @@ impl Port {
             }
         })
     }
-
-    /// Unregisters and closes every connection (bounded by [`CLOSE_TIMEOUT`]).
-    pub fn close(mut self) {
-        if let Some(p) = self.inner.take() {
-            block(self.rt, async move {
-                let _ = timeout(CLOSE_TIMEOUT, p.close()).await;
-            });
-        }
-    }
 }
 
-impl Drop for Port {
-    fn drop(&mut self) {
-        if let Some(p) = self.inner.take() {
-            close_on_drop(self.rt, p.close());
-        }
-    }
-}
+closes_when_dropped!(
+    Port,
+    "Unregisters and closes every connection (bounded by [`CLOSE_TIMEOUT`])."
+);
 
 /// A blocking [`buffered::BufferedPort`]. Dropping it closes it (best effort, bounded).
 pub struct BufferedPort {
@@ -370,24 +383,12 @@ impl BufferedPort {
     pub fn rpc(&self, b: &Bottle) -> Result<Bottle, PortError> {
         block(self.rt, self.port().rpc(b))
     }
-
-    /// Sends what is queued, unregisters and closes (bounded by [`CLOSE_TIMEOUT`]).
-    pub fn close(mut self) {
-        if let Some(p) = self.inner.take() {
-            block(self.rt, async move {
-                let _ = timeout(CLOSE_TIMEOUT, p.close()).await;
-            });
-        }
-    }
 }
 
-impl Drop for BufferedPort {
-    fn drop(&mut self) {
-        if let Some(p) = self.inner.take() {
-            close_on_drop(self.rt, p.close());
-        }
-    }
-}
+closes_when_dropped!(
+    BufferedPort,
+    "Sends what is queued, unregisters and closes (bounded by [`CLOSE_TIMEOUT`])."
+);
 
 /// A blocking [`buffered::RpcServer`].
 pub struct RpcServer {
@@ -434,20 +435,9 @@ impl RpcServer {
     {
         block(self.rt, self.server().serve(f))
     }
-
-    pub fn close(mut self) {
-        if let Some(s) = self.inner.take() {
-            block(self.rt, async move {
-                let _ = timeout(CLOSE_TIMEOUT, s.close()).await;
-            });
-        }
-    }
 }
 
-impl Drop for RpcServer {
-    fn drop(&mut self) {
-        if let Some(s) = self.inner.take() {
-            close_on_drop(self.rt, s.close());
-        }
-    }
-}
+closes_when_dropped!(
+    RpcServer,
+    "Stops serving, unregisters and closes (bounded by [`CLOSE_TIMEOUT`])."
+);
