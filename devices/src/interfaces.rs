@@ -599,6 +599,11 @@ pub trait IRemoteCalibrator {
             "this device does not forward to a calibrator device",
         ))
     }
+    /// The calibrator device this one forwards to (C++ `getCalibratorDevice`), so a
+    /// network wrapper can call it without holding this device meanwhile.
+    fn calibrator_device(&self) -> Option<crate::driver::SharedDevice> {
+        None
+    }
 }
 
 #[cfg(test)]

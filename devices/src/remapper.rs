@@ -858,6 +858,9 @@ impl IRemoteCalibrator for ControlBoardRemapper {
         ControlBoardRemapper::set_calibrator_device(self, device);
         Ok(())
     }
+    fn calibrator_device(&self) -> Option<SharedDevice> {
+        self.calibrator.clone()
+    }
     fn calibrate_single_joint(&mut self, j: usize) -> DevResult<()> {
         if let Some(r) = self.on_calibrator(|c| c.calibrate_single_joint(j)) {
             return r;

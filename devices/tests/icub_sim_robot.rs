@@ -311,9 +311,10 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
     let lim = imp.get_current_impedance_limit(3).unwrap();
     assert_eq!((lim.min_stiffness, lim.max_stiffness), (0.002, 9.889));
 
-    // Remote homing: `[set] [reca] [homw]` / `[homs] 3` -> the remapper's calibrator device
-    // (left_arm_calib, attached by yarprobotinterface's calibrate) -> the boards, without
-    // locking the remapper the call came through. HOME::positionHome of left_arm_calib.xml.
+    // Remote homing: `[set] [reca] [hom] 3` / `[homs]` -> controlBoard_nws_yarp -> the
+    // remapper's calibrator device (left_arm_calib, attached by yarprobotinterface's
+    // calibrate) -> the boards, served with the part unlocked (C++ getCalibratorDevice),
+    // so state:o goes on meanwhile. HOME::positionHome of left_arm_calib.xml.
     const HOME: [f64; 8] = [-30.0, 30.0, 0.0, 45.0, 0.0, 0.0, 40.0, 30.0];
     let dev = arm.device();
     dev.as_position_control()
@@ -330,18 +331,48 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
     let t = Instant::now();
     rc.homing_single_joint(3).unwrap();
     println!("homing the elbow 55 -> 45 deg: {:?}", t.elapsed());
-    // (the state stream pauses while the call holds the remapper: wait for a fresh one)
     assert!(eventually(T, || dev
         .as_encoders()
         .unwrap()
         .get_encoder(3)
         .is_ok_and(|q| (q - 45.0).abs() < 1.0)));
-    let t = Instant::now();
-    dev.as_remote_calibrator()
+    dev.as_position_control()
         .unwrap()
-        .homing_whole_part()
+        .position_move(3, 60.0)
         .unwrap();
+    assert!(eventually(T, || dev
+        .as_encoders()
+        .unwrap()
+        .get_encoder(3)
+        .is_ok_and(|q| (q - 60.0).abs() < 1.0)));
+    // Whole-part homing from a second client; this one keeps reading the streamed
+    // encoders (stale after 0.5 s) and sees the elbow travel while the call runs.
+    let t = Instant::now();
+    let homing = std::thread::spawn(|| {
+        let cfg = "device remote_controlboard\nremote /icub/left_arm\nlocal /test/left_arm_homing\ncarrier tcp\n";
+        let mut other = PolyDriver::open(&Property::from_config_text(cfg).unwrap())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let r = other
+            .device()
+            .as_remote_calibrator()
+            .unwrap()
+            .homing_whole_part();
+        let _ = other.close();
+        r
+    });
+    let mut seen = Vec::new();
+    while !homing.is_finished() {
+        let q = dev.as_encoders().unwrap().get_encoder(3);
+        assert!(q.is_ok(), "state:o stalled during homing: {q:?}");
+        seen.push(q.unwrap());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    homing.join().unwrap().unwrap();
     println!("homing the left arm: {:?}", t.elapsed());
+    assert!(
+        seen.iter().any(|q| *q < 59.0 && *q > 46.0),
+        "the elbow's travel 60 -> 45 is seen on state:o during the call: {seen:?}"
+    );
     // (wrist yaw's positionHome 40 lies beyond its joint limit 25: the board stops there)
     let home: Vec<f64> = (0..8)
         .map(|j| {

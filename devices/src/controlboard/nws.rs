@@ -243,7 +243,16 @@ async fn serve_rpc(port: Arc<Port>, slot: Slot) {
                 fail()
             }
             Ok(cmd) => match attached(&slot) {
-                Some(a) => device_call(|| handle_rpc(&cmd, lock(&a.device).device(), &mut stamp)),
+                Some(a) => device_call(|| match remote_calibrator_target(&cmd, &a.device) {
+                    Some(calibrator) => match calibrator.try_lock() {
+                        Ok(mut c) => handle_rpc(&cmd, c.device(), &mut stamp),
+                        Err(_) => {
+                            tracing::warn!("{}: `{cmd}`: the calibrator is busy", port.name());
+                            fail()
+                        }
+                    },
+                    None => handle_rpc(&cmd, lock(&a.device).device(), &mut stamp),
+                }),
                 None => {
                     tracing::warn!("{}: `{cmd}` but no device is attached", port.name());
                     fail()
@@ -252,6 +261,21 @@ async fn serve_rpc(port: Arc<Port>, slot: Slot) {
         };
         msg.reply(reply);
     }
+}
+
+/// For `[set] [reca] …`, the calibrator device the attached part forwards to (C++
+/// `getCalibratorDevice`): the request is served by it with the part unlocked, because
+/// calibrating, homing or parking takes seconds and the state streams and the other
+/// clients of the part must go on meanwhile.
+fn remote_calibrator_target(cmd: &Bottle, part: &SharedDevice) -> Option<SharedDevice> {
+    let is = |i: usize, v: i32| super::rpc::vocab(cmd.get(i)) == v;
+    if !(is(0, crate::vocabs::SET) && is(1, crate::vocabs::REMOTE_CALIBRATOR_IFACE)) {
+        return None;
+    }
+    lock(part)
+        .device()
+        .as_remote_calibrator()?
+        .calibrator_device()
 }
 
 fn fail() -> Bottle {

@@ -36,7 +36,7 @@ impl RpcStamp {
 }
 
 /// C++ `Value::asVocab32`: vocabs, and strings (packed) as in `get axes`.
-fn vocab(v: Option<&Value>) -> i32 {
+pub(super) fn vocab(v: Option<&Value>) -> i32 {
     match v {
         Some(Value::Vocab32(x)) => x.0,
         Some(Value::String(s)) => Vocab32::encode(s).0,
