@@ -110,7 +110,9 @@ impl ParametricCalibrator {
         let c = &self.joints[j];
         with(target, |d| {
             d.as_control_calibration()
-                .ok_or(DeviceError::Unsupported("target without IControlCalibration"))?
+                .ok_or(DeviceError::Unsupported(
+                    "target without IControlCalibration",
+                ))?
                 .calibrate_axis_with_params(
                     j,
                     u32::from(c.kind),
