@@ -604,6 +604,11 @@ pub trait IRemoteCalibrator {
     fn calibrator_device(&self) -> Option<crate::driver::SharedDevice> {
         None
     }
+    /// The flag `quitCalibrate`/`quitPark` raise, for a calibrator whose running
+    /// procedure checks it: a quit must reach a procedure that holds the device.
+    fn quit_signal(&self) -> Option<std::sync::Arc<std::sync::atomic::AtomicBool>> {
+        None
+    }
 }
 
 #[cfg(test)]

@@ -16,7 +16,8 @@ use crate::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::interfaces::*;
 use std::collections::HashMap;
-use std::sync::MutexGuard;
+use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, MutexGuard};
 use yarp_proto::{Bottle, Property, Value, Vocab32};
 
 /// The C++ device name.
@@ -241,6 +242,8 @@ pub struct ControlBoardRemapper {
     lut: Lut,
     /// The part's calibrator device (C++ `IRemoteCalibrator::setCalibratorDevice`).
     calibrator: Option<SharedDevice>,
+    /// Its quit flag, taken when it was set: a quit must reach it while it is busy.
+    calibrator_quit: Option<Arc<AtomicBool>>,
 }
 
 const NOT_ATTACHED: &str = "controlboardremapper: no boards attached yet";
@@ -269,6 +272,12 @@ impl ControlBoardRemapper {
     /// Sets (or clears) the calibrator device that `IRemoteCalibrator` calls go to; it
     /// must offer `IRemoteCalibrator` and must not lock this remapper while serving them.
     pub fn set_calibrator_device(&mut self, calibrator: Option<SharedDevice>) {
+        self.calibrator_quit = calibrator.as_ref().and_then(|c| {
+            lock(c)
+                .device()
+                .as_remote_calibrator()
+                .and_then(|rc| rc.quit_signal())
+        });
         self.calibrator = calibrator;
     }
 
@@ -395,15 +404,18 @@ fn board_info(key: &str, dev: &SharedDevice, with_names: bool) -> DevResult<Boar
 
 impl IMultipleWrapper for ControlBoardRemapper {
     fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
-        let layout = self.layout.as_ref().ok_or(DeviceError::NotOpen)?;
-        let with_names = matches!(layout, Layout::AxesNames(_));
+        if self.layout.is_none() {
+            return Err(DeviceError::NotOpen);
+        }
         // as C++, a device keyed "calibrator" is not a board but the calibrator device
         if let Some((_, c)) = devices
             .iter()
             .find(|(k, _)| k.eq_ignore_ascii_case("calibrator"))
         {
-            self.calibrator = Some(c.clone());
+            self.set_calibrator_device(Some(c.clone()));
         }
+        let layout = self.layout.as_ref().ok_or(DeviceError::NotOpen)?;
+        let with_names = matches!(layout, Layout::AxesNames(_));
         let boards: Vec<&(String, SharedDevice)> = devices
             .iter()
             .filter(|(k, _)| !k.eq_ignore_ascii_case("calibrator"))
@@ -860,6 +872,9 @@ impl IRemoteCalibrator for ControlBoardRemapper {
     }
     fn calibrator_device(&self) -> Option<SharedDevice> {
         self.calibrator.clone()
+    }
+    fn quit_signal(&self) -> Option<Arc<AtomicBool>> {
+        self.calibrator_quit.clone()
     }
     fn calibrate_single_joint(&mut self, j: usize) -> DevResult<()> {
         if let Some(r) = self.on_calibrator(|c| c.calibrate_single_joint(j)) {

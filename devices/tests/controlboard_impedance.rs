@@ -394,3 +394,118 @@ fn remapper_takes_its_calibrator_from_the_attach_list_and_never_waits_for_a_busy
     rc.set_calibrator_device(None).unwrap();
     assert!(!rc.is_calibrator_device_present().unwrap());
 }
+
+/// A calibrator whose homing runs until quit (at most 10 s), like parametricCalibrator's
+/// bounded waits.
+#[derive(Default)]
+struct SlowCalibrator {
+    quit: Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl DeviceDriver for SlowCalibrator {
+    fn open(&mut self, _: &Property) -> DevResult<()> {
+        Ok(())
+    }
+    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
+        Some(self)
+    }
+}
+
+impl IRemoteCalibrator for SlowCalibrator {
+    fn is_calibrator_device_present(&mut self) -> DevResult<bool> {
+        Ok(true)
+    }
+    fn calibrate_single_joint(&mut self, _: usize) -> DevResult<()> {
+        Ok(())
+    }
+    fn calibrate_whole_part(&mut self) -> DevResult<()> {
+        Ok(())
+    }
+    fn homing_single_joint(&mut self, _: usize) -> DevResult<()> {
+        Ok(())
+    }
+    fn homing_whole_part(&mut self) -> DevResult<()> {
+        use std::sync::atomic::Ordering;
+        // (the flag is not cleared here, so a quit that comes first is not lost)
+        let end = std::time::Instant::now() + std::time::Duration::from_secs(10);
+        while std::time::Instant::now() < end {
+            if self.quit.load(Ordering::SeqCst) {
+                return Err(DeviceError::Unsupported("stopped by quitPark"));
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        Ok(())
+    }
+    fn park_single_joint(&mut self, _: usize, _: bool) -> DevResult<()> {
+        Ok(())
+    }
+    fn park_whole_part(&mut self) -> DevResult<()> {
+        Ok(())
+    }
+    fn quit_calibrate(&mut self) -> DevResult<()> {
+        self.quit.store(true, std::sync::atomic::Ordering::SeqCst);
+        Ok(())
+    }
+    fn quit_park(&mut self) -> DevResult<()> {
+        self.quit_calibrate()
+    }
+    fn quit_signal(&self) -> Option<Arc<std::sync::atomic::AtomicBool>> {
+        Some(self.quit.clone())
+    }
+}
+
+/// A calibrator busy with a procedure started in-process (as yarprobotinterface's
+/// calibrate or park holds it) still gets a client's `quitCalibrate`/`quitPark` over the
+/// part's `rpc:i`, as C++'s flag-based abort: the running procedure stops at once. Other
+/// remote-calibrator requests meanwhile are refused, not queued behind it.
+#[test]
+fn a_quit_over_rpc_stops_a_procedure_that_holds_the_calibrator() {
+    name_client();
+    let fake = shared(PolyDriver::from_driver(
+        "fakeMotionControl",
+        Box::new(FakeMotionControl::with_joints(4)),
+    ));
+    let slow = shared(PolyDriver::from_driver(
+        "slowCalibrator",
+        Box::new(SlowCalibrator::default()),
+    ));
+    let mut r = ControlBoardRemapper::new();
+    r.open(&Property::from_config_text("networks (a)\njoints 4\na (0 3 0 3)\n").unwrap())
+        .expect("open remapper");
+    r.as_multiple_wrapper()
+        .unwrap()
+        .attach_all(&[("a".into(), fake), ("calibrator".into(), slow.clone())])
+        .expect("attach");
+    let mut nws = open("device controlBoard_nws_yarp\nname /qcal\nperiod 0.01\n");
+    nws.device()
+        .as_wrapper()
+        .unwrap()
+        .attach(shared(PolyDriver::from_driver(
+            "controlboardremapper",
+            Box::new(r),
+        )))
+        .expect("attach remapper");
+    let mut client = open("device remote_controlboard\nremote /qcal\nlocal /qcal/cli\n");
+    let (started_tx, started) = std::sync::mpsc::channel();
+    let procedure = std::thread::spawn(move || {
+        let mut c = slow.lock().unwrap();
+        started_tx.send(()).unwrap();
+        let t = std::time::Instant::now();
+        let r = c
+            .device()
+            .as_remote_calibrator()
+            .unwrap()
+            .homing_whole_part();
+        (r, t.elapsed())
+    });
+    started.recv().unwrap();
+    let rc = client.device().as_remote_calibrator().unwrap();
+    assert!(rc.homing_single_joint(1).is_err(), "busy: refused");
+    rc.quit_park().unwrap();
+    let (r, took) = procedure.join().unwrap();
+    assert!(r.is_err(), "a quit procedure fails");
+    assert!(
+        took < std::time::Duration::from_secs(3),
+        "the quit stopped it: {took:?}"
+    );
+}

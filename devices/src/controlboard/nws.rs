@@ -246,6 +246,11 @@ async fn serve_rpc(port: Arc<Port>, slot: Slot) {
                 Some(a) => device_call(|| match remote_calibrator_target(&cmd, &a.device) {
                     Some(calibrator) => match calibrator.try_lock() {
                         Ok(mut c) => handle_rpc(&cmd, c.device(), &mut stamp),
+                        // busy with a procedure: only a quit can reach it
+                        Err(_) if is_quit(&cmd) => match quit_signal(&a.device) {
+                            Some(_) => ok(),
+                            None => fail(),
+                        },
                         Err(_) => {
                             tracing::warn!("{}: `{cmd}`: the calibrator is busy", port.name());
                             fail()
@@ -276,6 +281,26 @@ fn remote_calibrator_target(cmd: &Bottle, part: &SharedDevice) -> Option<SharedD
         .device()
         .as_remote_calibrator()?
         .calibrator_device()
+}
+
+/// `[set] [reca] [quca|qupa]`.
+fn is_quit(cmd: &Bottle) -> bool {
+    use crate::vocabs::{QUIT_CALIBRATE, QUIT_PARK};
+    matches!(super::rpc::vocab(cmd.get(2)), QUIT_CALIBRATE | QUIT_PARK)
+}
+
+/// Raises the quit flag of the part's calibrator, which is busy with a procedure (the
+/// part keeps the flag from when the calibrator became its calibrator device).
+fn quit_signal(part: &SharedDevice) -> Option<()> {
+    let flag = lock(part).device().as_remote_calibrator()?.quit_signal()?;
+    flag.store(true, std::sync::atomic::Ordering::SeqCst);
+    Some(())
+}
+
+fn ok() -> Bottle {
+    let mut b = Bottle::new();
+    b.push(yarp_proto::Vocab32(crate::vocabs::OK));
+    b
 }
 
 fn fail() -> Bottle {

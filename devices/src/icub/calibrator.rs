@@ -490,6 +490,9 @@ impl IRemoteCalibrator for ParametricCalibrator {
         let all: Vec<usize> = self.calib_joints().collect();
         self.home_direct(&all, true, true)
     }
+    fn quit_signal(&self) -> Option<Arc<AtomicBool>> {
+        Some(self.quit.clone())
+    }
     fn quit_calibrate(&mut self) -> DevResult<()> {
         self.quit.store(true, Ordering::SeqCst);
         Ok(())
