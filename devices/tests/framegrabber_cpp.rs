@@ -11,7 +11,7 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 use yarp_devices::framegrabber::Image;
 use yarp_devices::{runtime, PolyDriver};
-use yarp_net::nameserver::{NameClient, NameServer};
+use yarp_net::nameserver::NameClient;
 use yarp_proto::{Bottle, Property};
 
 const WAIT: Duration = Duration::from_secs(10);
@@ -36,9 +36,7 @@ fn name_client() -> NameClient {
             let dir = tempfile::tempdir().expect("temp dir");
             std::env::set_var("YARP_CONFIG_HOME", dir.path());
             let addr = runtime::block_on(async {
-                let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
-                    .await
-                    .expect("bind name server");
+                let ns = yarp_interop_tests::bind_name_server().await;
                 let addr = ns.local_addr();
                 tokio::spawn(ns.serve());
                 addr

@@ -20,7 +20,6 @@ use yarp_devices::sensors::AnalogStatus;
 use yarp_devices::vocabs::CM_POSITION;
 use yarp_devices::PolyDriver;
 use yarp_net::blocking::{BufferedPort, Network};
-use yarp_net::nameserver::NameServer;
 use yarp_proto::Property;
 
 const T: Duration = Duration::from_secs(30);
@@ -38,9 +37,7 @@ fn start_name_server() -> tempfile::TempDir {
     let dir = tempfile::tempdir().expect("temp dir");
     std::env::set_var("YARP_CONFIG_HOME", dir.path());
     let addr = yarp_devices::runtime::block_on(async {
-        let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
-            .await
-            .expect("bind name server");
+        let ns = yarp_interop_tests::bind_name_server().await;
         let addr = ns.local_addr();
         tokio::spawn(ns.serve());
         addr

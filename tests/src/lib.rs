@@ -75,6 +75,34 @@ struct Net {
     _rt: tokio::runtime::Runtime,
 }
 
+/// Binds a name server for a test process on 127.0.0.1 below the kernel's ephemeral
+/// port range (32768 and up here). The server hands out port numbers from its own
+/// upwards, as `yarpserver` does; from an ephemeral base those numbers collide with the
+/// outgoing connections of every test in the namespace, and a C++ port given one fails
+/// with "address conflict". The base is picked from the process id and the clock, so
+/// concurrent test processes start their pools apart.
+pub async fn bind_name_server() -> NameServer {
+    let seed = std::process::id() as u64
+        ^ std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.subsec_nanos() as u64)
+            .unwrap_or(0);
+    let mut x = seed | 1;
+    for _ in 0..200 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        // the pool reaches base + 9999: keep it below 32768
+        let port = 10_000 + (x % 12_000) as u16;
+        if let Ok(ns) = NameServer::bind(("127.0.0.1", port), "127.0.0.1").await {
+            return ns;
+        }
+    }
+    NameServer::bind("127.0.0.1:0", "127.0.0.1")
+        .await
+        .expect("bind name server (run under netns-run)")
+}
+
 /// The address of this test process's name server, started on first use on 127.0.0.1
 /// and announced through a private `yarp.conf` (`YARP_CONFIG_HOME` points at a temp dir,
 /// so child processes and `yarp_net::network::name_client()` find it too).
@@ -89,9 +117,7 @@ pub fn name_server() -> SocketAddr {
             .build()
             .expect("name-server runtime");
         let addr = rt.block_on(async {
-            let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
-                .await
-                .expect("bind name server (run under netns-run)");
+            let ns = bind_name_server().await;
             let addr = ns.local_addr();
             tokio::spawn(ns.serve());
             addr

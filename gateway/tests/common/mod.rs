@@ -256,9 +256,7 @@ pub fn device_name_server() -> yarp_net::nameserver::NameClient {
                 .build()
                 .expect("name-server runtime");
             let addr = rt.block_on(async {
-                let ns = yarp_net::nameserver::NameServer::bind("127.0.0.1:0", "127.0.0.1")
-                    .await
-                    .expect("bind name server (run under netns-run)");
+                let ns = yarp_interop_tests::bind_name_server().await;
                 let addr = ns.local_addr();
                 tokio::spawn(ns.serve());
                 addr
