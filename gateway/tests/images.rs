@@ -36,6 +36,26 @@ struct Run {
     ages: Vec<f64>,
 }
 
+/// An rclpy subscriber of `/cam/image_raw` printing each image as a digest (Fast DDS's
+/// large-data profile).
+fn image_subscriber(venv: &std::path::Path, domain: u16) -> Peer {
+    Peer::start_with_profile(
+        venv,
+        domain,
+        &[
+            "sub",
+            "sensor_msgs/msg/Image",
+            "/cam/image_raw",
+            "--summary",
+            "--count",
+            "100000",
+            "--timeout",
+            "60",
+        ],
+        Some("fastdds_large_data.xml"),
+    )
+}
+
 /// Streams `n` `w`x`h` rgb8 frames at `hz` from a YARP port through the gateway to an
 /// rclpy subscriber that reports each frame's SHA-256.
 async fn stream(venv: &std::path::Path, index: u16, w: usize, h: usize, hz: f64, n: usize) -> Run {
@@ -58,21 +78,7 @@ qos = { depth = 10 }
         domain,
     )
     .await;
-    let sub = Peer::start_with_profile(
-        venv,
-        domain,
-        &[
-            "sub",
-            "sensor_msgs/msg/Image",
-            "/cam/image_raw",
-            "--summary",
-            "--count",
-            "100000",
-            "--timeout",
-            "60",
-        ],
-        Some("fastdds_large_data.xml"),
-    );
+    let sub = image_subscriber(venv, domain);
     sub.expect_async("READY", T).await;
     // Warm up with one frame until it arrives (discovery, connections).
     let warm = frame(w, h, 100_000);
@@ -244,21 +250,7 @@ qos = { depth = 10 }
         domain,
     )
     .await;
-    let sub = Peer::start_with_profile(
-        &venv,
-        domain,
-        &[
-            "sub",
-            "sensor_msgs/msg/Image",
-            "/cam/image_raw",
-            "--summary",
-            "--count",
-            "100000",
-            "--timeout",
-            "60",
-        ],
-        Some("fastdds_large_data.xml"),
-    );
+    let sub = image_subscriber(&venv, domain);
     sub.expect_async("READY", T).await;
     sub.expect_async("MSG", T).await; // discovery done, the stream flows
     while sub.try_line("MSG").is_some() {}
@@ -353,21 +345,7 @@ async fn rclpy_720p_at_60_hz_baseline() {
     };
     let (n, w, h) = (300usize, 1280usize, 720usize);
     let domain = common::domain_id(18);
-    let sub = Peer::start_with_profile(
-        &venv,
-        domain,
-        &[
-            "sub",
-            "sensor_msgs/msg/Image",
-            "/cam/image_raw",
-            "--summary",
-            "--count",
-            "100000",
-            "--timeout",
-            "60",
-        ],
-        Some("fastdds_large_data.xml"),
-    );
+    let sub = image_subscriber(&venv, domain);
     sub.expect_async("READY", T).await;
     let script =
         std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/peers/image_pub.py");
