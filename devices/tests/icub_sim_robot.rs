@@ -7,7 +7,7 @@
 //! and asks the part's calibrator (through the remapper) to home the arm. Every wait is
 //! bounded.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -532,29 +532,33 @@ fn wait_exit(child: &mut Reaped) -> Option<std::process::ExitStatus> {
     None
 }
 
-/// The command lines of launch-configs/icub-sim/robot/README.md, as processes: the
-/// emulator binary on UDP ports 20000..20009 and `yarprobotinterface --config
-/// icub_all.xml` unchanged; a client moves the elbow; SIGINT parks and exits 0.
-#[test]
-fn readme_command_lines_bring_up_the_robot_over_udp() {
-    use std::io::{BufRead, BufReader};
-    use std::process::{Command, Stdio};
+/// The `icub-board-emulator` binary built beside this test, with iCubGenova01's files, or
+/// `None` after a SKIPPED notice.
+fn emulator_program() -> Option<PathBuf> {
     let emulator = std::env::current_exe()
         .ok()
         .and_then(|exe| Some(exe.parent()?.parent()?.join("icub-board-emulator")))
         .filter(|p| p.is_file());
     let Some(emulator) = emulator else {
         eprintln!("SKIPPED: icub-board-emulator not built (cargo build -p icub-can)");
-        return;
+        return None;
     };
     if !genova_dir().exists() {
         eprintln!("SKIPPED: {} not found", genova_dir().display());
-        return;
+        return None;
     }
-    let _conf = start_name_server();
+    Some(emulator)
+}
+
+/// The whole emulated iCub (iCubGenova01's boards) on UDP ports `base_port`.., once it
+/// says it is ready; killed and reaped on drop.
+fn spawn_emulator(program: &Path, base_port: u16) -> Reaped {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
     let mut emu = Reaped(
-        Command::new(emulator)
-            .args(["--preset", "icub", "--bus", "udp-hub://127.0.0.1:20000+n"])
+        Command::new(program)
+            .args(["--preset", "icub", "--bus"])
+            .arg(format!("udp-hub://127.0.0.1:{base_port}+n"))
             .arg("--robot-dir")
             .arg(genova_dir())
             .stdout(Stdio::piped())
@@ -572,6 +576,20 @@ fn readme_command_lines_bring_up_the_robot_over_udp() {
         }
     });
     rx.recv_timeout(T).expect("emulator ready");
+    emu
+}
+
+/// The command lines of launch-configs/icub-sim/robot/README.md, as processes: the
+/// emulator binary on UDP ports 20000..20009 and `yarprobotinterface --config
+/// icub_all.xml` unchanged; a client moves the elbow; SIGINT parks and exits 0.
+#[test]
+fn readme_command_lines_bring_up_the_robot_over_udp() {
+    use std::process::{Command, Stdio};
+    let Some(emulator) = emulator_program() else {
+        return;
+    };
+    let _conf = start_name_server();
+    let _emu = spawn_emulator(&emulator, 20000);
 
     let log = tempfile::NamedTempFile::new().unwrap();
     let mut robot = Reaped(
@@ -628,41 +646,12 @@ fn readme_command_lines_bring_up_the_robot_over_udp() {
 /// comes up; the left arm moves, its cartesian `state:o` streams; SIGINT exits 0.
 #[test]
 fn keep_going_runs_the_real_genova01_config_as_processes() {
-    use std::io::{BufRead, BufReader};
     use std::process::{Command, Stdio};
-    let emulator = std::env::current_exe()
-        .ok()
-        .and_then(|exe| Some(exe.parent()?.parent()?.join("icub-board-emulator")))
-        .filter(|p| p.is_file());
-    let Some(emulator) = emulator else {
-        eprintln!("SKIPPED: icub-board-emulator not built (cargo build -p icub-can)");
+    let Some(emulator) = emulator_program() else {
         return;
     };
-    if !genova_dir().exists() {
-        eprintln!("SKIPPED: {} not found", genova_dir().display());
-        return;
-    }
     let _conf = start_name_server();
-    let mut emu = Reaped(
-        Command::new(emulator)
-            .args(["--preset", "icub", "--bus", "udp-hub://127.0.0.1:21000+n"])
-            .arg("--robot-dir")
-            .arg(genova_dir())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("spawn emulator"),
-    );
-    let stdout = emu.0.stdout.take().unwrap();
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            if line == "ready" {
-                let _ = tx.send(());
-            }
-        }
-    });
-    rx.recv_timeout(T).expect("emulator ready");
+    let emu = spawn_emulator(&emulator, 21000);
 
     let log = tempfile::NamedTempFile::new().unwrap();
     let mut robot = Reaped(
