@@ -144,6 +144,7 @@ async fn rpc_until_answered(
         if !unmatched || tokio::time::Instant::now() > deadline {
             return reply;
         }
+        eprintln!("{port}: {reply}; asking again");
     }
 }
 
@@ -154,32 +155,33 @@ async fn yarp_clients_call_ros_services() {
     };
     let domain = common::domain_id(7);
     let (ns, stop) = common::name_server().await;
+    // Each server answers until the test ends (not only its first request), so a call
+    // that the test repeats while discovery settles still finds it.
+    let serve = |srv: &str, name: &str, reply: &str| {
+        let args = [
+            "serve",
+            srv,
+            name,
+            reply,
+            "--count",
+            "1000",
+            "--timeout",
+            "300",
+        ];
+        Peer::start(&venv, domain, &args)
+    };
     let servers = [
-        Peer::start(
-            &venv,
-            domain,
-            &[
-                "serve",
-                "std_srvs/srv/Trigger",
-                "/ros/reset",
-                r#"{"success": true, "message": "done"}"#,
-            ],
+        serve(
+            "std_srvs/srv/Trigger",
+            "/ros/reset",
+            r#"{"success": true, "message": "done"}"#,
         ),
-        Peer::start(
-            &venv,
-            domain,
-            &[
-                "serve",
-                "std_srvs/srv/SetBool",
-                "/ros/motors",
-                r#"{"success": false, "message": "estop"}"#,
-            ],
+        serve(
+            "std_srvs/srv/SetBool",
+            "/ros/motors",
+            r#"{"success": false, "message": "estop"}"#,
         ),
-        Peer::start(
-            &venv,
-            domain,
-            &["serve", "std_srvs/srv/Empty", "/ros/beep", "{}"],
-        ),
+        serve("std_srvs/srv/Empty", "/ros/beep", "{}"),
     ];
     for s in &servers {
         s.expect_async("READY", T).await;

@@ -489,60 +489,75 @@ impl Builder {
                 let rpc = YarpRpc::new(self.ns.clone(), &s.yarp_port, &node.fully_qualified_name());
                 let c = counters.clone();
                 let cmd = |t: &Option<String>| Bottle::from_text(t.as_deref().unwrap_or_default());
-                let task = match StdSrv::from_type(&s.ros_type) {
+                let deferred: Deferred = match StdSrv::from_type(&s.ros_type) {
                     Some(StdSrv::Trigger) => {
                         let server: Server<EmptyMsg, OutcomeResponse> = node
                             .create_server(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
                             .map_err(|e| entity_err("service", &s.ros_service, e))?;
                         let command = cmd(&s.command);
-                        tokio::spawn(serve_ros(
-                            server,
-                            rpc,
-                            c,
-                            move |_| command.clone(),
-                            |r| {
-                                r.map(|b| service::outcome_from_reply(&b))
-                                    .unwrap_or_else(|e| OutcomeResponse {
-                                        success: false,
-                                        message: e,
-                                    })
-                            },
-                        ))
+                        Box::new(move |node| {
+                            tokio::spawn(serve_ros(
+                                server,
+                                node,
+                                rpc,
+                                c,
+                                move |_| command.clone(),
+                                |r| {
+                                    r.map(|b| service::outcome_from_reply(&b))
+                                        .unwrap_or_else(|e| OutcomeResponse {
+                                            success: false,
+                                            message: e,
+                                        })
+                                },
+                            ))
+                        })
                     }
                     Some(StdSrv::SetBool) => {
                         let server: Server<SetBoolRequest, OutcomeResponse> = node
                             .create_server(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
                             .map_err(|e| entity_err("service", &s.ros_service, e))?;
                         let (on, off) = (cmd(&s.command_true), cmd(&s.command_false));
-                        tokio::spawn(serve_ros(
-                            server,
-                            rpc,
-                            c,
-                            move |r: &SetBoolRequest| if r.data { on.clone() } else { off.clone() },
-                            |r| {
-                                r.map(|b| service::outcome_from_reply(&b))
-                                    .unwrap_or_else(|e| OutcomeResponse {
-                                        success: false,
-                                        message: e,
-                                    })
-                            },
-                        ))
+                        Box::new(move |node| {
+                            tokio::spawn(serve_ros(
+                                server,
+                                node,
+                                rpc,
+                                c,
+                                move |r: &SetBoolRequest| {
+                                    if r.data {
+                                        on.clone()
+                                    } else {
+                                        off.clone()
+                                    }
+                                },
+                                |r| {
+                                    r.map(|b| service::outcome_from_reply(&b))
+                                        .unwrap_or_else(|e| OutcomeResponse {
+                                            success: false,
+                                            message: e,
+                                        })
+                                },
+                            ))
+                        })
                     }
                     Some(StdSrv::Empty) | None => {
                         let server: Server<EmptyMsg, EmptyMsg> = node
                             .create_server(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
                             .map_err(|e| entity_err("service", &s.ros_service, e))?;
                         let command = cmd(&s.command);
-                        tokio::spawn(serve_ros(
-                            server,
-                            rpc,
-                            c,
-                            move |_| command.clone(),
-                            |_| EmptyMsg::default(),
-                        ))
+                        Box::new(move |node| {
+                            tokio::spawn(serve_ros(
+                                server,
+                                node,
+                                rpc,
+                                c,
+                                move |_| command.clone(),
+                                |_| EmptyMsg::default(),
+                            ))
+                        })
                     }
                 };
-                self.tasks.push(task);
+                self.deferred.push(deferred);
             }
             (ServiceConversion::Command, _) => {
                 let port = self.open_port(&s.yarp_port).await?;

@@ -9,15 +9,21 @@ use crate::service;
 use futures::{pin_mut, StreamExt};
 use ros2_client::{Client, Message, Node, Publisher, Server, Subscription};
 use std::sync::Arc;
+use std::time::Duration;
 use std::time::Instant;
 use tracing::{debug, warn};
 use yarp_net::port::Port;
 use yarp_proto::Bottle;
 
+/// How long a service response waits for the requesting client's reader to be matched
+/// (rmw_fastrtps waits for the writer's max_blocking_time; ours waits without blocking).
+const CLIENT_MATCH_TIMEOUT: Duration = Duration::from_secs(2);
+
 /// ROS service server -> YARP RPC: each request sends `cmd(request)` to the YARP port and
 /// answers with `resp(reply or error)`.
 pub(super) async fn serve_ros<Req, Resp>(
     server: Server<Req, Resp>,
+    node: Arc<Node>,
     mut rpc: YarpRpc,
     c: Arc<Counters>,
     cmd: impl Fn(&Req) -> Bottle,
@@ -40,6 +46,12 @@ pub(super) async fn serve_ros<Req, Resp>(
         let failed = reply.is_err();
         if let Err(e) = &reply {
             warn!("{e}");
+        }
+        // A client's first request can arrive before our response writer has matched its
+        // response reader; a response written then is lost. Wait for it, bounded.
+        let matched = tokio::time::timeout(CLIENT_MATCH_TIMEOUT, server.wait_for_client(&node, id));
+        if matched.await.is_err() {
+            debug!("service response: the client's reader is not matched yet; answering anyway");
         }
         match server.async_send_response(id, resp(reply)).await {
             Ok(()) if !failed => c.forwarded(t0.elapsed()),

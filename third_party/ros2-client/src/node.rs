@@ -901,6 +901,17 @@ impl Node {
   }
 
   pub(crate) fn wait_for_reader(&self, writer: GUID) -> impl Future<Output = ()> {
+    self.wait_for_matched_reader(writer, None)
+  }
+
+  // yarp-rs: waits for `writer` to match one particular remote reader (`Some`), or
+  // any (`None`). A service server uses it to hold a response until the
+  // requesting client's response reader is matched, as rmw_fastrtps does.
+  pub(crate) fn wait_for_matched_reader(
+    &self,
+    writer: GUID,
+    reader: Option<GUID>,
+  ) -> impl Future<Output = ()> {
     // Register the event receiver *before* reading the current match state, so
     // a match that occurs between the check and the registration is not
     // missed.
@@ -911,7 +922,7 @@ impl Node {
       .lock()
       .unwrap()
       .get(&writer)
-      .map(|readers| !readers.is_empty()) // there is someone matched
+      .map(|readers| reader_matched(readers, reader)) // there is someone matched
       .unwrap_or(false); // we do not even know who is asking
 
     match (already_present, status_receiver) {
@@ -921,6 +932,7 @@ impl Node {
       }
       (false, Some(status_receiver)) => ReaderWait::Wait {
         this_writer: writer,
+        wanted_reader: reader,
         writers_to_remote_readers: Arc::clone(&self.writers_to_remote_readers),
         status_event_stream: Box::pin(status_receiver),
       },
@@ -1543,6 +1555,7 @@ pub enum ReaderWait<'a> {
   // We need to wait for an event that is for us
   Wait {
     this_writer: GUID, // Writer who is waiting for Readers to appear
+    wanted_reader: Option<GUID>, // yarp-rs: that reader only, or any
     // Same map as `Node::writers_to_remote_readers`, kept up to date by the
     // Spinner from the raw DDS event, independently of `GraphEvent` mapping.
     writers_to_remote_readers: Arc<Mutex<BTreeMap<GUID, BTreeSet<GUID>>>>,
@@ -1561,6 +1574,7 @@ impl Future for ReaderWait<'_> {
 
       ReaderWait::Wait {
         this_writer,
+        wanted_reader,
         ref writers_to_remote_readers,
         ref mut status_event_stream,
       } => {
@@ -1581,7 +1595,7 @@ impl Future for ReaderWait<'_> {
                 .lock()
                 .unwrap()
                 .get(&this_writer)
-                .map(|readers| !readers.is_empty())
+                .map(|readers| reader_matched(readers, wanted_reader))
                 .unwrap_or(false)
               {
                 debug!("wait_for_reader: Matched remote reader.");
@@ -1601,6 +1615,14 @@ impl Future for ReaderWait<'_> {
         }
       }
     }
+  }
+}
+
+// yarp-rs: `wanted` among `readers`, or any reader at all when `wanted` is None.
+fn reader_matched(readers: &BTreeSet<GUID>, wanted: Option<GUID>) -> bool {
+  match wanted {
+    Some(r) => readers.contains(&r),
+    None => !readers.is_empty(),
   }
 }
 

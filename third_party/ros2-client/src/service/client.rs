@@ -89,7 +89,7 @@ where
     let write_opts_builder = WriteOptionsBuilder::new().source_timestamp(Timestamp::now()); // always add source timestamp
 
     let write_opts_builder = if self.service_mapping == ServiceMapping::Enhanced {
-      write_opts_builder
+      write_opts_builder.related_sample_identity(self.enhanced_related_identity())
     } else {
       write_opts_builder.related_sample_identity(SampleIdentity::from(gen_rmw_req_id))
     };
@@ -150,7 +150,7 @@ where
     let write_opts_builder = WriteOptionsBuilder::new().source_timestamp(Timestamp::now()); // always add source timestamp
 
     let write_opts_builder = if self.service_mapping == ServiceMapping::Enhanced {
-      write_opts_builder
+      write_opts_builder.related_sample_identity(self.enhanced_related_identity())
     } else {
       write_opts_builder.related_sample_identity(SampleIdentity::from(gen_rmw_req_id))
     };
@@ -189,7 +189,7 @@ where
             dcc
               .into_value()
               .unwrap(self.service_mapping, mi, self.client_guid)?;
-          if req_id == request_id {
+          if self.is_response_to(req_id, request_id) {
             return Ok(response);
           } else {
             debug!(
@@ -226,6 +226,27 @@ where
       my_node.wait_for_reader(self.request_sender.guid()),
       my_node.wait_for_writer(self.response_receiver.guid())
     );
+  }
+
+  // yarp-rs: in the Enhanced mapping the request names this client's response
+  // reader (sequence number unknown), as rmw_fastrtps clients do. A Fast DDS
+  // server then holds the response until that reader is matched instead of
+  // losing it right after discovery, and answers with the reader's GUID and
+  // the request's sequence number.
+  fn enhanced_related_identity(&self) -> SampleIdentity {
+    SampleIdentity {
+      writer_guid: self.response_receiver.guid(),
+      sequence_number: SequenceNumber::UNKNOWN,
+    }
+  }
+
+  // yarp-rs: a response names the request by the request writer's GUID, or (the
+  // server honoured `enhanced_related_identity`) by our response reader's GUID.
+  fn is_response_to(&self, received: RmwRequestId, sent: RmwRequestId) -> bool {
+    received == sent
+      || (self.service_mapping == ServiceMapping::Enhanced
+        && received.sequence_number == sent.sequence_number
+        && received.writer_gid == Gid::from(self.response_receiver.guid()))
   }
 
   fn increment_sequence_number(&self) {

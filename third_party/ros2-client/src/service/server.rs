@@ -86,6 +86,31 @@ where
     } // match
   }
 
+  // yarp-rs: ROS 2 clients (rmw_fastrtps, and our patched Client) name their
+  // response reader in the request's related_sample_identity. A reliable,
+  // volatile response written before this server's response writer has matched
+  // that reader is lost, so a server should await this (with a time limit, as
+  // rmw_fastrtps bounds it by max_blocking_time) before answering a request
+  // that arrived right after discovery. Ready at once for other request ids.
+  /// Resolves when the client that sent `request_id` can receive the response:
+  /// its response reader (named by the request id) is matched to this server's
+  /// response writer. Needs the node's spinner; bound it with a timeout.
+  pub fn wait_for_client(
+    &self,
+    my_node: &Node,
+    request_id: RmwRequestId,
+  ) -> impl std::future::Future<Output = ()> {
+    let reader = GUID::from(request_id.writer_gid);
+    let wanted = reader.entity_id.entity_kind.is_reader().then_some(reader);
+    let writer = self.response_sender.guid();
+    let wait = wanted.map(|r| my_node.wait_for_matched_reader(writer, Some(r)));
+    async move {
+      if let Some(w) = wait {
+        w.await
+      }
+    }
+  }
+
   /// Send response to request by Client.
   /// rmw_req_id identifies request being responded.
   pub fn send_response(&self, rmw_req_id: RmwRequestId, response: Resp) -> WriteResult<(), ()> {
