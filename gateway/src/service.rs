@@ -72,6 +72,17 @@ pub fn outcome_from_reply(reply: &Bottle) -> OutcomeResponse {
     }
 }
 
+/// A Trigger/SetBool response for the YARP reply, or for the reason there was none.
+pub fn outcome_from_call(reply: Result<Bottle, String>) -> OutcomeResponse {
+    match reply {
+        Ok(b) => outcome_from_reply(&b),
+        Err(message) => OutcomeResponse {
+            success: false,
+            message,
+        },
+    }
+}
+
 /// A std_srvs response as the reply Bottle for a YARP caller.
 pub fn reply_from_outcome(r: &OutcomeResponse) -> Bottle {
     let mut b = Bottle::new();

@@ -91,11 +91,16 @@ command = "[stop]"
         ["call", "std_srvs/srv/Empty", "/arm/park", "{}"],
         ["call", "std_srvs/srv/Trigger", "/arm/stop", "{}"],
     ]
-    .map(|a| Peer::start(&venv, domain, &a));
+    // Four rclpy processes start at once: on a starved machine each may take many
+    // seconds to discover the service, so they get a minute (they print RESP at once).
+    .map(|a| {
+        let args = [a.as_slice(), &["--timeout", "60"]].concat();
+        Peer::start(&venv, domain, &args)
+    });
     let resp: Vec<Json> = {
         let mut v = Vec::new();
         for p in &calls {
-            v.push(json_line(&p.expect_async("RESP", T).await));
+            v.push(json_line(&p.expect_async("RESP", 3 * T).await));
         }
         v
     };

@@ -502,13 +502,7 @@ impl Builder {
                                 rpc,
                                 c,
                                 move |_| command.clone(),
-                                |r| {
-                                    r.map(|b| service::outcome_from_reply(&b))
-                                        .unwrap_or_else(|e| OutcomeResponse {
-                                            success: false,
-                                            message: e,
-                                        })
-                                },
+                                service::outcome_from_call,
                             ))
                         })
                     }
@@ -530,13 +524,7 @@ impl Builder {
                                         off.clone()
                                     }
                                 },
-                                |r| {
-                                    r.map(|b| service::outcome_from_reply(&b))
-                                        .unwrap_or_else(|e| OutcomeResponse {
-                                            success: false,
-                                            message: e,
-                                        })
-                                },
+                                service::outcome_from_call,
                             ))
                         })
                     }
