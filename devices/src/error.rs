@@ -26,6 +26,20 @@ pub enum DeviceError {
     Unsupported(&'static str),
     #[error("device is not open")]
     NotOpen,
+    /// A run-time fault of the hardware or of a remote peer: a silent CAN board, a bus-off,
+    /// a remote device that does not answer. `device` names the device or the remote port.
+    #[error("device `{device}`: {reason}")]
+    Failed { device: String, reason: String },
+}
+
+impl DeviceError {
+    /// A [`DeviceError::Failed`] of `device`.
+    pub fn failed(device: impl Into<String>, reason: impl ToString) -> DeviceError {
+        DeviceError::Failed {
+            device: device.into(),
+            reason: reason.to_string(),
+        }
+    }
 }
 
 fn suggest(closest: &[String]) -> String {

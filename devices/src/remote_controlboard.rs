@@ -67,6 +67,8 @@ struct Link {
     axes: usize,
     timeout: Duration,
     write_strict: bool,
+    /// The remote control board's port prefix, named in errors.
+    remote: String,
 }
 
 /// The `remote_controlboard` device.
@@ -173,6 +175,7 @@ async fn connect(s: Settings, ns: NameClient) -> Result<Link, String> {
             axes,
             timeout: s.timeout,
             write_strict: s.write_strict,
+            remote: s.remote.clone(),
         }),
         Err(e) => {
             reader.abort();
@@ -335,7 +338,8 @@ impl RemoteControlBoard {
     /// Sends `cmd` on the RPC connection and returns the reply (C++ `rpc_p.write`);
     /// a `[fail]` reply or no reply is an error.
     pub fn call(&self, cmd: &Bottle) -> DevResult<Bottle> {
-        let port = self.link()?.rpc.clone();
+        let link = self.link()?;
+        let port = link.rpc.clone();
         let c = cmd.clone();
         let r =
             runtime::block_on(async move { tokio::time::timeout(RPC_TIMEOUT, port.rpc(&c)).await });
@@ -347,11 +351,17 @@ impl RemoteControlBoard {
             }
             Ok(Err(e)) => {
                 tracing::warn!("{NAME}: `{cmd}`: {e}");
-                Err(DeviceError::Unsupported(UNREACHABLE))
+                Err(DeviceError::failed(
+                    &link.remote,
+                    format!("{UNREACHABLE} ({e})"),
+                ))
             }
             Err(_) => {
                 tracing::warn!("{NAME}: `{cmd}`: no reply within {RPC_TIMEOUT:?}");
-                Err(DeviceError::Unsupported(UNREACHABLE))
+                Err(DeviceError::failed(
+                    &link.remote,
+                    format!("{UNREACHABLE} within {RPC_TIMEOUT:?}"),
+                ))
             }
         }
     }
@@ -425,8 +435,8 @@ impl RemoteControlBoard {
         let r = latest
             .as_ref()
             .filter(|r| r.at.elapsed() <= link.timeout)
-            .ok_or(DeviceError::Unsupported(STATE_ERR))?;
-        f(&r.data, r.stamp).ok_or(DeviceError::Unsupported(STATE_ERR))
+            .ok_or_else(|| DeviceError::failed(&link.remote, STATE_ERR))?;
+        f(&r.data, r.stamp).ok_or_else(|| DeviceError::failed(&link.remote, STATE_ERR))
     }
 
     fn state_vec(

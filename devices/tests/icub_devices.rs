@@ -378,7 +378,12 @@ fn silent_boards_fail_calls_within_their_timeouts() {
         "{:?}",
         t.elapsed()
     );
-    assert!(enc.get_encoders().is_err());
+    let err = enc.get_encoders().unwrap_err().to_string();
+    // the error says which device and which board, not just that something failed
+    assert!(
+        err.contains("left_arm_mc") && err.contains("board 2"),
+        "{err}"
+    );
     assert!(enc.get_encoder(0).is_ok(), "other boards unaffected");
     let t = Instant::now();
     let done = dev.as_position_control().unwrap().check_motion_done(3);

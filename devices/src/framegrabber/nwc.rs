@@ -229,14 +229,15 @@ impl FrameGrabberNwc {
                 Ok(Ok(reply)) => Ok(reply),
                 Ok(Err(e)) => {
                     tracing::error!("{NAME}: {cmd}: {e}");
-                    Err(DeviceError::Unsupported(
-                        "RPC to the remote frame grabber failed",
-                    ))
+                    Err(DeviceError::failed(NAME, format!("{cmd}: {e}")))
                 }
                 Err(_) => {
                     tracing::error!("{NAME}: {cmd}: no reply in {RPC_TIMEOUT:?}");
-                    Err(DeviceError::Unsupported(
-                        "the remote frame grabber did not answer",
+                    Err(DeviceError::failed(
+                        NAME,
+                        format!(
+                            "the remote frame grabber did not answer {cmd} within {RPC_TIMEOUT:?}"
+                        ),
                     ))
                 }
             }

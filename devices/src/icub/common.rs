@@ -112,8 +112,8 @@ pub fn open_error(device: &str, e: &ClientError) -> DeviceError {
     }
 }
 
-/// A runtime error of a driver core. `DeviceError` has no variant that carries a
-/// hardware message, so the detail goes to the log and the kind to the error.
+/// A runtime error of a driver core, naming the device and what failed (which board did
+/// not answer within which timeout, a bus-off, ...).
 pub fn call_error(device: &str, e: ClientError) -> DeviceError {
     tracing::debug!(device, "{e}");
     match e {
@@ -121,18 +121,7 @@ pub fn call_error(device: &str, e: ClientError) -> DeviceError {
             joint: joint as i64,
             axes: joints,
         },
-        ClientError::BoardTimeout { .. } | ClientError::BoardsSilent { .. } => {
-            DeviceError::Unsupported("CAN board did not answer within CanTimeout")
-        }
-        ClientError::Stale { .. } => {
-            DeviceError::Unsupported("no CAN broadcast from the board within its timeout")
-        }
-        ClientError::Bus(icub_can::BusError::BusOff(_)) => {
-            DeviceError::Unsupported("CAN bus is in bus-off")
-        }
-        ClientError::Bus(_) => DeviceError::Unsupported("CAN bus error"),
-        ClientError::Range { .. } => DeviceError::Unsupported("value out of the board's range"),
-        ClientError::Config(_) => DeviceError::Unsupported("invalid request for this board"),
+        e => DeviceError::failed(device, e),
     }
 }
 

@@ -145,7 +145,7 @@ impl Core {
             Err(e) => {
                 tracing::debug!("{id}: sending torques on {}: {e}", self.bus.name());
                 st.send_error = Some(e.to_string());
-                Err(bus_error(e))
+                Err(DeviceError::failed(id, e))
             }
         }
     }
@@ -177,14 +177,6 @@ impl Core {
                 tracing::debug!("{id}: full-scale reply: {e}");
             }
         }
-    }
-}
-
-fn bus_error(e: BusError) -> DeviceError {
-    match e {
-        BusError::BusOff(_) => DeviceError::Unsupported("CAN bus is in bus-off"),
-        BusError::Closed(_) => DeviceError::Unsupported("CAN bus is closed"),
-        _ => DeviceError::Unsupported("CAN bus error"),
     }
 }
 

@@ -56,7 +56,8 @@ pub enum ClientError {
     #[error("boards {boards:?} do not answer")]
     BoardsSilent { boards: Vec<u8> },
     #[error(
-        "no broadcast from board {board} for joint {joint} (last {age:?} ago, timeout {timeout:?})"
+        "no broadcast from board {board} for joint {joint} ({}, timeout {timeout:?})",
+        last_heard(.age)
     )]
     Stale {
         joint: usize,
@@ -66,6 +67,14 @@ pub enum ClientError {
     },
     #[error("value {value} out of the board's range for {what}")]
     Range { what: &'static str, value: f64 },
+}
+
+/// "last heard 504 ms ago" / "never heard", for [`ClientError::Stale`].
+fn last_heard(age: &Option<Duration>) -> String {
+    match age {
+        Some(a) => format!("last heard {} ms ago", a.as_millis()),
+        None => "never heard".to_string(),
+    }
 }
 
 #[cfg(test)]
