@@ -4,6 +4,7 @@
 //! icub-board-emulator --bus udp-hub://127.0.0.1:20001 --board 1:mc --board 2:mc --board 13:strain
 //! icub-board-emulator --preset icub --bus udp-hub://127.0.0.1:20000+n --robot-dir ../shared/robots-configuration/iCubGenova01
 //! icub-board-emulator --config boards.txt
+//! icub-board-emulator --xsens /tmp/ttyXSENS      # the head's Xsens MTx on a pseudo-terminal
 //! ```
 //!
 //! On start it prints one `bus <name> <local address>` line per bus, then `ready`.
@@ -50,6 +51,10 @@ struct Args {
     /// Start sensor boards (strain, MAIS, MTB inertial) streaming without a host.
     #[arg(long)]
     stream: bool,
+    /// Also emulate the head's Xsens MTx (xsensmtx) on a pseudo-terminal reachable at this
+    /// path (a symbolic link; name it as `serial`, or in YARP_ICUB_XSENS_SERIAL).
+    #[arg(long, value_name = "PATH")]
+    xsens: Option<std::path::PathBuf>,
     /// Print frame counters to stderr every this many seconds (0 = never).
     #[arg(long, default_value_t = 0.0)]
     stats_every_s: f64,
@@ -114,8 +119,10 @@ fn run(args: Args) -> Result<(), String> {
             plan.push((bus, local, boards));
         }
     }
-    if plan.is_empty() {
-        return Err("nothing to emulate: give --board, --preset or --config (see --help)".into());
+    if plan.is_empty() && args.xsens.is_none() {
+        return Err(
+            "nothing to emulate: give --board, --preset, --config or --xsens (see --help)".into(),
+        );
     }
     if !(0.1..=100.0).contains(&args.tick_ms) {
         return Err("--tick-ms must be within 0.1..=100".into());
@@ -139,6 +146,15 @@ fn run(args: Args) -> Result<(), String> {
         }
         running.push(emu.spawn().map_err(|e| e.to_string())?);
     }
+    let _mtx = match &args.xsens {
+        Some(link) => {
+            let (mtx, pts) = icub_can::emulator::mtx::pty_link(link)
+                .map_err(|e| format!("--xsens {}: {e}", link.display()))?;
+            say(&format!("xsens {} {}", link.display(), pts.display()));
+            Some(mtx)
+        }
+        None => None,
+    };
     say("ready");
     let start = Instant::now();
     let mut last_stats = Instant::now();

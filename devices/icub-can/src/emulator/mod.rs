@@ -8,6 +8,7 @@
 //! [`preset`] builds a whole 53-DOF iCub from the CAN layout of iCubGenova01.
 
 pub mod mc;
+pub mod mtx;
 pub mod preset;
 pub mod sensors;
 

@@ -1,0 +1,153 @@
+//! The emulated Xsens MTx ([`crate::xsens::EmulatedMtx`]) served on a serial port: it
+//! answers the host's configuration messages and, while measuring, streams `MTData` at
+//! its period with [`crate::xsens::emulated_motion`].
+//!
+//! [`pty_link`] makes a pseudo-terminal whose device path a configuration can name (as
+//! `serial` of `xsensmtx`), so no hardware or kernel serial driver is needed.
+
+use crate::xsens::{emulated_motion, Decoder, EmulatedMtx, Sample};
+use serialport::{SerialPort, TTYPort};
+use std::io::{ErrorKind, Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// A running emulated MTx; stops (and closes its port) on drop.
+pub struct MtxHandle {
+    stop: Arc<AtomicBool>,
+    /// While set, the sensor neither answers nor streams (an unplugged cable).
+    pub silent: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl MtxHandle {
+    /// Makes the sensor go quiet (`true`) or come back (`false`).
+    pub fn set_silent(&self, silent: bool) {
+        self.silent.store(silent, Ordering::SeqCst);
+    }
+}
+
+impl Drop for MtxHandle {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::SeqCst);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// Serves `mtx` on `port` in a thread until the handle is dropped, streaming
+/// `motion(seconds since start)`. `port`'s reads should time out (a few ms) so that the
+/// thread can stream and stop.
+pub fn serve(
+    mut port: impl Read + Write + Send + 'static,
+    mut mtx: EmulatedMtx,
+    motion: fn(f64) -> Sample,
+) -> std::io::Result<MtxHandle> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let silent = Arc::new(AtomicBool::new(false));
+    let (st, si) = (stop.clone(), silent.clone());
+    let thread = std::thread::Builder::new()
+        .name("xsens-mtx".into())
+        .spawn(move || {
+            let start = Instant::now();
+            let mut next = Instant::now();
+            let mut dec = Decoder::new();
+            let mut buf = [0u8; 256];
+            while !st.load(Ordering::SeqCst) {
+                match port.read(&mut buf) {
+                    Ok(n) if !si.load(Ordering::SeqCst) => dec.push(&buf[..n]),
+                    Ok(_) => {}
+                    Err(e) if e.kind() == ErrorKind::TimedOut => {}
+                    Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                    Err(e) => {
+                        // The host side closed (pty hang-up): wait for it to come back.
+                        tracing::trace!("emulated MTx: {e}");
+                        std::thread::sleep(Duration::from_millis(10));
+                    }
+                }
+                while let Some(r) = dec.next_message() {
+                    match r {
+                        Ok(m) => {
+                            for reply in mtx.handle(&m) {
+                                let _ = port.write_all(&reply.encode());
+                            }
+                        }
+                        Err(e) => tracing::debug!("emulated MTx: {e}"),
+                    }
+                }
+                if Instant::now() >= next {
+                    let t = start.elapsed().as_secs_f64();
+                    if !si.load(Ordering::SeqCst) {
+                        if let Some(m) = mtx.sample(&motion(t)) {
+                            let _ = port.write_all(&m.encode());
+                        }
+                    }
+                    next += Duration::from_secs_f64(mtx.period_s());
+                    if next < Instant::now() {
+                        next = Instant::now(); // fell behind: no burst to catch up
+                    }
+                }
+            }
+        })?;
+    Ok(MtxHandle {
+        stop,
+        silent,
+        thread: Some(thread),
+    })
+}
+
+/// A pseudo-terminal pair: the emulator's end (reads time out after 2 ms), and the path
+/// a host opens.
+pub fn pty() -> std::io::Result<(impl Read + Write + Send + 'static, PathBuf)> {
+    let (mut master, slave) = TTYPort::pair().map_err(std::io::Error::other)?;
+    master
+        .set_timeout(Duration::from_millis(2))
+        .map_err(std::io::Error::other)?;
+    let path = slave
+        .name()
+        .map(PathBuf::from)
+        .ok_or_else(|| std::io::Error::other("pseudo-terminal without a name"))?;
+    Ok((
+        PtyEnds {
+            master,
+            _slave: slave,
+        },
+        path,
+    ))
+}
+
+/// Serves an emulated MTx on a new pseudo-terminal reachable as `link` (a symbolic link
+/// replacing any earlier one), e.g. the `serial` path a robot file names.
+pub fn pty_link(link: &Path) -> std::io::Result<(MtxHandle, PathBuf)> {
+    let (port, path) = pty()?;
+    if link.symlink_metadata().is_ok() {
+        std::fs::remove_file(link)?;
+    }
+    std::os::unix::fs::symlink(&path, link)?;
+    Ok((serve(port, EmulatedMtx::default(), emulated_motion)?, path))
+}
+
+/// The master end of a pty, with its slave end kept open so that a host closing and
+/// reopening the path causes no hang-up on the master.
+struct PtyEnds {
+    master: TTYPort,
+    _slave: TTYPort,
+}
+
+impl Read for PtyEnds {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        self.master.read(buf)
+    }
+}
+
+impl Write for PtyEnds {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.master.write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.master.flush()
+    }
+}
