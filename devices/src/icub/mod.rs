@@ -7,6 +7,7 @@
 //! | `canBusSkin` | [`skin`] | `IAnalogSensor`, `ISkinPatches` |
 //! | `canBusInertialMTB` | [`inertial`] | `IAnalogSensor`, accelerometers, gyroscopes |
 //! | `canBusVirtualAnalogSensor` | [`virtual_analog`] | `IVirtualAnalogSensor` (joint torques sent as strain messages) |
+//! | `xsensmtx` | [`xsensmtx`] | the head's Xsens MTx on a serial port: gyroscope, accelerometer, magnetometer, orientation, `IAnalogSensor` (C++ `IGenericSensor`, 12 channels) |
 //! | `parametricCalibrator` | [`calibrator`] | `ICalibrator`, `IRemoteCalibrator` |
 //! | `cartesiancontrollerserver` | [`crate::cartesian`] | `IMultipleWrapper` (pose on `state:o`) |
 //!
@@ -24,6 +25,7 @@ pub mod motion_control;
 pub mod registry;
 pub mod skin;
 pub mod virtual_analog;
+pub mod xsensmtx;
 
 pub use analog::CanBusAnalogSensor;
 pub use calibrator::ParametricCalibrator;
@@ -31,6 +33,7 @@ pub use inertial::CanBusInertialMtb;
 pub use motion_control::CanMotionControl;
 pub use skin::CanBusSkin;
 pub use virtual_analog::CanBusVirtualAnalogSensor;
+pub use xsensmtx::XsensMtx;
 
 use crate::driver::Factory;
 
@@ -49,6 +52,7 @@ pub(crate) const DRIVERS: &[(&str, Factory)] = &[
         Box::new(CanBusVirtualAnalogSensor::new())
     }),
     (calibrator::NAME, || Box::new(ParametricCalibrator::new())),
+    (xsensmtx::NAME, || Box::new(XsensMtx::new())),
     (crate::cartesian::NAME, || {
         Box::new(crate::cartesian::CartesianControllerServer::new())
     }),

@@ -25,7 +25,7 @@ pub mod family;
 pub mod forward;
 pub mod imu_filter;
 pub mod interfaces;
-mod params;
+pub(crate) mod params;
 mod periodic;
 pub mod remapper;
 pub mod rpc;

@@ -1,0 +1,177 @@
+//! `xsensmtx` against an emulated Xsens MTx on a pseudo-terminal: the configuration
+//! sequence, values and units, an unplugged sensor, and a sensor that never answers.
+
+use icub_can::emulator::mtx;
+use icub_can::xsens::{EmulatedMtx, Sample};
+use std::time::{Duration, Instant};
+use yarp_devices::sensors::{AnalogStatus, MasStatus};
+use yarp_devices::PolyDriver;
+use yarp_proto::Property;
+
+fn still(_t: f64) -> Sample {
+    Sample {
+        acc: [0.5, -0.25, -9.75],
+        gyr: [0.1, -0.2, 0.3],
+        mag: [0.5, 0.0, 0.4],
+        euler: [1.5, -2.5, 30.0],
+    }
+}
+
+fn open(path: &std::path::Path) -> Result<PolyDriver, String> {
+    let cfg = format!(
+        "device xsensmtx\nserial {}\nsensor_name head_imu\nframe_name head_imu_frame\n",
+        path.display()
+    );
+    PolyDriver::open(&Property::from_config_text(&cfg).unwrap()).map_err(|e| e.to_string())
+}
+
+fn eventually(timeout: Duration, mut ok: impl FnMut() -> bool) -> bool {
+    let end = Instant::now() + timeout;
+    while Instant::now() < end {
+        if ok() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    ok()
+}
+
+fn close(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-4)
+}
+
+#[test]
+fn reads_an_emulated_mtx_in_yarp_units() {
+    let (port, path) = mtx::pty().unwrap();
+    // The sensor powers up measuring in another mode: open must reconfigure it.
+    let emulated = EmulatedMtx {
+        output_settings: 0,
+        ..EmulatedMtx::default()
+    };
+    let _mtx = mtx::serve(port, emulated, still).unwrap();
+    let mut pd = open(&path).unwrap_or_else(|e| panic!("{e}"));
+    let dev = pd.device();
+    assert!(eventually(Duration::from_secs(2), || dev
+        .as_three_axis_gyroscopes()
+        .unwrap()
+        .get_three_axis_gyroscope_status(0)
+        == MasStatus::Ok));
+    let deg = 180.0 / std::f64::consts::PI;
+    let gyro = dev
+        .as_three_axis_gyroscopes()
+        .unwrap()
+        .get_three_axis_gyroscope_measure(0)
+        .unwrap();
+    assert!(
+        close(&gyro.values, &[0.1 * deg, -0.2 * deg, 0.3 * deg]),
+        "deg/s: {:?}",
+        gyro.values
+    );
+    assert!(gyro.timestamp > 1e9, "a wall-clock stamp");
+    let acc = dev
+        .as_three_axis_linear_accelerometers()
+        .unwrap()
+        .get_three_axis_linear_accelerometer_measure(0)
+        .unwrap();
+    assert!(close(&acc.values, &[0.5, -0.25, -9.75]), "{:?}", acc.values);
+    let rpy = dev
+        .as_orientation_sensors()
+        .unwrap()
+        .get_orientation_sensor_measure_as_roll_pitch_yaw(0)
+        .unwrap();
+    assert!(close(&rpy.values, &[1.5, -2.5, 30.0]), "{:?}", rpy.values);
+    let mag = dev.as_three_axis_magnetometers().unwrap();
+    assert_eq!(mag.get_three_axis_magnetometer_name(0).unwrap(), "head_imu");
+    assert_eq!(
+        mag.get_three_axis_magnetometer_frame_name(0).unwrap(),
+        "head_imu_frame"
+    );
+    assert!(mag.get_three_axis_magnetometer_measure(1).is_err());
+    // C++ IGenericSensor::read: rpy, acc, gyro (deg/s), mag
+    let mut v = Vec::new();
+    assert_eq!(
+        dev.as_analog_sensor().unwrap().read(&mut v),
+        AnalogStatus::Ok
+    );
+    let want = [
+        1.5,
+        -2.5,
+        30.0,
+        0.5,
+        -0.25,
+        -9.75,
+        0.1 * deg,
+        -0.2 * deg,
+        0.3 * deg,
+        0.5,
+        0.0,
+        0.4,
+    ];
+    assert!(close(&v, &want), "{v:?}");
+    pd.close().unwrap();
+}
+
+#[test]
+fn an_unplugged_mtx_reads_as_timeout_and_recovers() {
+    let (port, path) = mtx::pty().unwrap();
+    let emulated = mtx::serve(port, EmulatedMtx::default(), still).unwrap();
+    let mut pd = open(&path).unwrap_or_else(|e| panic!("{e}"));
+    let dev = pd.device();
+    let status = |dev: &mut dyn yarp_devices::DeviceDriver| {
+        dev.as_orientation_sensors()
+            .unwrap()
+            .get_orientation_sensor_status(0)
+    };
+    assert!(eventually(Duration::from_secs(2), || status(dev) == MasStatus::Ok));
+    emulated.set_silent(true);
+    let t = Instant::now();
+    assert!(eventually(Duration::from_secs(2), || status(dev) == MasStatus::Timeout));
+    assert!(t.elapsed() < Duration::from_secs(1), "{:?}", t.elapsed());
+    let err = dev
+        .as_orientation_sensors()
+        .unwrap()
+        .get_orientation_sensor_measure_as_roll_pitch_yaw(0)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("xsensmtx") && err.contains("no sample"),
+        "{err}"
+    );
+    let mut v = Vec::new();
+    assert_eq!(
+        dev.as_analog_sensor().unwrap().read(&mut v),
+        AnalogStatus::Timeout
+    );
+    emulated.set_silent(false);
+    assert!(eventually(Duration::from_secs(2), || status(dev) == MasStatus::Ok));
+}
+
+#[test]
+fn a_silent_or_missing_sensor_fails_open_naming_the_port() {
+    // A pseudo-terminal nobody answers on.
+    let (_quiet, path) = mtx::pty().unwrap();
+    let t = Instant::now();
+    let err = open(&path).err().expect("open must fail");
+    assert!(t.elapsed() < Duration::from_secs(4), "{:?}", t.elapsed());
+    assert!(err.contains(&path.display().to_string()), "{err}");
+    assert!(err.contains("no MTx answers"), "{err}");
+
+    let err = open(std::path::Path::new("/nonexistent/ttyXSENS"))
+        .err()
+        .expect("open must fail");
+    assert!(err.contains("/nonexistent/ttyXSENS"), "{err}");
+}
+
+#[test]
+fn pty_link_gives_the_path_a_robot_file_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("ttyS0");
+    std::fs::write(&link, b"stale").unwrap(); // replaced, not an error
+    let (_mtx, _pts) = mtx::pty_link(&link).unwrap();
+    let mut pd = open(&link).unwrap_or_else(|e| panic!("{e}"));
+    let dev = pd.device();
+    assert!(eventually(Duration::from_secs(2), || {
+        let mut v = Vec::new();
+        dev.as_analog_sensor().unwrap().read(&mut v) == AnalogStatus::Ok && v.len() == 12
+    }));
+}
