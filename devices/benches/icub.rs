@@ -118,6 +118,7 @@ fn main() {
     let mut emu = Reaped(
         Command::new(&emulator)
             .args(["--preset", "icub", "--bus", "udp-hub://127.0.0.1:20000+n"])
+            .args(["--xsens", "/tmp/icub-sim-ttyXSENS"])
             .arg("--robot-dir")
             .arg(&genova)
             .stdout(Stdio::piped())

@@ -47,6 +47,20 @@ fn start_name_server() -> tempfile::TempDir {
 }
 
 /// The whole emulated robot, one in-process bus per network: `inproc://<tag>-<n>`.
+/// The head's Xsens MTx on a pseudo-terminal, named to every `xsensmtx` of this process
+/// through YARP_ICUB_XSENS_SERIAL; stops when dropped.
+fn emulate_head_imu() -> icub_can::emulator::mtx::MtxHandle {
+    let (port, path) = icub_can::emulator::mtx::pty().unwrap();
+    let mtx = icub_can::emulator::mtx::serve(
+        port,
+        icub_can::xsens::EmulatedMtx::default(),
+        icub_can::xsens::emulated_motion,
+    )
+    .unwrap();
+    std::env::set_var(yarp_devices::icub::xsensmtx::SERIAL_ENV, &path);
+    mtx
+}
+
 fn emulate_icub(tag: &str) -> Vec<EmulatorHandle> {
     let dir = genova_dir();
     preset::icub_networks(dir.exists().then_some(dir.as_path()))
@@ -178,6 +192,7 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
     // 8 motor-control parts, 6 strains, 2 MAIS, 3 skins, 2 hand MTBs
     assert_eq!(use_inproc(&mut robot, &tag), 21);
     let _emulators = emulate_icub(&tag);
+    let _mtx = emulate_head_imu();
     let _conf = start_name_server();
 
     let mut runner = RobotRunner::new(robot);
@@ -223,6 +238,12 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
     )
     .expect("connect to the cartesian state:o");
     let pose_before = left_arm_pose_matches_ikin(&runner, &cart);
+    // the head IMU streams through its multiple-analog-sensors wrapper
+    let imu = BufferedPort::open(&net, "/test/head_imu:i").unwrap();
+    net.connect("/icub/head/inertials/measures:o", "/test/head_imu:i", None)
+        .expect("connect to the head IMU");
+    assert!(imu.read_timeout(T).is_some(), "a head IMU measurement");
+    imu.close();
 
     let dev = arm.device();
     let pos = dev.as_position_control().unwrap();
@@ -413,19 +434,21 @@ fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
         format!("inproc://{tag}-{{n}}"),
     );
     let _emulators = emulate_icub(&tag);
+    let _mtx = emulate_head_imu(); // serial /dev/ttyS0 in the file
     let _conf = start_name_server();
     let robot = read_robot_file(&file, &Property::new())
         .unwrap_or_else(|e| panic!("{e}"))
         .robot;
     let mut runner = RobotRunner::new(robot);
-    let mut missing: Vec<&str> = runner
+    let missing: Vec<&str> = runner
         .unavailable_devices()
         .iter()
         .map(|(_, k)| *k)
         .collect();
-    missing.sort_unstable();
-    missing.dedup();
-    assert_eq!(missing, ["xsensmtx"]);
+    assert!(
+        missing.is_empty(),
+        "every device type is provided: {missing:?}"
+    );
     runner.set_keep_going(true);
     runner
         .enter_phase(ActionPhase::Startup)
@@ -446,6 +469,23 @@ fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
         "{failures:?}"
     );
     runner.enter_phase(ActionPhase::Run).unwrap();
+    // the head IMU is read through its wrapper and filtered by the imuFilter
+    let head_imu = runner
+        .device("head-inertial")
+        .expect("head-inertial opened");
+    assert!(eventually(T, || {
+        let mut pd = head_imu.lock().unwrap();
+        let mut v = Vec::new();
+        pd.device().as_analog_sensor().unwrap().read(&mut v)
+            == yarp_devices::sensors::AnalogStatus::Ok
+    }));
+    for wrapper in [
+        "head-inertials_wrapper",
+        "head-imuFilter",
+        "head-imuFilter_wrapper",
+    ] {
+        assert!(runner.device(wrapper).is_some(), "{wrapper} is up");
+    }
     for part in ["left_arm", "right_arm", "head", "torso", "left_leg"] {
         let dev = runner
             .device(&format!("{part}_mc_remapper"))
@@ -552,16 +592,21 @@ fn emulator_program() -> Option<PathBuf> {
 
 /// The whole emulated iCub (iCubGenova01's boards) on UDP ports `base_port`.., once it
 /// says it is ready; killed and reaped on drop.
-fn spawn_emulator(program: &Path, base_port: u16) -> Reaped {
+/// The emulator program with the whole iCub on UDP ports from `base_port`, and the head's
+/// Xsens MTx at `xsens` when given.
+fn spawn_emulator(program: &Path, base_port: u16, xsens: Option<&Path>) -> Reaped {
     use std::io::{BufRead, BufReader};
     use std::process::{Command, Stdio};
+    let mut cmd = Command::new(program);
+    cmd.args(["--preset", "icub", "--bus"])
+        .arg(format!("udp-hub://127.0.0.1:{base_port}+n"))
+        .arg("--robot-dir")
+        .arg(genova_dir());
+    if let Some(link) = xsens {
+        cmd.arg("--xsens").arg(link);
+    }
     let mut emu = Reaped(
-        Command::new(program)
-            .args(["--preset", "icub", "--bus"])
-            .arg(format!("udp-hub://127.0.0.1:{base_port}+n"))
-            .arg("--robot-dir")
-            .arg(genova_dir())
-            .stdout(Stdio::piped())
+        cmd.stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
             .expect("spawn emulator"),
@@ -589,7 +634,7 @@ fn readme_command_lines_bring_up_the_robot_over_udp() {
         return;
     };
     let _conf = start_name_server();
-    let _emu = spawn_emulator(&emulator, 20000);
+    let _emu = spawn_emulator(&emulator, 20000, Some(Path::new("/tmp/icub-sim-ttyXSENS")));
 
     let log = tempfile::NamedTempFile::new().unwrap();
     let mut robot = Reaped(
@@ -651,7 +696,9 @@ fn keep_going_runs_the_real_genova01_config_as_processes() {
         return;
     };
     let _conf = start_name_server();
-    let emu = spawn_emulator(&emulator, 21000);
+    let dir = tempfile::tempdir().unwrap();
+    let xsens = dir.path().join("ttyS0");
+    let emu = spawn_emulator(&emulator, 21000, Some(&xsens));
 
     let log = tempfile::NamedTempFile::new().unwrap();
     let mut robot = Reaped(
@@ -661,6 +708,7 @@ fn keep_going_runs_the_real_genova01_config_as_processes() {
                 yarp_devices::icub::common::BACKEND_ENV,
                 "udp://127.0.0.1:21000+n",
             )
+            .env(yarp_devices::icub::xsensmtx::SERIAL_ENV, &xsens)
             .current_dir(genova_dir())
             .stdout(Stdio::null())
             .stderr(log.reopen().unwrap())
@@ -674,7 +722,11 @@ fn keep_going_runs_the_real_genova01_config_as_processes() {
         read_log()
     );
     let text = read_log();
-    assert!(text.contains("xsensmtx"), "xsensmtx not reported:\n{text}");
+    // every device type is provided: the head's MTx (emulated) measures
+    assert!(
+        text.contains("MTx on") && text.contains("measuring"),
+        "{text}"
+    );
     assert!(
         text.contains("the robot runs without 2 failed")
             && text.contains("right_leg_oints")

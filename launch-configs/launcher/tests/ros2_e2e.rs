@@ -76,7 +76,14 @@ impl Drop for Lines {
 
 /// Runs `config` (with `extra` launcher arguments) and checks the whole chain with joint
 /// `joint` of the left arm commanded to `target` degrees.
-fn e2e(config: &str, extra: &[&str], joint: &str, target: f64, domain_offset: u32) {
+fn e2e(
+    config: &str,
+    extra: &[&str],
+    joint: &str,
+    target: f64,
+    domain_offset: u32,
+    imu_topic: Option<&str>,
+) {
     let Some(venv) = ros_venv() else {
         eprintln!("==================================================================");
         eprintln!("SKIPPED: no rclpy venv (run tests/peers/install-ros2.sh or set");
@@ -122,6 +129,34 @@ fn e2e(config: &str, extra: &[&str], joint: &str, target: f64, domain_offset: u3
     assert!(reply.contains("ok"), "reply {reply}");
     let moved = probe.expect("MOVED", Duration::from_secs(60));
     eprintln!("joint {joint} moved to {moved} deg (commanded {target})");
+
+    // An IMU of the robot reaches rclpy as sensor_msgs/Imu.
+    if let Some(topic) = imu_topic {
+        let mut imu_cmd = Command::new(venv.join("bin/python"));
+        imu_cmd
+            .arg("-u")
+            .arg(configs_dir().join("launcher/tests/peers/imu_probe.py"))
+            .args([topic, "--timeout", "60"])
+            .envs(ros_env);
+        let imu = Lines::spawn(imu_cmd);
+        let m: serde_json::Value =
+            serde_json::from_str(&imu.expect("IMU", Duration::from_secs(90))).expect("json");
+        let g = m["acc"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a.as_f64().unwrap().powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!((9.0..10.5).contains(&g), "|acceleration| {g}: {m}");
+        let q = m["q"].as_array().unwrap();
+        let norm = q.iter().map(|x| x.as_f64().unwrap().powi(2)).sum::<f64>();
+        assert!(
+            (norm - 1.0).abs() < 1e-3,
+            "unit orientation quaternion: {m}"
+        );
+        eprintln!("{topic} in rclpy: {m}");
+    }
 
     // Our `yarp read` sees the same joint on the YARP side.
     let conf_home = l.conf_home.path().to_path_buf();
@@ -176,7 +211,7 @@ fn e2e(config: &str, extra: &[&str], joint: &str, target: f64, domain_offset: u3
 
 #[test]
 fn fake_devices_to_rclpy_and_back() {
-    e2e("fake-devices.toml", &[], "0", 30.0, 0);
+    e2e("fake-devices.toml", &[], "0", 30.0, 0, None);
 }
 
 /// The acceptance run: the emulated iCub. Its robot files name the CAN hubs' UDP ports
@@ -194,5 +229,5 @@ fn icub_sim_to_rclpy_and_back() {
     });
     assert!(free.is_some(), "UDP ports 20000..20009 stay busy");
     // The iCub elbow (joint 3 of the arm, 15..105 degrees).
-    e2e("icub-sim.toml", &[], "3", 60.0, 1);
+    e2e("icub-sim.toml", &[], "3", 60.0, 1, Some("/icub/head/imu"));
 }
