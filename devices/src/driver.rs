@@ -160,6 +160,35 @@ pub trait DeviceDriver: Send {
     }
 }
 
+/// The `DeviceDriver` views of an IMU (gyroscope, linear accelerometer, magnetometer and
+/// orientation sensor: fakeIMU, imuFilter, xsensmtx): use inside
+/// `impl DeviceDriver for T { ... }` as `crate::imu_views!();`.
+#[macro_export]
+macro_rules! imu_views {
+    () => {
+        fn as_three_axis_gyroscopes(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::IThreeAxisGyroscopes> {
+            Some(self)
+        }
+        fn as_three_axis_linear_accelerometers(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::IThreeAxisLinearAccelerometers> {
+            Some(self)
+        }
+        fn as_three_axis_magnetometers(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::IThreeAxisMagnetometers> {
+            Some(self)
+        }
+        fn as_orientation_sensors(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::IOrientationSensors> {
+            Some(self)
+        }
+    };
+}
+
 /// The `DeviceDriver` views of a driver that implements every motor-control interface
 /// (fakeMotionControl, remote_controlboard, controlboardremapper): use inside
 /// `impl DeviceDriver for T { ... }` as `crate::motor_control_views!();`.

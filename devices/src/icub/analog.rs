@@ -137,15 +137,6 @@ impl IAnalogSensor for CanBusAnalogSensor {
             "canBusAnalogSensor calibration (offsets are set on the board)",
         ))
     }
-    fn calibrate_sensor_with(&mut self, _values: &[f64]) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
-    fn calibrate_channel(&mut self, _ch: usize) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
-    fn calibrate_channel_with(&mut self, _ch: usize, _value: f64) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
 }
 
 impl ISixAxisForceTorqueSensors for CanBusAnalogSensor {

@@ -164,15 +164,6 @@ impl IAnalogSensor for CanBusInertialMtb {
     fn calibrate_sensor(&mut self) -> DevResult<()> {
         Err(DeviceError::Unsupported("canBusInertialMTB calibration"))
     }
-    fn calibrate_sensor_with(&mut self, _values: &[f64]) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
-    fn calibrate_channel(&mut self, _ch: usize) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
-    fn calibrate_channel_with(&mut self, _ch: usize, _value: f64) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
 }
 
 impl IThreeAxisLinearAccelerometers for CanBusInertialMtb {

@@ -118,15 +118,6 @@ impl IAnalogSensor for CanBusSkin {
     fn calibrate_sensor(&mut self) -> DevResult<()> {
         Err(DeviceError::Unsupported("canBusSkin calibration"))
     }
-    fn calibrate_sensor_with(&mut self, _values: &[f64]) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
-    fn calibrate_channel(&mut self, _ch: usize) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
-    fn calibrate_channel_with(&mut self, _ch: usize, _value: f64) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
 }
 
 impl ISkinPatches for CanBusSkin {

@@ -295,20 +295,7 @@ impl DeviceDriver for XsensMtx {
     fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
         Some(self)
     }
-    fn as_three_axis_gyroscopes(&mut self) -> Option<&mut dyn IThreeAxisGyroscopes> {
-        Some(self)
-    }
-    fn as_three_axis_linear_accelerometers(
-        &mut self,
-    ) -> Option<&mut dyn IThreeAxisLinearAccelerometers> {
-        Some(self)
-    }
-    fn as_three_axis_magnetometers(&mut self) -> Option<&mut dyn IThreeAxisMagnetometers> {
-        Some(self)
-    }
-    fn as_orientation_sensors(&mut self) -> Option<&mut dyn IOrientationSensors> {
-        Some(self)
-    }
+    crate::imu_views!();
 }
 
 impl Drop for XsensMtx {
@@ -345,15 +332,6 @@ impl IAnalogSensor for XsensMtx {
     }
     fn calibrate_sensor(&mut self) -> DevResult<()> {
         Err(DeviceError::Unsupported("xsensmtx calibration"))
-    }
-    fn calibrate_sensor_with(&mut self, _values: &[f64]) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
-    fn calibrate_channel(&mut self, _ch: usize) -> DevResult<()> {
-        self.calibrate_sensor()
-    }
-    fn calibrate_channel_with(&mut self, _ch: usize, _value: f64) -> DevResult<()> {
-        self.calibrate_sensor()
     }
 }
 

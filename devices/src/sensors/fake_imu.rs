@@ -111,20 +111,7 @@ impl DeviceDriver for FakeImu {
         Ok(())
     }
 
-    fn as_three_axis_gyroscopes(&mut self) -> Option<&mut dyn IThreeAxisGyroscopes> {
-        Some(self)
-    }
-    fn as_three_axis_linear_accelerometers(
-        &mut self,
-    ) -> Option<&mut dyn IThreeAxisLinearAccelerometers> {
-        Some(self)
-    }
-    fn as_three_axis_magnetometers(&mut self) -> Option<&mut dyn IThreeAxisMagnetometers> {
-        Some(self)
-    }
-    fn as_orientation_sensors(&mut self) -> Option<&mut dyn IOrientationSensors> {
-        Some(self)
-    }
+    crate::imu_views!();
 }
 
 impl IThreeAxisGyroscopes for FakeImu {

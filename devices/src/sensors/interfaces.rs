@@ -215,7 +215,15 @@ pub trait IAnalogSensor {
     fn get_state(&mut self, ch: usize) -> AnalogStatus;
     fn get_channels(&mut self) -> usize;
     fn calibrate_sensor(&mut self) -> DevResult<()>;
-    fn calibrate_sensor_with(&mut self, values: &[f64]) -> DevResult<()>;
-    fn calibrate_channel(&mut self, ch: usize) -> DevResult<()>;
-    fn calibrate_channel_with(&mut self, ch: usize, value: f64) -> DevResult<()>;
+    /// The variants below default to [`IAnalogSensor::calibrate_sensor`], for sensors
+    /// that calibrate only as a whole (or not at all).
+    fn calibrate_sensor_with(&mut self, _values: &[f64]) -> DevResult<()> {
+        self.calibrate_sensor()
+    }
+    fn calibrate_channel(&mut self, _ch: usize) -> DevResult<()> {
+        self.calibrate_sensor()
+    }
+    fn calibrate_channel_with(&mut self, _ch: usize, _value: f64) -> DevResult<()> {
+        self.calibrate_sensor()
+    }
 }

@@ -248,6 +248,45 @@ fn entity_err(what: &'static str, name: &str, e: impl std::fmt::Debug) -> RosErr
     }
 }
 
+/// The ROS service server of `s` (Enhanced service mapping, as rmw_fastrtps).
+fn ros_server<Req, Resp>(node: &mut Node, s: &ServiceEntry) -> Result<Server<Req, Resp>, RosError>
+where
+    Req: ros2_client::Message + Clone + 'static,
+    Resp: ros2_client::Message + 'static,
+{
+    let (name, stype, q) = service_names(s)?;
+    node.create_server(ServiceMapping::Enhanced, &name, &stype, q.clone(), q)
+        .map_err(|e| entity_err("service", &s.ros_service, e))
+}
+
+/// The ROS service client of `s` (Enhanced service mapping, as rmw_fastrtps).
+fn ros_client<Req, Resp>(node: &mut Node, s: &ServiceEntry) -> Result<Client<Req, Resp>, RosError>
+where
+    Req: ros2_client::Message + Clone + 'static,
+    Resp: ros2_client::Message + 'static,
+{
+    let (name, stype, q) = service_names(s)?;
+    node.create_client(ServiceMapping::Enhanced, &name, &stype, q.clone(), q)
+        .map_err(|e| entity_err("client", &s.ros_service, e))
+}
+
+fn service_names(
+    s: &ServiceEntry,
+) -> Result<
+    (
+        ros2_client::Name,
+        ros2_client::ServiceTypeName,
+        ros2_client::QosProfile,
+    ),
+    RosError,
+> {
+    Ok((
+        ros::name(&s.ros_service)?,
+        ros::service_type(&s.ros_type),
+        ros::service_qos(),
+    ))
+}
+
 struct Builder {
     ns: NameClient,
     /// For the extra nodes of dynamic mode (same participant).
@@ -454,9 +493,6 @@ impl Builder {
 
     async fn service(&mut self, node: &mut Node, s: &ServiceEntry) -> Result<(), StartError> {
         let counters = Arc::new(Counters::default());
-        let sq = ros::service_qos();
-        let name = ros::name(&s.ros_service)?;
-        let stype = ros::service_type(&s.ros_type);
         let mut detail = format!("{:?}", s.conversion());
         match (s.conversion(), s.direction) {
             (ServiceConversion::TextRpc, _) => {
@@ -491,9 +527,7 @@ impl Builder {
                 let cmd = |t: &Option<String>| Bottle::from_text(t.as_deref().unwrap_or_default());
                 let deferred: Deferred = match StdSrv::from_type(&s.ros_type) {
                     Some(StdSrv::Trigger) => {
-                        let server: Server<EmptyMsg, OutcomeResponse> = node
-                            .create_server(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
-                            .map_err(|e| entity_err("service", &s.ros_service, e))?;
+                        let server: Server<EmptyMsg, OutcomeResponse> = ros_server(node, s)?;
                         let command = cmd(&s.command);
                         Box::new(move |node| {
                             tokio::spawn(serve_ros(
@@ -507,9 +541,7 @@ impl Builder {
                         })
                     }
                     Some(StdSrv::SetBool) => {
-                        let server: Server<SetBoolRequest, OutcomeResponse> = node
-                            .create_server(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
-                            .map_err(|e| entity_err("service", &s.ros_service, e))?;
+                        let server: Server<SetBoolRequest, OutcomeResponse> = ros_server(node, s)?;
                         let (on, off) = (cmd(&s.command_true), cmd(&s.command_false));
                         Box::new(move |node| {
                             tokio::spawn(serve_ros(
@@ -529,9 +561,7 @@ impl Builder {
                         })
                     }
                     Some(StdSrv::Empty) | None => {
-                        let server: Server<EmptyMsg, EmptyMsg> = node
-                            .create_server(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
-                            .map_err(|e| entity_err("service", &s.ros_service, e))?;
+                        let server: Server<EmptyMsg, EmptyMsg> = ros_server(node, s)?;
                         let command = cmd(&s.command);
                         Box::new(move |node| {
                             tokio::spawn(serve_ros(
@@ -553,9 +583,7 @@ impl Builder {
                 let service_name = s.ros_service.clone();
                 let deferred: Deferred = match StdSrv::from_type(&s.ros_type) {
                     Some(StdSrv::Trigger) => {
-                        let client: Client<EmptyMsg, OutcomeResponse> = node
-                            .create_client(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
-                            .map_err(|e| entity_err("client", &s.ros_service, e))?;
+                        let client: Client<EmptyMsg, OutcomeResponse> = ros_client(node, s)?;
                         Box::new(move |node| {
                             tokio::spawn(call_ros(
                                 port,
@@ -569,9 +597,7 @@ impl Builder {
                         })
                     }
                     Some(StdSrv::SetBool) => {
-                        let client: Client<SetBoolRequest, OutcomeResponse> = node
-                            .create_client(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
-                            .map_err(|e| entity_err("client", &s.ros_service, e))?;
+                        let client: Client<SetBoolRequest, OutcomeResponse> = ros_client(node, s)?;
                         Box::new(move |node| {
                             tokio::spawn(call_ros(
                                 port,
@@ -588,9 +614,7 @@ impl Builder {
                         })
                     }
                     Some(StdSrv::Empty) | None => {
-                        let client: Client<EmptyMsg, EmptyMsg> = node
-                            .create_client(ServiceMapping::Enhanced, &name, &stype, sq.clone(), sq)
-                            .map_err(|e| entity_err("client", &s.ros_service, e))?;
+                        let client: Client<EmptyMsg, EmptyMsg> = ros_client(node, s)?;
                         Box::new(move |node| {
                             tokio::spawn(call_ros(
                                 port,
