@@ -189,6 +189,56 @@ macro_rules! imu_views {
     };
 }
 
+/// The four multiple-analog-sensors interfaces of a device that is a single IMU, from its
+/// inherent methods `status(i) -> MasStatus`, `name(i)` and `frame(i) -> DevResult<String>`
+/// and one `fn(&self, i) -> DevResult<SensorMeasurement>` per family (fakeIMU, xsensmtx).
+#[macro_export]
+macro_rules! single_imu_interfaces {
+    ($ty:ty { gyro: $gyro:ident, acc: $acc:ident, mag: $mag:ident, rpy: $rpy:ident }) => {
+        $crate::single_imu_interfaces!(@one $ty, IThreeAxisGyroscopes, $gyro,
+            get_nr_of_three_axis_gyroscopes, get_three_axis_gyroscope_status,
+            get_three_axis_gyroscope_name, get_three_axis_gyroscope_frame_name,
+            get_three_axis_gyroscope_measure);
+        $crate::single_imu_interfaces!(@one $ty, IThreeAxisLinearAccelerometers, $acc,
+            get_nr_of_three_axis_linear_accelerometers,
+            get_three_axis_linear_accelerometer_status,
+            get_three_axis_linear_accelerometer_name,
+            get_three_axis_linear_accelerometer_frame_name,
+            get_three_axis_linear_accelerometer_measure);
+        $crate::single_imu_interfaces!(@one $ty, IThreeAxisMagnetometers, $mag,
+            get_nr_of_three_axis_magnetometers, get_three_axis_magnetometer_status,
+            get_three_axis_magnetometer_name, get_three_axis_magnetometer_frame_name,
+            get_three_axis_magnetometer_measure);
+        $crate::single_imu_interfaces!(@one $ty, IOrientationSensors, $rpy,
+            get_nr_of_orientation_sensors, get_orientation_sensor_status,
+            get_orientation_sensor_name, get_orientation_sensor_frame_name,
+            get_orientation_sensor_measure_as_roll_pitch_yaw);
+    };
+    (@one $ty:ty, $iface:ident, $measure:ident, $nr:ident, $status:ident, $name:ident,
+        $frame:ident, $get:ident) => {
+        impl $crate::sensors::$iface for $ty {
+            fn $nr(&self) -> usize {
+                1
+            }
+            fn $status(&self, i: usize) -> $crate::sensors::MasStatus {
+                self.status(i)
+            }
+            fn $name(&self, i: usize) -> $crate::error::DevResult<String> {
+                self.name(i)
+            }
+            fn $frame(&self, i: usize) -> $crate::error::DevResult<String> {
+                self.frame(i)
+            }
+            fn $get(
+                &self,
+                i: usize,
+            ) -> $crate::error::DevResult<$crate::sensors::SensorMeasurement> {
+                self.$measure(i)
+            }
+        }
+    };
+}
+
 /// The `DeviceDriver` views of a driver that implements every motor-control interface
 /// (fakeMotionControl, remote_controlboard, controlboardremapper): use inside
 /// `impl DeviceDriver for T { ... }` as `crate::motor_control_views!();`.

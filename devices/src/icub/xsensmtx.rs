@@ -230,6 +230,19 @@ impl XsensMtx {
         Ok(SensorMeasurement::new(v, l.stamp))
     }
 
+    fn gyro(&self, i: usize) -> DevResult<SensorMeasurement> {
+        self.measure(i, |s| s.gyr, DEG_PER_RAD)
+    }
+    fn acc(&self, i: usize) -> DevResult<SensorMeasurement> {
+        self.measure(i, |s| s.acc, 1.0)
+    }
+    fn mag(&self, i: usize) -> DevResult<SensorMeasurement> {
+        self.measure(i, |s| s.mag, 1.0)
+    }
+    fn rpy(&self, i: usize) -> DevResult<SensorMeasurement> {
+        self.measure(i, |s| s.euler, 1.0)
+    }
+
     fn name(&self, i: usize) -> DevResult<String> {
         if i == 0 {
             Ok(self.sensor_name.clone())
@@ -335,80 +348,9 @@ impl IAnalogSensor for XsensMtx {
     }
 }
 
-impl IThreeAxisGyroscopes for XsensMtx {
-    fn get_nr_of_three_axis_gyroscopes(&self) -> usize {
-        1
-    }
-    fn get_three_axis_gyroscope_status(&self, i: usize) -> MasStatus {
-        self.status(i)
-    }
-    fn get_three_axis_gyroscope_name(&self, i: usize) -> DevResult<String> {
-        self.name(i)
-    }
-    fn get_three_axis_gyroscope_frame_name(&self, i: usize) -> DevResult<String> {
-        self.frame(i)
-    }
-    fn get_three_axis_gyroscope_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        self.measure(i, |s| s.gyr, DEG_PER_RAD)
-    }
-}
-
-impl IThreeAxisLinearAccelerometers for XsensMtx {
-    fn get_nr_of_three_axis_linear_accelerometers(&self) -> usize {
-        1
-    }
-    fn get_three_axis_linear_accelerometer_status(&self, i: usize) -> MasStatus {
-        self.status(i)
-    }
-    fn get_three_axis_linear_accelerometer_name(&self, i: usize) -> DevResult<String> {
-        self.name(i)
-    }
-    fn get_three_axis_linear_accelerometer_frame_name(&self, i: usize) -> DevResult<String> {
-        self.frame(i)
-    }
-    fn get_three_axis_linear_accelerometer_measure(
-        &self,
-        i: usize,
-    ) -> DevResult<SensorMeasurement> {
-        self.measure(i, |s| s.acc, 1.0)
-    }
-}
-
-impl IThreeAxisMagnetometers for XsensMtx {
-    fn get_nr_of_three_axis_magnetometers(&self) -> usize {
-        1
-    }
-    fn get_three_axis_magnetometer_status(&self, i: usize) -> MasStatus {
-        self.status(i)
-    }
-    fn get_three_axis_magnetometer_name(&self, i: usize) -> DevResult<String> {
-        self.name(i)
-    }
-    fn get_three_axis_magnetometer_frame_name(&self, i: usize) -> DevResult<String> {
-        self.frame(i)
-    }
-    fn get_three_axis_magnetometer_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        self.measure(i, |s| s.mag, 1.0)
-    }
-}
-
-impl IOrientationSensors for XsensMtx {
-    fn get_nr_of_orientation_sensors(&self) -> usize {
-        1
-    }
-    fn get_orientation_sensor_status(&self, i: usize) -> MasStatus {
-        self.status(i)
-    }
-    fn get_orientation_sensor_name(&self, i: usize) -> DevResult<String> {
-        self.name(i)
-    }
-    fn get_orientation_sensor_frame_name(&self, i: usize) -> DevResult<String> {
-        self.frame(i)
-    }
-    fn get_orientation_sensor_measure_as_roll_pitch_yaw(
-        &self,
-        i: usize,
-    ) -> DevResult<SensorMeasurement> {
-        self.measure(i, |s| s.euler, 1.0)
-    }
-}
+crate::single_imu_interfaces!(XsensMtx {
+    gyro: gyro,
+    acc: acc,
+    mag: mag,
+    rpy: rpy
+});

@@ -79,6 +79,12 @@ impl FakeImu {
         Ok(SensorMeasurement::new(vec![c; 3], t))
     }
 
+    fn accelerometer(&self, i: usize) -> DevResult<SensorMeasurement> {
+        self.check(i)?;
+        let (c, t) = self.state_at(now());
+        Ok(SensorMeasurement::new(FakeImu::acceleration(c).to_vec(), t))
+    }
+
     fn status(&self, i: usize) -> MasStatus {
         if i == 0 {
             MasStatus::Ok
@@ -114,85 +120,12 @@ impl DeviceDriver for FakeImu {
     crate::imu_views!();
 }
 
-impl IThreeAxisGyroscopes for FakeImu {
-    fn get_nr_of_three_axis_gyroscopes(&self) -> usize {
-        1
-    }
-    fn get_three_axis_gyroscope_status(&self, i: usize) -> MasStatus {
-        self.status(i)
-    }
-    fn get_three_axis_gyroscope_name(&self, i: usize) -> DevResult<String> {
-        self.name(i)
-    }
-    fn get_three_axis_gyroscope_frame_name(&self, i: usize) -> DevResult<String> {
-        self.frame(i)
-    }
-    fn get_three_axis_gyroscope_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        self.counter(i)
-    }
-}
-
-impl IThreeAxisLinearAccelerometers for FakeImu {
-    fn get_nr_of_three_axis_linear_accelerometers(&self) -> usize {
-        1
-    }
-    fn get_three_axis_linear_accelerometer_status(&self, i: usize) -> MasStatus {
-        self.status(i)
-    }
-    fn get_three_axis_linear_accelerometer_name(&self, i: usize) -> DevResult<String> {
-        self.name(i)
-    }
-    fn get_three_axis_linear_accelerometer_frame_name(&self, i: usize) -> DevResult<String> {
-        self.frame(i)
-    }
-    fn get_three_axis_linear_accelerometer_measure(
-        &self,
-        i: usize,
-    ) -> DevResult<SensorMeasurement> {
-        self.check(i)?;
-        let (c, t) = self.state_at(now());
-        Ok(SensorMeasurement::new(FakeImu::acceleration(c).to_vec(), t))
-    }
-}
-
-impl IThreeAxisMagnetometers for FakeImu {
-    fn get_nr_of_three_axis_magnetometers(&self) -> usize {
-        1
-    }
-    fn get_three_axis_magnetometer_status(&self, i: usize) -> MasStatus {
-        self.status(i)
-    }
-    fn get_three_axis_magnetometer_name(&self, i: usize) -> DevResult<String> {
-        self.name(i)
-    }
-    fn get_three_axis_magnetometer_frame_name(&self, i: usize) -> DevResult<String> {
-        self.frame(i)
-    }
-    fn get_three_axis_magnetometer_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        self.counter(i)
-    }
-}
-
-impl IOrientationSensors for FakeImu {
-    fn get_nr_of_orientation_sensors(&self) -> usize {
-        1
-    }
-    fn get_orientation_sensor_status(&self, i: usize) -> MasStatus {
-        self.status(i)
-    }
-    fn get_orientation_sensor_name(&self, i: usize) -> DevResult<String> {
-        self.name(i)
-    }
-    fn get_orientation_sensor_frame_name(&self, i: usize) -> DevResult<String> {
-        self.frame(i)
-    }
-    fn get_orientation_sensor_measure_as_roll_pitch_yaw(
-        &self,
-        i: usize,
-    ) -> DevResult<SensorMeasurement> {
-        self.counter(i)
-    }
-}
+crate::single_imu_interfaces!(FakeImu {
+    gyro: counter,
+    acc: accelerometer,
+    mag: counter,
+    rpy: counter
+});
 
 #[cfg(test)]
 mod tests {
