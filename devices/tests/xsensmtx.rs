@@ -175,3 +175,39 @@ fn pty_link_gives_the_path_a_robot_file_names() {
         dev.as_analog_sensor().unwrap().read(&mut v) == AnalogStatus::Ok && v.len() == 12
     }));
 }
+
+/// The terminal's exclusive-use flag (TIOCEXCL), read through a new descriptor.
+fn exclusive(path: &std::path::Path) -> bool {
+    use std::os::fd::AsRawFd;
+    let f = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)
+        .unwrap();
+    let mut on: libc::c_int = 0;
+    // SAFETY: TIOCGEXCL writes one int through the pointer we pass.
+    let r = unsafe { libc::ioctl(f.as_raw_fd(), libc::TIOCGEXCL, &mut on) };
+    assert_eq!(r, 0, "TIOCGEXCL: {}", std::io::Error::last_os_error());
+    on != 0
+}
+
+#[test]
+fn the_port_is_exclusive_while_open_and_released_on_close() {
+    // Root may open an exclusive terminal anyway, so the flag itself is checked: were it
+    // left set (it outlives the descriptor while the emulator holds the terminal open), a
+    // non-root user could not open the emulator's terminal a second time. serialport
+    // clears it when it closes a port.
+    let (port, path) = mtx::pty().unwrap();
+    let _mtx = mtx::serve(port, EmulatedMtx::default(), still).unwrap();
+    let mut pd = open(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        exclusive(&path),
+        "no second reader while the device is open"
+    );
+    pd.close().unwrap();
+    assert!(!exclusive(&path), "released on close");
+    // and after an open that failed (nobody answers on this one)
+    let (_quiet, quiet_path) = mtx::pty().unwrap();
+    assert!(open(&quiet_path).is_err());
+    assert!(!exclusive(&quiet_path));
+}
