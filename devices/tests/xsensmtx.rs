@@ -167,13 +167,19 @@ fn pty_link_gives_the_path_a_robot_file_names() {
     let dir = tempfile::tempdir().unwrap();
     let link = dir.path().join("ttyS0");
     std::fs::write(&link, b"stale").unwrap(); // replaced, not an error
-    let (_mtx, _pts) = mtx::pty_link(&link).unwrap();
+    let (emulated, _pts) = mtx::pty_link(&link).unwrap();
     let mut pd = open(&link).unwrap_or_else(|e| panic!("{e}"));
     let dev = pd.device();
     assert!(eventually(Duration::from_secs(2), || {
         let mut v = Vec::new();
         dev.as_analog_sensor().unwrap().read(&mut v) == AnalogStatus::Ok && v.len() == 12
     }));
+    pd.close().unwrap();
+    drop(emulated);
+    assert!(
+        link.symlink_metadata().is_err(),
+        "the link goes with the emulator"
+    );
 }
 
 /// The terminal's exclusive-use flag (TIOCEXCL), read through a new descriptor.

@@ -20,6 +20,8 @@ pub struct MtxHandle {
     /// While set, the sensor neither answers nor streams (an unplugged cable).
     pub silent: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
+    /// A link made by [`pty_link`] and the terminal it names, removed on drop.
+    link: Option<(PathBuf, PathBuf)>,
 }
 
 impl MtxHandle {
@@ -34,6 +36,12 @@ impl Drop for MtxHandle {
         self.stop.store(true, Ordering::SeqCst);
         if let Some(t) = self.thread.take() {
             let _ = t.join();
+        }
+        // Remove our link, unless someone has since pointed it elsewhere.
+        if let Some((link, pts)) = self.link.take() {
+            if std::fs::read_link(&link).is_ok_and(|target| target == pts) {
+                let _ = std::fs::remove_file(&link);
+            }
         }
     }
 }
@@ -96,6 +104,7 @@ pub fn serve(
         stop,
         silent,
         thread: Some(thread),
+        link: None,
     })
 }
 
@@ -120,14 +129,17 @@ pub fn pty() -> std::io::Result<(impl Read + Write + Send + 'static, PathBuf)> {
 }
 
 /// Serves an emulated MTx on a new pseudo-terminal reachable as `link` (a symbolic link
-/// replacing any earlier one), e.g. the `serial` path a robot file names.
+/// replacing any earlier one, removed when the handle is dropped), e.g. the `serial` path
+/// a robot file names.
 pub fn pty_link(link: &Path) -> std::io::Result<(MtxHandle, PathBuf)> {
     let (port, path) = pty()?;
     if link.symlink_metadata().is_ok() {
         std::fs::remove_file(link)?;
     }
     std::os::unix::fs::symlink(&path, link)?;
-    Ok((serve(port, EmulatedMtx::default(), emulated_motion)?, path))
+    let mut handle = serve(port, EmulatedMtx::default(), emulated_motion)?;
+    handle.link = Some((link.to_path_buf(), path.clone()));
+    Ok((handle, path))
 }
 
 /// The master end of a pty, with its slave end kept open so that a host closing and
