@@ -8,9 +8,10 @@
 //! ```
 //!
 //! On start it prints one `bus <name> <local address>` line per bus, then `ready`.
+//! SIGINT or SIGTERM stops it cleanly (exit 0; its `--xsens` link is removed).
 
 use std::process::ExitCode;
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -155,11 +156,18 @@ fn run(args: Args) -> Result<(), String> {
         }
         None => None,
     };
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(sig, stop.clone()).map_err(|e| e.to_string())?;
+    }
     say("ready");
     let start = Instant::now();
     let mut last_stats = Instant::now();
     loop {
         std::thread::sleep(Duration::from_millis(50));
+        if stop.load(Ordering::SeqCst) {
+            break;
+        }
         if args
             .duration_s
             .is_some_and(|d| start.elapsed().as_secs_f64() >= d)
