@@ -12,8 +12,8 @@
 //! * a YARP number (`YA....RP`) of the tcp family: sender name, header reply carrying the
 //!   advertised port, then indexed messages. Data messages (`~d` / `~D`) hold a binary
 //!   command Bottle; the reply (`~d` only) is written without index, then the ack for
-//!   `tcp`. Admin (`~a`) messages are acked but not answered. The tcp framing is parsed
-//!   here privately (`yarp_proto::wire` was not finished when this was written).
+//!   `tcp`. Admin (`~a`) messages are acked but not answered. The tcp framing is the
+//!   shared `yarp_proto::wire` decoder's, as for ports.
 //! * anything else gets C++'s "Protocol not found" text and is closed (this includes
 //!   HTTP: the web pages of `yarpserver` are not served).
 //!
