@@ -14,7 +14,7 @@
 use icub_can::client::{SensorStatus, StrainClient, StrainParams};
 use yarp_proto::Property;
 
-use super::common::{lookup_one, now, open_bus, open_error, text};
+use super::common::{device_id, lookup_one, now, open_bus, open_error};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::sensors::{AnalogStatus, IAnalogSensor, ISixAxisForceTorqueSensors};
@@ -82,9 +82,7 @@ pub fn mas_status(s: SensorStatus) -> MasStatus {
 impl DeviceDriver for CanBusAnalogSensor {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        self.id = config
-            .find("id")
-            .map_or_else(|| self.kind.to_string(), text);
+        self.id = device_id(config, self.kind);
         let get = |k: &str| lookup_one(config, None, k);
         let params = StrainParams::from_lookup(&get).map_err(|e| open_error(&self.id, &e))?;
         self.sensor_name = get("sensorName").unwrap_or_else(|| self.id.clone());

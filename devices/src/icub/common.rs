@@ -35,6 +35,12 @@ pub fn text(v: &Value) -> String {
     }
 }
 
+/// The device's instance name for logs and errors: yarprobotinterface's `id` (the XML
+/// device name), else `default` (the device type).
+pub fn device_id(config: &Property, default: &str) -> String {
+    config.find("id").map_or_else(|| default.to_string(), text)
+}
+
 /// The values after the key of a line `(key v1 v2 ...)`; a single list value
 /// (`(key (v1 v2))`) is flattened.
 fn line_values(line: &Bottle) -> Vec<String> {

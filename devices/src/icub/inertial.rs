@@ -14,7 +14,7 @@ use icub_can::client::{InertialClient, SensorStatus};
 use yarp_proto::Property;
 
 use super::analog::mas_status;
-use super::common::{lookup, lookup_one, now, open_bus, open_error, text};
+use super::common::{device_id, lookup, lookup_one, now, open_bus, open_error};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::sensors::{
@@ -87,7 +87,7 @@ impl CanBusInertialMtb {
 impl DeviceDriver for CanBusInertialMtb {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        self.id = config.find("id").map_or_else(|| NAME.to_string(), text);
+        self.id = device_id(config, NAME);
         let addrs =
             lookup(config, None, "canAddress").ok_or_else(|| DeviceError::MissingParam {
                 device: self.id.clone(),

@@ -32,7 +32,7 @@ use icub_can::client::{JointPid, McParams, MotorControlClient};
 use icub_can::proto::{ControlMode, PidKind};
 use yarp_proto::{Property, Vocab32};
 
-use super::common::{call_error, lookup, open_bus, open_error, text};
+use super::common::{call_error, device_id, lookup, open_bus, open_error};
 use super::registry::{self, Registration};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
@@ -172,7 +172,7 @@ impl CanMotionControl {
 impl DeviceDriver for CanMotionControl {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        self.id = config.find("id").map_or_else(|| NAME.to_string(), text);
+        self.id = device_id(config, NAME);
         let get = |g: &str, k: &str| lookup(config, Some(g), k);
         let params = McParams::from_lookup(&get).map_err(|e| open_error(&self.id, &e))?;
         let n = params.joints();

@@ -15,7 +15,7 @@ use icub_can::client::SkinClient;
 use yarp_proto::Property;
 
 use super::analog::mas_status;
-use super::common::{lookup, lookup_one, now, open_bus, open_error, text};
+use super::common::{device_id, lookup, lookup_one, now, open_bus, open_error};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::sensors::{AnalogStatus, IAnalogSensor, ISkinPatches, MasStatus, SensorMeasurement};
@@ -57,7 +57,7 @@ impl CanBusSkin {
 impl DeviceDriver for CanBusSkin {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        self.id = config.find("id").map_or_else(|| NAME.to_string(), text);
+        self.id = device_id(config, NAME);
         let bad = |got: String| DeviceError::BadParam {
             device: self.id.clone(),
             param: "skinCanIds".into(),

@@ -41,7 +41,7 @@ use icub_can::proto::{
 use icub_can::CanFrame;
 use yarp_proto::Property;
 
-use super::common::{lookup, lookup_one, open_bus, text};
+use super::common::{device_id, lookup, lookup_one, open_bus};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::sensors::{IVirtualAnalogSensor, VasStatus};
@@ -242,7 +242,7 @@ impl CanBusVirtualAnalogSensor {
 impl DeviceDriver for CanBusVirtualAnalogSensor {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        self.id = config.find("id").map_or_else(|| NAME.to_string(), text);
+        self.id = device_id(config, NAME);
         let address = self.int(config, "canAddress")?;
         if !(1..=14).contains(&address) {
             return Err(self.bad("canAddress", "a board address 1..14", address.to_string()));

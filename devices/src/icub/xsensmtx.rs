@@ -17,6 +17,7 @@
 //! sample for 0.5 s (C++'s read timeout) reads as `Timeout` and its measures are errors;
 //! a sensor that does not answer `GoToConfig` fails the open within 2 s, naming the port.
 
+use super::common::device_id;
 use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
 use crate::sensors::interfaces::*;
@@ -261,9 +262,7 @@ const DEG_PER_RAD: f64 = 180.0 / std::f64::consts::PI;
 impl DeviceDriver for XsensMtx {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = Params::new(NAME, config);
-        if let Some(id) = p.string("id")? {
-            self.id = id;
-        }
+        self.id = device_id(config, NAME);
         let serial = match std::env::var(SERIAL_ENV) {
             Ok(s) if !s.is_empty() => s,
             _ => p.string("serial")?.unwrap_or_else(|| DEFAULT_SERIAL.into()),
