@@ -912,18 +912,26 @@ impl Node {
     writer: GUID,
     reader: Option<GUID>,
   ) -> impl Future<Output = ()> {
+    let matched = || {
+      self
+        .writers_to_remote_readers
+        .lock()
+        .unwrap()
+        .get(&writer)
+        .map(|readers| reader_matched(readers, reader)) // there is someone matched
+        .unwrap_or(false) // we do not even know who is asking
+    };
+    // yarp-rs: nothing to wait for, so no event receiver to register (each one stays in
+    // the node's list until the next graph event; a server asks once per request).
+    if matched() {
+      return ReaderWait::Ready;
+    }
     // Register the event receiver *before* reading the current match state, so
     // a match that occurs between the check and the registration is not
     // missed.
     let status_receiver = self.status_receiver();
 
-    let already_present = self
-      .writers_to_remote_readers
-      .lock()
-      .unwrap()
-      .get(&writer)
-      .map(|readers| reader_matched(readers, reader)) // there is someone matched
-      .unwrap_or(false); // we do not even know who is asking
+    let already_present = matched();
 
     match (already_present, status_receiver) {
       (true, _) => {
