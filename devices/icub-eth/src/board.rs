@@ -1,0 +1,810 @@
+//! A board as the emulator runs it, without sockets: it answers the host's ropframes as
+//! the firmware's `EOtheBOARDtransceiver`/`EOagent` and services do, and streams the
+//! regular ROPs the host loaded, at the configured rate, while running.
+//!
+//! - `ask` → `say` with the variable (signature copied when `plussign`; time when the ask
+//!   has `rqsttime`); an unknown variable is answered only if `rqstconf` (with a `nak`).
+//! - `set` writes the variable if its size is exactly the variable's (else it is dropped,
+//!   as `EOagent` does); `rqstconf` gets `ack`/`nak`. Writes to command variables act:
+//!   `appl cmmnds go2state`, `comm cmmnds queryarray` (→ `sig<replyarray>` with the
+//!   endpoint descriptors), `service cmmnds command` (→ `sig<service status
+//!   commandresult>`), joint config and commands (→ the [`JointModel`]s).
+//! - Services: `verifyactivate` succeeds for a category the board has entities for;
+//!   `start` makes the application run (regulars flow); `stop` of the last started
+//!   service (or of `all`) returns it to config and clears the regulars of the stopped
+//!   services; `regsig_load`/`regsig_clear` edit the regulars.
+//! - Regulars: a `sig` per loaded variable every `cycletime × txratedivider` µs
+//!   (`eOmn_appl_config_t`, 1 ms × 1 by default), in as few frames as fit `max_tx_packet`.
+
+use crate::entities::boards::EthBoardType;
+use crate::entities::mc::{
+    Calibrator, JointConfig, JointStatusCore, JointStatusTarget, MotorStatus, MotorStatusBasic,
+    MultiEncoders, Setpoint,
+};
+use crate::entities::mn::{
+    category, opc, service_type, versions, ApplConfig, ApplState, ApplStatus, BuildDate,
+    CommStatus, EndpointDescriptor, QueryArray, ReplyArray, ServiceCommand, ServiceCommandResult,
+    ServiceOperation, ServiceState, ServiceStatus, TransceiverProperties, Version,
+};
+use crate::frame::{Frame, FrameBuilder, FrameError, EMPTY_FRAME_SIZE};
+use crate::id::{endpoint as ep, entity as en, ids, tag, Id32};
+use crate::nvstore::NvStore;
+use crate::plant::{JointModel, SimpleJoint};
+use crate::rop::{ConfInfo, Rop, RopCode};
+use crate::wire::Entity;
+use std::time::Duration;
+
+/// What a board is: its identity and the entities its services offer.
+#[derive(Debug, Clone)]
+pub struct BoardConfig {
+    /// `ETH_BOARD_SETTINGS/Name`, for logs.
+    pub name: String,
+    pub ip: std::net::Ipv4Addr,
+    pub board_type: EthBoardType,
+    /// The application's version (`eOmn_appl_status_t::version`).
+    pub firmware: Version,
+    pub build_date: BuildDate,
+    /// Protocol versions the board announces: management, motion control, analog
+    /// sensors, skin (default: this crate's, i.e. a board with matching firmware).
+    pub protocol: [Version; 4],
+    /// Joints (and as many motors) of the motion-control service.
+    pub joints: u8,
+    pub strains: u8,
+    pub maises: u8,
+    pub temperatures: u8,
+    pub inertials3: u8,
+    pub pscs: u8,
+    pub poses: u8,
+    pub fts: u8,
+    pub batteries: u8,
+    pub skins: u8,
+    /// Largest datagram the board sends.
+    pub max_tx_packet: usize,
+    /// Largest datagram the board accepts (`eOmn_transceiver_properties_t::maxsizeRXpacket`).
+    pub max_rx_packet: usize,
+}
+
+impl BoardConfig {
+    /// A board of a type at an address, with nothing on it yet.
+    pub fn new(name: &str, ip: std::net::Ipv4Addr, board_type: EthBoardType) -> Self {
+        Self {
+            name: name.to_string(),
+            ip,
+            board_type,
+            firmware: Version::new(3, 80),
+            build_date: BuildDate {
+                year: 2024,
+                month: 1,
+                day: 1,
+                hour: 0,
+                min: 0,
+            },
+            protocol: [versions::MN, versions::MC, versions::AS, versions::SK],
+            joints: 0,
+            strains: 0,
+            maises: 0,
+            temperatures: 0,
+            inertials3: 0,
+            pscs: 0,
+            poses: 0,
+            fts: 0,
+            batteries: 0,
+            skins: 0,
+            max_tx_packet: 1500,
+            max_rx_packet: 768,
+        }
+    }
+
+    fn entity_counts(&self) -> [(u8, u8, u8); 13] {
+        [
+            (ep::MOTION_CONTROL, en::MC_JOINT, self.joints),
+            (ep::MOTION_CONTROL, en::MC_MOTOR, self.joints),
+            (
+                ep::MOTION_CONTROL,
+                en::MC_CONTROLLER,
+                u8::from(self.joints > 0),
+            ),
+            (ep::ANALOG_SENSORS, en::AS_STRAIN, self.strains),
+            (ep::ANALOG_SENSORS, en::AS_MAIS, self.maises),
+            (ep::ANALOG_SENSORS, en::AS_TEMPERATURE, self.temperatures),
+            (ep::ANALOG_SENSORS, en::AS_INERTIAL3, self.inertials3),
+            (ep::ANALOG_SENSORS, en::AS_PSC, self.pscs),
+            (ep::ANALOG_SENSORS, en::AS_POS, self.poses),
+            (ep::ANALOG_SENSORS, en::AS_FT, self.fts),
+            (ep::ANALOG_SENSORS, en::AS_BATTERY, self.batteries),
+            (ep::SKIN, en::SK_SKIN, self.skins),
+            (ep::MANAGEMENT, en::MN_INFO, 1),
+        ]
+    }
+
+    /// Whether the board has what a service category needs.
+    pub fn supports(&self, cat: u8) -> bool {
+        match cat {
+            category::MC => self.joints > 0,
+            category::STRAIN => self.strains > 0,
+            category::MAIS => self.maises > 0,
+            category::SKIN => self.skins > 0,
+            category::INERTIALS3 => self.inertials3 > 0,
+            category::TEMPERATURES => self.temperatures > 0,
+            category::PSC => self.pscs > 0,
+            category::POS => self.poses > 0,
+            category::FT => self.fts > 0,
+            category::BATTERY => self.batteries > 0,
+            _ => false,
+        }
+    }
+}
+
+/// Counters of what the board dropped or noticed.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct BoardCounters {
+    pub frames_received: u64,
+    pub invalid_frames: u64,
+    pub bad_rops: u64,
+    pub sequence_errors: u64,
+    /// Asks/sets of variables the board does not have, or sets of the wrong size.
+    pub rejected_rops: u64,
+    pub frames_sent: u64,
+    pub regulars_sent: u64,
+}
+
+/// Something the board did that its owner may want to log or act on.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BoardEvent {
+    /// The application state changed (go2state, service start/stop).
+    State(ApplState),
+    /// A service command was executed.
+    Service {
+        operation: u8,
+        category: u8,
+        ok: bool,
+    },
+    /// A `set` of a variable the board owns (sensor configs and enables included).
+    Set(Id32),
+}
+
+/// The board-side engine.
+pub struct BoardEngine {
+    cfg: BoardConfig,
+    store: NvStore,
+    state: ApplState,
+    services: [ServiceState; category::COUNT],
+    regulars: [Vec<Id32>; category::COUNT],
+    joints: Vec<Box<dyn JointModel>>,
+    replies: Vec<Rop>,
+    events: Vec<BoardEvent>,
+    tx_sequence: u64,
+    rx_sequence: Option<u64>,
+    next_regulars: Option<Duration>,
+    counters: BoardCounters,
+}
+
+impl std::fmt::Debug for BoardEngine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BoardEngine")
+            .field("name", &self.cfg.name)
+            .field("ip", &self.cfg.ip)
+            .field("state", &self.state)
+            .finish_non_exhaustive()
+    }
+}
+
+fn service_index(cat: u8) -> Option<usize> {
+    let i = usize::from(cat);
+    (i < category::COUNT).then_some(i)
+}
+
+impl BoardEngine {
+    /// A board in config state with [`SimpleJoint`]s at position 0.
+    pub fn new(cfg: BoardConfig) -> Self {
+        let joints = (0..cfg.joints)
+            .map(|_| Box::new(SimpleJoint::new(0.0)) as Box<dyn JointModel>)
+            .collect();
+        Self::with_joints(cfg, joints)
+    }
+
+    /// A board whose joints are the given models (one per configured joint; missing ones
+    /// are [`SimpleJoint`]s, extra ones ignored).
+    pub fn with_joints(cfg: BoardConfig, mut joints: Vec<Box<dyn JointModel>>) -> Self {
+        joints.truncate(usize::from(cfg.joints));
+        while joints.len() < usize::from(cfg.joints) {
+            joints.push(Box::new(SimpleJoint::new(0.0)));
+        }
+        let mut store = NvStore::new();
+        for e in [en::MN_COMM, en::MN_APPL, en::MN_SERVICE] {
+            store.add_entity(ep::MANAGEMENT, e, 1);
+        }
+        for (e, n, c) in cfg.entity_counts() {
+            store.add_entity(e, n, c);
+        }
+        let mut b = Self {
+            cfg,
+            store,
+            state: ApplState::Config,
+            services: [ServiceState::Idle; category::COUNT],
+            regulars: Default::default(),
+            joints,
+            replies: Vec::new(),
+            events: Vec::new(),
+            tx_sequence: 0,
+            rx_sequence: None,
+            next_regulars: None,
+            counters: BoardCounters::default(),
+        };
+        b.init_management();
+        b.publish_joints();
+        b
+    }
+
+    fn init_management(&mut self) {
+        let comm = CommStatus {
+            management_protocol_version: self.cfg.protocol[0],
+            transceiver: TransceiverProperties {
+                listening_port: 12345,
+                destination_port: 12345,
+                max_size_rx_packet: self.cfg.max_rx_packet as u16,
+                max_size_tx_packet: self.cfg.max_tx_packet as u16,
+                max_size_ropframe_regulars: self.cfg.max_tx_packet as u16,
+                max_size_ropframe_replies: self.cfg.max_tx_packet as u16,
+                max_size_ropframe_occasionals: self.cfg.max_tx_packet as u16,
+                max_size_rop: 384,
+                max_number_regular_rops: 128,
+            },
+        };
+        let _ = self.store.write(ids::COMM_STATUS, &comm);
+        let _ = self.store.write(ids::APPL_CONFIG, &ApplConfig::default());
+        self.write_appl_status();
+        self.write_service_status(ServiceCommandResult::default());
+    }
+
+    fn write_appl_status(&mut self) {
+        let mut name = [0u8; 16];
+        let n = self.cfg.name.len().min(15);
+        name[..n].copy_from_slice(&self.cfg.name.as_bytes()[..n]);
+        let cfg = self.appl_config();
+        let st = ApplStatus {
+            build_date: self.cfg.build_date,
+            version: self.cfg.firmware,
+            name,
+            current_state: self.state as u8,
+            cloop_timings: [cfg.maxtime_rx, cfg.maxtime_do, cfg.maxtime_tx],
+            tx_decimation_factor: cfg.txratedivider.max(1),
+            board_type: self.cfg.board_type as u8,
+        };
+        let _ = self.store.write(ids::APPL_STATUS, &st);
+    }
+
+    fn write_service_status(&mut self, result: ServiceCommandResult) {
+        let mut st = ServiceStatus {
+            command_result: result,
+            ..Default::default()
+        };
+        for (i, s) in self.services.iter().enumerate() {
+            st.state_of_service[i] = *s as u8;
+        }
+        if let Some(item) = self.store.item_mut(ep::MANAGEMENT, en::MN_SERVICE, 0) {
+            item[..ServiceStatus::SIZE].copy_from_slice(&st.to_bytes());
+        }
+    }
+
+    pub fn config(&self) -> &BoardConfig {
+        &self.cfg
+    }
+    pub fn state(&self) -> ApplState {
+        self.state
+    }
+    pub fn service_state(&self, cat: u8) -> Option<ServiceState> {
+        service_index(cat).map(|i| self.services[i])
+    }
+    pub fn counters(&self) -> BoardCounters {
+        self.counters
+    }
+    /// The variables (read them to model sensors' configs; write sensor statuses).
+    pub fn store(&self) -> &NvStore {
+        &self.store
+    }
+    pub fn store_mut(&mut self) -> &mut NvStore {
+        &mut self.store
+    }
+    pub fn joint(&self, j: usize) -> Option<&dyn JointModel> {
+        self.joints.get(j).map(|b| b.as_ref())
+    }
+    pub fn joint_mut(&mut self, j: usize) -> Option<&mut (dyn JointModel + 'static)> {
+        self.joints.get_mut(j).map(|b| b.as_mut())
+    }
+    /// The regulars currently loaded, in transmission order.
+    pub fn regulars(&self) -> Vec<Id32> {
+        self.regulars.iter().flatten().copied().collect()
+    }
+    /// The regular period: `cycletime × txratedivider`.
+    pub fn regular_period(&self) -> Duration {
+        let c = self.appl_config();
+        let cycle = if c.cycletime == 0 { 1000 } else { c.cycletime };
+        Duration::from_micros(u64::from(cycle) * u64::from(c.txratedivider.max(1)))
+    }
+    fn appl_config(&self) -> ApplConfig {
+        self.store.read(ids::APPL_CONFIG).unwrap_or_default()
+    }
+    /// Takes what happened since the last call.
+    pub fn poll_event(&mut self) -> Option<BoardEvent> {
+        if self.events.is_empty() {
+            None
+        } else {
+            Some(self.events.remove(0))
+        }
+    }
+
+    fn set_state(&mut self, s: ApplState) {
+        if s != self.state {
+            self.state = s;
+            self.write_appl_status();
+            self.events.push(BoardEvent::State(s));
+        }
+    }
+
+    /// Processes a datagram from the host; replies are queued for [`Self::poll_transmit`].
+    /// A malformed frame is counted and dropped; malformed ROPs are counted and the ROPs
+    /// before them processed (as `EOreceiver` does).
+    pub fn handle_datagram(&mut self, datagram: &[u8]) -> Result<(), FrameError> {
+        let frame = match Frame::decode(datagram) {
+            Ok(f) => f,
+            Err(e) => {
+                self.counters.invalid_frames += 1;
+                return Err(e);
+            }
+        };
+        self.counters.frames_received += 1;
+        let seq = frame.header.sequence;
+        if let Some(prev) = self.rx_sequence {
+            if seq != prev.wrapping_add(1) {
+                self.counters.sequence_errors += 1;
+            }
+        }
+        self.rx_sequence = Some(seq);
+        let (rops, err) = frame.parse_rops();
+        if err.is_some() {
+            self.counters.bad_rops += 1;
+        }
+        for rop in rops {
+            self.process(rop);
+        }
+        Ok(())
+    }
+
+    fn reply_to(&self, rop: &Rop) -> Rop {
+        let mut r = Rop {
+            ctrl: Default::default(),
+            code: rop.code,
+            id32: rop.id32,
+            data: Vec::new(),
+            signature: None,
+            time: None,
+        };
+        if rop.ctrl.plussign {
+            r.ctrl.plussign = true;
+            r.signature = rop.signature;
+        }
+        if rop.ctrl.rqsttime {
+            r.ctrl.plustime = true;
+        }
+        r
+    }
+
+    fn process(&mut self, rop: Rop) {
+        let id = rop.id32;
+        let known = self.store.contains(id);
+        match rop.code {
+            RopCode::Ask => {
+                if known {
+                    let mut r = self.reply_to(&rop);
+                    r.code = RopCode::Say;
+                    r.data = self.store.get(id).map(<[u8]>::to_vec).unwrap_or_default();
+                    self.replies.push(r);
+                } else {
+                    self.reject(&rop);
+                }
+            }
+            RopCode::Set if rop.carries_data() => {
+                if known && self.store.set(id, &rop.data).is_ok() {
+                    if rop.ctrl.rqstconf {
+                        let mut r = self.reply_to(&rop);
+                        r.ctrl.confinfo = ConfInfo::Ack;
+                        self.replies.push(r);
+                    }
+                    self.on_set(id, &rop.data);
+                } else {
+                    self.reject(&rop);
+                }
+            }
+            _ => {
+                // say/sig/rst: the board owns no remote variables; confirm if asked.
+                if rop.ctrl.rqstconf {
+                    let mut r = self.reply_to(&rop);
+                    r.ctrl.confinfo = ConfInfo::Ack;
+                    self.replies.push(r);
+                }
+            }
+        }
+    }
+
+    fn reject(&mut self, rop: &Rop) {
+        self.counters.rejected_rops += 1;
+        if rop.ctrl.rqstconf {
+            let mut r = self.reply_to(rop);
+            r.ctrl.confinfo = ConfInfo::Nak;
+            self.replies.push(r);
+        }
+    }
+
+    fn on_set(&mut self, id: Id32, data: &[u8]) {
+        self.events.push(BoardEvent::Set(id));
+        match (id.endpoint(), id.entity(), id.tag()) {
+            (ep::MANAGEMENT, en::MN_APPL, tag::MN_APPL_CMMNDS_GO2STATE) => {
+                match ApplState::from_u8(data[0]) {
+                    Some(ApplState::Running) => self.set_state(ApplState::Running),
+                    Some(ApplState::Config) => self.set_state(ApplState::Config),
+                    _ => {}
+                }
+            }
+            (
+                ep::MANAGEMENT,
+                en::MN_APPL,
+                tag::MN_APPL_CONFIG | tag::MN_APPL_CONFIG_TXRATEDIVIDER,
+            ) => {
+                self.write_appl_status();
+            }
+            (ep::MANAGEMENT, en::MN_COMM, tag::MN_COMM_CMMNDS_COMMAND_QUERYARRAY) => {
+                if let Ok(q) = QueryArray::from_bytes(data) {
+                    if q.opc == opc::QUERY_ARRAY_EPDES {
+                        let reply = ReplyArray::endpoint_descriptors(&self.endpoint_descriptors());
+                        let bytes = reply.to_bytes();
+                        let _ = self.store.set(ids::COMM_REPLY_ARRAY, &bytes);
+                        self.replies.push(Rop::sig(ids::COMM_REPLY_ARRAY, bytes));
+                    }
+                }
+            }
+            (ep::MANAGEMENT, en::MN_SERVICE, tag::MN_SERVICE_CMMNDS_COMMAND) => {
+                if let Ok(cmd) = ServiceCommand::from_bytes(data) {
+                    self.service_command(&cmd);
+                }
+            }
+            (ep::MOTION_CONTROL, en::MC_JOINT, t) => self.joint_set(id.index(), t, data),
+            _ => {}
+        }
+    }
+
+    fn endpoint_descriptors(&self) -> Vec<EndpointDescriptor> {
+        let mut v = vec![EndpointDescriptor {
+            endpoint: ep::MANAGEMENT,
+            entities_inside: 4,
+            version: self.cfg.protocol[0],
+        }];
+        for e in [ep::MOTION_CONTROL, ep::ANALOG_SENSORS, ep::SKIN] {
+            let n = (0..crate::id::entities_in_endpoint(e))
+                .filter(|ent| self.store.count(e, *ent) > 0)
+                .count() as u8;
+            if n > 0 {
+                v.push(EndpointDescriptor {
+                    endpoint: e,
+                    entities_inside: n,
+                    version: self.cfg.protocol[usize::from(e)],
+                });
+            }
+        }
+        v
+    }
+
+    fn service_command(&mut self, cmd: &ServiceCommand) {
+        let cat = cmd.category;
+        let mut ok = true;
+        let mut data = [0u8; 28];
+        let mut stype = service_type::NONE;
+        let cats: Vec<usize> = if cat == category::ALL {
+            (0..category::COUNT).collect()
+        } else {
+            service_index(cat).into_iter().collect()
+        };
+        match ServiceOperation::from_u8(cmd.operation) {
+            Some(ServiceOperation::VerifyActivate) => {
+                stype = cmd.service_type();
+                match service_index(cat) {
+                    Some(i) if self.cfg.supports(cat) => {
+                        self.services[i] = ServiceState::Activated;
+                        if cat == category::MC {
+                            self.activate_mc();
+                        }
+                    }
+                    Some(i) => {
+                        self.services[i] = ServiceState::FailureOfVerify;
+                        ok = false;
+                    }
+                    None => ok = false,
+                }
+            }
+            Some(ServiceOperation::Start) => {
+                for i in &cats {
+                    if matches!(
+                        self.services[*i],
+                        ServiceState::Activated | ServiceState::Started
+                    ) {
+                        self.services[*i] = ServiceState::Started;
+                    } else if cat != category::ALL {
+                        ok = false;
+                    }
+                }
+                if self.services.contains(&ServiceState::Started) {
+                    self.set_state(ApplState::Running);
+                }
+            }
+            Some(ServiceOperation::Stop) => {
+                let mut stopped = 0usize;
+                for i in &cats {
+                    if self.services[*i] == ServiceState::Started {
+                        self.services[*i] = ServiceState::Activated;
+                    }
+                    stopped += self.regulars[*i].len();
+                    self.regulars[*i].clear();
+                }
+                if !self.services.contains(&ServiceState::Started) {
+                    self.set_state(ApplState::Config);
+                }
+                // eOmn_service_command_stop_result_data_t: applstate, totalregulars, serviceregulars.
+                data[0] = self.state as u8;
+                data[1] = self.regulars.iter().map(Vec::len).sum::<usize>().min(255) as u8;
+                data[2] = stopped.min(255) as u8;
+            }
+            Some(ServiceOperation::Deactivate) => {
+                for i in &cats {
+                    self.services[*i] = ServiceState::Idle;
+                    self.regulars[*i].clear();
+                }
+                if !self.services.contains(&ServiceState::Started) {
+                    self.set_state(ApplState::Config);
+                }
+            }
+            Some(ServiceOperation::RegsigLoad) => match service_index(cat) {
+                Some(i) => {
+                    for id in cmd.id32s() {
+                        if self.store.contains(id) {
+                            if !self.regulars[i].contains(&id) {
+                                self.regulars[i].push(id);
+                            }
+                        } else {
+                            ok = false;
+                        }
+                    }
+                }
+                None => ok = false,
+            },
+            Some(ServiceOperation::RegsigClear) => {
+                for i in &cats {
+                    self.regulars[*i].clear();
+                }
+            }
+            Some(ServiceOperation::None) | None => ok = false,
+        }
+        let result = ServiceCommandResult {
+            latest_command_is_ok: ok,
+            operation: cmd.operation,
+            category: cat,
+            service_type: stype,
+            data,
+        };
+        self.write_service_status(result);
+        self.replies
+            .push(Rop::sig(ids::SERVICE_COMMAND_RESULT, result.to_bytes()));
+        self.events.push(BoardEvent::Service {
+            operation: cmd.operation,
+            category: cat,
+            ok,
+        });
+    }
+
+    fn activate_mc(&mut self) {
+        let n = self.cfg.joints;
+        let status = crate::entities::mc::ControllerStatus {
+            state_of_controller: 1,
+            num_of_joints: n,
+            num_of_motors: n,
+            all_jomo_initted: true,
+            flags_initted_joints: ((1u32 << n) - 1) as u16,
+            flags_initted_motors: ((1u32 << n) - 1) as u16,
+            supply_voltage: 0,
+        };
+        let _ = self.store.write(
+            Id32::new(
+                ep::MOTION_CONTROL,
+                en::MC_CONTROLLER,
+                0,
+                tag::MC_CONTROLLER_STATUS,
+            ),
+            &status,
+        );
+    }
+
+    fn joint_set(&mut self, j: u8, t: u8, data: &[u8]) {
+        let Some(model) = self.joints.get_mut(usize::from(j)) else {
+            return;
+        };
+        match t {
+            tag::MC_JOINT_CONFIG => {
+                if let Ok(c) = JointConfig::from_bytes(data) {
+                    model.configure(&c);
+                }
+            }
+            tag::MC_JOINT_CMMNDS_SETPOINT => {
+                if let Ok(s) = Setpoint::from_bytes(data) {
+                    model.setpoint(&s);
+                }
+            }
+            tag::MC_JOINT_CMMNDS_CONTROLMODE => model.set_control_mode(data[0]),
+            tag::MC_JOINT_CMMNDS_INTERACTIONMODE => model.set_interaction_mode(data[0]),
+            tag::MC_JOINT_CMMNDS_STOPTRAJECTORY => {
+                if data[0] != 0 {
+                    model.stop_trajectory();
+                }
+            }
+            tag::MC_JOINT_CMMNDS_CALIBRATION => {
+                if let Ok(c) = Calibrator::from_bytes(data) {
+                    model.calibrate(&c);
+                }
+            }
+            _ => {}
+        }
+        self.publish_joint(usize::from(j));
+    }
+
+    /// Advances the joints by `dt` seconds (while running, as the firmware's control loop
+    /// runs only then) and publishes their status in the joint and motor variables.
+    pub fn step(&mut self, dt: f64) {
+        if self.state == ApplState::Running {
+            for j in self.joints.iter_mut() {
+                j.step(dt);
+            }
+        }
+        self.publish_joints();
+    }
+
+    fn publish_joints(&mut self) {
+        for j in 0..self.joints.len() {
+            self.publish_joint(j);
+        }
+    }
+
+    fn publish_joint(&mut self, j: usize) {
+        let Some(model) = self.joints.get(j) else {
+            return;
+        };
+        let f = model.feedback();
+        let ji = j as u8;
+        let sat = |v: f64| v.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
+        let core = JointStatusCore {
+            position: sat(f.position),
+            velocity: sat(f.velocity),
+            acceleration: sat(f.acceleration),
+            torque: f.torque as f32,
+            ofpid: [
+                sat(f.reference),
+                0,
+                sat(f.reference - f.position),
+                0,
+                i32::from(f.pwm),
+            ],
+            control_mode: f.control_mode,
+            interaction_mode: f.interaction_mode,
+            motion_done: f.motion_done,
+        };
+        let target = JointStatusTarget {
+            position: sat(f.target_position),
+            position_raw: sat(f.reference),
+            velocity: sat(f.target_velocity),
+            acceleration: 0,
+            torque: 0.0,
+            pwm: i32::from(f.pwm),
+            current: i32::from(f.current),
+        };
+        let motor = MotorStatus {
+            basic: MotorStatusBasic {
+                position: sat(f.position),
+                velocity: sat(f.velocity),
+                acceleration: sat(f.acceleration),
+                current: f.current,
+                temperature: f.temperature,
+                pwm: f.pwm,
+            },
+            mc_fault_state: 0,
+        };
+        let _ = self
+            .store
+            .write(ids::joint(ji, tag::MC_JOINT_STATUS_CORE), &core);
+        let _ = self
+            .store
+            .write(ids::joint(ji, tag::MC_JOINT_STATUS_TARGET), &target);
+        let _ = self.store.write(
+            ids::joint(ji, tag::MC_JOINT_STATUS_ADDINFO_MULTIENC),
+            &MultiEncoders([core.position, 0, 0]),
+        );
+        let _ = self
+            .store
+            .write(ids::motor(ji, tag::MC_MOTOR_STATUS), &motor);
+    }
+
+    /// The next datagram to send at time `now` (µs of the board's life, used as the
+    /// frame's age): queued replies at once, and the regulars when their period is due
+    /// while running. Call until `None`.
+    pub fn poll_transmit(&mut self, now: Duration) -> Option<Vec<u8>> {
+        let mut fb = FrameBuilder::new(self.cfg.max_tx_packet);
+        let mut taken = 0;
+        for r in &self.replies {
+            if fb.push(r).is_err() {
+                if fb.is_empty() {
+                    // A reply larger than a datagram can never go: drop it.
+                    taken += 1;
+                    continue;
+                }
+                break;
+            }
+            taken += 1;
+        }
+        self.replies.drain(..taken);
+        if self.replies.is_empty() && self.regulars_due(now) {
+            let regs = self.regulars();
+            let mut sent = 0;
+            for id in regs {
+                let Ok(data) = self.store.get(id) else {
+                    continue;
+                };
+                let rop = Rop::sig(id, data.to_vec());
+                if fb.push(&rop).is_err() {
+                    if fb.is_empty() {
+                        continue;
+                    }
+                    // Flush this frame; the rest of the regulars go in the next one.
+                    self.counters.regulars_sent += sent;
+                    return Some(self.finish(&fb, now));
+                }
+                sent += 1;
+            }
+            self.counters.regulars_sent += sent;
+            self.schedule_regulars(now);
+        }
+        if fb.is_empty() {
+            return None;
+        }
+        Some(self.finish(&fb, now))
+    }
+
+    fn regulars_due(&self, now: Duration) -> bool {
+        self.state == ApplState::Running
+            && self.regulars.iter().any(|r| !r.is_empty())
+            && self.next_regulars.map_or(true, |t| now >= t)
+    }
+
+    fn schedule_regulars(&mut self, now: Duration) {
+        let p = self.regular_period();
+        let next = match self.next_regulars {
+            Some(t) if t + p > now => t + p,
+            _ => now + p,
+        };
+        self.next_regulars = Some(next);
+    }
+
+    /// When [`Self::poll_transmit`] next has something to send without new input.
+    pub fn next_transmit(&self) -> Option<Duration> {
+        if !self.replies.is_empty() {
+            return Some(Duration::ZERO);
+        }
+        if self.state == ApplState::Running && self.regulars.iter().any(|r| !r.is_empty()) {
+            return Some(self.next_regulars.unwrap_or(Duration::ZERO));
+        }
+        None
+    }
+
+    fn finish(&mut self, fb: &FrameBuilder, now: Duration) -> Vec<u8> {
+        self.tx_sequence += 1;
+        self.counters.frames_sent += 1;
+        let v = fb.finish(self.tx_sequence, now.as_micros() as u64);
+        debug_assert!(v.len() >= EMPTY_FRAME_SIZE);
+        v
+    }
+}

@@ -1,0 +1,1037 @@
+//! The host side (what icub-main's `HostTransceiver`, `theNVmanager`, `EthMonitorPresence`
+//! and `EthResource` do), without sockets.
+//!
+//! [`HostTransceiver`] queues ROPs and packs them into ropframes of at most the board's
+//! `maxSizeRXpacket` bytes (`poll_transmit`), numbering the frames from 1; it decodes the
+//! board's datagrams into its copy of the board's variables (`handle_datagram`), matches
+//! each `say` to its `ask` by signature and each awaited `sig` by id32, expires requests
+//! after their timeout (`handle_timeout`), checks the board's sequence numbers and
+//! reports a board that stops streaming within its presence timeout. Bad datagrams are
+//! counted and dropped.
+//!
+//! [`Startup`] drives one board through `EthResource`'s bring-up and the services'
+//! activation, with the same timeouts and retries as C++.
+
+use crate::entities::boards::EthBoardType;
+use crate::entities::mn::{
+    category, opc, versions, ApplConfig, ApplStatus, QueryArray, ReplyArray, ServiceCommand,
+    ServiceCommandResult, ServiceOperation, Version,
+};
+use crate::frame::{Frame, FrameBuilder, FrameError, RopsError};
+use crate::id::{endpoint as ep, endpoint_name, entity as en, ids, Id32};
+use crate::nvstore::{NvError, NvStore};
+use crate::rop::{ConfInfo, Rop, RopCode};
+use crate::wire::Entity;
+use std::collections::{HashMap, VecDeque};
+use std::net::Ipv4Addr;
+use std::time::Duration;
+use thiserror::Error;
+
+/// The presence timeout when `ETH_BOARD_ACTIONS/MONITOR_ITS_PRESENCE` gives none (20 ms).
+pub const DEFAULT_PRESENCE_TIMEOUT: Duration = Duration::from_millis(20);
+/// `theNVmanager` signatures wrap below this value (`uniquesignature()`).
+const SIGNATURE_WRAP: u32 = 0xA000_0000;
+
+/// What the host knows of a board before talking to it (`ETH_BOARD` of the XML).
+#[derive(Debug, Clone)]
+pub struct HostConfig {
+    /// `ETH_BOARD_SETTINGS/Name`.
+    pub board_name: String,
+    /// `ETH_BOARD_PROPERTIES/IpAddress`.
+    pub board_ip: Ipv4Addr,
+    /// `ETH_BOARD_PROPERTIES/Type`.
+    pub board_type: EthBoardType,
+    /// `ETH_BOARD_PROPERTIES/maxSizeRXpacket` (768 by default): the largest frame we send.
+    pub max_tx_packet: usize,
+    /// `MONITOR_ITS_PRESENCE/timeout` (None: `enabled false`).
+    pub presence_timeout: Option<Duration>,
+    /// Our protocol versions (this crate's by default): management, MC, AS, SK.
+    pub protocol: [Version; 4],
+}
+
+impl HostConfig {
+    pub fn new(board_name: &str, board_ip: Ipv4Addr, board_type: EthBoardType) -> Self {
+        Self {
+            board_name: board_name.to_string(),
+            board_ip,
+            board_type,
+            max_tx_packet: 768,
+            presence_timeout: Some(DEFAULT_PRESENCE_TIMEOUT),
+            protocol: [versions::MN, versions::MC, versions::AS, versions::SK],
+        }
+    }
+}
+
+/// Identifies an outstanding request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct RequestId(u64);
+
+/// Why a request failed.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum RequestError {
+    /// As `theNVmanager::Impl::ask()` / `wait()` report it.
+    #[error("timeout for BOARD {board} IP {ip} and nv {id}")]
+    Timeout {
+        board: String,
+        ip: Ipv4Addr,
+        id: Id32,
+    },
+    #[error("BOARD {board} IP {ip} refused nv {id} (nak)")]
+    Nak {
+        board: String,
+        ip: Ipv4Addr,
+        id: Id32,
+    },
+}
+
+/// A local problem preparing a request.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum HostError {
+    #[error(transparent)]
+    Nv(#[from] NvError),
+    #[error("ROP for {0} does not fit in a frame of the board's maxSizeRXpacket")]
+    TooBig(Id32),
+}
+
+/// Something the owner should log or act on.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum HostEvent {
+    /// The board has been silent longer than its presence timeout
+    /// (`EthMonitorPresence`: "has been silent for ... sec (its timeout is ... sec)").
+    BoardLost {
+        silent_for: Duration,
+        timeout: Duration,
+    },
+    /// The board talks again after being lost.
+    BoardRecovered { lost_for: Duration },
+    /// A frame's sequence number is not the previous + 1.
+    SequenceGap { expected: u64, received: u64 },
+    /// A datagram that is not a ropframe was dropped.
+    BadFrame(FrameError),
+    /// ROPs of a frame could not be parsed (those before were used).
+    BadRops(RopsError),
+    /// A variable arrived by `sig` (regulars, command results, diagnostics).
+    Signal(Id32),
+}
+
+impl HostEvent {
+    /// The message C++ prints for this event, naming the board.
+    pub fn describe(&self, cfg: &HostConfig) -> String {
+        let who = format!("{} ({})", cfg.board_ip, cfg.board_name);
+        match self {
+            Self::BoardLost {
+                silent_for,
+                timeout,
+            } => format!(
+                "eth::EthMonitorPresence: BOARD {who} has been silent for {:.3} sec (its timeout is {:.3} sec)",
+                silent_for.as_secs_f64(),
+                timeout.as_secs_f64()
+            ),
+            Self::BoardRecovered { lost_for } => format!(
+                "eth::EthMonitorPresence: BOARD {who} has shown after being lost for {:.3} sec",
+                lost_for.as_secs_f64()
+            ),
+            Self::SequenceGap { expected, received } => format!(
+                "BOARD {who}: detected an error in sequence number: expected = {expected}, received = {received}, lost = {}",
+                received.wrapping_sub(*expected)
+            ),
+            Self::BadFrame(e) => format!("BOARD {who}: dropped an invalid ropframe: {e}"),
+            Self::BadRops(e) => format!("BOARD {who}: dropped ROPs of a ropframe: {e}"),
+            Self::Signal(id) => format!("BOARD {who}: sig<{id}>"),
+        }
+    }
+}
+
+/// Counters of the host's reception and transmission.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct HostCounters {
+    pub frames_received: u64,
+    pub frames_sent: u64,
+    pub invalid_frames: u64,
+    pub bad_rops: u64,
+    pub sequence_gaps: u64,
+    /// ROPs about variables we do not know, or with a size that is not the variable's.
+    pub unknown_rops: u64,
+    pub timeouts: u64,
+}
+
+#[derive(Debug)]
+struct Pending {
+    id: Id32,
+    deadline: Duration,
+    /// `ask`: wait for the `say` with this signature; `command`: for a `sig` of `id`.
+    signature: Option<u32>,
+}
+
+/// The host's side of one board.
+#[derive(Debug)]
+pub struct HostTransceiver {
+    cfg: HostConfig,
+    store: NvStore,
+    queue: VecDeque<Rop>,
+    pending: HashMap<RequestId, Pending>,
+    results: HashMap<RequestId, Result<Vec<u8>, RequestError>>,
+    events: VecDeque<HostEvent>,
+    next_request: u64,
+    next_signature: u32,
+    tx_sequence: u64,
+    rx_sequence: Option<u64>,
+    last_heard: Option<Duration>,
+    lost_since: Option<Duration>,
+    monitor_presence: bool,
+    counters: HostCounters,
+}
+
+impl HostTransceiver {
+    pub fn new(cfg: HostConfig) -> Self {
+        // Room for every variable of the largest boards (`eonvset_BRDcfgMax`).
+        let mut store = NvStore::new();
+        for e in 0..4 {
+            store.add_entity(ep::MANAGEMENT, e, 1);
+        }
+        store.add_entity(ep::MOTION_CONTROL, en::MC_JOINT, 12);
+        store.add_entity(ep::MOTION_CONTROL, en::MC_MOTOR, 12);
+        store.add_entity(ep::MOTION_CONTROL, en::MC_CONTROLLER, 1);
+        for e in 0..8 {
+            store.add_entity(ep::ANALOG_SENSORS, e, 4);
+        }
+        store.add_entity(ep::SKIN, en::SK_SKIN, 4);
+        Self {
+            cfg,
+            store,
+            queue: VecDeque::new(),
+            pending: HashMap::new(),
+            results: HashMap::new(),
+            events: VecDeque::new(),
+            next_request: 1,
+            next_signature: 0,
+            tx_sequence: 0,
+            rx_sequence: None,
+            last_heard: None,
+            lost_since: None,
+            monitor_presence: false,
+            counters: HostCounters::default(),
+        }
+    }
+
+    pub fn config(&self) -> &HostConfig {
+        &self.cfg
+    }
+    pub fn counters(&self) -> HostCounters {
+        self.counters
+    }
+    /// Our copy of the board's variables (`getLocalValue`).
+    pub fn store(&self) -> &NvStore {
+        &self.store
+    }
+    /// A variable as last received.
+    pub fn read<T: Entity>(&self, id: Id32) -> Result<T, NvError> {
+        self.store.read(id)
+    }
+    /// Whether the board is currently reported lost.
+    pub fn board_lost(&self) -> bool {
+        self.lost_since.is_some()
+    }
+
+    /// Arms (or disarms) the presence monitor: once armed, a board silent for longer than
+    /// its presence timeout is reported (armed when a service starts: from then on the
+    /// board streams its regulars).
+    pub fn monitor_presence(&mut self, on: bool, now: Duration) {
+        self.monitor_presence = on && self.cfg.presence_timeout.is_some();
+        if self.monitor_presence && self.last_heard.is_none() {
+            self.last_heard = Some(now);
+        }
+    }
+
+    fn request_id(&mut self) -> RequestId {
+        let r = RequestId(self.next_request);
+        self.next_request += 1;
+        r
+    }
+
+    fn check_size(&self, rop: &Rop) -> Result<(), HostError> {
+        if rop.wire_size() + crate::frame::EMPTY_FRAME_SIZE > self.cfg.max_tx_packet {
+            return Err(HostError::TooBig(rop.id32));
+        }
+        Ok(())
+    }
+
+    /// `ask<id>` with a fresh signature (`theNVmanager::ask`); the value arrives with the
+    /// board's `say`. Result via [`Self::take_result`].
+    pub fn ask(
+        &mut self,
+        id: Id32,
+        timeout: Duration,
+        now: Duration,
+    ) -> Result<RequestId, HostError> {
+        id.layout().ok_or(NvError::Unknown(id))?;
+        let signature = self.next_signature;
+        self.next_signature = (self.next_signature + 1) % SIGNATURE_WRAP;
+        let rop = Rop::ask(id)
+            .with_signature(signature)
+            .with_time(now.as_micros() as u64);
+        self.check_size(&rop)?;
+        self.queue.push_back(rop);
+        let r = self.request_id();
+        self.pending.insert(
+            r,
+            Pending {
+                id,
+                deadline: now + timeout,
+                signature: Some(signature),
+            },
+        );
+        Ok(r)
+    }
+
+    /// `set<id>` (`HostTransceiver::addROPset`): `data` must have the variable's size.
+    pub fn set(&mut self, id: Id32, data: &[u8], now: Duration) -> Result<(), HostError> {
+        let size = id.size().ok_or(NvError::Unknown(id))?;
+        if data.len() != size {
+            return Err(NvError::Size {
+                id,
+                expected: size,
+                got: data.len(),
+            }
+            .into());
+        }
+        let rop = Rop::set(id, data.to_vec()).with_time(now.as_micros() as u64);
+        self.check_size(&rop)?;
+        self.queue.push_back(rop);
+        Ok(())
+    }
+
+    /// `set` of a typed variable.
+    pub fn set_value<T: Entity>(
+        &mut self,
+        id: Id32,
+        v: &T,
+        now: Duration,
+    ) -> Result<(), HostError> {
+        self.set(id, &v.to_bytes(), now)
+    }
+
+    /// `theNVmanager::command`: `set<cmd>` then wait for the board's `sig<reply>`.
+    pub fn command(
+        &mut self,
+        cmd: Id32,
+        data: &[u8],
+        reply: Id32,
+        timeout: Duration,
+        now: Duration,
+    ) -> Result<RequestId, HostError> {
+        reply.layout().ok_or(NvError::Unknown(reply))?;
+        self.set(cmd, data, now)?;
+        let r = self.request_id();
+        self.pending.insert(
+            r,
+            Pending {
+                id: reply,
+                deadline: now + timeout,
+                signature: None,
+            },
+        );
+        Ok(r)
+    }
+
+    /// The outcome of a request once it has one (the value asked or signalled).
+    pub fn take_result(&mut self, r: RequestId) -> Option<Result<Vec<u8>, RequestError>> {
+        self.results.remove(&r)
+    }
+
+    /// Whether a request is still waiting.
+    pub fn is_pending(&self, r: RequestId) -> bool {
+        self.pending.contains_key(&r)
+    }
+
+    /// The next ropframe to send, if ROPs are queued: as many as fit `max_tx_packet`.
+    pub fn poll_transmit(&mut self, now: Duration) -> Option<Vec<u8>> {
+        if self.queue.is_empty() {
+            return None;
+        }
+        let mut fb = FrameBuilder::new(self.cfg.max_tx_packet);
+        while let Some(rop) = self.queue.front() {
+            if fb.push(rop).is_err() {
+                if fb.is_empty() {
+                    // Cannot happen (checked when queued); never loop on it.
+                    self.queue.pop_front();
+                    continue;
+                }
+                break;
+            }
+            self.queue.pop_front();
+        }
+        if fb.is_empty() {
+            return None;
+        }
+        self.tx_sequence += 1;
+        self.counters.frames_sent += 1;
+        Some(fb.finish(self.tx_sequence, now.as_micros() as u64))
+    }
+
+    /// Takes a datagram from the board. A datagram that is not a ropframe is counted,
+    /// reported as [`HostEvent::BadFrame`] and returned as an error.
+    pub fn handle_datagram(&mut self, datagram: &[u8], now: Duration) -> Result<(), FrameError> {
+        let frame = match Frame::decode(datagram) {
+            Ok(f) => f,
+            Err(e) => {
+                self.counters.invalid_frames += 1;
+                self.events.push_back(HostEvent::BadFrame(e));
+                return Err(e);
+            }
+        };
+        self.counters.frames_received += 1;
+        self.heard(now);
+        let seq = frame.header.sequence;
+        if let Some(prev) = self.rx_sequence {
+            let expected = prev.wrapping_add(1);
+            if seq != expected {
+                self.counters.sequence_gaps += 1;
+                self.events.push_back(HostEvent::SequenceGap {
+                    expected,
+                    received: seq,
+                });
+            }
+        }
+        self.rx_sequence = Some(seq);
+        let (rops, err) = frame.parse_rops();
+        if let Some(e) = err {
+            self.counters.bad_rops += 1;
+            self.events.push_back(HostEvent::BadRops(e));
+        }
+        for rop in rops {
+            self.process(rop);
+        }
+        Ok(())
+    }
+
+    fn heard(&mut self, now: Duration) {
+        if let Some(since) = self.lost_since.take() {
+            self.events.push_back(HostEvent::BoardRecovered {
+                lost_for: now.saturating_sub(since),
+            });
+        }
+        self.last_heard = Some(now);
+    }
+
+    fn process(&mut self, rop: Rop) {
+        let id = rop.id32;
+        match (rop.code, rop.ctrl.confinfo) {
+            (RopCode::Say | RopCode::Sig, ConfInfo::None) => {
+                if self.store.set(id, &rop.data).is_err() {
+                    self.counters.unknown_rops += 1;
+                    return;
+                }
+                let done: Vec<RequestId> = self
+                    .pending
+                    .iter()
+                    .filter(|(_, p)| {
+                        p.id == id
+                            && match (rop.code, p.signature) {
+                                (RopCode::Say, Some(s)) => rop.signature == Some(s),
+                                (RopCode::Sig, None) => true,
+                                _ => false,
+                            }
+                    })
+                    .map(|(r, _)| *r)
+                    .collect();
+                for r in done {
+                    self.pending.remove(&r);
+                    self.results.insert(r, Ok(rop.data.clone()));
+                }
+                if rop.code == RopCode::Sig {
+                    self.events.push_back(HostEvent::Signal(id));
+                }
+            }
+            (_, ConfInfo::Nak) => {
+                let done: Vec<RequestId> = self
+                    .pending
+                    .iter()
+                    .filter(|(_, p)| {
+                        p.id == id && (p.signature.is_none() || p.signature == rop.signature)
+                    })
+                    .map(|(r, _)| *r)
+                    .collect();
+                for r in done {
+                    self.pending.remove(&r);
+                    self.results.insert(
+                        r,
+                        Err(RequestError::Nak {
+                            board: self.cfg.board_name.clone(),
+                            ip: self.cfg.board_ip,
+                            id,
+                        }),
+                    );
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// Expires requests and checks the board's presence at time `now`.
+    pub fn handle_timeout(&mut self, now: Duration) {
+        let expired: Vec<RequestId> = self
+            .pending
+            .iter()
+            .filter(|(_, p)| now >= p.deadline)
+            .map(|(r, _)| *r)
+            .collect();
+        for r in expired {
+            if let Some(p) = self.pending.remove(&r) {
+                self.counters.timeouts += 1;
+                self.results.insert(
+                    r,
+                    Err(RequestError::Timeout {
+                        board: self.cfg.board_name.clone(),
+                        ip: self.cfg.board_ip,
+                        id: p.id,
+                    }),
+                );
+            }
+        }
+        if let (true, Some(timeout), Some(last), None) = (
+            self.monitor_presence,
+            self.cfg.presence_timeout,
+            self.last_heard,
+            self.lost_since,
+        ) {
+            let silent = now.saturating_sub(last);
+            if silent > timeout {
+                self.lost_since = Some(last);
+                self.events.push_back(HostEvent::BoardLost {
+                    silent_for: silent,
+                    timeout,
+                });
+            }
+        }
+    }
+
+    /// When [`Self::handle_timeout`] must next run.
+    pub fn next_deadline(&self) -> Option<Duration> {
+        let req = self.pending.values().map(|p| p.deadline).min();
+        let presence = match (
+            self.monitor_presence,
+            self.cfg.presence_timeout,
+            self.last_heard,
+            self.lost_since,
+        ) {
+            (true, Some(t), Some(last), None) => Some(last + t + Duration::from_micros(1)),
+            _ => None,
+        };
+        match (req, presence) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    pub fn poll_event(&mut self) -> Option<HostEvent> {
+        self.events.pop_front()
+    }
+}
+
+/// Why a board's bring-up failed; the messages are C++'s.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum StartupError {
+    #[error("EthResource::verifyBoardPresence() DID NOT have replies from BOARD {board} with IP {ip} after {seconds:.3} seconds: CANNOT PROCEED ANY FURTHER")]
+    NoReply {
+        board: String,
+        ip: Ipv4Addr,
+        seconds: f64,
+    },
+    /// A protocol version differs: `verifyBoardTransceiver()` / `verifyEPprotocol()`.
+    #[error("EthResource::verifyEPprotocol() for ep = {endpoint} detected: pc104.version = {local} and board.version = {remote}: mismatching protocol version in BOARD {board} with IP {ip}: cannot proceed any further. ACTION REQUIRED: BOARD {board} with IP {ip} needs a FW update.")]
+    ProtocolVersion {
+        board: String,
+        ip: Ipv4Addr,
+        endpoint: &'static str,
+        local: Version,
+        remote: Version,
+    },
+    #[error("{what} failed for BOARD {board} with IP {ip}: {reason}")]
+    Step {
+        board: String,
+        ip: Ipv4Addr,
+        what: String,
+        reason: String,
+    },
+}
+
+/// What one service needs at start-up (the `embObj*` device's `open()`):
+/// `serviceVerifyActivate`, the configuration `setcheck`s, `serviceSetRegulars`,
+/// `serviceStart`.
+#[derive(Debug, Clone)]
+pub struct ServiceSpec {
+    pub category: u8,
+    /// The `verifyactivate` command (e.g. [`ServiceCommand::verify_activate`]); `None`:
+    /// without parameter (`eomn_serv_MC_generic`).
+    pub activate: Option<ServiceCommand>,
+    /// Variables to set and verify after activation, in order (joint and motor configs,
+    /// sensor configs).
+    pub configs: Vec<(Id32, Vec<u8>)>,
+    /// Variables the board shall signal regularly.
+    pub regulars: Vec<Id32>,
+}
+
+#[derive(Debug, Clone)]
+enum Op {
+    /// ask, retried `retries` more times.
+    Ask {
+        id: Id32,
+        timeout: Duration,
+        retries: u32,
+    },
+    /// set + wait for sig, `times` attempts.
+    Command {
+        cmd: Id32,
+        data: Vec<u8>,
+        reply: Id32,
+        timeout: Duration,
+        times: u32,
+    },
+    /// set, wait, ask and compare (`theNVmanager::setcheck`).
+    SetCheck {
+        id: Id32,
+        data: Vec<u8>,
+        retries: u32,
+        wait: Duration,
+        timeout: Duration,
+    },
+}
+
+#[derive(Debug, Clone)]
+enum Check {
+    None,
+    ManagementVersion,
+    ApplStatus,
+    Endpoints(Vec<u8>),
+    ServiceOk(String),
+}
+
+#[derive(Debug, Clone, Copy)]
+enum Phase {
+    Idle,
+    Waiting(RequestId),
+    /// setcheck: set sent, ask at this time.
+    SetWait(Duration),
+}
+
+/// The result of [`Startup::poll`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum StartupStatus {
+    Busy,
+    Done,
+    Failed(StartupError),
+}
+
+/// What the bring-up learned of the board.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct BoardFacts {
+    pub management_version: Option<Version>,
+    pub appl_status: Option<ApplStatus>,
+    /// `EthResource::askBoardVersion(): detected wrong board. expecting X and detected Y`.
+    pub warnings: Vec<String>,
+}
+
+/// A board's bring-up as `EthResource` and the `embObj*` devices' `open()` do it:
+///
+/// 1. `verifyBoardPresence`: ask `comm status managementprotocolversion`, 1 s × 21 attempts;
+/// 2. `verifyBoardTransceiver`: the management version must equal ours;
+/// 3. `cleanBoardBehaviour`: service `stop` of `all` (0.5 s × 3);
+/// 4. `setTimingOfRunningCycle`: setcheck `appl config` (5 retries, 10 ms, 2 s);
+/// 5. `askBoardVersion`: ask `appl status` (0.5 s), warn on a different board type;
+/// 6. `verifyEPprotocol`: query the endpoint descriptors (0.1 s), compare management's and
+///    each service endpoint's version with ours;
+/// 7. per service: `verifyactivate` (0.5 s × 3), config setchecks (10 retries, 10 ms,
+///    50 ms), `regsig_load` (0.5 s × 3), `start` (0.5 s × 3).
+#[derive(Debug)]
+pub struct Startup {
+    steps: VecDeque<(String, Op, Check)>,
+    phase: Phase,
+    attempt: u32,
+    started_at: Option<Duration>,
+    facts: BoardFacts,
+    appl_config: ApplConfig,
+}
+
+fn service_name(cat: u8) -> String {
+    const N: [&str; 10] = [
+        "mc",
+        "strain",
+        "mais",
+        "skin",
+        "inertials3",
+        "temperatures",
+        "psc",
+        "pos",
+        "ft",
+        "battery",
+    ];
+    N.get(usize::from(cat))
+        .map(|s| format!("eomn_serv_category_{s}"))
+        .unwrap_or_else(|| format!("category {cat}"))
+}
+
+fn service_endpoint(cat: u8) -> u8 {
+    match cat {
+        category::MC => ep::MOTION_CONTROL,
+        category::SKIN => ep::SKIN,
+        _ => ep::ANALOG_SENSORS,
+    }
+}
+
+impl Startup {
+    pub fn new(appl_config: ApplConfig, services: &[ServiceSpec]) -> Self {
+        let s = |d: Duration| d;
+        let ms = |m: u64| s(Duration::from_millis(m));
+        let svc = |op: ServiceOperation, cat: u8, c: ServiceCommand| Op::Command {
+            cmd: ids::SERVICE_COMMAND,
+            data: {
+                let mut c = c;
+                c.operation = op as u8;
+                c.category = cat;
+                c.to_bytes()
+            },
+            reply: ids::SERVICE_COMMAND_RESULT,
+            timeout: ms(500),
+            times: 3,
+        };
+        let mut steps = VecDeque::new();
+        steps.push_back((
+            "verifyBoardPresence".to_string(),
+            Op::Ask {
+                id: ids::COMM_MANAGEMENT_PROTOCOL_VERSION,
+                timeout: ms(1000),
+                retries: 20,
+            },
+            Check::ManagementVersion,
+        ));
+        steps.push_back((
+            "cleanBoardBehaviour".to_string(),
+            svc(
+                ServiceOperation::Stop,
+                category::ALL,
+                ServiceCommand::bare(ServiceOperation::Stop, category::ALL),
+            ),
+            Check::ServiceOk("serviceStop(eomn_serv_category_all)".into()),
+        ));
+        steps.push_back((
+            "setTimingOfRunningCycle".to_string(),
+            Op::SetCheck {
+                id: ids::APPL_CONFIG,
+                data: appl_config.to_bytes(),
+                retries: 5,
+                wait: ms(10),
+                timeout: ms(2000),
+            },
+            Check::None,
+        ));
+        steps.push_back((
+            "askBoardVersion".to_string(),
+            Op::Ask {
+                id: ids::APPL_STATUS,
+                timeout: ms(500),
+                retries: 0,
+            },
+            Check::ApplStatus,
+        ));
+        let mut eps: Vec<u8> = services
+            .iter()
+            .map(|s| service_endpoint(s.category))
+            .collect();
+        eps.sort_unstable();
+        eps.dedup();
+        let q = QueryArray {
+            opc: opc::QUERY_ARRAY_EPDES,
+            endpoint: ep::ALL,
+            set_number: 0,
+            set_size: 0,
+        };
+        steps.push_back((
+            "verifyEPprotocol".to_string(),
+            Op::Command {
+                cmd: ids::COMM_QUERY_ARRAY,
+                data: q.to_bytes(),
+                reply: ids::COMM_REPLY_ARRAY,
+                timeout: ms(100),
+                times: 1,
+            },
+            Check::Endpoints(eps),
+        ));
+        for sp in services {
+            let name = service_name(sp.category);
+            let act = sp.activate.clone().unwrap_or_else(|| {
+                ServiceCommand::bare(ServiceOperation::VerifyActivate, sp.category)
+            });
+            steps.push_back((
+                format!("serviceVerifyActivate({name})"),
+                svc(ServiceOperation::VerifyActivate, sp.category, act),
+                Check::ServiceOk(format!("serviceVerifyActivate({name})")),
+            ));
+            for (id, data) in &sp.configs {
+                steps.push_back((
+                    format!("setcheckRemoteValue({id})"),
+                    Op::SetCheck {
+                        id: *id,
+                        data: data.clone(),
+                        retries: 10,
+                        wait: ms(10),
+                        timeout: ms(50),
+                    },
+                    Check::None,
+                ));
+            }
+            if !sp.regulars.is_empty() {
+                steps.push_back((
+                    format!("serviceSetRegulars({name})"),
+                    svc(
+                        ServiceOperation::RegsigLoad,
+                        sp.category,
+                        ServiceCommand::regsig_load(sp.category, &sp.regulars),
+                    ),
+                    Check::ServiceOk(format!("serviceSetRegulars({name})")),
+                ));
+            }
+            steps.push_back((
+                format!("serviceStart({name})"),
+                svc(
+                    ServiceOperation::Start,
+                    sp.category,
+                    ServiceCommand::bare(ServiceOperation::Start, sp.category),
+                ),
+                Check::ServiceOk(format!("serviceStart({name})")),
+            ));
+        }
+        Self {
+            steps,
+            phase: Phase::Idle,
+            attempt: 0,
+            started_at: None,
+            facts: BoardFacts::default(),
+            appl_config,
+        }
+    }
+
+    pub fn facts(&self) -> &BoardFacts {
+        &self.facts
+    }
+
+    /// The step under way (for logs).
+    pub fn current_step(&self) -> Option<&str> {
+        self.steps.front().map(|s| s.0.as_str())
+    }
+
+    /// Advances the bring-up: call after every datagram and deadline (and at the start).
+    pub fn poll(&mut self, host: &mut HostTransceiver, now: Duration) -> StartupStatus {
+        self.started_at.get_or_insert(now);
+        loop {
+            let Some((name, op, check)) = self.steps.front().cloned() else {
+                host.monitor_presence(true, now);
+                return StartupStatus::Done;
+            };
+            match self.run(host, &op, now) {
+                Err(e) => return StartupStatus::Failed(self.fail(host, &name, e, now)),
+                Ok(None) => return StartupStatus::Busy,
+                Ok(Some(value)) => {
+                    if let Err(e) = self.check(host, &check, &value) {
+                        return StartupStatus::Failed(e);
+                    }
+                    self.steps.pop_front();
+                    self.phase = Phase::Idle;
+                    self.attempt = 0;
+                }
+            }
+        }
+    }
+
+    fn fail(
+        &self,
+        host: &HostTransceiver,
+        what: &str,
+        reason: String,
+        now: Duration,
+    ) -> StartupError {
+        let cfg = host.config();
+        if what == "verifyBoardPresence" {
+            return StartupError::NoReply {
+                board: cfg.board_name.clone(),
+                ip: cfg.board_ip,
+                seconds: now
+                    .saturating_sub(self.started_at.unwrap_or(now))
+                    .as_secs_f64(),
+            };
+        }
+        StartupError::Step {
+            board: cfg.board_name.clone(),
+            ip: cfg.board_ip,
+            what: what.to_string(),
+            reason,
+        }
+    }
+
+    /// Runs one operation: `Ok(Some(value))` when done, `Ok(None)` while waiting.
+    fn run(
+        &mut self,
+        host: &mut HostTransceiver,
+        op: &Op,
+        now: Duration,
+    ) -> Result<Option<Vec<u8>>, String> {
+        let (attempts, wait_before) = match op {
+            Op::Ask { retries, .. } => (retries + 1, None),
+            Op::Command { times, .. } => (*times, None),
+            Op::SetCheck { retries, wait, .. } => (*retries, Some(*wait)),
+        };
+        loop {
+            match self.phase {
+                Phase::Idle => {
+                    if self.attempt >= attempts.max(1) {
+                        return Err(format!("no valid reply after {} attempts", self.attempt));
+                    }
+                    self.attempt += 1;
+                    match op {
+                        Op::Ask { id, timeout, .. } => {
+                            let r = host.ask(*id, *timeout, now).map_err(|e| e.to_string())?;
+                            self.phase = Phase::Waiting(r);
+                        }
+                        Op::Command {
+                            cmd,
+                            data,
+                            reply,
+                            timeout,
+                            ..
+                        } => {
+                            let r = host
+                                .command(*cmd, data, *reply, *timeout, now)
+                                .map_err(|e| e.to_string())?;
+                            self.phase = Phase::Waiting(r);
+                        }
+                        Op::SetCheck { id, data, .. } => {
+                            host.set(*id, data, now).map_err(|e| e.to_string())?;
+                            self.phase = Phase::SetWait(now + wait_before.unwrap_or_default());
+                        }
+                    }
+                }
+                Phase::SetWait(at) => {
+                    if now < at {
+                        return Ok(None);
+                    }
+                    let Op::SetCheck { id, timeout, .. } = op else {
+                        unreachable!("SetWait only for SetCheck")
+                    };
+                    let r = host.ask(*id, *timeout, now).map_err(|e| e.to_string())?;
+                    self.phase = Phase::Waiting(r);
+                }
+                Phase::Waiting(r) => match host.take_result(r) {
+                    None if host.is_pending(r) => return Ok(None),
+                    None | Some(Err(_)) => self.phase = Phase::Idle,
+                    Some(Ok(v)) => {
+                        if let Op::SetCheck { data, .. } = op {
+                            if &v != data {
+                                self.phase = Phase::Idle;
+                                continue;
+                            }
+                        }
+                        return Ok(Some(v));
+                    }
+                },
+            }
+        }
+    }
+
+    fn version_error(
+        host: &HostTransceiver,
+        ep_: u8,
+        local: Version,
+        remote: Version,
+    ) -> StartupError {
+        StartupError::ProtocolVersion {
+            board: host.config().board_name.clone(),
+            ip: host.config().board_ip,
+            endpoint: endpoint_name(ep_),
+            local,
+            remote,
+        }
+    }
+
+    fn check(
+        &mut self,
+        host: &mut HostTransceiver,
+        check: &Check,
+        value: &[u8],
+    ) -> Result<(), StartupError> {
+        let cfg = host.config().clone();
+        let step_err = |what: &str, reason: String| StartupError::Step {
+            board: cfg.board_name.clone(),
+            ip: cfg.board_ip,
+            what: what.to_string(),
+            reason,
+        };
+        match check {
+            Check::None => Ok(()),
+            Check::ManagementVersion => {
+                let v = Version::from_bytes(value)
+                    .map_err(|e| step_err("verifyBoardTransceiver", e.to_string()))?;
+                self.facts.management_version = Some(v);
+                if v != cfg.protocol[0] {
+                    return Err(Self::version_error(
+                        host,
+                        ep::MANAGEMENT,
+                        cfg.protocol[0],
+                        v,
+                    ));
+                }
+                Ok(())
+            }
+            Check::ApplStatus => {
+                let st = ApplStatus::from_bytes(value)
+                    .map_err(|e| step_err("askBoardVersion", e.to_string()))?;
+                let detected = EthBoardType::from_u8(st.board_type);
+                if detected != cfg.board_type {
+                    self.facts.warnings.push(format!(
+                        "EthResource::askBoardVersion(): detected wrong board. expecting {} and detected {}",
+                        cfg.board_type, detected
+                    ));
+                }
+                self.facts.appl_status = Some(st);
+                Ok(())
+            }
+            Check::Endpoints(eps) => {
+                let reply = ReplyArray::from_bytes(value)
+                    .map_err(|e| step_err("verifyEPprotocol", e.to_string()))?;
+                let descs = reply.descriptors();
+                for want in std::iter::once(ep::MANAGEMENT).chain(eps.iter().copied()) {
+                    let local = cfg.protocol[usize::from(want).min(3)];
+                    match descs.iter().find(|d| d.endpoint == want) {
+                        Some(d) if d.version != local => {
+                            return Err(Self::version_error(host, want, local, d.version))
+                        }
+                        Some(_) => {}
+                        None if want == ep::MANAGEMENT => {}
+                        None => {
+                            return Err(step_err(
+                                "verifyEPprotocol",
+                                format!("the board does not offer {}", endpoint_name(want)),
+                            ))
+                        }
+                    }
+                }
+                Ok(())
+            }
+            Check::ServiceOk(what) => {
+                let r = ServiceCommandResult::from_bytes(value)
+                    .map_err(|e| step_err(what, e.to_string()))?;
+                if !r.latest_command_is_ok {
+                    return Err(step_err(
+                        what,
+                        "the board replied latestcommandisok = false".into(),
+                    ));
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The `appl config` this bring-up sets.
+    pub fn appl_config(&self) -> &ApplConfig {
+        &self.appl_config
+    }
+}

@@ -1,0 +1,264 @@
+//! The joint model a [`BoardEngine`](crate::board::BoardEngine) drives: the board engine
+//! turns the host's joint commands into calls on a [`JointModel`] and publishes what the
+//! model reports in the joint and motor status. Any plant can be plugged in (e.g. the CAN
+//! emulator's PID-and-motor plant, once shared); [`SimpleJoint`] is the built-in one.
+//!
+//! Units are the wire's: positions in the joint's raw units (`eOmeas_position_t`),
+//! velocities raw units/s, torques N·m, currents mA, PWM duty counts.
+
+use crate::entities::mc::{control_mode, Calibrator, JointConfig, Setpoint};
+
+/// What a joint reports each control period.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct JointFeedback {
+    pub position: f64,
+    pub velocity: f64,
+    pub acceleration: f64,
+    pub torque: f64,
+    /// The control mode status (`eOmc_controlmode_t`, see [`control_mode`]).
+    pub control_mode: u8,
+    pub interaction_mode: u8,
+    pub motion_done: bool,
+    /// The reference the controller tracks (position modes).
+    pub reference: f64,
+    pub target_position: f64,
+    pub target_velocity: f64,
+    pub pwm: i16,
+    pub current: i16,
+    /// Motor temperature, raw.
+    pub temperature: i16,
+}
+
+/// A joint plant with its controller, as the board's motion-control service sees it.
+pub trait JointModel: Send {
+    /// `set<joint config>`: gains, limits, timeouts.
+    fn configure(&mut self, config: &JointConfig);
+    /// `set<joint cmmnds controlmode>` (an `eOmc_controlmode_command_t`).
+    fn set_control_mode(&mut self, mode: u8);
+    /// `set<joint cmmnds interactionmode>`.
+    fn set_interaction_mode(&mut self, mode: u8);
+    /// `set<joint cmmnds setpoint>`.
+    fn setpoint(&mut self, setpoint: &Setpoint);
+    /// `set<joint cmmnds stoptrajectory>`.
+    fn stop_trajectory(&mut self);
+    /// `set<joint cmmnds calibration>`.
+    fn calibrate(&mut self, calibrator: &Calibrator);
+    /// Advances the joint by `dt` seconds.
+    fn step(&mut self, dt: f64);
+    fn feedback(&self) -> JointFeedback;
+}
+
+/// How long [`SimpleJoint`] stays in the calibration mode, s.
+pub const CALIBRATION_TIME: f64 = 0.1;
+/// Time constant with which [`SimpleJoint`] follows its reference, s.
+pub const TRACKING_TIME_CONSTANT: f64 = 0.02;
+/// Distance (raw units) under which a position move counts as done.
+pub const MOTION_DONE_TOLERANCE: f64 = 100.0;
+/// Trajectory speed when the set point gives none, raw units/s (10°/s in iCub degrees).
+pub const DEFAULT_TRAJECTORY_SPEED: f64 = 10.0 * 65536.0 / 360.0;
+
+/// A minimal joint: a trajectory generator (position, velocity, direct) and a first-order
+/// lag from reference to position; open-loop PWM and current move the joint at a speed
+/// proportional to the command. It starts `notConfigured` and goes idle when configured,
+/// as the boards do; calibration lasts [`CALIBRATION_TIME`] and ends in position control
+/// holding the pose.
+#[derive(Debug, Clone)]
+pub struct SimpleJoint {
+    q: f64,
+    qd: f64,
+    qdd: f64,
+    mode: u8,
+    interaction: u8,
+    reference: f64,
+    target: f64,
+    speed: f64,
+    velocity_cmd: f64,
+    open_loop: f64,
+    limits: Option<(f64, f64)>,
+    calibrating: f64,
+    current: i16,
+    pwm: i16,
+}
+
+impl SimpleJoint {
+    pub fn new(position: f64) -> Self {
+        Self {
+            q: position,
+            qd: 0.0,
+            qdd: 0.0,
+            mode: control_mode::NOT_CONFIGURED,
+            interaction: 0,
+            reference: position,
+            target: position,
+            speed: DEFAULT_TRAJECTORY_SPEED,
+            velocity_cmd: 0.0,
+            open_loop: 0.0,
+            limits: None,
+            calibrating: 0.0,
+            current: 0,
+            pwm: 0,
+        }
+    }
+
+    fn clamp(&self, v: f64) -> f64 {
+        match self.limits {
+            Some((a, b)) => v.clamp(a, b),
+            None => v,
+        }
+    }
+
+    fn hold(&mut self) {
+        self.reference = self.q;
+        self.target = self.q;
+        self.velocity_cmd = 0.0;
+        self.open_loop = 0.0;
+    }
+}
+
+impl JointModel for SimpleJoint {
+    fn configure(&mut self, config: &JointConfig) {
+        let (a, b) = (config.user_limits.min, config.user_limits.max);
+        self.limits = (a < b).then_some((f64::from(a), f64::from(b)));
+        if self.mode == control_mode::NOT_CONFIGURED {
+            self.mode = control_mode::IDLE;
+        }
+    }
+
+    fn set_control_mode(&mut self, mode: u8) {
+        if matches!(
+            self.mode,
+            control_mode::NOT_CONFIGURED | control_mode::HW_FAULT
+        ) {
+            return;
+        }
+        let mode = match mode {
+            control_mode::FORCE_IDLE | control_mode::EVERYTHING_OFF => control_mode::IDLE,
+            m => m,
+        };
+        if mode != self.mode {
+            self.hold();
+        }
+        self.mode = mode;
+    }
+
+    fn set_interaction_mode(&mut self, mode: u8) {
+        self.interaction = mode;
+    }
+
+    fn setpoint(&mut self, setpoint: &Setpoint) {
+        match (*setpoint, self.mode) {
+            (
+                Setpoint::Position { value, velocity },
+                control_mode::POSITION | control_mode::MIXED,
+            ) => {
+                self.target = self.clamp(f64::from(value));
+                self.speed = if velocity != 0 {
+                    f64::from(velocity).abs()
+                } else {
+                    DEFAULT_TRAJECTORY_SPEED
+                };
+            }
+            (Setpoint::PositionRaw { value }, control_mode::DIRECT | control_mode::POSITION) => {
+                let v = self.clamp(f64::from(value));
+                self.reference = v;
+                self.target = v;
+            }
+            (
+                Setpoint::Velocity { value, .. },
+                control_mode::VELOCITY | control_mode::MIXED | control_mode::VEL_DIRECT,
+            ) => {
+                self.velocity_cmd = f64::from(value);
+            }
+            (Setpoint::OpenLoop { value }, control_mode::OPENLOOP) => {
+                self.open_loop = f64::from(value);
+                self.pwm = value;
+            }
+            (Setpoint::Current { value }, control_mode::CURRENT) => {
+                self.open_loop = f64::from(value);
+                self.current = value;
+            }
+            _ => {}
+        }
+    }
+
+    fn stop_trajectory(&mut self) {
+        self.target = self.reference;
+        self.velocity_cmd = 0.0;
+    }
+
+    fn calibrate(&mut self, _calibrator: &Calibrator) {
+        if self.mode == control_mode::NOT_CONFIGURED {
+            return;
+        }
+        self.mode = control_mode::CALIB;
+        self.calibrating = CALIBRATION_TIME;
+        self.hold();
+    }
+
+    fn step(&mut self, dt: f64) {
+        if dt <= 0.0 {
+            return;
+        }
+        let q0 = self.q;
+        let qd0 = self.qd;
+        match self.mode {
+            control_mode::CALIB => {
+                self.calibrating -= dt;
+                if self.calibrating <= 0.0 {
+                    self.mode = control_mode::POSITION;
+                    self.hold();
+                }
+            }
+            control_mode::POSITION | control_mode::MIXED | control_mode::DIRECT => {
+                let err = self.target - self.reference;
+                let step = self.speed * dt;
+                self.reference = if err.abs() <= step {
+                    self.target
+                } else {
+                    self.reference + step * err.signum()
+                };
+                if self.mode == control_mode::MIXED {
+                    self.reference = self.clamp(self.reference + self.velocity_cmd * dt);
+                }
+            }
+            control_mode::VELOCITY | control_mode::VEL_DIRECT => {
+                self.reference = self.clamp(self.reference + self.velocity_cmd * dt);
+                self.target = self.reference;
+            }
+            control_mode::OPENLOOP | control_mode::CURRENT => {
+                self.reference = self.clamp(self.q + self.open_loop * 10.0 * dt);
+                self.target = self.reference;
+            }
+            _ => {}
+        }
+        let tracking = !matches!(
+            self.mode,
+            control_mode::IDLE | control_mode::NOT_CONFIGURED | control_mode::HW_FAULT
+        );
+        if tracking {
+            let k = dt / (TRACKING_TIME_CONSTANT + dt);
+            self.q = self.clamp(self.q + (self.reference - self.q) * k);
+        }
+        self.qd = (self.q - q0) / dt;
+        self.qdd = (self.qd - qd0) / dt;
+    }
+
+    fn feedback(&self) -> JointFeedback {
+        JointFeedback {
+            position: self.q,
+            velocity: self.qd,
+            acceleration: self.qdd,
+            torque: 0.0,
+            control_mode: self.mode,
+            interaction_mode: self.interaction,
+            motion_done: (self.reference - self.target).abs() < 0.5
+                && (self.q - self.target).abs() <= MOTION_DONE_TOLERANCE,
+            reference: self.reference,
+            target_position: self.target,
+            target_velocity: self.velocity_cmd,
+            pwm: self.pwm,
+            current: self.current,
+            temperature: 0,
+        }
+    }
+}
