@@ -602,13 +602,15 @@ impl BoardEngine {
 
     fn activate_mc(&mut self) {
         let n = self.cfg.joints;
+        // eO16flags_t: bit j set for each initted joint.
+        let mask = 1u32.checked_shl(u32::from(n)).map_or(u32::MAX, |v| v - 1) as u16;
         let status = crate::entities::mc::ControllerStatus {
             state_of_controller: 1,
             num_of_joints: n,
             num_of_motors: n,
             all_jomo_initted: true,
-            flags_initted_joints: ((1u32 << n) - 1) as u16,
-            flags_initted_motors: ((1u32 << n) - 1) as u16,
+            flags_initted_joints: mask,
+            flags_initted_motors: mask,
             supply_voltage: 0,
         };
         let _ = self.store.write(
@@ -639,11 +641,7 @@ impl BoardEngine {
             }
             tag::MC_JOINT_CMMNDS_CONTROLMODE => model.set_control_mode(data[0]),
             tag::MC_JOINT_CMMNDS_INTERACTIONMODE => model.set_interaction_mode(data[0]),
-            tag::MC_JOINT_CMMNDS_STOPTRAJECTORY => {
-                if data[0] != 0 {
-                    model.stop_trajectory();
-                }
-            }
+            tag::MC_JOINT_CMMNDS_STOPTRAJECTORY if data[0] != 0 => model.stop_trajectory(),
             tag::MC_JOINT_CMMNDS_CALIBRATION => {
                 if let Ok(c) = Calibrator::from_bytes(data) {
                     model.calibrate(&c);
@@ -777,7 +775,7 @@ impl BoardEngine {
     fn regulars_due(&self, now: Duration) -> bool {
         self.state == ApplState::Running
             && self.regulars.iter().any(|r| !r.is_empty())
-            && self.next_regulars.map_or(true, |t| now >= t)
+            && self.next_regulars.is_none_or(|t| now >= t)
     }
 
     fn schedule_regulars(&mut self, now: Duration) {
