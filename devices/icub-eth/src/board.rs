@@ -172,7 +172,7 @@ pub struct BoardEngine {
     regulars: [Vec<Id32>; category::COUNT],
     joints: Vec<Box<dyn JointModel>>,
     replies: Vec<Rop>,
-    events: Vec<BoardEvent>,
+    events: std::collections::VecDeque<BoardEvent>,
     tx_sequence: u64,
     rx_sequence: Option<u64>,
     next_regulars: Option<Duration>,
@@ -225,7 +225,7 @@ impl BoardEngine {
             regulars: Default::default(),
             joints,
             replies: Vec::new(),
-            events: Vec::new(),
+            events: Default::default(),
             tx_sequence: 0,
             rx_sequence: None,
             next_regulars: None,
@@ -327,18 +327,22 @@ impl BoardEngine {
     }
     /// Takes what happened since the last call.
     pub fn poll_event(&mut self) -> Option<BoardEvent> {
-        if self.events.is_empty() {
-            None
-        } else {
-            Some(self.events.remove(0))
+        self.events.pop_front()
+    }
+
+    fn push_event(&mut self, e: BoardEvent) {
+        // Nobody may be polling: keep the latest ones only.
+        if self.events.len() >= crate::host::EVENT_QUEUE_LIMIT {
+            self.events.pop_front();
         }
+        self.events.push_back(e);
     }
 
     fn set_state(&mut self, s: ApplState) {
         if s != self.state {
             self.state = s;
             self.write_appl_status();
-            self.events.push(BoardEvent::State(s));
+            self.push_event(BoardEvent::State(s));
         }
     }
 
@@ -437,7 +441,7 @@ impl BoardEngine {
     }
 
     fn on_set(&mut self, id: Id32, data: &[u8]) {
-        self.events.push(BoardEvent::Set(id));
+        self.push_event(BoardEvent::Set(id));
         match (id.endpoint(), id.entity(), id.tag()) {
             (ep::MANAGEMENT, en::MN_APPL, tag::MN_APPL_CMMNDS_GO2STATE) => {
                 match ApplState::from_u8(data[0]) {
@@ -593,7 +597,7 @@ impl BoardEngine {
         self.write_service_status(result);
         self.replies
             .push(Rop::sig(ids::SERVICE_COMMAND_RESULT, result.to_bytes()));
-        self.events.push(BoardEvent::Service {
+        self.push_event(BoardEvent::Service {
             operation: cmd.operation,
             category: cat,
             ok,

@@ -29,6 +29,8 @@ use thiserror::Error;
 
 /// The presence timeout when `ETH_BOARD_ACTIONS/MONITOR_ITS_PRESENCE` gives none (20 ms).
 pub const DEFAULT_PRESENCE_TIMEOUT: Duration = Duration::from_millis(20);
+/// Events kept for the owner; older ones are dropped (and counted) beyond this.
+pub const EVENT_QUEUE_LIMIT: usize = 4096;
 /// `theNVmanager` signatures wrap below this value (`uniquesignature()`).
 const SIGNATURE_WRAP: u32 = 0xA000_0000;
 
@@ -104,8 +106,13 @@ pub enum HostEvent {
     },
     /// The board talks again after being lost.
     BoardRecovered { lost_for: Duration },
-    /// A frame's sequence number is not the previous + 1.
-    SequenceGap { expected: u64, received: u64 },
+    /// A frame's sequence number is not the previous + 1 (with both frames' ages, µs).
+    SequenceGap {
+        expected: u64,
+        received: u64,
+        previous_age: u64,
+        age: u64,
+    },
     /// A datagram that is not a ropframe was dropped.
     BadFrame(FrameError),
     /// ROPs of a frame could not be parsed (those before were used).
@@ -131,11 +138,20 @@ impl HostEvent {
                 "eth::EthMonitorPresence: BOARD {who} has shown after being lost for {:.3} sec",
                 lost_for.as_secs_f64()
             ),
-            Self::SequenceGap { expected, received } => format!(
-                "BOARD {who}: detected an error in sequence number: expected = {expected}, received = {received}, lost = {}",
+            Self::SequenceGap {
+                expected,
+                received,
+                previous_age,
+                age,
+            } => format!(
+                "hostTransceiver()::parse() detected an ERROR in sequence number from IP = {} Expected: {expected} - Received: {received} - Missing: {} - Prev Frame TX at {previous_age} us - This Frame TX at {age} us",
+                cfg.board_ip,
                 received.wrapping_sub(*expected)
             ),
-            Self::BadFrame(e) => format!("BOARD {who}: dropped an invalid ropframe: {e}"),
+            Self::BadFrame(e) => format!(
+                "hostTransceiver()::parse() detected an ERROR of type INVALID FRAME from IP = {}: {e}",
+                cfg.board_ip
+            ),
             Self::BadRops(e) => format!("BOARD {who}: dropped ROPs of a ropframe: {e}"),
             Self::Signal(id) => format!("BOARD {who}: sig<{id}>"),
         }
@@ -153,6 +169,8 @@ pub struct HostCounters {
     /// ROPs about variables we do not know, or with a size that is not the variable's.
     pub unknown_rops: u64,
     pub timeouts: u64,
+    /// Events dropped because nobody polled them ([`EVENT_QUEUE_LIMIT`]).
+    pub events_dropped: u64,
 }
 
 #[derive(Debug)]
@@ -175,7 +193,8 @@ pub struct HostTransceiver {
     next_request: u64,
     next_signature: u32,
     tx_sequence: u64,
-    rx_sequence: Option<u64>,
+    /// Sequence number and age of the last frame.
+    rx_sequence: Option<(u64, u64)>,
     last_heard: Option<Duration>,
     lost_since: Option<Duration>,
     monitor_presence: bool,
@@ -376,28 +395,30 @@ impl HostTransceiver {
             Ok(f) => f,
             Err(e) => {
                 self.counters.invalid_frames += 1;
-                self.events.push_back(HostEvent::BadFrame(e));
+                self.push_event(HostEvent::BadFrame(e));
                 return Err(e);
             }
         };
         self.counters.frames_received += 1;
         self.heard(now);
-        let seq = frame.header.sequence;
-        if let Some(prev) = self.rx_sequence {
+        let (seq, age) = (frame.header.sequence, frame.header.age);
+        if let Some((prev, previous_age)) = self.rx_sequence {
             let expected = prev.wrapping_add(1);
             if seq != expected {
                 self.counters.sequence_gaps += 1;
-                self.events.push_back(HostEvent::SequenceGap {
+                self.push_event(HostEvent::SequenceGap {
                     expected,
                     received: seq,
+                    previous_age,
+                    age,
                 });
             }
         }
-        self.rx_sequence = Some(seq);
+        self.rx_sequence = Some((seq, age));
         let (rops, err) = frame.parse_rops();
         if let Some(e) = err {
             self.counters.bad_rops += 1;
-            self.events.push_back(HostEvent::BadRops(e));
+            self.push_event(HostEvent::BadRops(e));
         }
         for rop in rops {
             self.process(rop);
@@ -407,7 +428,7 @@ impl HostTransceiver {
 
     fn heard(&mut self, now: Duration) {
         if let Some(since) = self.lost_since.take() {
-            self.events.push_back(HostEvent::BoardRecovered {
+            self.push_event(HostEvent::BoardRecovered {
                 lost_for: now.saturating_sub(since),
             });
         }
@@ -437,10 +458,10 @@ impl HostTransceiver {
                     .collect();
                 for r in done {
                     self.pending.remove(&r);
-                    self.results.insert(r, Ok(rop.data.clone()));
+                    self.finish_request(r, Ok(rop.data.clone()));
                 }
                 if rop.code == RopCode::Sig {
-                    self.events.push_back(HostEvent::Signal(id));
+                    self.push_event(HostEvent::Signal(id));
                 }
             }
             (_, ConfInfo::Nak) => {
@@ -454,7 +475,7 @@ impl HostTransceiver {
                     .collect();
                 for r in done {
                     self.pending.remove(&r);
-                    self.results.insert(
+                    self.finish_request(
                         r,
                         Err(RequestError::Nak {
                             board: self.cfg.board_name.clone(),
@@ -479,7 +500,7 @@ impl HostTransceiver {
         for r in expired {
             if let Some(p) = self.pending.remove(&r) {
                 self.counters.timeouts += 1;
-                self.results.insert(
+                self.finish_request(
                     r,
                     Err(RequestError::Timeout {
                         board: self.cfg.board_name.clone(),
@@ -498,7 +519,7 @@ impl HostTransceiver {
             let silent = now.saturating_sub(last);
             if silent > timeout {
                 self.lost_since = Some(last);
-                self.events.push_back(HostEvent::BoardLost {
+                self.push_event(HostEvent::BoardLost {
                     silent_for: silent,
                     timeout,
                 });
@@ -526,6 +547,24 @@ impl HostTransceiver {
 
     pub fn poll_event(&mut self) -> Option<HostEvent> {
         self.events.pop_front()
+    }
+
+    fn finish_request(&mut self, r: RequestId, res: Result<Vec<u8>, RequestError>) {
+        // Results nobody takes must not pile up: forget the oldest.
+        if self.results.len() >= EVENT_QUEUE_LIMIT {
+            if let Some(oldest) = self.results.keys().min().copied() {
+                self.results.remove(&oldest);
+            }
+        }
+        self.results.insert(r, res);
+    }
+
+    fn push_event(&mut self, e: HostEvent) {
+        if self.events.len() >= EVENT_QUEUE_LIMIT {
+            self.events.pop_front();
+            self.counters.events_dropped += 1;
+        }
+        self.events.push_back(e);
     }
 }
 

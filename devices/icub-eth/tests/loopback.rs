@@ -265,10 +265,19 @@ fn a_silent_board_is_reported_within_its_timeout() {
     l.board_to_host = true;
     l.tick();
     let mut recovered = false;
+    let mut gap = None;
     while let Some(e) = l.host.poll_event() {
         recovered |= matches!(e, HostEvent::BoardRecovered { .. });
+        if matches!(e, HostEvent::SequenceGap { .. }) {
+            gap = Some(e.describe(l.host.config()));
+        }
     }
     assert!(recovered);
+    let gap = gap.expect("sequence gap reported");
+    assert!(
+        gap.contains("ERROR in sequence number from IP = 10.0.1.1"),
+        "{gap}"
+    );
     // The board's frames kept their numbering: the host sees the gap.
     assert_eq!(l.host.counters().sequence_gaps, 1);
 }
