@@ -26,6 +26,7 @@ use crate::entities::mn::{
     CommStatus, EndpointDescriptor, QueryArray, ReplyArray, ServiceCommand, ServiceCommandResult,
     ServiceOperation, ServiceState, ServiceStatus, TransceiverProperties, Version,
 };
+use crate::entities::service::entities_for_service;
 use crate::frame::{Frame, FrameBuilder, FrameError, EMPTY_FRAME_SIZE};
 use crate::id::{endpoint as ep, entity as en, ids, tag, Id32};
 use crate::nvstore::NvStore;
@@ -62,6 +63,11 @@ pub struct BoardConfig {
     pub max_tx_packet: usize,
     /// Largest datagram the board accepts (`eOmn_transceiver_properties_t::maxsizeRXpacket`).
     pub max_rx_packet: usize,
+    /// Create the entities a `verifyactivate` configuration names (joints from its jomo
+    /// descriptors, FT sensors from its sensor array, skin patches, ...), as a board
+    /// with that hardware behind it would have them: the emulator then needs only the
+    /// boards' addresses and types.
+    pub auto_entities: bool,
 }
 
 impl BoardConfig {
@@ -92,6 +98,7 @@ impl BoardConfig {
             skins: 0,
             max_tx_packet: 1500,
             max_rx_packet: 768,
+            auto_entities: true,
         }
     }
 
@@ -115,23 +122,6 @@ impl BoardConfig {
             (ep::SKIN, en::SK_SKIN, self.skins),
             (ep::MANAGEMENT, en::MN_INFO, 1),
         ]
-    }
-
-    /// Whether the board has what a service category needs.
-    pub fn supports(&self, cat: u8) -> bool {
-        match cat {
-            category::MC => self.joints > 0,
-            category::STRAIN => self.strains > 0,
-            category::MAIS => self.maises > 0,
-            category::SKIN => self.skins > 0,
-            category::INERTIALS3 => self.inertials3 > 0,
-            category::TEMPERATURES => self.temperatures > 0,
-            category::PSC => self.pscs > 0,
-            category::POS => self.poses > 0,
-            category::FT => self.fts > 0,
-            category::BATTERY => self.batteries > 0,
-            _ => false,
-        }
     }
 }
 
@@ -163,6 +153,9 @@ pub enum BoardEvent {
     Set(Id32),
 }
 
+/// Makes the joint model of a joint created by a service configuration.
+pub type JointFactory = Box<dyn FnMut(u8) -> Box<dyn JointModel> + Send>;
+
 /// The board-side engine.
 pub struct BoardEngine {
     cfg: BoardConfig,
@@ -171,6 +164,7 @@ pub struct BoardEngine {
     services: [ServiceState; category::COUNT],
     regulars: [Vec<Id32>; category::COUNT],
     joints: Vec<Box<dyn JointModel>>,
+    joint_factory: Option<JointFactory>,
     replies: Vec<Rop>,
     events: std::collections::VecDeque<BoardEvent>,
     tx_sequence: u64,
@@ -224,6 +218,7 @@ impl BoardEngine {
             services: [ServiceState::Idle; category::COUNT],
             regulars: Default::default(),
             joints,
+            joint_factory: None,
             replies: Vec::new(),
             events: Default::default(),
             tx_sequence: 0,
@@ -289,6 +284,50 @@ impl BoardEngine {
 
     pub fn config(&self) -> &BoardConfig {
         &self.cfg
+    }
+    /// How joints created by an MC service configuration are modelled (default: [`SimpleJoint`]).
+    pub fn set_joint_factory(&mut self, f: JointFactory) {
+        self.joint_factory = Some(f);
+    }
+    /// Whether the board has the entities of a service category.
+    pub fn supports(&self, cat: u8) -> bool {
+        let (e, n) = match cat {
+            category::MC => (ep::MOTION_CONTROL, en::MC_JOINT),
+            category::STRAIN => (ep::ANALOG_SENSORS, en::AS_STRAIN),
+            category::MAIS => (ep::ANALOG_SENSORS, en::AS_MAIS),
+            category::SKIN => (ep::SKIN, en::SK_SKIN),
+            category::INERTIALS3 => (ep::ANALOG_SENSORS, en::AS_INERTIAL3),
+            category::TEMPERATURES => (ep::ANALOG_SENSORS, en::AS_TEMPERATURE),
+            category::PSC => (ep::ANALOG_SENSORS, en::AS_PSC),
+            category::POS => (ep::ANALOG_SENSORS, en::AS_POS),
+            category::FT => (ep::ANALOG_SENSORS, en::AS_FT),
+            category::BATTERY => (ep::ANALOG_SENSORS, en::AS_BATTERY),
+            _ => return false,
+        };
+        self.store.count(e, n) > 0
+    }
+
+    /// Adds what a service configuration names (see [`BoardConfig::auto_entities`]).
+    fn add_service_entities(&mut self, cmd: &ServiceCommand) {
+        for (e, n, count) in
+            entities_for_service(cmd.category, cmd.service_type(), cmd.config_data())
+        {
+            if count == 0 {
+                continue;
+            }
+            self.store.add_entity(e, n, count);
+            if (e, n) == (ep::MOTION_CONTROL, en::MC_JOINT) {
+                while self.joints.len() < usize::from(count) {
+                    let j = self.joints.len() as u8;
+                    let model = match self.joint_factory.as_mut() {
+                        Some(f) => f(j),
+                        None => Box::new(SimpleJoint::new(0.0)),
+                    };
+                    self.joints.push(model);
+                }
+            }
+        }
+        self.publish_joints();
     }
     pub fn state(&self) -> ApplState {
         self.state
@@ -487,13 +526,13 @@ impl BoardEngine {
             let n = (0..crate::id::entities_in_endpoint(e))
                 .filter(|ent| self.store.count(e, *ent) > 0)
                 .count() as u8;
-            if n > 0 {
-                v.push(EndpointDescriptor {
-                    endpoint: e,
-                    entities_inside: n,
-                    version: self.cfg.protocol[usize::from(e)],
-                });
-            }
+            // Every endpoint is listed, with its version, even before a service gives it
+            // entities: the host checks the versions before activating the services.
+            v.push(EndpointDescriptor {
+                endpoint: e,
+                entities_inside: n,
+                version: self.cfg.protocol[usize::from(e)],
+            });
         }
         v
     }
@@ -511,8 +550,11 @@ impl BoardEngine {
         match ServiceOperation::from_u8(cmd.operation) {
             Some(ServiceOperation::VerifyActivate) => {
                 stype = cmd.service_type();
+                if self.cfg.auto_entities {
+                    self.add_service_entities(cmd);
+                }
                 match service_index(cat) {
-                    Some(i) if self.cfg.supports(cat) => {
+                    Some(i) if self.supports(cat) => {
                         self.services[i] = ServiceState::Activated;
                         if cat == category::MC {
                             self.activate_mc();
@@ -605,7 +647,7 @@ impl BoardEngine {
     }
 
     fn activate_mc(&mut self) {
-        let n = self.cfg.joints;
+        let n = self.joints.len().min(255) as u8;
         // eO16flags_t: bit j set for each initted joint.
         let mask = 1u32.checked_shl(u32::from(n)).map_or(u32::MAX, |v| v - 1) as u16;
         let status = crate::entities::mc::ControllerStatus {

@@ -532,3 +532,124 @@ fn hostile_bytes_never_panic() {
         let _ = Rop::decode(&b[EMPTY_FRAME_SIZE.min(cut)..]);
     }
 }
+
+#[test]
+fn service_config_layouts() {
+    use icub_eth::entities::boards::{BoardInfo, CanLocation};
+    use icub_eth::entities::mn::service_type;
+    use icub_eth::entities::service::{
+        entities_for_service, CanSensorDescriptor, CanSensorsConfig, Coupling, JomoDescriptor,
+        JomoDescriptors, McServiceConfig, SkinServiceConfig,
+    };
+    // eOmn_serv_config_data_mc_foc_t (324 of the 340-byte union): version 5 at 0, type at 5,
+    // 2 fillers, eOmc_arrayof_4jomodescriptors_t at 8 (head: capacity 4, itemsize 5, size),
+    // eOmc_4jomo_coupling_t (292) at 32.
+    let jomo = JomoDescriptor {
+        actuator: CanLocation {
+            port: 0,
+            addr: 1,
+            inside_index: 0,
+        }
+        .to_byte(),
+        encoder1: (1, 2, 1), // aea on port 2, at joint
+        encoder2: (0, 0, 0),
+    };
+    let foc = McServiceConfig::Foc {
+        version: [2, 0, 0, 2, 0],
+        board_type: 8, // eobrd_foc
+        jomos: JomoDescriptors(vec![jomo; 3]),
+        coupling: Coupling::default(),
+    };
+    let b = foc.to_bytes();
+    assert_eq!(b.len(), 340);
+    assert_eq!(b[5], 8);
+    assert_eq!(&b[8..12], &[4, 5, 3, 0]);
+    assert_eq!(&b[12..17], &[0x02, 1, 2 | 1 << 5, 0, 0]);
+    // coupling: joint2set at 32, jsetcfg 36..100, joint2motor at 100 (identity in q17.14).
+    assert_eq!(&b[32..36], &[0, 1, 2, 3]);
+    assert_eq!(&b[100..104], &(1i32 << 14).to_le_bytes());
+    assert_eq!(
+        McServiceConfig::parse(service_type::MC_FOC, &b),
+        Some(foc.clone())
+    );
+    assert_eq!(foc.joints(), 3);
+    assert_eq!(
+        entities_for_service(category::MC, service_type::MC_FOC, &b),
+        vec![(1, 0, 3), (1, 1, 3), (1, 2, 1)]
+    );
+    // mc4: version 5, shifts 3, mc4joints[12] at 8, mais 6 at 20, broadcastflags at 26.
+    let mut joints = [0u8; 12];
+    joints[..4].copy_from_slice(&[0x02, 0x22, 0x04, 0x24]);
+    let mc4 = McServiceConfig::Mc4 {
+        version: [0; 5],
+        shifts: [8, 0x55, 0x55],
+        joints,
+        mais: [0; 6],
+        broadcast_flags: 0x0013,
+    };
+    let b = mc4.to_bytes();
+    assert_eq!(&b[8..12], &[0x02, 0x22, 0x04, 0x24]);
+    assert_eq!(&b[26..28], &[0x13, 0]);
+    assert_eq!(
+        McServiceConfig::parse(service_type::MC_MC4, &b)
+            .unwrap()
+            .joints(),
+        4
+    );
+    // mc4plusfaps: eOmn_serv_config_data_as_pos_t (24) first, jomos at 24.
+    let faps = McServiceConfig::Mc4plusFaps {
+        pos: [0; 24],
+        jomos: JomoDescriptors(vec![jomo; 4]),
+        coupling: Coupling::default(),
+    };
+    let b = faps.to_bytes();
+    assert_eq!(&b[24..28], &[4, 5, 4, 0]);
+    assert_eq!(
+        McServiceConfig::parse(service_type::MC_MC4PLUSFAPS, &b)
+            .unwrap()
+            .joints(),
+        4
+    );
+    // eOmn_serv_config_data_as_ft_t (40): canmonitor 4, EOarray head (4, 8, n) at 4, sensors at 8.
+    let ft = CanSensorsConfig {
+        can_monitor: [100, 1, 0, 0],
+        sensors: vec![
+            CanSensorDescriptor {
+                board: BoardInfo {
+                    board_type: 12,
+                    firmware: [2, 0, 0],
+                    protocol: [2, 0]
+                },
+                can_location: CanLocation {
+                    port: 1,
+                    addr: 13,
+                    inside_index: 0
+                },
+            };
+            2
+        ],
+    };
+    let b = ft.ft_bytes();
+    assert_eq!(b.len(), 40);
+    assert_eq!(&b[4..8], &[4, 8, 2, 0]);
+    assert_eq!(&b[8..15], &[12, 2, 0, 0, 2, 0, 1 | 13 << 1]);
+    assert_eq!(CanSensorsConfig::from_ft_bytes(&b), ft);
+    assert_eq!(ft.battery_bytes().len(), 16);
+    assert_eq!(
+        entities_for_service(category::FT, service_type::AS_FT, &b),
+        vec![(2, 6, 2)]
+    );
+    // eOmn_serv_config_data_sk_skin_t (24): boardinfo 6, numofpatches at 6, canmapskin at 8.
+    let sk = SkinServiceConfig {
+        num_of_patches: 2,
+        can_map: [[0x7f00, 0], [0, 0x3f00], [0; 2], [0; 2]],
+        ..Default::default()
+    };
+    let b = sk.to_bytes();
+    assert_eq!(b[6], 2);
+    assert_eq!(&b[8..10], &0x7f00u16.to_le_bytes());
+    assert_eq!(
+        entities_for_service(category::SKIN, service_type::SK_SKIN, &b),
+        vec![(3, 0, 2)]
+    );
+}

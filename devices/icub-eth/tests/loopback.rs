@@ -12,6 +12,10 @@ use icub_eth::entities::mc::{
 use icub_eth::entities::mn::{
     category, service_type, ApplConfig, ApplState, ServiceCommand, Version,
 };
+use icub_eth::entities::service::{
+    CanSensorDescriptor, CanSensorsConfig, Coupling, JomoDescriptor, JomoDescriptors,
+    McServiceConfig,
+};
 use icub_eth::host::{
     HostConfig, HostEvent, HostTransceiver, ServiceSpec, Startup, StartupError, StartupStatus,
 };
@@ -80,11 +84,10 @@ impl Loop {
     }
 }
 
+/// A board that knows only its address and type: the services' configurations tell it
+/// its joints and sensors.
 fn arm_board() -> BoardConfig {
-    let mut b = BoardConfig::new("left_arm-eb1-j0_3", IP, EthBoardType::Ems4);
-    b.joints = 4;
-    b.fts = 1;
-    b
+    BoardConfig::new("left_arm-eb1-j0_3", IP, EthBoardType::Ems4)
 }
 
 fn mc_service(joints: u8) -> ServiceSpec {
@@ -110,7 +113,13 @@ fn mc_service(joints: u8) -> ServiceSpec {
             service_type::MC_FOC,
             0,
             0,
-            &[],
+            &McServiceConfig::Foc {
+                version: [0; 5],
+                board_type: 8,
+                jomos: JomoDescriptors(vec![JomoDescriptor::default(); usize::from(joints)]),
+                coupling: Coupling::default(),
+            }
+            .to_bytes(),
         )),
         configs,
         regulars,
@@ -131,7 +140,11 @@ fn ft_service() -> ServiceSpec {
             service_type::AS_FT,
             0,
             0,
-            &[],
+            &CanSensorsConfig {
+                can_monitor: [0; 4],
+                sensors: vec![CanSensorDescriptor::default()],
+            }
+            .ft_bytes(),
         )),
         configs: vec![(ids::analog(en::AS_FT, 0, tag::AS_FT_CONFIG), cfg.to_bytes())],
         regulars: vec![ids::analog(en::AS_FT, 0, tag::AS_FT_STATUS)],
@@ -235,6 +248,18 @@ fn startup_position_command_and_encoder_feedback() {
 }
 
 #[test]
+fn a_board_with_fixed_entities_needs_no_configuration() {
+    let mut b = arm_board();
+    b.auto_entities = false;
+    b.joints = 2;
+    let mut l = Loop::new(b);
+    let mut mc = mc_service(2);
+    mc.activate = None; // eomn_serv_MC_generic: no parameter
+    l.start(&[mc]).expect("start-up");
+    assert_eq!(l.board.regulars().len(), 6);
+}
+
+#[test]
 fn a_silent_board_is_reported_within_its_timeout() {
     let mut l = Loop::new(arm_board());
     l.start(&[mc_service(4)]).expect("start-up");
@@ -319,7 +344,8 @@ fn a_different_motion_control_protocol_is_refused() {
 fn a_wrong_board_type_is_a_warning_and_a_missing_service_an_error() {
     let mut b = arm_board();
     b.board_type = EthBoardType::Mc4plus;
-    b.fts = 0;
+    b.auto_entities = false;
+    b.joints = 4;
     let mut l = Loop::new(b);
     let e = l.start(&[mc_service(4), ft_service()]).unwrap_err();
     let msg = e.to_string();

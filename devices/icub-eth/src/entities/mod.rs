@@ -6,4 +6,5 @@ pub mod analog;
 pub mod boards;
 pub mod mc;
 pub mod mn;
+pub mod service;
 pub mod skin;
