@@ -31,7 +31,7 @@ use crate::frame::{Frame, FrameBuilder, FrameError, EMPTY_FRAME_SIZE};
 use crate::id::{endpoint as ep, entity as en, ids, tag, Id32};
 use crate::nvstore::NvStore;
 use crate::plant::{JointModel, SimpleJoint};
-use crate::rop::{ConfInfo, Rop, RopCode};
+use crate::rop::{ConfInfo, Rop, RopCode, RopRef};
 use crate::wire::Entity;
 use std::time::Duration;
 
@@ -404,17 +404,13 @@ impl BoardEngine {
             }
         }
         self.rx_sequence = Some(seq);
-        let (rops, err) = frame.parse_rops();
-        if err.is_some() {
+        if frame.visit_rops(|r| self.process(r)).is_some() {
             self.counters.bad_rops += 1;
-        }
-        for rop in rops {
-            self.process(rop);
         }
         Ok(())
     }
 
-    fn reply_to(&self, rop: &Rop) -> Rop {
+    fn reply_to(&self, rop: &RopRef) -> Rop {
         let mut r = Rop {
             ctrl: Default::default(),
             code: rop.code,
@@ -433,7 +429,7 @@ impl BoardEngine {
         r
     }
 
-    fn process(&mut self, rop: Rop) {
+    fn process(&mut self, rop: RopRef) {
         let id = rop.id32;
         let known = self.store.contains(id);
         match rop.code {
@@ -448,13 +444,13 @@ impl BoardEngine {
                 }
             }
             RopCode::Set if rop.carries_data() => {
-                if known && self.store.set(id, &rop.data).is_ok() {
+                if known && self.store.set(id, rop.data).is_ok() {
                     if rop.ctrl.rqstconf {
                         let mut r = self.reply_to(&rop);
                         r.ctrl.confinfo = ConfInfo::Ack;
                         self.replies.push(r);
                     }
-                    self.on_set(id, &rop.data);
+                    self.on_set(id, rop.data);
                 } else {
                     self.reject(&rop);
                 }
@@ -470,7 +466,7 @@ impl BoardEngine {
         }
     }
 
-    fn reject(&mut self, rop: &Rop) {
+    fn reject(&mut self, rop: &RopRef) {
         self.counters.rejected_rops += 1;
         if rop.ctrl.rqstconf {
             let mut r = self.reply_to(rop);
@@ -798,8 +794,7 @@ impl BoardEngine {
                 let Ok(data) = self.store.get(id) else {
                     continue;
                 };
-                let rop = Rop::sig(id, data.to_vec());
-                if fb.push(&rop).is_err() {
+                if fb.push_sig(id, data).is_err() {
                     if fb.is_empty() {
                         continue;
                     }

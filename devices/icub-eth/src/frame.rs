@@ -12,7 +12,8 @@
 //! ```
 //! An empty ropframe is 28 bytes (`eo_ropframe_sizeforZEROrops`).
 
-use crate::rop::{Rop, RopError};
+use crate::id::Id32;
+use crate::rop::{padded, Rop, RopError, RopRef, ROP_HEAD_SIZE};
 use thiserror::Error;
 
 pub const FRAME_START: u32 = 0x1234_5678;
@@ -109,29 +110,40 @@ impl<'a> Frame<'a> {
     /// the counted ROPs, or too few ROPs, are reported as [`RopsError::Count`].
     pub fn parse_rops(&self) -> (Vec<Rop>, Option<RopsError>) {
         let mut rops = Vec::with_capacity(usize::from(self.header.rops_count).min(64));
+        let err = self.visit_rops(|r| rops.push(r.to_rop()));
+        (rops, err)
+    }
+
+    /// Calls `f` on each ROP without copying (see [`Self::parse_rops`]); returns the first
+    /// problem.
+    pub fn visit_rops(&self, mut f: impl FnMut(RopRef<'a>)) -> Option<RopsError> {
         let mut at = 0;
+        let mut parsed = 0usize;
         for _ in 0..self.header.rops_count {
             if at == self.rops.len() {
                 break;
             }
-            match Rop::decode(&self.rops[at..]) {
+            match RopRef::decode(&self.rops[at..]) {
                 Ok((rop, n)) => {
-                    rops.push(rop);
+                    f(rop);
+                    parsed += 1;
                     at += n;
                 }
                 Err(e) => {
-                    let index = rops.len();
-                    return (rops, Some(RopsError::Rop { index, error: e }));
+                    return Some(RopsError::Rop {
+                        index: parsed,
+                        error: e,
+                    })
                 }
             }
         }
-        let err = (at != self.rops.len() || rops.len() != usize::from(self.header.rops_count))
-            .then_some(RopsError::Count {
+        (at != self.rops.len() || parsed != usize::from(self.header.rops_count)).then_some(
+            RopsError::Count {
                 declared: self.header.rops_count,
-                parsed: rops.len(),
+                parsed,
                 unparsed_bytes: self.rops.len() - at,
-            });
-        (rops, err)
+            },
+        )
     }
 }
 
@@ -194,6 +206,34 @@ impl FrameBuilder {
             }));
         }
         rop.encode_into(&mut self.rops).map_err(PushError::Rop)?;
+        self.count += 1;
+        Ok(())
+    }
+
+    /// Appends a plain `sig<id>` with `data` (no signature, no time) without building a
+    /// [`Rop`]: the regulars' path.
+    pub fn push_sig(&mut self, id: Id32, data: &[u8]) -> Result<(), PushError> {
+        let n = ROP_HEAD_SIZE + padded(data.len());
+        if data.is_empty() {
+            return Err(PushError::Rop(RopError::MissingData(
+                crate::rop::RopCode::Sig,
+            )));
+        }
+        let dsiz = u16::try_from(data.len())
+            .map_err(|_| PushError::Rop(RopError::DataTooLong(data.len())))?;
+        if n > self.room() || self.count == u16::MAX {
+            return Err(PushError::Full(FrameFull {
+                rop: n,
+                left: self.room(),
+            }));
+        }
+        self.rops.push(0);
+        self.rops.push(crate::rop::RopCode::Sig as u8);
+        self.rops.extend_from_slice(&dsiz.to_le_bytes());
+        self.rops.extend_from_slice(&id.0.to_le_bytes());
+        self.rops.extend_from_slice(data);
+        self.rops
+            .resize(self.rops.len() + padded(data.len()) - data.len(), 0);
         self.count += 1;
         Ok(())
     }

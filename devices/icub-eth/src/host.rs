@@ -20,7 +20,7 @@ use crate::entities::mn::{
 use crate::frame::{Frame, FrameBuilder, FrameError, RopsError};
 use crate::id::{endpoint as ep, endpoint_name, entity as en, ids, Id32};
 use crate::nvstore::{NvError, NvStore};
-use crate::rop::{ConfInfo, Rop, RopCode};
+use crate::rop::{ConfInfo, Rop, RopCode, RopRef};
 use crate::wire::Entity;
 use std::collections::{HashMap, VecDeque};
 use std::net::Ipv4Addr;
@@ -415,13 +415,9 @@ impl HostTransceiver {
             }
         }
         self.rx_sequence = Some((seq, age));
-        let (rops, err) = frame.parse_rops();
-        if let Some(e) = err {
+        if let Some(e) = frame.visit_rops(|r| self.process(r)) {
             self.counters.bad_rops += 1;
             self.push_event(HostEvent::BadRops(e));
-        }
-        for rop in rops {
-            self.process(rop);
         }
         Ok(())
     }
@@ -435,11 +431,11 @@ impl HostTransceiver {
         self.last_heard = Some(now);
     }
 
-    fn process(&mut self, rop: Rop) {
+    fn process(&mut self, rop: RopRef) {
         let id = rop.id32;
         match (rop.code, rop.ctrl.confinfo) {
             (RopCode::Say | RopCode::Sig, ConfInfo::None) => {
-                if self.store.set(id, &rop.data).is_err() {
+                if self.store.set(id, rop.data).is_err() {
                     self.counters.unknown_rops += 1;
                     return;
                 }
@@ -458,7 +454,7 @@ impl HostTransceiver {
                     .collect();
                 for r in done {
                     self.pending.remove(&r);
-                    self.finish_request(r, Ok(rop.data.clone()));
+                    self.finish_request(r, Ok(rop.data.to_vec()));
                 }
                 if rop.code == RopCode::Sig {
                     self.push_event(HostEvent::Signal(id));

@@ -234,6 +234,41 @@ impl Rop {
     /// Decodes one ROP from the start of `stream` (as `eo_parser_GetROP`) and returns it
     /// with the number of bytes it took.
     pub fn decode(stream: &[u8]) -> Result<(Rop, usize), RopError> {
+        RopRef::decode(stream).map(|(r, n)| (r.to_rop(), n))
+    }
+}
+
+/// A decoded ROP borrowing its data from the datagram (no allocation: what the state
+/// machines use on the 1 kHz streams).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RopRef<'a> {
+    pub ctrl: RopCtrl,
+    pub code: RopCode,
+    pub id32: Id32,
+    pub data: &'a [u8],
+    pub signature: Option<u32>,
+    pub time: Option<u64>,
+}
+
+impl<'a> RopRef<'a> {
+    /// See [`Rop::carries_data`].
+    pub fn carries_data(&self) -> bool {
+        self.ctrl.confinfo == ConfInfo::None && self.code.has_data()
+    }
+
+    pub fn to_rop(&self) -> Rop {
+        Rop {
+            ctrl: self.ctrl,
+            code: self.code,
+            id32: self.id32,
+            data: self.data.to_vec(),
+            signature: self.signature,
+            time: self.time,
+        }
+    }
+
+    /// See [`Rop::decode`].
+    pub fn decode(stream: &'a [u8]) -> Result<(RopRef<'a>, usize), RopError> {
         let head = stream.get(..ROP_HEAD_SIZE).ok_or(RopError::Truncated {
             needed: ROP_HEAD_SIZE,
             available: stream.len(),
@@ -259,9 +294,9 @@ impl Rop {
         }
         let mut at = ROP_HEAD_SIZE;
         let data = if carries {
-            stream[at..at + dsiz].to_vec()
+            &stream[at..at + dsiz]
         } else {
-            Vec::new()
+            &[][..]
         };
         at += data_len;
         let signature = ctrl.plussign.then(|| {
@@ -276,7 +311,7 @@ impl Rop {
             u64::from_le_bytes(t)
         });
         Ok((
-            Rop {
+            RopRef {
                 ctrl,
                 code,
                 id32,
