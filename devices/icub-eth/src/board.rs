@@ -667,15 +667,23 @@ impl BoardEngine {
     }
 
     fn joint_set(&mut self, j: u8, t: u8, data: &[u8]) {
+        // Any part of the joint config (the whole, a PID, the user limits, the impedance,
+        // ...) reconfigures the joint with the config as it now stands.
+        let config = (tag::MC_JOINT_CONFIG..=tag::MC_JOINT_CONFIG_TCFILTERTYPE)
+            .contains(&t)
+            .then(|| {
+                self.store
+                    .read::<JointConfig>(ids::joint(j, tag::MC_JOINT_CONFIG))
+                    .ok()
+            })
+            .flatten();
         let Some(model) = self.joints.get_mut(usize::from(j)) else {
             return;
         };
+        if let Some(c) = &config {
+            model.configure(c);
+        }
         match t {
-            tag::MC_JOINT_CONFIG => {
-                if let Ok(c) = JointConfig::from_bytes(data) {
-                    model.configure(&c);
-                }
-            }
             tag::MC_JOINT_CMMNDS_SETPOINT => {
                 if let Ok(s) = Setpoint::from_bytes(data) {
                     model.setpoint(&s);

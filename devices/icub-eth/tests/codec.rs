@@ -653,3 +653,55 @@ fn service_config_layouts() {
         vec![(3, 0, 2)]
     );
 }
+
+#[test]
+fn sensor_service_config_layouts() {
+    use icub_eth::entities::boards::{BoardInfo, CanLocation};
+    use icub_eth::entities::service::{
+        MaisServiceConfig, PosSensorConfig, PosServiceConfig, StrainServiceConfig,
+    };
+    // eOmn_serv_config_data_as_strain_t: eObrd_info_t (type, fw 3, proto 2) then the CAN
+    // location (port:1, addr:4, insideindex:3): CAN2 address 13 -> 1 | 13 << 1 = 0x1B.
+    let st = StrainServiceConfig {
+        board: BoardInfo {
+            board_type: 12,
+            firmware: [2, 0, 7],
+            protocol: [2, 0],
+        },
+        can_location: CanLocation {
+            port: 1,
+            addr: 13,
+            inside_index: 0,
+        },
+    };
+    assert_eq!(st.to_bytes(), vec![12, 2, 0, 7, 2, 0, 0x1B]);
+    // eOmn_serv_config_data_as_mais_t: version 5 then CAN1 address 14 -> 0x1C.
+    let m = MaisServiceConfig {
+        version: [1, 0, 0, 1, 0],
+        can_location: CanLocation {
+            port: 0,
+            addr: 14,
+            inside_index: 0,
+        },
+    };
+    assert_eq!(m.to_bytes(), vec![1, 0, 0, 1, 0, 0x1C]);
+    // eoas_pos_SensorConfig_t: type 0, connector 1, port 2, enabled, rotation 1 (+180):
+    // bits 0x0000 | 1 << 4 | 2 << 8 | 1 << 12 | 1 << 14 = 0x5210, then offset -30.
+    let s = PosSensorConfig {
+        connector: 1,
+        port: 2,
+        enabled: true,
+        rotation: 1,
+        offset: -30,
+        ..Default::default()
+    };
+    assert_eq!(s.to_bytes(), vec![0x10, 0x52, 0xE2, 0xFF]);
+    let p = PosServiceConfig {
+        sensors: [s; 4],
+        ..Default::default()
+    };
+    let b = p.to_bytes();
+    assert_eq!(b.len(), 24);
+    assert_eq!(&b[8..12], &[0x10, 0x52, 0xE2, 0xFF]);
+    assert_eq!(PosServiceConfig::from_bytes(&b).unwrap(), p);
+}

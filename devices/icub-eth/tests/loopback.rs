@@ -408,3 +408,39 @@ fn garbage_is_counted_and_dropped() {
     l.tick();
     assert_eq!(l.board.state(), ApplState::Running);
 }
+
+#[test]
+fn calibration_ends_in_position_control() {
+    use icub_eth::entities::mc::Calibrator;
+    let mut l = Loop::new(arm_board());
+    l.start(&[mc_service(4)]).expect("start-up");
+    // parametricCalibratorEth: calibrateAxisWithParams -> set<joint cmmnds calibration>.
+    let cal = Calibrator {
+        calibration_type: 12, // eomc_calibration_type12_absolute_sensor
+        params: [1000, 0, 0, 0, 0, 0],
+    };
+    l.host
+        .set_value(ids::joint(2, tag::MC_JOINT_CMMNDS_CALIBRATION), &cal, l.now)
+        .unwrap();
+    let mut seen_calib = false;
+    let mut done_after = None;
+    let t0 = l.now;
+    for _ in 0..500 {
+        l.tick();
+        let core: JointStatusCore = l
+            .host
+            .read(ids::joint(2, tag::MC_JOINT_STATUS_CORE))
+            .unwrap();
+        seen_calib |= core.control_mode == control_mode::CALIB;
+        // embObjMotionControl::calibrationDoneRaw: done when no longer calib (nor idle).
+        if seen_calib && core.control_mode == control_mode::POSITION {
+            done_after = Some(l.now - t0);
+            break;
+        }
+    }
+    let done_after = done_after.expect("calibration ends in position control");
+    assert!(
+        done_after >= Duration::from_millis(100) && done_after < Duration::from_millis(110),
+        "{done_after:?}"
+    );
+}

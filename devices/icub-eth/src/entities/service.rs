@@ -610,3 +610,123 @@ pub fn entities_for_service(cat: u8, service_type_: u8, data: &[u8]) -> Vec<(u8,
         _ => Vec::new(),
     }
 }
+
+/// `eOmn_serv_config_data_as_strain_t` (7 bytes): the strain board and where it is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct StrainServiceConfig {
+    pub board: BoardInfo,
+    pub can_location: CanLocation,
+}
+
+impl Entity for StrainServiceConfig {
+    const C_TYPE: &'static str = "eOmn_serv_config_data_as_strain_t";
+    const SIZE: usize = 7;
+    fn write(&self, w: &mut Writer) {
+        w.entity(&self.board);
+        w.u8(self.can_location.to_byte());
+    }
+    fn read(r: &mut Reader) -> Self {
+        Self {
+            board: r.entity(),
+            can_location: CanLocation::from_byte(r.u8()),
+        }
+    }
+}
+
+/// `eOmn_serv_config_data_as_mais_t` (6 bytes): `eObrd_version_t` (firmware major, minor,
+/// build; protocol major, minor) and the CAN location.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct MaisServiceConfig {
+    pub version: [u8; 5],
+    pub can_location: CanLocation,
+}
+
+impl Entity for MaisServiceConfig {
+    const C_TYPE: &'static str = "eOmn_serv_config_data_as_mais_t";
+    const SIZE: usize = 6;
+    fn write(&self, w: &mut Writer) {
+        w.bytes(&self.version);
+        w.u8(self.can_location.to_byte());
+    }
+    fn read(r: &mut Reader) -> Self {
+        Self {
+            version: r.array(),
+            can_location: CanLocation::from_byte(r.u8()),
+        }
+    }
+}
+
+/// `eoas_pos_SensorConfig_t` (4 bytes): a u16 bit field (type:4, connector:4, port:4,
+/// enabled:1, invertdirection:1, rotation:2 from bit 0) and the offset in deci-degrees.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PosSensorConfig {
+    /// `eoas_pos_TYPE_t` (0 decideg, 14 none).
+    pub sensor_type: u8,
+    pub connector: u8,
+    /// `eObrd_portpos_t`.
+    pub port: u8,
+    pub enabled: bool,
+    pub invert_direction: bool,
+    /// `eoas_pos_ROT_t`.
+    pub rotation: u8,
+    pub offset: i16,
+}
+
+impl Entity for PosSensorConfig {
+    const C_TYPE: &'static str = "eoas_pos_SensorConfig_t";
+    const SIZE: usize = 4;
+    fn write(&self, w: &mut Writer) {
+        let bits = u16::from(self.sensor_type & 0xf)
+            | u16::from(self.connector & 0xf) << 4
+            | u16::from(self.port & 0xf) << 8
+            | u16::from(self.enabled) << 12
+            | u16::from(self.invert_direction) << 13
+            | u16::from(self.rotation & 3) << 14;
+        w.u16(bits);
+        w.i16(self.offset);
+    }
+    fn read(r: &mut Reader) -> Self {
+        let b = r.u16();
+        Self {
+            sensor_type: (b & 0xf) as u8,
+            connector: ((b >> 4) & 0xf) as u8,
+            port: ((b >> 8) & 0xf) as u8,
+            enabled: b & (1 << 12) != 0,
+            invert_direction: b & (1 << 13) != 0,
+            rotation: (b >> 14) as u8,
+            offset: r.i16(),
+        }
+    }
+}
+
+/// `eoas_pos_ServiceConfig_t` = `eOmn_serv_config_data_as_pos_t` (24 bytes): one
+/// `eoas_pos_BoardConfig_t` (board info 6, CAN location 1, filler 1, 4 sensors).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PosServiceConfig {
+    pub board: BoardInfo,
+    pub can_location: CanLocation,
+    pub sensors: [PosSensorConfig; 4],
+}
+
+impl Entity for PosServiceConfig {
+    const C_TYPE: &'static str = "eOmn_serv_config_data_as_pos_t";
+    const SIZE: usize = 24;
+    fn write(&self, w: &mut Writer) {
+        w.entity(&self.board);
+        w.u8(self.can_location.to_byte());
+        w.u8(0);
+        for s in &self.sensors {
+            w.entity(s);
+        }
+    }
+    fn read(r: &mut Reader) -> Self {
+        let board = r.entity();
+        let can_location = CanLocation::from_byte(r.u8());
+        r.skip(1);
+        Self {
+            board,
+            can_location,
+            sensors: [r.entity(), r.entity(), r.entity(), r.entity()],
+        }
+    }
+}
