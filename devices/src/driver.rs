@@ -8,7 +8,7 @@ use crate::error::{DevResult, DeviceError};
 use crate::framegrabber::{IFrameGrabberControls, IFrameGrabberImage};
 use crate::interfaces::*;
 use crate::sensors::*;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, LazyLock, Mutex, RwLock};
 use yarp_proto::{Bottle, Property, Value};
 
 /// A device shared between its owner and the wrappers attached to it.
@@ -277,40 +277,113 @@ macro_rules! motor_control_views {
 /// Makes a fresh, unopened driver.
 pub type Factory = fn() -> Box<dyn DeviceDriver>;
 
-/// The drivers this crate knows, by their C++ names; each family module lists its own.
-const FAMILIES: &[&[(&str, Factory)]] = &[
-    crate::fake_motion_control::DRIVERS,
-    crate::controlboard::DRIVERS,
-    crate::remote_controlboard::DRIVERS,
-    crate::remapper::DRIVERS,
-    crate::framegrabber::DRIVERS,
-    crate::sensors::DRIVERS,
-    crate::bundler::DRIVERS,
-    crate::icub::DRIVERS,
-];
-
-fn drivers() -> impl Iterator<Item = &'static (&'static str, Factory)> {
-    FAMILIES.iter().flat_map(|f| f.iter())
+/// One known driver: its C++ name, the crate that provides it and its factory.
+#[derive(Clone, Copy)]
+pub struct DriverEntry {
+    pub name: &'static str,
+    /// The cargo crate the driver comes from (`yarp-devices`, `icubmod`, ...), shown by
+    /// `yarpdev --list` as C++ shows a plugin's library.
+    pub provider: &'static str,
+    pub factory: Factory,
 }
 
-/// Lookup of drivers by C++ name.
-pub struct Registry;
+/// The drivers known to this process, by C++ name.
+///
+/// Each device crate adds its own drivers with a `register(&mut Registry)` function; this
+/// crate's are added when the table is first used (`crate::register`), those of the
+/// others by the program that links them, before it opens devices:
+///
+/// ```
+/// # fn register(_: &mut yarp_devices::Registry) {}
+/// # mod icubmod { pub use super::register; }
+/// yarp_devices::Registry::install(icubmod::register);
+/// ```
+///
+/// Registration is explicit rather than distributed (`inventory`, `linkme`): those collect
+/// entries through linker sections, so a device crate that nothing references is silently
+/// dropped from the link and its devices vanish, and a test binary gets whatever happens
+/// to be linked; here a program or test registers exactly the crates it names, and the
+/// framework never names a driver module (no import circle between registry and drivers).
+#[derive(Default)]
+pub struct Registry {
+    drivers: Vec<DriverEntry>,
+}
+
+/// The process-wide table.
+static TABLE: LazyLock<RwLock<Registry>> = LazyLock::new(|| {
+    let mut table = Registry::default();
+    crate::register(&mut table);
+    RwLock::new(table)
+});
+
+fn table() -> std::sync::RwLockReadGuard<'static, Registry> {
+    TABLE.read().unwrap_or_else(|e| e.into_inner())
+}
 
 impl Registry {
+    /// Adds `provider`'s drivers. Adding the same driver again is a no-op, so that each
+    /// test may register what it needs; one name from two crates is a programming error.
+    pub fn add(&mut self, provider: &'static str, drivers: &[(&'static str, Factory)]) {
+        for &(name, factory) in drivers {
+            match self.drivers.iter().find(|e| e.name == name) {
+                Some(e) if e.provider == provider => {}
+                Some(e) => panic!(
+                    "device {name:?} registered by both {} and {provider}",
+                    e.provider
+                ),
+                None => self.drivers.push(DriverEntry {
+                    name,
+                    provider,
+                    factory,
+                }),
+            }
+        }
+    }
+
+    /// Runs a device crate's `register` on the process-wide table.
+    pub fn install(register: impl FnOnce(&mut Registry)) {
+        register(&mut TABLE.write().unwrap_or_else(|e| e.into_inner()));
+    }
+
+    /// Every known driver, sorted by name (case-insensitive).
+    pub fn entries() -> Vec<DriverEntry> {
+        let mut entries = table().drivers.clone();
+        entries.sort_unstable_by_key(|e| e.name.to_lowercase());
+        entries
+    }
+
     /// Every known device name.
     pub fn names() -> Vec<&'static str> {
-        let mut names: Vec<&'static str> = drivers().map(|(n, _)| *n).collect();
-        names.sort_unstable_by_key(|n| n.to_lowercase());
-        names
+        Self::entries().iter().map(|e| e.name).collect()
+    }
+
+    /// Whether a driver called `name` is known.
+    pub fn knows(name: &str) -> bool {
+        table().drivers.iter().any(|e| e.name == name)
+    }
+
+    /// The crate that provides driver `name`.
+    pub fn provider(name: &str) -> Option<&'static str> {
+        table()
+            .drivers
+            .iter()
+            .find(|e| e.name == name)
+            .map(|e| e.provider)
     }
 
     /// A fresh (unopened) driver; an unknown name lists the closest known names.
     pub fn get(name: &str) -> DevResult<Box<dyn DeviceDriver>> {
-        if let Some((_, f)) = drivers().find(|(n, _)| *n == name) {
+        let factory = table()
+            .drivers
+            .iter()
+            .find(|e| e.name == name)
+            .map(|e| e.factory);
+        if let Some(f) = factory {
             return Ok(f());
         }
-        let mut scored: Vec<(usize, &str)> = drivers()
-            .map(|(n, _)| (distance(&name.to_lowercase(), &n.to_lowercase()), *n))
+        let mut scored: Vec<(usize, &str)> = Self::names()
+            .into_iter()
+            .map(|n| (distance(&name.to_lowercase(), &n.to_lowercase()), n))
             .collect();
         scored.sort();
         let limit = (name.len().max(3)) * 2 / 3 + 1;

@@ -1,15 +1,17 @@
-//! YARP device layer: the driver framework (`DeviceDriver`, `Registry`, `PolyDriver`),
-//! the motor-control interface traits, the `fakeMotionControl` device and the
-//! `controlBoard_nws_yarp` RPC server, wire-compatible with C++ YARP 3.12.
+//! The YARP device framework, wire-compatible with C++ YARP 3.12: the driver traits and
+//! factory (`DeviceDriver`, `Registry`, `PolyDriver`), the device interfaces, the fake
+//! devices, the network wrappers and clients (NWS/NWC, `analogServer`, ...), the
+//! remappers and the robot interface (`yarprobotinterface`'s XML reader and runner).
+//!
+//! It names no robot's drivers: those live in crates of their own (the iCub's in
+//! `icubmod`), which add themselves to the [`Registry`] with their `register` function.
 
 pub mod bundler;
-pub mod cartesian;
 pub mod controlboard;
 pub mod driver;
 pub mod error;
 pub mod fake_motion_control;
 pub mod framegrabber;
-pub mod icub;
 pub mod interfaces;
 pub mod remapper;
 pub mod remote_controlboard;
@@ -22,6 +24,26 @@ pub use driver::{
     shared, DeviceDriver, ICalibrator, IMultipleWrapper, IWrapper, Params, PolyDriver, Registry,
     SharedDevice,
 };
+pub use driver::{DriverEntry, Factory};
 pub use error::{DevResult, DeviceError};
 pub use fake_motion_control::FakeMotionControl;
 pub use interfaces::*;
+
+/// The name this crate's drivers are listed under.
+pub const PROVIDER: &str = "yarp-devices";
+
+/// Adds this crate's drivers (fakes, wrappers, clients, remappers) to `registry`; the
+/// process-wide table does this itself when first used.
+pub fn register(registry: &mut Registry) {
+    for family in [
+        fake_motion_control::DRIVERS,
+        controlboard::DRIVERS,
+        remote_controlboard::DRIVERS,
+        remapper::DRIVERS,
+        framegrabber::DRIVERS,
+        sensors::DRIVERS,
+        bundler::DRIVERS,
+    ] {
+        registry.add(PROVIDER, family);
+    }
+}

@@ -466,23 +466,6 @@ fn analog_client_reads_and_calibrates_through_the_server() {
     server.close().unwrap();
 }
 
-/// `wrappers/skin/left_arm_skin_wrapper.xml` in small: ports from the `ports` paramlist
-/// (elements as the XML gives them: one text each), named `/<robot>/skin/<port>`.
-#[test]
-fn skin_wrapper_serves_icub_skin_ports() {
-    let mut wrapper = open(
-        "device skinWrapper\nsubdevice fakeAnalogSensor\nrobotName /icub\nperiod 20\ntotal_taxels 6\nchannelsNum 6\nports (left_hand left_forearm)\nleft_hand \"0 1 0 1\"\nleft_forearm \"2 5 0 3\"\n",
-    );
-    let hand = read_from("/icub/skin/left_hand", "/skin/h", 1);
-    let forearm = read_from("/icub/skin/left_forearm", "/skin/f", 1);
-    assert_eq!(hand[0].1.len(), 2);
-    assert_eq!(forearm[0].1.len(), 4);
-    assert!(hand[0].0.is_some(), "with an envelope");
-    let replies = rpc_calls("/icub/skin/left_hand/rpc:i", &["[iana] [cal]"]);
-    assert_eq!(replies, ["0"]);
-    wrapper.close().unwrap();
-}
-
 /// This process's CPU time (user + system) in seconds, from /proc/self/stat.
 fn cpu_seconds() -> f64 {
     let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();

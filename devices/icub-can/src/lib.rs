@@ -7,7 +7,7 @@
 //! | [`frame`] | [`CanFrame`]: classic CAN frames with Linux identifier-word flags |
 //! | [`bus`] | [`CanBus`] endpoints (ICanBus role): in-process, cannelloni/UDP, SocketCAN; [`bus::config`] picks one from `canBackend` / `physDevice` / `CanDeviceNum` |
 //! | [`proto`] | the iCub protocol as a pure codec: [`proto::Message`], [`proto::decode_any`] (fuzz entry point) |
-//! | [`emulator`] | emulated motor-control, strain, MAIS, skin and MTB boards; a 53-DOF iCub preset; the `icub-board-emulator` binary |
+//! | [`emulator`] | emulated motor-control, strain, MAIS, skin and MTB boards (run as a robot by `icub-board-emulator`, crate `icub-emulators`) |
 //! | [`xsens`] | the Xsens MT serial protocol of the head IMU (`xsensmtx`) as a pure codec, and an emulated MTx ([`emulator::mtx`] serves it on a serial port or pseudo-terminal) |
 //! | [`client`] | synchronous driver cores: [`client::MotorControlClient`], [`client::StrainClient`], [`client::SkinClient`], [`client::InertialClient`] |
 //!

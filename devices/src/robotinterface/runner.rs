@@ -29,12 +29,12 @@ pub trait DeviceFactory: Send + Sync {
     fn open(&self, config: &Property) -> DevResult<PolyDriver>;
 }
 
-/// The crate's driver registry (C++ names).
+/// The process-wide driver [`Registry`] (C++ names).
 pub struct RegistryFactory;
 
 impl DeviceFactory for RegistryFactory {
     fn knows(&self, kind: &str) -> bool {
-        Registry::names().contains(&kind)
+        Registry::knows(kind)
     }
 
     fn open(&self, config: &Property) -> DevResult<PolyDriver> {

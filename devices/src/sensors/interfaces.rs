@@ -32,7 +32,7 @@ impl SensorMeasurement {
 }
 
 /// The error for a sensor index past the end.
-pub(crate) fn no_sensor(family: &'static str, index: usize, count: usize) -> DeviceError {
+pub fn no_sensor(family: &'static str, index: usize, count: usize) -> DeviceError {
     DeviceError::BadParam {
         device: family.to_string(),
         param: "sens_index".into(),

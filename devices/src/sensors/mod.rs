@@ -6,9 +6,10 @@
 //! - MAS wrappers: `multipleanalogsensorsserver` (`/<name>/measures:o` stream and the
 //!   thrift metadata service on `/<name>/rpc:o`), `multipleanalogsensorsclient`,
 //!   `multipleanalogsensorsremapper`;
-//! - legacy wrappers: `analogServer`, `analogsensorclient`, `skinWrapper`;
-//! - `virtualAnalogServer` (torques from a port into `IVirtualAnalogSensor` devices) and
-//!   `imuFilter` (an IMU with its gyro bias removed).
+//! - legacy wrappers: `analogServer`, `analogsensorclient`;
+//! - `virtualAnalogServer` (torques from a port into `IVirtualAnalogSensor` devices).
+//!
+//! (icub-main's `skinWrapper` and `imuFilter` are in crate `icubmod`.)
 //!
 //! Protocol logic is pure (`wire`, `rpc`, `server::collect_*`, `analog_server::
 //! handle_analog_rpc`); the devices are thin tokio layers over `yarp-net` ports.
@@ -23,14 +24,12 @@ pub mod fake_fts;
 pub mod fake_imu;
 pub mod family;
 pub mod forward;
-pub mod imu_filter;
 pub mod interfaces;
-pub(crate) mod params;
-mod periodic;
+pub mod params;
+pub mod periodic;
 pub mod remapper;
 pub mod rpc;
 pub mod server;
-pub mod skin_wrapper;
 pub mod virtual_analog;
 pub mod virtual_analog_server;
 pub mod wire;
@@ -42,11 +41,9 @@ pub use fake_analog::FakeAnalogSensor;
 pub use fake_fts::FakeFts;
 pub use fake_imu::FakeImu;
 pub use family::SensorFamily;
-pub use imu_filter::ImuFilter;
 pub use interfaces::*;
 pub use remapper::MultipleAnalogSensorsRemapper;
 pub use server::MultipleAnalogSensorsServer;
-pub use skin_wrapper::SkinWrapper;
 pub use virtual_analog::{IVirtualAnalogSensor, VasStatus};
 pub use virtual_analog_server::VirtualAnalogServer;
 pub use wire::{SensorMetadata, SensorRpcData, SensorStreamingData};
@@ -58,11 +55,9 @@ pub(crate) const DRIVERS: &[(&str, Factory)] = &[
     ("fakeAnalogSensor", || Box::new(FakeAnalogSensor::new())),
     ("analogServer", || Box::new(AnalogServer::new())),
     ("analogsensorclient", || Box::new(AnalogSensorClient::new())),
-    ("skinWrapper", || Box::new(SkinWrapper::new())),
     ("virtualAnalogServer", || {
         Box::new(VirtualAnalogServer::new())
     }),
-    ("imuFilter", || Box::new(ImuFilter::new())),
     ("multipleanalogsensorsserver", || {
         Box::new(MultipleAnalogSensorsServer::new())
     }),

@@ -6,7 +6,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use yarp_proto::Value;
 
 /// Wall-clock time in seconds (C++ `yarp::os::Time::now`).
-pub(crate) fn now() -> f64 {
+pub fn now() -> f64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map(|d| d.as_secs_f64())
@@ -15,7 +15,7 @@ pub(crate) fn now() -> f64 {
 
 /// A boolean parameter as C++ `Value::asBool` reads it (`true`/`false`, 0/1); a key
 /// given without a value (`--constantValue`) counts as true.
-pub(crate) fn bool_param(p: &Params<'_>, key: &str) -> DevResult<Option<bool>> {
+pub fn bool_param(p: &Params<'_>, key: &str) -> DevResult<Option<bool>> {
     let Some(v) = p.find(key) else {
         return Ok(p.config.check(key).then_some(true));
     };
@@ -36,7 +36,7 @@ pub(crate) fn bool_param(p: &Params<'_>, key: &str) -> DevResult<Option<bool>> {
 }
 
 /// A period given in milliseconds (C++ `int`, floats accepted), as seconds.
-pub(crate) fn period_ms(p: &Params<'_>, key: &str) -> DevResult<Option<f64>> {
+pub fn period_ms(p: &Params<'_>, key: &str) -> DevResult<Option<f64>> {
     match p.float(key)? {
         None => Ok(None),
         Some(ms) if ms > 0.0 && ms.is_finite() => Ok(Some(ms / 1000.0)),
@@ -50,6 +50,6 @@ pub(crate) fn period_ms(p: &Params<'_>, key: &str) -> DevResult<Option<f64>> {
 }
 
 /// A required string parameter.
-pub(crate) fn required_string(p: &Params<'_>, key: &str) -> DevResult<String> {
+pub fn required_string(p: &Params<'_>, key: &str) -> DevResult<String> {
     p.string(key)?.ok_or_else(|| p.missing(key))
 }

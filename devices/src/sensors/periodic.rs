@@ -7,14 +7,14 @@ use tokio::time::Instant;
 
 /// Deadlines every `period`.
 #[derive(Debug)]
-pub(crate) struct Ticker {
+pub struct Ticker {
     period: Duration,
     next: Instant,
 }
 
 impl Ticker {
     /// The first tick is immediate.
-    pub(crate) fn new(period: Duration) -> Self {
+    pub fn new(period: Duration) -> Self {
         Ticker {
             period,
             next: Instant::now(),
@@ -22,7 +22,7 @@ impl Ticker {
     }
 
     /// Waits for the next deadline.
-    pub(crate) async fn tick(&mut self) {
+    pub async fn tick(&mut self) {
         tokio::time::sleep_until(self.next).await;
         let now = Instant::now();
         self.next += self.period;

@@ -3,7 +3,7 @@
 //! `/robot/yarprobotinterface` service and the control board it brought up. Without a C++
 //! YARP the test says SKIPPED loudly and passes. Run under netns-run.
 
-#[path = "fixtures/robotinterface/live_support.rs"]
+#[path = "../../tests/fixtures/robotinterface/live_support.rs"]
 mod support;
 
 use std::io::{Read, Write};
@@ -70,7 +70,8 @@ async fn cpp_yarp_rpc_queries_the_robot() {
         return;
     }
     let net = start_network().await;
-    let fixtures = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/robotinterface");
+    let fixtures =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/robotinterface");
     let mut child = Child::spawn(
         BIN,
         &["--config", "robot_fake.xml"],

@@ -1,15 +1,22 @@
-//! The iCub CAN devices of icub-main, over the driver cores of crate `icub_can`:
+//! `icubmod`: the iCub devices of icub-main (`src/libraries/icubmod`), as drivers of the
+//! YARP device framework (crate `yarp-devices`). The CAN devices run over the driver cores
+//! of crate `icub_can`, the cartesian server over the kinematics of crate `icub_ikin`:
 //!
-//! | device | module | interfaces |
-//! |--------|--------|------------|
-//! | `canmotioncontrol` | [`motion_control`] | encoders, position, velocity, torque, impedance, calibration, PIDs, control/interaction modes, limits, axis info, motor encoders, amplifiers, PWM |
+//! | device (icub-main directory) | module | interfaces |
+//! |------------------------------|--------|------------|
+//! | `canmotioncontrol` (`canBusMotionControl`) | [`motion_control`] | encoders, position, velocity, torque, impedance, calibration, PIDs, control/interaction modes, limits, axis info, motor encoders, amplifiers, PWM |
 //! | `canBusAnalogSensor`, `canBusFtSensor` | [`analog`] | `IAnalogSensor`, `ISixAxisForceTorqueSensors` (strain) |
 //! | `canBusSkin` | [`skin`] | `IAnalogSensor`, `ISkinPatches` |
 //! | `canBusInertialMTB` | [`inertial`] | `IAnalogSensor`, accelerometers, gyroscopes |
 //! | `canBusVirtualAnalogSensor` | [`virtual_analog`] | `IVirtualAnalogSensor` (joint torques sent as strain messages) |
 //! | `xsensmtx` | [`xsensmtx`] | the head's Xsens MTx on a serial port: gyroscope, accelerometer, magnetometer, orientation, `IAnalogSensor` (C++ `IGenericSensor`, 12 channels) |
+//! | `imuFilter` | [`imu_filter`] | an IMU with its gyro bias removed (`IMultipleWrapper` + the IMU interfaces) |
+//! | `skinWrapper` | [`skin_wrapper`] | an `analogServer` per skin part |
 //! | `parametricCalibrator` | [`calibrator`] | `ICalibrator`, `IRemoteCalibrator` |
-//! | `cartesiancontrollerserver` | [`crate::cartesian`] | `IMultipleWrapper` (pose on `state:o`) |
+//! | `cartesiancontrollerserver` (`cartesianController`) | [`cartesian`] | `IMultipleWrapper` (pose on `state:o`) |
+//!
+//! Programs make them known with [`register`] before opening devices:
+//! `yarp_devices::Registry::install(icubmod::register)`.
 //!
 //! Each device reads the parameters of the robots-configuration XML files unchanged; the
 //! bus is chosen by `canBackend` (e.g. `udp://127.0.0.1:20000+n`, one port per
@@ -18,27 +25,36 @@
 //! statuses: a silent board fails a call within its timeout, never hangs it.
 
 pub mod analog;
+pub mod boards;
 pub mod calibrator;
+pub mod cartesian;
 pub mod common;
+pub mod imu_filter;
 pub mod inertial;
 pub mod motion_control;
-pub mod registry;
 pub mod skin;
+pub mod skin_wrapper;
 pub mod virtual_analog;
 pub mod xsensmtx;
 
 pub use analog::CanBusAnalogSensor;
 pub use calibrator::ParametricCalibrator;
+pub use cartesian::CartesianControllerServer;
+pub use imu_filter::ImuFilter;
 pub use inertial::CanBusInertialMtb;
 pub use motion_control::CanMotionControl;
 pub use skin::CanBusSkin;
+pub use skin_wrapper::SkinWrapper;
 pub use virtual_analog::CanBusVirtualAnalogSensor;
 pub use xsensmtx::XsensMtx;
 
-use crate::driver::Factory;
+use yarp_devices::{Factory, Registry};
 
-/// The iCub drivers, by C++ name.
-pub(crate) const DRIVERS: &[(&str, Factory)] = &[
+/// The name this crate's drivers are listed under (`yarpdev --list`).
+pub const PROVIDER: &str = "icubmod";
+
+/// The drivers of this crate, by C++ name.
+pub const DRIVERS: &[(&str, Factory)] = &[
     (motion_control::NAME, || Box::new(CanMotionControl::new())),
     ("canBusAnalogSensor", || {
         Box::new(CanBusAnalogSensor::new("canBusAnalogSensor"))
@@ -53,7 +69,14 @@ pub(crate) const DRIVERS: &[(&str, Factory)] = &[
     }),
     (calibrator::NAME, || Box::new(ParametricCalibrator::new())),
     (xsensmtx::NAME, || Box::new(XsensMtx::new())),
-    (crate::cartesian::NAME, || {
-        Box::new(crate::cartesian::CartesianControllerServer::new())
+    ("imuFilter", || Box::new(ImuFilter::new())),
+    ("skinWrapper", || Box::new(SkinWrapper::new())),
+    (cartesian::NAME, || {
+        Box::new(CartesianControllerServer::new())
     }),
 ];
+
+/// Adds the iCub drivers to `registry` (`Registry::install(icubmod::register)`).
+pub fn register(registry: &mut Registry) {
+    registry.add(PROVIDER, DRIVERS);
+}

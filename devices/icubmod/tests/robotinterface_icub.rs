@@ -12,7 +12,8 @@ use yarp_devices::{DevResult, DeviceError, PolyDriver};
 use yarp_proto::{Property, Value};
 
 fn icub_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/robots-configuration/iCubGenova01")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/robots-configuration/iCubGenova01")
 }
 
 fn load(file: &str) -> Option<Robot> {
@@ -35,6 +36,7 @@ fn type_counts(robot: &Robot) -> BTreeMap<&str, usize> {
 
 #[test]
 fn icub_all_device_types() {
+    yarp_devices::Registry::install(icubmod::register);
     let Some(robot) = load("icub_all.xml") else {
         return;
     };
@@ -77,6 +79,7 @@ fn icub_all_device_types() {
 
 #[test]
 fn icub_all_params_convert_like_cpp() {
+    yarp_devices::Registry::install(icubmod::register);
     let Some(robot) = load("icub_all.xml") else {
         return;
     };
@@ -155,6 +158,7 @@ fn icub_all_params_convert_like_cpp() {
 
 #[test]
 fn icub_all_phases_and_levels() {
+    yarp_devices::Registry::install(icubmod::register);
     let Some(robot) = load("icub_all.xml") else {
         return;
     };
@@ -194,6 +198,7 @@ impl DeviceFactory for KnowsAll {
 
 #[test]
 fn icub_all_dry_run_resolves_every_target() {
+    yarp_devices::Registry::install(icubmod::register);
     let Some(robot) = load("icub_all.xml") else {
         return;
     };
@@ -213,6 +218,7 @@ fn icub_all_dry_run_resolves_every_target() {
 
 #[test]
 fn icub_all_reports_unavailable_types_by_name() {
+    yarp_devices::Registry::install(icubmod::register);
     let Some(robot) = load("icub_all.xml") else {
         return;
     };
@@ -231,6 +237,7 @@ fn icub_all_reports_unavailable_types_by_name() {
 
 #[test]
 fn other_icub_robot_files_load() {
+    yarp_devices::Registry::install(icubmod::register);
     for (file, devices) in [
         ("icub_all_no_legs.xml", 46),
         ("icub_analog_only.xml", 35),

@@ -14,11 +14,11 @@
 use icub_can::client::{SensorStatus, StrainClient, StrainParams};
 use yarp_proto::Property;
 
-use super::common::{device_id, lookup_one, now, open_bus, open_error};
-use crate::driver::DeviceDriver;
-use crate::error::{DevResult, DeviceError};
-use crate::sensors::{AnalogStatus, IAnalogSensor, ISixAxisForceTorqueSensors};
-use crate::sensors::{MasStatus, SensorMeasurement};
+use crate::common::{device_id, lookup_one, now, open_bus, open_error};
+use yarp_devices::driver::DeviceDriver;
+use yarp_devices::error::{DevResult, DeviceError};
+use yarp_devices::sensors::{AnalogStatus, IAnalogSensor, ISixAxisForceTorqueSensors};
+use yarp_devices::sensors::{MasStatus, SensorMeasurement};
 
 /// `canBusAnalogSensor` / `canBusFtSensor`.
 pub struct CanBusAnalogSensor {
@@ -157,7 +157,7 @@ impl ISixAxisForceTorqueSensors for CanBusAnalogSensor {
         let c = self.check_sensor(i)?;
         let values = c
             .read_checked()
-            .map_err(|e| super::common::call_error(&self.id, e))?;
+            .map_err(|e| crate::common::call_error(&self.id, e))?;
         Ok(SensorMeasurement::new(values, now()))
     }
 }

@@ -25,11 +25,12 @@ use yarp_proto::Property;
 const T: Duration = Duration::from_secs(30);
 
 fn robot_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../launch-configs/icub-sim/robot")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../launch-configs/icub-sim/robot")
 }
 
 fn genova_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/robots-configuration/iCubGenova01")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/robots-configuration/iCubGenova01")
 }
 
 /// A name server for this test process, announced through a private yarp.conf.
@@ -57,7 +58,7 @@ fn emulate_head_imu() -> icub_can::emulator::mtx::MtxHandle {
         icub_can::xsens::emulated_motion,
     )
     .unwrap();
-    std::env::set_var(yarp_devices::icub::xsensmtx::SERIAL_ENV, &path);
+    std::env::set_var(icubmod::xsensmtx::SERIAL_ENV, &path);
     mtx
 }
 
@@ -180,6 +181,7 @@ fn eventually(limit: Duration, mut f: impl FnMut() -> bool) -> bool {
 
 #[test]
 fn simulated_icub_comes_up_moves_and_shuts_down() {
+    yarp_device_programs::register_all();
     let file = robot_dir().join("icub_all.xml");
     if !genova_dir().exists() {
         eprintln!("SKIPPED: {} not found", genova_dir().display());
@@ -423,6 +425,7 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
 /// joint and cartesian `state:o` stream.
 #[test]
 fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
+    yarp_device_programs::register_all();
     let file = genova_dir().join("icub_all.xml");
     if !file.exists() {
         eprintln!("SKIPPED: {} not found", file.display());
@@ -430,7 +433,7 @@ fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
     }
     let tag = format!("real{}", std::process::id());
     std::env::set_var(
-        yarp_devices::icub::common::BACKEND_ENV,
+        icubmod::common::BACKEND_ENV,
         format!("inproc://{tag}-{{n}}"),
     );
     let _emulators = emulate_icub(&tag);
@@ -580,7 +583,7 @@ fn emulator_program() -> Option<PathBuf> {
         .and_then(|exe| Some(exe.parent()?.parent()?.join("icub-board-emulator")))
         .filter(|p| p.is_file());
     let Some(emulator) = emulator else {
-        eprintln!("SKIPPED: icub-board-emulator not built (cargo build -p icub-can)");
+        eprintln!("SKIPPED: icub-board-emulator not built (cargo build -p icub-emulators)");
         return None;
     };
     if !genova_dir().exists() {
@@ -629,6 +632,7 @@ fn spawn_emulator(program: &Path, base_port: u16, xsens: Option<&Path>) -> Reape
 /// icub_all.xml` unchanged; a client moves the elbow; SIGINT parks and exits 0.
 #[test]
 fn readme_command_lines_bring_up_the_robot_over_udp() {
+    yarp_device_programs::register_all();
     use std::process::{Command, Stdio};
     let Some(emulator) = emulator_program() else {
         return;
@@ -691,6 +695,7 @@ fn readme_command_lines_bring_up_the_robot_over_udp() {
 /// comes up; the left arm moves, its cartesian `state:o` streams; SIGINT exits 0.
 #[test]
 fn keep_going_runs_the_real_genova01_config_as_processes() {
+    yarp_device_programs::register_all();
     use std::process::{Command, Stdio};
     let Some(emulator) = emulator_program() else {
         return;
@@ -704,11 +709,8 @@ fn keep_going_runs_the_real_genova01_config_as_processes() {
     let mut robot = Reaped(
         Command::new(env!("CARGO_BIN_EXE_yarprobotinterface"))
             .args(["--config", "icub_all.xml", "--keep-going"])
-            .env(
-                yarp_devices::icub::common::BACKEND_ENV,
-                "udp://127.0.0.1:21000+n",
-            )
-            .env(yarp_devices::icub::xsensmtx::SERIAL_ENV, &xsens)
+            .env(icubmod::common::BACKEND_ENV, "udp://127.0.0.1:21000+n")
+            .env(icubmod::xsensmtx::SERIAL_ENV, &xsens)
             .current_dir(genova_dir())
             .stdout(Stdio::null())
             .stderr(log.reopen().unwrap())

@@ -16,8 +16,8 @@
 //! Run (sockets: inside the private network namespace; the emulator must be built with
 //! the same profile):
 //! ```sh
-//! cargo build --release -p icub-can --bin icub-board-emulator
-//! /work/shared/netns-run cargo bench -p yarp-devices --bench icub
+//! cargo build --release -p icub-emulators --bin icub-board-emulator
+//! /work/shared/netns-run cargo bench -p yarp-device-programs --bench icub
 //! ```
 
 use std::io::{BufRead, BufReader};
@@ -88,7 +88,7 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
 
 fn main() {
     // `cargo bench` passes `--bench`; nothing else is accepted
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let robot_dir = root.join("launch-configs/icub-sim/robot");
     let genova = root.join("../shared/robots-configuration/iCubGenova01");
     let emulator = std::env::current_exe()
@@ -96,7 +96,7 @@ fn main() {
         .and_then(|exe| Some(exe.parent()?.parent()?.join("icub-board-emulator")))
         .filter(|p| p.is_file());
     let Some(emulator) = emulator else {
-        eprintln!("SKIPPED: icub-board-emulator not built for this profile (cargo build --release -p icub-can)");
+        eprintln!("SKIPPED: icub-board-emulator not built for this profile (cargo build --release -p icub-emulators)");
         return;
     };
     let seconds = env_num("ICUB_BENCH_SECONDS", 10);

@@ -3,7 +3,7 @@
 //! `/robot/part/rpc:i`, names the device type it lacks, reports readiness on
 //! `/robot/yarprobotinterface`, and shuts down cleanly on SIGINT, SIGTERM or RPC `quit`.
 
-#[path = "fixtures/robotinterface/live_support.rs"]
+#[path = "../../tests/fixtures/robotinterface/live_support.rs"]
 mod support;
 
 use std::path::PathBuf;
@@ -13,7 +13,7 @@ use yarp_devices::Registry;
 const BIN: &str = env!("CARGO_BIN_EXE_yarprobotinterface");
 
 fn fixtures() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/robotinterface")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/robotinterface")
 }
 
 fn wrapper_registered() -> bool {

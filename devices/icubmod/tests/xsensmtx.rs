@@ -42,6 +42,7 @@ fn close(a: &[f64], b: &[f64]) -> bool {
 
 #[test]
 fn reads_an_emulated_mtx_in_yarp_units() {
+    yarp_devices::Registry::install(icubmod::register);
     let (port, path) = mtx::pty().unwrap();
     // The sensor powers up measuring in another mode: open must reconfigure it.
     let emulated = EmulatedMtx {
@@ -113,6 +114,7 @@ fn reads_an_emulated_mtx_in_yarp_units() {
 
 #[test]
 fn an_unplugged_mtx_reads_as_timeout_and_recovers() {
+    yarp_devices::Registry::install(icubmod::register);
     let (port, path) = mtx::pty().unwrap();
     let emulated = mtx::serve(port, EmulatedMtx::default(), still).unwrap();
     let mut pd = open(&path).unwrap_or_else(|e| panic!("{e}"));
@@ -148,6 +150,7 @@ fn an_unplugged_mtx_reads_as_timeout_and_recovers() {
 
 #[test]
 fn a_silent_or_missing_sensor_fails_open_naming_the_port() {
+    yarp_devices::Registry::install(icubmod::register);
     // A pseudo-terminal nobody answers on.
     let (_quiet, path) = mtx::pty().unwrap();
     let t = Instant::now();
@@ -164,6 +167,7 @@ fn a_silent_or_missing_sensor_fails_open_naming_the_port() {
 
 #[test]
 fn pty_link_gives_the_path_a_robot_file_names() {
+    yarp_devices::Registry::install(icubmod::register);
     let dir = tempfile::tempdir().unwrap();
     let link = dir.path().join("ttyS0");
     std::fs::write(&link, b"stale").unwrap(); // replaced, not an error
@@ -199,6 +203,7 @@ fn exclusive(path: &std::path::Path) -> bool {
 
 #[test]
 fn the_port_is_exclusive_while_open_and_released_on_close() {
+    yarp_devices::Registry::install(icubmod::register);
     // Root may open an exclusive terminal anyway, so the flag itself is checked: were it
     // left set (it outlives the descriptor while the emulator holds the terminal open), a
     // non-root user could not open the emulator's terminal a second time. serialport

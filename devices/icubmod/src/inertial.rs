@@ -13,11 +13,11 @@
 use icub_can::client::{InertialClient, SensorStatus};
 use yarp_proto::Property;
 
-use super::analog::mas_status;
-use super::common::{device_id, lookup, lookup_one, now, open_bus, open_error};
-use crate::driver::DeviceDriver;
-use crate::error::{DevResult, DeviceError};
-use crate::sensors::{
+use crate::analog::mas_status;
+use crate::common::{device_id, lookup, lookup_one, now, open_bus, open_error};
+use yarp_devices::driver::DeviceDriver;
+use yarp_devices::error::{DevResult, DeviceError};
+use yarp_devices::sensors::{
     AnalogStatus, IAnalogSensor, IThreeAxisGyroscopes, IThreeAxisLinearAccelerometers, MasStatus,
     SensorMeasurement,
 };

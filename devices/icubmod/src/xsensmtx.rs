@@ -17,11 +17,7 @@
 //! sample for 0.5 s (C++'s read timeout) reads as `Timeout` and its measures are errors;
 //! a sensor that does not answer `GoToConfig` fails the open within 2 s, naming the port.
 
-use super::common::device_id;
-use crate::driver::{DeviceDriver, Params};
-use crate::error::{DevResult, DeviceError};
-use crate::sensors::interfaces::*;
-use crate::sensors::params::now;
+use crate::common::device_id;
 use icub_can::xsens::{
     mid, Decoder, Message, Sample, OUTPUT_MODE_CALIB, OUTPUT_MODE_ORIENT, OUTPUT_SETTINGS_EULER,
 };
@@ -31,6 +27,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
+use yarp_devices::driver::{DeviceDriver, Params};
+use yarp_devices::error::{DevResult, DeviceError};
+use yarp_devices::sensors::interfaces::*;
+use yarp_devices::sensors::params::now;
 use yarp_proto::Property;
 
 pub(crate) const NAME: &str = "xsensmtx";
@@ -307,7 +307,7 @@ impl DeviceDriver for XsensMtx {
     fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
         Some(self)
     }
-    crate::imu_views!();
+    yarp_devices::imu_views!();
 }
 
 impl Drop for XsensMtx {
@@ -347,7 +347,7 @@ impl IAnalogSensor for XsensMtx {
     }
 }
 
-crate::single_imu_interfaces!(XsensMtx {
+yarp_devices::single_imu_interfaces!(XsensMtx {
     gyro: gyro,
     acc: acc,
     mag: mag,

@@ -9,7 +9,7 @@ use icub_can::client::ClientError;
 use icub_can::CanBus;
 use yarp_proto::{Bottle, Property, Value};
 
-use crate::error::DeviceError;
+use yarp_devices::error::DeviceError;
 
 /// Overrides the bus of every iCub CAN device that names none with `canBackend`, so a
 /// robot's XML can run unmodified (see `launch-configs/icub-sim/robot/README.md`).

@@ -356,6 +356,7 @@ fn run() -> i32 {
 }
 
 fn main() {
+    yarp_device_programs::register_all();
     let code = run();
     // Serving tasks of closed devices may still be winding down on the device runtime;
     // they must not keep the process alive.

@@ -95,15 +95,16 @@ fn cxx_info(name: &str) -> (&'static str, Option<&'static str>) {
     }
 }
 
-/// One `--list` line, in the form C++ `Drivers::toString` gives built-in devices.
-fn list_line(name: &str) -> String {
+/// One `--list` line, in the form C++ `Drivers::toString` gives built-in devices, with
+/// the crate that provides the device where C++ names a plugin's library.
+fn list_line(name: &str, provider: &str) -> String {
     let (class, wrapper) = cxx_info(name);
     let wrapped = match wrapper {
         None => "has no network wrapper".to_string(),
         Some(w) if w == name => "is a network wrapper.".to_string(),
         Some(w) => format!("wrapped by \"{w}\""),
     };
-    format!("Device \"{name}\", C++ class {class}, {wrapped}")
+    format!("Device \"{name}\", C++ class {class}, {wrapped} (found in crate {provider})")
 }
 
 fn print_help() {
@@ -186,8 +187,8 @@ fn run() -> i32 {
     }
     if options.check("list") {
         info("Here are devices listed for your system:");
-        for name in Registry::names() {
-            info(&list_line(name));
+        for entry in Registry::entries() {
+            info(&list_line(entry.name, entry.provider));
         }
         return 0;
     }
@@ -283,6 +284,7 @@ fn run() -> i32 {
 }
 
 fn main() {
+    yarp_device_programs::register_all();
     let code = run();
     use std::io::Write;
     let _ = std::io::stdout().flush();
@@ -298,16 +300,16 @@ mod tests {
     #[test]
     fn list_lines_in_cpp_form() {
         assert_eq!(
-            list_line("fakeMotionControl"),
-            "Device \"fakeMotionControl\", C++ class FakeMotionControl, wrapped by \"controlBoard_nws_yarp\""
+            list_line("fakeMotionControl", "yarp-devices"),
+            "Device \"fakeMotionControl\", C++ class FakeMotionControl, wrapped by \"controlBoard_nws_yarp\" (found in crate yarp-devices)"
         );
         assert_eq!(
-            list_line("controlBoard_nws_yarp"),
-            "Device \"controlBoard_nws_yarp\", C++ class ControlBoard_nws_yarp, is a network wrapper."
+            list_line("controlBoard_nws_yarp", "yarp-devices"),
+            "Device \"controlBoard_nws_yarp\", C++ class ControlBoard_nws_yarp, is a network wrapper. (found in crate yarp-devices)"
         );
         assert_eq!(
-            list_line("remote_controlboard"),
-            "Device \"remote_controlboard\", C++ class RemoteControlBoard, has no network wrapper"
+            list_line("remote_controlboard", "yarp-devices"),
+            "Device \"remote_controlboard\", C++ class RemoteControlBoard, has no network wrapper (found in crate yarp-devices)"
         );
     }
 }

@@ -19,7 +19,8 @@ use yarp_devices::{shared, DeviceError, PolyDriver, Registry, SharedDevice};
 use yarp_proto::Property;
 
 fn icub_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/robots-configuration/iCubGenova01")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/robots-configuration/iCubGenova01")
 }
 
 /// The `Property` of device `name` from iCubGenova01 file `file`, with `canBackend`.
@@ -148,6 +149,7 @@ fn move_elbow(pd: &mut PolyDriver) {
 
 #[test]
 fn registry_names_the_icub_devices() {
+    yarp_devices::Registry::install(icubmod::register);
     let names = Registry::names();
     for n in [
         "canmotioncontrol",
@@ -163,6 +165,7 @@ fn registry_names_the_icub_devices() {
 
 #[test]
 fn left_arm_moves_a_joint_on_the_inproc_bus() {
+    yarp_devices::Registry::install(icubmod::register);
     let (url, _emu) = inproc_network(1, "move");
     let Some(mut pd) = open_left_arm(&url) else {
         return;
@@ -186,6 +189,7 @@ fn left_arm_moves_a_joint_on_the_inproc_bus() {
 /// broadcasts its simulated joint torques there.
 #[test]
 fn left_arm_reads_measured_torques_and_runs_torque_mode() {
+    yarp_devices::Registry::install(icubmod::register);
     let name = format!("icub-test-torque-{}", std::process::id());
     let bus = VirtualBus::named(&name);
     let _emu = emulate(Arc::new(bus.endpoint()), 1);
@@ -281,6 +285,7 @@ fn left_arm_reads_measured_torques_and_runs_torque_mode() {
 
 #[test]
 fn left_arm_moves_a_joint_over_udp() {
+    yarp_devices::Registry::install(icubmod::register);
     let (url, _emu) = udp_network(1);
     let Some(mut pd) = open_left_arm(&url) else {
         return;
@@ -290,6 +295,7 @@ fn left_arm_moves_a_joint_over_udp() {
 
 #[test]
 fn velocity_and_group_moves() {
+    yarp_devices::Registry::install(icubmod::register);
     let (url, _emu) = inproc_network(1, "vel");
     let Some(mut pd) = open_left_arm(&url) else {
         return;
@@ -326,6 +332,7 @@ fn velocity_and_group_moves() {
 
 #[test]
 fn strain_streams_forces_and_torques() {
+    yarp_devices::Registry::install(icubmod::register);
     let (url, _emu) = inproc_network(1, "ft");
     let Some(p) = icub_params("hardware/FT/left_arm_strain.xml", "left_arm_strain", &url) else {
         return;
@@ -359,6 +366,7 @@ fn strain_streams_forces_and_torques() {
 
 #[test]
 fn silent_boards_fail_calls_within_their_timeouts() {
+    yarp_devices::Registry::install(icubmod::register);
     let (url, emu) = inproc_network(1, "silent");
     let Some(mut pd) = open_left_arm(&url) else {
         return;
@@ -412,6 +420,7 @@ fn silent_boards_fail_calls_within_their_timeouts() {
 
 #[test]
 fn missing_backend_is_a_clear_error() {
+    yarp_devices::Registry::install(icubmod::register);
     let Some(mut p) = icub_params(
         "hardware/motorControl/icub_left_arm.xml",
         "left_arm_mc",
@@ -420,7 +429,7 @@ fn missing_backend_is_a_clear_error() {
         return;
     };
     p.unput("canBackend");
-    if std::env::var_os(yarp_devices::icub::common::BACKEND_ENV).is_some() {
+    if std::env::var_os(icubmod::common::BACKEND_ENV).is_some() {
         return;
     }
     let err = PolyDriver::open(&p).err().expect("cfw2can has no driver");
@@ -430,6 +439,7 @@ fn missing_backend_is_a_clear_error() {
 
 #[test]
 fn skin_and_inertial_of_the_left_arm() {
+    yarp_devices::Registry::install(icubmod::register);
     let (url, _emu) = inproc_network(7, "skin");
     let Some(p) = icub_params("hardware/skin/left_arm.xml", "left_arm_skin", &url) else {
         return;
@@ -486,6 +496,7 @@ fn calibrator() -> Option<PolyDriver> {
 
 #[test]
 fn parametric_calibrator_calibrates_and_parks_the_left_arm() {
+    yarp_devices::Registry::install(icubmod::register);
     let (url, _emu) = inproc_network(1, "calib");
     let Some(pd) = open_left_arm(&url) else {
         return;
@@ -524,6 +535,7 @@ fn parametric_calibrator_calibrates_and_parks_the_left_arm() {
 
 #[test]
 fn calibrator_reports_a_silent_board() {
+    yarp_devices::Registry::install(icubmod::register);
     let (url, emu) = inproc_network(1, "calib-silent");
     let Some(pd) = open_left_arm(&url) else {
         return;
@@ -539,8 +551,9 @@ fn calibrator_reports_a_silent_board() {
 
 #[test]
 fn malformed_frames_are_counted_and_ignored() {
+    yarp_devices::Registry::install(icubmod::register);
     use icub_can::proto::{make_id, mc::per, MsgClass};
-    use yarp_devices::icub::CanMotionControl;
+    use icubmod::CanMotionControl;
     use yarp_devices::DeviceDriver;
     let (url, _emu) = inproc_network(1, "malformed");
     let Some(p) = icub_params(
@@ -578,6 +591,7 @@ fn malformed_frames_are_counted_and_ignored() {
 
 #[test]
 fn impedance_round_trips_and_a_compliant_elbow_follows_its_spring() {
+    yarp_devices::Registry::install(icubmod::register);
     let (url, _emu) = inproc_network(1, "impedance");
     let Some(mut pd) = open_left_arm(&url) else {
         return;
@@ -627,7 +641,8 @@ fn impedance_round_trips_and_a_compliant_elbow_follows_its_spring() {
 
 #[test]
 fn remote_calibrator_homes_parks_and_quits_without_locking_its_target() {
-    use yarp_devices::icub::ParametricCalibrator;
+    yarp_devices::Registry::install(icubmod::register);
+    use icubmod::ParametricCalibrator;
     use yarp_devices::DeviceDriver;
     let (url, _emu) = inproc_network(1, "remote-calib");
     let Some(pd) = open_left_arm(&url) else {
@@ -729,6 +744,7 @@ fn remote_calibrator_homes_parks_and_quits_without_locking_its_target() {
 /// offers it, here a fakeMotionControl, then moves the joints to their startup position.
 #[test]
 fn parametric_calibrator_calibrates_a_fake_board_through_icontrolcalibration() {
+    yarp_devices::Registry::install(icubmod::register);
     let fake = shared(PolyDriver::from_driver(
         "fakeMotionControl",
         Box::new(yarp_devices::FakeMotionControl::with_joints(2)),

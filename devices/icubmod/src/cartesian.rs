@@ -20,13 +20,13 @@
 //!
 //! The pose computation ([`CartesianState`]) is pure; the device is the tokio layer.
 
-use crate::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
-use crate::error::{DevResult, DeviceError};
-use crate::runtime;
 use icub_ikin::{Limb, LimbKind, DEG2RAD};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::task::JoinHandle;
+use yarp_devices::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
+use yarp_devices::error::{DevResult, DeviceError};
+use yarp_devices::runtime;
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Stamp};
 

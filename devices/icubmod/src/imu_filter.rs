@@ -28,11 +28,11 @@ use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use super::interfaces::*;
-use super::params::{bool_param, period_ms};
-use crate::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
-use crate::error::{DevResult, DeviceError};
-use crate::runtime;
+use yarp_devices::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
+use yarp_devices::error::{DevResult, DeviceError};
+use yarp_devices::runtime;
+use yarp_devices::sensors::interfaces::*;
+use yarp_devices::sensors::params::{bool_param, period_ms};
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Stamp};
 
@@ -511,7 +511,7 @@ impl DeviceDriver for ImuFilter {
     fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
         Some(self)
     }
-    crate::imu_views!();
+    yarp_devices::imu_views!();
 }
 
 impl IMultipleWrapper for ImuFilter {
@@ -546,7 +546,7 @@ impl IMultipleWrapper for ImuFilter {
             self.verbose,
         );
         let task = runtime::handle().spawn(async move {
-            let mut ticker = super::periodic::Ticker::new(period);
+            let mut ticker = yarp_devices::sensors::periodic::Ticker::new(period);
             loop {
                 tokio::select! {
                     _ = &mut rx => break,

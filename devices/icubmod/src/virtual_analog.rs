@@ -41,10 +41,10 @@ use icub_can::proto::{
 use icub_can::CanFrame;
 use yarp_proto::Property;
 
-use super::common::{device_id, lookup, lookup_one, open_bus};
-use crate::driver::DeviceDriver;
-use crate::error::{DevResult, DeviceError};
-use crate::sensors::{IVirtualAnalogSensor, VasStatus};
+use crate::common::{device_id, lookup, lookup_one, open_bus};
+use yarp_devices::driver::DeviceDriver;
+use yarp_devices::error::{DevResult, DeviceError};
+use yarp_devices::sensors::{IVirtualAnalogSensor, VasStatus};
 
 pub(crate) const NAME: &str = "canBusVirtualAnalogSensor";
 
@@ -598,7 +598,7 @@ mod tests {
         dev.update_virtual_analog_sensor_measure(&[1.0, 1.0])
             .unwrap();
         // the physDevice of the real files is refused with a message naming canBackend
-        if std::env::var_os(super::super::common::BACKEND_ENV).is_some() {
+        if std::env::var_os(crate::common::BACKEND_ENV).is_some() {
             return;
         }
         let real = Property::from_text(

@@ -24,7 +24,8 @@ use yarp_net::blocking::{BufferedPort, Network, Port};
 use yarp_proto::{Bottle, Property, Value};
 
 fn genova_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/robots-configuration/iCubGenova01")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/robots-configuration/iCubGenova01")
 }
 
 /// The next two frames on `tap` (one 0xA, one 0xB), decoded to (board, six torques).
@@ -78,6 +79,7 @@ fn quiet(tap: &VirtualEndpoint, d: Duration) -> bool {
 
 #[test]
 fn torques_written_to_the_port_reach_the_can_bus() {
+    yarp_devices::Registry::install(icubmod::register);
     name_client();
     let bus = format!("vas-it-{}", std::process::id());
     let tap = VirtualBus::named(&bus).endpoint();
@@ -188,6 +190,7 @@ fn torques_written_to_the_port_reach_the_can_bus() {
 /// robotinterface runner (the bus from `YARP_ICUB_CAN_BACKEND`, as the Genova01 tests do).
 #[test]
 fn genova01_vft_files_run_unmodified() {
+    yarp_devices::Registry::install(icubmod::register);
     let dir = genova_dir();
     if !dir.exists() {
         eprintln!("SKIPPED: {} not found", dir.display());
@@ -196,7 +199,7 @@ fn genova01_vft_files_run_unmodified() {
     name_client();
     let tag = format!("vas-g-{}", std::process::id());
     std::env::set_var(
-        yarp_devices::icub::common::BACKEND_ENV,
+        icubmod::common::BACKEND_ENV,
         format!("inproc://{tag}-{{n}}"),
     );
     let arm_tap = VirtualBus::named(&format!("{tag}-1")).endpoint();
@@ -253,6 +256,7 @@ fn genova01_vft_files_run_unmodified() {
 /// pure bias, which the filter estimates and removes.
 #[test]
 fn imu_filter_removes_a_constant_gyro_bias() {
+    yarp_devices::Registry::install(icubmod::register);
     name_client();
     let cfg = Property::from_config_text(
         "device imuFilter\nsubdevice fakeIMU\nname /imufit\nperiod 5\nbias-gain 0.2\nconstantValue true\nsensorName head_imu\nframeName head_frame\n",
@@ -350,6 +354,7 @@ fn imu_filter_removes_a_constant_gyro_bias() {
 /// A bad `imuFilter` configuration or attachment is an error naming the problem.
 #[test]
 fn imu_filter_refuses_what_it_cannot_filter() {
+    yarp_devices::Registry::install(icubmod::register);
     name_client();
     let bad =
         Property::from_config_text("device imuFilter\nname /imufbad\nbias-gain -1\n").unwrap();

@@ -27,7 +27,7 @@
 //! `parkSingleJoint`/`parkWholePart` are the park above, `quitCalibrate`/`quitPark` stop
 //! the running procedure. These calls arrive while the caller holds the target's lock,
 //! so they never lock the target: they drive the joints' boards directly, found in
-//! [`super::registry`] by the axis names read from the target at `calibrate`. Every
+//! [`crate::boards`] by the axis names read from the target at `calibrate`. Every
 //! wait is bounded and stops when a quit is asked.
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -39,11 +39,11 @@ use icub_can::proto::ControlMode;
 
 use yarp_proto::Property;
 
-use super::common::{lookup, text};
-use crate::driver::{DeviceDriver, ICalibrator, SharedDevice};
-use crate::error::{DevResult, DeviceError};
-use crate::interfaces::IRemoteCalibrator;
-use crate::vocabs::{CM_HW_FAULT, CM_IDLE, CM_POSITION};
+use crate::common::{lookup, text};
+use yarp_devices::driver::{DeviceDriver, ICalibrator, SharedDevice};
+use yarp_devices::error::{DevResult, DeviceError};
+use yarp_devices::interfaces::IRemoteCalibrator;
+use yarp_devices::vocabs::{CM_HW_FAULT, CM_IDLE, CM_POSITION};
 
 pub(crate) const NAME: &str = "parametricCalibrator";
 
@@ -152,8 +152,7 @@ impl ParametricCalibrator {
         let name = self.axis_names.get(j).ok_or(DeviceError::Unsupported(
             "the calibrator has not calibrated its target yet",
         ))?;
-        super::registry::find(name)
-            .ok_or(DeviceError::Unsupported("no CAN board drives this joint"))
+        crate::boards::find(name).ok_or(DeviceError::Unsupported("no CAN board drives this joint"))
     }
 
     fn direct<T>(
@@ -162,7 +161,7 @@ impl ParametricCalibrator {
         f: impl FnOnce(&MotorControlClient, usize) -> Result<T, icub_can::client::ClientError>,
     ) -> DevResult<T> {
         let (client, jj) = self.board(j)?;
-        f(&client, jj).map_err(|e| super::common::call_error(&self.name, e))
+        f(&client, jj).map_err(|e| crate::common::call_error(&self.name, e))
     }
 
     /// Position mode, then a move of `set` to `pos(j)` at `vel(j)`, on the boards.

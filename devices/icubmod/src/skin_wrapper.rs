@@ -7,9 +7,9 @@
 //! `total_taxels`, so the ports are `/<robot>/skin/<port>` (e.g. `/icub/skin/left_hand`;
 //! a leading `/` in `robotName`, as a port prefix has, is not doubled).
 
-use super::analog_server::AnalogServer;
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
-use crate::error::DevResult;
+use yarp_devices::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use yarp_devices::error::DevResult;
+use yarp_devices::sensors::analog_server::AnalogServer;
 use yarp_proto::{Property, Value};
 
 const NAME: &str = "skinWrapper";

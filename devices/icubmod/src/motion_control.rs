@@ -11,7 +11,7 @@
 //! addition: `GENERAL::AxisType` (joint types),
 //! `GENERAL::fullscalePWM` (for duty cycles), `LIMITS::motorOverloadCurrents` (reported
 //! as the maximum current), `LIMITS::jntVelMax` (velocity limits). The bus comes from
-//! `CAN::canBackend` (or `physDevice` + `CanDeviceNum`, see [`super::common::open_bus`]).
+//! `CAN::canBackend` (or `physDevice` + `CanDeviceNum`, see [`crate::common::open_bus`]).
 //!
 //! `IMPEDANCE::stiffness`/`damping` (N·m/°, N·m·s/°, one per joint, as icub-main's
 //! `parseImpedanceGroup_NewFormat`; the iCubGenova01 legs have them) are sent to the
@@ -32,16 +32,16 @@ use icub_can::client::{JointPid, McParams, MotorControlClient};
 use icub_can::proto::{ControlMode, PidKind};
 use yarp_proto::{Property, Vocab32};
 
-use super::common::{call_error, device_id, lookup, open_bus, open_error};
-use super::registry::{self, Registration};
-use crate::driver::DeviceDriver;
-use crate::error::{DevResult, DeviceError};
-use crate::interfaces::*;
-use crate::vocabs::*;
+use crate::boards::{self, Registration};
+use crate::common::{call_error, device_id, lookup, open_bus, open_error};
+use yarp_devices::driver::DeviceDriver;
+use yarp_devices::error::{DevResult, DeviceError};
+use yarp_devices::interfaces::*;
+use yarp_devices::vocabs::*;
 
 pub(crate) const NAME: &str = "canmotioncontrol";
 
-// YARP control-mode and PID-type vocabs this device needs beyond `crate::vocabs`.
+// YARP control-mode and PID-type vocabs this device needs beyond `yarp_devices::vocabs`.
 const CM_FORCE_IDLE: Vocab32 = Vocab32::new("fidl");
 const CM_IMPEDANCE_POS: Vocab32 = Vocab32::new("impp");
 const CM_IMPEDANCE_VEL: Vocab32 = Vocab32::new("impv");
@@ -217,7 +217,7 @@ impl DeviceDriver for CanMotionControl {
                     .map_err(|e| call_error(&self.id, e))?;
             }
         }
-        self._registration = Some(registry::register(&client));
+        self._registration = Some(boards::register(&client));
         self.client = Some(client);
         tracing::info!(device = %self.id, joints = n, "canmotioncontrol open");
         Ok(())
@@ -354,7 +354,7 @@ impl IEncoders for CanMotionControl {
     fn get_encoder_timed(&mut self, j: usize) -> DevResult<(f64, f64)> {
         let pos = self.run(|c| c.encoder(j))?;
         let age = self.run(|c| c.joint_status(j))?.position_age;
-        let t = super::common::now() - age.map_or(0.0, |a| a.as_secs_f64());
+        let t = crate::common::now() - age.map_or(0.0, |a| a.as_secs_f64());
         Ok((pos, t))
     }
     fn set_encoder(&mut self, _j: usize, _value: f64) -> DevResult<()> {
@@ -368,7 +368,7 @@ impl IEncoders for CanMotionControl {
     fn get_encoders_timed(&mut self) -> DevResult<(Vec<f64>, Vec<f64>)> {
         let v = self.run(|c| c.encoders_timed())?;
         Ok(v.into_iter()
-            .map(|(p, at)| (p, super::common::wall_time(at)))
+            .map(|(p, at)| (p, crate::common::wall_time(at)))
             .unzip())
     }
 }

@@ -2,7 +2,7 @@
 //! unknown-device and no-network errors, and a served device (deviceBundler, `--from`,
 //! `--subdevice`) that stops cleanly on SIGINT, SIGTERM or a message on `<name>/quit`.
 
-#[path = "fixtures/robotinterface/live_support.rs"]
+#[path = "../../tests/fixtures/robotinterface/live_support.rs"]
 mod support;
 
 use support::*;
@@ -33,14 +33,23 @@ async fn list_prints_every_registered_device_in_cpp_form() {
         out.contains("[INFO] |yarp.dev.Drivers| Here are devices listed for your system:"),
         "{out}"
     );
-    for name in Registry::names() {
+    yarp_device_programs::register_all();
+    for entry in Registry::entries() {
+        let line = out
+            .lines()
+            .find(|l| l.contains(&format!("Device \"{}\", C++ class ", entry.name)))
+            .unwrap_or_else(|| panic!("{} missing:\n{out}", entry.name));
         assert!(
-            out.contains(&format!("Device \"{name}\", C++ class ")),
-            "{name} missing:\n{out}"
+            line.ends_with(&format!("(found in crate {})", entry.provider)),
+            "{line}"
         );
     }
     assert!(
-        out.contains("Device \"fakeMotionControl\", C++ class FakeMotionControl, wrapped by \"controlBoard_nws_yarp\""),
+        out.contains("Device \"fakeMotionControl\", C++ class FakeMotionControl, wrapped by \"controlBoard_nws_yarp\" (found in crate yarp-devices)"),
+        "{out}"
+    );
+    assert!(
+        out.contains("Device \"canmotioncontrol\", C++ class unknown, has no network wrapper (found in crate icubmod)"),
         "{out}"
     );
 }
