@@ -20,9 +20,9 @@ pub fn package_of(program: &str) -> &'static str {
     match program {
         "yarp" => "yarp-cli",
         "yarpserver" => "yarp-net",
-        "yarpdev" | "yarprobotinterface" => "yarp-devices",
+        "yarpdev" | "yarprobotinterface" => "yarp-device-programs",
         "yarp-ros2-gateway" => "yarp-ros2-gateway",
-        "icub-board-emulator" => "icub-can",
+        "icub-board-emulator" => "icub-emulators",
         "yarp-launch" => "yarp-launch",
         _ => "<package>",
     }
@@ -106,6 +106,7 @@ mod tests {
         assert!(e.to_string().contains("no-such-program-xyz"));
         let e = resolve("yarpdev-missing/x", Path::new("/")).unwrap_err();
         assert!(e.to_string().contains("not found"));
-        assert_eq!(package_of("yarpdev"), "yarp-devices");
+        assert_eq!(package_of("yarpdev"), "yarp-device-programs");
+        assert_eq!(package_of("icub-board-emulator"), "icub-emulators");
     }
 }

@@ -38,7 +38,7 @@ fn ready_configs_load_and_find_their_programs() {
 
 #[test]
 fn fake_devices_runs_with_plots_camera_and_bridge() {
-    program("yarpdev", "yarp-devices");
+    program("yarpdev", "yarp-device-programs");
     program("yarp-ros2-gateway", "yarp-ros2-gateway");
     let cfg = configs_dir().join("fake-devices.toml");
     // A domain of its own (101..=200): other tests run DDS in this network namespace.

@@ -219,8 +219,8 @@ fn fake_devices_to_rclpy_and_back() {
 /// are free.
 #[test]
 fn icub_sim_to_rclpy_and_back() {
-    program("icub-board-emulator", "icub-can");
-    program("yarprobotinterface", "yarp-devices");
+    program("icub-board-emulator", "icub-emulators");
+    program("yarprobotinterface", "yarp-device-programs");
     let free = eventually(Duration::from_secs(120), || {
         let all = (20000..20010)
             .map(|p| std::net::UdpSocket::bind(("127.0.0.1", p)))
