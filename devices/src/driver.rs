@@ -294,8 +294,7 @@ pub struct DriverEntry {
 /// others by the program that links them, before it opens devices:
 ///
 /// ```
-/// # fn register(_: &mut yarp_devices::Registry) {}
-/// # mod icubmod { pub use super::register; }
+/// # mod icubmod { pub fn register(_: &mut yarp_devices::Registry) {} }
 /// yarp_devices::Registry::install(icubmod::register);
 /// ```
 ///
