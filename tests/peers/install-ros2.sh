@@ -1,18 +1,58 @@
 #!/usr/bin/env bash
-# Installs ROS 2 Kilted's rclpy and the message packages the gateway tests use, from PyPI's
-# ros-* wheels (~25 s, ~260 MB), into the git-ignored venv .venv-ros/ (or $ROS_VENV).
+# Installs rclpy and the message packages the gateway and launcher tests use, from PyPI's
+# ROS 2 wheels, into a venv (~25 s, ~260 MB once; cached).
+#
+#   install-ros2.sh [kilted|jazzy]      # default kilted
+#
+# kilted: the unprefixed `ros-*` wheels (cp311..cp313), venv $ROS_VENV (default .venv-ros/).
+# jazzy:  the `ros-jazzy-*` wheels, which exist for Python 3.12 only, venv $ROS_JAZZY_VENV
+#         (default .venv-ros-jazzy/); the Python 3.12 is $ROS_JAZZY_PYTHON, else
+#         `python3.12` on PATH, else pyenv's newest 3.12; none: exit 1 saying so.
 # Idempotent: when the venv already imports every package it returns at once.
-# Prints the venv directory on success (tests read it from ROS_VENV).
+# Prints the venv directory on success (tests read it from ROS_VENV / ROS_JAZZY_VENV).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-venv=${ROS_VENV:-$PWD/.venv-ros}
-packages=(ros-rclpy ros-std-msgs ros-sensor-msgs ros-geometry-msgs ros-std-srvs
-          ros-trajectory-msgs ros-diagnostic-msgs ros-rmw-fastrtps-cpp)
+distro=${1:-kilted}
+names=(rclpy std-msgs sensor-msgs geometry-msgs std-srvs trajectory-msgs diagnostic-msgs
+       rmw-fastrtps-cpp)
 probe='import rclpy, std_msgs.msg, sensor_msgs.msg, geometry_msgs.msg, std_srvs.srv, trajectory_msgs.msg, diagnostic_msgs.msg'
+case $distro in
+    kilted)
+        venv=${ROS_VENV:-$PWD/.venv-ros}
+        prefix=ros-
+        python=python3
+        ;;
+    jazzy)
+        venv=${ROS_JAZZY_VENV:-$PWD/.venv-ros-jazzy}
+        prefix=ros-jazzy-
+        python=${ROS_JAZZY_PYTHON:-}
+        ;;
+    *)
+        echo "install-ros2.sh: unknown distro '$distro' (kilted or jazzy)" >&2
+        exit 2
+        ;;
+esac
 if [[ -x $venv/bin/python ]] && "$venv/bin/python" -c "$probe" 2>/dev/null; then
     echo "$venv"; exit 0
 fi
-python3 -m venv "$venv" >&2
-"$venv/bin/pip" install -q "${packages[@]}" >&2
+if [[ $distro == jazzy && -z $python ]]; then
+    # PyPI has ros-jazzy-* wheels for CPython 3.12 only.
+    if command -v python3.12 >/dev/null && python3.12 -c 'import venv' 2>/dev/null; then
+        python=python3.12
+    else
+        root=$(pyenv root 2>/dev/null || echo "$HOME/.pyenv")
+        found=$(ls -d "$root"/versions/3.12.* 2>/dev/null | sort -V | tail -n 1 || true)
+        if [[ -n $found && -x $found/bin/python3.12 ]]; then
+            python=$found/bin/python3.12
+        fi
+    fi
+    if [[ -z $python ]]; then
+        echo "install-ros2.sh: ROS 2 Jazzy's wheels need Python 3.12: none found (no python3.12" \
+             "on PATH, no pyenv 3.12.x); install one or set ROS_JAZZY_PYTHON" >&2
+        exit 1
+    fi
+fi
+"$python" -m venv "$venv" >&2
+"$venv/bin/pip" install -q "${names[@]/#/$prefix}" >&2
 "$venv/bin/python" -c "$probe" >&2
 echo "$venv"
