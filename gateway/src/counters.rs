@@ -2,6 +2,7 @@
 
 use crate::dynmsg::Value as Ros;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::Mutex;
 use std::time::Duration;
 
 /// Live counters of one mapping, updated lock-free by its bridge task.
@@ -11,6 +12,8 @@ pub struct Counters {
     drops: AtomicU64,
     latency_ns_total: AtomicU64,
     latency_ns_max: AtomicU64,
+    /// Why the last message was not forwarded or applied (until one is again).
+    problem: Mutex<Option<String>>,
 }
 
 /// A copy of [`Counters`] at one moment.
@@ -36,6 +39,26 @@ impl Counters {
 
     pub fn dropped(&self) {
         self.drops.fetch_add(1, Relaxed);
+    }
+
+    /// Counts a drop and keeps `why` for the diagnostics (e.g. why a command was refused).
+    pub fn refused(&self, why: impl Into<String>) {
+        self.dropped();
+        *self.problem.lock().unwrap_or_else(|e| e.into_inner()) = Some(why.into());
+    }
+
+    /// Counts a success that clears the last problem (the bridge works again).
+    pub fn applied(&self, latency: Duration) {
+        self.forwarded(latency);
+        *self.problem.lock().unwrap_or_else(|e| e.into_inner()) = None;
+    }
+
+    /// The reason kept by the last [`Counters::refused`], if nothing succeeded since.
+    pub fn problem(&self) -> Option<String> {
+        self.problem
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
     }
 
     pub fn snapshot(&self) -> Snapshot {
@@ -84,10 +107,14 @@ pub struct Row {
     /// e.g. `yarp->ros /counter:o -> /counter`.
     pub route: String,
     pub snapshot: Snapshot,
+    /// Why the last message was not applied, while that is still so.
+    pub problem: Option<String>,
 }
 
 /// A `diagnostic_msgs/msg/DiagnosticArray` with one OK status per mapping (WARN when it
-/// dropped messages), stamped `stamp_ns` nanoseconds after the epoch.
+/// dropped messages), stamped `stamp_ns` nanoseconds after the epoch. A mapping whose last
+/// message was not applied says why in its `message` (after the route) and in the value
+/// `last_problem`.
 pub fn diagnostic_array(stamp_ns: u64, hardware_id: &str, rows: &[Row]) -> Ros {
     let kv = |k: &str, v: String| Ros::Struct(vec![Ros::Str(k.into()), Ros::Str(v)]);
     let statuses = rows
@@ -95,23 +122,29 @@ pub fn diagnostic_array(stamp_ns: u64, hardware_id: &str, rows: &[Row]) -> Ros {
         .map(|r| {
             let s = r.snapshot;
             let level = if s.drops > 0 { 1 } else { 0 };
+            let mut values = vec![
+                kv("messages", s.messages.to_string()),
+                kv("drops", s.drops.to_string()),
+                kv(
+                    "latency_mean_us",
+                    format!("{:.1}", s.latency_mean.as_secs_f64() * 1e6),
+                ),
+                kv(
+                    "latency_max_us",
+                    format!("{:.1}", s.latency_max.as_secs_f64() * 1e6),
+                ),
+            ];
+            let mut message = r.route.clone();
+            if let Some(p) = &r.problem {
+                message = format!("{message}; last message not applied: {p}");
+                values.push(kv("last_problem", p.clone()));
+            }
             Ros::Struct(vec![
                 Ros::U8(level),
                 Ros::Str(format!("yarp-ros2-gateway: {}", r.name)),
-                Ros::Str(r.route.clone()),
+                Ros::Str(message),
                 Ros::Str(hardware_id.into()),
-                Ros::List(vec![
-                    kv("messages", s.messages.to_string()),
-                    kv("drops", s.drops.to_string()),
-                    kv(
-                        "latency_mean_us",
-                        format!("{:.1}", s.latency_mean.as_secs_f64() * 1e6),
-                    ),
-                    kv(
-                        "latency_max_us",
-                        format!("{:.1}", s.latency_max.as_secs_f64() * 1e6),
-                    ),
-                ]),
+                Ros::List(values),
             ])
         })
         .collect();
@@ -145,6 +178,14 @@ mod tests {
         assert_eq!((s.messages, s.drops), (2, 1));
         assert_eq!(s.latency_mean, Duration::from_micros(20));
         assert_eq!(s.latency_max, Duration::from_micros(30));
+        assert_eq!(c.problem(), None);
+        c.refused("no board");
+        assert_eq!(
+            (c.snapshot().drops, c.problem().as_deref()),
+            (2, Some("no board"))
+        );
+        c.applied(Duration::from_micros(20));
+        assert_eq!(c.problem(), None);
     }
 
     #[test]
@@ -167,6 +208,7 @@ mod tests {
                     messages: 3,
                     ..Default::default()
                 },
+                problem: None,
             },
             Row {
                 name: "b".into(),
@@ -175,6 +217,7 @@ mod tests {
                     drops: 1,
                     ..Default::default()
                 },
+                problem: Some("the board refused it".into()),
             },
         ];
         let m = diagnostic_array(1_500_000_000, "host", &rows);
@@ -188,5 +231,9 @@ mod tests {
         );
         assert_eq!(st[0].fields().unwrap()[0], Ros::U8(0));
         assert_eq!(st[1].fields().unwrap()[0], Ros::U8(1));
+        assert_eq!(
+            st[1].fields().unwrap()[2],
+            Ros::Str("ros->yarp /b -> /b; last message not applied: the board refused it".into())
+        );
     }
 }

@@ -139,22 +139,56 @@ pub enum Durability {
     TransientLocal,
 }
 
+impl std::fmt::Display for Reliability {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Reliability::Reliable => "reliable",
+            Reliability::BestEffort => "best_effort",
+        })
+    }
+}
+
 /// ROS QoS of an entry's DDS endpoints (history is always keep-last `depth`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Qos {
-    pub reliability: Reliability,
+    /// `None` until loaded: then the entry's default ([`default_reliability`]) when the
+    /// file gives none.
+    pub reliability: Option<Reliability>,
     pub durability: Durability,
     pub depth: u32,
+}
+
+impl Qos {
+    /// The reliability in force (reliable when unset).
+    pub fn reliability(&self) -> Reliability {
+        self.reliability.unwrap_or_default()
+    }
 }
 
 impl Default for Qos {
     fn default() -> Self {
         Qos {
-            reliability: Reliability::Reliable,
+            reliability: None,
             durability: Durability::Volatile,
             depth: 10,
         }
+    }
+}
+
+/// An entry's reliability when its file gives none. What the gateway offers
+/// (`yarp_to_ros`, `both`) is reliable, as rclpy's, `ros2 topic echo`'s and RViz's
+/// default subscriptions request: a reliable reader never matches a best-effort writer.
+/// What it reads as commands (joint commands, a Twist into YARP) is best effort, because
+/// a best-effort reader matches reliable and best-effort publishers alike (teleop and
+/// controllers use either) and, of a stream of setpoints, only the newest matters.
+pub fn default_reliability(t: &TopicEntry) -> Reliability {
+    let command = matches!(default_conversion(t), Some(Conversion::JointCommand))
+        || (t.direction == Direction::RosToYarp && t.ros_type == "geometry_msgs/msg/Twist");
+    if command {
+        Reliability::BestEffort
+    } else {
+        Reliability::Reliable
     }
 }
 
@@ -363,8 +397,9 @@ impl Mappings {
                     message,
                 };
                 if key == "topic" {
-                    let t: TopicEntry = deserialize(v).map_err(|(k, m)| err(&k, m))?;
+                    let mut t: TopicEntry = deserialize(v).map_err(|(k, m)| err(&k, m))?;
                     validate_topic(&t).map_err(|(k, m)| err(k, m))?;
+                    t.qos.reliability = Some(t.qos.reliability.unwrap_or(default_reliability(&t)));
                     check_unique(&out, &t.name, file)?;
                     out.topics.push(t);
                 } else {
@@ -799,7 +834,7 @@ command = "[home]"
         assert_eq!(m.services.len(), 1);
         let c = &m.topics[0];
         assert_eq!(c.conversion(), Conversion::Scalar);
-        assert_eq!(c.qos.reliability, Reliability::BestEffort);
+        assert_eq!(c.qos.reliability, Some(Reliability::BestEffort));
         assert_eq!(c.qos.durability, Durability::Volatile);
         assert_eq!(c.qos.depth, 5);
         assert_eq!(c.rate_limit_hz, Some(10.0));

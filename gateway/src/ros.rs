@@ -120,7 +120,7 @@ pub fn qos(q: &mapping::Qos) -> QosProfile {
         .history(History::KeepLast {
             depth: q.depth as usize,
         });
-    match q.reliability {
+    match q.reliability() {
         mapping::Reliability::Reliable => p.reliability(Reliability::Reliable {
             when_full: WhenFull::Wait(Duration::from_millis(20)),
         }),

@@ -52,14 +52,17 @@ pub(super) async fn ros_to_board(
             Ok((m, _)) => match tx.try_send(m) {
                 Ok(()) => {}
                 Err(TrySendError::Full(_)) => {
-                    debug!("{}: board busy, command dropped", t.name);
-                    c.dropped();
+                    warn!(
+                        "{}: command not applied: the board is busy with earlier ones",
+                        t.name
+                    );
+                    c.refused("the board is busy with earlier commands");
                 }
                 Err(TrySendError::Disconnected(_)) => return,
             },
             Err(e) => {
                 debug!("{}: take: {e:?}", t.name);
-                c.dropped();
+                c.refused(format!("undecodable message: {e:?}"));
             }
         }
     }
@@ -258,8 +261,9 @@ fn board_thread(rx: Receiver<Ros>, t: TopicEntry, c: Arc<Counters>) {
             Ok(m) => {
                 let t0 = Instant::now();
                 let Some(b) = board.as_mut() else {
-                    debug!("{}: no board yet, command dropped", t.name);
-                    c.dropped();
+                    let why = format!("control board {} not reachable yet", cb.remote);
+                    warn!("{}: command not applied: {why}", t.name);
+                    c.refused(why);
                     continue;
                 };
                 let cmd = joint_command::decode(&t.ros_type, &m, cb.mode, &b.info, &b.default_axes);
@@ -331,14 +335,14 @@ fn settle(
     plan: &mut Option<Plan>,
 ) {
     match r {
-        Ok(()) => c.forwarded(t0.elapsed()),
+        Ok(()) => c.applied(t0.elapsed()),
         Err(Failure::Message(e)) => {
-            debug!("{name}: {e}");
-            c.dropped();
+            warn!("{name}: command not applied: {e}");
+            c.refused(e);
         }
         Err(Failure::Board(e)) => {
-            warn!("{name}: {e}; reconnecting");
-            c.dropped();
+            warn!("{name}: command not applied: {e}; reconnecting");
+            c.refused(e);
             *plan = None;
             if let Some(mut b) = board.take() {
                 let _ = b.dev.close();

@@ -96,6 +96,7 @@ impl Bridge {
                 self.direction, self.yarp, self.ros, self.ros_type
             ),
             snapshot: self.counters.snapshot(),
+            problem: self.counters.problem(),
         }
     }
 }
@@ -374,7 +375,7 @@ impl Builder {
         if let Some(s) = &t.yarp_sink {
             yarp = format!("{yarp} -> {s}");
         }
-        let mut detail = format!("{conv:?} {:?}/{}", t.qos.reliability, t.qos.depth);
+        let mut detail = format!("{conv:?} {}/{}", t.qos.reliability(), t.qos.depth);
         if let Some(r) = t.rate_limit_hz {
             detail.push_str(&format!(" <={r}Hz"));
         }
@@ -425,7 +426,7 @@ impl Builder {
             ),
             ros: t.ros_topic.clone(),
             ros_type: t.ros_type.clone(),
-            detail: format!("JointCommand {:?}", cb.mode),
+            detail: format!("JointCommand {:?} {}", cb.mode, t.qos.reliability()),
             counters,
         });
         Ok(())

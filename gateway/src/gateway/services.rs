@@ -131,19 +131,31 @@ pub(super) async fn text_rpc(
             c.dropped();
             continue;
         };
-        let reply = match rpc.call(&Bottle::from_text(text)).await {
-            Ok(b) => String::from_utf8_lossy(&b.to_text()).into_owned(),
+        let (reply, refused) = match rpc.call(&Bottle::from_text(text)).await {
+            Ok(b) => {
+                let reply = String::from_utf8_lossy(&b.to_text()).into_owned();
+                // The robot refused the command: say so where ROS users look.
+                let refused = (!service::reply_success(&b))
+                    .then(|| format!("{} answered `{reply}` to `{text}`", rpc.target));
+                (reply, refused)
+            }
             Err(e) => {
-                c.dropped();
-                service::fail_reply(&e).to_string()
+                let refused = format!("`{text}`: {e}");
+                (service::fail_reply(&e).to_string(), Some(refused))
             }
         };
+        if let Some(why) = &refused {
+            warn!("text RPC: {why}");
+        }
         match publisher
             .async_publish(Ros::Struct(vec![Ros::Str(reply)]))
             .await
         {
-            Ok(()) => c.forwarded(t0.elapsed()),
-            Err(_) => c.dropped(),
+            Ok(()) => match refused {
+                Some(why) => c.refused(why),
+                None => c.applied(t0.elapsed()),
+            },
+            Err(e) => c.refused(format!("reply not published: {e:?}")),
         }
     }
 }
