@@ -339,18 +339,86 @@ impl ParametricCalibrator {
         for &j in set {
             self.calibrate_joint(target, j)?;
         }
-        self.wait_done(target, set, CALIBRATE_JOINT_TIMEOUT)?;
+        self.wait_calibrated(target, set, CALIBRATE_JOINT_TIMEOUT)?;
         self.move_set(target, set, |c| c.startup_pos, |c| c.startup_vel)?;
-        self.wait_done(target, set, GO_TO_ZERO_TIMEOUT)?;
-        for &j in set {
-            let at = with(target, |d| {
-                d.as_encoders()
-                    .ok_or(DeviceError::Unsupported("target without IEncoders"))?
-                    .get_encoder(j)
+        self.wait_startup_position(target, set, GO_TO_ZERO_TIMEOUT)
+    }
+
+    /// Waits until every joint of `set` says its calibration is done and it stands still
+    /// (C++ `checkCalibrateJointEnded` asks `calibrationDone`: a motion-done flag alone may
+    /// still be the one from before the calibration started, on a busy machine).
+    fn wait_calibrated(
+        &self,
+        target: &SharedDevice,
+        set: &[usize],
+        timeout: Duration,
+    ) -> DevResult<()> {
+        let start = Instant::now();
+        loop {
+            let done = with(target, |d| {
+                let mut all = true;
+                for &j in set {
+                    let c = d
+                        .as_control_calibration()
+                        .ok_or(DeviceError::Unsupported(
+                            "target without IControlCalibration",
+                        ))?
+                        .calibration_done(j)?;
+                    let p = d
+                        .as_position_control()
+                        .ok_or(DeviceError::Unsupported("target without IPositionControl"))?
+                        .check_motion_done(j)?;
+                    all &= c && p;
+                }
+                Ok(all)
             })?;
-            self.check_startup_position(j, at)?;
+            if done {
+                return Ok(());
+            }
+            self.stopped()?;
+            if start.elapsed() > timeout {
+                return Err(self.fail(
+                    "CALIB_ORDER",
+                    "joints that finish calibrating in time",
+                    format!("joints {set:?} still calibrating after {timeout:?}"),
+                ));
+            }
+            std::thread::sleep(POLL);
         }
-        Ok(())
+    }
+
+    /// Waits until every joint of `set` stands within `startupPosThreshold` of its startup
+    /// position (C++ `checkGoneToZeroThreshold`: position and motion done polled until
+    /// `timeout`, so a move that has not begun yet is not taken for one that ended).
+    fn wait_startup_position(
+        &self,
+        target: &SharedDevice,
+        set: &[usize],
+        timeout: Duration,
+    ) -> DevResult<()> {
+        let start = Instant::now();
+        loop {
+            let at = with(target, |d| {
+                let e = d
+                    .as_encoders()
+                    .ok_or(DeviceError::Unsupported("target without IEncoders"))?;
+                set.iter()
+                    .map(|&j| e.get_encoder(j))
+                    .collect::<DevResult<Vec<f64>>>()
+            })?;
+            let missed = set
+                .iter()
+                .zip(&at)
+                .find(|(&j, &q)| (q - self.joints[j].startup_pos).abs() > self.joints[j].threshold);
+            let Some((&j, &q)) = missed else {
+                return self.wait_done(target, set, timeout.saturating_sub(start.elapsed()));
+            };
+            self.stopped()?;
+            if start.elapsed() > timeout {
+                return self.check_startup_position(j, q);
+            }
+            std::thread::sleep(POLL);
+        }
     }
 }
 
@@ -528,8 +596,17 @@ impl ICalibrator for ParametricCalibrator {
         if self.skip {
             tracing::warn!(device = %self.name, "skipCalibration is on: not calibrating");
         } else {
+            // As icub-main: a set that fails is reported and the next ones still run.
+            let mut first_error = None;
             for set in &self.order {
-                self.calibrate_set(&target, set)?;
+                if let Err(e) = self.calibrate_set(&target, set) {
+                    self.stopped()?;
+                    tracing::error!(device = %self.name, "joints {set:?}: {e}");
+                    first_error.get_or_insert(e);
+                }
+            }
+            if let Some(e) = first_error {
+                return Err(e);
             }
         }
         self.calibrated = true;

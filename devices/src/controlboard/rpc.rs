@@ -257,6 +257,10 @@ fn set(cmd: &Bottle, dev: &mut dyn DeviceDriver) -> Option<Option<()>> {
         }
         _ => return None,
     };
+    // The reply is a bare [fail] (as C++): the log says why.
+    if let Err(e) = &r {
+        tracing::warn!("controlBoard rpc: `{cmd}` refused by the device: {e}");
+    }
     Some(r.ok())
 }
 

@@ -557,7 +557,19 @@ impl CalibratorJob {
             ActionType::Park => c.park(self.target, true),
             _ => c.calibrate(self.target),
         };
-        result.map_err(|e| format!("{kind} of {} by {name} failed: {e}", self.target_name))
+        let failure = result
+            .err()
+            .map(|e| format!("{kind} of {} by {name} failed: {e}", self.target_name));
+        match failure {
+            // As C++ (CalibratorThread ignores the calibrator's result): the robot starts
+            // and serves its parts; the part stays as the calibrator left it.
+            Some(f) if kind == ActionType::Calibrate => {
+                tracing::error!("{f}; the robot runs on");
+                Ok(())
+            }
+            Some(f) => Err(f),
+            None => Ok(()),
+        }
     }
 
     /// As C++ `Device::calibrate`: when the calibrator offers `IRemoteCalibrator` and the
