@@ -181,11 +181,13 @@ impl Default for Qos {
 /// default subscriptions request: a reliable reader never matches a best-effort writer.
 /// What it reads as commands (joint commands, a Twist into YARP) is best effort, because
 /// a best-effort reader matches reliable and best-effort publishers alike (teleop and
-/// controllers use either) and, of a stream of setpoints, only the newest matters.
+/// controllers use either) and, of a stream of setpoints, only the newest matters. A
+/// `transient_local` entry stays reliable: a late-joining reader gets the writer's kept
+/// samples only over the reliable protocol.
 pub fn default_reliability(t: &TopicEntry) -> Reliability {
     let command = matches!(default_conversion(t), Some(Conversion::JointCommand))
         || (t.direction == Direction::RosToYarp && t.ros_type == "geometry_msgs/msg/Twist");
-    if command {
+    if command && t.qos.durability == Durability::Volatile {
         Reliability::BestEffort
     } else {
         Reliability::Reliable

@@ -11,10 +11,13 @@ use yarp_proto::Bottle;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn ports_matching_a_pattern_come_and_go() {
-    let Some(venv) = common::venv_or_skip("ports_matching_a_pattern_come_and_go") else {
-        return;
-    };
-    let domain = common::domain_id(17);
+    for d in common::distros("ports_matching_a_pattern_come_and_go") {
+        ports_matching_a_pattern_come_and_go_on(&d).await;
+    }
+}
+
+async fn ports_matching_a_pattern_come_and_go_on(venv: &common::Distro) {
+    let domain = venv.domain(17);
     let (ns, stop) = common::name_server().await;
     let gw = common::gateway(
         r#"
@@ -38,7 +41,7 @@ ros_type = "std_msgs/msg/String"
     let _other = Port::open("/sensors/cmd:i", ns.clone()).await.unwrap();
     let a = Port::open("/sensors/temp:o", ns.clone()).await.unwrap();
     let sub = Peer::start(
-        &venv,
+        venv,
         domain,
         &["sub", "std_msgs/msg/String", "/yarp/sensors/temp_o"],
     );
@@ -76,12 +79,13 @@ ros_type = "std_msgs/msg/String"
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn ros_topics_matching_a_pattern_are_mirrored_while_published() {
-    let Some(venv) =
-        common::venv_or_skip("ros_topics_matching_a_pattern_are_mirrored_while_published")
-    else {
-        return;
-    };
-    let domain = common::domain_id(25);
+    for d in common::distros("ros_topics_matching_a_pattern_are_mirrored_while_published") {
+        ros_topics_matching_a_pattern_are_mirrored_while_published_on(&d).await;
+    }
+}
+
+async fn ros_topics_matching_a_pattern_are_mirrored_while_published_on(venv: &common::Distro) {
+    let domain = venv.domain(25);
     let (ns, stop) = common::name_server().await;
     let gw = common::gateway(
         r#"
@@ -99,7 +103,7 @@ ros_type = "std_msgs/msg/Float64"
     // Three seconds of a matching topic, plus one of another type and one elsewhere.
     let float = |topic: &str, data: &str| {
         Peer::start(
-            &venv,
+            venv,
             domain,
             &[
                 "pub",
@@ -116,7 +120,7 @@ ros_type = "std_msgs/msg/Float64"
     let temp = float("/sensors/temp_a", r#"{"data": 21.5}"#);
     let _elsewhere = float("/other/temp", r#"{"data": 1.0}"#);
     let _other_type = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "pub",

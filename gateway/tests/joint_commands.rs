@@ -61,6 +61,7 @@ fn near(a: f64, b: f64) -> bool {
 /// Starts board, checker and gateway for one test; waits until the gateway's
 /// remote_controlboard has registered its ports.
 async fn setup(
+    venv: &common::Distro,
     prefix: &str,
     index: u16,
     mapping: &str,
@@ -71,7 +72,7 @@ async fn setup(
     u16,
 ) {
     let ns = common::device_name_server();
-    let domain = common::domain_id(index);
+    let domain = venv.domain(index);
     let (server_name, check_name) = (format!("{prefix}/arm"), format!("{prefix}/check"));
     let server = blocking(move || board(&server_name)).await;
     let remote = format!("{prefix}/arm");
@@ -88,12 +89,17 @@ async fn setup(
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn multi_array_positions_then_position_direct_setpoints_move_the_joints() {
-    let Some(venv) = common::venv_or_skip(
-        "multi_array_positions_then_position_direct_setpoints_move_the_joints",
-    ) else {
-        return;
-    };
+    for d in common::distros("multi_array_positions_then_position_direct_setpoints_move_the_joints")
+    {
+        multi_array_positions_then_position_direct_setpoints_move_the_joints_on(&d).await;
+    }
+}
+
+async fn multi_array_positions_then_position_direct_setpoints_move_the_joints_on(
+    venv: &common::Distro,
+) {
     let (_server, check, gw, domain) = setup(
+        venv,
         "/t19",
         19,
         r#"
@@ -116,7 +122,7 @@ control_board = { remote = "/t19/arm", mode = "position_direct" }
     )
     .await;
     let publisher = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "pub",
@@ -141,7 +147,7 @@ control_board = { remote = "/t19/arm", mode = "position_direct" }
     drop(publisher);
     // Position-direct setpoints by name on the same board (the elbow only).
     let _direct = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "pub",
@@ -166,10 +172,14 @@ control_board = { remote = "/t19/arm", mode = "position_direct" }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn joint_trajectory_is_followed_point_by_point() {
-    let Some(venv) = common::venv_or_skip("joint_trajectory_is_followed_point_by_point") else {
-        return;
-    };
+    for d in common::distros("joint_trajectory_is_followed_point_by_point") {
+        joint_trajectory_is_followed_point_by_point_on(&d).await;
+    }
+}
+
+async fn joint_trajectory_is_followed_point_by_point_on(venv: &common::Distro) {
     let (_server, check, gw, domain) = setup(
+        venv,
         "/t20",
         20,
         r#"
@@ -189,7 +199,7 @@ qos = { durability = "transient_local", depth = 1 }
         {"positions": [0.2, 0.4], "time_from_start": {"sec": 0, "nanosec": 600000000}},
         {"positions": [-0.2, 0.8], "time_from_start": {"sec": 1, "nanosec": 600000000}}]}"#;
     let publisher = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "pub",
@@ -230,10 +240,14 @@ qos = { durability = "transient_local", depth = 1 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn joint_state_velocities_by_name_in_velocity_mode() {
-    let Some(venv) = common::venv_or_skip("joint_state_velocities_by_name_in_velocity_mode") else {
-        return;
-    };
+    for d in common::distros("joint_state_velocities_by_name_in_velocity_mode") {
+        joint_state_velocities_by_name_in_velocity_mode_on(&d).await;
+    }
+}
+
+async fn joint_state_velocities_by_name_in_velocity_mode_on(venv: &common::Distro) {
     let (_server, check, gw, domain) = setup(
+        venv,
         "/t21",
         21,
         r#"
@@ -248,7 +262,7 @@ control_board = { remote = "/t21/arm", mode = "velocity" }
     )
     .await;
     let _pub = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "pub",

@@ -13,10 +13,13 @@ use yarp_net::port::Port;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn control_board_state_becomes_joint_state() {
-    let Some(venv) = common::venv_or_skip("control_board_state_becomes_joint_state") else {
-        return;
-    };
-    let domain = common::domain_id(14);
+    for d in common::distros("control_board_state_becomes_joint_state") {
+        control_board_state_becomes_joint_state_on(&d).await;
+    }
+}
+
+async fn control_board_state_becomes_joint_state_on(venv: &common::Distro) {
+    let domain = venv.domain(14);
     let ns = common::device_name_server();
     let _server = blocking(|| {
         common::open_device(
@@ -73,7 +76,7 @@ joint_names = { from = "axis_info", rpc_port = "/t14/left_arm/rpc:i" }
     )
     .await;
     let sub = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "sub",
@@ -140,10 +143,13 @@ joint_names = { from = "axis_info", rpc_port = "/t14/left_arm/rpc:i" }
 /// Domain index: 22.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn state_ext_gives_velocity_and_effort() {
-    let Some(venv) = common::venv_or_skip("state_ext_gives_velocity_and_effort") else {
-        return;
-    };
-    let domain = common::domain_id(22);
+    for d in common::distros("state_ext_gives_velocity_and_effort") {
+        state_ext_gives_velocity_and_effort_on(&d).await;
+    }
+}
+
+async fn state_ext_gives_velocity_and_effort_on(venv: &common::Distro) {
+    let domain = venv.domain(22);
     let ns = common::device_name_server();
     let _server = blocking(|| {
         common::open_device(
@@ -186,7 +192,7 @@ joint_names = { from = "axis_info", rpc_port = "/t22/arm/rpc:i" }
     )
     .await;
     let sub = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "sub",

@@ -25,13 +25,16 @@ fn pct(v: &mut [f64], p: usize) -> f64 {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 #[ignore = "measurement; run explicitly"]
 async fn string_round_trip_latency() {
-    let Some(venv) = common::venv_or_skip("string_round_trip_latency") else {
-        return;
-    };
+    for d in common::first_distro("string_round_trip_latency") {
+        string_round_trip_latency_on(&d).await;
+    }
+}
+
+async fn string_round_trip_latency_on(venv: &common::Distro) {
     // Direct rclpy <-> rclpy.
-    let d = common::domain_id(10);
+    let d = venv.domain(10);
     let echo = Peer::start(
-        &venv,
+        venv,
         d,
         &[
             "echo",
@@ -46,7 +49,7 @@ async fn string_round_trip_latency() {
     );
     echo.expect_async("READY", T).await;
     let ping = Peer::start(
-        &venv,
+        venv,
         d,
         &[
             "ping",
@@ -65,7 +68,7 @@ async fn string_round_trip_latency() {
     eprintln!("direct rclpy round trip: {direct}");
 
     // Through the gateway.
-    let d = common::domain_id(11);
+    let d = venv.domain(11);
     let (ns, stop) = common::name_server().await;
     let w = Port::open("/lat/ping:o", ns.clone()).await.unwrap();
     let r = BufferedPort::open("/lat/pong:i", ns.clone()).await.unwrap();
@@ -93,7 +96,7 @@ ros_type = "std_msgs/msg/String"
     )
     .await;
     let echo = Peer::start(
-        &venv,
+        venv,
         d,
         &[
             "echo",

@@ -21,10 +21,13 @@ ros_type = "std_msgs/msg/Int32"
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn program_bridges_and_reports_diagnostics() {
-    let Some(venv) = common::venv_or_skip("program_bridges_and_reports_diagnostics") else {
-        return;
-    };
-    let domain = common::domain_id(9);
+    for d in common::distros("program_bridges_and_reports_diagnostics") {
+        program_bridges_and_reports_diagnostics_on(&d).await;
+    }
+}
+
+async fn program_bridges_and_reports_diagnostics_on(venv: &common::Distro) {
+    let domain = venv.domain(9);
     let dir = std::env::temp_dir().join(format!("yarp-ros2-gateway-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("m.toml");
@@ -58,7 +61,7 @@ async fn program_bridges_and_reports_diagnostics() {
     assert!(dir.join("yarp.conf").exists(), "first run writes yarp.conf");
 
     let diag = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "sub",
@@ -68,7 +71,7 @@ async fn program_bridges_and_reports_diagnostics() {
             "1000",
         ],
     );
-    let sub = Peer::start(&venv, domain, &["sub", "std_msgs/msg/Int32", "/count"]);
+    let sub = Peer::start(venv, domain, &["sub", "std_msgs/msg/Int32", "/count"]);
     sub.expect_async("READY", T).await;
     let ns = NameClient::new(ns_addr.parse().unwrap()).with_timeout(T);
     let w = Port::open("/test/count:o", ns.clone()).await.unwrap();

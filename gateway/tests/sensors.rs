@@ -46,10 +46,13 @@ fn now() -> f64 {
 /// served by a `multipleanalogsensorsserver`.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn imu_and_wrench_from_multiple_analog_sensors() {
-    let Some(venv) = common::venv_or_skip("imu_and_wrench_from_multiple_analog_sensors") else {
-        return;
-    };
-    let domain = common::domain_id(12);
+    for d in common::distros("imu_and_wrench_from_multiple_analog_sensors") {
+        imu_and_wrench_from_multiple_analog_sensors_on(&d).await;
+    }
+}
+
+async fn imu_and_wrench_from_multiple_analog_sensors_on(venv: &common::Distro) {
+    let domain = venv.domain(12);
     let ns = common::device_name_server();
     let _imu = blocking(|| {
         common::open_device(
@@ -91,9 +94,9 @@ qos = { reliability = "best_effort", depth = 5 }
         domain,
     )
     .await;
-    let imu = Peer::start(&venv, domain, &["sub", "sensor_msgs/msg/Imu", "/imu"]);
+    let imu = Peer::start(venv, domain, &["sub", "sensor_msgs/msg/Imu", "/imu"]);
     let ft = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "sub",
@@ -145,11 +148,13 @@ qos = { reliability = "best_effort", depth = 5 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_yarp_source_that_vanishes_and_returns_is_reconnected() {
-    let Some(venv) = common::venv_or_skip("a_yarp_source_that_vanishes_and_returns_is_reconnected")
-    else {
-        return;
-    };
-    let domain = common::domain_id(13);
+    for d in common::distros("a_yarp_source_that_vanishes_and_returns_is_reconnected") {
+        a_yarp_source_that_vanishes_and_returns_is_reconnected_on(&d).await;
+    }
+}
+
+async fn a_yarp_source_that_vanishes_and_returns_is_reconnected_on(venv: &common::Distro) {
+    let domain = venv.domain(13);
     let (ns, stop) = common::name_server().await;
     let gw = common::gateway(
         r#"
@@ -166,7 +171,7 @@ ros_type = "std_msgs/msg/Int32"
     )
     .await;
     let sub = Peer::start(
-        &venv,
+        venv,
         domain,
         &["sub", "std_msgs/msg/Int32", "/counter", "--count", "1000"],
     );

@@ -18,10 +18,13 @@ fn json_line(s: &str) -> Json {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn ros_clients_call_yarp_rpc_ports() {
-    let Some(venv) = common::venv_or_skip("ros_clients_call_yarp_rpc_ports") else {
-        return;
-    };
-    let domain = common::domain_id(6);
+    for d in common::distros("ros_clients_call_yarp_rpc_ports") {
+        ros_clients_call_yarp_rpc_ports_on(&d).await;
+    }
+}
+
+async fn ros_clients_call_yarp_rpc_ports_on(venv: &common::Distro) {
+    let domain = venv.domain(6);
     let (ns, stop) = common::name_server().await;
     // A YARP RPC server that records commands and answers like a device would.
     let server = RpcServer::open("/test/arm/rpc:i", ns.clone())
@@ -95,7 +98,7 @@ command = "[stop]"
     // seconds to discover the service, so they get a minute (they print RESP at once).
     .map(|a| {
         let args = [a.as_slice(), &["--timeout", "60"]].concat();
-        Peer::start(&venv, domain, &args)
+        Peer::start(venv, domain, &args)
     });
     let resp: Vec<Json> = {
         let mut v = Vec::new();
@@ -155,10 +158,13 @@ async fn rpc_until_answered(
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn yarp_clients_call_ros_services() {
-    let Some(venv) = common::venv_or_skip("yarp_clients_call_ros_services") else {
-        return;
-    };
-    let domain = common::domain_id(7);
+    for d in common::distros("yarp_clients_call_ros_services") {
+        yarp_clients_call_ros_services_on(&d).await;
+    }
+}
+
+async fn yarp_clients_call_ros_services_on(venv: &common::Distro) {
+    let domain = venv.domain(7);
     let (ns, stop) = common::name_server().await;
     // Each server answers until the test ends (not only its first request), so a call
     // that the test repeats while discovery settles still finds it.
@@ -173,7 +179,7 @@ async fn yarp_clients_call_ros_services() {
             "--timeout",
             "300",
         ];
-        Peer::start(&venv, domain, &args)
+        Peer::start(venv, domain, &args)
     };
     let servers = [
         serve(
@@ -245,10 +251,13 @@ ros_type = "std_srvs/srv/Empty"
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn generic_text_rpc_over_string_topics() {
-    let Some(venv) = common::venv_or_skip("generic_text_rpc_over_string_topics") else {
-        return;
-    };
-    let domain = common::domain_id(8);
+    for d in common::distros("generic_text_rpc_over_string_topics") {
+        generic_text_rpc_over_string_topics_on(&d).await;
+    }
+}
+
+async fn generic_text_rpc_over_string_topics_on(venv: &common::Distro) {
+    let domain = venv.domain(8);
     let (ns, stop) = common::name_server().await;
     let server = RpcServer::open("/test/board/rpc:i", ns.clone())
         .await
@@ -279,13 +288,13 @@ ros_type = "std_msgs/msg/String"
     )
     .await;
     let sub = Peer::start(
-        &venv,
+        venv,
         domain,
         &["sub", "std_msgs/msg/String", "/board/rpc/reply"],
     );
     sub.expect_async("READY", T).await;
     let _pubr = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "pub",

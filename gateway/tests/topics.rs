@@ -38,10 +38,13 @@ async fn write_until_received(w: &Port, b: &Bottle, peer: &Peer) -> Json {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn yarp_bottles_reach_rclpy_subscribers() {
-    let Some(venv) = common::venv_or_skip("yarp_bottles_reach_rclpy_subscribers") else {
-        return;
-    };
-    let domain = common::domain_id(2);
+    for d in common::distros("yarp_bottles_reach_rclpy_subscribers") {
+        yarp_bottles_reach_rclpy_subscribers_on(&d).await;
+    }
+}
+
+async fn yarp_bottles_reach_rclpy_subscribers_on(venv: &common::Distro) {
+    let domain = venv.domain(2);
     let (ns, stop) = common::name_server().await;
     let w_text = Port::open("/test/text:o", ns.clone()).await.unwrap();
     let w_int = Port::open("/test/int:o", ns.clone()).await.unwrap();
@@ -92,7 +95,7 @@ ros_type = "geometry_msgs/msg/Twist"
         ("std_msgs/msg/Float64MultiArray", "/yarp/array"),
         ("geometry_msgs/msg/Twist", "/yarp/twist"),
     ]
-    .map(|(ty, topic)| Peer::start(&venv, domain, &["sub", ty, topic]));
+    .map(|(ty, topic)| Peer::start(venv, domain, &["sub", ty, topic]));
     for p in &subs {
         p.expect_async("READY", T).await;
     }
@@ -137,10 +140,13 @@ ros_type = "geometry_msgs/msg/Twist"
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn rclpy_messages_reach_yarp_readers() {
-    let Some(venv) = common::venv_or_skip("rclpy_messages_reach_yarp_readers") else {
-        return;
-    };
-    let domain = common::domain_id(3);
+    for d in common::distros("rclpy_messages_reach_yarp_readers") {
+        rclpy_messages_reach_yarp_readers_on(&d).await;
+    }
+}
+
+async fn rclpy_messages_reach_yarp_readers_on(venv: &common::Distro) {
+    let domain = venv.domain(3);
     let (ns, stop) = common::name_server().await;
     let r_twist = BufferedPort::open("/test/cmd_vel:i", ns.clone())
         .await
@@ -198,7 +204,7 @@ qos = { reliability = "best_effort", depth = 1 }
             r#"{"data": "[hello] (1 2) \"x y\""}"#,
         ),
     ]
-    .map(|a| Peer::start(&venv, domain, &a));
+    .map(|a| Peer::start(venv, domain, &a));
     assert_eq!(
         read(&r_twist).await,
         Bottle::from_text("0.5 0.0 0.0 0.0 0.0 -0.25")

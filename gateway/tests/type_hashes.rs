@@ -8,11 +8,12 @@ use yarp_ros2_gateway::{hash::rihs01, types::MESSAGES};
 
 #[test]
 fn every_catalog_type_matches_the_installed_type_descriptions() {
-    let Some(venv) =
-        common::venv_or_skip("every_catalog_type_matches_the_installed_type_descriptions")
-    else {
-        return;
-    };
+    for d in common::distros("every_catalog_type_matches_the_installed_type_descriptions") {
+        every_catalog_type_matches_the_installed_type_descriptions_on(&d);
+    }
+}
+
+fn every_catalog_type_matches_the_installed_type_descriptions_on(venv: &common::Distro) {
     let mut checked = 0;
     for t in MESSAGES {
         // `pkg/srv/Name_Request` lives in `share/pkg/srv/Name.json`.
@@ -39,24 +40,28 @@ fn every_catalog_type_matches_the_installed_type_descriptions() {
 
 #[test]
 fn rclpy_reports_the_same_hash_for_its_own_endpoints() {
-    let Some(venv) = common::venv_or_skip("rclpy_reports_the_same_hash_for_its_own_endpoints")
-    else {
-        return;
-    };
+    for d in common::distros("rclpy_reports_the_same_hash_for_its_own_endpoints") {
+        rclpy_reports_the_same_hash_for_its_own_endpoints_on(&d);
+    }
+}
+
+fn rclpy_reports_the_same_hash_for_its_own_endpoints_on(venv: &common::Distro) {
     for (i, ty) in ["geometry_msgs/msg/Twist", "sensor_msgs/msg/JointState"]
         .into_iter()
         .enumerate()
     {
-        let peer = common::Peer::start(&venv, common::domain_id(i as u16), &["hash", ty]);
+        let peer = common::Peer::start(venv, venv.domain(i as u16), &["hash", ty]);
         assert_eq!(peer.expect("HASH", common::T), rihs01(ty).unwrap(), "{ty}");
         assert!(peer.finish(common::T));
     }
 }
 
 /// What rclpy reports for the gateway's own endpoints: `(pubs, subs)` JSON of one topic.
-async fn gateway_endpoints_seen_by_rclpy(index: u16) -> Option<(serde_json::Value, String)> {
-    let venv = common::venv_or_skip("gateway_endpoints_seen_by_rclpy")?;
-    let domain = common::domain_id(index);
+async fn gateway_endpoints_seen_by_rclpy(
+    venv: &common::Distro,
+    index: u16,
+) -> (serde_json::Value, String) {
+    let domain = venv.domain(index);
     let (ns, stop) = common::name_server().await;
     let gw = common::gateway(
         r#"
@@ -72,7 +77,7 @@ ros_type = "geometry_msgs/msg/Twist"
     )
     .await;
     let peer = common::Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "info",
@@ -91,22 +96,22 @@ ros_type = "geometry_msgs/msg/Twist"
     assert!(peer.finish(common::T));
     gw.shutdown().await;
     stop.shutdown();
-    Some((info, rihs01("geometry_msgs/msg/Twist").unwrap()))
+    (info, rihs01("geometry_msgs/msg/Twist").unwrap())
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn rclpy_discovers_the_gateway_endpoints_with_their_types() {
-    let Some((info, want)) = gateway_endpoints_seen_by_rclpy(4).await else {
-        return;
-    };
-    for side in ["pubs", "subs"] {
-        let e = &info[side][0];
-        assert_eq!(e["type"], "geometry_msgs/msg/Twist", "{info}");
-        assert_eq!(e["node"], "yarp_ros2_gateway", "{info}");
-        eprintln!(
-            "rclpy sees the gateway's {side} with {} (correct: {want})",
-            e["hash"]
-        );
+    for d in common::distros("rclpy_discovers_the_gateway_endpoints_with_their_types") {
+        let (info, want) = gateway_endpoints_seen_by_rclpy(&d, 4).await;
+        for side in ["pubs", "subs"] {
+            let e = &info[side][0];
+            assert_eq!(e["type"], "geometry_msgs/msg/Twist", "{info}");
+            assert_eq!(e["node"], "yarp_ros2_gateway", "{info}");
+            eprintln!(
+                "[{}] rclpy sees the gateway's {side} with {} (correct: {want})",
+                d.name, e["hash"]
+            );
+        }
     }
 }
 
@@ -116,11 +121,13 @@ async fn rclpy_discovers_the_gateway_endpoints_with_their_types() {
 /// carry the hash of the service type, as rmw announces them).
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn rclpy_sees_the_correct_type_hash_on_gateway_endpoints() {
-    let Some(venv) = common::venv_or_skip("rclpy_sees_the_correct_type_hash_on_gateway_endpoints")
-    else {
-        return;
-    };
-    let domain = common::domain_id(5);
+    for d in common::distros("rclpy_sees_the_correct_type_hash_on_gateway_endpoints") {
+        rclpy_sees_the_correct_type_hash_on_gateway_endpoints_on(&d).await;
+    }
+}
+
+async fn rclpy_sees_the_correct_type_hash_on_gateway_endpoints_on(venv: &common::Distro) {
+    let domain = venv.domain(5);
     let (ns, stop) = common::name_server().await;
     let gw = common::gateway(
         r#"
@@ -184,7 +191,7 @@ ros_type = "std_srvs/srv/SetBool"
     let mut args = vec!["info_many"];
     args.extend(want.iter().map(|(topic, _)| *topic));
     args.extend(["--timeout", "15"]);
-    let peer = common::Peer::start(&venv, domain, &args);
+    let peer = common::Peer::start(venv, domain, &args);
     let info: serde_json::Value =
         serde_json::from_str(&peer.expect_async("INFO", common::T).await).unwrap();
     assert!(peer.finish(common::T));

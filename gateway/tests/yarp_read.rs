@@ -56,13 +56,16 @@ async fn six_numbers(reader: &Peer, who: &str) -> Vec<f64> {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn rclpy_twist_reaches_yarp_read() {
-    let Some(venv) = common::venv_or_skip("rclpy_twist_reaches_yarp_read") else {
-        return;
-    };
+    for d in common::distros("rclpy_twist_reaches_yarp_read") {
+        rclpy_twist_reaches_yarp_read_on(&d).await;
+    }
+}
+
+async fn rclpy_twist_reaches_yarp_read_on(venv: &common::Distro) {
     let Some(ours) = our_yarp() else {
         return;
     };
-    let domain = common::domain_id(24);
+    let domain = venv.domain(24);
     // The readers find the name server through the yarp.conf this writes.
     let ns = common::device_name_server();
     let our_reader = yarp_read(&ours, "/t24/ours");
@@ -92,7 +95,7 @@ ros_type = "geometry_msgs/msg/Twist"
         }
     }
     let _pub = Peer::start(
-        &venv,
+        venv,
         domain,
         &[
             "pub",

@@ -11,39 +11,96 @@ use std::time::{Duration, Instant};
 /// How long any single wait in a test may take.
 pub const T: Duration = Duration::from_secs(20);
 
-/// The rclpy venv (`ROS_VENV`, default `<repo>/.venv-ros`), if it holds a Python.
-pub fn ros_venv() -> Option<PathBuf> {
-    let dir = std::env::var_os("ROS_VENV")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../.venv-ros"));
-    dir.join("bin/python").exists().then_some(dir)
+/// A ROS 2 distro the rclpy tests run against, with its venv (`tests/peers/install-ros2.sh
+/// [kilted|jazzy]`): Kilted's `ros-*` wheels in `ROS_VENV` (default `<repo>/.venv-ros`),
+/// Jazzy's `ros-jazzy-*` wheels in `ROS_JAZZY_VENV` (default `<repo>/.venv-ros-jazzy`).
+/// Derefs to the venv directory.
+#[derive(Debug, Clone)]
+pub struct Distro {
+    /// `ROS_DISTRO` of its nodes.
+    pub name: &'static str,
+    pub venv: PathBuf,
+    /// Its place in [`KNOWN`] (keeps the distros' ROS domains apart).
+    slot: u16,
 }
 
-/// Returns the venv, or prints a loud skip notice and returns `None` (the test passes).
-pub fn venv_or_skip(test: &str) -> Option<PathBuf> {
-    let v = ros_venv();
-    if v.is_none() {
-        eprintln!(
-            "\n*** SKIPPED: rclpy venv not found ({test}); run tests/peers/install-ros2.sh \
-             or set ROS_VENV ***\n"
-        );
+impl std::ops::Deref for Distro {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.venv
     }
-    v
 }
 
-/// A ROS domain id unique to this test within this test run.
+impl Distro {
+    /// The ROS domain of test `index` for this distro (see [`domain_id`]).
+    pub fn domain(&self, index: u16) -> u16 {
+        domain_slot(index) + 26 * self.slot
+    }
+}
+
+/// The distros, their venv variables and default venv directories.
+const KNOWN: [(&str, &str, &str); 2] = [
+    ("kilted", "ROS_VENV", "../.venv-ros"),
+    ("jazzy", "ROS_JAZZY_VENV", "../.venv-ros-jazzy"),
+];
+
+/// The distros to run rclpy tests against: `YARP_ROS_DISTROS` (comma-separated), default
+/// every known one. A distro whose venv is missing is skipped with a loud notice (the
+/// test passes for it), except under CI=true, where that fails the test.
+pub fn distros(test: &str) -> Vec<Distro> {
+    let wanted = std::env::var("YARP_ROS_DISTROS").unwrap_or_else(|_| "kilted,jazzy".into());
+    let ci = std::env::var("CI").is_ok_and(|v| v == "true");
+    let mut found = Vec::new();
+    for want in wanted.split(',').map(str::trim).filter(|w| !w.is_empty()) {
+        let Some(slot) = KNOWN.iter().position(|k| k.0 == want) else {
+            panic!("YARP_ROS_DISTROS names `{want}`: known are kilted, jazzy");
+        };
+        let (name, var, default) = KNOWN[slot];
+        let venv = std::env::var_os(var)
+            .map(PathBuf::from)
+            .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(default));
+        if venv.join("bin/python").exists() {
+            found.push(Distro {
+                name,
+                venv,
+                slot: slot as u16,
+            });
+            continue;
+        }
+        let why = format!(
+            "no ROS 2 {name} rclpy venv at {} (run tests/peers/install-ros2.sh {name} or set {var})",
+            venv.display()
+        );
+        assert!(!ci, "{test}: {why}");
+        eprintln!("\n*** SKIPPED for {name}: {test}: {why} ***\n");
+    }
+    found
+}
+
+/// The first distro of [`distros`] only: for measurements (throughput, latency) of the
+/// gateway's own path, which one rclpy is enough to drive.
+pub fn first_distro(test: &str) -> Vec<Distro> {
+    distros(test).into_iter().take(1).collect()
+}
+
+/// A ROS domain id unique to this test within this test run (the first distro's; see
+/// [`Distro::domain`] for the others).
 ///
 /// `index` is the test's own number (unique across the gateway's tests, < 26). The run
-/// picks one of 8 slots of 26 domains from nextest's run id (or the process id under plain
-/// `cargo test`), so two suites running at once rarely share a domain either; the slots
-/// stay below 232, the highest domain RTPS's port formula allows.
+/// picks one of 4 slots of 52 domains (26 per distro) from nextest's run id (or the
+/// process id under plain `cargo test`), so two suites running at once rarely share a
+/// domain either; the slots stay below 232, the highest domain RTPS's port formula allows.
 pub fn domain_id(index: u16) -> u16 {
+    domain_slot(index)
+}
+
+fn domain_slot(index: u16) -> u16 {
     assert!(index < 26, "domain index {index} out of range");
     let seed = std::env::var("NEXTEST_RUN_ID").unwrap_or_else(|_| std::process::id().to_string());
     let h = seed.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
         (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
     });
-    20 + (h % 8) as u16 * 26 + index
+    20 + (h % 4) as u16 * 52 + index
 }
 
 /// A running rclpy peer (`gateway/tests/peers/peer.py`); killed and reaped on drop.
@@ -55,26 +112,26 @@ pub struct Peer {
 
 impl Peer {
     /// Starts `peer.py <args>` in `domain`.
-    pub fn start(venv: &std::path::Path, domain: u16, args: &[&str]) -> Peer {
-        Peer::start_with_profile(venv, domain, args, None)
+    pub fn start(distro: &Distro, domain: u16, args: &[&str]) -> Peer {
+        Peer::start_with_profile(distro, domain, args, None)
     }
 
     /// Like [`Peer::start`], with a Fast DDS XML profile from `tests/peers/` (which then
     /// chooses the transports).
     pub fn start_with_profile(
-        venv: &std::path::Path,
+        distro: &Distro,
         domain: u16,
         args: &[&str],
         profile: Option<&str>,
     ) -> Peer {
         let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/peers/peer.py");
-        let mut cmd = Command::new(venv.join("bin/python"));
+        let mut cmd = Command::new(distro.join("bin/python"));
         cmd.arg("-u")
             .arg(script)
             .args(args)
             .env("ROS_DOMAIN_ID", domain.to_string())
             .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-            .env("ROS_DISTRO", "kilted")
+            .env("ROS_DISTRO", distro.name)
             // UDP only: Fast DDS's /dev/shm segments are not isolated by netns-run.
             .env("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4");
         if let Some(p) = profile {
