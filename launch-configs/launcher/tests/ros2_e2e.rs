@@ -1,32 +1,21 @@
 //! The mission end to end: `yarp-launch` starts a robot config (`icub-sim.toml`, the
-//! emulated iCub, and `fake-devices.toml`), a real rclpy node reads
-//! `/icub/left_arm/joint_states` and commands a joint through the gateway, our `yarp read`
-//! reads a YARP port, headless Chromium loads the dashboard, and everything stops with no
-//! process left behind. Prints the time
-//! from the command to the first JointState. Needs the rclpy venv
-//! (`tests/peers/install-ros2.sh`, `ROS_VENV`); skips loudly without it.
+//! emulated iCub, and `fake-devices.toml`); for each ROS 2 distro (Kilted and Jazzy, see
+//! `common::ros`) real rclpy nodes with rclpy's default QoS read every state topic the
+//! gateway offers and `/icub/left_arm/joint_states`, and command a joint through the
+//! gateway once the part is calibrated; our `yarp read` reads a YARP port, headless
+//! Chromium loads the dashboard, and everything stops with no process left behind. Prints
+//! the time from the start to the first JointState. Needs the rclpy venvs
+//! (`tests/peers/install-ros2.sh [jazzy]`, `ROS_VENV`, `ROS_JAZZY_VENV`); skips loudly
+//! without them (fails under CI=true).
 
 mod common;
 
+use common::ros::{distros, Distro};
 use common::*;
 use std::io::{BufRead, BufReader};
-use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
-
-fn ros_venv() -> Option<PathBuf> {
-    let dir = std::env::var_os("ROS_VENV")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| configs_dir().join("../.venv-ros"));
-    let ok = Command::new(dir.join("bin/python"))
-        .args(["-c", "import rclpy, sensor_msgs.msg, std_msgs.msg"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    ok.then_some(dir)
-}
 
 /// A child whose stdout lines arrive on a channel; killed and reaped on drop.
 struct Lines {
@@ -74,70 +63,183 @@ impl Drop for Lines {
     }
 }
 
-/// Runs `config` (with `extra` launcher arguments) and checks the whole chain with joint
-/// `joint` of the left arm commanded to `target` degrees.
-fn e2e(
-    config: &str,
-    extra: &[&str],
-    joint: &str,
-    target: f64,
+/// The state topics a default-QoS subscriber must receive from `mapping` (the launch's
+/// gateway mappings): every topic the gateway publishes that the file does not mark
+/// best effort (images may be), and the gateway's /diagnostics; as `TOPIC=pkg/msg/Type`.
+fn state_topics(mapping: &str) -> Vec<String> {
+    let path = configs_dir().join("../mappings/launch").join(mapping);
+    let text = std::fs::read_to_string(&path).expect("mapping file");
+    let table: toml::Table = text.parse().expect("mapping TOML");
+    let mut topics: Vec<String> = table["topic"]
+        .as_array()
+        .expect("[[topic]] entries")
+        .iter()
+        .filter(|t| {
+            let offered = matches!(t["direction"].as_str(), Some("yarp_to_ros" | "both"));
+            let best_effort = t
+                .get("qos")
+                .and_then(|q| q.get("reliability"))
+                .is_some_and(|r| r.as_str() == Some("best_effort"));
+            offered && !best_effort
+        })
+        .map(|t| {
+            format!(
+                "{}={}",
+                t["ros_topic"].as_str().unwrap(),
+                t["ros_type"].as_str().unwrap()
+            )
+        })
+        .collect();
+    topics.push("/diagnostics=diagnostic_msgs/msg/DiagnosticArray".into());
+    topics
+}
+
+/// What one end-to-end run checks.
+struct Scenario<'a> {
+    config: &'a str,
+    /// The gateway mapping file of the config (in mappings/launch/).
+    mapping: &'a str,
+    /// Joint of the left arm commanded, and its targets (degrees) per distro, in turn.
+    joint: &'a str,
+    targets: [f64; 2],
+    /// The robot's log line that says the left arm is calibrated (commands wait for it).
+    calibrated: Option<&'a str>,
+    /// The ROS domain is 1 + 2 * (pid % 50) + this (this file uses 1..=100).
     domain_offset: u32,
-    imu_topic: Option<&str>,
-) {
-    let Some(venv) = ros_venv() else {
+    imu_topic: Option<&'a str>,
+}
+
+/// Runs the scenario's config and checks the whole chain, for every ROS 2 distro at once
+/// (one launch; one rclpy node per distro and role in the same domain): each distro's
+/// default-QoS subscribers receive every state topic, and each distro in turn commands
+/// the joint through the gateway and sees it move.
+fn e2e(s: Scenario) {
+    let distros = distros(s.config);
+    if distros.is_empty() {
         eprintln!("==================================================================");
         eprintln!("SKIPPED: no rclpy venv (run tests/peers/install-ros2.sh or set");
         eprintln!("ROS_VENV): the ROS 2 end-to-end launch test did not run.");
         eprintln!("==================================================================");
         return;
+    }
+    // A ROS domain per test: the two tests of this file may run at once, and other tests
+    // run DDS in the same network namespace.
+    let domain = (1 + (std::process::id() % 50) * 2 + s.domain_offset).to_string();
+    let ros_env = |distro: &'static str| {
+        [
+            ("ROS_DOMAIN_ID", domain.clone()),
+            ("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST".to_string()),
+            ("ROS_DISTRO", distro.to_string()),
+            // UDP only: Fast DDS's /dev/shm segments are not isolated by netns-run.
+            ("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4".to_string()),
+        ]
     };
-    // A ROS domain per test (this file uses 1..=100): the two tests of this file may run
-    // in one process, and other tests run DDS in the same network namespace.
-    let domain = (1 + (std::process::id() % 50) * 2 + domain_offset).to_string();
-    let ros_env = [
-        ("ROS_DOMAIN_ID", domain.as_str()),
-        ("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"),
-        ("ROS_DISTRO", "kilted"),
-        // UDP only: Fast DDS's /dev/shm segments are not isolated by netns-run.
-        ("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4"),
-    ];
+    let work = tempfile::tempdir().unwrap();
+    let topics = state_topics(s.mapping);
 
-    // The rclpy node first (its start-up is not the launcher's), then the launch.
-    let mut probe_cmd = Command::new(venv.join("bin/python"));
-    probe_cmd
-        .arg("-u")
-        .arg(configs_dir().join("launcher/tests/peers/joint_probe.py"))
-        .args(["left_arm", joint, &format!("{target}"), "--timeout", "150"])
-        .envs(ros_env);
-    let probe = Lines::spawn(probe_cmd);
-    probe.expect("READY", Duration::from_secs(60));
+    // The rclpy nodes first (their start-up is not the launcher's), then the launch.
+    let mut nodes = Vec::new();
+    for (k, d) in distros.iter().enumerate() {
+        let go = work.path().join(format!("go-{}", d.name));
+        let target = format!("{}", s.targets[k % 2]);
+        let mut joint_cmd = Command::new(d.python());
+        joint_cmd
+            .arg("-u")
+            .arg(configs_dir().join("launcher/tests/peers/joint_probe.py"))
+            .args(["left_arm", s.joint, &target, "--timeout", "240", "--go"])
+            .arg(&go)
+            .envs(ros_env(d.name));
+        let mut state_cmd = Command::new(d.python());
+        state_cmd
+            .arg("-u")
+            .arg(configs_dir().join("launcher/tests/peers/state_probe.py"))
+            .args(["--timeout", "240"])
+            .args(&topics)
+            .envs(ros_env(d.name));
+        nodes.push(Nodes {
+            distro: d.clone(),
+            joint: Lines::spawn(joint_cmd),
+            state: Lines::spawn(state_cmd),
+            go,
+            target: s.targets[k % 2],
+        });
+    }
+    for n in &nodes {
+        n.joint.expect("READY", Duration::from_secs(90));
+        n.state.expect("READY", Duration::from_secs(90));
+    }
 
     let t0 = Instant::now();
-    let mut args = vec!["--dashboard", "127.0.0.1:0"];
-    args.extend_from_slice(extra);
-    let mut l = Launch::start_with_env(&configs_dir().join(config), &args, &ros_env);
+    let args = ["--dashboard", "127.0.0.1:0"];
+    let launch_env = ros_env(distros[0].name);
+    let launch_env: Vec<(&str, &str)> = launch_env.iter().map(|(k, v)| (*k, v.as_str())).collect();
+    let mut l = Launch::start_with_env(&configs_dir().join(s.config), &args, &launch_env);
+    let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        checks(&mut l, &nodes, &s, t0, &launch_env)
+    }));
+    if let Err(e) = r {
+        // The modules' logs say why (the robot's, the gateway's): print them.
+        eprintln!("---- yarp-launch output ----\n{}", l.drain().join("\n"));
+        std::panic::resume_unwind(e);
+    }
+}
+
+/// One distro's rclpy nodes.
+struct Nodes {
+    distro: Distro,
+    joint: Lines,
+    state: Lines,
+    /// Created when its joint probe may command.
+    go: std::path::PathBuf,
+    target: f64,
+}
+
+fn checks(l: &mut Launch, nodes: &[Nodes], s: &Scenario, t0: Instant, ros_env: &[(&str, &str)]) {
     let url = l.dashboard_url();
-    let first = probe.expect("FIRST", Duration::from_secs(150));
-    let to_first = t0.elapsed();
-    eprintln!(
-        "{config}: command to first JointState in rclpy: {:.2} s",
-        to_first.as_secs_f64()
-    );
-    let js: serde_json::Value = serde_json::from_str(&first).expect("json");
-    assert!(js["name"].as_array().is_some_and(|n| !n.is_empty()), "{js}");
-    let reply = probe.expect("REPLY", Duration::from_secs(30));
-    assert!(reply.contains("ok"), "reply {reply}");
-    let moved = probe.expect("MOVED", Duration::from_secs(60));
-    eprintln!("joint {joint} moved to {moved} deg (commanded {target})");
+    for n in nodes {
+        let first = n.joint.expect("FIRST", Duration::from_secs(150));
+        eprintln!(
+            "{} [{}]: start to first JointState in a default-QoS rclpy subscriber: {:.2} s",
+            s.config,
+            n.distro.name,
+            t0.elapsed().as_secs_f64()
+        );
+        let js: serde_json::Value = serde_json::from_str(&first).expect("json");
+        assert!(js["name"].as_array().is_some_and(|n| !n.is_empty()), "{js}");
+    }
+    // Commands need the part calibrated (the robot says so in its log), not a delay.
+    if let Some(line) = s.calibrated {
+        l.wait_line(line, Duration::from_secs(150));
+    }
+    let mut last_target = None;
+    for n in nodes {
+        std::fs::write(&n.go, b"go").unwrap();
+        let reply = n.joint.expect("REPLY", Duration::from_secs(30));
+        assert!(reply.contains("ok"), "[{}] reply {reply}", n.distro.name);
+        let moved = n.joint.expect("MOVED", Duration::from_secs(60));
+        eprintln!(
+            "[{}] joint {} moved to {moved} deg (commanded {})",
+            n.distro.name, s.joint, n.target
+        );
+        last_target = Some(n.target);
+    }
+    for n in nodes {
+        n.state.expect("ALL", Duration::from_secs(120));
+        eprintln!(
+            "[{}] default-QoS subscribers received every state topic",
+            n.distro.name
+        );
+    }
+    let (target, joint, venv) = (last_target.unwrap(), s.joint, nodes[0].distro.venv.clone());
 
     // An IMU of the robot reaches rclpy as sensor_msgs/Imu.
-    if let Some(topic) = imu_topic {
+    if let Some(topic) = s.imu_topic {
         let mut imu_cmd = Command::new(venv.join("bin/python"));
         imu_cmd
             .arg("-u")
             .arg(configs_dir().join("launcher/tests/peers/imu_probe.py"))
             .args([topic, "--timeout", "60"])
-            .envs(ros_env);
+            .envs(ros_env.iter().copied());
         let imu = Lines::spawn(imu_cmd);
         let m: serde_json::Value =
             serde_json::from_str(&imu.expect("IMU", Duration::from_secs(90))).expect("json");
@@ -206,12 +308,19 @@ fn e2e(
         .collect();
     assert_eq!(l.stop(Signal::SIGINT, Duration::from_secs(60)), Some(0));
     assert_eq!(wait_gone(&pids, Duration::from_secs(5)), Vec::<i32>::new());
-    drop(probe);
 }
 
 #[test]
 fn fake_devices_to_rclpy_and_back() {
-    e2e("fake-devices.toml", &[], "0", 30.0, 0, None);
+    e2e(Scenario {
+        config: "fake-devices.toml",
+        mapping: "fake-devices.toml",
+        joint: "0",
+        targets: [30.0, 20.0],
+        calibrated: None,
+        domain_offset: 0,
+        imu_topic: None,
+    });
 }
 
 /// The acceptance run: the emulated iCub. Its robot files name the CAN hubs' UDP ports
@@ -229,5 +338,13 @@ fn icub_sim_to_rclpy_and_back() {
     });
     assert!(free.is_some(), "UDP ports 20000..20009 stay busy");
     // The iCub elbow (joint 3 of the arm, 15..105 degrees).
-    e2e("icub-sim.toml", &[], "3", 60.0, 1, Some("/icub/head/imu"));
+    e2e(Scenario {
+        config: "icub-sim.toml",
+        mapping: "icub-sim.toml",
+        joint: "3",
+        targets: [60.0, 50.0],
+        calibrated: Some("calibration done device=Left_Arm_Calibrator"),
+        domain_offset: 1,
+        imu_topic: Some("/icub/head/imu"),
+    });
 }

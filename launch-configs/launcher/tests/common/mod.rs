@@ -5,6 +5,7 @@
 #![allow(dead_code)]
 
 pub mod browser;
+pub mod ros;
 
 use nix::sys::signal::kill;
 pub use nix::sys::signal::Signal;

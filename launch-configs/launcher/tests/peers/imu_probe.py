@@ -12,7 +12,6 @@ import sys
 import time
 
 import rclpy
-from rclpy.qos import QoSProfile, ReliabilityPolicy, HistoryPolicy
 from sensor_msgs.msg import Imu
 
 
@@ -25,10 +24,8 @@ def main():
     rclpy.init()
     node = rclpy.create_node("e2e_imu_probe")
     got = []
-    # The gateway publishes sensor streams best effort.
-    qos = QoSProfile(reliability=ReliabilityPolicy.BEST_EFFORT,
-                     history=HistoryPolicy.KEEP_LAST, depth=5)
-    node.create_subscription(Imu, args.topic, got.append, qos)
+    # rclpy's default QoS (reliable, keep last 10): the gateway offers sensor streams so.
+    node.create_subscription(Imu, args.topic, got.append, 10)
     print("READY", flush=True)
     while not got and time.monotonic() < deadline:
         rclpy.spin_once(node, timeout_sec=0.1)

@@ -1,20 +1,22 @@
 """An rclpy node for the launcher's end-to-end test: reads a part's JointState, commands a
 joint through the gateway's text-RPC topics, and watches the joint move.
 
-  joint_probe.py PART JOINT TARGET_DEG [--timeout S]
+  joint_probe.py PART JOINT TARGET_DEG [--timeout S] [--go FILE]
 
+Subscribes with rclpy's default QoS (reliable, keep last 10), as `ros2 topic echo` does.
 Prints, one line each, flushed: READY (node up), FIRST <json> (first JointState: names,
-positions), REPLY <text> (the YARP reply to `[set] [pos] JOINT TARGET`), MOVED <deg>
+positions), REPLY <text> (the YARP reply to `[set] [pos] JOINT TARGET`, sent once FILE
+exists when --go is given: the test creates it when the part is calibrated), MOVED <deg>
 (the joint reached the target within 1 degree), then exits 0. Exits 1 on timeout.
 """
 import argparse
 import json
 import math
+import os
 import sys
 import time
 
 import rclpy
-from rclpy.qos import QoSProfile, ReliabilityPolicy, HistoryPolicy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
@@ -29,14 +31,12 @@ def main():
     ap.add_argument("joint", type=int)
     ap.add_argument("target", type=float)
     ap.add_argument("--timeout", type=float, default=60.0)
+    ap.add_argument("--go", help="command only once this file exists")
     a = ap.parse_args()
 
     rclpy.init()
     node = rclpy.create_node("launch_joint_probe")
     state = {"first": None, "pos": None, "reply": None}
-    best_effort = QoSProfile(
-        depth=5, reliability=ReliabilityPolicy.BEST_EFFORT, history=HistoryPolicy.KEEP_LAST
-    )
 
     def on_joints(msg):
         if state["first"] is None:
@@ -46,9 +46,11 @@ def main():
             state["pos"] = math.degrees(msg.position[a.joint])
 
     def on_reply(msg):
-        state["reply"] = msg.data
+        # Other nodes' commands are answered on the same topic: only ours count.
+        if sent_at is not None:
+            state["reply"] = msg.data
 
-    node.create_subscription(JointState, f"/icub/{a.part}/joint_states", on_joints, best_effort)
+    node.create_subscription(JointState, f"/icub/{a.part}/joint_states", on_joints, 10)
     node.create_subscription(String, f"/icub/{a.part}/rpc/reply", on_reply, 10)
     request = node.create_publisher(String, f"/icub/{a.part}/rpc/request", 10)
     say("READY")
@@ -59,7 +61,7 @@ def main():
     try:
         while time.monotonic() < deadline:
             rclpy.spin_once(node, timeout_sec=0.05)
-            if state["first"] is None:
+            if state["first"] is None or (a.go and not os.path.exists(a.go)):
                 continue
             # Send (and re-send until answered: the gateway may not have matched us yet).
             if state["reply"] is None and (sent_at is None or time.monotonic() - sent_at > 1.0):
@@ -67,6 +69,7 @@ def main():
                 sent_at = time.monotonic()
             if state["reply"] is not None and sent_at is not None:
                 say("REPLY", state["reply"])
+                say("REPLY_AFTER", f"{time.monotonic() - sent_at:.3f}")
                 sent_at = None
             if state["reply"] is not None and state["pos"] is not None:
                 if abs(state["pos"] - a.target) < 1.0:
