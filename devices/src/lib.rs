@@ -18,6 +18,7 @@ pub mod remote_controlboard;
 pub mod robotinterface;
 pub mod runtime;
 pub mod sensors;
+pub mod test_motor;
 pub mod vocabs;
 
 pub use driver::{
@@ -37,6 +38,7 @@ pub const PROVIDER: &str = "yarp-devices";
 pub fn register(registry: &mut Registry) {
     for family in [
         fake_motion_control::DRIVERS,
+        test_motor::DRIVERS,
         controlboard::DRIVERS,
         remote_controlboard::DRIVERS,
         remapper::DRIVERS,

@@ -6,10 +6,16 @@
 //! * `/<name>/state:o` — joint positions every `period`, with an envelope;
 //! * `/<name>/stateExt:o` — the whole `jointData`, same envelope.
 //!
+//! With `single_port` (YARP 2's `ServerControlBoard`, as in YARP's design paper) there is
+//! one port, named `<name>` itself: it serves every command it receives (`single_port`
+//! dialect, `help` included, replies when wanted) and streams the joint positions to
+//! every output, reversed text connections included.
+//!
 //! As in C++, the ports open first and the device comes later through `attach`;
 //! publishing starts at attach and stops at detach.
 
 use super::rpc::{handle_rpc, RpcStamp};
+use super::single_port::handle_single_port;
 use super::state::{envelope_time, positions_bottle, JointData};
 use super::streaming::{handle_command, CommandMessage};
 use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
@@ -58,8 +64,12 @@ pub struct ControlBoardNws {
     prefix: String,
     rpc_name: String,
     rpc_contact: Contact,
-    /// rpc:i, command:i, state:o, stateExt:o
+    /// rpc:i, command:i, state:o, stateExt:o; or the single port
     ports: Vec<Arc<Port>>,
+    /// Which of `ports` get the joint positions (state:o, or the single port) and the
+    /// whole joint data (stateExt:o, none in single-port mode).
+    state: usize,
+    state_ext: Option<usize>,
     slot: Slot,
     period: Duration,
     handle: Handle,
@@ -106,6 +116,35 @@ impl ControlBoardNws {
             rpc_name,
             prefix,
             ports: vec![rpc, command, state, state_ext],
+            state: 2,
+            state_ext: Some(3),
+            slot,
+            period,
+            handle: Handle::current(),
+            tasks,
+            publisher: None,
+        })
+    }
+
+    /// Opens the one port `name` of the single-port mode (YARP 2's `--single_port`):
+    /// commands, RPC and the joint-position stream share it. Nothing is served until
+    /// [`ControlBoardNws::attach`].
+    pub async fn open_single_port(
+        name: &str,
+        ns: NameClient,
+        period: Duration,
+    ) -> Result<ControlBoardNws, PortError> {
+        let prefix = port_prefix(name);
+        let port = Arc::new(Port::open(&prefix, ns).await?);
+        let slot: Slot = Arc::new(Mutex::new(None));
+        let tasks = vec![tokio::spawn(serve_single_port(port.clone(), slot.clone()))];
+        Ok(ControlBoardNws {
+            rpc_contact: port.contact().clone(),
+            rpc_name: prefix.clone(),
+            prefix,
+            ports: vec![port],
+            state: 0,
+            state_ext: None,
             slot,
             period,
             handle: Handle::current(),
@@ -119,7 +158,7 @@ impl ControlBoardNws {
         &self.prefix
     }
 
-    /// The RPC port's name.
+    /// The RPC port's name (the single port's name in single-port mode).
     pub fn rpc_name(&self) -> &str {
         &self.rpc_name
     }
@@ -149,8 +188,8 @@ impl ControlBoardNws {
         *lock(&self.slot) = Some(Attached { device, axes });
         self.publisher = Some(self.handle.spawn(publish(
             self.slot.clone(),
-            self.ports[2].clone(),
-            self.ports[3].clone(),
+            self.ports[self.state].clone(),
+            self.state_ext.map(|i| self.ports[i].clone()),
             self.period,
         )));
         Ok(())
@@ -309,6 +348,34 @@ fn fail() -> Bottle {
     b
 }
 
+/// The single port: every message is a command (YARP 2 also took streamed ones), answered
+/// as a device responder when the sender waits for a reply.
+async fn serve_single_port(port: Arc<Port>, slot: Slot) {
+    let mut stamp = RpcStamp::new();
+    while let Some(mut msg) = port.read().await {
+        let reply = match msg.bottle() {
+            Err(e) => {
+                tracing::warn!(
+                    "{}: undecodable command from {}: {e}",
+                    port.name(),
+                    msg.from
+                );
+                fail()
+            }
+            Ok(cmd) => match attached(&slot) {
+                Some(a) => device_call(|| {
+                    handle_single_port(&cmd, lock(&a.device).device(), &mut stamp, a.axes)
+                }),
+                None => {
+                    tracing::warn!("{}: `{cmd}` but no device is attached", port.name());
+                    fail()
+                }
+            },
+        };
+        msg.reply_as_responder(reply);
+    }
+}
+
 async fn serve_commands(port: Arc<Port>, slot: Slot) {
     while let Some(msg) = port.read().await {
         let cmd = msg
@@ -333,8 +400,10 @@ async fn serve_commands(port: Arc<Port>, slot: Slot) {
     }
 }
 
-/// Publishes `state:o` and `stateExt:o` every `period` (C++ `ControlBoard_nws_yarp::run`).
-async fn publish(slot: Slot, state: Arc<Port>, state_ext: Arc<Port>, period: Duration) {
+/// Publishes `state:o` and `stateExt:o` every `period` (C++ `ControlBoard_nws_yarp::run`);
+/// in single-port mode the positions go out on the single port and there is no
+/// `stateExt:o`.
+async fn publish(slot: Slot, state: Arc<Port>, state_ext: Option<Arc<Port>>, period: Duration) {
     let mut tick = tokio::time::interval(period);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
     let mut count: i32 = 0;
@@ -342,8 +411,9 @@ async fn publish(slot: Slot, state: Arc<Port>, state_ext: Arc<Port>, period: Dur
     loop {
         tick.tick().await;
         let Some(a) = attached(&slot) else { return };
-        let (to_state, to_ext) = (!state.outputs().is_empty(), !state_ext.outputs().is_empty());
-        if !to_state && !to_ext {
+        let to_state = !state.outputs().is_empty();
+        let to_ext = state_ext.as_ref().filter(|p| !p.outputs().is_empty());
+        if !to_state && to_ext.is_none() {
             // nobody listens: keep the sequence going without reading the board
             count = if count == i32::MAX { 0 } else { count + 1 };
             continue;
@@ -367,7 +437,7 @@ async fn publish(slot: Slot, state: Arc<Port>, state_ext: Arc<Port>, period: Dur
         };
         let stamp = Stamp::new(count, time);
         count = if count == i32::MAX { 0 } else { count + 1 };
-        if to_ext {
+        if let Some(state_ext) = to_ext {
             state_ext.write_nowait(&data.to_bottle(), Some(stamp));
         }
         if to_state {
@@ -378,7 +448,8 @@ async fn publish(slot: Slot, state: Arc<Port>, state_ext: Arc<Port>, period: Dur
 
 /// `controlBoard_nws_yarp` as a registered device: `name` (port prefix, required) and
 /// `period` (seconds, a float as C++ requires, default 0.02); serves the device given
-/// by `attach` / `attach_all` (exactly one) or by `subdevice`.
+/// by `attach` / `attach_all` (exactly one) or by `subdevice`. With `single_port` (a
+/// flag, as YARP 2's `controlboard`) it opens the one port `name` instead of four.
 #[derive(Default)]
 pub struct ControlBoardNwsDevice {
     server: Option<ControlBoardNws>,
@@ -434,10 +505,14 @@ impl DeviceDriver for ControlBoardNwsDevice {
         };
         let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
         let prefix = name.clone();
+        let single = config.check("single_port");
         let server = runtime::block_on(async move {
-            ControlBoardNws::open_ports(&prefix, ns, period)
-                .await
-                .map_err(|e| e.to_string())
+            if single {
+                ControlBoardNws::open_single_port(&prefix, ns, period).await
+            } else {
+                ControlBoardNws::open_ports(&prefix, ns, period).await
+            }
+            .map_err(|e| e.to_string())
         })
         .map_err(network)?;
         if let Some(old) = self.server.replace(server) {

@@ -230,6 +230,30 @@ pub fn reply_text_line(reply: &Bottle) -> Vec<u8> {
     v
 }
 
+/// How a C++ `DeviceResponder` writes its reply on a text connection: a reply whose first
+/// element is `many` (the `help` listing) goes out one line per following element, a
+/// list as its contents and anything else as a one-element Bottle (so a string keeps its
+/// quotes); any other reply is one line, as [`reply_text_line`].
+pub fn responder_text_lines(reply: &Bottle) -> Vec<u8> {
+    let is_many = match reply.get(0) {
+        Some(Value::Vocab32(v)) => *v == crate::Vocab32::encode("many"),
+        Some(Value::String(s)) => s == b"many",
+        _ => false,
+    };
+    if !is_many {
+        return reply_text_line(reply);
+    }
+    let mut out = Vec::new();
+    for v in reply.iter().skip(1) {
+        let line = match v.as_list() {
+            Some(list) => list.clone(),
+            None => Bottle::new().with(v.clone()),
+        };
+        out.extend_from_slice(&reply_text_line(&line));
+    }
+    out
+}
+
 fn fail_msg(msg: &str) -> Bottle {
     let mut b = Bottle::new();
     b.add_vocab("fail");

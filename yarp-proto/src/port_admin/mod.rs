@@ -28,8 +28,8 @@ mod describe;
 
 pub use admin::{
     admin_help, format_add_result, format_atch_result, format_del_result, format_prop_set_result,
-    format_unknown_result, handle_admin, reply_text_line, AddOutcome, AdminAction, AdminResponse,
-    Direction, Pending, ADMIN_VERSION,
+    format_unknown_result, handle_admin, reply_text_line, responder_text_lines, AddOutcome,
+    AdminAction, AdminResponse, Direction, Pending, ADMIN_VERSION,
 };
 pub use command::TextCommand;
 pub use describe::{

@@ -502,3 +502,16 @@ fn never_panics_on_odd_input() {
     let _ = handle_admin(&Bottle::new().with(Vocab32(-1)), &p);
     let _ = handle_admin(&Bottle::new().with(Value::Float64(f64::NAN)), &p);
 }
+
+#[test]
+fn responder_listing_goes_out_one_line_per_entry() {
+    // C++ DeviceResponder::read in text mode: strings keep their quotes, the trailing
+    // vocab is a line of its own
+    let reply = Bottle::from_text("[many] \"[help]\" \"[get] [axes]\" (1 2) [ok]");
+    assert_eq!(
+        responder_text_lines(&reply),
+        b"\"[help]\"\r\n\"[get] [axes]\"\r\n1 2\r\n[ok]\r\n"
+    );
+    let plain = Bottle::from_text("[is] [axes] 2 [ok]");
+    assert_eq!(responder_text_lines(&plain), b"[is] [axes] 2 [ok]\r\n");
+}

@@ -8,7 +8,12 @@
 //! yarpdev --from board.ini [--context C] [--key value ...]  # command line overrides
 //!                       # the file, found as C++ ResourceFinder would (see `resource`)
 //! yarpdev --list
+//! yarpdev --device test_motor --axes 2 --single_port --name /motors   # YARP's design paper
 //! ```
+//!
+//! As C++, a device that has a network wrapper of another name (`--list`: "wrapped by")
+//! is opened through `deviceBundler` with that wrapper (`test_motor` and
+//! `fakeMotionControl` come up served by `controlBoard_nws_yarp`).
 //!
 //! Exit status: 0 after a clean close (and for `--list` / help, as C++), 1 when the
 //! device cannot be opened or the configuration cannot be read, 255 without a name server.
@@ -77,6 +82,7 @@ fn watch_signals(tx: mpsc::Sender<Stop>) -> std::io::Result<()> {
 fn cxx_info(name: &str) -> (&'static str, Option<&'static str>) {
     match name {
         "fakeMotionControl" => ("FakeMotionControl", Some("controlBoard_nws_yarp")),
+        "test_motor" => ("TestMotor", Some("controlBoard_nws_yarp")),
         "controlBoard_nws_yarp" => ("ControlBoard_nws_yarp", Some("controlBoard_nws_yarp")),
         "remote_controlboard" => ("RemoteControlBoard", None),
         "controlboardremapper" => ("ControlBoardRemapper", Some("controlBoard_nws_yarp")),
@@ -93,6 +99,23 @@ fn cxx_info(name: &str) -> (&'static str, Option<&'static str>) {
         "deviceBundler" => ("DeviceBundler", None),
         _ => ("unknown", None),
     }
+}
+
+/// C++ `PolyDriver` with `wrapping_enabled` (which yarpdev sets): a device whose network
+/// wrapper is another device is opened by `deviceBundler` with that wrapper.
+fn wrap_in_network_wrapper(options: &mut Property) {
+    let Some(device) = options.find("device").map(text) else {
+        return;
+    };
+    let Some(wrapper) = cxx_info(&device).1 else {
+        return;
+    };
+    if wrapper == device || !Registry::knows(wrapper) {
+        return;
+    }
+    options.put("attached_device", Value::from(device.as_str()));
+    options.put("wrapper_device", Value::from(wrapper));
+    options.put("device", Value::from("deviceBundler"));
 }
 
 /// One `--list` line, in the form C++ `Drivers::toString` gives built-in devices, with
@@ -209,6 +232,7 @@ fn run() -> i32 {
         ));
     }
     options.put("wrapping_enabled", Value::from("1"));
+    wrap_in_network_wrapper(&mut options);
 
     let ns = match check_network() {
         Ok(ns) => ns,
@@ -296,6 +320,28 @@ fn main() {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_device_with_a_network_wrapper_is_bundled_with_it() {
+        let mut o = Property::from_args(["--device", "test_motor", "--single_port"]);
+        wrap_in_network_wrapper(&mut o);
+        assert_eq!(text(o.find("device").unwrap()), "deviceBundler");
+        assert_eq!(text(o.find("attached_device").unwrap()), "test_motor");
+        assert_eq!(
+            text(o.find("wrapper_device").unwrap()),
+            "controlBoard_nws_yarp"
+        );
+        for own in [
+            "controlBoard_nws_yarp",
+            "remote_controlboard",
+            "deviceBundler",
+        ] {
+            let mut o = Property::from_args(["--device", own]);
+            wrap_in_network_wrapper(&mut o);
+            assert_eq!(text(o.find("device").unwrap()), own);
+            assert!(o.find("attached_device").is_none());
+        }
+    }
 
     #[test]
     fn list_lines_in_cpp_form() {

@@ -305,6 +305,10 @@ impl Conn<'_> {
                     None => None,
                 };
                 match reply {
+                    Some(ReplyBody::Responder(b)) if text => {
+                        self.reply_and_ack(stream, &port_admin::responder_text_lines(&b))
+                            .await?;
+                    }
                     Some(b) if text => {
                         let b = b.into_bottle();
                         self.reply_and_ack(stream, &port_admin::reply_text_line(&b))
@@ -319,7 +323,7 @@ impl Conn<'_> {
                             }
                         })?;
                     }
-                    Some(ReplyBody::Bottle(b)) => {
+                    Some(ReplyBody::Bottle(b) | ReplyBody::Responder(b)) => {
                         // large blobs in the reply go out straight from the Bottle
                         let segs = yarp_proto::binary::encode_segments(&b);
                         let mut parts: Vec<&[u8]> = segs.iter().map(|s| s.as_ref()).collect();

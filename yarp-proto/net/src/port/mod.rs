@@ -144,6 +144,15 @@ impl Incoming {
         }
     }
 
+    /// Sends the reply as a C++ `DeviceResponder` does: on a text connection a reply
+    /// starting with `[many]` (a `help` listing) goes out one line per entry; binary
+    /// connections get the Bottle as [`Incoming::reply`] sends it.
+    pub fn reply_as_responder(&mut self, b: Bottle) {
+        if let Some(tx) = self.reply.take() {
+            let _ = tx.send(ReplyBody::Responder(b));
+        }
+    }
+
     /// Takes the reply handle, to answer later from elsewhere.
     pub fn take_replier(&mut self) -> Option<Replier> {
         self.reply.take().map(Replier)
@@ -156,13 +165,15 @@ pub(crate) enum ReplyBody {
     Bottle(Bottle),
     /// Binary Bottle bytes, sent as they are.
     Encoded(Vec<u8>),
+    /// A `DeviceResponder` reply (`[many]` listings split into lines in text mode).
+    Responder(Bottle),
 }
 
 impl ReplyBody {
     /// The reply as a Bottle (undecodable bytes give an empty one, logged).
     pub(crate) fn into_bottle(self) -> Bottle {
         match self {
-            ReplyBody::Bottle(b) => b,
+            ReplyBody::Bottle(b) | ReplyBody::Responder(b) => b,
             ReplyBody::Encoded(bytes) => Bottle::decode(&bytes).unwrap_or_else(|e| {
                 tracing::warn!("dropping an undecodable encoded reply: {e}");
                 Bottle::new()
