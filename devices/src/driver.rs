@@ -7,6 +7,7 @@
 use crate::error::{DevResult, DeviceError};
 use crate::framegrabber::{IFrameGrabberControls, IFrameGrabberImage};
 use crate::interfaces::*;
+use crate::kind::{interfaces_of, kind_of, suggest, Kind};
 use crate::sensors::*;
 use std::sync::{Arc, LazyLock, Mutex, RwLock};
 use yarp_proto::{Bottle, Property, Value};
@@ -370,7 +371,21 @@ impl Registry {
             .map(|e| e.provider)
     }
 
-    /// A fresh (unopened) driver; an unknown name lists the closest known names.
+    /// The C++ names of the interfaces driver `name` offers (read from a fresh,
+    /// unopened instance), and the kind they make it.
+    pub fn interfaces(name: &str) -> Option<(Vec<&'static str>, Kind)> {
+        let factory = table()
+            .drivers
+            .iter()
+            .find(|e| e.name == name)
+            .map(|e| e.factory)?;
+        let interfaces = interfaces_of(factory().as_mut());
+        let kind = kind_of(&interfaces);
+        Some((interfaces, kind))
+    }
+
+    /// A fresh (unopened) driver; an unknown name lists the closest known names, and
+    /// devices of the kind the name asks for (motor devices for a motor-like name).
     pub fn get(name: &str) -> DevResult<Box<dyn DeviceDriver>> {
         let factory = table()
             .drivers
@@ -380,41 +395,17 @@ impl Registry {
         if let Some(f) = factory {
             return Ok(f());
         }
-        let mut scored: Vec<(usize, &str)> = Self::names()
+        let known: Vec<(&str, Kind)> = Self::entries()
             .into_iter()
-            .map(|n| (distance(&name.to_lowercase(), &n.to_lowercase()), n))
+            .map(|e| (e.name, kind_of(&interfaces_of((e.factory)().as_mut()))))
             .collect();
-        scored.sort();
-        let limit = (name.len().max(3)) * 2 / 3 + 1;
-        let mut closest: Vec<String> = scored
-            .iter()
-            .filter(|(d, _)| *d <= limit)
-            .take(3)
-            .map(|(_, n)| n.to_string())
-            .collect();
-        if closest.is_empty() {
-            closest = scored.iter().take(3).map(|(_, n)| n.to_string()).collect();
-        }
+        let s = suggest(name, &known);
         Err(DeviceError::UnknownDevice {
             name: name.to_string(),
-            closest,
+            closest: s.names,
+            kind: s.kind,
         })
     }
-}
-
-/// Levenshtein distance.
-fn distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut cur = vec![i + 1];
-        for (j, cb) in b.iter().enumerate() {
-            let sub = prev[j] + usize::from(ca != *cb);
-            cur.push(sub.min(prev[j + 1] + 1).min(cur[j] + 1));
-        }
-        prev = cur;
-    }
-    prev[b.len()]
 }
 
 /// An opened device chosen by the `device` key of its configuration (C++ `PolyDriver`).

@@ -1,5 +1,6 @@
 //! Errors of the device layer.
 
+use crate::kind::Kind;
 use thiserror::Error;
 
 /// What can go wrong when opening a device or calling one of its interfaces.
@@ -7,8 +8,14 @@ use thiserror::Error;
 pub enum DeviceError {
     #[error("no `device` parameter given")]
     NoDeviceName,
-    #[error("unknown device `{name}`{}", suggest(.closest))]
-    UnknownDevice { name: String, closest: Vec<String> },
+    #[error("unknown device `{name}`{}", suggest(.closest, .kind))]
+    UnknownDevice {
+        name: String,
+        /// Known names to suggest, best first.
+        closest: Vec<String>,
+        /// The kind of device the name asks for, when it says (`fake_motor`: a motor).
+        kind: Option<Kind>,
+    },
     #[error("device `{device}`: missing required parameter `{param}`")]
     MissingParam { device: String, param: String },
     #[error("device `{device}`: parameter `{param}` should be {expected}, got `{got}`")]
@@ -42,12 +49,15 @@ impl DeviceError {
     }
 }
 
-fn suggest(closest: &[String]) -> String {
-    if closest.is_empty() {
-        String::new()
-    } else {
-        format!("; closest known devices: {}", closest.join(", "))
+fn suggest(closest: &[String], kind: &Option<Kind>) -> String {
+    let mut s = String::new();
+    if !closest.is_empty() {
+        s = format!("; closest known devices: {}", closest.join(", "));
     }
+    if let Some(k) = kind {
+        s.push_str(&format!(" (a {} was asked for)", k.label()));
+    }
+    s + "; `yarpdev --list` lists every device with its kind and interfaces"
 }
 
 pub type DevResult<T> = Result<T, DeviceError>;

@@ -13,6 +13,7 @@ pub mod error;
 pub mod fake_motion_control;
 pub mod framegrabber;
 pub mod interfaces;
+pub mod kind;
 pub mod remapper;
 pub mod remote_controlboard;
 pub mod robotinterface;

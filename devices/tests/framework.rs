@@ -14,6 +14,35 @@ fn unknown_device_lists_closest() {
 }
 
 #[test]
+fn an_unknown_motor_name_suggests_motor_devices() {
+    // the paper's device under another name: a motor was asked for, motors are offered
+    let Err(DeviceError::UnknownDevice {
+        closest,
+        kind: Some(kind),
+        ..
+    }) = Registry::get("fake_motor")
+    else {
+        panic!("fake_motor is not a known device");
+    };
+    assert_eq!(kind.label(), "motor");
+    for motor in closest.iter().map(String::as_str) {
+        let (_, k) = Registry::interfaces(motor).expect("a known device");
+        assert_eq!(k, kind, "{motor} is not a motor device");
+    }
+    assert!(closest.iter().any(|n| n == "test_motor"), "{closest:?}");
+    assert!(
+        closest.iter().any(|n| n == "fakeMotionControl"),
+        "{closest:?}"
+    );
+    let msg = Registry::get("fake_motor").err().unwrap().to_string();
+    assert!(
+        msg.contains("(a motor was asked for)")
+            && msg.ends_with("`yarpdev --list` lists every device with its kind and interfaces"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn mistyped_parameter_names_param_and_device() {
     let cfg =
         Property::from_config_text("device fakeMotionControl\n[GENERAL]\njoints four\n").unwrap();

@@ -52,6 +52,11 @@ async fn list_prints_every_registered_device_in_cpp_form() {
         out.contains("Device \"canmotioncontrol\", C++ class unknown, has no network wrapper (found in crate icubmod)"),
         "{out}"
     );
+    // each device's kind and interfaces follow C++'s line
+    assert!(
+        out.contains("Device \"test_motor\", C++ class TestMotor, wrapped by \"controlBoard_nws_yarp\" (found in crate yarp-devices)\n[INFO] |yarp.dev.Drivers|     motor: IEncodersTimed, IPositionControl, IVelocityControl\n"),
+        "{out}"
+    );
 }
 
 #[tokio::test]

@@ -212,6 +212,10 @@ fn run() -> i32 {
         info("Here are devices listed for your system:");
         for entry in Registry::entries() {
             info(&list_line(entry.name, entry.provider));
+            // then what the device is: its kind and interfaces
+            if let Some((ifaces, kind)) = Registry::interfaces(entry.name) {
+                info(&format!("    {}: {}", kind.label(), ifaces.join(", ")));
+            }
         }
         return 0;
     }
