@@ -31,6 +31,8 @@ struct Mock {
     log: Log,
     /// `fail_attach` in the configuration: every attach fails.
     fail_attach: bool,
+    /// `fail_calibrate` in the configuration: every calibration fails.
+    fail_calibrate: bool,
 }
 
 impl DeviceDriver for Mock {
@@ -41,6 +43,7 @@ impl DeviceDriver for Mock {
             .unwrap_or("")
             .into();
         self.fail_attach = config.check("fail_attach");
+        self.fail_calibrate = config.check("fail_calibrate");
         if config.check("fail") {
             return Err(DeviceError::MissingParam {
                 device: self.id.clone(),
@@ -106,6 +109,9 @@ impl ICalibrator for Mock {
             &self.log,
             format!("calibrate {} by {}", id_of(&target), self.id),
         );
+        if self.fail_calibrate {
+            return Err(DeviceError::Unsupported("joints still moving after 20 s"));
+        }
         Ok(())
     }
     fn park(&mut self, target: SharedDevice, wait: bool) -> DevResult<()> {
@@ -138,6 +144,7 @@ impl DeviceFactory for MockFactory {
             id: String::new(),
             log: self.log.clone(),
             fail_attach: false,
+            fail_calibrate: false,
         };
         m.open(config)?;
         self.configs.lock().unwrap().push(config.clone());
@@ -429,5 +436,33 @@ fn keep_going_skips_failed_devices_and_what_depends_on_them() {
     );
     assert!(runner.device("bad").is_none());
     runner.enter_phase(ActionPhase::Run).unwrap();
+    runner.enter_phase(ActionPhase::Shutdown).unwrap();
+}
+
+/// As C++ (its CalibratorThread ignores the calibrator's result): a calibration that fails
+/// is logged and the robot starts and serves its parts; it is not shut down (its wrappers
+/// detached, every command then answered [fail]) right after its startup.
+#[test]
+fn a_failed_calibration_does_not_stop_the_robot() {
+    let (mut runner, log, _) = runner_for(robot(
+        r#"<robot name="r"><device name="b" type="mockBoard"/>
+           <device name="w" type="mockWrapper"><action phase="startup" level="10" type="attach">
+              <param name="device">b</param></action></device>
+           <device name="calib" type="mockCalibrator"><param name="fail_calibrate">1</param>
+              <action phase="startup" level="15" type="calibrate">
+              <param name="target">b</param></action></device></robot>"#,
+    ));
+    runner.enter_phase(ActionPhase::Startup).unwrap();
+    assert!(runner.failures().is_empty(), "{:?}", runner.failures());
+    assert_eq!(
+        take(&log),
+        [
+            "open b",
+            "open w",
+            "open calib",
+            "attach w -> b",
+            "calibrate b by calib"
+        ]
+    );
     runner.enter_phase(ActionPhase::Shutdown).unwrap();
 }
