@@ -48,6 +48,7 @@ pub mod line;
 pub mod message;
 pub mod number;
 pub mod scan;
+pub mod shmem;
 pub mod text_carrier;
 
 pub use carrier::{

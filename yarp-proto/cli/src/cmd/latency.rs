@@ -160,7 +160,11 @@ pub fn run(args: &[String]) -> Result<()> {
     };
     let carrier =
         Carrier::from_name(&cfg.proto).ok_or_else(|| anyhow!("unknown carrier {}", cfg.proto))?;
-    if !matches!(carrier.spec().framing, Framing::Stream | Framing::Text) {
+    if !matches!(
+        carrier.spec().framing,
+        Framing::Stream | Framing::Text | Framing::Handshake | Framing::Local
+    ) || carrier == Carrier::Local
+    {
         bail!(
             "carrier {} is not supported by ports in this implementation yet",
             cfg.proto

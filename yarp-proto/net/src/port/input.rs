@@ -61,6 +61,8 @@ enum End {
     Http(Vec<u8>),
     /// A unix_stream handshake: continue on a Unix socket.
     Unix(Carrier),
+    /// A shmem handshake: continue on shared memory.
+    Shmem,
 }
 
 async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
@@ -102,6 +104,10 @@ async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
             drop(stream);
             let from = conn_from(&conn_name);
             super::unix::serve_input(&shared, id, kill, from, carrier, ports).await;
+        }
+        Ok(End::Shmem) => {
+            let from = conn_from(&conn_name);
+            super::shmem::serve_input(&shared, id, kill, from, stream).await;
         }
         Ok(End::Udp) => {
             let local = stream.local_addr().map(|a| a.ip());
@@ -162,7 +168,8 @@ impl Conn<'_> {
                         Carrier::Udp
                         | Carrier::Mcast
                         | Carrier::UnixStream
-                        | Carrier::UnixStreamAck => {
+                        | Carrier::UnixStreamAck
+                        | Carrier::Shmem => {
                             self.dgram = Some(h.carrier());
                             self.spec = Some(spec);
                             continue;
@@ -196,6 +203,7 @@ impl Conn<'_> {
                         Some(c @ (Carrier::UnixStream | Carrier::UnixStreamAck)) => {
                             return Ok(End::Unix(c))
                         }
+                        Some(Carrier::Shmem) => return Ok(End::Shmem),
                         Some(_) => return self.mcast_group(stream).await,
                         None => {}
                     }

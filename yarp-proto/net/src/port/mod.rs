@@ -21,6 +21,7 @@ mod http;
 mod input;
 mod local;
 pub(crate) mod output;
+pub mod shmem;
 pub mod unix;
 
 use crate::nameserver::{NameClient, NameClientError};

@@ -105,6 +105,24 @@ impl Outgoing {
         out
     }
 
+    /// The binary message as parts, for `f`: index and port command, then the Bottle's
+    /// encoding segments (large strings and blobs lent, not copied).
+    pub(crate) fn with_binary_parts<R>(
+        &self,
+        cmd: &PortCommand,
+        f: impl FnOnce(&[&[u8]]) -> R,
+    ) -> R {
+        let segs = yarp_proto::binary::encode_segments(&self.bottle);
+        let len: usize = segs.iter().map(|s| s.len()).sum();
+        let mut head = Vec::with_capacity(64);
+        Index::new(vec![cmd.binary_len() as u32, len as u32]).encode(&mut head);
+        cmd.encode_binary(&mut head);
+        let mut parts: Vec<&[u8]> = Vec::with_capacity(segs.len() + 1);
+        parts.push(&head);
+        parts.extend(segs.iter().map(|s| s.as_ref()));
+        f(&parts)
+    }
+
     /// Writes this message in a carrier's framing.
     async fn write_to(
         &self,
@@ -229,6 +247,7 @@ pub(crate) async fn connect(
         Some(c @ (Carrier::UnixStream | Carrier::UnixStreamAck)) => {
             return super::unix::connect(shared, target, contact, c).await;
         }
+        Some(Carrier::Shmem) => return super::shmem::connect(shared, target, contact).await,
         _ => {}
     }
     let spec = super::carrier_by_name(carrier)
