@@ -1,16 +1,21 @@
 #!/usr/bin/env python3
-"""Round-trip latency of `yarp latency-test`, ours and C++'s, in the same run.
+"""Round-trip latency of `yarp latency-test`, ours and C++'s, side by side in one run: every
+client/server pair (ours -> ours, C++ -> C++, ours -> C++, C++ -> ours), every carrier both
+implement (tcp, fast_tcp, udp, shmem), 100 B to 8 MB.
 
-Run under ../shared/netns-run from the repository root, after `cargo build --release -p yarp-cli -p yarp-net`:
+One command, from the repository root (builds what it needs, finds the C++ peer itself):
 
-    ../shared/netns-run python3 tests/bench/latency_vs_cpp.py [--frames N] [--sizes 100,1000,...]
+    ../shared/netns-run python3 tests/bench/latency_vs_cpp.py [--frames N] [--sizes 100,...]
+        [--carriers tcp,fast_tcp,udp,shmem] [--markdown]
 
-C++ programs come from $YARP_CPP_BIN (the pip-built C++ YARP 3.5, see tests/peers/install-cpp-yarp.sh);
-without it only our pairs run. Every pair uses one name server (ours) and the tcp carrier in
-no-reply mode (client writes, server writes back on its own connection: the only mode
-C++ 3.5 has). Latency per frame = arrival - send time, including the server's copy of the
-payload (the C++ 3.5 client reports it so; our client's log has it in a separate column,
-added back here). Prints median and p99 in ms and the implied throughput (2 x size / median).
+C++ programs come from $YARP_CPP_BIN, else from tests/peers/install-cpp-yarp.sh (which
+prints its bin directory, building C++ YARP on first use); without them only our pairs run.
+Every pair uses one name server (ours). Both clients get the same options, so both use
+replies on the same connection where the carrier has them (tcp, fast_tcp, shmem) and the
+server's own output connection otherwise (udp). Latency per frame = arrival - send time,
+including the server's copy of the payload (both clients log that copy time separately;
+it is added back). Prints median and p99 in ms, the machine's load before and after, and
+with --markdown one table per carrier for BENCHMARKS.md.
 """
 import argparse
 import os
@@ -25,6 +30,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 TARGET = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
 OURS = os.path.join(TARGET, "release", "yarp")
 OUR_SERVER = os.path.join(TARGET, "release", "yarpserver")
+PAIRS = [("rust", "rust"), ("c++", "c++"), ("rust", "c++"), ("c++", "rust")]
 
 
 def free_port():
@@ -33,38 +39,54 @@ def free_port():
         return s.getsockname()[1]
 
 
-def wait_port_registered(yarp, env, name, limit=10.0):
+def load():
+    with open("/proc/loadavg") as f:
+        return " ".join(f.read().split()[:3]) + f" (load average, {os.cpu_count()} cores)"
+
+
+def find_cpp():
+    d = os.environ.get("YARP_CPP_BIN")
+    if not d:
+        script = os.path.join(ROOT, "tests", "peers", "install-cpp-yarp.sh")
+        try:
+            r = subprocess.run([script], capture_output=True, text=True, timeout=7200)
+            d = r.stdout.strip().splitlines()[-1] if r.returncode == 0 and r.stdout.strip() else None
+        except (OSError, subprocess.TimeoutExpired):
+            d = None
+    cpp = os.path.join(d, "yarp") if d else None
+    return cpp if cpp and os.path.exists(cpp) else None
+
+
+def wait_port_registered(env, name, limit=10.0):
     t0 = time.time()
     while time.time() - t0 < limit:
-        r = subprocess.run([yarp, "exists", name], env=env, capture_output=True, timeout=10)
+        r = subprocess.run([OURS, "exists", name], env=env, capture_output=True, timeout=10)
         if r.returncode == 0:
             return True
         time.sleep(0.1)
     return False
 
 
-def run_pair(server_bin, client_bin, size, frames, env, workdir, ours_client):
+def run_pair(server_bin, client_bin, carrier, size, frames, env, workdir):
     srv = subprocess.Popen([server_bin, "latency-test", "--server"], env=env,
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
-        if not wait_port_registered(OURS, env, "/latencyTest/server"):
+        if not wait_port_registered(env, "/latencyTest/server"):
             return None
         prefix = os.path.join(workdir, f"log_{time.time_ns()}_")
         args = [client_bin, "latency-test", "--client", "--nframes", str(frames),
-                "--payload_size", str(size), "--client_wait", "0", "--logfile", prefix]
-        if ours_client:
-            args.append("--no-reply")
+                "--payload_size", str(size), "--client_wait", "0", "--logfile", prefix,
+                "--protocol", carrier]
         try:
-            subprocess.run(args, env=env, capture_output=True, timeout=120)
+            subprocess.run(args, env=env, capture_output=True, timeout=60 + frames * 0.5)
         except subprocess.TimeoutExpired:
             return None
         path = f"{prefix}{size}.txt"
         if not os.path.exists(path):
             return None
         rows = [list(map(float, l.split())) for l in open(path) if l.strip()]
-        # our client subtracts the server's copy time; add it back to compare like with like
-        lat = [r[0] + (r[1] * 1000.0 if ours_client else 0.0) for r in rows[3:]]
-        return lat
+        # both clients subtract the server's copy time; add it back
+        return [r[0] + r[1] * 1000.0 for r in rows[3:]]
     finally:
         srv.terminate()
         try:
@@ -81,16 +103,22 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--frames", type=int, default=200)
     ap.add_argument("--sizes", default="100,1000,65536,1048576,8388608")
+    ap.add_argument("--carriers", default="tcp,fast_tcp,udp,shmem")
+    ap.add_argument("--markdown", action="store_true")
     a = ap.parse_args()
-    cpp_dir = os.environ.get("YARP_CPP_BIN")
-    cpp = os.path.join(cpp_dir, "yarp") if cpp_dir else None
-    if cpp and not os.path.exists(cpp):
-        cpp = None
+    if not (os.path.exists(OURS) and os.path.exists(OUR_SERVER)):
+        subprocess.run(["cargo", "build", "--release", "-p", "yarp-cli", "-p", "yarp-net"],
+                       cwd=ROOT, check=True)
+    cpp = find_cpp()
     if not cpp:
-        print("C++ YARP not found (set YARP_CPP_BIN): only our pairs run", file=sys.stderr)
-    for b in (OURS, OUR_SERVER):
-        if not os.path.exists(b):
-            sys.exit(f"{b} missing: cargo build --release -p yarp-cli -p yarp-net")
+        print("C++ YARP not found (YARP_CPP_BIN, tests/peers/install-cpp-yarp.sh): only our pairs run",
+              file=sys.stderr)
+    bins = {"rust": OURS, "c++": cpp}
+    pairs = [p for p in PAIRS if cpp or p == ("rust", "rust")]
+    sizes = [int(s) for s in a.sizes.split(",")]
+    carriers = a.carriers.split(",")
+    results = {}
+    print(f"load before: {load()}")
     with tempfile.TemporaryDirectory() as d:
         env = dict(os.environ, YARP_CONFIG_HOME=d, YARP_DATA_HOME=d)
         port = free_port()
@@ -99,26 +127,55 @@ def main():
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         try:
             time.sleep(0.5)
-            pairs = [("rust", OURS, "rust", OURS)]
-            if cpp:
-                pairs += [("c++", cpp, "c++", cpp), ("rust", OURS, "c++", cpp), ("c++", cpp, "rust", OURS)]
-            print(f"{'client':<6} {'server':<6} {'size':>9} {'n':>5} {'median ms':>10} {'p99 ms':>8} {'MB/s':>9}")
-            for size in [int(s) for s in a.sizes.split(",")]:
-                frames = max(20, min(a.frames, (256 << 20) // max(size, 1)))
-                for cname, cbin, sname, sbin in pairs:
-                    lat = run_pair(sbin, cbin, size, frames, env, d, cname == "rust")
-                    if not lat:
-                        print(f"{cname:<6} {sname:<6} {size:>9} failed")
-                        continue
-                    lat.sort()
-                    med = statistics.median(lat)
-                    p99 = lat[min(len(lat) - 1, int(len(lat) * 0.99))]
-                    mbps = 2 * size / (med / 1000.0) / 1e6 if med > 0 else 0
-                    print(f"{cname:<6} {sname:<6} {size:>9} {len(lat):>5} {med:>10.3f} {p99:>8.3f} {mbps:>9.0f}")
-                    sys.stdout.flush()
+            print(f"{'carrier':<9} {'client':<6} {'server':<6} {'size':>9} {'n':>5} {'median ms':>10} {'p99 ms':>8}")
+            for carrier in carriers:
+                for size in sizes:
+                    frames = max(20, min(a.frames, (256 << 20) // max(size, 1)))
+                    for cname, sname in pairs:
+                        lat = run_pair(bins[sname], bins[cname], carrier, size, frames, env, d)
+                        if not lat:
+                            print(f"{carrier:<9} {cname:<6} {sname:<6} {size:>9} failed")
+                            continue
+                        lat.sort()
+                        med = statistics.median(lat)
+                        p99 = lat[min(len(lat) - 1, int(len(lat) * 0.99))]
+                        results[(carrier, size, cname, sname)] = (med, p99)
+                        print(f"{carrier:<9} {cname:<6} {sname:<6} {size:>9} {len(lat):>5} {med:>10.3f} {p99:>8.3f}")
+                        sys.stdout.flush()
         finally:
             ns.terminate()
             ns.wait(5)
+    print(f"load after: {load()}")
+    if a.markdown:
+        print_markdown(results, carriers, sizes, pairs)
+
+
+def human(size):
+    if size >= 1 << 20:
+        return f"{size >> 20} MB"
+    if size >= 1 << 10 and size % 1024 == 0:
+        return f"{size >> 10} KB"
+    return f"{size} B"
+
+
+def print_markdown(results, carriers, sizes, pairs):
+    names = {"rust": "ours", "c++": "C++"}
+    for carrier in carriers:
+        print(f"\n`{carrier}`, median ms (p99):\n")
+        head = " | ".join(f"{names[c]} → {names[s]}" for c, s in pairs)
+        print(f"| size | {head} | worst mixed ÷ C++ |")
+        print("|---" * (len(pairs) + 2) + "|")
+        for size in sizes:
+            cells = []
+            for c, s in pairs:
+                r = results.get((carrier, size, c, s))
+                cells.append(f"{r[0]:.3f} ({r[1]:.2f})" if r else "failed")
+            base = results.get((carrier, size, "c++", "c++"))
+            mixed = [results.get((carrier, size, c, s)) for c, s in pairs if c != s]
+            ratio = ""
+            if base and mixed and all(mixed):
+                ratio = f"{max(m[0] for m in mixed) / base[0]:.2f}×"
+            print(f"| {human(size)} | " + " | ".join(cells) + f" | {ratio} |")
 
 
 if __name__ == "__main__":
