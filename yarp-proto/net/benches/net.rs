@@ -335,6 +335,36 @@ impl Bench {
     }
 }
 
+impl Bench {
+    /// One memcpy of `size` bytes between two buffers already in memory: the ceiling of a
+    /// carrier that copies (shmem copies twice, into the ring and out of it, overlapped).
+    fn memcpy(&mut self, size: usize) {
+        let src = vec![b'p'; size];
+        let mut dst = vec![0u8; size];
+        dst.copy_from_slice(&src);
+        let mut times = Vec::new();
+        let start = Instant::now();
+        while times.len() < 200 && start.elapsed() < CASE_TIME {
+            let t = Instant::now();
+            dst.copy_from_slice(std::hint::black_box(&src));
+            std::hint::black_box(&mut dst);
+            times.push(t.elapsed().as_secs_f64() * 1000.0);
+        }
+        times.sort_by(f64::total_cmp);
+        let med = percentile(&times, 0.5);
+        self.rows.push(Row {
+            case: "memcpy (reference)".to_string(),
+            carrier: "-",
+            size,
+            n: times.len(),
+            median_ms: Some(med),
+            p99_ms: Some(percentile(&times, 0.99)),
+            mbps: size as f64 / (med / 1000.0) / MB as f64,
+            note: String::new(),
+        });
+    }
+}
+
 fn supports_reply(carrier: &str) -> bool {
     carrier == "local" || Carrier::from_name(carrier).is_some_and(|c| c.spec().supports_reply)
 }
@@ -408,7 +438,7 @@ fn main() {
                 b.rpc_client_small(carrier).await;
             }
         }
-        for carrier in ["tcp", "fast_tcp", "local"] {
+        for carrier in ["tcp", "fast_tcp", "shmem", "local"] {
             for size in [KB, 64 * KB, MB, 8 * MB] {
                 if want(&format!("rtt {carrier} {size}")) {
                     b.round_trip(carrier, size).await;
@@ -423,6 +453,7 @@ fn main() {
             "fast_tcp",
             "udp",
             "unix_stream",
+            "shmem",
             "local",
             "local+copy",
         ] {
@@ -434,6 +465,9 @@ fn main() {
         }
         if want("stream text 1000") {
             b.stream("text", KB).await;
+        }
+        if want("memcpy") {
+            b.memcpy(8 * MB);
         }
         stop.shutdown();
         b.rows

@@ -175,7 +175,9 @@ impl RawPeer {
             peer.make_mutex(PathBuf::from(path));
         }
         peer.set_header(&RingHeader::new(size as i32));
-        peer.side.write_all(&Packet::connect().encode()).unwrap();
+        peer.side
+            .write_all(&Packet::connect(false).encode())
+            .unwrap();
         let mut ack = [0u8; 8];
         peer.side.read_exact(&mut ack).unwrap();
         assert_eq!(Packet::decode(&ack).command, shmem::command::ACKNOWLEDGE);

@@ -48,6 +48,12 @@ pub mod command {
     pub const ACKNOWLEDGE: i32 = 1;
 }
 
+/// What our sender puts in `CONNECT`'s size field (C++ sends 4096 there and its receiver
+/// ignores the field), and our receiver then in `ACKNOWLEDGE`'s (where C++ leaves stack
+/// bytes): both sides are ours, and a writer also wakes a waiting reader with one byte on
+/// the TCP side channel, so that readers wait in their event loop, not on a mutex.
+pub const DOORBELL: i32 = 0x4c4c_4542;
+
 /// Bytes of a side-channel packet.
 pub const PACKET_LEN: usize = 8;
 
@@ -59,20 +65,29 @@ pub struct Packet {
 }
 
 impl Packet {
-    /// What the sender sends once its ring exists.
-    pub fn connect() -> Packet {
+    /// What the sender sends once its ring exists (offering the [`DOORBELL`] or not).
+    pub fn connect(doorbell: bool) -> Packet {
         Packet {
             command: command::CONNECT,
-            size: DEFAULT_RING_SIZE,
+            size: if doorbell {
+                DOORBELL
+            } else {
+                DEFAULT_RING_SIZE
+            },
         }
     }
 
     /// What the receiver answers once both rings exist (C++ leaves `size` unset).
-    pub fn acknowledge() -> Packet {
+    pub fn acknowledge(doorbell: bool) -> Packet {
         Packet {
             command: command::ACKNOWLEDGE,
-            size: 0,
+            size: if doorbell { DOORBELL } else { 0 },
         }
+    }
+
+    /// Whether the packet says its sender is ours and rings the [`DOORBELL`].
+    pub fn doorbell(&self) -> bool {
+        self.size == DOORBELL
     }
 
     pub fn encode(&self) -> [u8; PACKET_LEN] {
@@ -326,8 +341,13 @@ mod tests {
         assert_eq!(b[4..8], 4096i32.to_le_bytes());
         assert_eq!(b[24..28], 4i32.to_le_bytes());
         assert_eq!(RingHeader::decode(&b), h);
-        assert_eq!(Packet::connect().encode(), [0, 0, 0, 0, 0, 16, 0, 0]);
-        assert_eq!(Packet::decode(&Packet::acknowledge().encode()).command, 1);
+        assert_eq!(Packet::connect(false).encode(), [0, 0, 0, 0, 0, 16, 0, 0]);
+        assert_eq!(
+            Packet::decode(&Packet::acknowledge(false).encode()).command,
+            1
+        );
+        assert!(!Packet::connect(false).doorbell());
+        assert!(Packet::decode(&Packet::acknowledge(true).encode()).doorbell());
         assert_eq!(segment_key(10002, 0), 10002);
         assert_eq!(segment_key(10002, 2), (2 << 16) + 10002);
         assert_eq!(

@@ -1,7 +1,8 @@
 //! The `shmem` carrier, interoperable with C++ YARP's plugin: the handshake on TCP (see
 //! [`yarp_proto::wire::shmem`]), then the tcp-family protocol (index, blocks,
-//! acknowledgements, replies) through two shared-memory rings, one per direction. Each
-//! connection runs on its own thread, since waiting on a ring blocks.
+//! acknowledgements, replies) through two shared-memory rings, one per direction. A reader
+//! with nothing to read waits in the event loop for the doorbell when the peer is ours,
+//! and on the C++ wait-data mutex (on a blocking thread) otherwise.
 //!
 //! What we create is removed as soon as the peer has it: our segments are marked for
 //! removal once the peer attached them (the kernel frees them with the last process),
@@ -14,11 +15,11 @@ use super::input::InputEntry;
 use super::output::{Job, Outgoing, OutputError, OutputHandle, READ_CHUNK};
 use super::{Incoming, ReplyBody, Shared, CONNECT_TIMEOUT, OUTPUT_QUEUE};
 use bytes::BufMut;
-use ring::{Liveness, RingReader, RingWriter};
+use ring::{gone, Liveness, RingReader, RingWriter, POLL};
 use std::io;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::{mpsc, Notify};
@@ -59,23 +60,54 @@ impl Link {
     }
 
     /// Reads into the decoder until it has an event.
-    fn next_event(&mut self, decoder: &mut Decoder) -> io::Result<Event> {
+    async fn next_event(&mut self, decoder: &mut Decoder) -> io::Result<Event> {
         loop {
             match decoder.poll() {
                 Ok(Some(ev)) => return Ok(ev),
                 Ok(None) => {}
                 Err(e) => return Err(io::Error::new(io::ErrorKind::InvalidData, e)),
             }
-            let mut space = decoder.read_buf(READ_CHUNK);
-            let chunk = space.chunk_mut();
-            let (ptr, len) = (chunk.as_mut_ptr(), chunk.len());
-            // SAFETY: `chunk` is the decoder's spare capacity, `len` bytes long; exactly
-            // the `n` bytes written are then declared initialised.
-            unsafe {
-                let n = self.inp.read(ptr, len, &self.live)?;
-                space.advance_mut(n);
+            loop {
+                let mut space = decoder.read_buf(READ_CHUNK);
+                let chunk = space.chunk_mut();
+                let (ptr, len) = (chunk.as_mut_ptr(), chunk.len());
+                // SAFETY: `chunk` is the decoder's spare capacity, `len` bytes long;
+                // exactly the `n` bytes written are then declared initialised.
+                let got = unsafe {
+                    let got = self.inp.try_read(ptr, len, true, &self.live)?;
+                    if let Some(n) = got {
+                        space.advance_mut(n);
+                    }
+                    got
+                };
+                if got.is_some() {
+                    break;
+                }
+                self.wait().await?;
             }
         }
+    }
+
+    /// Waits (bounded) until the writer may have written, then checks the peer is there.
+    async fn wait(&mut self) -> io::Result<()> {
+        if self.live.doorbell() {
+            if let Ok(ready) = timeout(POLL, self.live.sock.readable()).await {
+                ready?;
+                let mut bells = [0u8; 64];
+                match self.live.sock.try_read(&mut bells) {
+                    Ok(0) => return Err(gone()),
+                    Ok(_) => {}
+                    Err(e) if e.kind() == io::ErrorKind::WouldBlock => {}
+                    Err(e) => return Err(e),
+                }
+            }
+        } else {
+            let waitdata = self.inp.waitdata();
+            tokio::task::spawn_blocking(move || waitdata.lock_for(POLL))
+                .await
+                .map_err(io::Error::other)??;
+        }
+        self.live.check()
     }
 
     fn close(&mut self) {
@@ -166,7 +198,7 @@ pub(crate) async fn connect(
     let peer_port = side.peer_addr().map_err(io_err)?.port();
     let temp = temp_dir();
     let out = RingWriter::create(&temp, my_port, DEFAULT_RING_SIZE).map_err(io_err)?;
-    side.write_all(&Packet::connect().encode())
+    side.write_all(&Packet::connect(true).encode())
         .await
         .map_err(io_err)?;
     let ack = read_packet(&mut side).await.map_err(io_err)?;
@@ -178,15 +210,15 @@ pub(crate) async fn connect(
     }
     let inp = RingReader::open(&temp, peer_port).map_err(io_err)?;
     let stop = Arc::new(AtomicBool::new(false));
-    let live = Liveness::new(side.into_std().map_err(io_err)?, stop.clone()).map_err(io_err)?;
+    let live = Liveness::new(side, stop.clone(), ack.doorbell());
     let link = Link { out, inp, live };
     let route = Route::new(&shared.name, target, "shmem");
     let (tx, rx) = mpsc::channel(OUTPUT_QUEUE);
     let port = Arc::downgrade(shared);
     let target = target.to_string();
-    let task = tokio::task::spawn_blocking(move || {
+    let task = tokio::spawn(async move {
         let _stop_on_exit = StopOnDrop(stop);
-        let result = run_output(&target, link, rx);
+        let result = run_output(&target, link, rx).await;
         if let Err(e) = &result {
             tracing::debug!("shmem output to {target} ended: {e}");
             if let Some(shared) = port.upgrade() {
@@ -208,23 +240,23 @@ impl Drop for StopOnDrop {
     }
 }
 
-fn run_output(target: &str, mut link: Link, mut rx: mpsc::Receiver<Job>) -> io::Result<()> {
+async fn run_output(target: &str, mut link: Link, mut rx: mpsc::Receiver<Job>) -> io::Result<()> {
     let spec = stream_spec();
     let mut decoder = Decoder::responses(spec, DecoderConfig::default());
-    let result = (|| {
-        while let Some(job) = rx.blocking_recv() {
+    let result = async {
+        while let Some(job) = rx.recv().await {
             match job {
                 Job::Data(msg) => {
                     let cmd = msg.command(false);
                     write_message(&mut link, &msg, &cmd)?;
                     decoder.expect_response(&cmd);
-                    await_ack(&mut link, &mut decoder)?;
+                    await_ack(&mut link, &mut decoder).await?;
                 }
                 Job::Rpc(msg, reply_tx) => {
                     let cmd = msg.command(true);
                     write_message(&mut link, &msg, &cmd)?;
                     decoder.expect_response(&cmd);
-                    match await_reply(&mut link, &mut decoder) {
+                    match await_reply(&mut link, &mut decoder).await {
                         Ok(b) => {
                             let _ = reply_tx.send(Ok(b));
                         }
@@ -241,13 +273,8 @@ fn run_output(target: &str, mut link: Link, mut rx: mpsc::Receiver<Job>) -> io::
                 Job::Close(done) => {
                     let _ = link.write(&[&wire::close_message()]);
                     decoder.expect_response(&PortCommand::close());
-                    let deadline = Instant::now() + Duration::from_secs(1);
-                    while Instant::now() < deadline {
-                        match link.next_event(&mut decoder) {
-                            Ok(Event::Ack(_)) | Err(_) => break,
-                            Ok(_) => {}
-                        }
-                    }
+                    let _ =
+                        timeout(Duration::from_secs(1), await_ack(&mut link, &mut decoder)).await;
                     if let Some(done) = done {
                         let _ = done.send(());
                     }
@@ -256,7 +283,8 @@ fn run_output(target: &str, mut link: Link, mut rx: mpsc::Receiver<Job>) -> io::
             }
         }
         Ok(())
-    })();
+    }
+    .await;
     link.close();
     result
 }
@@ -265,18 +293,18 @@ fn write_message(link: &mut Link, msg: &Outgoing, cmd: &PortCommand) -> io::Resu
     msg.with_binary_parts(cmd, |parts| link.write(parts))
 }
 
-fn await_ack(link: &mut Link, decoder: &mut Decoder) -> io::Result<()> {
+async fn await_ack(link: &mut Link, decoder: &mut Decoder) -> io::Result<()> {
     loop {
-        if let Event::Ack(_) = link.next_event(decoder)? {
+        if let Event::Ack(_) = link.next_event(decoder).await? {
             return Ok(());
         }
     }
 }
 
-fn await_reply(link: &mut Link, decoder: &mut Decoder) -> io::Result<Bottle> {
+async fn await_reply(link: &mut Link, decoder: &mut Decoder) -> io::Result<Bottle> {
     let mut reply = None;
     loop {
-        match link.next_event(decoder)? {
+        match link.next_event(decoder).await? {
             Event::Reply(bytes) => {
                 reply = Some(
                     Bottle::decode(&bytes)
@@ -342,9 +370,11 @@ async fn accept(
     let temp = temp_dir();
     let inp = RingReader::open(&temp, peer_port)?;
     let out = RingWriter::create(&temp, my_port, DEFAULT_RING_SIZE)?;
-    side.write_all(&Packet::acknowledge().encode()).await?;
+    let doorbell = hello.doorbell();
+    side.write_all(&Packet::acknowledge(doorbell).encode())
+        .await?;
     let stop = Arc::new(AtomicBool::new(false));
-    let live = Liveness::new(side.into_std()?, stop.clone())?;
+    let live = Liveness::new(side, stop.clone(), doorbell);
     let link = Link { out, inp, live };
     shared.lock().inputs.insert(
         id,
@@ -362,70 +392,73 @@ async fn accept(
             stop.store(true, Ordering::Relaxed);
         })
     };
-    let port = shared.clone();
-    let result = tokio::task::spawn_blocking(move || run_input(&port, &from, link)).await;
+    let result = run_input(shared, &from, link).await;
     watcher.abort();
     shared.lock().inputs.remove(&id);
-    match result {
-        Ok(r) => r,
-        Err(e) => Err(io::Error::other(e.to_string())),
-    }
+    result
 }
 
-fn run_input(shared: &Arc<Shared>, from: &str, mut link: Link) -> io::Result<()> {
+async fn run_input(shared: &Arc<Shared>, from: &str, mut link: Link) -> io::Result<()> {
     let mut decoder = Decoder::messages(stream_spec(), DecoderConfig::default());
     let ack = wire::ack();
-    let result = (|| loop {
-        let m = match link.next_event(&mut decoder)? {
-            Event::Message(m) => m,
-            Event::InvalidMessage { error, .. } => {
-                tracing::warn!("{}: bad message from {from}: {error}", shared.name);
-                continue;
-            }
-            _ => continue,
-        };
-        match m.command.kind() {
-            CommandKind::Data { reply } => {
-                let (tx, rx) = if reply {
-                    let (tx, rx) = tokio::sync::oneshot::channel();
-                    (Some(tx), Some(rx))
-                } else {
-                    (None, None)
-                };
-                let incoming = Incoming {
-                    stamp: m.stamp(),
-                    payload: m.payload,
-                    is_text: false,
-                    from: from.to_string(),
-                    reply: tx,
-                    decoded: None,
-                };
-                if shared.deliver.blocking_send(incoming).is_err() {
+    let result = async {
+        loop {
+            let m = match link.next_event(&mut decoder).await? {
+                Event::Message(m) => m,
+                Event::InvalidMessage { error, .. } => {
+                    tracing::warn!("{}: bad message from {from}: {error}", shared.name);
+                    continue;
+                }
+                _ => continue,
+            };
+            match m.command.kind() {
+                CommandKind::Data { reply } => {
+                    let (tx, rx) = if reply {
+                        let (tx, rx) = tokio::sync::oneshot::channel();
+                        (Some(tx), Some(rx))
+                    } else {
+                        (None, None)
+                    };
+                    let incoming = Incoming {
+                        stamp: m.stamp(),
+                        payload: m.payload,
+                        is_text: false,
+                        from: from.to_string(),
+                        reply: tx,
+                        decoded: None,
+                    };
+                    if shared.deliver.send(incoming).await.is_err() {
+                        return Ok(());
+                    }
+                    let reply = match rx {
+                        Some(rx) => rx.await.ok(),
+                        None => None,
+                    };
+                    match reply {
+                        Some(ReplyBody::Encoded(bytes)) => link.write(&[&bytes, &ack])?,
+                        Some(ReplyBody::Bottle(b)) => {
+                            let segs = yarp_proto::binary::encode_segments(&b);
+                            let mut parts: Vec<&[u8]> = segs.iter().map(|s| s.as_ref()).collect();
+                            parts.push(&ack);
+                            link.write(&parts)?;
+                        }
+                        None => link.write(&[&ack])?,
+                    }
+                }
+                CommandKind::Close => {
+                    link.write(&[&ack])?;
                     return Ok(());
                 }
-                match rx.and_then(|rx| rx.blocking_recv().ok()) {
-                    Some(ReplyBody::Encoded(bytes)) => link.write(&[&bytes, &ack])?,
-                    Some(ReplyBody::Bottle(b)) => {
-                        let segs = yarp_proto::binary::encode_segments(&b);
-                        let mut parts: Vec<&[u8]> = segs.iter().map(|s| s.as_ref()).collect();
-                        parts.push(&ack);
-                        link.write(&parts)?;
-                    }
-                    None => link.write(&[&ack])?,
+                _ => {
+                    // administrative commands are served on tcp connections; here they are
+                    // only acknowledged
+                    tracing::debug!("{}: shmem command from {from} ignored", shared.name);
+                    link.write(&[&ack])?;
                 }
             }
-            CommandKind::Close => {
-                link.write(&[&ack])?;
-                return Ok(());
-            }
-            _ => {
-                // administrative commands are served on tcp connections; here they are
-                // only acknowledged
-                tracing::debug!("{}: shmem command from {from} ignored", shared.name);
-                link.write(&[&ack])?;
-            }
         }
-    })();
+    }
+    .await;
     link.close();
     result
 }

@@ -1,7 +1,8 @@
 //! One direction of a shmem connection: the ring buffer of C++ YARP's `ShmemOutputStream`
 //! / `ShmemInputStream`, written by one process and read by the other (layout and rules in
-//! [`yarp_proto::wire::shmem`]). Calls block (up to [`POLL`] at a time, between which the
-//! side channel is checked), so they run on a connection's own thread.
+//! [`yarp_proto::wire::shmem`]). Nothing here waits for the peer except for the access
+//! mutex, which is held only for the moment of a copy; waiting for data is the caller's
+//! (see [`RingReader::try_read`]).
 
 use super::sys::{ProcessMutex, Segment};
 use std::io;
@@ -22,16 +23,30 @@ pub(crate) const POLL: Duration = Duration::from_millis(100);
 const CHUNK: usize = 256 * 1024;
 
 /// The TCP connection of the handshake, kept to notice a peer that goes away (C++ does
-/// the same), and this side's stop flag.
+/// the same) and, between two of our processes, to wake a waiting reader (the "doorbell":
+/// one byte, so that the reader can wait in the event loop instead of on a mutex).
 pub(crate) struct Liveness {
-    sock: std::net::TcpStream,
+    pub(crate) sock: tokio::net::TcpStream,
     stop: Arc<AtomicBool>,
+    doorbell: bool,
 }
 
 impl Liveness {
-    pub(crate) fn new(sock: std::net::TcpStream, stop: Arc<AtomicBool>) -> io::Result<Liveness> {
-        sock.set_nonblocking(true)?;
-        Ok(Liveness { sock, stop })
+    pub(crate) fn new(
+        sock: tokio::net::TcpStream,
+        stop: Arc<AtomicBool>,
+        doorbell: bool,
+    ) -> Liveness {
+        Liveness {
+            sock,
+            stop,
+            doorbell,
+        }
+    }
+
+    /// Whether the peer is ours and rings the doorbell.
+    pub(crate) fn doorbell(&self) -> bool {
+        self.doorbell
     }
 
     /// An error once the peer closed the side channel or this side was told to stop.
@@ -42,17 +57,28 @@ impl Liveness {
                 "shmem connection closed by this port",
             ));
         }
-        let mut b = [0u8; 1];
-        match self.sock.peek(&mut b) {
-            Ok(0) => Err(io::Error::new(
-                io::ErrorKind::UnexpectedEof,
-                "the shmem peer went away (its TCP side channel closed)",
-            )),
+        let mut b = [std::mem::MaybeUninit::<u8>::uninit(); 1];
+        match socket2::SockRef::from(&self.sock).peek(&mut b) {
+            Ok(0) => Err(gone()),
             Ok(_) => Ok(()),
             Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(()),
             Err(e) => Err(e),
         }
     }
+
+    fn ring(&self) {
+        if self.doorbell {
+            // a full socket buffer means the reader has bells enough to wake up
+            let _ = socket2::SockRef::from(&self.sock).send(&[1]);
+        }
+    }
+}
+
+pub(crate) fn gone() -> io::Error {
+    io::Error::new(
+        io::ErrorKind::UnexpectedEof,
+        "the shmem peer went away (its TCP side channel closed)",
+    )
 }
 
 fn bad(e: ShmemError) -> io::Error {
@@ -70,7 +96,7 @@ fn peer_closed() -> io::Error {
 struct Ring {
     seg: Segment,
     access: ProcessMutex,
-    waitdata: ProcessMutex,
+    waitdata: Arc<ProcessMutex>,
     port: u16,
     resizes: u32,
 }
@@ -97,9 +123,15 @@ impl Ring {
         unsafe { self.seg.ptr().add(HEADER_LEN) }
     }
 
+    /// Takes the access mutex. It is held only while a copy of at most [`CHUNK`] bytes
+    /// runs, so this rarely waits, and then briefly; a peer that died holding it is
+    /// noticed on the side channel.
     fn lock(&self, live: &Liveness) -> io::Result<()> {
+        if self.access.try_lock() {
+            return Ok(());
+        }
         loop {
-            if self.access.lock_for(POLL)? {
+            if self.access.lock_for(Duration::from_millis(10))? {
                 return Ok(());
             }
             live.check()?;
@@ -151,7 +183,7 @@ impl RingWriter {
         let ring = Ring {
             seg,
             access,
-            waitdata,
+            waitdata: Arc::new(waitdata),
             port,
             resizes: 0,
         };
@@ -269,7 +301,7 @@ impl RingWriter {
 
     fn publish(&mut self, n: usize, size: usize, live: &Liveness) -> io::Result<()> {
         self.ring.lock(live)?;
-        let r = (|| {
+        let r = (|| -> io::Result<bool> {
             let mut h = self.ring.header();
             if h.close {
                 return Err(peer_closed());
@@ -282,15 +314,19 @@ impl RingWriter {
                 ));
             }
             h.produce(n);
+            let woke = h.waiting > 0;
             while h.waiting > 0 {
                 h.waiting -= 1;
                 self.ring.waitdata.unlock();
             }
             self.ring.set_header(&h);
-            Ok(())
+            Ok(woke)
         })();
         self.ring.access.unlock();
-        r
+        if r? {
+            live.ring();
+        }
+        Ok(())
     }
 
     pub(crate) fn close(&mut self) {
@@ -325,7 +361,7 @@ impl RingReader {
         let ring = Ring {
             seg,
             access,
-            waitdata,
+            waitdata: Arc::new(waitdata),
             port,
             resizes: 0,
         };
@@ -333,31 +369,38 @@ impl RingReader {
         Ok(RingReader { ring })
     }
 
-    /// Reads at least one byte into `dst` (at most `dst_len` bytes), waiting for them.
+    /// Copies what is there (at most `dst_len` bytes) into `dst`; `None` when the ring is
+    /// empty, in which case this reader is registered as waiting when `wait` (the writer
+    /// then wakes it: the wait-data mutex for C++, the doorbell between ours).
     ///
     /// # Safety
     /// `dst` must be valid for writes of `dst_len` bytes.
-    pub(crate) unsafe fn read(
+    pub(crate) unsafe fn try_read(
         &mut self,
         dst: *mut u8,
         dst_len: usize,
+        wait: bool,
         live: &Liveness,
-    ) -> io::Result<usize> {
-        loop {
-            self.ring.lock(live)?;
-            // SAFETY: forwarded contract.
-            let r = unsafe { self.read_locked(dst, dst_len) };
-            self.ring.access.unlock();
-            if let Some(n) = r? {
-                return Ok(n);
-            }
-            self.ring.waitdata.lock_for(POLL)?;
-            live.check()?;
-        }
+    ) -> io::Result<Option<usize>> {
+        self.ring.lock(live)?;
+        // SAFETY: forwarded contract.
+        let r = unsafe { self.read_locked(dst, dst_len, wait) };
+        self.ring.access.unlock();
+        r
+    }
+
+    /// The mutex a C++ writer unlocks to wake us.
+    pub(crate) fn waitdata(&self) -> Arc<ProcessMutex> {
+        self.ring.waitdata.clone()
     }
 
     /// Under the access mutex: copies what is there, or registers as waiting.
-    unsafe fn read_locked(&mut self, dst: *mut u8, dst_len: usize) -> io::Result<Option<usize>> {
+    unsafe fn read_locked(
+        &mut self,
+        dst: *mut u8,
+        dst_len: usize,
+        wait: bool,
+    ) -> io::Result<Option<usize>> {
         let mut h = self.ring.header();
         if h.close {
             return Err(peer_closed());
@@ -377,8 +420,10 @@ impl RingReader {
         }
         h.validate(self.ring.capacity()).map_err(bad)?;
         if h.avail == 0 {
-            h.waiting = h.waiting.saturating_add(1);
-            self.ring.set_header(&h);
+            if wait {
+                h.waiting = h.waiting.saturating_add(1);
+                self.ring.set_header(&h);
+            }
             return Ok(None);
         }
         let spans = h.read_spans(dst_len.min(CHUNK));

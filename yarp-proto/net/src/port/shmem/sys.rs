@@ -142,8 +142,9 @@ pub(crate) struct ProcessMutex {
     owned: Option<PathBuf>,
 }
 
-// SAFETY: a process-shared mutex may be used from any thread.
+// SAFETY: a process-shared mutex may be used from any thread, also at once.
 unsafe impl Send for ProcessMutex {}
+unsafe impl Sync for ProcessMutex {}
 
 const MUTEX_LEN: usize = std::mem::size_of::<libc::pthread_mutex_t>();
 
