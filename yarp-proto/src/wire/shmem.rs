@@ -396,6 +396,10 @@ mod tests {
         r.resize = true;
         r.newsize = 1 << 30;
         assert!(r.validate_resize(4096).is_err());
-        assert!(RingHeader::new(i32::MAX).grown_size(1).is_err());
+        let full = RingHeader {
+            avail: i32::MAX,
+            ..RingHeader::new(i32::MAX)
+        };
+        assert!(full.grown_size(1).is_err());
     }
 }
