@@ -121,6 +121,9 @@ def main():
     print(f"load before: {load()}")
     with tempfile.TemporaryDirectory() as d:
         env = dict(os.environ, YARP_CONFIG_HOME=d, YARP_DATA_HOME=d)
+        if cpp and "YARP_DATA_DIRS" not in env:
+            # C++ finds its carrier plugins (shmem) there
+            env["YARP_DATA_DIRS"] = os.path.join(os.path.dirname(os.path.dirname(cpp)), "share", "yarp")
         port = free_port()
         subprocess.run([OURS, "conf", "127.0.0.1", str(port)], env=env, check=True, capture_output=True)
         ns = subprocess.Popen([OUR_SERVER, "--ip", "127.0.0.1", "--socket", str(port)], env=env,

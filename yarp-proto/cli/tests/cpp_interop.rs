@@ -491,6 +491,11 @@ impl World {
             .env("YARP_DATA_HOME", &self.dir.0)
             .env_remove("YARP_NAMESPACE")
             .env_remove("YARP_ROBOT_NAME");
+        // with its own data home, C++ finds its carrier plugins (shmem) only through this
+        let share = self.cpp.join("../share/yarp");
+        if share.join("plugins").is_dir() {
+            c.env("YARP_DATA_DIRS", share);
+        }
     }
 
     fn cpp_cmd(&self, prog: &str) -> Command {
@@ -852,8 +857,8 @@ fn rustserver_cpp_name_query_exists_where_clean() {
 // ---------------------------------------------------------------------------------------
 // Carriers (C++ yarpserver). The writer's side is told to connect by the other side's
 // `yarp connect /w /r <carrier>`, so both ports' admin handling is exercised too.
-// Not here: shmem (not implemented on our side; unix_stream is our carrier between
-// processes) and unix_stream (the pip-built C++ 3.5 has no unix_stream plugin).
+// shmem needs a C++ build with its plugin (the CMake build of tests/peers); not here:
+// unix_stream (the pip-built C++ 3.5 had no unix_stream plugin).
 // ---------------------------------------------------------------------------------------
 
 fn carrier_case(test: &str, writer: Side, carrier: &str) {
@@ -891,6 +896,16 @@ fn carrier_fast_tcp_rust_write_to_cpp_read() {
 #[test]
 fn carrier_fast_tcp_cpp_write_to_rust_read() {
     carrier_case("carrier_fast_tcp_cpp_to_rust", Side::Cpp, "fast_tcp");
+}
+
+#[test]
+fn carrier_shmem_rust_write_to_cpp_read() {
+    carrier_case("carrier_shmem_rust_to_cpp", Side::Rust, "shmem");
+}
+
+#[test]
+fn carrier_shmem_cpp_write_to_rust_read() {
+    carrier_case("carrier_shmem_cpp_to_rust", Side::Cpp, "shmem");
 }
 
 #[test]
@@ -1024,6 +1039,28 @@ fn latency_case(test: &str, server: Side, client: Side, extra: &[&str]) {
 #[test]
 fn latency_test_cpp_client_rust_server() {
     latency_case("latency_cpp_client", Side::Rust, Side::Cpp, &[]);
+}
+
+// shmem with replies (RPC) both ways: each frame's answer comes back through the ring
+// the server created
+#[test]
+fn latency_test_shmem_replies_cpp_client_rust_server() {
+    latency_case(
+        "latency_shmem_cpp_client",
+        Side::Rust,
+        Side::Cpp,
+        &["--protocol", "shmem"],
+    );
+}
+
+#[test]
+fn latency_test_shmem_replies_rust_client_cpp_server() {
+    latency_case(
+        "latency_shmem_rust_client",
+        Side::Cpp,
+        Side::Rust,
+        &["--protocol", "shmem"],
+    );
 }
 
 // Reply mode (`--client` without `--no-reply`) needs a C++ 3.12 server: 3.5's server only
