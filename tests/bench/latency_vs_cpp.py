@@ -78,7 +78,7 @@ def run_pair(server_bin, client_bin, carrier, size, frames, env, workdir):
                 "--payload_size", str(size), "--client_wait", "0", "--logfile", prefix,
                 "--protocol", carrier]
         try:
-            subprocess.run(args, env=env, capture_output=True, timeout=60 + frames * 0.5)
+            subprocess.run(args, env=env, capture_output=True, timeout=15 + frames * 0.15)
         except subprocess.TimeoutExpired:
             return None
         path = f"{prefix}{size}.txt"

@@ -50,6 +50,15 @@ pub const DEFAULT_PACING: Duration = Duration::from_millis(1);
 
 const RECV_BUF: usize = 65536;
 
+/// Waits `p` without the timer, whose millisecond ticks would double a 1 ms pause: other
+/// tasks run meanwhile, as C++ yields in a loop for the same pause.
+async fn pause(p: Duration) {
+    let start = std::time::Instant::now();
+    while start.elapsed() < p {
+        tokio::task::yield_now().await;
+    }
+}
+
 fn invalid(msg: impl Into<String>) -> io::Error {
     io::Error::new(io::ErrorKind::InvalidData, msg.into())
 }
@@ -137,7 +146,7 @@ impl UdpSender {
         for datagram in self.writer.split(message) {
             if previous_large {
                 if let Some(p) = pacing {
-                    tokio::time::sleep(p).await;
+                    pause(p).await;
                 }
             }
             let n = self.socket.send(&datagram).await?;
