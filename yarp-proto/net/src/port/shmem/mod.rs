@@ -436,7 +436,7 @@ async fn run_input(shared: &Arc<Shared>, from: &str, mut link: Link) -> io::Resu
                     };
                     match reply {
                         Some(ReplyBody::Encoded(bytes)) => link.write(&[&bytes, &ack])?,
-                        Some(ReplyBody::Bottle(b)) => {
+                        Some(ReplyBody::Bottle(b) | ReplyBody::Responder(b)) => {
                             let segs = yarp_proto::binary::encode_segments(&b);
                             let mut parts: Vec<&[u8]> = segs.iter().map(|s| s.as_ref()).collect();
                             parts.push(&ack);
