@@ -1,7 +1,7 @@
 //! C++ YARP tools (3.5, from `tests/peers/install-cpp-yarp.sh` or `YARP_CPP_BIN`) against
 //! our frameGrabber_nws_yarp + fakeFrameGrabber: `yarp rpc` must print what it printed
 //! against C++ 3.12 in framegrabber.jsonl, and `yarp read ... envelope` must read our
-//! image stream. Without a C++ YARP the tests say SKIPPED loudly and pass. Run under
+//! image stream. Without a C++ YARP the tests say SKIPPED loudly (in CI: fail). Run under
 //! netns-run.
 
 use std::io::{BufRead, BufReader, Read, Write};
@@ -16,8 +16,8 @@ use yarp_proto::{Bottle, Property};
 
 const WAIT: Duration = Duration::from_secs(10);
 
-fn cpp_yarp() -> Option<PathBuf> {
-    yarp_interop_tests::cpp_bin_dir().map(|d| yarp_interop_tests::real_cpp_program(&d, "yarp"))
+fn cpp_yarp(test: &str) -> Option<PathBuf> {
+    yarp_interop_tests::cpp_program(test, "yarp")
 }
 
 /// Kills and reaps the child when dropped.
@@ -95,8 +95,8 @@ fn comparable(line: &str) -> String {
 
 #[test]
 fn cpp_yarp_rpc_prints_what_it_printed_against_cpp() {
-    let (Some(yarp), Some(cases)) = (cpp_yarp(), recorded_rpc()) else {
-        eprintln!("SKIPPED: C++ YARP not found (or no framegrabber.jsonl): framegrabber_cpp");
+    let cases = recorded_rpc().expect("../shared/yarp-vectors/framegrabber.jsonl");
+    let Some(yarp) = cpp_yarp("cpp_yarp_rpc_prints_what_it_printed_against_cpp") else {
         return;
     };
     let mut server = grabber("/grabber");
@@ -145,8 +145,7 @@ fn cpp_yarp_rpc_prints_what_it_printed_against_cpp() {
 
 #[test]
 fn cpp_yarp_read_reads_our_images() {
-    let Some(yarp) = cpp_yarp() else {
-        eprintln!("SKIPPED: C++ YARP not found: framegrabber_cpp");
+    let Some(yarp) = cpp_yarp("cpp_yarp_read_reads_our_images") else {
         return;
     };
     let mut server = grabber("/cam");

@@ -1,7 +1,7 @@
 //! The C++ `yarp rpc` tool (YARP 3.5 from `tests/peers/install-cpp-yarp.sh`, or the
 //! directory in `YARP_CPP_BIN`) against our multipleanalogsensorsserver: it must print
 //! exactly what it printed against C++ 3.12 in imu.jsonl. Without a C++ YARP the test
-//! says SKIPPED loudly and passes. Run under netns-run.
+//! says SKIPPED loudly (in CI: fails). Run under netns-run.
 
 use std::io::{Read, Write};
 use std::process::{Command, Stdio};

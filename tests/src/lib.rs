@@ -1,9 +1,13 @@
 //! Shared helpers for the tests of every crate: the recorded C++ YARP vectors in
 //! `../shared/yarp-vectors/`, a name server per test process, the C++ YARP peer, bounded
-//! waits and child processes that are always reaped.
+//! waits and child processes that are always reaped, and the peers of the live tests (C++
+//! YARP, rclpy, Chromium) with the rule for when one is missing ([`peer_missing`]).
+
+mod peer;
+pub use peer::*;
 
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Child;
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
@@ -135,65 +139,6 @@ pub fn name_server() -> SocketAddr {
 /// A client of [`name_server`] (starting it if needed).
 pub fn name_client() -> NameClient {
     NameClient::new(name_server()).with_timeout(T)
-}
-
-/// The directory holding the real C++ YARP programs: `$YARP_CPP_BIN`, else the pip-built
-/// peer in `.venv-yarp` (pip puts Python wrappers in `bin/` that do not forward signals,
-/// so the real binaries in `site-packages/yarp/bin` come first).
-pub fn cpp_bin_dir() -> Option<PathBuf> {
-    let mut dirs = Vec::new();
-    if let Some(d) = std::env::var_os("YARP_CPP_BIN") {
-        dirs.push(PathBuf::from(d));
-    }
-    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../.venv-yarp");
-    if let Ok(libs) = std::fs::read_dir(venv.join("lib")) {
-        for d in libs.flatten() {
-            dirs.push(d.path().join("site-packages/yarp/bin"));
-        }
-    }
-    dirs.push(venv.join("bin"));
-    dirs.into_iter().find(|d| d.join("yarp").is_file())
-}
-
-/// A C++ YARP program (`yarp`, `yarpdev`, ...), or `None` after saying loudly that
-/// `test` is skipped.
-pub fn cpp_program(test: &str, name: &str) -> Option<PathBuf> {
-    match cpp_bin_dir()
-        .map(|d| real_cpp_program(&d, name))
-        .filter(|p| p.is_file())
-    {
-        Some(p) => Some(p),
-        None => {
-            eprintln!(
-                "SKIPPED: {test}: C++ YARP `{name}` not found (set YARP_CPP_BIN or run \
-                 tests/peers/install-cpp-yarp.sh)"
-            );
-            None
-        }
-    }
-}
-
-/// The program to run for `prog` of the C++ bin directory `bin`. pip's
-/// `yarp-middleware` installs Python wrappers in `<venv>/bin` that run the real program of
-/// `lib/python*/site-packages/yarp/bin/` as a child and do not pass signals on: killing
-/// the wrapper would leave the C++ program (and its port) running. This returns the real
-/// program where `bin` holds such a wrapper, else `bin/prog`.
-pub fn real_cpp_program(bin: &Path, prog: &str) -> PathBuf {
-    let wrapper = bin.join(prog);
-    let is_wrapper = std::fs::read(&wrapper)
-        .map(|b| b.starts_with(b"#!") && b.windows(17).any(|w| w == b"yarp.bin.__main__"))
-        .unwrap_or(false);
-    if is_wrapper {
-        if let Ok(dirs) = std::fs::read_dir(bin.join("../lib")) {
-            for d in dirs.flatten() {
-                let real = d.path().join("site-packages/yarp/bin").join(prog);
-                if d.file_name().to_string_lossy().starts_with("python") && real.is_file() {
-                    return real;
-                }
-            }
-        }
-    }
-    wrapper
 }
 
 /// A child process killed and reaped when dropped, so no test leaves one behind.

@@ -1,7 +1,7 @@
 //! The C++ `yarp rpc` tool (YARP 3.5 from `tests/peers/install-cpp-yarp.sh`, or the
 //! directory in `YARP_CPP_BIN`) against our `yarprobotinterface`: its
 //! `/robot/yarprobotinterface` service and the control board it brought up. Without a C++
-//! YARP the test says SKIPPED loudly and passes. Run under netns-run.
+//! YARP the test says SKIPPED loudly (in CI: fails). Run under netns-run.
 
 #[path = "../../tests/fixtures/robotinterface/live_support.rs"]
 mod support;
@@ -17,7 +17,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_yarprobotinterface");
 
 /// The real C++ `yarp` program (pip installs a Python wrapper beside it).
 fn cpp_yarp() -> Option<PathBuf> {
-    yarp_interop_tests::cpp_bin_dir().map(|d| yarp_interop_tests::real_cpp_program(&d, "yarp"))
+    yarp_interop_tests::cpp_program("robotinterface_cpp", "yarp")
 }
 
 /// Runs `yarp rpc <port>` with `lines` on stdin; the `Response:` lines it printed.
@@ -62,13 +62,9 @@ fn cpp_rpc(yarp: &Path, conf_home: &Path, port: &str, lines: &[&str]) -> Vec<Str
 #[tokio::test]
 async fn cpp_yarp_rpc_queries_the_robot() {
     let Some(yarp) = cpp_yarp() else {
-        eprintln!("SKIPPED: C++ YARP not found");
         return;
     };
-    if !Registry::names().contains(&"controlBoard_nws_yarp") {
-        eprintln!("SKIPPED: controlBoard_nws_yarp is not a registered device yet");
-        return;
-    }
+    assert!(Registry::names().contains(&"controlBoard_nws_yarp"));
     let net = start_network().await;
     let fixtures =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/robotinterface");

@@ -116,10 +116,12 @@ struct Scenario<'a> {
 fn e2e(s: Scenario) {
     let distros = distros(s.config);
     if distros.is_empty() {
-        eprintln!("==================================================================");
-        eprintln!("SKIPPED: no rclpy venv (run tests/peers/install-ros2.sh or set");
-        eprintln!("ROS_VENV): the ROS 2 end-to-end launch test did not run.");
-        eprintln!("==================================================================");
+        yarp_interop_tests::peer_missing(
+            s.config,
+            "rclpy",
+            "no ROS 2 venv in $ROS_VENV / $ROS_JAZZY_VENV that imports rclpy",
+            yarp_interop_tests::RCLPY_INSTALL,
+        );
         return;
     }
     // A ROS domain per test: the two tests of this file may run at once, and other tests

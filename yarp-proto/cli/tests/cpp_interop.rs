@@ -6,9 +6,9 @@
 //!         cargo test -p yarp-cli --test cpp_interop -- --test-threads=2
 //!
 //! The C++ programs are found through `YARP_CPP_BIN` (a directory holding `yarp` and
-//! `yarpserver`; if set and they do not work, the tests FAIL), else `<repo>/.venv-yarp/bin`
-//! (made by `tests/peers/install-cpp-yarp.sh`). Without either every test prints a loud
-//! `SKIPPED` line and passes.
+//! `yarpserver`; if set and they do not work, the tests FAIL), else the build of
+//! `tests/peers/install-cpp-yarp.sh` in `~/.cache/yarp-rs/cpp-yarp`. Without either every
+//! test prints a loud `SKIPPED` line, and in CI (`CI=true`) fails.
 //!
 //! Every test has its own `YARP_CONFIG_HOME`, its own name server on a port chosen at run
 //! time, a timeout on every wait, and Drop guards that stop and reap every child process
@@ -24,7 +24,7 @@ use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::os::unix::process::CommandExt;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
@@ -81,12 +81,7 @@ fn cpp_bin() -> Option<PathBuf> {
             }
             return Ok(Some(dir));
         }
-        let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv-yarp/bin");
-        if venv.join("yarpserver").is_file() && venv.join("yarp").is_file() {
-            Ok(Some(venv.canonicalize().unwrap_or(venv)))
-        } else {
-            Ok(None)
-        }
+        Ok(yarp_interop_tests::cpp_bin_dir().filter(|d| d.join("yarpserver").is_file()))
     });
     match found {
         Ok(Some(d)) => Some(d.clone()),
@@ -95,10 +90,15 @@ fn cpp_bin() -> Option<PathBuf> {
     }
 }
 
+/// The shared rule for a missing peer: fails in CI, says SKIPPED loudly elsewhere.
+#[track_caller]
 fn skipped(test: &str) {
-    loud(&format!(
-        "interop: {test} SKIPPED (no C++ YARP): set YARP_CPP_BIN or run tests/peers/install-cpp-yarp.sh"
-    ));
+    yarp_interop_tests::peer_missing(
+        test,
+        "C++ YARP",
+        "no `yarp`/`yarpserver` in $YARP_CPP_BIN or ~/.cache/yarp-rs/cpp-yarp",
+        yarp_interop_tests::CPP_YARP_INSTALL,
+    );
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1349,8 +1349,11 @@ fn disconnect_names_actual_carrier_like_cpp() {
 fn zz_print_interop_matrix() {
     let have = match cpp_bin() {
         Some(d) => format!("C++ YARP from {}", d.display()),
-        None => "SKIPPED (no C++ YARP): set YARP_CPP_BIN or run tests/peers/install-cpp-yarp.sh"
-            .to_owned(),
+        None => {
+            skipped("zz_print_interop_matrix");
+            "SKIPPED (no C++ YARP): set YARP_CPP_BIN or run tests/peers/install-cpp-yarp.sh"
+                .to_owned()
+        }
     };
     let rows = [
         (

@@ -22,14 +22,12 @@ pub fn chromium() -> Option<PathBuf> {
         .map(PathBuf::from)
         .find(|p| p.exists());
     if !ok || found.is_none() {
-        eprintln!("==================================================================");
-        eprintln!("SKIPPED: headless Chromium is not available and could not be");
-        eprintln!(
-            "installed ({}): the dashboard was not checked",
-            script.display()
+        yarp_interop_tests::peer_missing(
+            "dashboard in a browser",
+            "headless Chromium",
+            &format!("{} did not give /usr/bin/chromium", script.display()),
+            yarp_interop_tests::CHROMIUM_INSTALL,
         );
-        eprintln!("in a browser.");
-        eprintln!("==================================================================");
         return None;
     }
     found
