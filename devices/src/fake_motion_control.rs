@@ -74,6 +74,10 @@ struct Joint {
     ref_current: f64,
     current: f64,
     max_current: f64,
+    peak_current: f64,
+    nominal_current: f64,
+    pwm_limit: f64,
+    supply_voltage: f64,
     stiffness: f64,
     damping: f64,
     impedance_offset: f64,
@@ -143,6 +147,10 @@ impl FakeMotionControl {
                 ref_current: 0.0,
                 current: (33.0 + i as f64) * 100.0,
                 max_current: (33.0 + i as f64) * 1000.0,
+                peak_current: (33.0 + i as f64) * 2.0,
+                nominal_current: (33.0 + i as f64) * 20.0,
+                pwm_limit: (33.0 + i as f64) * 10.0,
+                supply_voltage: (33.0 + i as f64) * 200.0,
                 stiffness: 0.0,
                 damping: 0.0,
                 impedance_offset: 0.0,
@@ -476,6 +484,37 @@ impl IAmplifierControl for FakeMotionControl {
     }
     fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
         Ok(self.joint(j)?.max_current)
+    }
+    fn set_max_current(&mut self, j: usize, v: f64) -> DevResult<()> {
+        self.joint(j)?.max_current = v;
+        Ok(())
+    }
+    fn get_nominal_current(&mut self, m: usize) -> DevResult<f64> {
+        Ok(self.joint(m)?.nominal_current)
+    }
+    fn set_nominal_current(&mut self, m: usize, v: f64) -> DevResult<()> {
+        self.joint(m)?.nominal_current = v;
+        Ok(())
+    }
+    fn get_peak_current(&mut self, m: usize) -> DevResult<f64> {
+        Ok(self.joint(m)?.peak_current)
+    }
+    fn set_peak_current(&mut self, m: usize, v: f64) -> DevResult<()> {
+        self.joint(m)?.peak_current = v;
+        Ok(())
+    }
+    fn get_pwm(&mut self, m: usize) -> DevResult<f64> {
+        Ok(self.joint(m)?.duty)
+    }
+    fn get_pwm_limit(&mut self, m: usize) -> DevResult<f64> {
+        Ok(self.joint(m)?.pwm_limit)
+    }
+    fn set_pwm_limit(&mut self, m: usize, v: f64) -> DevResult<()> {
+        self.joint(m)?.pwm_limit = v;
+        Ok(())
+    }
+    fn get_power_supply_voltage(&mut self, m: usize) -> DevResult<f64> {
+        Ok(self.joint(m)?.supply_voltage)
     }
 }
 

@@ -336,13 +336,49 @@ pub trait IMotorEncoders {
     }
 }
 
-/// `IAmplifierControl` (subset).
+/// `IAmplifierControl`. The setters and the per-motor readings other than the current
+/// default to "not supported" (a `[fail]` on the wire, as C++ devices that lack them).
 pub trait IAmplifierControl {
     fn enable_amp(&mut self, j: usize) -> DevResult<()>;
     fn disable_amp(&mut self, j: usize) -> DevResult<()>;
     fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>>;
+    fn get_amp_status(&mut self, j: usize) -> DevResult<i32> {
+        let all = self.get_amp_statuses()?;
+        let axes = all.len();
+        all.get(j).copied().ok_or(DeviceError::InvalidJoint {
+            joint: j as i64,
+            axes,
+        })
+    }
     fn get_current(&mut self, j: usize) -> DevResult<f64>;
     fn get_max_current(&mut self, j: usize) -> DevResult<f64>;
+    fn set_max_current(&mut self, _j: usize, _v: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setMaxCurrent"))
+    }
+    fn get_nominal_current(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getNominalCurrent"))
+    }
+    fn set_nominal_current(&mut self, _m: usize, _v: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setNominalCurrent"))
+    }
+    fn get_peak_current(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getPeakCurrent"))
+    }
+    fn set_peak_current(&mut self, _m: usize, _v: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setPeakCurrent"))
+    }
+    fn get_pwm(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getPWM"))
+    }
+    fn get_pwm_limit(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getPWMLimit"))
+    }
+    fn set_pwm_limit(&mut self, _m: usize, _v: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setPWMLimit"))
+    }
+    fn get_power_supply_voltage(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getPowerSupplyVoltage"))
+    }
 }
 
 /// `IMotor` (subset).
@@ -353,6 +389,15 @@ pub trait IMotor {
     }
     fn get_gearbox_ratio(&mut self, _m: usize) -> DevResult<f64> {
         Err(DeviceError::Unsupported("getGearboxRatio"))
+    }
+    fn set_gearbox_ratio(&mut self, _m: usize, _v: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setGearboxRatio"))
+    }
+    fn get_temperature_limit(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getTemperatureLimit"))
+    }
+    fn set_temperature_limit(&mut self, _m: usize, _v: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setTemperatureLimit"))
     }
 }
 

@@ -680,6 +680,96 @@ impl IAmplifierControl for ControlBoardRemapper {
             |a, l| a.get_max_current(l)
         )
     }
+    fn set_max_current(&mut self, j: usize, v: f64) -> DevResult<()> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.set_max_current(l, v)
+        )
+    }
+    fn get_nominal_current(&mut self, j: usize) -> DevResult<f64> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.get_nominal_current(l)
+        )
+    }
+    fn set_nominal_current(&mut self, j: usize, v: f64) -> DevResult<()> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.set_nominal_current(l, v)
+        )
+    }
+    fn get_peak_current(&mut self, j: usize) -> DevResult<f64> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.get_peak_current(l)
+        )
+    }
+    fn set_peak_current(&mut self, j: usize, v: f64) -> DevResult<()> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.set_peak_current(l, v)
+        )
+    }
+    fn get_pwm(&mut self, j: usize) -> DevResult<f64> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.get_pwm(l)
+        )
+    }
+    fn get_pwm_limit(&mut self, j: usize) -> DevResult<f64> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.get_pwm_limit(l)
+        )
+    }
+    fn set_pwm_limit(&mut self, j: usize, v: f64) -> DevResult<()> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.set_pwm_limit(l, v)
+        )
+    }
+    fn get_power_supply_voltage(&mut self, j: usize) -> DevResult<f64> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.get_power_supply_voltage(l)
+        )
+    }
+    fn get_amp_status(&mut self, j: usize) -> DevResult<i32> {
+        on!(
+            self,
+            j,
+            as_amplifier_control,
+            "IAmplifierControl",
+            |a, l| a.get_amp_status(l)
+        )
+    }
 }
 
 impl IMotor for ControlBoardRemapper {
@@ -692,6 +782,15 @@ impl IMotor for ControlBoardRemapper {
     }
     fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
         on!(self, m, as_motor, "IMotor", |x, l| x.get_gearbox_ratio(l))
+    }
+    fn set_gearbox_ratio(&mut self, m: usize, v: f64) -> DevResult<()> {
+        on!(self, m, as_motor, "IMotor", |x, l| x.set_gearbox_ratio(l, v))
+    }
+    fn get_temperature_limit(&mut self, m: usize) -> DevResult<f64> {
+        on!(self, m, as_motor, "IMotor", |x, l| x.get_temperature_limit(l))
+    }
+    fn set_temperature_limit(&mut self, m: usize, v: f64) -> DevResult<()> {
+        on!(self, m, as_motor, "IMotor", |x, l| x.set_temperature_limit(l, v))
     }
 }
 

@@ -970,6 +970,37 @@ impl IAmplifierControl for RemoteControlBoard {
     fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
         self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_MAXCURRENT), j32(j)])
     }
+    fn set_max_current(&mut self, j: usize, v: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(AMP_MAXCURRENT), j32(j), v])
+    }
+    fn get_amp_status(&mut self, j: usize) -> DevResult<i32> {
+        let v = self.get_value(bottle![Vocab32(GET), Vocab32(AMP_STATUS_SINGLE), j32(j)])?;
+        v.as_i32().ok_or(DeviceError::Unsupported(REFUSED))
+    }
+    fn get_nominal_current(&mut self, m: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_NOMINAL_CURRENT), j32(m)])
+    }
+    fn set_nominal_current(&mut self, m: usize, v: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(AMP_NOMINAL_CURRENT), j32(m), v])
+    }
+    fn get_peak_current(&mut self, m: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_PEAK_CURRENT), j32(m)])
+    }
+    fn set_peak_current(&mut self, m: usize, v: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(AMP_PEAK_CURRENT), j32(m), v])
+    }
+    fn get_pwm(&mut self, m: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_PWM), j32(m)])
+    }
+    fn get_pwm_limit(&mut self, m: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_PWM_LIMIT), j32(m)])
+    }
+    fn set_pwm_limit(&mut self, m: usize, v: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(AMP_PWM_LIMIT), j32(m), v])
+    }
+    fn get_power_supply_voltage(&mut self, m: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_VOLTAGE_SUPPLY), j32(m)])
+    }
 }
 
 impl IMotor for RemoteControlBoard {
@@ -984,6 +1015,15 @@ impl IMotor for RemoteControlBoard {
     }
     fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
         self.get_f64(bottle![Vocab32(GET), Vocab32(GEARBOX_RATIO), j32(m)])
+    }
+    fn set_gearbox_ratio(&mut self, m: usize, v: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(GEARBOX_RATIO), j32(m), v])
+    }
+    fn get_temperature_limit(&mut self, m: usize) -> DevResult<f64> {
+        self.get_f64(bottle![Vocab32(GET), Vocab32(TEMPERATURE_LIMIT), j32(m)])
+    }
+    fn set_temperature_limit(&mut self, m: usize, v: f64) -> DevResult<()> {
+        self.set(bottle![Vocab32(SET), Vocab32(TEMPERATURE_LIMIT), j32(m), v])
     }
 }
 

@@ -229,6 +229,24 @@ fn set(cmd: &Bottle, dev: &mut dyn DeviceDriver) -> Option<Option<()>> {
         }
         AMP_ENABLE => dev.as_amplifier_control()?.enable_amp(joint(cmd, 2)?),
         AMP_DISABLE => dev.as_amplifier_control()?.disable_amp(joint(cmd, 2)?),
+        AMP_MAXCURRENT => dev
+            .as_amplifier_control()?
+            .set_max_current(joint(cmd, 2)?, float(cmd, 3)),
+        AMP_NOMINAL_CURRENT => dev
+            .as_amplifier_control()?
+            .set_nominal_current(joint(cmd, 2)?, float(cmd, 3)),
+        AMP_PEAK_CURRENT => dev
+            .as_amplifier_control()?
+            .set_peak_current(joint(cmd, 2)?, float(cmd, 3)),
+        AMP_PWM_LIMIT => dev
+            .as_amplifier_control()?
+            .set_pwm_limit(joint(cmd, 2)?, float(cmd, 3)),
+        TEMPERATURE_LIMIT => dev
+            .as_motor()?
+            .set_temperature_limit(joint(cmd, 2)?, float(cmd, 3)),
+        GEARBOX_RATIO => dev
+            .as_motor()?
+            .set_gearbox_ratio(joint(cmd, 2)?, float(cmd, 3)),
         ICONTROLMODE => {
             let cm = dev.as_control_mode()?;
             let modes = |i: usize| -> Option<Vec<Vocab32>> {
@@ -386,6 +404,49 @@ fn get(cmd: &Bottle, dev: &mut dyn DeviceDriver, resp: &mut Bottle) -> Option<()
                 .get_max_current(joint(cmd, 2)?)
                 .ok()?,
         ),
+        AMP_CURRENTS => {
+            let n = dev.as_encoders()?.get_axes().ok()?;
+            let amp = dev.as_amplifier_control()?;
+            let v = (0..n).map(|j| amp.get_current(j)).collect::<Result<Vec<_>, _>>();
+            resp.push(float_list(&v.ok()?))
+        }
+        AMP_STATUS_SINGLE => resp.push(
+            dev.as_amplifier_control()?
+                .get_amp_status(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        AMP_NOMINAL_CURRENT => resp.push(
+            dev.as_amplifier_control()?
+                .get_nominal_current(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        AMP_PEAK_CURRENT => resp.push(
+            dev.as_amplifier_control()?
+                .get_peak_current(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        AMP_PWM => resp.push(dev.as_amplifier_control()?.get_pwm(joint(cmd, 2)?).ok()?),
+        AMP_PWM_LIMIT => resp.push(
+            dev.as_amplifier_control()?
+                .get_pwm_limit(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        AMP_VOLTAGE_SUPPLY => resp.push(
+            dev.as_amplifier_control()?
+                .get_power_supply_voltage(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        TEMPERATURE_LIMIT => resp.push(
+            dev.as_motor()?
+                .get_temperature_limit(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        TEMPERATURES => {
+            let motor = dev.as_motor()?;
+            let n = motor.get_number_of_motors().ok()?;
+            let v = (0..n).map(|m| motor.get_temperature(m)).collect::<Result<Vec<_>, _>>();
+            resp.push(float_list(&v.ok()?))
+        }
         TEMPERATURE => resp.push(dev.as_motor()?.get_temperature(joint(cmd, 2)?).ok()?),
         MOTORS_NUMBER => {
             let n = dev.as_motor()?.get_number_of_motors().ok()?;
