@@ -1,92 +1,157 @@
-//! Interoperability with a real C++ YARP (run under netns-run): C++ `yarp rpc` drives our
-//! `controlBoard_nws_yarp`; a C++ `remote_controlboard` drives it and our
-//! `remote_controlboard` drives a C++ `fakeMotionControl` when the C++ build has those
-//! devices (`yarpdev --list`). The C++ programs come from `YARP_CPP_BIN`, else
-//! `<repo>/.venv-yarp/bin`; without them every test prints `SKIPPED: C++ YARP not
-//! found` and passes.
+//! Interoperability of our control board with a real C++ YARP (3.5 with its device plugins,
+//! from `tests/peers/install-cpp-yarp.sh`); run under netns-run.
+//!
+//! - C++ `yarp rpc` types text commands at our `controlBoard_nws_yarp`.
+//! - C++ `remote_controlboard` drives our `controlBoard_nws_yarp` + `fakeMotionControl`.
+//!   C++ has no command-line client for a control board, so the C++ client is driven
+//!   through C++'s own wrapper: `yarpdev --device controlBoard_nws_yarp --subdevice
+//!   remote_controlboard` parses `yarp rpc` text and calls every interface method of the
+//!   C++ `remote_controlboard`, which sends it to the board under test. The same session
+//!   runs against C++'s `controlBoard_nws_yarp` + `fakeMotionControl`; the method table
+//!   below wants the same answer from ours, row by row.
+//! - Our `remote_controlboard` drives C++ `fakeMotionControl` behind C++'s wrapper.
+//!
+//! Without the C++ peer every test says SKIPPED loudly; in CI (`CI=true`) it fails.
 
 mod controlboard_common;
 
 use controlboard_common::{name_client, T};
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::path::Path;
+use std::process::{Child, Stdio};
 use std::time::Instant;
 use yarp_devices::PolyDriver;
+use yarp_interop_tests::{cpp_command, cpp_devices, cpp_program, Reaped};
 use yarp_proto::Property;
-
-/// The real C++ program `prog` (see `yarp_interop_tests::cpp_bin_dir`).
-fn cpp_program(prog: &str) -> Option<PathBuf> {
-    yarp_interop_tests::cpp_bin_dir()
-        .map(|d| yarp_interop_tests::real_cpp_program(&d, prog))
-        .filter(|p| p.is_file())
-}
-
-fn skip(what: &str) {
-    let mut e = std::io::stderr().lock();
-    let _ = writeln!(e, "SKIPPED: {what}");
-}
 
 /// Waits for `child` at most `T`, killing it if it is still running; returns its stdout.
 fn finish(mut child: Child) -> String {
+    let mut stdout = child.stdout.take().expect("piped stdout");
+    let reader = std::thread::spawn(move || {
+        let mut out = String::new();
+        let _ = stdout.read_to_string(&mut out);
+        out
+    });
     let start = Instant::now();
     while child.try_wait().expect("try_wait").is_none() {
-        if start.elapsed() > T {
+        if start.elapsed() > 3 * T {
             let _ = child.kill();
             let _ = child.wait();
-            panic!("C++ program did not finish within {T:?}");
+            panic!("C++ program did not finish within {:?}", 3 * T);
         }
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
-    let mut out = String::new();
-    if let Some(mut s) = child.stdout.take() {
-        let _ = s.read_to_string(&mut out);
-    }
-    out
+    reader.join().unwrap_or_default()
 }
 
-/// C++ `yarp rpc <name>/rpc:i` against our controlBoard_nws_yarp over a 4-joint
-/// fakeMotionControl: types `input`, returns the `Response` lines (or `None`, after a
-/// SKIPPED notice, without the C++ peer).
-fn cpp_rpc_session(name: &str, input: &[u8]) -> Option<Vec<String>> {
-    let Some(yarp) = cpp_program("yarp") else {
-        skip("C++ YARP not found (set YARP_CPP_BIN or install .venv-yarp)");
-        return None;
-    };
-    name_client();
-    let _nws = PolyDriver::open(
-        &Property::from_config_text(format!(
-            "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname {name}\n\
-             [GENERAL]\njoints 4\n"
-        ))
-        .unwrap(),
-    )
-    .expect("open wrapper");
-    let mut child = Command::new(&yarp)
-        .args(["rpc", &format!("{name}/rpc:i")])
+/// C++ `yarp rpc <port>` with `input` typed: the `Response` lines it printed.
+fn cpp_rpc(yarp: &Path, port: &str, input: &[u8]) -> Vec<String> {
+    let mut child = cpp_command(yarp)
+        .args(["rpc", port])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
         .expect("spawn C++ yarp rpc");
     child.stdin.take().unwrap().write_all(input).unwrap();
-    let out = finish(child);
-    Some(
-        out.lines()
-            .filter(|l| l.starts_with("Response"))
-            .map(str::to_string)
-            .collect(),
+    finish(child)
+        .lines()
+        .filter(|l| l.starts_with("Response"))
+        .map(str::to_string)
+        .collect()
+}
+
+/// Our `controlBoard_nws_yarp` over a 4-joint `fakeMotionControl` named `name`.
+fn our_board(name: &str) -> PolyDriver {
+    name_client();
+    PolyDriver::open(
+        &Property::from_config_text(format!(
+            "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname {name}\n\
+             period 0.01\n[GENERAL]\njoints 4\n"
+        ))
+        .unwrap(),
+    )
+    .expect("open our wrapper")
+}
+
+fn registered(port: &str) -> bool {
+    let ns = name_client();
+    let port = port.to_string();
+    controlboard_common::run(async move { ns.query(&port).await.unwrap().is_some() })
+}
+
+/// `yarpdev` of the C++ peer in `bin` with `args`, once `port` is registered.
+fn cpp_yarpdev(bin: &Path, args: &[&str], port: &str) -> Reaped {
+    name_client();
+    let child = cpp_command(&bin.join("yarpdev"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn C++ yarpdev");
+    let child = Reaped(child);
+    controlboard_common::wait_for(&format!("C++ yarpdev's {port}"), || {
+        registered(port).then_some(())
+    });
+    child
+}
+
+/// C++ `controlBoard_nws_yarp` named `name` over C++ `fakeMotionControl` (4 joints).
+fn cpp_board(bin: &Path, name: &str) -> Reaped {
+    cpp_yarpdev(
+        bin,
+        &[
+            "--device",
+            "controlBoard_nws_yarp",
+            "--subdevice",
+            "fakeMotionControl",
+            "--name",
+            name,
+            "--period",
+            "0.01",
+            "--GENERAL::Joints",
+            "4",
+        ],
+        &format!("{name}/stateExt:o"),
+    )
+}
+
+/// C++ `remote_controlboard` connected to the board `remote`, wrapped by C++
+/// `controlBoard_nws_yarp` as `name` so `yarp rpc {name}/rpc:i` calls its methods.
+fn cpp_client_chain(bin: &Path, name: &str, remote: &str) -> Reaped {
+    let local = format!("{name}/client");
+    cpp_yarpdev(
+        bin,
+        &[
+            "--device",
+            "controlBoard_nws_yarp",
+            "--subdevice",
+            "remote_controlboard",
+            "--name",
+            name,
+            "--period",
+            "0.01",
+            "--remote",
+            remote,
+            "--local",
+            &local,
+        ],
+        &format!("{name}/rpc:i"),
     )
 }
 
 #[test]
 fn cpp_yarp_rpc_drives_our_wrapper() {
-    let Some(lines) = cpp_rpc_session(
-        "/cpp",
-        b"get axes\n[get] [axes]\n[set] [pos] 0 10.0\n[get] [pos] 0\n[get] [prot]\nfoo bar\n[set] [poss] 5\n",
-    ) else {
+    let Some(yarp) = cpp_program("cpp_yarp_rpc_drives_our_wrapper", "yarp") else {
         return;
     };
+    let _nws = our_board("/cpp");
+    let lines = cpp_rpc(
+        &yarp,
+        "/cpp/rpc:i",
+        b"get axes\n[get] [axes]\n[set] [pos] 0 10.0\n[get] [pos] 0\n[get] [prot]\nfoo bar\n[set] [poss] 5\n",
+    );
     let out = lines.join("\n");
     assert_eq!(lines.len(), 7, "{out}");
     assert!(
@@ -111,14 +176,17 @@ fn cpp_yarp_rpc_drives_our_wrapper() {
 /// parser gives (plain words are packed into vocabs and echoed as typed).
 #[test]
 fn cpp_yarp_rpc_impedance_and_calibration() {
-    let Some(lines) = cpp_rpc_session(
-        "/cppimp",
+    let Some(yarp) = cpp_program("cpp_yarp_rpc_impedance_and_calibration", "yarp") else {
+        return;
+    };
+    let _nws = our_board("/cppimp");
+    let lines = cpp_rpc(
+        &yarp,
+        "/cppimp/rpc:i",
         b"set iimp ipr 0 (1.0 0.5)\nget iimp ipr 0\n[get] [iimp] [llim] 0\n\
           [set] [iimp] [iof] 0 (2.5)\n[get] [iimp] [iof] 0\ncalj 0 3 1.0 2.0 3.0\n\
           cald 0\nget reca isca\nset imp ipr 0 (1.0 0.5)\n",
-    ) else {
-        return;
-    };
+    );
     let out = lines.join("\n");
     assert_eq!(lines.len(), 9, "{out}");
     let stamped = |line: &str, head: &str| {
@@ -142,71 +210,300 @@ fn cpp_yarp_rpc_impedance_and_calibration() {
     assert_eq!(lines[8], "Response: [fail]");
 }
 
-/// The C++ devices this test needs, if the C++ build has them.
-fn cpp_devices() -> Option<String> {
-    let yarpdev = cpp_program("yarpdev")?;
-    let child = Command::new(yarpdev)
-        .arg("--list")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .ok()?;
-    let out = child.wait_with_output().ok()?;
-    Some(format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    ))
+/// One call of the C++ `remote_controlboard`: the interface method, and the `yarp rpc`
+/// line that makes C++'s wrapper call it on the C++ client (4 joints; rows run in order,
+/// so a `get` after a `set` reads what was set).
+struct Row {
+    method: &'static str,
+    line: &'static str,
 }
 
-fn registered(port: &str) -> bool {
-    let ns = name_client();
-    let port = port.to_string();
-    controlboard_common::run(async move { ns.query(&port).await.unwrap().is_some() })
+const fn row(method: &'static str, line: &'static str) -> Row {
+    Row { method, line }
 }
 
-/// Stops a child on every exit path.
-struct Reap(Child);
+/// Every method of the interfaces C++ `remote_controlboard` implements that C++'s
+/// wrapper can call from `yarp rpc` (streaming-only setters, e.g. `setPosition` or
+/// `setRefTorque`, are checked through their getters after a streamed set).
+const METHODS: &[Row] = &[
+    // IEncodersTimed / IAxisInfo: served from the streamed state (stateExt:o)
+    row("getAxes", "[get] [axes]"),
+    row("getAxisName", "[get] [name] 1"),
+    row("getJointType", "[get] [type] 1"),
+    row("getEncoder", "[get] [enc] 1"),
+    row("getEncoders", "[get] [encs]"),
+    row("getEncoderSpeed", "[get] [esp] 1"),
+    row("getEncoderSpeeds", "[get] [esps]"),
+    row("getEncoderAcceleration", "[get] [eac] 1"),
+    row("getEncoderAccelerations", "[get] [eacs]"),
+    row("setEncoder", "[set] [enc] 1 5.0"),
+    row("setEncoders", "[set] [encs] (0.0 5.0 0.0 0.0)"),
+    row("resetEncoder", "[set] [ere] 1"),
+    row("resetEncoders", "[set] [eres]"),
+    // IMotorEncoders
+    row("getNumberOfMotorEncoders", "[get] [mnum]"),
+    row("getMotorEncoder", "[get] [mnc] 1"),
+    row("getMotorEncoders", "[get] [mncs]"),
+    row("getMotorEncoderSpeed", "[get] [msp] 1"),
+    row("getMotorEncoderSpeeds", "[get] [msps]"),
+    row("getMotorEncoderAcceleration", "[get] [mac] 1"),
+    row("getMotorEncoderAccelerations", "[get] [macs]"),
+    row("getMotorEncoderCountsPerRevolution", "[get] [mcpr] 1"),
+    row("setMotorEncoderCountsPerRevolution", "[set] [mcpr] 1 1000.0"),
+    row("resetMotorEncoder", "[set] [mere] 1"),
+    row("resetMotorEncoders", "[set] [meres]"),
+    // IControlMode
+    row("getControlMode", "[get] [icmd] [cmod] 1"),
+    row("getControlModes", "[get] [icmd] [cmds]"),
+    row("getControlModes(group)", "[get] [icmd] [cmog] 2 (0 1)"),
+    row("setControlMode", "[set] [icmd] [cmod] 1 [vel]"),
+    row("getControlMode (velocity)", "[get] [icmd] [cmod] 1"),
+    row(
+        "setControlModes(group)",
+        "[set] [icmd] [cmog] 2 (2 3) ([posd] [posd])",
+    ),
+    row("getControlModes (mixed)", "[get] [icmd] [cmds]"),
+    row(
+        "setControlModes",
+        "[set] [icmd] [cmds] ([pos] [pos] [pos] [pos])",
+    ),
+    // IPositionControl
+    row("positionMove", "[set] [pos] 1 30.0"),
+    row("getTargetPosition", "[get] [pos] 1"),
+    row("positionMove(all)", "[set] [poss] (1.0 2.0 3.0 4.0)"),
+    row("getTargetPositions", "[get] [poss]"),
+    row("positionMove(group)", "[set] [posg] 2 (0 1) (5.0 6.0)"),
+    row("getTargetPositions(group)", "[get] [posg] 2 (0 1)"),
+    row("relativeMove", "[set] [rel] 1 5.0"),
+    row("relativeMove(all)", "[set] [rels] (1.0 1.0 1.0 1.0)"),
+    row("relativeMove(group)", "[set] [relg] 2 (0 1) (1.0 1.0)"),
+    row("checkMotionDone", "[get] [don] 1"),
+    row("checkMotionDone(all)", "[get] [dons]"),
+    row("checkMotionDone(group)", "[get] [dong] 2 (0 1)"),
+    row("setRefSpeed", "[set] [vel] 1 10.0"),
+    row("getRefSpeed", "[get] [vel] 1"),
+    row("setRefSpeeds", "[set] [vels] (1.0 2.0 3.0 4.0)"),
+    row("getRefSpeeds", "[get] [vels]"),
+    row("setRefSpeeds(group)", "[set] [velg] 2 (0 1) (7.0 8.0)"),
+    row("getRefSpeeds(group)", "[get] [velg] 2 (0 1)"),
+    row("setRefAcceleration", "[set] [acc] 1 20.0"),
+    row("getRefAcceleration", "[get] [acc] 1"),
+    row("setRefAccelerations", "[set] [accs] (1.0 2.0 3.0 4.0)"),
+    row("getRefAccelerations", "[get] [accs]"),
+    row("setRefAccelerations(group)", "[set] [accg] 2 (0 1) (7.0 8.0)"),
+    row("getRefAccelerations(group)", "[get] [accg] 2 (0 1)"),
+    row("stop", "[set] [sto] 1"),
+    row("stop(all)", "[set] [stos]"),
+    row("stop(group)", "[set] [stog] 2 (0 1)"),
+    // IPositionDirect (set over the streaming port; read back over RPC)
+    row("getRefPosition", "[get] [dpo] 1"),
+    row("getRefPositions", "[get] [dpos]"),
+    row("getRefPositions(group)", "[get] [dpog] 2 (0 1)"),
+    // IVelocityControl (velocityMove is streamed to command:i)
+    row("setControlMode (velocity all)", "[set] [icmd] [cmds] ([vel] [vel] [vel] [vel])"),
+    row("velocityMove(all)", "[set] [vmos] (1.0 2.0 3.0 4.0)"),
+    row("getRefVelocity", "[get] [vmo] 1"),
+    row("getRefVelocities", "[get] [vmos]"),
+    row("getRefVelocities(group)", "[get] [vmog] 2 (0 1)"),
+    row("setControlMode (position all)", "[set] [icmd] [cmds] ([pos] [pos] [pos] [pos])"),
+    // IInteractionMode
+    row("getInteractionMode", "[get] [intm] [mode] 1"),
+    row("getInteractionModes", "[get] [intm] [mods]"),
+    row("setInteractionMode", "[set] [intm] [mode] 1 [comp]"),
+    row("getInteractionModes(group)", "[get] [intm] [mobg] 2 (0 1)"),
+    row(
+        "setInteractionModes(group)",
+        "[set] [intm] [mobg] 2 (0 1) ([stif] [stif])",
+    ),
+    row(
+        "setInteractionModes",
+        "[set] [intm] [mods] ([stif] [comp] [stif] [stif])",
+    ),
+    row("getInteractionModes (set)", "[get] [intm] [mods]"),
+    // IPidControl
+    row("getPid", "[get] [pid] [pid] [pos] 1"),
+    row(
+        "setPid",
+        "[set] [pid] [pid] [pos] 1 (1.0 2.0 3.0 4.0 5.0 6.0 7.0 8.0 9.0 10.0)",
+    ),
+    row("getPid (set)", "[get] [pid] [pid] [pos] 1"),
+    row("getPids", "[get] [pid] [pids] [pos]"),
+    row("setPidReference", "[set] [pid] [ref] [pos] 1 3.0"),
+    row("getPidReference", "[get] [pid] [ref] [pos] 1"),
+    row("getPidReferences", "[get] [pid] [refs] [pos]"),
+    row("setPidErrorLimit", "[set] [pid] [lim] [pos] 1 50.0"),
+    row("getPidErrorLimit", "[get] [pid] [lim] [pos] 1"),
+    row("getPidErrorLimits", "[get] [pid] [lims] [pos]"),
+    row("getPidError", "[get] [pid] [err] [pos] 1"),
+    row("getPidErrors", "[get] [pid] [errs] [pos]"),
+    row("getPidOutput", "[get] [pid] [out] [pos] 1"),
+    row("getPidOutputs", "[get] [pid] [outs] [pos]"),
+    row("setPidOffset", "[set] [pid] [off] [pos] 1 2.0"),
+    row("disablePid", "[set] [pid] [dis] [pos] 1"),
+    row("isPidEnabled (disabled)", "[get] [pid] [ena] [pos] 1"),
+    row("enablePid", "[set] [pid] [ena] [pos] 1"),
+    row("isPidEnabled", "[get] [pid] [ena] [pos] 1"),
+    row("resetPid", "[set] [pid] [res] [pos] 1"),
+    row("getPid (velocity)", "[get] [pid] [pid] [vel] 1"),
+    row("getPid (torque)", "[get] [pid] [pid] [trq] 1"),
+    row("getPid (current)", "[get] [pid] [pid] [cur] 1"),
+    // IControlLimits
+    row("setLimits", "[set] [llim] 1 -10.0 10.0"),
+    row("getLimits", "[get] [llim] 1"),
+    row("setVelLimits", "[set] [vlim] 1 0.0 50.0"),
+    row("getVelLimits", "[get] [vlim] 1"),
+    // IAmplifierControl
+    row("enableAmp", "[set] [aen] 1"),
+    row("disableAmp", "[set] [adi] 1"),
+    row("getCurrent", "[get] [acu] 1"),
+    row("getCurrents", "[get] [acus]"),
+    row("getAmpStatus(all)", "[get] [asta]"),
+    row("getAmpStatus", "[get] [asts] 1"),
+    row("setMaxCurrent", "[set] [maxc] 0 2.0"),
+    row("getMaxCurrent", "[get] [maxc] 0"),
+    row("getNominalCurrent", "[get] [acno] 1"),
+    row("setNominalCurrent", "[set] [acno] 1 1.5"),
+    row("getPeakCurrent", "[get] [acpk] 1"),
+    row("setPeakCurrent", "[set] [acpk] 1 3.0"),
+    row("getPWM", "[get] [pwm] 1"),
+    row("getPWMLimit", "[get] [pwml] 1"),
+    row("setPWMLimit", "[set] [pwml] 1 40.0"),
+    row("getPowerSupplyVoltage", "[get] [avsu] 1"),
+    // IMotor
+    row("getNumberOfMotors", "[get] [mtnm]"),
+    row("getTemperature", "[get] [tmp] 1"),
+    row("getTemperatures", "[get] [tmps]"),
+    row("getTemperatureLimit", "[get] [tmpl] 1"),
+    row("setTemperatureLimit", "[set] [tmpl] 1 60.0"),
+    row("getGearboxRatio", "[get] [gbxr] 1"),
+    row("setGearboxRatio", "[set] [gbxr] 1 100.0"),
+    // ICurrentControl
+    row("getCurrentRange", "[get] [icur] [rng] 1"),
+    row("getCurrentRanges", "[get] [icur] [rngs]"),
+    row("setControlMode (current)", "[set] [icmd] [cmod] 1 [icur]"),
+    row("setRefCurrent", "[set] [icur] [ref] 1 0.5"),
+    row("getRefCurrent", "[get] [icur] [ref] 1"),
+    row("setRefCurrents", "[set] [icur] [refs] (0.1 0.2 0.3 0.4)"),
+    row("getRefCurrents", "[get] [icur] [refs]"),
+    row("setRefCurrents(group)", "[set] [icur] [refg] 2 (0 1) (0.7 0.8)"),
+    // IPWMControl
+    row("setControlMode (pwm)", "[set] [icmd] [cmod] 1 [ipwm]"),
+    row("setRefDutyCycle", "[set] [ipwm] [ref] 1 10.0"),
+    row("getRefDutyCycle", "[get] [ipwm] [ref] 1"),
+    row("getRefDutyCycles", "[get] [ipwm] [refs]"),
+    row("getDutyCycle", "[get] [ipwm] [pwm] 1"),
+    row("getDutyCycles", "[get] [ipwm] [pwms]"),
+    // ITorqueControl
+    row("getTorque", "[get] [torq] [trq] 1"),
+    row("getTorques", "[get] [torq] [trqs]"),
+    row("getTorqueRange", "[get] [torq] [rng] 1"),
+    row("getTorqueRanges", "[get] [torq] [rngs]"),
+    row("setControlMode (torque)", "[set] [icmd] [cmod] 1 [torq]"),
+    row("setRefTorque", "[set] [torq] [ref] 1 0.5"),
+    row("getRefTorque", "[get] [torq] [ref] 1"),
+    row("setRefTorques", "[set] [torq] [refs] (0.1 0.2 0.3 0.4)"),
+    row("getRefTorques", "[get] [torq] [refs]"),
+    row("getMotorTorqueParams", "[get] [torq] [mtps] 1"),
+    row(
+        "setMotorTorqueParams",
+        "[set] [torq] [mtps] 1 1.0 2.0 3.0 4.0",
+    ),
+    // IImpedanceControl
+    row("setImpedance", "[set] [iimp] [ipr] 1 (1.0 0.5)"),
+    row("getImpedance", "[get] [iimp] [ipr] 1"),
+    row("setImpedanceOffset", "[set] [iimp] [iof] 1 (2.5)"),
+    row("getImpedanceOffset", "[get] [iimp] [iof] 1"),
+    row("getCurrentImpedanceLimit", "[get] [iimp] [llim] 1"),
+    // IRemoteVariables
+    row("getRemoteVariablesList", "[get] [ivar] [lvar]"),
+    // IControlCalibration / IRemoteCalibrator
+    row("calibrateAxisWithParams", "[calj] 1 3 1.0 2.0 3.0"),
+    row("calibrationDone", "[cald] 1"),
+    row("isCalibratorDevicePresent", "[get] [reca] [isca]"),
+    // back to position control, where the board started
+    row(
+        "setControlModes (end)",
+        "[set] [icmd] [cmds] ([pos] [pos] [pos] [pos])",
+    ),
+    row("getControlModes (end)", "[get] [icmd] [cmds]"),
+];
 
-impl Drop for Reap {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
+/// A reply without what differs between runs: the `[tsta] n t` stamps.
+fn comparable(line: &str) -> String {
+    let mut out = Vec::new();
+    let mut words = line.split(' ');
+    while let Some(w) = words.next() {
+        out.push(w);
+        if w == "[tsta]" {
+            words.next();
+            words.next();
+        }
     }
+    out.join(" ")
+}
+
+/// The replies of the C++ client chain `name` over the board at `remote` to every row.
+fn method_table_session(bin: &Path, name: &str, remote: &str) -> Vec<String> {
+    let _chain = cpp_client_chain(bin, name, remote);
+    let mut input = String::new();
+    for r in METHODS {
+        input.push_str(r.line);
+        input.push('\n');
+    }
+    let lines = cpp_rpc(&bin.join("yarp"), &format!("{name}/rpc:i"), input.as_bytes());
+    lines.iter().map(|l| comparable(l)).collect()
+}
+
+/// The method table: every row's reply from C++ `remote_controlboard` over our board is
+/// the reply it gets over C++ `fakeMotionControl` behind C++'s wrapper.
+#[test]
+fn cpp_remote_controlboard_drives_our_wrapper() {
+    let test = "cpp_remote_controlboard_drives_our_wrapper";
+    let Some(bin) = cpp_devices(
+        test,
+        &[
+            "controlBoard_nws_yarp",
+            "remote_controlboard",
+            "fakeMotionControl",
+        ],
+    ) else {
+        return;
+    };
+    let _ours = our_board("/mt_ours");
+    let ours = method_table_session(&bin, "/mt_chain_ours", "/mt_ours");
+    let _theirs = cpp_board(&bin, "/mt_cpp");
+    let theirs = method_table_session(&bin, "/mt_chain_cpp", "/mt_cpp");
+    assert_eq!(
+        theirs.len(),
+        METHODS.len(),
+        "C++ reference session: {theirs:#?}"
+    );
+    assert_eq!(ours.len(), METHODS.len(), "session over ours: {ours:#?}");
+    let mut table = String::new();
+    let mut bad = Vec::new();
+    for ((r, o), c) in METHODS.iter().zip(&ours).zip(&theirs) {
+        let verdict = if o == c { "ok" } else { "DIFFERS" };
+        table.push_str(&format!(
+            "{verdict:7} {:36} {:48} {o}\n",
+            r.method, r.line
+        ));
+        if o != c {
+            bad.push(format!("{} `{}`: ours {o:?}, C++ {c:?}", r.method, r.line));
+        }
+    }
+    eprintln!("method table (C++ remote_controlboard -> our controlBoard_nws_yarp):\n{table}");
+    assert!(bad.is_empty(), "{} rows differ:\n{}", bad.len(), bad.join("\n"));
 }
 
 #[test]
 fn our_remote_drives_cpp_fake_motion_control() {
-    let Some(list) = cpp_devices() else {
-        skip("C++ YARP not found (set YARP_CPP_BIN or install .venv-yarp)");
+    let Some(bin) = cpp_devices(
+        "our_remote_drives_cpp_fake_motion_control",
+        &["controlBoard_nws_yarp", "fakeMotionControl"],
+    ) else {
         return;
     };
-    if !(list.contains("fakeMotionControl") && list.contains("controlBoard_nws_yarp")) {
-        skip("the C++ YARP build has no fakeMotionControl / controlBoard_nws_yarp (`yarpdev --list`)");
-        return;
-    }
-    name_client();
-    let child = Command::new(cpp_program("yarpdev").unwrap())
-        .args([
-            "--device",
-            "controlBoard_nws_yarp",
-            "--subdevice",
-            "fakeMotionControl",
-            "--name",
-            "/cppfake",
-            "--period",
-            "0.01",
-            "--GENERAL::Joints",
-            "4",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn yarpdev");
-    let _reap = Reap(child);
-    controlboard_common::wait_for("C++ /cppfake/stateExt:o", || {
-        registered("/cppfake/stateExt:o").then_some(())
-    });
+    let _cpp = cpp_board(&bin, "/cppfake");
     let mut remote = PolyDriver::open(
         &Property::from_config_text("device remote_controlboard\nremote /cppfake\nlocal /ours\n")
             .unwrap(),
@@ -214,80 +511,25 @@ fn our_remote_drives_cpp_fake_motion_control() {
     .expect("our remote_controlboard opens against C++");
     let d = remote.device();
     let axes = d.as_encoders().unwrap().get_axes().unwrap();
-    assert!(axes > 0);
+    assert_eq!(axes, 4);
     let q = controlboard_common::wait_for("encoders streamed by C++", || {
         d.as_encoders().unwrap().get_encoders().ok()
     });
     assert_eq!(q.len(), axes);
-    d.as_position_control()
-        .unwrap()
-        .position_move(0, 10.0)
-        .unwrap();
-    assert_eq!(
-        d.as_position_control()
-            .unwrap()
-            .get_target_position(0)
-            .unwrap(),
-        10.0
-    );
-}
-
-#[test]
-fn cpp_remote_controlboard_drives_our_wrapper() {
-    let Some(list) = cpp_devices() else {
-        skip("C++ YARP not found (set YARP_CPP_BIN or install .venv-yarp)");
-        return;
-    };
-    // the venv the C++ peer was installed into (CI: YARP_CPP_VENV)
-    let python = std::env::var_os("YARP_CPP_VENV")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../.venv-yarp"))
-        .join("bin/python3");
-    if !list.contains("remote_controlboard") {
-        skip("the C++ YARP build has no remote_controlboard device (`yarpdev --list`)");
-        return;
-    }
-    if !python.is_file() {
-        skip("no python3 with the C++ YARP bindings next to the C++ programs");
-        return;
-    }
-    name_client();
-    let _nws = PolyDriver::open(
-        &Property::from_config_text(
-            "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname /ourcb\nperiod 0.01\n\
-             [GENERAL]\njoints 4\n",
-        )
-        .unwrap(),
-    )
-    .expect("open wrapper");
-    let script = r#"
-import time, yarp
-yarp.Network.init()
-p = yarp.Property()
-p.put("device", "remote_controlboard"); p.put("remote", "/ourcb"); p.put("local", "/pycli")
-d = yarp.PolyDriver(p)
-assert d.isValid(), "open"
-enc = d.viewIEncoders(); pos = d.viewIPositionControl()
-print("axes", enc.getAxes())
-assert pos.positionMove(1, 30.0)
-v = yarp.Vector(4)
-deadline = time.time() + 5
-while time.time() < deadline:
-    if enc.getEncoders(v.data()) and abs(v[1] - 30.0) < 1e-6:
-        break
-    time.sleep(0.05)
-print("enc1", v[1])
-d.close()
-"#;
-    let mut child = Command::new(python)
-        .arg("-c")
-        .arg(script)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn python");
-    let _ = child.stdin.take();
-    let out = finish(child);
-    assert!(out.contains("axes 4"), "{out}");
-    assert!(out.contains("enc1 30.0"), "{out}");
+    let pos = d.as_position_control().unwrap();
+    pos.position_move(0, 10.0).unwrap();
+    assert_eq!(pos.get_target_position(0).unwrap(), 10.0);
+    pos.set_ref_speed(1, 12.5).unwrap();
+    assert_eq!(pos.get_ref_speed(1).unwrap(), 12.5);
+    // the C++ fake moves to the target at once: the streamed state follows
+    controlboard_common::wait_for("C++ encoder 0 at the target", || {
+        let q = d.as_encoders().unwrap().get_encoder(0).ok()?;
+        ((q - 10.0).abs() < 1e-9).then_some(())
+    });
+    let lim = d.as_control_limits().unwrap();
+    lim.set_limits(2, -5.0, 5.0).unwrap();
+    assert_eq!(lim.get_limits(2).unwrap(), (-5.0, 5.0));
+    let amp = d.as_amplifier_control().unwrap();
+    amp.set_max_current(0, 2.0).unwrap();
+    assert_eq!(amp.get_max_current(0).unwrap(), 2.0);
 }

@@ -229,3 +229,181 @@ fn cpp_yarp_read_reads_our_images() {
     eprintln!("interop: C++ yarp read <- frameGrabber_nws_yarp OK");
     server.close().unwrap();
 }
+
+/// The `Response` lines of a C++ `yarp rpc` session, made comparable.
+fn responses(out: &str) -> Vec<String> {
+    out.lines()
+        .filter(|l| l.starts_with("Response"))
+        .map(comparable)
+        .collect()
+}
+
+/// C++ `frameGrabber_nwc_yarp` reads our `frameGrabber_nws_yarp`. C++ has no command-line
+/// frame grabber client, so C++'s own `frameGrabber_nws_yarp` wraps the C++ client
+/// (`yarpdev --device frameGrabber_nws_yarp --subdevice frameGrabber_nwc_yarp`): its
+/// images are the ones the C++ client read from ours, and each `yarp rpc` line at it is a
+/// call of the C++ client answered by ours. The same session over C++'s
+/// `frameGrabber_nws_yarp` + `fakeFrameGrabber` must print the same.
+#[test]
+fn cpp_frame_grabber_client_reads_ours() {
+    let test = "cpp_frame_grabber_client_reads_ours";
+    let Some(bin) = yarp_interop_tests::cpp_devices(
+        test,
+        &[
+            "frameGrabber_nws_yarp",
+            "frameGrabber_nwc_yarp",
+            "fakeFrameGrabber",
+        ],
+    ) else {
+        return;
+    };
+    let cases = recorded_rpc().expect("../shared/yarp-vectors/framegrabber.jsonl");
+    let input: String = cases.iter().map(|(t, _)| format!("{t}\n")).collect();
+    let chain = |name: &str, remote: &str| {
+        yarp_interop_tests::cpp_yarpdev(
+            &bin,
+            &[
+                "--device",
+                "frameGrabber_nws_yarp",
+                "--subdevice",
+                "frameGrabber_nwc_yarp",
+                "--remote",
+                remote,
+                "--local",
+                &format!("{name}/client"),
+                "--name",
+                name,
+                "--period",
+                "0.1",
+            ],
+            &format!("{name}/rpc"),
+        )
+    };
+    let mut ours = grabber("/fg_ours");
+    let _chain_ours = chain("/fg_chain_ours", "/fg_ours");
+    let yarp = bin.join("yarp");
+    let over_ours = responses(&yarp_interop_tests::cpp_rpc_output(
+        &yarp,
+        "/fg_chain_ours/rpc",
+        &input,
+    ));
+    let _cpp = yarp_interop_tests::cpp_yarpdev(
+        &bin,
+        &[
+            "--device",
+            "frameGrabber_nws_yarp",
+            "--subdevice",
+            "fakeFrameGrabber",
+            "--name",
+            "/fg_cpp",
+            "--width",
+            "8",
+            "--height",
+            "6",
+            "--period",
+            "0.1",
+        ],
+        "/fg_cpp/rpc",
+    );
+    let _chain_cpp = chain("/fg_chain_cpp", "/fg_cpp");
+    let over_cpp = responses(&yarp_interop_tests::cpp_rpc_output(
+        &yarp,
+        "/fg_chain_cpp/rpc",
+        &input,
+    ));
+    assert_eq!(over_cpp.len(), cases.len(), "C++ reference: {over_cpp:#?}");
+    let mut bad = Vec::new();
+    for (((text, _), o), c) in cases.iter().zip(&over_ours).zip(&over_cpp) {
+        let verdict = if o == c { "ok" } else { "DIFFERS" };
+        eprintln!("{verdict:7} {text:40} {o}");
+        if o != c {
+            bad.push(format!("`{text}`: over ours {o:?}, over C++ {c:?}"));
+        }
+    }
+    assert_eq!(over_ours.len(), cases.len(), "over ours: {over_ours:#?}");
+    assert!(bad.is_empty(), "{} rows differ:\n{}", bad.len(), bad.join("\n"));
+
+    // the C++ client's images, republished by C++'s wrapper, are ours (8x6 RGB)
+    let reader = Reaped(
+        yarp_interop_tests::cpp_command(&yarp)
+            .args(["read", "/fg_rd", "/fg_chain_ours"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("C++ yarp read"),
+    );
+    let mut reader = reader;
+    let stdout = reader.0.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let start = Instant::now();
+    loop {
+        assert!(start.elapsed() < WAIT, "no image from the C++ chain");
+        let Ok(line) = rx.recv_timeout(WAIT) else {
+            continue;
+        };
+        if line.starts_with("[mat] [rgb] (3 144 65544 8 6) {") {
+            break;
+        }
+    }
+    ours.close().unwrap();
+}
+
+/// Our `frameGrabber_nwc_yarp` reads C++'s `frameGrabber_nws_yarp` + `fakeFrameGrabber`.
+#[test]
+fn our_frame_grabber_client_reads_cpp() {
+    let test = "our_frame_grabber_client_reads_cpp";
+    let Some(bin) = yarp_interop_tests::cpp_devices(
+        test,
+        &["frameGrabber_nws_yarp", "fakeFrameGrabber"],
+    ) else {
+        return;
+    };
+    name_client();
+    let _cpp = yarp_interop_tests::cpp_yarpdev(
+        &bin,
+        &[
+            "--device",
+            "frameGrabber_nws_yarp",
+            "--subdevice",
+            "fakeFrameGrabber",
+            "--name",
+            "/fgr_cpp",
+            "--width",
+            "8",
+            "--height",
+            "6",
+            "--period",
+            "0.05",
+        ],
+        "/fgr_cpp/rpc",
+    );
+    let mut client = PolyDriver::open(
+        &Property::from_config_text(
+            "device frameGrabber_nwc_yarp\nremote /fgr_cpp\nlocal /fgr_ours\n",
+        )
+        .unwrap(),
+    )
+    .expect("our client opens against C++");
+    let d = client.device();
+    let fg = d.as_frame_grabber_image().expect("IFrameGrabberImage");
+    assert_eq!((fg.width(), fg.height()), (8, 6));
+    let start = Instant::now();
+    let img = loop {
+        if let Ok(img) = fg.get_image() {
+            if img.width() > 0 {
+                break img;
+            }
+        }
+        assert!(start.elapsed() < WAIT, "no image from C++");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!((img.width(), img.height()), (8, 6));
+    client.close().unwrap();
+}

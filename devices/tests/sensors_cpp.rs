@@ -81,3 +81,173 @@ fn cpp_yarp_rpc_prints_what_it_printed_against_cpp() {
     eprintln!("interop: C++ yarp rpc -> multipleanalogsensorsserver OK");
     server.close().unwrap();
 }
+
+/// What `yarp rpc` printed for a MAS server, without log lines.
+fn printed(out: &str) -> Vec<String> {
+    out.lines()
+        .filter(|l| !l.starts_with('[') || l.starts_with("[fail]"))
+        .filter(|l| !l.trim().is_empty())
+        .map(str::to_string)
+        .collect()
+}
+
+/// C++ `multipleanalogsensorsserver` over C++ `multipleanalogsensorsclient` reading the
+/// server `remote`, named `name`: each `yarp rpc` line at it is answered by the C++
+/// client's view of `remote`.
+fn cpp_client_chain(bin: &std::path::Path, name: &str, remote: &str) -> Reaped {
+    yarp_interop_tests::cpp_yarpdev(
+        bin,
+        &[
+            "--device",
+            "multipleanalogsensorsserver",
+            "--subdevice",
+            "multipleanalogsensorsclient",
+            "--remote",
+            remote,
+            "--local",
+            &format!("{name}/client"),
+            "--name",
+            name,
+            "--period",
+            "20",
+        ],
+        &format!("{name}/rpc:o"),
+    )
+}
+
+/// C++ `multipleanalogsensorsclient` reads our server (over our `fakeIMU`): through C++'s
+/// server wrapping the C++ client, the recorded `yarp rpc` session prints what it prints
+/// over C++'s server + `fakeIMU`, and the measurements stream.
+#[test]
+fn cpp_mas_client_reads_our_server() {
+    let test = "cpp_mas_client_reads_our_server";
+    let Some(bin) = yarp_interop_tests::cpp_devices(
+        test,
+        &[
+            "multipleanalogsensorsserver",
+            "multipleanalogsensorsclient",
+            "fakeIMU",
+        ],
+    ) else {
+        return;
+    };
+    let cases = recorded_rpc();
+    let input: String = cases.iter().map(|(t, _)| format!("{t}\n")).collect();
+    name_server();
+    let mut server = PolyDriver::open(
+        &Property::from_config_text(
+            "device multipleanalogsensorsserver\nsubdevice fakeIMU\nname /mas_ours\nperiod 20\n",
+        )
+        .unwrap(),
+    )
+    .expect("our server");
+    let yarp = bin.join("yarp");
+    let _chain_ours = cpp_client_chain(&bin, "/mas_chain_ours", "/mas_ours");
+    let over_ours = printed(&yarp_interop_tests::cpp_rpc_output(
+        &yarp,
+        "/mas_chain_ours/rpc:o",
+        &input,
+    ));
+    let _cpp = yarp_interop_tests::cpp_yarpdev(
+        &bin,
+        &[
+            "--device",
+            "multipleanalogsensorsserver",
+            "--subdevice",
+            "fakeIMU",
+            "--name",
+            "/mas_cpp",
+            "--period",
+            "20",
+        ],
+        "/mas_cpp/rpc:o",
+    );
+    let _chain_cpp = cpp_client_chain(&bin, "/mas_chain_cpp", "/mas_cpp");
+    let over_cpp = printed(&yarp_interop_tests::cpp_rpc_output(
+        &yarp,
+        "/mas_chain_cpp/rpc:o",
+        &input,
+    ));
+    assert!(!over_cpp.is_empty(), "the C++ reference printed nothing");
+    assert_eq!(over_ours, over_cpp, "inputs:\n{input}");
+
+    // the measurements the C++ client reads from ours, republished by C++'s server
+    let mut reader = Reaped(
+        yarp_interop_tests::cpp_command(&yarp)
+            .args(["read", "/mas_rd", "/mas_chain_ours/measures:o"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("C++ yarp read"),
+    );
+    let stdout = reader.0.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        use std::io::BufRead;
+        for line in std::io::BufReader::new(stdout).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let start = Instant::now();
+    loop {
+        assert!(start.elapsed() < WAIT, "no measurements from the C++ chain");
+        let Ok(line) = rx.recv_timeout(WAIT) else {
+            continue;
+        };
+        // ((gyros) (accelerometers) ...): a list of lists per family
+        if line.starts_with("((((") {
+            break;
+        }
+    }
+    server.close().unwrap();
+}
+
+/// Our `multipleanalogsensorsclient` reads C++'s server over C++'s `fakeIMU`.
+#[test]
+fn our_mas_client_reads_cpp_server() {
+    let test = "our_mas_client_reads_cpp_server";
+    let Some(bin) =
+        yarp_interop_tests::cpp_devices(test, &["multipleanalogsensorsserver", "fakeIMU"])
+    else {
+        return;
+    };
+    name_server();
+    let _cpp = yarp_interop_tests::cpp_yarpdev(
+        &bin,
+        &[
+            "--device",
+            "multipleanalogsensorsserver",
+            "--subdevice",
+            "fakeIMU",
+            "--name",
+            "/masr_cpp",
+            "--period",
+            "20",
+        ],
+        "/masr_cpp/rpc:o",
+    );
+    let mut client = PolyDriver::open(
+        &Property::from_config_text(
+            "device multipleanalogsensorsclient\nremote /masr_cpp\nlocal /masr_ours\n",
+        )
+        .unwrap(),
+    )
+    .expect("our client opens against C++");
+    let d = client.device();
+    let gyro = d.as_three_axis_gyroscopes().expect("IThreeAxisGyroscopes");
+    assert_eq!(gyro.get_nr_of_three_axis_gyroscopes(), 1);
+    let start = Instant::now();
+    let m = loop {
+        if let Ok(m) = gyro.get_three_axis_gyroscope_measure(0) {
+            break m;
+        }
+        assert!(start.elapsed() < WAIT, "no gyroscope measure from C++");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(m.values.len(), 3);
+    let orient = d.as_orientation_sensors().expect("IOrientationSensors");
+    assert_eq!(orient.get_nr_of_orientation_sensors(), 1);
+    client.close().unwrap();
+}

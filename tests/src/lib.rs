@@ -3,7 +3,9 @@
 //! waits and child processes that are always reaped, and the peers of the live tests (C++
 //! YARP, rclpy, Chromium) with the rule for when one is missing ([`peer_missing`]).
 
+mod cpp_tools;
 mod peer;
+pub use cpp_tools::*;
 pub use peer::*;
 
 use std::net::SocketAddr;

@@ -1,0 +1,66 @@
+//! Driving the C++ peer's programs from a test: `yarp rpc` sessions and `yarpdev`
+//! devices registered with this process's name server ([`crate::name_server`]).
+
+use crate::{cpp_command, name_client, wait_for, Reaped, T};
+use std::io::{Read, Write};
+use std::path::Path;
+use std::process::Stdio;
+use std::time::{Duration, Instant};
+
+/// C++ `yarp rpc <port>` with `input` typed (then end of input): everything it printed
+/// on stdout. Panics if it does not finish within 3 [`T`].
+pub fn cpp_rpc_output(yarp: &Path, port: &str, input: &str) -> String {
+    let mut child = cpp_command(yarp)
+        .args(["rpc", port])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn C++ yarp rpc");
+    let _ = child.stdin.take().unwrap().write_all(input.as_bytes());
+    let mut stdout = child.stdout.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = stdout.read_to_string(&mut s);
+        s
+    });
+    let mut child = Reaped(child);
+    let start = Instant::now();
+    while child.0.try_wait().expect("try_wait").is_none() {
+        assert!(
+            start.elapsed() < 3 * T,
+            "C++ yarp rpc {port} did not finish"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    reader.join().unwrap_or_default()
+}
+
+/// Whether `port` is registered with this process's name server.
+pub fn registered(port: &str) -> bool {
+    let ns = name_client();
+    let port = port.to_string();
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .expect("runtime");
+    rt.block_on(async move { ns.query(&port).await.ok().flatten().is_some() })
+}
+
+/// C++ `yarpdev` of the bin directory `bin` with `args`, returned once `port` is
+/// registered (killed and reaped on drop).
+pub fn cpp_yarpdev(bin: &Path, args: &[&str], port: &str) -> Reaped {
+    name_client();
+    let child = cpp_command(&bin.join("yarpdev"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn C++ yarpdev");
+    let child = Reaped(child);
+    wait_for(&format!("C++ yarpdev's {port}"), || {
+        registered(port).then_some(())
+    });
+    child
+}
