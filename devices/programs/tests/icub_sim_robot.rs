@@ -96,9 +96,9 @@ fn use_inproc(robot: &mut Robot, tag: &str) -> usize {
     n
 }
 
-/// C++ `yarp` from `YARP_CPP_BIN`, else the repository's `.venv-yarp`.
+/// C++ `yarp` of the C++ peer, or `None` after the shared missing-peer rule (fails in CI).
 fn cpp_yarp() -> Option<PathBuf> {
-    yarp_interop_tests::cpp_bin_dir().map(|d| yarp_interop_tests::real_cpp_program(&d, "yarp"))
+    yarp_interop_tests::cpp_program("simulated_icub (C++ yarp rpc step)", "yarp")
 }
 
 /// Runs C++ `yarp rpc PORT` with `input` on stdin; its output, bounded by `T`.
@@ -295,23 +295,20 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
     drop(ft);
 
     // C++ `yarp rpc` drives the same joint
-    match cpp_yarp() {
-        None => eprintln!("SKIPPED: C++ YARP not found (C++ yarp rpc step)"),
-        Some(yarp) => {
-            let out = cpp_rpc(&yarp, "/icub/left_arm/rpc:i", "set pos 3 50\n");
-            assert!(out.contains("[ok]"), "{out}");
-            let dev = arm.device();
-            assert!(eventually(T, || dev
-                .as_encoders()
-                .unwrap()
-                .get_encoder(3)
-                .is_ok_and(|q| (q - 50.0).abs() < 1.0)));
-            let out = cpp_rpc(&yarp, "/icub/left_arm/rpc:i", "get enc 3\n");
-            assert!(
-                out.contains("[is] enc 49.") || out.contains("[is] enc 50."),
-                "{out}"
-            );
-        }
+    if let Some(yarp) = cpp_yarp() {
+        let out = cpp_rpc(&yarp, "/icub/left_arm/rpc:i", "set pos 3 50\n");
+        assert!(out.contains("[ok]"), "{out}");
+        let dev = arm.device();
+        assert!(eventually(T, || dev
+            .as_encoders()
+            .unwrap()
+            .get_encoder(3)
+            .is_ok_and(|q| (q - 50.0).abs() < 1.0)));
+        let out = cpp_rpc(&yarp, "/icub/left_arm/rpc:i", "get enc 3\n");
+        assert!(
+            out.contains("[is] enc 49.") || out.contains("[is] enc 50."),
+            "{out}"
+        );
     }
 
     // Impedance through the network: `set iimp ipr 3 (stiff damp)` / `get iimp ipr 3` ->

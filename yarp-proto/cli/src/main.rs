@@ -25,29 +25,38 @@ enum Command {
         args: Vec<String>,
     },
     /// Read from a port and print what arrives: `yarp read /port [envelope] [/source...]`.
-    Read { port: String, rest: Vec<String> },
+    Read {
+        #[arg(allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Write stdin lines (one Bottle each) to a port: `yarp write /port [/target...]`.
-    Write { port: String, targets: Vec<String> },
+    Write {
+        #[arg(allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Read from one port and write stdin lines to another: `yarp readwrite /in /out`.
     Readwrite {
         read_port: String,
         write_port: String,
     },
-    /// Send stdin lines as RPC commands to a port and print the replies.
+    /// Send stdin lines as RPC commands to a port and print the replies:
+    /// `yarp rpc /port [carrier]`.
     Rpc {
-        target: String,
-        carrier: Option<String>,
+        #[arg(allow_hyphen_values = true)]
+        args: Vec<String>,
     },
     /// Serve RPC on a port: print each request and reply with the next stdin line.
     Rpcserver { port: String },
     /// Connect two ports: `yarp connect /from /to [carrier]`.
     Connect {
-        from: String,
-        to: String,
-        carrier: Option<String>,
+        #[arg(allow_hyphen_values = true)]
+        args: Vec<String>,
     },
     /// Remove a connection: `yarp disconnect /from /to`.
-    Disconnect { from: String, to: String },
+    Disconnect {
+        #[arg(allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Send a command to the name server: `yarp name query /port`, `yarp name list` ...
     Name {
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
@@ -60,8 +69,11 @@ enum Command {
         #[arg(allow_hyphen_values = true)]
         args: Vec<String>,
     },
-    /// Wait until a port exists.
-    Wait { port: String },
+    /// Wait until a port (or a connection `/from /to`) exists.
+    Wait {
+        #[arg(allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Unregister ports that no longer answer.
     Clean,
     /// Show or set where the name server is: `yarp conf [<ip> <port> | --clean]`.
@@ -103,16 +115,16 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Server { args } => cmd::net::server(&args),
-        Command::Read { port, rest } => cmd::net::read(&port, &rest),
-        Command::Write { port, targets } => cmd::net::write(&port, &targets),
+        Command::Read { args } => cmd::net::read(&args),
+        Command::Write { args } => cmd::net::write(&args),
         Command::Readwrite {
             read_port,
             write_port,
         } => cmd::net::readwrite(&read_port, &write_port),
-        Command::Rpc { target, carrier } => cmd::net::rpc(&target, carrier.as_deref()),
+        Command::Rpc { args } => cmd::net::rpc(&args),
         Command::Rpcserver { port } => cmd::net::rpcserver(&port),
-        Command::Connect { from, to, carrier } => cmd::net::connect(&from, &to, carrier.as_deref()),
-        Command::Disconnect { from, to } => cmd::net::disconnect(&from, &to),
+        Command::Connect { args } => cmd::net::connect(&args),
+        Command::Disconnect { args } => cmd::net::disconnect(&args),
         Command::Name { args } => cmd::net::name(&args),
         Command::Exists { args } => match cmd::net::exists(&args) {
             Ok(true) => Ok(()),
@@ -120,7 +132,7 @@ fn main() -> ExitCode {
             Err(e) => Err(e),
         },
         Command::Ping { args } => cmd::net::ping(&args),
-        Command::Wait { port } => cmd::net::wait(&port),
+        Command::Wait { args } => cmd::net::wait(&args),
         Command::Clean => cmd::net::clean(),
         Command::Conf { args } => cmd::net::conf(&args),
         Command::Where => cmd::net::where_(),
@@ -135,6 +147,8 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // already said, in C++'s words
+        Err(e) if e.is::<cmd::net::Reported>() => ExitCode::FAILURE,
         Err(e) => {
             eprintln!("yarp: {e:#}");
             ExitCode::FAILURE

@@ -59,6 +59,7 @@ const CASES: &[Case] = &[
     case(&["exists", "/fp/w", "/fp/none"], Ports, 1, ""),
     case(&["exists", "/fp/w", "/fp/r2"], Ports, 1, ""),
     case(&["exists"], Ports, 1, "Please specify a port name"),
+    case(&["exists", "/a", "/b", "/c", "/d"], Ports, 1, "Please specify a port name"),
     case(&["exists", "/fp/none"], NoServer, 1, ""),
     // ping
     case(&["ping"], Ports, 1, "Usage:"),
@@ -68,7 +69,8 @@ const CASES: &[Case] = &[
     case(&["wait", "/a", "/b", "/c"], Ports, 1, "Please specify a single port name"),
     // connect
     case(&["connect"], Ports, 1, "[get help with 'yarp connect --help']"),
-    case(&["connect", "/fp/w"], Ports, 1, "Must have two arguments"),
+    case(&["connect", "/fp/w"], Ports, 1, "must have two/three arguments"),
+    case(&["connect", "/a", "/b", "tcp", "/d"], Ports, 1, "must have two/three arguments"),
     case(&["connect", "/fp/none", "/fp/r"], Ports, 1, "Failure"),
     case(&["connect", "/fp/w", "/fp/none"], Ports, 1, "Failure"),
     case(&["connect", "/fp/w", "/fp/r", "nosuchcarrier"], Ports, 1, "Failure"),
@@ -76,12 +78,13 @@ const CASES: &[Case] = &[
     case(&["connect", "/fp/w", "/fp/r"], NoServer, 1, "Failure"),
     // disconnect
     case(&["disconnect", "/fp/w"], Ports, 1, "Must have two arguments"),
+    case(&["disconnect", "/a", "/b", "/c"], Ports, 1, "Must have two arguments"),
     case(&["disconnect", "/fp/none", "/fp/r"], Ports, 1, "Failure"),
     case(&["disconnect", "/fp/w", "/fp/none"], Ports, 1, "Failure"),
     case(&["disconnect", "/fp/w", "/fp/r2"], Ports, 1, "Failure"),
     // rpc
     case(&["rpc"], Ports, 1, ""),
-    case(&["rpc", "/fp/none"], Ports, 1, "Failure"),
+    case(&["rpc", "/fp/none"], Ports, 1, "Cannot make connection"),
     // read / write
     case(&["read"], Ports, 1, "Usage:"),
     case(&["write"], Ports, 1, "Please supply the port name"),

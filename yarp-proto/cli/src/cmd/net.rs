@@ -3,7 +3,7 @@
 use anyhow::{anyhow, bail, Context, Result};
 use std::io::{BufRead, Write};
 use std::time::Duration;
-use yarp_net::network::{self, NetworkError};
+use yarp_net::network;
 use yarp_net::port::Port;
 use yarp_net::rpc::RpcClient;
 use yarp_proto::wire::Carrier;
@@ -37,6 +37,29 @@ fn info(msg: &str) {
     println!("[INFO] |yarp.os.Network| {msg}");
 }
 
+/// A failure already reported to the user (in C++'s words): `yarp` exits 1 and says no
+/// more.
+#[derive(Debug)]
+pub struct Reported;
+
+impl std::fmt::Display for Reported {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("reported")
+    }
+}
+
+impl std::error::Error for Reported {}
+
+/// Prints `lines` as C++ `yarp` prints its errors (`[ERROR] ...` on stderr) and gives the
+/// error that makes `yarp` exit 1.
+fn cpp_error<S: AsRef<str>>(lines: &[S]) -> anyhow::Error {
+    let mut e = std::io::stderr().lock();
+    for l in lines {
+        let _ = writeln!(e, "[ERROR] {}", l.as_ref());
+    }
+    anyhow::Error::new(Reported)
+}
+
 /// Stdin lines, read on a thread of their own so that the async side can also watch
 /// ports and signals; the channel closes at end of input.
 fn stdin_lines() -> tokio::sync::mpsc::Receiver<String> {
@@ -53,7 +76,13 @@ fn stdin_lines() -> tokio::sync::mpsc::Receiver<String> {
 }
 
 /// `yarp read <port> [envelope] [source...]`
-pub fn read(port: &str, rest: &[String]) -> Result<()> {
+pub fn read(args: &[String]) -> Result<()> {
+    let Some((port, rest)) = args.split_first() else {
+        return Err(cpp_error(&[
+            "Usage:",
+            "  yarp read <port> [remote port] [envelope] [trim [length]]",
+        ]));
+    };
     let envelope = rest.iter().any(|a| a == "envelope");
     let sources: Vec<&String> = rest.iter().filter(|a| *a != "envelope").collect();
     runtime()?.block_on(async {
@@ -92,7 +121,12 @@ pub fn read(port: &str, rest: &[String]) -> Result<()> {
 }
 
 /// `yarp write <port> [target...]`: one Bottle per stdin line.
-pub fn write(port: &str, targets: &[String]) -> Result<()> {
+pub fn write(args: &[String]) -> Result<()> {
+    let Some((port, targets)) = args.split_first() else {
+        return Err(cpp_error(&[
+            "Please supply the port name, and optionally some targets",
+        ]));
+    };
     runtime()?.block_on(async {
         let ns = network::name_client()?;
         let p = Port::open(port, ns.clone()).await?;
@@ -153,7 +187,12 @@ pub fn readwrite(read_port: &str, write_port: &str) -> Result<()> {
 pub fn ping(args: &[String]) -> Result<()> {
     let time = args.iter().any(|a| a == "--time");
     let Some(port) = args.iter().find(|a| !a.starts_with("--")) else {
-        bail!("usage: yarp ping [--time] <port>");
+        return Err(cpp_error(&[
+            "Usage:",
+            "  yarp ping /port",
+            "  yarp ping --time /port",
+            "  yarp ping --rate /port",
+        ]));
     };
     runtime()?.block_on(async {
         let ns = network::name_client()?;
@@ -233,17 +272,33 @@ fn print_response(reply: &Bottle) {
 }
 
 /// `yarp rpc <target> [carrier]`: stdin lines are commands, replies printed.
-pub fn rpc(target: &str, carrier: Option<&str>) -> Result<()> {
+pub fn rpc(args: &[String]) -> Result<()> {
+    let (target, carrier) = match args {
+        [t] => (t.as_str(), None),
+        [t, c] => (t.as_str(), Some(c.as_str())),
+        _ => {
+            for l in [
+                "Usage:",
+                "  yarp [admin] rpc </destport>",
+                "    Open an RPC client and connect to 'destport'",
+            ] {
+                println!("[INFO] {l}");
+            }
+            return Err(anyhow::Error::new(Reported));
+        }
+    };
     let carrier = match carrier {
         Some(c) => Carrier::from_name(c).ok_or_else(|| anyhow!("unknown carrier {c}"))?,
         None => Carrier::Tcp,
     };
     runtime()?.block_on(async {
         let ns = network::name_client()?;
-        let contact = ns
-            .query(target)
-            .await?
-            .ok_or_else(|| NetworkError::UnknownPort(target.to_string()))?;
+        let Some(contact) = ns.query(target).await? else {
+            return Err(cpp_error(&[
+                "Cannot make connection",
+                "Alternative method: precede port name with --client",
+            ]));
+        };
         let mut client = RpcClient::connect(&contact, "anon_rpc", carrier).await?;
         let stdin = std::io::stdin();
         for line in stdin.lock().lines() {
@@ -282,7 +337,19 @@ pub fn rpcserver(port: &str) -> Result<()> {
 }
 
 /// `yarp connect <from> <to> [carrier]`
-pub fn connect(from: &str, to: &str, carrier: Option<&str>) -> Result<()> {
+pub fn connect(args: &[String]) -> Result<()> {
+    let (from, to, carrier) = match args {
+        [f, t] => (f, t, None),
+        [f, t, c] => (f, t, Some(c.as_str())),
+        _ => {
+            let mut lines = vec![];
+            if args.is_empty() {
+                lines.push("[get help with 'yarp connect --help']");
+            }
+            lines.push("Currently must have two/three arguments, a sender port and receiver port (and an optional protocol)");
+            return Err(cpp_error(&lines));
+        }
+    };
     runtime()?.block_on(async {
         let ns = network::name_client()?;
         let (ok, msg) = network::connect(&ns, from, to, carrier).await?;
@@ -297,7 +364,12 @@ pub fn connect(from: &str, to: &str, carrier: Option<&str>) -> Result<()> {
 }
 
 /// `yarp disconnect <from> <to>`
-pub fn disconnect(from: &str, to: &str) -> Result<()> {
+pub fn disconnect(args: &[String]) -> Result<()> {
+    let [from, to] = args else {
+        return Err(cpp_error(&[
+            "Must have two arguments, a sender port and receiver port",
+        ]));
+    };
     runtime()?.block_on(async {
         let ns = network::name_client()?;
         if let Some(carrier) = network::connection_carrier(&ns, from, to).await? {
@@ -343,17 +415,32 @@ pub fn exists(args: &[String]) -> Result<bool> {
                     None => false,
                 }
             }
-            _ => bail!("usage: yarp exists <port> | yarp exists <from> <to> [carrier]"),
+            _ => return Err(cpp_error(&["Please specify a port name"])),
         })
     })
 }
 
-/// `yarp wait <port>`: waits until the port exists.
-pub fn wait(port: &str) -> Result<()> {
+/// `yarp wait <port>`: waits until the port exists; `yarp wait <from> <to>`: until
+/// the connection exists.
+pub fn wait(args: &[String]) -> Result<()> {
+    if !(1..=2).contains(&args.len()) {
+        return Err(cpp_error(&[
+            "Please specify a single port name, or a source and destination port name",
+        ]));
+    }
     runtime()?.block_on(async {
         let ns = network::name_client()?;
         loop {
-            if network::exists(&ns, port).await.unwrap_or(false) {
+            let there = match args {
+                [port] => network::exists(&ns, port).await.unwrap_or(false),
+                [from, to] => network::connection_carrier(&ns, from, to)
+                    .await
+                    .ok()
+                    .flatten()
+                    .is_some(),
+                _ => false,
+            };
+            if there {
                 return Ok(());
             }
             tokio::select! {
@@ -371,6 +458,11 @@ pub fn name(args: &[String]) -> Result<()> {
     }
     runtime()?.block_on(async {
         let ns = network::name_client()?;
+        if let [query, port] = args {
+            if query == "query" && ns.query(port).await?.is_none() {
+                return Err(cpp_error(&[format!("{port} not known.")]));
+            }
+        }
         let cmd = args.join(" ");
         let eol = if matches!(args[0].as_str(), "register" | "set") {
             "\r\n"
