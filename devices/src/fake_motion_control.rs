@@ -88,6 +88,7 @@ struct Joint {
 pub struct FakeMotionControl {
     joints: Vec<Joint>,
     pids: HashMap<(i32, usize), (Pid, bool, f64)>,
+    pid_error_limits: HashMap<(i32, usize), f64>,
     last: Instant,
 }
 
@@ -110,6 +111,7 @@ impl FakeMotionControl {
         FakeMotionControl {
             joints: Vec::new(),
             pids: HashMap::new(),
+            pid_error_limits: HashMap::new(),
             last: Instant::now(),
         }
     }
@@ -420,6 +422,11 @@ impl IInteractionMode for FakeMotionControl {
 }
 
 impl ITorqueControl for FakeMotionControl {
+    fn get_motor_torque_params(&mut self, j: usize) -> DevResult<[f64; 4]> {
+        // the C++ fake keeps none: zeros
+        self.joint(j)?;
+        Ok([0.0; 4])
+    }
     fn get_axes(&mut self) -> DevResult<usize> {
         Ok(self.joints.len())
     }
@@ -449,6 +456,15 @@ impl ITorqueControl for FakeMotionControl {
 }
 
 impl IMotorEncoders for FakeMotionControl {
+    // the C++ fake does not keep counts per revolution: it answers 0 and accepts a value
+    fn get_motor_encoder_counts_per_revolution(&mut self, m: usize) -> DevResult<f64> {
+        self.joint(m)?;
+        Ok(0.0)
+    }
+    fn set_motor_encoder_counts_per_revolution(&mut self, m: usize, _v: f64) -> DevResult<()> {
+        self.joint(m)?;
+        Ok(())
+    }
     fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
         Ok(self.joints.len())
     }
@@ -586,6 +602,24 @@ impl IPidControl for FakeMotionControl {
     }
     fn reset_pid(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<()> {
         self.joint(j)?;
+        Ok(())
+    }
+    fn set_pid_error_limit(&mut self, pid_type: Vocab32, j: usize, l: f64) -> DevResult<()> {
+        self.joint(j)?;
+        self.pid_error_limits.insert((pid_type.0, j), l);
+        Ok(())
+    }
+    fn get_pid_error_limit(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        self.joint(j)?;
+        Ok(self
+            .pid_error_limits
+            .get(&(pid_type.0, j))
+            .copied()
+            .unwrap_or(0.0))
+    }
+    fn set_pid_offset(&mut self, pid_type: Vocab32, j: usize, v: f64) -> DevResult<()> {
+        self.joint(j)?;
+        self.pids.entry((pid_type.0, j)).or_default().0.offset = v;
         Ok(())
     }
 }

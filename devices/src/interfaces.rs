@@ -307,6 +307,10 @@ pub trait ITorqueControl {
     fn get_torque_range(&mut self, _j: usize) -> DevResult<(f64, f64)> {
         Err(DeviceError::Unsupported("getTorqueRange"))
     }
+    /// C++ `MotorTorqueParameters` of joint `j`: (bemf, bemf_scale, ktau, ktau_scale).
+    fn get_motor_torque_params(&mut self, _j: usize) -> DevResult<[f64; 4]> {
+        Err(DeviceError::Unsupported("getMotorTorqueParams"))
+    }
 }
 
 /// `IMotorEncoders` (subset).
@@ -317,6 +321,12 @@ pub trait IMotorEncoders {
         (0..self.get_num_of_motor_encoders()?)
             .map(|m| self.get_motor_encoder(m))
             .collect()
+    }
+    fn get_motor_encoder_counts_per_revolution(&mut self, _m: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getMotorEncoderCountsPerRevolution"))
+    }
+    fn set_motor_encoder_counts_per_revolution(&mut self, _m: usize, _v: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setMotorEncoderCountsPerRevolution"))
     }
     fn get_motor_encoder_speed(&mut self, _m: usize) -> DevResult<f64> {
         Err(DeviceError::Unsupported("getMotorEncoderSpeed"))
@@ -472,6 +482,15 @@ pub trait IPidControl {
     /// Resets the loop (integral term).
     fn reset_pid(&mut self, _pid_type: Vocab32, _j: usize) -> DevResult<()> {
         Err(DeviceError::Unsupported("resetPid"))
+    }
+    fn set_pid_error_limit(&mut self, _pid_type: Vocab32, _j: usize, _l: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setPidErrorLimit"))
+    }
+    fn get_pid_error_limit(&mut self, _pid_type: Vocab32, _j: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getPidErrorLimit"))
+    }
+    fn set_pid_offset(&mut self, _pid_type: Vocab32, _j: usize, _v: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setPidOffset"))
     }
 }
 

@@ -215,6 +215,9 @@ fn set(cmd: &Bottle, dev: &mut dyn DeviceDriver) -> Option<Option<()>> {
         // single-joint velocity moves only travel on command:i in C++
         VELOCITY_MOVES => dev.as_velocity_control()?.velocity_moves(&floats(cmd, 2)?),
         E_RESET => dev.as_encoders()?.reset_encoder(joint(cmd, 2)?),
+        MOTOR_CPR => dev
+            .as_motor_encoders()?
+            .set_motor_encoder_counts_per_revolution(joint(cmd, 2)?, float(cmd, 3)),
         E_RESETS => dev.as_encoders()?.reset_encoders(),
         ENCODER => dev
             .as_encoders()?
@@ -346,6 +349,34 @@ fn get(cmd: &Bottle, dev: &mut dyn DeviceDriver, resp: &mut Bottle) -> Option<()
         REF_ACCELERATION => resp.push(
             dev.as_position_control()?
                 .get_ref_acceleration(joint(cmd, 2)?)
+                .ok()?,
+        ),
+        REF_SPEED_GROUP => {
+            let js = joints(cmd, 3)?;
+            resp.push(float_list(
+                &dev.as_position_control()?.get_ref_speed_group(&js).ok()?,
+            ))
+        }
+        REF_ACCELERATION_GROUP => {
+            let js = joints(cmd, 3)?;
+            resp.push(float_list(
+                &dev.as_position_control()?
+                    .get_ref_acceleration_group(&js)
+                    .ok()?,
+            ))
+        }
+        VELOCITY_MOVE_GROUP => {
+            let js = joints(cmd, 3)?;
+            let v = dev.as_velocity_control()?;
+            let refs = js
+                .iter()
+                .map(|&j| v.get_ref_velocity(j))
+                .collect::<Result<Vec<_>, _>>();
+            resp.push(float_list(&refs.ok()?))
+        }
+        MOTOR_CPR => resp.push(
+            dev.as_motor_encoders()?
+                .get_motor_encoder_counts_per_revolution(joint(cmd, 2)?)
                 .ok()?,
         ),
         REF_ACCELERATIONS => resp.push(float_list(
@@ -535,6 +566,16 @@ fn open_loop(
             resp.push(lo).push(hi);
             return Some(true);
         }
+        (CURRENT_IFACE, RANGES) => {
+            let r = all(dev, &mut |d, j| {
+                d.as_current_control()?.get_current_range(j).ok().map(|x| x.0)
+            })?;
+            let h = all(dev, &mut |d, j| {
+                d.as_current_control()?.get_current_range(j).ok().map(|x| x.1)
+            })?;
+            resp.push(float_list(&r)).push(float_list(&h));
+            return Some(true);
+        }
         (CURRENT_IFACE, REF) => dev
             .as_current_control()?
             .get_ref_current(joint(cmd, 3)?)
@@ -600,6 +641,19 @@ fn torque(
                     let (lo, hi) = t.get_torque_range(joint(cmd, 3)?).ok()?;
                     resp.push(lo).push(hi)
                 }
+                RANGES => {
+                    let n = t.get_axes().ok()?;
+                    let r = (0..n)
+                        .map(|j| t.get_torque_range(j))
+                        .collect::<Result<Vec<_>, _>>()
+                        .ok()?;
+                    let lo: Vec<f64> = r.iter().map(|x| x.0).collect();
+                    let hi: Vec<f64> = r.iter().map(|x| x.1).collect();
+                    resp.push(float_list(&lo)).push(float_list(&hi))
+                }
+                MOTOR_PARAMS => {
+                    resp.push(float_list(&t.get_motor_torque_params(joint(cmd, 3)?).ok()?))
+                }
                 _ => return Some(false),
             };
             stamp_into(resp, stamp);
@@ -661,31 +715,48 @@ fn interaction(
 
 /// `[set|get] [pid] <what> <pid type> <joint> ...` (no timestamp in these replies).
 fn pid(cmd: &Bottle, action: i32, dev: &mut dyn DeviceDriver, resp: &mut Bottle) -> Option<bool> {
+    let n = axes(dev);
     let p = dev.as_pid_control()?;
     let ty = Vocab32(vocab(cmd.get(3)));
-    let j = joint(cmd, 4)?;
+    let j = || joint(cmd, 4);
     match action {
         SET => Some(
             match vocab(cmd.get(2)) {
-                PID => p.set_pid(ty, j, crate::interfaces::Pid::from_slice(&floats(cmd, 5)?)),
-                PID_ENABLE => p.enable_pid(ty, j),
-                PID_DISABLE => p.disable_pid(ty, j),
-                REF => p.set_pid_reference(ty, j, float(cmd, 5)),
-                PID_RESET => p.reset_pid(ty, j),
+                PID => p.set_pid(ty, j()?, crate::interfaces::Pid::from_slice(&floats(cmd, 5)?)),
+                PID_ENABLE => p.enable_pid(ty, j()?),
+                PID_DISABLE => p.disable_pid(ty, j()?),
+                REF => p.set_pid_reference(ty, j()?, float(cmd, 5)),
+                PID_RESET => p.reset_pid(ty, j()?),
+                PID_ERROR_LIMIT => p.set_pid_error_limit(ty, j()?, float(cmd, 5)),
+                PID_OFFSET => p.set_pid_offset(ty, j()?, float(cmd, 5)),
                 _ => return Some(false),
             }
             .is_ok(),
         ),
         GET => {
             resp.push(Vocab32(IS)).push(cmd[1].clone());
-            match vocab(cmd.get(2)) {
-                PID => resp.push(float_list(&p.get_pid(ty, j).ok()?.to_array())),
-                PID_ENABLE => resp.push(i32::from(p.is_pid_enabled(ty, j).ok()?)),
-                REF => resp.push(p.get_pid_reference(ty, j).ok()?),
-                PID_ERROR => resp.push(p.get_pid_error(ty, j).ok()?),
-                PID_OUTPUT => resp.push(p.get_pid_output(ty, j).ok()?),
+            // the all-joints forms: one value (a list for `pids`) per joint
+            let each = |f: &mut dyn FnMut(usize) -> Option<Value>| -> Option<Value> {
+                (0..n?)
+                    .map(f)
+                    .collect::<Option<Vec<Value>>>()
+                    .map(|v| Value::List(v.into_iter().collect()))
+            };
+            let v: Value = match vocab(cmd.get(2)) {
+                PID => float_list(&p.get_pid(ty, j()?).ok()?.to_array()),
+                PID_ENABLE => Value::from(i32::from(p.is_pid_enabled(ty, j()?).ok()?)),
+                REF => p.get_pid_reference(ty, j()?).ok()?.into(),
+                PID_ERROR => p.get_pid_error(ty, j()?).ok()?.into(),
+                PID_OUTPUT => p.get_pid_output(ty, j()?).ok()?.into(),
+                PID_ERROR_LIMIT => p.get_pid_error_limit(ty, j()?).ok()?.into(),
+                PIDS => each(&mut |k| Some(float_list(&p.get_pid(ty, k).ok()?.to_array())))?,
+                REFS => each(&mut |k| Some(p.get_pid_reference(ty, k).ok()?.into()))?,
+                PID_ERROR_LIMITS => each(&mut |k| Some(p.get_pid_error_limit(ty, k).ok()?.into()))?,
+                PID_ERRORS => each(&mut |k| Some(p.get_pid_error(ty, k).ok()?.into()))?,
+                PID_OUTPUTS => each(&mut |k| Some(p.get_pid_output(ty, k).ok()?.into()))?,
                 _ => return Some(false),
             };
+            resp.push(v);
             Some(true)
         }
         _ => Some(false),

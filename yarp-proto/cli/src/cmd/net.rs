@@ -196,10 +196,8 @@ pub fn ping(args: &[String]) -> Result<()> {
     };
     runtime()?.block_on(async {
         let ns = network::name_client()?;
-        let Some(contact) = ns.query(port).await? else {
-            // C++ reports this and still exits 0
-            println!("[ERROR] could not find port");
-            return Ok(());
+        let Some(contact) = ns.query(port).await.ok().flatten() else {
+            return Err(cpp_error(&["could not find port"]));
         };
         if !time {
             let text = network::admin_text_ack(&contact, "<ping>", &["*"]).await?;
@@ -341,17 +339,28 @@ pub fn connect(args: &[String]) -> Result<()> {
     let (from, to, carrier) = match args {
         [f, t] => (f, t, None),
         [f, t, c] => (f, t, Some(c.as_str())),
+        // C++ lists the name server's persistent connections (of the port) here: we keep
+        // none, so there is nothing to list
+        [] => {
+            let _ = cpp_error(&["[get help with 'yarp connect --help']"]);
+            return Ok(());
+        }
+        [_] => return Ok(()),
         _ => {
-            let mut lines = vec![];
-            if args.is_empty() {
-                lines.push("[get help with 'yarp connect --help']");
-            }
-            lines.push("Currently must have two/three arguments, a sender port and receiver port (and an optional protocol)");
-            return Err(cpp_error(&lines));
+            return Err(cpp_error(&[
+                "Currently must have two/three arguments, a sender port and receiver port (and an optional protocol)",
+            ]))
         }
     };
+    if let Some(c) = carrier {
+        if Carrier::from_name(c).is_none() {
+            unknown_carrier(from, to, c);
+            return Err(anyhow::Error::new(Reported));
+        }
+    }
     runtime()?.block_on(async {
         let ns = network::name_client()?;
+        ends_exist(&ns, from, to).await?;
         let (ok, msg) = network::connect(&ns, from, to, carrier).await?;
         if ok {
             info(&format!("Success: {msg}"));
@@ -363,6 +372,48 @@ pub fn connect(args: &[String]) -> Result<()> {
     })
 }
 
+/// What C++ `yarp connect` prints for a carrier it has no plugin for (its search for a
+/// plugin library, then the refusal), line for line.
+fn unknown_carrier(from: &str, to: &str, c: &str) {
+    let mut e = std::io::stderr().lock();
+    let _ = writeln!(
+        e,
+        "[ERROR] |yarp.os.YarpPluginSettings| Cannot find \"{c}\" plugin (not built in, and no \
+         .ini file found for it)Check that YARP_DATA_DIRS leads to at least one directory with \
+         plugins/{c}.ini or share/yarp/plugins/{c}.ini in it"
+    );
+    let _ = writeln!(
+        e,
+        "[WARNING] |yarp.os.YarpPluginSettings| Cannot load plugin from shared library ()"
+    );
+    let _ = writeln!(
+        e,
+        "[WARNING] |yarp.os.YarpPluginSettings| (yarp_{c}: cannot open shared object file: No \
+         such file or directory\nyarp_{c}.so: cannot open shared object file: No such file or \
+         directory\nlibyarp_{c}.so: cannot open shared object file: No such file or directory)"
+    );
+    let _ = writeln!(
+        e,
+        "[ERROR] |yarp.os.Network| Failed to find library support for carrier {c}"
+    );
+    let _ = writeln!(e, "[ERROR] |yarp.os.Carriers| Could not find carrier \"{c}\"");
+    let _ = writeln!(
+        e,
+        "[ERROR] |yarp.os.Network| Failure: no way to make connection {from}->{c}:/{to}"
+    );
+}
+
+/// C++'s check before a connection is made, changed or looked for: both ports known.
+async fn ends_exist(ns: &yarp_net::nameserver::NameClient, from: &str, to: &str) -> Result<()> {
+    if ns.query(from).await.ok().flatten().is_none() {
+        return Err(cpp_error(&[format!("Failure: could not find source port {from}")]));
+    }
+    if ns.query(to).await.ok().flatten().is_none() {
+        return Err(cpp_error(&[format!("Failure: could not find destination port {to}")]));
+    }
+    Ok(())
+}
+
 /// `yarp disconnect <from> <to>`
 pub fn disconnect(args: &[String]) -> Result<()> {
     let [from, to] = args else {
@@ -372,6 +423,7 @@ pub fn disconnect(args: &[String]) -> Result<()> {
     };
     runtime()?.block_on(async {
         let ns = network::name_client()?;
+        ends_exist(&ns, from, to).await?;
         if let Some(carrier) = network::connection_carrier(&ns, from, to).await? {
             info(&format!(
                 "Connection found between {from} and {to} using carrier {carrier}"
@@ -382,8 +434,8 @@ pub fn disconnect(args: &[String]) -> Result<()> {
             info(&format!("Success: {msg}"));
             Ok(())
         } else {
-            println!("[ERROR] |yarp.os.Network| Failure: {msg}");
-            bail!("disconnection failed")
+            // C++'s words whatever the port said
+            Err(cpp_error(&["Failure: no such connection"]))
         }
     })
 }
@@ -396,6 +448,9 @@ pub fn exists(args: &[String]) -> Result<bool> {
             [p] => network::exists(&ns, p).await?,
             // C++ checks for a connection with the given carrier, tcp by default
             [from, to] | [from, to, _] => {
+                if ends_exist(&ns, from, to).await.is_err() {
+                    return Ok(false);
+                }
                 let want = args.get(2).map(String::as_str).unwrap_or("tcp");
                 match network::connection_carrier(&ns, from, to)
                     .await
@@ -459,7 +514,7 @@ pub fn name(args: &[String]) -> Result<()> {
     runtime()?.block_on(async {
         let ns = network::name_client()?;
         if let [query, port] = args {
-            if query == "query" && ns.query(port).await?.is_none() {
+            if query == "query" && ns.query(port).await.ok().flatten().is_none() {
                 return Err(cpp_error(&[format!("{port} not known.")]));
             }
         }
