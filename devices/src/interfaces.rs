@@ -323,10 +323,14 @@ pub trait IMotorEncoders {
             .collect()
     }
     fn get_motor_encoder_counts_per_revolution(&mut self, _m: usize) -> DevResult<f64> {
-        Err(DeviceError::Unsupported("getMotorEncoderCountsPerRevolution"))
+        Err(DeviceError::Unsupported(
+            "getMotorEncoderCountsPerRevolution",
+        ))
     }
     fn set_motor_encoder_counts_per_revolution(&mut self, _m: usize, _v: f64) -> DevResult<()> {
-        Err(DeviceError::Unsupported("setMotorEncoderCountsPerRevolution"))
+        Err(DeviceError::Unsupported(
+            "setMotorEncoderCountsPerRevolution",
+        ))
     }
     fn get_motor_encoder_speed(&mut self, _m: usize) -> DevResult<f64> {
         Err(DeviceError::Unsupported("getMotorEncoderSpeed"))

@@ -784,13 +784,16 @@ impl IMotor for ControlBoardRemapper {
         on!(self, m, as_motor, "IMotor", |x, l| x.get_gearbox_ratio(l))
     }
     fn set_gearbox_ratio(&mut self, m: usize, v: f64) -> DevResult<()> {
-        on!(self, m, as_motor, "IMotor", |x, l| x.set_gearbox_ratio(l, v))
+        on!(self, m, as_motor, "IMotor", |x, l| x
+            .set_gearbox_ratio(l, v))
     }
     fn get_temperature_limit(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor, "IMotor", |x, l| x.get_temperature_limit(l))
+        on!(self, m, as_motor, "IMotor", |x, l| x
+            .get_temperature_limit(l))
     }
     fn set_temperature_limit(&mut self, m: usize, v: f64) -> DevResult<()> {
-        on!(self, m, as_motor, "IMotor", |x, l| x.set_temperature_limit(l, v))
+        on!(self, m, as_motor, "IMotor", |x, l| x
+            .set_temperature_limit(l, v))
     }
 }
 

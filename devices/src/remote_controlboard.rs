@@ -981,7 +981,12 @@ impl IAmplifierControl for RemoteControlBoard {
         self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_NOMINAL_CURRENT), j32(m)])
     }
     fn set_nominal_current(&mut self, m: usize, v: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(AMP_NOMINAL_CURRENT), j32(m), v])
+        self.set(bottle![
+            Vocab32(SET),
+            Vocab32(AMP_NOMINAL_CURRENT),
+            j32(m),
+            v
+        ])
     }
     fn get_peak_current(&mut self, m: usize) -> DevResult<f64> {
         self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_PEAK_CURRENT), j32(m)])

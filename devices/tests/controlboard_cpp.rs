@@ -230,7 +230,12 @@ const fn row(method: &'static str, line: &'static str) -> Row {
 }
 
 /// A row C++ 3.5 answers differently from 3.12: `ours` is the 3.12 answer.
-const fn v312(method: &'static str, line: &'static str, ours: &'static str, why: &'static str) -> Row {
+const fn v312(
+    method: &'static str,
+    line: &'static str,
+    ours: &'static str,
+    why: &'static str,
+) -> Row {
     Row {
         method,
         line,
@@ -266,7 +271,10 @@ const METHODS: &[Row] = &[
     row("getMotorEncoderAcceleration", "[get] [mac] 1"),
     row("getMotorEncoderAccelerations", "[get] [macs]"),
     row("getMotorEncoderCountsPerRevolution", "[get] [mcpr] 1"),
-    row("setMotorEncoderCountsPerRevolution", "[set] [mcpr] 1 1000.0"),
+    row(
+        "setMotorEncoderCountsPerRevolution",
+        "[set] [mcpr] 1 1000.0",
+    ),
     row("resetMotorEncoder", "[set] [mere] 1"),
     row("resetMotorEncoders", "[set] [meres]"),
     // IEncoders setters (after the motor encoders, which C++ 3.5 keeps at 0)
@@ -297,11 +305,36 @@ const METHODS: &[Row] = &[
     row("positionMove(group)", "[set] [posg] 2 (0 1) (5.0 6.0)"),
     row("getTargetPositions(group)", "[get] [posg] 2 (0 1)"),
     v312("relativeMove", "[set] [rel] 1 5.0", "Response: [ok]", NYI35),
-    v312("relativeMove(all)", "[set] [rels] (1.0 1.0 1.0 1.0)", "Response: [ok]", NYI35),
-    v312("relativeMove(group)", "[set] [relg] 2 (0 1) (1.0 1.0)", "Response: [ok]", NYI35),
-    v312("checkMotionDone", "[get] [don] 1", "Response: [is] [don] 1 [tsta] [ok]", NYI35),
-    v312("checkMotionDone(all)", "[get] [dons]", "Response: [is] [dons] 1 [tsta] [ok]", NYI35),
-    v312("checkMotionDone(group)", "[get] [dong] 2 (0 1)", "Response: [is] [dong] 1 [tsta] [ok]", NYI35),
+    v312(
+        "relativeMove(all)",
+        "[set] [rels] (1.0 1.0 1.0 1.0)",
+        "Response: [ok]",
+        NYI35,
+    ),
+    v312(
+        "relativeMove(group)",
+        "[set] [relg] 2 (0 1) (1.0 1.0)",
+        "Response: [ok]",
+        NYI35,
+    ),
+    v312(
+        "checkMotionDone",
+        "[get] [don] 1",
+        "Response: [is] [don] 1 [tsta] [ok]",
+        NYI35,
+    ),
+    v312(
+        "checkMotionDone(all)",
+        "[get] [dons]",
+        "Response: [is] [dons] 1 [tsta] [ok]",
+        NYI35,
+    ),
+    v312(
+        "checkMotionDone(group)",
+        "[get] [dong] 2 (0 1)",
+        "Response: [is] [dong] 1 [tsta] [ok]",
+        NYI35,
+    ),
     row("setRefSpeed", "[set] [vel] 1 10.0"),
     row("getRefSpeed", "[get] [vel] 1"),
     row("setRefSpeeds", "[set] [vels] (1.0 2.0 3.0 4.0)"),
@@ -312,17 +345,28 @@ const METHODS: &[Row] = &[
     row("getRefAcceleration", "[get] [acc] 1"),
     row("setRefAccelerations", "[set] [accs] (1.0 2.0 3.0 4.0)"),
     row("getRefAccelerations", "[get] [accs]"),
-    row("setRefAccelerations(group)", "[set] [accg] 2 (0 1) (7.0 8.0)"),
+    row(
+        "setRefAccelerations(group)",
+        "[set] [accg] 2 (0 1) (7.0 8.0)",
+    ),
     row("getRefAccelerations(group)", "[get] [accg] 2 (0 1)"),
     v312("stop", "[set] [sto] 1", "Response: [ok]", NYI35),
     v312("stop(all)", "[set] [stos]", "Response: [ok]", NYI35),
-    v312("stop(group)", "[set] [stog] 2 (0 1)", "Response: [ok]", NYI35),
+    v312(
+        "stop(group)",
+        "[set] [stog] 2 (0 1)",
+        "Response: [ok]",
+        NYI35,
+    ),
     // IPositionDirect (set over the streaming port; read back over RPC)
     row("getRefPosition", "[get] [dpo] 1"),
     row("getRefPositions", "[get] [dpos]"),
     row("getRefPositions(group)", "[get] [dpog] 2 (0 1)"),
     // IVelocityControl (velocityMove is streamed to command:i)
-    row("setControlMode (velocity all)", "[set] [icmd] [cmds] ([vel] [vel] [vel] [vel])"),
+    row(
+        "setControlMode (velocity all)",
+        "[set] [icmd] [cmds] ([vel] [vel] [vel] [vel])",
+    ),
     row("velocityMove(all)", "[set] [vmos] (1.0 2.0 3.0 4.0)"),
     row("getRefVelocity", "[get] [vmo] 1"),
     v312(
@@ -337,7 +381,10 @@ const METHODS: &[Row] = &[
         "Response: [is] [vmog] (1.0 2.0) [tsta] [ok]",
         VEL35,
     ),
-    row("setControlMode (position all)", "[set] [icmd] [cmds] ([pos] [pos] [pos] [pos])"),
+    row(
+        "setControlMode (position all)",
+        "[set] [icmd] [cmds] ([pos] [pos] [pos] [pos])",
+    ),
     // IInteractionMode
     row("getInteractionMode", "[get] [intm] [mode] 1"),
     row("getInteractionModes", "[get] [intm] [mods]"),
@@ -381,7 +428,12 @@ const METHODS: &[Row] = &[
     row("getPid (current)", "[get] [pid] [pid] [cur] 1"),
     // IControlLimits
     row("setLimits", "[set] [llim] 1 -10.0 10.0"),
-    v312("getLimits", "[get] [llim] 1", "Response: [is] [llim] -10.0 10.0 [tsta] [ok]", NYI35),
+    v312(
+        "getLimits",
+        "[get] [llim] 1",
+        "Response: [is] [llim] -10.0 10.0 [tsta] [ok]",
+        NYI35,
+    ),
     row("setVelLimits", "[set] [vlim] 1 0.0 50.0"),
     row("getVelLimits", "[get] [vlim] 1"),
     // IAmplifierControl
@@ -403,8 +455,18 @@ const METHODS: &[Row] = &[
     row("getPowerSupplyVoltage", "[get] [avsu] 1"),
     // IMotor
     row("getNumberOfMotors", "[get] [mtnm]"),
-    v312("getTemperature", "[get] [tmp] 1", "Response: [is] [tmp] 38.5 [tsta] [ok]", NYI35),
-    v312("getTemperatures", "[get] [tmps]", "Response: [is] [tmps] (37.5 38.5 39.5 40.5) [tsta] [ok]", NYI35),
+    v312(
+        "getTemperature",
+        "[get] [tmp] 1",
+        "Response: [is] [tmp] 38.5 [tsta] [ok]",
+        NYI35,
+    ),
+    v312(
+        "getTemperatures",
+        "[get] [tmps]",
+        "Response: [is] [tmps] (37.5 38.5 39.5 40.5) [tsta] [ok]",
+        NYI35,
+    ),
     row("getTemperatureLimit", "[get] [tmpl] 1"),
     row("setTemperatureLimit", "[set] [tmpl] 1 60.0"),
     row("getGearboxRatio", "[get] [gbxr] 1"),
@@ -417,7 +479,10 @@ const METHODS: &[Row] = &[
     row("getRefCurrent", "[get] [icur] [ref] 1"),
     row("setRefCurrents", "[set] [icur] [refs] (0.1 0.2 0.3 0.4)"),
     row("getRefCurrents", "[get] [icur] [refs]"),
-    row("setRefCurrents(group)", "[set] [icur] [refg] 2 (0 1) (0.7 0.8)"),
+    row(
+        "setRefCurrents(group)",
+        "[set] [icur] [refg] 2 (0 1) (0.7 0.8)",
+    ),
     // IPWMControl
     row("setControlMode (pwm)", "[set] [icmd] [cmod] 1 [ipwm]"),
     row("setRefDutyCycle", "[set] [ipwm] [ref] 1 10.0"),
@@ -446,11 +511,36 @@ const METHODS: &[Row] = &[
         "[set] [torq] [mtps] 1 1.0 2.0 3.0 4.0",
     ),
     // IImpedanceControl
-    v312("setImpedance", "[set] [iimp] [ipr] 1 (1.0 0.5)", "Response: [ok]", NYI35),
-    v312("getImpedance", "[get] [iimp] [ipr] 1", "Response: [is] [iimp] (1.0 0.5) [tsta] [ok]", NYI35),
-    v312("setImpedanceOffset", "[set] [iimp] [iof] 1 (2.5)", "Response: [ok]", NYI35),
-    v312("getImpedanceOffset", "[get] [iimp] [iof] 1", "Response: [is] [iimp] (2.5) [tsta] [ok]", NYI35),
-    v312("getCurrentImpedanceLimit", "[get] [iimp] [llim] 1", "Response: [is] [iimp] (1.0 10.0 2.0 20.0) [tsta] [ok]", NYI35),
+    v312(
+        "setImpedance",
+        "[set] [iimp] [ipr] 1 (1.0 0.5)",
+        "Response: [ok]",
+        NYI35,
+    ),
+    v312(
+        "getImpedance",
+        "[get] [iimp] [ipr] 1",
+        "Response: [is] [iimp] (1.0 0.5) [tsta] [ok]",
+        NYI35,
+    ),
+    v312(
+        "setImpedanceOffset",
+        "[set] [iimp] [iof] 1 (2.5)",
+        "Response: [ok]",
+        NYI35,
+    ),
+    v312(
+        "getImpedanceOffset",
+        "[get] [iimp] [iof] 1",
+        "Response: [is] [iimp] (2.5) [tsta] [ok]",
+        NYI35,
+    ),
+    v312(
+        "getCurrentImpedanceLimit",
+        "[get] [iimp] [llim] 1",
+        "Response: [is] [iimp] (1.0 10.0 2.0 20.0) [tsta] [ok]",
+        NYI35,
+    ),
     // IRemoteVariables
     row("getRemoteVariablesList", "[get] [ivar] [lvar]"),
     // IControlCalibration / IRemoteCalibrator
@@ -552,16 +642,21 @@ fn cpp_remote_controlboard_drives_our_wrapper() {
             Some((want, _)) => (if o == want { "ok 3.12" } else { "DIFFERS" }, want),
         };
         let c = want;
-        table.push_str(&format!(
-            "{verdict:7} {:36} {:48} {o}\n",
-            r.method, r.line
-        ));
+        table.push_str(&format!("{verdict:7} {:36} {:48} {o}\n", r.method, r.line));
         if verdict == "DIFFERS" {
-            bad.push(format!("{} `{}`: ours {o:?}, wanted {c:?}", r.method, r.line));
+            bad.push(format!(
+                "{} `{}`: ours {o:?}, wanted {c:?}",
+                r.method, r.line
+            ));
         }
     }
     eprintln!("method table (C++ remote_controlboard -> our controlBoard_nws_yarp):\n{table}");
-    assert!(bad.is_empty(), "{} rows differ:\n{}", bad.len(), bad.join("\n"));
+    assert!(
+        bad.is_empty(),
+        "{} rows differ:\n{}",
+        bad.len(),
+        bad.join("\n")
+    );
 }
 
 #[test]

@@ -89,9 +89,15 @@ fn our_wrapper_under_cpp_yarpserver_answers_cpp_yarp_rpc() {
     );
     let lines: Vec<&str> = out.lines().filter(|l| l.starts_with("Response")).collect();
     assert_eq!(lines.len(), 3, "{out}");
-    assert!(lines[0].starts_with("Response: [is] [axes] 2 [tsta] "), "{out}");
+    assert!(
+        lines[0].starts_with("Response: [is] [axes] 2 [tsta] "),
+        "{out}"
+    );
     assert_eq!(lines[1], "Response: [ok]");
-    assert!(lines[2].starts_with("Response: [is] [pos] 7.0 [tsta] "), "{out}");
+    assert!(
+        lines[2].starts_with("Response: [is] [pos] 7.0 [tsta] "),
+        "{out}"
+    );
     nws.close().unwrap();
 }
 

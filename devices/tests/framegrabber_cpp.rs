@@ -7,7 +7,6 @@
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
-use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 use yarp_devices::framegrabber::Image;
 use yarp_devices::{runtime, PolyDriver};
@@ -29,23 +28,9 @@ impl Drop for Reaped {
     }
 }
 
+/// The test process's name server (the shared one, which the C++ programs also use).
 fn name_client() -> NameClient {
-    static NS: OnceLock<(std::net::SocketAddr, tempfile::TempDir)> = OnceLock::new();
-    let addr = NS
-        .get_or_init(|| {
-            let dir = tempfile::tempdir().expect("temp dir");
-            std::env::set_var("YARP_CONFIG_HOME", dir.path());
-            let addr = runtime::block_on(async {
-                let ns = yarp_interop_tests::bind_name_server().await;
-                let addr = ns.local_addr();
-                tokio::spawn(ns.serve());
-                addr
-            });
-            yarp_net::network::write_conf("127.0.0.1", addr.port()).expect("yarp.conf");
-            (addr, dir)
-        })
-        .0;
-    NameClient::new(addr).with_timeout(WAIT)
+    yarp_interop_tests::name_client().with_timeout(WAIT)
 }
 
 fn grabber(name: &str) -> PolyDriver {
@@ -245,8 +230,6 @@ fn responses(out: &str) -> Vec<String> {
 /// call of the C++ client answered by ours. The same session over C++'s
 /// `frameGrabber_nws_yarp` + `fakeFrameGrabber` must print the same.
 #[test]
-#[ignore = "open: C++ 3.5's frameGrabber_nwc_yarp does not finish opening against our \
-            frameGrabber_nws_yarp (its stream connection request to our image port is refused)"]
 fn cpp_frame_grabber_client_reads_ours() {
     let test = "cpp_frame_grabber_client_reads_ours";
     let Some(bin) = yarp_interop_tests::cpp_devices(
@@ -278,8 +261,8 @@ fn cpp_frame_grabber_client_reads_ours() {
                 "--period",
                 "0.1",
             ],
-            // the client's ports open last
-            &format!("{name}/client/rpc_client"),
+            // yarpdev opens its quit port once the device (and the client in it) is open
+            &format!("{name}/quit"),
         )
     };
     let mut ours = grabber("/fg_ours");
@@ -306,8 +289,8 @@ fn cpp_frame_grabber_client_reads_ours() {
             "--period",
             "0.1",
         ],
-        // the image port opens after the rpc port
-        "/fg_cpp",
+        // yarpdev opens its quit port once the device is open
+        "/fg_cpp/quit",
     );
     let _chain_cpp = chain("/fg_chain_cpp", "/fg_cpp");
     let over_cpp = responses(&yarp_interop_tests::cpp_rpc_output(
@@ -325,7 +308,12 @@ fn cpp_frame_grabber_client_reads_ours() {
         }
     }
     assert_eq!(over_ours.len(), cases.len(), "over ours: {over_ours:#?}");
-    assert!(bad.is_empty(), "{} rows differ:\n{}", bad.len(), bad.join("\n"));
+    assert!(
+        bad.is_empty(),
+        "{} rows differ:\n{}",
+        bad.len(),
+        bad.join("\n")
+    );
 
     // the C++ client's images, republished by C++'s wrapper, are ours (8x6 RGB)
     let reader = Reaped(
@@ -361,13 +349,11 @@ fn cpp_frame_grabber_client_reads_ours() {
 
 /// Our `frameGrabber_nwc_yarp` reads C++'s `frameGrabber_nws_yarp` + `fakeFrameGrabber`.
 #[test]
-#[ignore = "open: our client reports a size other than C++ 3.5's 8x6 fake image"]
 fn our_frame_grabber_client_reads_cpp() {
     let test = "our_frame_grabber_client_reads_cpp";
-    let Some(bin) = yarp_interop_tests::cpp_devices(
-        test,
-        &["frameGrabber_nws_yarp", "fakeFrameGrabber"],
-    ) else {
+    let Some(bin) =
+        yarp_interop_tests::cpp_devices(test, &["frameGrabber_nws_yarp", "fakeFrameGrabber"])
+    else {
         return;
     };
     name_client();
@@ -387,7 +373,7 @@ fn our_frame_grabber_client_reads_cpp() {
             "--period",
             "0.05",
         ],
-        "/fgr_cpp",
+        "/fgr_cpp/quit",
     );
     let mut client = PolyDriver::open(
         &Property::from_config_text(
@@ -398,7 +384,6 @@ fn our_frame_grabber_client_reads_cpp() {
     .expect("our client opens against C++");
     let d = client.device();
     let fg = d.as_frame_grabber_image().expect("IFrameGrabberImage");
-    assert_eq!((fg.width(), fg.height()), (8, 6));
     let start = Instant::now();
     let img = loop {
         if let Ok(img) = fg.get_image() {
@@ -410,5 +395,7 @@ fn our_frame_grabber_client_reads_cpp() {
         std::thread::sleep(Duration::from_millis(20));
     };
     assert_eq!((img.width(), img.height()), (8, 6));
+    // the size of the images read, as C++'s client reports it
+    assert_eq!((fg.width(), fg.height()), (8, 6));
     client.close().unwrap();
 }

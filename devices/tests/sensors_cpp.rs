@@ -111,16 +111,15 @@ fn cpp_client_chain(bin: &std::path::Path, name: &str, remote: &str) -> Reaped {
             "--period",
             "20",
         ],
-        &format!("{name}/rpc:o"),
+        // yarpdev opens its quit port once the device is open
+        &format!("{name}/quit"),
     )
 }
 
 /// C++ `multipleanalogsensorsclient` reads our server (over our `fakeIMU`): through C++'s
 /// server wrapping the C++ client, the recorded `yarp rpc` session prints what it prints
-/// over C++'s server + `fakeIMU`, and the measurements stream.
+/// over C++'s server + `fakeIMU` (the metadata the C++ client got from ours).
 #[test]
-#[ignore = "C++ 3.5's multipleanalogsensorsclient reads 10 sensor families; ours (as 3.12) \
-            serves 12, so the 3.5 client cannot read it: needs a 3.12 C++ peer"]
 fn cpp_mas_client_reads_our_server() {
     let test = "cpp_mas_client_reads_our_server";
     let Some(bin) = yarp_interop_tests::cpp_devices(
@@ -162,7 +161,7 @@ fn cpp_mas_client_reads_our_server() {
             "--period",
             "20",
         ],
-        "/mas_cpp/rpc:o",
+        "/mas_cpp/quit",
     );
     let _chain_cpp = cpp_client_chain(&bin, "/mas_chain_cpp", "/mas_cpp");
     let over_cpp = printed(&yarp_interop_tests::cpp_rpc_output(
@@ -173,36 +172,10 @@ fn cpp_mas_client_reads_our_server() {
     assert!(!over_cpp.is_empty(), "the C++ reference printed nothing");
     assert_eq!(over_ours, over_cpp, "inputs:\n{input}");
 
-    // the measurements the C++ client reads from ours, republished by C++'s server
-    let mut reader = Reaped(
-        yarp_interop_tests::cpp_command(&yarp)
-            .args(["read", "/mas_rd", "/mas_chain_ours/measures:o"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("C++ yarp read"),
-    );
-    let stdout = reader.0.stdout.take().unwrap();
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        use std::io::BufRead;
-        for line in std::io::BufReader::new(stdout).lines().map_while(Result::ok) {
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let start = Instant::now();
-    loop {
-        assert!(start.elapsed() < WAIT, "no measurements from the C++ chain");
-        let Ok(line) = rx.recv_timeout(WAIT) else {
-            continue;
-        };
-        // ((gyros) (accelerometers) ...): a list of lists per family
-        if line.starts_with("((((") {
-            break;
-        }
-    }
+    // The measurements do not pass: 3.12's stream (ours) carries 12 sensor families, C++
+    // 3.5's client reads 10 and reports every sensor as not MAS_OK, so C++ 3.5's server
+    // over it publishes nothing. The 3.12 behaviour is kept; reading them back needs a 3.12
+    // C++ peer (ours reads ours: sensors_live).
     server.close().unwrap();
 }
 
@@ -230,7 +203,7 @@ fn our_mas_client_refuses_cpp35_server_metadata() {
             "--period",
             "20",
         ],
-        "/masr_cpp/rpc:o",
+        "/masr_cpp/quit",
     );
     let err = PolyDriver::open(
         &Property::from_config_text(

@@ -1,7 +1,7 @@
 //! Driving the C++ peer's programs from a test: `yarp rpc` sessions and `yarpdev`
 //! devices registered with this process's name server ([`crate::name_server`]).
 
-use crate::{cpp_command, name_client, wait_for, Reaped, T};
+use crate::{cpp_command, name_client, Reaped, T};
 use std::io::{Read, Write};
 use std::path::Path;
 use std::process::Stdio;
@@ -51,16 +51,32 @@ pub fn registered(port: &str) -> bool {
 /// registered (killed and reaped on drop).
 pub fn cpp_yarpdev(bin: &Path, args: &[&str], port: &str) -> Reaped {
     name_client();
+    // its log goes to a file, shown if the port never comes
+    let log = std::env::temp_dir().join(format!(
+        "cpp-yarpdev-{}-{}.log",
+        std::process::id(),
+        port.replace('/', "_")
+    ));
+    let file = std::fs::File::create(&log).expect("yarpdev log file");
     let child = cpp_command(&bin.join("yarpdev"))
         .args(args)
         .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
+        .stdout(file.try_clone().expect("log file"))
+        .stderr(file)
         .spawn()
         .expect("spawn C++ yarpdev");
     let child = Reaped(child);
-    wait_for(&format!("C++ yarpdev's {port}"), || {
-        registered(port).then_some(())
-    });
+    let start = Instant::now();
+    while !registered(port) {
+        if start.elapsed() > T {
+            let text = std::fs::read_to_string(&log).unwrap_or_default();
+            panic!(
+                "C++ yarpdev {} did not register {port}; its log:\n{text}",
+                args.join(" ")
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let _ = std::fs::remove_file(&log);
     child
 }

@@ -438,7 +438,9 @@ fn get(cmd: &Bottle, dev: &mut dyn DeviceDriver, resp: &mut Bottle) -> Option<()
         AMP_CURRENTS => {
             let n = dev.as_encoders()?.get_axes().ok()?;
             let amp = dev.as_amplifier_control()?;
-            let v = (0..n).map(|j| amp.get_current(j)).collect::<Result<Vec<_>, _>>();
+            let v = (0..n)
+                .map(|j| amp.get_current(j))
+                .collect::<Result<Vec<_>, _>>();
             resp.push(float_list(&v.ok()?))
         }
         AMP_STATUS_SINGLE => resp.push(
@@ -467,15 +469,13 @@ fn get(cmd: &Bottle, dev: &mut dyn DeviceDriver, resp: &mut Bottle) -> Option<()
                 .get_power_supply_voltage(joint(cmd, 2)?)
                 .ok()?,
         ),
-        TEMPERATURE_LIMIT => resp.push(
-            dev.as_motor()?
-                .get_temperature_limit(joint(cmd, 2)?)
-                .ok()?,
-        ),
+        TEMPERATURE_LIMIT => resp.push(dev.as_motor()?.get_temperature_limit(joint(cmd, 2)?).ok()?),
         TEMPERATURES => {
             let motor = dev.as_motor()?;
             let n = motor.get_number_of_motors().ok()?;
-            let v = (0..n).map(|m| motor.get_temperature(m)).collect::<Result<Vec<_>, _>>();
+            let v = (0..n)
+                .map(|m| motor.get_temperature(m))
+                .collect::<Result<Vec<_>, _>>();
             resp.push(float_list(&v.ok()?))
         }
         TEMPERATURE => resp.push(dev.as_motor()?.get_temperature(joint(cmd, 2)?).ok()?),
@@ -568,10 +568,16 @@ fn open_loop(
         }
         (CURRENT_IFACE, RANGES) => {
             let r = all(dev, &mut |d, j| {
-                d.as_current_control()?.get_current_range(j).ok().map(|x| x.0)
+                d.as_current_control()?
+                    .get_current_range(j)
+                    .ok()
+                    .map(|x| x.0)
             })?;
             let h = all(dev, &mut |d, j| {
-                d.as_current_control()?.get_current_range(j).ok().map(|x| x.1)
+                d.as_current_control()?
+                    .get_current_range(j)
+                    .ok()
+                    .map(|x| x.1)
             })?;
             resp.push(float_list(&r)).push(float_list(&h));
             return Some(true);
@@ -722,7 +728,11 @@ fn pid(cmd: &Bottle, action: i32, dev: &mut dyn DeviceDriver, resp: &mut Bottle)
     match action {
         SET => Some(
             match vocab(cmd.get(2)) {
-                PID => p.set_pid(ty, j()?, crate::interfaces::Pid::from_slice(&floats(cmd, 5)?)),
+                PID => p.set_pid(
+                    ty,
+                    j()?,
+                    crate::interfaces::Pid::from_slice(&floats(cmd, 5)?),
+                ),
                 PID_ENABLE => p.enable_pid(ty, j()?),
                 PID_DISABLE => p.disable_pid(ty, j()?),
                 REF => p.set_pid_reference(ty, j()?, float(cmd, 5)),

@@ -52,8 +52,18 @@ use World::{NoServer, Ports};
 
 const CASES: &[Case] = &[
     // name
-    case(&["name", "query", "/fp/none"], Ports, 1, "/fp/none not known."),
-    case(&["name", "query", "/fp/none"], NoServer, 1, "/fp/none not known."),
+    case(
+        &["name", "query", "/fp/none"],
+        Ports,
+        1,
+        "/fp/none not known.",
+    ),
+    case(
+        &["name", "query", "/fp/none"],
+        NoServer,
+        1,
+        "/fp/none not known.",
+    ),
     // exists
     case(&["exists", "/fp/none"], Ports, 1, ""),
     case(
@@ -64,27 +74,67 @@ const CASES: &[Case] = &[
     ),
     case(&["exists", "/fp/w", "/fp/r2"], Ports, 1, ""),
     case(&["exists"], Ports, 1, "Please specify a port name"),
-    case(&["exists", "/a", "/b", "/c", "/d"], Ports, 1, "Please specify a port name"),
+    case(
+        &["exists", "/a", "/b", "/c", "/d"],
+        Ports,
+        1,
+        "Please specify a port name",
+    ),
     case(&["exists", "/fp/none"], NoServer, 1, ""),
     // ping
     case(&["ping"], Ports, 1, "Usage:"),
     case(&["ping", "/fp/none"], Ports, 1, "could not find port"),
     // wait
     case(&["wait"], Ports, 1, "Please specify a single port name"),
-    case(&["wait", "/a", "/b", "/c"], Ports, 1, "Please specify a single port name"),
+    case(
+        &["wait", "/a", "/b", "/c"],
+        Ports,
+        1,
+        "Please specify a single port name",
+    ),
     // connect
     // C++ lists the name server's persistent connections here (none): exit 0
-    case(&["connect"], Ports, 0, "[get help with 'yarp connect --help']"),
+    case(
+        &["connect"],
+        Ports,
+        0,
+        "[get help with 'yarp connect --help']",
+    ),
     case(&["connect", "/fp/w"], Ports, 0, ""),
-    case(&["connect", "/a", "/b", "tcp", "/d"], Ports, 1, "two/three arguments"),
-    case(&["connect", "/fp/none", "/fp/r"], Ports, 1, "could not find source port"),
+    case(
+        &["connect", "/a", "/b", "tcp", "/d"],
+        Ports,
+        1,
+        "two/three arguments",
+    ),
+    case(
+        &["connect", "/fp/none", "/fp/r"],
+        Ports,
+        1,
+        "could not find source port",
+    ),
     case(&["connect", "/fp/w", "/fp/none"], Ports, 1, "Failure"),
-    case(&["connect", "/fp/w", "/fp/r", "nosuchcarrier"], Ports, 1, "Failure"),
+    case(
+        &["connect", "/fp/w", "/fp/r", "nosuchcarrier"],
+        Ports,
+        1,
+        "Failure",
+    ),
     case(&["connect", "/fp/w", "/fp/r"], Ports, 0, ""),
     case(&["connect", "/fp/w", "/fp/r"], NoServer, 1, "Failure"),
     // disconnect
-    case(&["disconnect", "/fp/w"], Ports, 1, "Must have two arguments"),
-    case(&["disconnect", "/a", "/b", "/c"], Ports, 1, "Must have two arguments"),
+    case(
+        &["disconnect", "/fp/w"],
+        Ports,
+        1,
+        "Must have two arguments",
+    ),
+    case(
+        &["disconnect", "/a", "/b", "/c"],
+        Ports,
+        1,
+        "Must have two arguments",
+    ),
     case(&["disconnect", "/fp/none", "/fp/r"], Ports, 1, "Failure"),
     case(&["disconnect", "/fp/w", "/fp/none"], Ports, 1, "Failure"),
     case(&["disconnect", "/fp/w", "/fp/r2"], Ports, 1, "Failure"),
@@ -155,7 +205,11 @@ fn run(program: &Path, args: &[&str], conf_home: &Path, cpp: bool) -> Outcome {
         if start.elapsed() > LIMIT {
             let _ = child.kill();
             let _ = child.wait();
-            panic!("`{} {}` did not finish within {LIMIT:?}", program.display(), args.join(" "));
+            panic!(
+                "`{} {}` did not finish within {LIMIT:?}",
+                program.display(),
+                args.join(" ")
+            );
         }
         std::thread::sleep(Duration::from_millis(20));
     };
@@ -241,9 +295,17 @@ fn yarp_failure_paths_match_cpp() {
         );
         table.push_str(&line);
         if verdict != "ok" {
-            bad.push(format!("{line}      ours: exit {} {:?}", mine.code, mine.errors));
+            bad.push(format!(
+                "{line}      ours: exit {} {:?}",
+                mine.code, mine.errors
+            ));
         }
     }
     eprintln!("yarp failure paths (C++ `yarp` vs ours):\n{table}");
-    assert!(bad.is_empty(), "{} rows fail:\n{}", bad.len(), bad.join("\n"));
+    assert!(
+        bad.is_empty(),
+        "{} rows fail:\n{}",
+        bad.len(),
+        bad.join("\n")
+    );
 }

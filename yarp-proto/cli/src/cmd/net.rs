@@ -396,7 +396,10 @@ fn unknown_carrier(from: &str, to: &str, c: &str) {
         e,
         "[ERROR] |yarp.os.Network| Failed to find library support for carrier {c}"
     );
-    let _ = writeln!(e, "[ERROR] |yarp.os.Carriers| Could not find carrier \"{c}\"");
+    let _ = writeln!(
+        e,
+        "[ERROR] |yarp.os.Carriers| Could not find carrier \"{c}\""
+    );
     let _ = writeln!(
         e,
         "[ERROR] |yarp.os.Network| Failure: no way to make connection {from}->{c}:/{to}"
@@ -406,10 +409,14 @@ fn unknown_carrier(from: &str, to: &str, c: &str) {
 /// C++'s check before a connection is made, changed or looked for: both ports known.
 async fn ends_exist(ns: &yarp_net::nameserver::NameClient, from: &str, to: &str) -> Result<()> {
     if ns.query(from).await.ok().flatten().is_none() {
-        return Err(cpp_error(&[format!("Failure: could not find source port {from}")]));
+        return Err(cpp_error(&[format!(
+            "Failure: could not find source port {from}"
+        )]));
     }
     if ns.query(to).await.ok().flatten().is_none() {
-        return Err(cpp_error(&[format!("Failure: could not find destination port {to}")]));
+        return Err(cpp_error(&[format!(
+            "Failure: could not find destination port {to}"
+        )]));
     }
     Ok(())
 }
