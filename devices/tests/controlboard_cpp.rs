@@ -34,10 +34,11 @@ fn finish(mut child: Child) -> String {
     });
     let start = Instant::now();
     while child.try_wait().expect("try_wait").is_none() {
-        if start.elapsed() > 3 * T {
+        // the paced method table takes ~10 s itself; a loaded machine slows C++ too
+        if start.elapsed() > 6 * T {
             let _ = child.kill();
             let _ = child.wait();
-            panic!("C++ program did not finish within {:?}", 3 * T);
+            panic!("C++ program did not finish within {:?}", 6 * T);
         }
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
