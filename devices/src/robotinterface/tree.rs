@@ -85,6 +85,25 @@ fn read(path: &Path) -> Result<String, XmlError> {
     })
 }
 
+/// An XML declaration after leading blank lines (some robots-configuration files start
+/// with an empty line; TinyXML, which C++ uses, accepts them) is blanked out, keeping
+/// every line and column where it was.
+fn late_declaration_blanked(text: &str) -> std::borrow::Cow<'_, str> {
+    let body = text.trim_start();
+    if body.len() == text.len() || !body.starts_with("<?xml") {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let start = text.len() - body.len();
+    let Some(end) = body.find("?>").map(|e| start + e + 2) else {
+        return std::borrow::Cow::Borrowed(text);
+    };
+    let blank: String = text[start..end]
+        .chars()
+        .map(|c| if c == '\n' { '\n' } else { ' ' })
+        .collect();
+    std::borrow::Cow::Owned(format!("{}{blank}{}", &text[..start], &text[end..]))
+}
+
 fn canonical(path: &Path) -> PathBuf {
     std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
 }
@@ -99,6 +118,7 @@ fn load_text(
         allow_dtd: true,
         ..Default::default()
     };
+    let text = &late_declaration_blanked(text);
     let doc =
         roxmltree::Document::parse_with_options(text, opts).map_err(|e| XmlError::Malformed {
             file: name.to_string(),

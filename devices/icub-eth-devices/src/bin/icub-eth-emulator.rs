@@ -1,0 +1,77 @@
+//! `icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN]`:
+//! emulates every Ethernet board of a robots-configuration robot directory, each on its
+//! own `IpAddress:12345` UDP socket. The address map (also `YARP_ICUB_ETH_ADDRESS_MAP`)
+//! serves the robot's addresses elsewhere, e.g. `10.0.1.0/24=127.0.1.0/24` on a laptop
+//! without the robot's addresses; the devices must use the same map.
+
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+use icub_eth_devices::emulator::{robot_boards, serve};
+use icub_eth_devices::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+
+fn usage() -> ! {
+    eprintln!(
+        "usage: icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN]"
+    );
+    std::process::exit(2)
+}
+
+fn main() {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let mut args = std::env::args().skip(1);
+    let mut dir: Option<PathBuf> = None;
+    let mut top: Option<PathBuf> = None;
+    let mut map_text = std::env::var(ADDRESS_MAP_ENV).unwrap_or_default();
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--config" => top = Some(args.next().unwrap_or_else(|| usage()).into()),
+            "--address-map" => map_text = args.next().unwrap_or_else(|| usage()),
+            "-h" | "--help" => usage(),
+            _ if dir.is_none() => dir = Some(a.into()),
+            _ => usage(),
+        }
+    }
+    let dir = dir.unwrap_or_else(|| usage());
+    let map = AddressMap::parse(&map_text).unwrap_or_else(|e| {
+        eprintln!("icub-eth-emulator: {e}");
+        std::process::exit(2)
+    });
+    let top = top.map(|t| if t.is_absolute() { t } else { dir.join(t) });
+    let specs = robot_boards(&dir, top.as_deref()).unwrap_or_else(|e| {
+        eprintln!("icub-eth-emulator: {e}");
+        std::process::exit(1)
+    });
+    let stop = Arc::new(AtomicBool::new(false));
+    let (served, threads) = serve(specs, &map, stop).unwrap_or_else(|e| {
+        eprintln!("icub-eth-emulator: {e}");
+        std::process::exit(1)
+    });
+    for b in &served {
+        let s = &b.spec;
+        println!(
+            "board {} {} at {} ({} joints{}{}{}{}{}{}{})",
+            s.params.name,
+            s.params.type_name,
+            b.local,
+            s.joints.len(),
+            if s.strains > 0 { ", strain" } else { "" },
+            if s.fts > 0 { ", ft" } else { "" },
+            if s.maises > 0 { ", mais" } else { "" },
+            if s.inertials3 > 0 { ", inertials" } else { "" },
+            if s.skins > 0 { ", skin" } else { "" },
+            if s.poses > 0 { ", pos" } else { "" },
+            if s.batteries > 0 { ", battery" } else { "" },
+        );
+    }
+    println!("icub-eth-emulator: serving {} boards", served.len());
+    for t in threads {
+        let _ = t.join();
+    }
+}

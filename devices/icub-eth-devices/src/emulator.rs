@@ -1,0 +1,290 @@
+//! The Ethernet board emulator behind `icub-eth-emulator`: every board a robot directory
+//! names, each an [`icub_eth::board::BoardEngine`] on its own UDP socket
+//! (`IpAddress:IpPort` of its `ETH_BOARD`, through the address map), answering the
+//! host as the board's firmware does and streaming its regulars at the configured rate.
+//!
+//! What a board carries comes from the robot's files, read with the robot interface's
+//! XML reader: the boards of `hardware/electronics/*-eln.xml`, and for each `embObj*`
+//! device of the robot's top-level file (`yarprobotinterface.ini`'s `config`) the
+//! entities its service needs: joints (`embObjMotionControl`: `GENERAL/Joints`, starting
+//! inside `LIMITS` at 0° when allowed), strain/FT, MAIS, inertials, skin, POS, battery.
+//! Joints are emulated by the board engine's joint model; sensors stream slowly varying
+//! values.
+
+use std::collections::BTreeMap;
+use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4, UdpSocket};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use icub_eth::board::{BoardConfig, BoardEngine};
+use icub_eth::entities::analog::{FtStatus, FtTimedValue};
+use icub_eth::id::{entity as en, ids, tag};
+use icub_eth::plant::{JointModel, SimpleJoint};
+use yarp_devices::robotinterface::read_robot_str;
+use yarp_proto::Property;
+
+use crate::eth::config::Node;
+use crate::eth::params::{read_eth_board, AddressMap, EthBoardParams};
+
+/// What one emulated board carries.
+#[derive(Debug, Clone)]
+pub struct BoardSpec {
+    pub params: EthBoardParams,
+    /// Initial position of each joint, encoder units.
+    pub joints: Vec<f64>,
+    pub strains: u8,
+    pub maises: u8,
+    pub inertials3: u8,
+    pub temperatures: u8,
+    pub poses: u8,
+    pub fts: u8,
+    pub batteries: u8,
+    pub skins: u8,
+    /// The devices that use the board (for the start-up listing).
+    pub users: Vec<String>,
+}
+
+impl BoardSpec {
+    fn new(params: EthBoardParams) -> Self {
+        Self {
+            params,
+            joints: Vec::new(),
+            strains: 0,
+            maises: 0,
+            inertials3: 0,
+            temperatures: 0,
+            poses: 0,
+            fts: 0,
+            batteries: 0,
+            skins: 0,
+            users: Vec::new(),
+        }
+    }
+
+    fn config(&self) -> BoardConfig {
+        let p = &self.params;
+        let mut c = BoardConfig::new(&p.name, p.ip, p.board_type);
+        c.joints = self.joints.len() as u8;
+        c.strains = self.strains;
+        c.maises = self.maises;
+        c.inertials3 = self.inertials3;
+        c.temperatures = self.temperatures;
+        c.poses = self.poses;
+        c.fts = self.fts;
+        c.batteries = self.batteries;
+        c.skins = self.skins;
+        c.max_rx_packet = p.max_rx_packet;
+        c
+    }
+}
+
+const DTD: &str = r#"<!DOCTYPE robot PUBLIC "-//YARP//DTD yarprobotinterface 3.0//EN" "http://www.yarp.it/DTD/yarprobotinterfaceV3.0.dtd">"#;
+
+/// The robot's top-level XML file: `yarprobotinterface.ini`'s `config`.
+pub fn robot_file(dir: &Path) -> Result<PathBuf, String> {
+    let ini = dir.join("yarprobotinterface.ini");
+    let text = std::fs::read_to_string(&ini).map_err(|e| format!("{}: {e}", ini.display()))?;
+    let name = text
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("config"))
+        .map(str::trim)
+        .find(|s| !s.is_empty())
+        .ok_or_else(|| format!("{}: no `config` line", ini.display()))?;
+    Ok(dir.join(name))
+}
+
+/// The boards of a robot directory (see the module documentation).
+pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, String> {
+    let mut boards: BTreeMap<Ipv4Addr, BoardSpec> = BTreeMap::new();
+    // Every board the electronics files name.
+    let eln_dir = dir.join("hardware/electronics");
+    let mut eln: Vec<PathBuf> = std::fs::read_dir(&eln_dir)
+        .map_err(|e| format!("{}: {e}", eln_dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.to_string_lossy().ends_with("-eln.xml"))
+        .collect();
+    eln.sort();
+    for file in &eln {
+        let xml = format!(
+            "<?xml version=\"1.0\"?>\n{DTD}\n<robot name=\"eln\" build=\"0\" portprefix=\"/eln\" xmlns:xi=\"http://www.w3.org/2001/XInclude\"><devices><device name=\"eln\" type=\"eln\"><xi:include href=\"{}\"/></device></devices></robot>",
+            file.file_name().map(|f| f.to_string_lossy()).unwrap_or_default()
+        );
+        let loaded = read_robot_str(&xml, &eln_dir, &Property::default())
+            .map_err(|e| format!("{}: {e}", file.display()))?;
+        let Some(dev) = loaded.robot.devices.first() else {
+            continue;
+        };
+        let cfg = dev.to_property().map_err(|e| e.to_string())?;
+        let params = read_eth_board(&cfg).map_err(|e| format!("{}: {e}", file.display()))?;
+        boards
+            .entry(params.ip)
+            .or_insert_with(|| BoardSpec::new(params));
+    }
+    // What the robot's devices need of them.
+    let top = match top {
+        Some(t) => t.to_path_buf(),
+        None => robot_file(dir)?,
+    };
+    let loaded = yarp_devices::robotinterface::read_robot_file(&top, &Property::default())
+        .map_err(|e| format!("{}: {e}", top.display()))?;
+    for dev in &loaded.robot.devices {
+        if !dev.kind.starts_with("embObj") {
+            continue;
+        }
+        let cfg = dev.to_property().map_err(|e| e.to_string())?;
+        let params = match read_eth_board(&cfg) {
+            Ok(p) => p,
+            Err(e) => {
+                tracing::warn!("device {}: {e}: not emulated", dev.name);
+                continue;
+            }
+        };
+        let b = boards
+            .entry(params.ip)
+            .or_insert_with(|| BoardSpec::new(params));
+        b.users.push(format!("{} ({})", dev.name, dev.kind));
+        let root = Node::root(&cfg);
+        match dev.kind.as_str() {
+            "embObjMotionControl" => {
+                let n = root
+                    .group("GENERAL")
+                    .and_then(|g| g.number("Joints").ok().flatten())
+                    .unwrap_or(0.0) as usize;
+                let num = |g: &'static str, k: &str, d: f64| -> Vec<f64> {
+                    root.group(g)
+                        .and_then(|g| g.numbers(k, n).ok().flatten())
+                        .unwrap_or_else(|| vec![d; n])
+                };
+                let enc = num("GENERAL", "Encoder", 1.0);
+                let (lo, hi) = (
+                    num("LIMITS", "jntPosMin", 0.0),
+                    num("LIMITS", "jntPosMax", 0.0),
+                );
+                b.joints = (0..n)
+                    .map(|j| {
+                        let deg = if lo[j] <= hi[j] {
+                            0.0f64.clamp(lo[j], hi[j])
+                        } else {
+                            0.0
+                        };
+                        deg * enc[j]
+                    })
+                    .collect();
+            }
+            "embObjFTsensor" => {
+                b.strains = b.strains.max(1);
+                b.temperatures = b.temperatures.max(1);
+            }
+            "embObjMultipleFTsensors" => b.fts = b.fts.saturating_add(1).min(4),
+            "embObjMais" => b.maises = 1,
+            "embObjIMU" | "embObjInertials" => b.inertials3 = 1,
+            "embObjSkin" => b.skins = b.skins.max(1),
+            "embObjPOS" => b.poses = 1,
+            "embObjBattery" => b.batteries = 1,
+            _ => {}
+        }
+    }
+    Ok(boards.into_values().collect())
+}
+
+/// Writes the sensors' values of a board (slowly varying, so that streams visibly
+/// change).
+fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u64) {
+    for i in 0..spec.fts {
+        let s = (t * 0.5).sin() as f32;
+        let ft = FtStatus {
+            timed_value: FtTimedValue {
+                age: age_us,
+                values: [s, 2.0 * s, 9.81, 0.1 * s, 0.2 * s, 0.3],
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let _ = engine
+            .store_mut()
+            .write(ids::analog(en::AS_FT, i, tag::AS_FT_STATUS), &ft);
+    }
+}
+
+/// A board served on its socket until `stop`.
+pub struct ServedBoard {
+    pub spec: BoardSpec,
+    pub local: SocketAddrV4,
+}
+
+/// Binds every board's socket (failing, naming the board, when an address is missing)
+/// and serves them on one thread each until `stop` is set.
+pub fn serve(
+    specs: Vec<BoardSpec>,
+    map: &AddressMap,
+    stop: Arc<AtomicBool>,
+) -> Result<(Vec<ServedBoard>, Vec<std::thread::JoinHandle<()>>), String> {
+    let mut served = Vec::new();
+    let mut threads = Vec::new();
+    for spec in specs {
+        let local = SocketAddrV4::new(map.map(spec.params.ip), spec.params.port);
+        let socket = UdpSocket::bind(local).map_err(|e| {
+            format!(
+                "BOARD {}: cannot bind {local}: {e} (give this address to an interface, e.g. `ip addr add {}/24 dev lo`, or map the robot's addresses with --address-map 10.0.1.0/24=127.0.1.0/24)",
+                spec.params.who(),
+                local.ip()
+            )
+        })?;
+        let joints: Vec<Box<dyn JointModel>> = spec
+            .joints
+            .iter()
+            .map(|q| Box::new(SimpleJoint::new(*q)) as Box<dyn JointModel>)
+            .collect();
+        let engine = BoardEngine::with_joints(spec.config(), joints);
+        let stop = stop.clone();
+        let s2 = spec.clone();
+        let t = std::thread::Builder::new()
+            .name(format!("board-{}", spec.params.ip))
+            .spawn(move || run_board(socket, engine, s2, stop))
+            .map_err(|e| e.to_string())?;
+        threads.push(t);
+        served.push(ServedBoard { spec, local });
+    }
+    Ok((served, threads))
+}
+
+fn run_board(socket: UdpSocket, mut engine: BoardEngine, spec: BoardSpec, stop: Arc<AtomicBool>) {
+    let epoch = Instant::now();
+    let mut last_step = Instant::now();
+    let mut peer: Option<SocketAddr> = None;
+    let mut buf = vec![0u8; 65536];
+    while !stop.load(Ordering::Relaxed) {
+        let now = epoch.elapsed();
+        let wait = engine
+            .next_transmit()
+            .map_or(Duration::from_millis(5), |t| t.saturating_sub(now))
+            .clamp(Duration::from_micros(200), Duration::from_millis(5));
+        let _ = socket.set_read_timeout(Some(wait));
+        if let Ok((n, from)) = socket.recv_from(&mut buf) {
+            peer = Some(from);
+            if let Err(e) = engine.handle_datagram(&buf[..n]) {
+                tracing::debug!(board = %spec.params.who(), "dropped a datagram: {e}");
+            }
+        }
+        let dt = last_step.elapsed();
+        if dt >= Duration::from_millis(1) {
+            last_step = Instant::now();
+            engine.step(dt.as_secs_f64());
+            let now = epoch.elapsed();
+            update_sensors(
+                &mut engine,
+                &spec,
+                now.as_secs_f64(),
+                now.as_micros() as u64,
+            );
+        }
+        let now = epoch.elapsed();
+        while let Some(d) = engine.poll_transmit(now) {
+            if let Some(p) = peer {
+                let _ = socket.send_to(&d, p);
+            }
+        }
+    }
+}

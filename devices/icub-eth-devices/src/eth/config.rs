@@ -1,0 +1,205 @@
+//! Reading the groups of a device's configuration the way icub-main's parsers do
+//! (`findGroup(..).find(..)`, multi-value lines `(key v1 v2 ...)`), with errors that name
+//! the parameter by its path (`ETH_BOARD/ETH_BOARD_PROPERTIES/IpAddress`).
+
+use yarp_proto::{Bottle, Property, Value};
+
+/// A parameter that is missing or does not parse.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("parameter `{param}` should be {expected}, got `{got}`")]
+pub struct ParamError {
+    /// The parameter's path, groups separated by `/`.
+    pub param: String,
+    pub expected: &'static str,
+    /// What was found (`<missing>` when absent).
+    pub got: String,
+}
+
+impl ParamError {
+    pub fn missing(param: impl Into<String>, expected: &'static str) -> Self {
+        Self {
+            param: param.into(),
+            expected,
+            got: "<missing>".into(),
+        }
+    }
+    pub fn bad(param: impl Into<String>, expected: &'static str, got: impl Into<String>) -> Self {
+        Self {
+            param: param.into(),
+            expected,
+            got: got.into(),
+        }
+    }
+    /// As the device layer's error, naming the device.
+    pub fn for_device(self, device: &str) -> yarp_devices::DeviceError {
+        yarp_devices::DeviceError::BadParam {
+            device: device.to_string(),
+            param: self.param,
+            expected: self.expected,
+            got: self.got,
+        }
+    }
+}
+
+/// A value as C++ `asString` gives it (numbers printed as such, quotes removed).
+pub fn text(v: &Value) -> String {
+    match v.as_str() {
+        Some(s) => s.to_string(),
+        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
+    }
+}
+
+/// A group (or the whole configuration) of a device.
+#[derive(Clone, Copy)]
+pub enum Node<'a> {
+    Root(&'a Property),
+    Group(&'a Bottle, &'a str),
+}
+
+impl<'a> Node<'a> {
+    pub fn root(p: &'a Property) -> Self {
+        Node::Root(p)
+    }
+
+    fn path_of(&self, key: &str) -> String {
+        match self {
+            Node::Root(_) => key.to_string(),
+            Node::Group(_, path) => format!("{path}/{key}"),
+        }
+    }
+
+    /// The line `(key ...)` of this node.
+    fn line(&self, key: &str) -> Option<&'a Bottle> {
+        match *self {
+            Node::Root(p) => p.find_group(key),
+            Node::Group(b, _) => b.find_group(key),
+        }
+    }
+
+    /// The sub-group `name` (a line whose values are lines).
+    pub fn group(&self, name: &'a str) -> Option<Node<'a>> {
+        let b = self.line(name)?;
+        // The path is only for messages; leak-free: keep the group's own name.
+        Some(Node::Group(b, name))
+    }
+
+    /// The sub-group `name`, or an error naming it.
+    pub fn need_group(&self, name: &'a str) -> Result<Node<'a>, ParamError> {
+        self.group(name)
+            .ok_or_else(|| ParamError::missing(self.path_of(name), "a group"))
+    }
+
+    pub fn has(&self, key: &str) -> bool {
+        self.line(key).is_some()
+    }
+
+    /// The values after `key` (a single list value is flattened), as text.
+    pub fn strings(&self, key: &str) -> Option<Vec<String>> {
+        let line = self.line(key)?;
+        let rest: Vec<&Value> = line.iter().skip(1).collect();
+        if let [only] = rest.as_slice() {
+            if let Some(list) = only.as_list() {
+                return Some(list.iter().map(text).collect());
+            }
+        }
+        Some(rest.into_iter().map(text).collect())
+    }
+
+    /// The first value of `key`, as text.
+    pub fn string(&self, key: &str) -> Option<String> {
+        self.strings(key).and_then(|v| v.into_iter().next())
+    }
+
+    pub fn need_string(&self, key: &str, expected: &'static str) -> Result<String, ParamError> {
+        self.string(key)
+            .ok_or_else(|| ParamError::missing(self.path_of(key), expected))
+    }
+
+    /// The first value of `key` as a number.
+    pub fn number(&self, key: &str) -> Result<Option<f64>, ParamError> {
+        match self.string(key) {
+            None => Ok(None),
+            Some(s) => parse_number(&s)
+                .map(Some)
+                .ok_or_else(|| ParamError::bad(self.path_of(key), "a number", s)),
+        }
+    }
+
+    /// `key` as a boolean (`true`/`false`/`1`/`0`).
+    pub fn boolean(&self, key: &str) -> Option<bool> {
+        self.string(key)
+            .map(|s| matches!(s.trim_matches('"'), "true" | "1" | "TRUE" | "True"))
+    }
+
+    /// `key`'s values as numbers, exactly `n` of them.
+    pub fn numbers(&self, key: &str, n: usize) -> Result<Option<Vec<f64>>, ParamError> {
+        let Some(v) = self.strings(key) else {
+            return Ok(None);
+        };
+        let nums: Vec<f64> = v.iter().filter_map(|s| parse_number(s)).collect();
+        if nums.len() != v.len() || v.len() != n {
+            return Err(ParamError::bad(
+                self.path_of(key),
+                "one number per joint",
+                v.join(" "),
+            ));
+        }
+        Ok(Some(nums))
+    }
+
+    /// Like [`Self::numbers`], but an error when absent.
+    pub fn need_numbers(&self, key: &str, n: usize) -> Result<Vec<f64>, ParamError> {
+        self.numbers(key, n)?
+            .ok_or_else(|| ParamError::missing(self.path_of(key), "one number per joint"))
+    }
+
+    /// `key`'s values as text, exactly `n` of them.
+    pub fn need_strings(&self, key: &str, n: usize) -> Result<Vec<String>, ParamError> {
+        let v = self
+            .strings(key)
+            .ok_or_else(|| ParamError::missing(self.path_of(key), "one value per joint"))?;
+        if v.len() != n {
+            return Err(ParamError::bad(
+                self.path_of(key),
+                "one value per joint",
+                v.join(" "),
+            ));
+        }
+        Ok(v)
+    }
+}
+
+/// A number as YARP reads it (decimal, `0x` hex).
+pub fn parse_number(s: &str) -> Option<f64> {
+    let s = s.trim().trim_matches('"');
+    if let Some(h) = s.strip_prefix("0x").or_else(|| s.strip_prefix("0X")) {
+        return i64::from_str_radix(h, 16).ok().map(|v| v as f64);
+    }
+    s.parse::<f64>().ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nested_groups_and_lists() {
+        let p = Property::from_text(
+            "(ETH_BOARD (ETH_BOARD_PROPERTIES (IpAddress \"10.0.1.1\") (IpPort 12345))) (GENERAL (Encoder 1.5 2.5) (AxisName \"a\" \"b\"))",
+        );
+        let root = Node::root(&p);
+        let props = root
+            .need_group("ETH_BOARD")
+            .unwrap()
+            .need_group("ETH_BOARD_PROPERTIES")
+            .unwrap();
+        assert_eq!(props.string("IpAddress").unwrap(), "10.0.1.1");
+        assert_eq!(props.number("IpPort").unwrap(), Some(12345.0));
+        let g = root.need_group("GENERAL").unwrap();
+        assert_eq!(g.need_numbers("Encoder", 2).unwrap(), [1.5, 2.5]);
+        let e = g.need_numbers("Encoder", 3).unwrap_err();
+        assert_eq!(e.param, "GENERAL/Encoder");
+        assert_eq!(g.need_strings("AxisName", 2).unwrap(), ["a", "b"]);
+        assert!(root.need_group("NOPE").is_err());
+    }
+}

@@ -1,0 +1,481 @@
+//! The I/O of the host side (icub-main's `TheEthManager`, `EthResource`, `theNVmanager`):
+//! one UDP socket at the `PC104` address for the whole process, one
+//! [`icub_eth::host::HostTransceiver`] per board, a reader thread that feeds the boards'
+//! datagrams to them, expires requests and reports boards that fall silent (naming IP
+//! and board, within the board's `MONITOR_ITS_PRESENCE` timeout), and blocking calls for
+//! the devices: every wait is bounded.
+//!
+//! A board is brought up once, by the first device that uses it ([`Board::bring_up`]:
+//! presence, management protocol version, clean, running cycle, board version, as
+//! `EthResource::open2`/`verifyEPprotocol`); each device then activates its own service
+//! ([`super::service`]).
+
+use std::collections::HashMap;
+use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4, UdpSocket};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
+use std::time::{Duration, Instant};
+
+use icub_eth::host::{
+    HostConfig, HostEvent, HostTransceiver, RequestError, Startup, StartupError, StartupStatus,
+};
+use icub_eth::{Entity, Id32};
+
+use super::params::{AddressMap, EthBoardParams, Pc104};
+
+/// How long the reader waits for a datagram before servicing timers.
+const TICK: Duration = Duration::from_millis(2);
+
+/// A failed exchange with a board, naming it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EthError {
+    #[error(transparent)]
+    Request(#[from] RequestError),
+    #[error(transparent)]
+    Startup(#[from] StartupError),
+    #[error("BOARD {who}: {reason}")]
+    Board { who: String, reason: String },
+}
+
+/// The bring-up state of a board.
+#[derive(Debug, Clone)]
+enum BringUp {
+    NotYet,
+    Done,
+    Failed(EthError),
+}
+
+struct Inner {
+    host: HostTransceiver,
+    bring_up: BringUp,
+    last_missing_report: Option<Instant>,
+}
+
+/// One Ethernet board of the robot.
+pub struct Board {
+    params: EthBoardParams,
+    /// Where the board is reached (the robot's address through the address map).
+    addr: SocketAddrV4,
+    socket: Arc<UdpSocket>,
+    epoch: Instant,
+    inner: Mutex<Inner>,
+    changed: Condvar,
+    /// Serialises the bring-up.
+    bring_up_lock: Mutex<()>,
+}
+
+impl Board {
+    pub fn params(&self) -> &EthBoardParams {
+        &self.params
+    }
+
+    /// `IP (name)`, as C++ names a board.
+    pub fn who(&self) -> String {
+        self.params.who()
+    }
+
+    fn now(&self) -> Duration {
+        self.epoch.elapsed()
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Inner> {
+        self.inner.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Sends what the transceiver has queued.
+    fn flush(&self, inner: &mut Inner) {
+        let now = self.now();
+        while let Some(d) = inner.host.poll_transmit(now) {
+            if let Err(e) = self.socket.send_to(&d, self.addr) {
+                tracing::warn!(board = %self.who(), "cannot send to {}: {e}", self.addr);
+            }
+        }
+    }
+
+    /// Brings the board up once (the first caller does it; later callers get its outcome).
+    pub fn bring_up(&self) -> Result<(), EthError> {
+        let _serial = self.bring_up_lock.lock().unwrap_or_else(|e| e.into_inner());
+        match &self.lock().bring_up {
+            BringUp::Done => return Ok(()),
+            BringUp::Failed(e) => return Err(e.clone()),
+            BringUp::NotYet => {}
+        }
+        let mut startup = Startup::new(self.params.appl, &[]);
+        let result = loop {
+            let mut inner = self.lock();
+            let now = self.now();
+            inner.host.handle_timeout(now);
+            let status = startup.poll(&mut inner.host, now);
+            self.flush(&mut inner);
+            match status {
+                StartupStatus::Done => break Ok(()),
+                StartupStatus::Failed(e) => break Err(EthError::Startup(e)),
+                StartupStatus::Busy => {
+                    let _ = self
+                        .changed
+                        .wait_timeout(inner, Duration::from_millis(1))
+                        .unwrap_or_else(|e| e.into_inner());
+                }
+            }
+        };
+        for w in &startup.facts().warnings {
+            tracing::warn!(board = %self.who(), "{w}");
+        }
+        let mut inner = self.lock();
+        inner.bring_up = match &result {
+            Ok(()) => BringUp::Done,
+            Err(e) => BringUp::Failed(e.clone()),
+        };
+        if result.is_ok() {
+            tracing::info!(board = %self.who(), "board is up");
+        }
+        result
+    }
+
+    /// Waits (bounded by the request's own timeout) for a request's outcome.
+    fn wait(&self, r: icub_eth::host::RequestId) -> Result<Vec<u8>, EthError> {
+        let mut inner = self.lock();
+        loop {
+            if let Some(res) = inner.host.take_result(r) {
+                return res.map_err(EthError::from);
+            }
+            let now = self.now();
+            inner.host.handle_timeout(now);
+            if let Some(res) = inner.host.take_result(r) {
+                return res.map_err(EthError::from);
+            }
+            if !inner.host.is_pending(r) {
+                return Err(EthError::Board {
+                    who: self.who(),
+                    reason: "request lost".into(),
+                });
+            }
+            inner = self
+                .changed
+                .wait_timeout(inner, Duration::from_millis(1))
+                .unwrap_or_else(|e| e.into_inner())
+                .0;
+        }
+    }
+
+    fn host_error(&self, e: icub_eth::host::HostError) -> EthError {
+        EthError::Board {
+            who: self.who(),
+            reason: e.to_string(),
+        }
+    }
+
+    /// `ask<id>` and its `say` (`theNVmanager::ask`).
+    pub fn ask(&self, id: Id32, timeout: Duration) -> Result<Vec<u8>, EthError> {
+        let r = {
+            let mut inner = self.lock();
+            let now = self.now();
+            let r = inner
+                .host
+                .ask(id, timeout, now)
+                .map_err(|e| self.host_error(e))?;
+            self.flush(&mut inner);
+            r
+        };
+        self.wait(r)
+    }
+
+    /// A typed `ask`.
+    pub fn ask_value<T: Entity>(&self, id: Id32, timeout: Duration) -> Result<T, EthError> {
+        let v = self.ask(id, timeout)?;
+        T::from_bytes(&v).map_err(|e| EthError::Board {
+            who: self.who(),
+            reason: e.to_string(),
+        })
+    }
+
+    /// `set<id>` (`setRemoteValue`): sent at once, not confirmed.
+    pub fn set(&self, id: Id32, data: &[u8]) -> Result<(), EthError> {
+        let mut inner = self.lock();
+        let now = self.now();
+        inner
+            .host
+            .set(id, data, now)
+            .map_err(|e| self.host_error(e))?;
+        self.flush(&mut inner);
+        Ok(())
+    }
+
+    pub fn set_value<T: Entity>(&self, id: Id32, v: &T) -> Result<(), EthError> {
+        self.set(id, &v.to_bytes())
+    }
+
+    /// `set<cmd>` then the board's `sig<reply>` (`theNVmanager::command`).
+    pub fn command(
+        &self,
+        cmd: Id32,
+        data: &[u8],
+        reply: Id32,
+        timeout: Duration,
+    ) -> Result<Vec<u8>, EthError> {
+        let r = {
+            let mut inner = self.lock();
+            let now = self.now();
+            let r = inner
+                .host
+                .command(cmd, data, reply, timeout, now)
+                .map_err(|e| self.host_error(e))?;
+            self.flush(&mut inner);
+            r
+        };
+        self.wait(r)
+    }
+
+    /// `theNVmanager::setcheck`: set, wait, ask back and compare, `retries` times.
+    pub fn setcheck(
+        &self,
+        id: Id32,
+        data: &[u8],
+        retries: u32,
+        wait: Duration,
+        timeout: Duration,
+    ) -> Result<(), EthError> {
+        let mut last = None;
+        for _ in 0..retries.max(1) {
+            self.set(id, data)?;
+            std::thread::sleep(wait);
+            match self.ask(id, timeout) {
+                Ok(v) if v == data => return Ok(()),
+                Ok(_) => last = Some("the board holds a different value".to_string()),
+                Err(e) => last = Some(e.to_string()),
+            }
+        }
+        Err(EthError::Board {
+            who: self.who(),
+            reason: format!(
+                "setcheck of {id} failed after {} attempts: {}",
+                retries.max(1),
+                last.unwrap_or_default()
+            ),
+        })
+    }
+
+    /// The board's variable as last received (`getLocalValue`), and whether the board is
+    /// currently reported silent.
+    pub fn read<T: Entity>(&self, id: Id32) -> Result<T, EthError> {
+        let inner = self.lock();
+        if inner.host.board_lost() {
+            return Err(EthError::Board {
+                who: self.who(),
+                reason: format!(
+                    "has been silent longer than its timeout of {:.3} s",
+                    self.params
+                        .presence_timeout
+                        .unwrap_or_default()
+                        .as_secs_f64()
+                ),
+            });
+        }
+        inner.host.read(id).map_err(|e| EthError::Board {
+            who: self.who(),
+            reason: e.to_string(),
+        })
+    }
+
+    /// Whether the board is currently reported silent.
+    pub fn is_lost(&self) -> bool {
+        self.lock().host.board_lost()
+    }
+
+    /// Receive and timer work of the reader thread.
+    fn on_datagram(&self, d: &[u8]) {
+        let mut inner = self.lock();
+        let now = self.now();
+        let _ = inner.host.handle_datagram(d, now);
+        self.events(&mut inner);
+        drop(inner);
+        self.changed.notify_all();
+    }
+
+    fn on_tick(&self) {
+        let mut inner = self.lock();
+        let now = self.now();
+        inner.host.handle_timeout(now);
+        self.events(&mut inner);
+        self.flush(&mut inner);
+        if inner.host.board_lost() {
+            let due = inner
+                .last_missing_report
+                .is_none_or(|t| t.elapsed() >= self.params.missing_report_period);
+            if due && inner.last_missing_report.is_some() {
+                tracing::error!(
+                    "eth::EthMonitorPresence: BOARD {} is still silent",
+                    self.who()
+                );
+            }
+            if due {
+                inner.last_missing_report = Some(Instant::now());
+            }
+        } else {
+            inner.last_missing_report = None;
+        }
+        drop(inner);
+        self.changed.notify_all();
+    }
+
+    fn events(&self, inner: &mut Inner) {
+        let cfg = inner.host.config().clone();
+        while let Some(ev) = inner.host.poll_event() {
+            match &ev {
+                HostEvent::BoardLost { .. } => tracing::error!("{}", ev.describe(&cfg)),
+                HostEvent::BoardRecovered { .. } => tracing::warn!("{}", ev.describe(&cfg)),
+                HostEvent::Signal(_) => {}
+                _ => tracing::debug!("{}", ev.describe(&cfg)),
+            }
+        }
+    }
+}
+
+/// The process's Ethernet manager: the host socket and the boards behind it.
+pub struct EthManager {
+    local: Pc104,
+    map: AddressMap,
+    socket: Arc<UdpSocket>,
+    boards: Mutex<HashMap<Ipv4Addr, Arc<Board>>>,
+}
+
+fn manager_slot() -> &'static Mutex<Option<Arc<EthManager>>> {
+    static M: OnceLock<Mutex<Option<Arc<EthManager>>>> = OnceLock::new();
+    M.get_or_init(|| Mutex::new(None))
+}
+
+impl EthManager {
+    /// The process's manager, bound to `pc104` on first use (C++ `TheEthManager::instance`
+    /// + `initCommunication`); every device must name the same host address.
+    pub fn instance(pc104: &Pc104) -> Result<Arc<EthManager>, EthError> {
+        let mut slot = manager_slot().lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(m) = slot.as_ref() {
+            if m.local.ip != pc104.ip || m.local.port != pc104.port {
+                return Err(EthError::Board {
+                    who: format!("{}:{}", pc104.ip, pc104.port),
+                    reason: format!(
+                        "the host already uses {}:{} (PC104IpAddress differs between devices)",
+                        m.local.ip, m.local.port
+                    ),
+                });
+            }
+            return Ok(m.clone());
+        }
+        let map = AddressMap::from_env().map_err(|e| EthError::Board {
+            who: super::params::ADDRESS_MAP_ENV.into(),
+            reason: e,
+        })?;
+        let local = SocketAddrV4::new(map.map(pc104.ip), pc104.port);
+        let socket = UdpSocket::bind(local).map_err(|e| EthError::Board {
+            who: format!("PC104 {}:{}", pc104.ip, pc104.port),
+            reason: format!(
+                "cannot bind the host's UDP socket at {local}: {e} (give the host this address, or map the robot's addresses with {}=10.0.1.0/24=127.0.1.0/24)",
+                super::params::ADDRESS_MAP_ENV
+            ),
+        })?;
+        socket
+            .set_read_timeout(Some(TICK))
+            .map_err(|e| EthError::Board {
+                who: local.to_string(),
+                reason: e.to_string(),
+            })?;
+        let m = Arc::new(EthManager {
+            local: *pc104,
+            map,
+            socket: Arc::new(socket),
+            boards: Mutex::new(HashMap::new()),
+        });
+        let weak = Arc::downgrade(&m);
+        std::thread::Builder::new()
+            .name("eth-manager".into())
+            .spawn(move || reader(weak))
+            .map_err(|e| EthError::Board {
+                who: local.to_string(),
+                reason: e.to_string(),
+            })?;
+        tracing::info!(
+            "eth manager: host at {local} (robot address {}:{})",
+            pc104.ip,
+            pc104.port
+        );
+        *slot = Some(m.clone());
+        Ok(m)
+    }
+
+    /// The board at `params.ip` (created on first request, as `requestResource2`).
+    pub fn board(&self, params: &EthBoardParams) -> Arc<Board> {
+        let mut boards = self.boards.lock().unwrap_or_else(|e| e.into_inner());
+        boards
+            .entry(params.ip)
+            .or_insert_with(|| {
+                let mut cfg = HostConfig::new(&params.name, params.ip, params.board_type);
+                cfg.max_tx_packet = params.max_rx_packet;
+                cfg.presence_timeout = params.presence_timeout;
+                Arc::new(Board {
+                    params: params.clone(),
+                    addr: SocketAddrV4::new(self.map.map(params.ip), params.port),
+                    socket: self.socket.clone(),
+                    epoch: Instant::now(),
+                    inner: Mutex::new(Inner {
+                        host: HostTransceiver::new(cfg),
+                        bring_up: BringUp::NotYet,
+                        last_missing_report: None,
+                    }),
+                    changed: Condvar::new(),
+                    bring_up_lock: Mutex::new(()),
+                })
+            })
+            .clone()
+    }
+
+    fn board_at(&self, served: Ipv4Addr) -> Option<Arc<Board>> {
+        let robot_ip = self.map.unmap(served);
+        self.boards
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .get(&robot_ip)
+            .cloned()
+    }
+
+    fn all_boards(&self) -> Vec<Arc<Board>> {
+        self.boards
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .values()
+            .cloned()
+            .collect()
+    }
+}
+
+/// The reader thread: datagrams to their board, timers every [`TICK`]; it ends with the
+/// manager.
+fn reader(m: std::sync::Weak<EthManager>) {
+    let mut buf = vec![0u8; 65536];
+    let mut last_tick = Instant::now();
+    loop {
+        let Some(mgr) = m.upgrade() else {
+            return;
+        };
+        match mgr.socket.recv_from(&mut buf) {
+            Ok((n, SocketAddr::V4(from))) => match mgr.board_at(*from.ip()) {
+                Some(b) => b.on_datagram(&buf[..n]),
+                None => tracing::debug!("datagram from unknown board {from} dropped"),
+            },
+            Ok(_) => {}
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) => {}
+            Err(e) => {
+                tracing::warn!("eth manager: receive error: {e}");
+                std::thread::sleep(TICK);
+            }
+        }
+        if last_tick.elapsed() >= TICK {
+            last_tick = Instant::now();
+            for b in mgr.all_boards() {
+                b.on_tick();
+            }
+        }
+    }
+}

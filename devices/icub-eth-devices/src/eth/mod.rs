@@ -1,0 +1,35 @@
+//! icub-main's `embObj*` devices: the Ethernet iCub and ergoCub boards, over the embObj
+//! protocol of crate `icub_eth`.
+//!
+//! | device | module | interfaces |
+//! |--------|--------|------------|
+//! | `embObjMotionControl` | [`motion_control`] | encoders, position, velocity, position direct, torque, current, PWM, impedance, calibration, PIDs, control/interaction modes, limits, axis info, motor encoders, amplifiers, motors (temperature) |
+//! | `parametricCalibratorEth` | [`calibrator`] | `ICalibrator` |
+//!
+//! Parameters: [`params`] (`PC104`, `ETH_BOARD`, `SERVICE`), [`mc_params`]; the host's
+//! socket and the boards: [`manager`]; a device's service on its board: [`service`].
+
+pub mod calibrator;
+pub mod config;
+pub mod manager;
+pub mod mc_params;
+pub mod motion_control;
+pub mod params;
+pub mod service;
+
+pub use calibrator::ParametricCalibratorEth;
+pub use motion_control::EmbObjMotionControl;
+
+use yarp_devices::driver::Factory;
+
+/// The embObj drivers, by C++ name.
+pub const DRIVERS: &[(&str, Factory)] = &[
+    (
+        motion_control::NAME,
+        || Box::new(EmbObjMotionControl::new()),
+    ),
+    (
+        calibrator::NAME,
+        || Box::new(ParametricCalibratorEth::new()),
+    ),
+];

@@ -1,0 +1,1048 @@
+//! `embObjMotionControl` (icub-main): the joints of one Ethernet motor-control board
+//! (EMS4 + 2FOC, MC4plus, MC2plus, AMC, ...) behind the YARP motor interfaces.
+//!
+//! `open`, as C++: the board's `ETH_BOARD`/`PC104` groups and the motion-control
+//! parameters ([`McParams`]); the board is brought up (once per board); the MC endpoint's
+//! protocol version is verified; the service (`SERVICE/type`) is verified and activated;
+//! every joint is set idle, its status (`joint status core`, `addinfo multienc`, `motor
+//! status`) is made regular, its `joint config` and `motor config` are set and checked;
+//! the service is started. Any step that fails names the board (IP and name) and why.
+//!
+//! Units, as icub-main's `measureConverter`: positions and velocities are sent in
+//! encoder units (`Encoder` per degree), currents in `ampsToSensor` units per A, PWM in
+//! `fullscalePWM` counts per 100 %. Readings come from the regulars the board streams;
+//! `checkMotionDone` and `calibrationDone` ask the board, as C++ does. A board silent for
+//! longer than its `MONITOR_ITS_PRESENCE` timeout makes every reading fail, naming it.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use icub_eth::entities::mc::{
+    control_mode as cm, Calibrator, CurrentLimits, Impedance, JointConfig, JointStatusCore,
+    MotorConfig, MotorParams, MotorStatus, PositionLimits, Setpoint,
+};
+use icub_eth::entities::mn::{category, ServiceCommand};
+use icub_eth::id::{ids, tag};
+use icub_eth::{Entity, Id32};
+use yarp_devices::interfaces::*;
+use yarp_devices::vocabs::*;
+use yarp_devices::{DevResult, DeviceDriver, DeviceError};
+use yarp_proto::{Property, Vocab32};
+
+use super::config::text;
+use super::manager::{Board, EthError, EthManager};
+use super::mc_params::{McParams, PidParams};
+use super::params::{read_eth_board, read_pc104};
+use super::service;
+
+pub const NAME: &str = "embObjMotionControl";
+
+const CM_FORCE_IDLE: Vocab32 = Vocab32::new("fidl");
+const CM_IMPEDANCE_POS: Vocab32 = Vocab32::new("impp");
+const CM_IMPEDANCE_VEL: Vocab32 = Vocab32::new("impv");
+const CM_CALIBRATING: Vocab32 = Vocab32::new("calb");
+const CM_NOT_CONFIGURED: Vocab32 = Vocab32::new("cfgn");
+const CM_CONFIGURED: Vocab32 = Vocab32::new("cfgd");
+const CM_VEL_DIRECT: Vocab32 = Vocab32::new("veld");
+
+/// How long an `ask` of a joint variable may take (`theNVmanager`'s default).
+const ASK_TIMEOUT: Duration = Duration::from_millis(500);
+/// How long `setControlMode` waits for the board to report the new mode.
+const MODE_TIMEOUT: Duration = Duration::from_millis(650);
+
+/// The YARP vocab of a board control-mode status.
+pub fn mode_vocab(m: u8) -> Vocab32 {
+    match m {
+        cm::IDLE => CM_IDLE,
+        cm::POSITION => CM_POSITION,
+        cm::VELOCITY => CM_VELOCITY,
+        cm::TORQUE => CM_TORQUE,
+        cm::IMPEDANCE_POS => CM_IMPEDANCE_POS,
+        cm::IMPEDANCE_VEL => CM_IMPEDANCE_VEL,
+        cm::CURRENT => CM_CURRENT,
+        cm::MIXED => CM_MIXED,
+        cm::DIRECT => CM_POSITION_DIRECT,
+        cm::VEL_DIRECT => CM_VEL_DIRECT,
+        cm::OPENLOOP => CM_PWM,
+        cm::HW_FAULT => CM_HW_FAULT,
+        cm::NOT_CONFIGURED => CM_NOT_CONFIGURED,
+        cm::CONFIGURED => CM_CONFIGURED,
+        cm::CALIB => CM_CALIBRATING,
+        cm::FORCE_IDLE => CM_FORCE_IDLE,
+        _ => CM_UNKNOWN,
+    }
+}
+
+/// The board command for a YARP control mode a client may ask for.
+pub fn vocab_mode(v: Vocab32) -> Option<u8> {
+    Some(match v {
+        _ if v == CM_IDLE => cm::IDLE,
+        _ if v == CM_FORCE_IDLE => cm::FORCE_IDLE,
+        _ if v == CM_POSITION => cm::POSITION,
+        _ if v == CM_VELOCITY => cm::VELOCITY,
+        _ if v == CM_TORQUE => cm::TORQUE,
+        _ if v == CM_CURRENT => cm::CURRENT,
+        _ if v == CM_MIXED => cm::MIXED,
+        _ if v == CM_POSITION_DIRECT => cm::DIRECT,
+        _ if v == CM_VEL_DIRECT => cm::VEL_DIRECT,
+        _ if v == CM_PWM => cm::OPENLOOP,
+        _ if v == CM_IMPEDANCE_POS => cm::IMPEDANCE_POS,
+        _ if v == CM_IMPEDANCE_VEL => cm::IMPEDANCE_VEL,
+        _ => return None,
+    })
+}
+
+/// `eOmc_calibrator32_t`'s parameter words for a calibration (C++
+/// `setCalibrationParametersRaw`: each type's union member, fields at their C offsets;
+/// `zero` already in encoder units).
+pub fn calibrator(params: &CalibrationParameters, zero: i32) -> Option<Calibrator> {
+    let i = |v: f64| v.round() as i32;
+    let lo16 = |v: f64| i32::from(v.round() as i16) & 0xffff;
+    let p = match params.kind {
+        0 | 2 => [lo16(params.param1), i(params.param2), zero, 0, 0, 0],
+        1 => [i(params.param1), i(params.param2), zero, 0, 0, 0],
+        3 | 4 => [
+            i(params.param1),
+            i(params.param2),
+            i(params.param3),
+            zero,
+            0,
+            0,
+        ],
+        5 => [i(params.param1), i(params.param2), zero, 0, 0, 0],
+        6 => [
+            i(params.param1),
+            i(params.param2),
+            i(params.param4),
+            i(params.param5),
+            zero,
+            lo16(params.param3),
+        ],
+        7 => [
+            i(params.param1),
+            i(params.param2),
+            i(params.param4),
+            i(params.param5),
+            zero,
+            0,
+        ],
+        8 | 9 => [
+            i(params.param1),
+            i(params.param2),
+            i(params.param_zero),
+            0,
+            0,
+            0,
+        ],
+        10 => [i(params.param1), zero, 0, 0, 0, 0],
+        11 => [
+            i(params.param1),
+            i(params.param2),
+            i(params.param3),
+            i(params.param4),
+            i(params.param5),
+            0,
+        ],
+        12 => [i(params.param1), zero, 0, 0, 0, 0],
+        13 => [
+            i(params.param1),
+            i(params.param2),
+            i(params.param3),
+            i(params.param4),
+            0,
+            0,
+        ],
+        14 => {
+            let invert = params.param3.round() as i64;
+            if invert != 0 && invert != 1 {
+                return None;
+            }
+            [
+                i(params.param1),
+                i(params.param2),
+                invert as i32,
+                i(params.param4),
+                i(params.param5),
+                zero,
+            ]
+        }
+        _ => return None,
+    };
+    Some(Calibrator {
+        calibration_type: params.kind as u8,
+        params: p,
+    })
+}
+
+/// The `embObjMotionControl` device.
+#[derive(Default)]
+pub struct EmbObjMotionControl {
+    id: String,
+    p: Option<McParams>,
+    board: Option<Arc<Board>>,
+    jconfig: Vec<JointConfig>,
+    mconfig: Vec<MotorConfig>,
+    ref_speed: Vec<f64>,
+    ref_acc: Vec<f64>,
+    targets: Vec<f64>,
+    ref_velocity: Vec<f64>,
+    ref_position: Vec<f64>,
+    ref_torque: Vec<f64>,
+    ref_current: Vec<f64>,
+    ref_pwm: Vec<f64>,
+    vel_limits: Vec<(f64, f64)>,
+    mode_set_at: Vec<Option<Instant>>,
+}
+
+impl EmbObjMotionControl {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The board behind the device (to check its presence, counters, ...).
+    pub fn board(&self) -> Option<&Arc<Board>> {
+        self.board.as_ref()
+    }
+
+    fn p(&self) -> DevResult<&McParams> {
+        self.p.as_ref().ok_or(DeviceError::NotOpen)
+    }
+
+    fn b(&self) -> DevResult<&Board> {
+        self.board.as_deref().ok_or(DeviceError::NotOpen)
+    }
+
+    fn fail(&self, e: EthError) -> DeviceError {
+        DeviceError::failed(&self.id, e)
+    }
+
+    fn axes(&self) -> DevResult<usize> {
+        Ok(self.p()?.joints)
+    }
+
+    /// The board joint of logical joint `j` (checked).
+    fn phys(&self, j: usize) -> DevResult<u8> {
+        let p = self.p()?;
+        if j >= p.joints {
+            return Err(DeviceError::InvalidJoint {
+                joint: j as i64,
+                axes: p.joints,
+            });
+        }
+        Ok(p.axis_map[j] as u8)
+    }
+
+    fn a2e(&self, j: usize) -> f64 {
+        self.p
+            .as_ref()
+            .and_then(|p| p.angle_to_encoder.get(j).copied())
+            .filter(|f| *f != 0.0)
+            .unwrap_or(1.0)
+    }
+
+    fn joint_id(&self, j: usize, t: u8) -> DevResult<Id32> {
+        Ok(ids::joint(self.phys(j)?, t))
+    }
+
+    fn motor_id(&self, j: usize, t: u8) -> DevResult<Id32> {
+        Ok(ids::motor(self.phys(j)?, t))
+    }
+
+    fn core(&self, j: usize) -> DevResult<JointStatusCore> {
+        let id = self.joint_id(j, tag::MC_JOINT_STATUS_CORE)?;
+        self.b()?.read(id).map_err(|e| self.fail(e))
+    }
+
+    fn motor_status(&self, j: usize) -> DevResult<MotorStatus> {
+        let id = self.motor_id(j, tag::MC_MOTOR_STATUS)?;
+        self.b()?.read(id).map_err(|e| self.fail(e))
+    }
+
+    fn set<T: Entity>(&self, id: Id32, v: &T) -> DevResult<()> {
+        self.b()?.set_value(id, v).map_err(|e| self.fail(e))
+    }
+
+    fn setpoint(&self, j: usize, sp: Setpoint) -> DevResult<()> {
+        let id = self.joint_id(j, tag::MC_JOINT_CMMNDS_SETPOINT)?;
+        self.set(id, &sp)
+    }
+
+    fn ask_u8(&self, j: usize, t: u8) -> DevResult<u8> {
+        let id = self.joint_id(j, t)?;
+        let v = self.b()?.ask(id, ASK_TIMEOUT).map_err(|e| self.fail(e))?;
+        Ok(v.first().copied().unwrap_or(0))
+    }
+
+    /// The board's joint and motor configuration of joint `j` (C++ `init()`).
+    fn configs(p: &McParams, j: usize) -> (JointConfig, MotorConfig) {
+        let a2e = if p.angle_to_encoder[j] != 0.0 {
+            p.angle_to_encoder[j]
+        } else {
+            1.0
+        };
+        let pos = |deg: f64| (deg * a2e).round() as i32;
+        let pid = |v: &Option<PidParams>| v.map(|p| p.to_eo(a2e)).unwrap_or_default();
+        let trq = p.trq_pids[j].unwrap_or_default();
+        let jc = JointConfig {
+            pid_trajectory: pid(&p.pos_pids[j]),
+            pid_direct: pid(&p.pos_pids[j]),
+            pid_torque: trq.to_eo(1.0),
+            user_limits: PositionLimits {
+                min: pos(p.pos_min[j]),
+                max: pos(p.pos_max[j]),
+            },
+            hardware_limits: PositionLimits {
+                min: pos(p.hw_pos_min[j]),
+                max: pos(p.hw_pos_max[j]),
+            },
+            impedance: Impedance {
+                stiffness: p.stiffness[j] as f32,
+                damping: p.damping[j] as f32,
+                offset: 0.0,
+            },
+            max_velocity_of_joint: pos(p.vel_max[j]),
+            jnt_encoder_resolution: p.joint_encoder_resolution[j] as i32,
+            motor_params: MotorParams {
+                ktau_value: trq.ktau as f32,
+                friction: [
+                    trq.viscous_pos as f32,
+                    trq.viscous_neg as f32,
+                    trq.coulomb_pos as f32,
+                    trq.coulomb_neg as f32,
+                    trq.velocity_thres as f32,
+                ],
+                ..Default::default()
+            },
+            velocity_setpoint_timeout: p.velocity_timeout[j] as u16,
+            current_setpoint_timeout: p.current_timeout[j] as u16,
+            openloop_setpoint_timeout: p.pwm_timeout[j] as u16,
+            torque_setpoint_timeout: p.torque_timeout[j] as u16,
+            torque_feedback_timeout: p.torque_fbk_timeout[j] as u16,
+            tc_filter_type: trq.filter_type as u8,
+            jnt_enc_tolerance: p.joint_encoder_tolerance[j] as f32,
+            gearbox_e2j: p.gearbox_e2j[j] as f32,
+            ..Default::default()
+        };
+        let flags = u8::from(p.has_hall_sensor[j])
+            | u8::from(p.has_temp_sensor[j]) << 1
+            | u8::from(p.has_rotor_encoder[j]) << 2
+            | u8::from(p.has_rotor_encoder_index[j]) << 3
+            | u8::from(p.has_speed_encoder[j]) << 4;
+        let mc = MotorConfig {
+            pid_current: p.cur_pids[j].map(|c| c.to_eo(1.0)).unwrap_or_default(),
+            pid_speed: p.spd_pids[j].map(|c| c.to_eo(1.0)).unwrap_or_default(),
+            gearbox_m2j: p.gearbox_m2j[j] as f32,
+            rotor_encoder_resolution: p.rotor_encoder_resolution[j] as i32,
+            current_limits: CurrentLimits {
+                nominal: p.nominal_current[j] as i16,
+                peak: p.peak_current[j] as i16,
+                overload: p.overload_current[j] as i16,
+            },
+            rotor_index_offset: p.rotor_index_offset[j] as i16,
+            motor_poles: p.motor_poles[j] as u8,
+            flags,
+            rot_enc_tolerance: p.rotor_encoder_tolerance[j] as f32,
+            pwm_limit: p.pwm_limit[j] as i16,
+            limits_of_rotor: PositionLimits {
+                min: pos(p.rotor_min[j]),
+                max: pos(p.rotor_max[j]),
+            },
+            ..Default::default()
+        };
+        (jc, mc)
+    }
+
+    /// C++ `open()` after the parameters: verify, activate, `init()`, start.
+    fn bring_up(&mut self, board: &Arc<Board>, p: &McParams) -> Result<(), EthError> {
+        board.bring_up()?;
+        service::verify_endpoint(board, service::endpoint_of(category::MC))?;
+        service::verify_activate(
+            board,
+            &ServiceCommand::verify_activate(category::MC, p.service.service_type, 0, 0, &[]),
+        )?;
+        for j in 0..p.joints {
+            let f = p.axis_map[j] as u8;
+            board.set(ids::joint(f, tag::MC_JOINT_CMMNDS_CONTROLMODE), &[cm::IDLE])?;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+        let mut regulars = Vec::new();
+        for f in 0..p.joints as u8 {
+            regulars.push(ids::joint(f, tag::MC_JOINT_STATUS_CORE));
+            regulars.push(ids::joint(f, tag::MC_JOINT_STATUS_ADDINFO_MULTIENC));
+            regulars.push(ids::motor(f, tag::MC_MOTOR_STATUS));
+        }
+        service::set_regulars(board, category::MC, &regulars)?;
+        std::thread::sleep(Duration::from_millis(5));
+        for j in 0..p.joints {
+            let f = p.axis_map[j] as u8;
+            service::setcheck(
+                board,
+                ids::joint(f, tag::MC_JOINT_CONFIG),
+                &self.jconfig[j].to_bytes(),
+            )?;
+        }
+        for j in 0..p.joints {
+            let f = p.axis_map[j] as u8;
+            service::setcheck(
+                board,
+                ids::motor(f, tag::MC_MOTOR_CONFIG),
+                &self.mconfig[j].to_bytes(),
+            )?;
+        }
+        service::start(board, category::MC)
+    }
+
+    /// Per-joint numbers of a PID kind: the configuration's gains, user units.
+    fn pid_cache(&self, t: Vocab32, j: usize) -> DevResult<(PidParams, f64)> {
+        let p = self.p()?;
+        self.phys(j)?;
+        let a2e = self.a2e(j);
+        let (eo, metric, factor) = match t {
+            _ if t == PIDTYPE_POSITION => (
+                &self.jconfig[j].pid_trajectory,
+                p.pos_pids[j].is_some_and(|q| q.metric_feedback),
+                a2e,
+            ),
+            _ if t == PIDTYPE_TORQUE => (&self.jconfig[j].pid_torque, false, 1.0),
+            _ if t == PIDTYPE_CURRENT => (&self.mconfig[j].pid_current, false, 1.0),
+            _ if t == PIDTYPE_VELOCITY => (&self.mconfig[j].pid_speed, false, 1.0),
+            _ => return Err(DeviceError::Unsupported("unknown PID type")),
+        };
+        Ok((PidParams::from_eo(eo, metric, factor), factor))
+    }
+}
+
+impl DeviceDriver for EmbObjMotionControl {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        self.close()?;
+        self.id = config.find("id").map_or_else(|| NAME.to_string(), text);
+        let id = self.id.clone();
+        let pc104 = read_pc104(config).map_err(|e| e.for_device(&id))?;
+        let eth = read_eth_board(config).map_err(|e| e.for_device(&id))?;
+        let p = McParams::read(config).map_err(|e| e.for_device(&id))?;
+        let n = p.joints;
+        let (jc, mc): (Vec<_>, Vec<_>) = (0..n).map(|j| Self::configs(&p, j)).unzip();
+        self.jconfig = jc;
+        self.mconfig = mc;
+        self.ref_speed = vec![10.0; n];
+        self.ref_acc = vec![0.0; n];
+        self.targets = vec![0.0; n];
+        self.ref_velocity = vec![0.0; n];
+        self.ref_position = vec![0.0; n];
+        self.ref_torque = vec![0.0; n];
+        self.ref_current = vec![0.0; n];
+        self.ref_pwm = vec![0.0; n];
+        self.vel_limits = p.vel_max.iter().map(|v| (0.0, *v)).collect();
+        self.mode_set_at = vec![None; n];
+        let mgr = EthManager::instance(&pc104).map_err(|e| DeviceError::failed(&id, e))?;
+        let board = mgr.board(&eth);
+        if let Err(e) = self.bring_up(&board, &p) {
+            tracing::error!(device = %id, "embObjMotionControl::open() fails for BOARD {}: {e}", board.who());
+            return Err(DeviceError::failed(&id, e));
+        }
+        tracing::info!(device = %id, board = %board.who(), joints = n, "embObjMotionControl open");
+        self.p = Some(p);
+        self.board = Some(board);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        if let (Some(b), Some(p)) = (self.board.take(), self.p.take()) {
+            for f in 0..p.joints as u8 {
+                let _ = b.set(ids::joint(f, tag::MC_JOINT_CMMNDS_CONTROLMODE), &[cm::IDLE]);
+            }
+        }
+        Ok(())
+    }
+
+    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
+        Some(self)
+    }
+    fn as_position_control(&mut self) -> Option<&mut dyn IPositionControl> {
+        Some(self)
+    }
+    fn as_velocity_control(&mut self) -> Option<&mut dyn IVelocityControl> {
+        Some(self)
+    }
+    fn as_control_mode(&mut self) -> Option<&mut dyn IControlMode> {
+        Some(self)
+    }
+    fn as_axis_info(&mut self) -> Option<&mut dyn IAxisInfo> {
+        Some(self)
+    }
+    fn as_control_limits(&mut self) -> Option<&mut dyn IControlLimits> {
+        Some(self)
+    }
+    fn as_interaction_mode(&mut self) -> Option<&mut dyn IInteractionMode> {
+        Some(self)
+    }
+    fn as_torque_control(&mut self) -> Option<&mut dyn ITorqueControl> {
+        Some(self)
+    }
+    fn as_motor_encoders(&mut self) -> Option<&mut dyn IMotorEncoders> {
+        Some(self)
+    }
+    fn as_amplifier_control(&mut self) -> Option<&mut dyn IAmplifierControl> {
+        Some(self)
+    }
+    fn as_motor(&mut self) -> Option<&mut dyn IMotor> {
+        Some(self)
+    }
+    fn as_pid_control(&mut self) -> Option<&mut dyn IPidControl> {
+        Some(self)
+    }
+    fn as_current_control(&mut self) -> Option<&mut dyn ICurrentControl> {
+        Some(self)
+    }
+    fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
+        Some(self)
+    }
+    fn as_position_direct(&mut self) -> Option<&mut dyn IPositionDirect> {
+        Some(self)
+    }
+    fn as_impedance_control(&mut self) -> Option<&mut dyn IImpedanceControl> {
+        Some(self)
+    }
+    fn as_control_calibration(&mut self) -> Option<&mut dyn IControlCalibration> {
+        Some(self)
+    }
+}
+
+impl IEncoders for EmbObjMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_encoder(&mut self, j: usize) -> DevResult<f64> {
+        Ok(f64::from(self.core(j)?.position) / self.a2e(j))
+    }
+    fn get_encoder_speed(&mut self, j: usize) -> DevResult<f64> {
+        Ok(f64::from(self.core(j)?.velocity) / self.a2e(j))
+    }
+    fn get_encoder_acceleration(&mut self, j: usize) -> DevResult<f64> {
+        Ok(f64::from(self.core(j)?.acceleration) / self.a2e(j))
+    }
+    fn get_encoder_timed(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        Ok((self.get_encoder(j)?, wall_time()))
+    }
+    fn set_encoder(&mut self, _j: usize, _value: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported(
+            "setEncoder: not available on embObj boards",
+        ))
+    }
+}
+
+fn wall_time() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
+impl IPositionControl for EmbObjMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn position_move(&mut self, j: usize, target: f64) -> DevResult<()> {
+        let a2e = self.a2e(j);
+        let sp = Setpoint::Position {
+            value: (target * a2e).round() as i32,
+            velocity: (self.ref_speed.get(j).copied().unwrap_or(10.0) * a2e).round() as i32,
+        };
+        self.setpoint(j, sp)?;
+        self.targets[j] = target;
+        Ok(())
+    }
+    fn relative_move(&mut self, j: usize, delta: f64) -> DevResult<()> {
+        self.phys(j)?;
+        let t = self.targets[j] + delta;
+        self.position_move(j, t)
+    }
+    fn check_motion_done(&mut self, j: usize) -> DevResult<bool> {
+        Ok(self.ask_u8(j, tag::MC_JOINT_STATUS_CORE_MODES_ISMOTIONDONE)? != 0)
+    }
+    fn set_ref_speed(&mut self, j: usize, speed: f64) -> DevResult<()> {
+        self.phys(j)?;
+        self.ref_speed[j] = speed.abs();
+        Ok(())
+    }
+    fn set_ref_acceleration(&mut self, j: usize, acc: f64) -> DevResult<()> {
+        self.phys(j)?;
+        self.ref_acc[j] = acc;
+        Ok(())
+    }
+    fn get_ref_speed(&mut self, j: usize) -> DevResult<f64> {
+        self.phys(j)?;
+        Ok(self.ref_speed[j])
+    }
+    fn get_ref_acceleration(&mut self, j: usize) -> DevResult<f64> {
+        self.phys(j)?;
+        Ok(self.ref_acc[j])
+    }
+    fn stop(&mut self, j: usize) -> DevResult<()> {
+        let id = self.joint_id(j, tag::MC_JOINT_CMMNDS_STOPTRAJECTORY)?;
+        self.b()?.set(id, &[1]).map_err(|e| self.fail(e))
+    }
+    fn get_target_position(&mut self, j: usize) -> DevResult<f64> {
+        self.phys(j)?;
+        Ok(self.targets[j])
+    }
+}
+
+impl IVelocityControl for EmbObjMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn velocity_move(&mut self, j: usize, speed: f64) -> DevResult<()> {
+        let a2e = self.a2e(j);
+        let sp = Setpoint::Velocity {
+            value: (speed * a2e).round() as i32,
+            acceleration: (self.ref_acc.get(j).copied().unwrap_or(0.0) * a2e).round() as i32,
+        };
+        self.setpoint(j, sp)?;
+        self.ref_velocity[j] = speed;
+        Ok(())
+    }
+    fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
+        self.phys(j)?;
+        Ok(self.ref_velocity[j])
+    }
+}
+
+impl IControlMode for EmbObjMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
+        Ok(mode_vocab(self.core(j)?.control_mode))
+    }
+    /// Sends the command, then waits (0.65 s at most) for the board to report it, as
+    /// C++ `checkRemoteControlModeStatus`.
+    fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
+        let m = vocab_mode(mode).ok_or(DeviceError::Unsupported(
+            "control mode not available on embObj boards",
+        ))?;
+        let id = self.joint_id(j, tag::MC_JOINT_CMMNDS_CONTROLMODE)?;
+        self.b()?.set(id, &[m]).map_err(|e| self.fail(e))?;
+        self.mode_set_at[j] = Some(Instant::now());
+        let want = match m {
+            cm::FORCE_IDLE => cm::IDLE,
+            m => m,
+        };
+        let start = Instant::now();
+        loop {
+            let now = self.ask_u8(j, tag::MC_JOINT_STATUS_CORE_MODES_CONTROLMODESTATUS)?;
+            if now == want {
+                return Ok(());
+            }
+            if now == cm::HW_FAULT || start.elapsed() > MODE_TIMEOUT {
+                return Err(DeviceError::failed(
+                    &self.id,
+                    format!(
+                        "joint {j}: asked control mode {mode}, the board reports {} after {:.2} s",
+                        mode_vocab(now),
+                        start.elapsed().as_secs_f64()
+                    ),
+                ));
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+}
+
+impl IInteractionMode for EmbObjMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_interaction_mode(&mut self, j: usize) -> DevResult<Vocab32> {
+        Ok(match self.core(j)?.interaction_mode {
+            0 => IM_STIFF,
+            1 => IM_COMPLIANT,
+            _ => IM_UNKNOWN,
+        })
+    }
+    fn set_interaction_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
+        let m: u8 = match mode {
+            _ if mode == IM_STIFF => 0,
+            _ if mode == IM_COMPLIANT => 1,
+            _ => return Err(DeviceError::Unsupported("unknown interaction mode")),
+        };
+        let id = self.joint_id(j, tag::MC_JOINT_CMMNDS_INTERACTIONMODE)?;
+        self.b()?.set(id, &[m]).map_err(|e| self.fail(e))
+    }
+}
+
+impl IAxisInfo for EmbObjMotionControl {
+    fn get_axis_name(&mut self, j: usize) -> DevResult<String> {
+        self.phys(j)?;
+        Ok(self.p()?.axis_names[j].clone())
+    }
+    fn get_joint_type(&mut self, j: usize) -> DevResult<Vocab32> {
+        self.phys(j)?;
+        Ok(match self.p()?.axis_types[j].as_str() {
+            "prismatic" => JOINTTYPE_PRISMATIC,
+            _ => JOINTTYPE_REVOLUTE,
+        })
+    }
+}
+
+impl IControlLimits for EmbObjMotionControl {
+    fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
+        let a2e = self.a2e(j);
+        let lim = PositionLimits {
+            min: (min * a2e).round() as i32,
+            max: (max * a2e).round() as i32,
+        };
+        let id = self.joint_id(j, tag::MC_JOINT_CONFIG_USERLIMITS)?;
+        self.set(id, &lim)?;
+        self.jconfig[j].user_limits = lim;
+        Ok(())
+    }
+    fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        self.phys(j)?;
+        let a2e = self.a2e(j);
+        let l = self.jconfig[j].user_limits;
+        Ok((f64::from(l.min) / a2e, f64::from(l.max) / a2e))
+    }
+    fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
+        self.phys(j)?;
+        self.vel_limits[j] = (min, max);
+        Ok(())
+    }
+    fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        self.phys(j)?;
+        Ok(self.vel_limits[j])
+    }
+}
+
+impl ITorqueControl for EmbObjMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_torque(&mut self, j: usize) -> DevResult<f64> {
+        Ok(f64::from(self.core(j)?.torque))
+    }
+    fn set_ref_torque(&mut self, j: usize, t: f64) -> DevResult<()> {
+        self.setpoint(j, Setpoint::Torque { value: t as f32 })?;
+        self.ref_torque[j] = t;
+        Ok(())
+    }
+    fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
+        self.phys(j)?;
+        Ok(self.ref_torque[j])
+    }
+}
+
+impl IMotorEncoders for EmbObjMotionControl {
+    fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    /// The rotor position, in degrees at the joint side (the board's raw rotor units
+    /// over the joint's encoder factor).
+    fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
+        Ok(f64::from(self.motor_status(m)?.basic.position) / self.a2e(m))
+    }
+    fn get_motor_encoder_speed(&mut self, m: usize) -> DevResult<f64> {
+        Ok(f64::from(self.motor_status(m)?.basic.velocity) / self.a2e(m))
+    }
+    fn get_motor_encoder_acceleration(&mut self, m: usize) -> DevResult<f64> {
+        Ok(f64::from(self.motor_status(m)?.basic.acceleration) / self.a2e(m))
+    }
+}
+
+impl IAmplifierControl for EmbObjMotionControl {
+    /// As C++: the boards enable their amplifiers with the control mode.
+    fn enable_amp(&mut self, j: usize) -> DevResult<()> {
+        self.phys(j).map(|_| ())
+    }
+    fn disable_amp(&mut self, j: usize) -> DevResult<()> {
+        self.set_control_mode(j, CM_IDLE)
+    }
+    fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>> {
+        (0..self.axes()?)
+            .map(|j| self.motor_status(j).map(|s| s.mc_fault_state as i32))
+            .collect()
+    }
+    /// A (the motor status current over `ampsToSensor`).
+    fn get_current(&mut self, j: usize) -> DevResult<f64> {
+        let s = self.motor_status(j)?;
+        Ok(f64::from(s.basic.current) / self.p()?.amps_to_sensor[j])
+    }
+    fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
+        self.phys(j)?;
+        let p = self.p()?;
+        Ok(p.overload_current[j] / p.amps_to_sensor[j])
+    }
+}
+
+impl IMotor for EmbObjMotionControl {
+    /// The motor temperature the board reports (raw, as the boards without a
+    /// temperature sensor report it).
+    fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
+        Ok(f64::from(self.motor_status(m)?.basic.temperature))
+    }
+    fn get_number_of_motors(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
+        self.phys(m)?;
+        Ok(self.p()?.gearbox_m2j[m])
+    }
+}
+
+impl IPidControl for EmbObjMotionControl {
+    fn get_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<Pid> {
+        let (p, _) = self.pid_cache(pid_type, j)?;
+        Ok(Pid {
+            kp: p.kp,
+            kd: p.kd,
+            ki: p.ki,
+            max_int: p.max_int,
+            scale: p.scale,
+            max_output: p.max_output,
+            offset: p.offset,
+            stiction_up: p.stiction_up,
+            stiction_down: p.stiction_down,
+            kff: p.kff,
+        })
+    }
+    fn set_pid(&mut self, pid_type: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
+        let (old, factor) = self.pid_cache(pid_type, j)?;
+        let new = PidParams {
+            kp: pid.kp,
+            kd: pid.kd,
+            ki: pid.ki,
+            max_int: pid.max_int,
+            max_output: pid.max_output,
+            offset: pid.offset,
+            scale: pid.scale,
+            stiction_up: pid.stiction_up,
+            stiction_down: pid.stiction_down,
+            kff: pid.kff,
+            ..old
+        };
+        let eo = new.to_eo(factor);
+        match pid_type {
+            _ if pid_type == PIDTYPE_POSITION => {
+                self.set(self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTRAJECTORY)?, &eo)?;
+                self.jconfig[j].pid_trajectory = eo;
+            }
+            _ if pid_type == PIDTYPE_TORQUE => {
+                self.set(self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTORQUE)?, &eo)?;
+                self.jconfig[j].pid_torque = eo;
+            }
+            _ if pid_type == PIDTYPE_CURRENT => {
+                self.set(self.motor_id(j, tag::MC_MOTOR_CONFIG_PIDCURRENT)?, &eo)?;
+                self.mconfig[j].pid_current = eo;
+            }
+            _ => {
+                self.set(self.motor_id(j, tag::MC_MOTOR_CONFIG_PIDSPEED)?, &eo)?;
+                self.mconfig[j].pid_speed = eo;
+            }
+        }
+        Ok(())
+    }
+    fn enable_pid(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<()> {
+        self.phys(j).map(|_| ())
+    }
+    fn disable_pid(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<()> {
+        self.set_control_mode(j, CM_IDLE)
+    }
+    fn is_pid_enabled(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<bool> {
+        let m = self.core(j)?.control_mode;
+        Ok(!matches!(
+            m,
+            cm::IDLE | cm::FORCE_IDLE | cm::HW_FAULT | cm::NOT_CONFIGURED | cm::CONFIGURED
+        ))
+    }
+    fn set_pid_reference(&mut self, pid_type: Vocab32, j: usize, r: f64) -> DevResult<()> {
+        match pid_type {
+            _ if pid_type == PIDTYPE_POSITION => self.set_position(j, r),
+            _ if pid_type == PIDTYPE_TORQUE => self.set_ref_torque(j, r),
+            _ if pid_type == PIDTYPE_CURRENT => self.set_ref_current(j, r),
+            _ => Err(DeviceError::Unsupported("PID reference of this type")),
+        }
+    }
+    fn get_pid_reference(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        match pid_type {
+            _ if pid_type == PIDTYPE_POSITION => {
+                let c = self.core(j)?;
+                Ok(f64::from(c.ofpid[0]) / self.a2e(j))
+            }
+            _ if pid_type == PIDTYPE_TORQUE => self.get_ref_torque(j),
+            _ if pid_type == PIDTYPE_CURRENT => self.get_ref_current(j),
+            _ => Err(DeviceError::Unsupported("PID reference of this type")),
+        }
+    }
+    fn get_pid_error(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        let c = self.core(j)?;
+        if pid_type == PIDTYPE_POSITION {
+            Ok(f64::from(c.ofpid[2]) / self.a2e(j))
+        } else {
+            Ok(f64::from(c.ofpid[2]))
+        }
+    }
+    fn get_pid_output(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        Ok(f64::from(self.core(j)?.ofpid[4]))
+    }
+}
+
+impl ICurrentControl for EmbObjMotionControl {
+    fn get_ref_current(&mut self, j: usize) -> DevResult<f64> {
+        self.phys(j)?;
+        Ok(self.ref_current[j])
+    }
+    fn set_ref_current(&mut self, j: usize, current: f64) -> DevResult<()> {
+        let raw = current * self.p()?.amps_to_sensor.get(j).copied().unwrap_or(1000.0);
+        self.setpoint(
+            j,
+            Setpoint::Current {
+                value: raw.round().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16,
+            },
+        )?;
+        self.ref_current[j] = current;
+        Ok(())
+    }
+    fn get_current_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        let max = IAmplifierControl::get_max_current(self, j)?;
+        Ok((-max, max))
+    }
+}
+
+impl IPwmControl for EmbObjMotionControl {
+    fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64> {
+        self.phys(j)?;
+        Ok(self.ref_pwm[j])
+    }
+    fn set_ref_duty_cycle(&mut self, j: usize, duty: f64) -> DevResult<()> {
+        let full = self.p()?.full_scale_pwm.get(j).copied().unwrap_or(32000.0);
+        let raw = (duty / 100.0 * full).round();
+        self.setpoint(
+            j,
+            Setpoint::OpenLoop {
+                value: raw.clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16,
+            },
+        )?;
+        self.ref_pwm[j] = duty;
+        Ok(())
+    }
+    fn get_duty_cycle(&mut self, m: usize) -> DevResult<f64> {
+        let s = self.motor_status(m)?;
+        let full = self.p()?.full_scale_pwm[m];
+        Ok(if full != 0.0 {
+            f64::from(s.basic.pwm) / full * 100.0
+        } else {
+            f64::from(s.basic.pwm)
+        })
+    }
+}
+
+impl IPositionDirect for EmbObjMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn set_position(&mut self, j: usize, reference: f64) -> DevResult<()> {
+        let a2e = self.a2e(j);
+        self.setpoint(
+            j,
+            Setpoint::PositionRaw {
+                value: (reference * a2e).round() as i32,
+            },
+        )?;
+        self.ref_position[j] = reference;
+        Ok(())
+    }
+    fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
+        self.phys(j)?;
+        Ok(self.ref_position[j])
+    }
+}
+
+/// icub-main's `_impedance_limits` of the Ethernet boards (the same for every joint).
+const IMPEDANCE_LIMITS: ImpedanceLimits = ImpedanceLimits {
+    min_stiffness: 0.002,
+    max_stiffness: 9.889,
+    min_damping: 0.001,
+    max_damping: 9.888,
+};
+
+impl IImpedanceControl for EmbObjMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
+        self.phys(j)?;
+        let i = self.jconfig[j].impedance;
+        Ok((f64::from(i.stiffness), f64::from(i.damping)))
+    }
+    fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
+        self.phys(j)?;
+        let mut i = self.jconfig[j].impedance;
+        i.stiffness = stiffness as f32;
+        i.damping = damping as f32;
+        self.set(self.joint_id(j, tag::MC_JOINT_CONFIG_IMPEDANCE)?, &i)?;
+        self.jconfig[j].impedance = i;
+        Ok(())
+    }
+    fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
+        self.phys(j)?;
+        Ok(f64::from(self.jconfig[j].impedance.offset))
+    }
+    fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
+        self.phys(j)?;
+        let mut i = self.jconfig[j].impedance;
+        i.offset = offset as f32;
+        self.set(self.joint_id(j, tag::MC_JOINT_CONFIG_IMPEDANCE)?, &i)?;
+        self.jconfig[j].impedance = i;
+        Ok(())
+    }
+    fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits> {
+        self.phys(j)?;
+        Ok(IMPEDANCE_LIMITS)
+    }
+}
+
+impl IControlCalibration for EmbObjMotionControl {
+    /// C++ `calibrateAxisWithParamsRaw`: the same command with the three parameters.
+    fn calibrate_axis_with_params(
+        &mut self,
+        j: usize,
+        kind: u32,
+        p1: f64,
+        p2: f64,
+        p3: f64,
+    ) -> DevResult<()> {
+        self.set_calibration_parameters(
+            j,
+            &CalibrationParameters {
+                kind,
+                param1: p1,
+                param2: p2,
+                param3: p3,
+                ..Default::default()
+            },
+        )
+    }
+    /// C++ `setCalibrationParametersRaw`: `set<joint cmmnds calibration>` with the
+    /// type's parameters (`paramZero` in encoder units).
+    fn set_calibration_parameters(
+        &mut self,
+        j: usize,
+        params: &CalibrationParameters,
+    ) -> DevResult<()> {
+        let zero = (params.param_zero * self.a2e(j)).round() as i32;
+        let c = calibrator(params, zero).ok_or(DeviceError::Unsupported(
+            "calibration type or parameters not accepted by embObj boards",
+        ))?;
+        self.set(self.joint_id(j, tag::MC_JOINT_CMMNDS_CALIBRATION)?, &c)?;
+        self.mode_set_at[j] = Some(Instant::now());
+        Ok(())
+    }
+    /// C++ `calibrationDoneRaw`: the board's control mode is no longer calibration or
+    /// not-configured.
+    fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
+        let m = self.ask_u8(j, tag::MC_JOINT_STATUS_CORE_MODES_CONTROLMODESTATUS)?;
+        Ok(!matches!(
+            m,
+            cm::CALIB | cm::NOT_CONFIGURED | cm::CONFIGURED
+        ))
+    }
+}

@@ -1,0 +1,361 @@
+//! The Ethernet parameters every `embObj*` device reads, exactly as robots-configuration
+//! writes them and icub-main's `eth::parser::read` / `ServiceParser` read them:
+//!
+//! - `PC104` (`hardware/electronics/pc104.xml`): `PC104IpAddress`, `PC104IpPort`,
+//!   `PC104TXrate`, `PC104RXrate`;
+//! - `ETH_BOARD` (`*-eln.xml`): `ETH_BOARD_PROPERTIES` (`IpAddress`, `IpPort`, `Type`,
+//!   `maxSizeRXpacket`, `maxSizeROP`), `ETH_BOARD_SETTINGS` (`Name`, `RUNNINGMODE`:
+//!   `period`, `maxTimeOfRXactivity`, `maxTimeOfDOactivity`, `maxTimeOfTXactivity`,
+//!   `TXrateOfRegularROPs`), `ETH_BOARD_ACTIONS/MONITOR_ITS_PRESENCE` (`enabled`,
+//!   `timeout`, `periodOfMissingReport`);
+//! - `SERVICE/type` (`*_service.xml`): the service (`eomn_serv_MC_foc`, ...).
+//!
+//! Defaults and clamps are C++'s: port 12345, 768-byte packets, 384-byte ROPs, a
+//! 1000 µs cycle of 400 + 300 + 300 µs (used whenever the three do not add up to the
+//! period), TX rate 1..20, presence timeout 20 ms (at most 100 ms), missing-report period
+//! 60 s (at most 600 s).
+
+use std::net::Ipv4Addr;
+use std::time::Duration;
+
+use icub_eth::entities::boards::EthBoardType;
+use icub_eth::entities::mn::{category, service_type, ApplConfig};
+use yarp_proto::Property;
+
+use super::config::{Node, ParamError};
+
+/// The host's address (`PC104`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Pc104 {
+    pub ip: Ipv4Addr,
+    pub port: u16,
+    pub tx_rate: u32,
+    pub rx_rate: u32,
+}
+
+/// One Ethernet board as `ETH_BOARD` describes it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EthBoardParams {
+    pub ip: Ipv4Addr,
+    pub port: u16,
+    pub board_type: EthBoardType,
+    /// `Type` as written.
+    pub type_name: String,
+    pub max_rx_packet: usize,
+    pub max_rop: usize,
+    /// `ETH_BOARD_SETTINGS/Name` (`NOT-NAMED` when empty, as C++).
+    pub name: String,
+    /// The running cycle (`RUNNINGMODE`) sent as `eOmn_appl_config_t`.
+    pub appl: ApplConfig,
+    /// `MONITOR_ITS_PRESENCE`: `None` when disabled.
+    pub presence_timeout: Option<Duration>,
+    pub missing_report_period: Duration,
+}
+
+impl EthBoardParams {
+    /// How C++ names a board in its messages: `IP (name)`.
+    pub fn who(&self) -> String {
+        format!("{} ({})", self.ip, self.name)
+    }
+    /// The period of the board's regular ROPs.
+    pub fn regulars_period(&self) -> Duration {
+        Duration::from_micros(
+            u64::from(self.appl.cycletime) * u64::from(self.appl.txratedivider.max(1)),
+        )
+    }
+}
+
+fn ip_of(s: &str, param: &str) -> Result<Ipv4Addr, ParamError> {
+    s.trim()
+        .trim_matches('"')
+        .parse()
+        .map_err(|_| ParamError::bad(param, "an IPv4 address", s))
+}
+
+/// `PC104` (C++ `eth::parser::read(cfgtotal, pc104data)`).
+pub fn read_pc104(config: &Property) -> Result<Pc104, ParamError> {
+    let g = Node::root(config).need_group("PC104")?;
+    let ip = ip_of(
+        &g.need_string("PC104IpAddress", "an IPv4 address")?,
+        "PC104/PC104IpAddress",
+    )?;
+    let port = g
+        .number("PC104IpPort")?
+        .ok_or_else(|| ParamError::missing("PC104/PC104IpPort", "a UDP port"))?;
+    let rate = |k: &str| -> Result<u32, ParamError> {
+        Ok(g.number(k)?.map_or(1, |v| (v as i64).clamp(1, 20) as u32))
+    };
+    Ok(Pc104 {
+        ip,
+        port: port as u16,
+        tx_rate: rate("PC104TXrate")?,
+        rx_rate: rate("PC104RXrate")?,
+    })
+}
+
+/// `ETH_BOARD` (C++ `eth::parser::read(cfgtotal, boarddata)`).
+pub fn read_eth_board(config: &Property) -> Result<EthBoardParams, ParamError> {
+    let board = Node::root(config).need_group("ETH_BOARD")?;
+    let props = board.need_group("ETH_BOARD_PROPERTIES")?;
+    let settings = board.need_group("ETH_BOARD_SETTINGS")?;
+    let ip = ip_of(
+        &props.need_string("IpAddress", "an IPv4 address")?,
+        "ETH_BOARD_PROPERTIES/IpAddress",
+    )?;
+    let port = props.number("IpPort")?.map_or(12345, |p| p as u16);
+    let type_name = props.string("Type").unwrap_or_default();
+    let board_type = EthBoardType::from_name(&type_name).unwrap_or(EthBoardType::Unknown);
+    let max_rx_packet = props.number("maxSizeRXpacket")?.map_or(768, |v| v as usize);
+    let max_rop = props.number("maxSizeROP")?.map_or(384, |v| v as usize);
+    let name = settings
+        .string("Name")
+        .filter(|n| !n.is_empty())
+        .unwrap_or_else(|| "NOT-NAMED".into());
+    let mut appl = ApplConfig::default();
+    if let Some(rm) = settings.group("RUNNINGMODE") {
+        let get = |k: &str, d: u16| -> Result<u16, ParamError> {
+            Ok(rm.number(k)?.map_or(d, |v| v as u16))
+        };
+        appl.cycletime = get("period", appl.cycletime)?;
+        appl.safetygap = get("safetygap", appl.safetygap)?;
+        appl.maxtime_rx = get("maxTimeOfRXactivity", appl.maxtime_rx)?;
+        appl.maxtime_do = get("maxTimeOfDOactivity", appl.maxtime_do)?;
+        appl.maxtime_tx = get("maxTimeOfTXactivity", appl.maxtime_tx)?;
+        if let Some(r) = rm.number("TXrateOfRegularROPs")? {
+            appl.txratedivider = (r as i64).clamp(1, 20) as u8;
+        }
+        let sum =
+            u32::from(appl.maxtime_rx) + u32::from(appl.maxtime_do) + u32::from(appl.maxtime_tx);
+        if sum != u32::from(appl.cycletime) {
+            tracing::warn!(
+                board = %ip,
+                "ETH_BOARD_SETTINGS::RUNNINGMODE sum(maxTimeOfRXactivity, maxTimeOfDOactivity, maxTimeOfTXactivity) != period: using default values"
+            );
+            appl.cycletime = 1000;
+            appl.maxtime_rx = 400;
+            appl.maxtime_do = 300;
+            appl.maxtime_tx = 300;
+        }
+    }
+    let mut presence_timeout = Some(Duration::from_millis(20));
+    let mut missing_report_period = Duration::from_secs(60);
+    if let Some(m) = board
+        .group("ETH_BOARD_ACTIONS")
+        .and_then(|a| a.group("MONITOR_ITS_PRESENCE"))
+    {
+        let enabled = m.string("enabled").as_deref() == Some("true");
+        let t = m.number("timeout")?.unwrap_or(0.020).min(0.100);
+        presence_timeout = (enabled && t > 0.0).then(|| Duration::from_secs_f64(t));
+        if let Some(p) = m.number("periodOfMissingReport")? {
+            missing_report_period = Duration::from_secs_f64(p.clamp(0.0, 600.0));
+        }
+    }
+    Ok(EthBoardParams {
+        ip,
+        port,
+        board_type,
+        type_name,
+        max_rx_packet,
+        max_rop,
+        name,
+        appl,
+        presence_timeout,
+        missing_report_period,
+    })
+}
+
+/// A service as `SERVICE/type` names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ServiceKind {
+    /// `eOmn_serv_type_t`.
+    pub service_type: u8,
+    /// `eOmn_serv_category_t`.
+    pub category: u8,
+}
+
+/// The `eomn_serv_*` names of `SERVICE/type` (C++ `eomn_string2servicetype`).
+pub fn service_kind(name: &str) -> Option<ServiceKind> {
+    use category as c;
+    use service_type as t;
+    let (service_type, category) = match name.trim().trim_matches('"') {
+        "eomn_serv_MC_generic" => (t::MC_GENERIC, c::MC),
+        "eomn_serv_MC_foc" => (t::MC_FOC, c::MC),
+        "eomn_serv_MC_mc4" => (t::MC_MC4, c::MC),
+        "eomn_serv_MC_mc4plus" => (t::MC_MC4PLUS, c::MC),
+        "eomn_serv_MC_mc4plusmais" => (t::MC_MC4PLUSMAIS, c::MC),
+        "eomn_serv_MC_mc2plus" => (t::MC_MC2PLUS, c::MC),
+        "eomn_serv_MC_mc2pluspsc" => (t::MC_MC2PLUSPSC, c::MC),
+        "eomn_serv_MC_mc4plusfaps" => (t::MC_MC4PLUSFAPS, c::MC),
+        "eomn_serv_MC_advfoc" => (t::MC_ADVFOC, c::MC),
+        "eomn_serv_AS_mais" => (t::AS_MAIS, c::MAIS),
+        "eomn_serv_AS_strain" => (t::AS_STRAIN, c::STRAIN),
+        "eomn_serv_AS_inertials3" => (t::AS_INERTIALS3, c::INERTIALS3),
+        "eomn_serv_AS_temperatures" => (t::AS_TEMPERATURES, c::TEMPERATURES),
+        "eomn_serv_AS_psc" => (t::AS_PSC, c::PSC),
+        "eomn_serv_AS_pos" => (t::AS_POS, c::POS),
+        "eomn_serv_AS_ft" => (t::AS_FT, c::FT),
+        "eomn_serv_AS_battery" => (t::AS_BATTERY, c::BATTERY),
+        "eomn_serv_SK_skin" => (t::SK_SKIN, c::SKIN),
+        _ => return None,
+    };
+    Some(ServiceKind {
+        service_type,
+        category,
+    })
+}
+
+/// `SERVICE/type`.
+pub fn read_service(config: &Property) -> Result<ServiceKind, ParamError> {
+    let s = Node::root(config).need_group("SERVICE")?;
+    let name = s.need_string("type", "an eomn_serv_* service type")?;
+    service_kind(&name)
+        .ok_or_else(|| ParamError::bad("SERVICE/type", "an eomn_serv_* service type", name))
+}
+
+/// Serves or reaches a robot's boards at other addresses than its files give, so that a
+/// robot runs unmodified on a laptop without its `10.0.1.x` addresses and without root:
+/// `YARP_ICUB_ETH_ADDRESS_MAP=10.0.1.0/24=127.0.1.0/24` (several maps separated by `,`).
+/// The devices and `icub-eth-emulator` both honour it; messages keep the robot's
+/// addresses.
+pub const ADDRESS_MAP_ENV: &str = "YARP_ICUB_ETH_ADDRESS_MAP";
+
+/// A mapping of IPv4 networks (`FROM/len=TO/len`, same prefix length).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct AddressMap {
+    rules: Vec<(u32, u32, u32)>,
+}
+
+impl AddressMap {
+    /// Parses `10.0.1.0/24=127.0.1.0/24[,...]`; empty text is the identity.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let mut rules = Vec::new();
+        for rule in text.split(',').map(str::trim).filter(|r| !r.is_empty()) {
+            let bad = || {
+                format!(
+                    "address map `{rule}`: expected FROM/LEN=TO/LEN, e.g. 10.0.1.0/24=127.0.1.0/24"
+                )
+            };
+            let (from, to) = rule.split_once('=').ok_or_else(bad)?;
+            let net = |s: &str| -> Result<(u32, u32), String> {
+                let (a, l) = s.trim().split_once('/').ok_or_else(bad)?;
+                let a: Ipv4Addr = a.parse().map_err(|_| bad())?;
+                let l: u32 = l.parse().map_err(|_| bad())?;
+                if l > 32 {
+                    return Err(bad());
+                }
+                let mask = if l == 0 { 0 } else { u32::MAX << (32 - l) };
+                Ok((u32::from(a) & mask, mask))
+            };
+            let (f, fm) = net(from)?;
+            let (t, tm) = net(to)?;
+            if fm != tm {
+                return Err(bad());
+            }
+            rules.push((f, t, fm));
+        }
+        Ok(Self { rules })
+    }
+
+    /// The map of [`ADDRESS_MAP_ENV`] (the identity when unset).
+    pub fn from_env() -> Result<Self, String> {
+        Self::parse(&std::env::var(ADDRESS_MAP_ENV).unwrap_or_default())
+    }
+
+    /// Where the robot's address `ip` is served.
+    pub fn map(&self, ip: Ipv4Addr) -> Ipv4Addr {
+        let a = u32::from(ip);
+        for &(f, t, m) in &self.rules {
+            if a & m == f {
+                return Ipv4Addr::from(t | (a & !m));
+            }
+        }
+        ip
+    }
+
+    /// The robot's address of a served address `ip` (inverse of [`Self::map`]).
+    pub fn unmap(&self, ip: Ipv4Addr) -> Ipv4Addr {
+        let a = u32::from(ip);
+        for &(f, t, m) in &self.rules {
+            if a & m == t {
+                return Ipv4Addr::from(f | (a & !m));
+            }
+        }
+        ip
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LEFT_ARM_EB1: &str = "(ETH_BOARD (ETH_BOARD_PROPERTIES (IpAddress \"10.0.1.1\") (IpPort 12345) (Type ems4) (maxSizeRXpacket 768) (maxSizeROP 384)) (ETH_BOARD_SETTINGS (Name left_arm-eb1-j0_3) (RUNNINGMODE (period 1000) (maxTimeOfRXactivity 400) (maxTimeOfDOactivity 300) (maxTimeOfTXactivity 300) (TXrateOfRegularROPs 5))) (ETH_BOARD_ACTIONS (MONITOR_ITS_PRESENCE (enabled true) (timeout 0.02) (periodOfMissingReport 60.0)))) (PC104 (PC104IpAddress \"10.0.1.104\") (PC104IpPort 12345) (PC104TXrate 1) (PC104RXrate 5)) (SERVICE (type eomn_serv_MC_foc))";
+
+    #[test]
+    fn icub_genova02_left_arm_board() {
+        let p = Property::from_text(LEFT_ARM_EB1);
+        let b = read_eth_board(&p).unwrap();
+        assert_eq!(b.ip, Ipv4Addr::new(10, 0, 1, 1));
+        assert_eq!(b.port, 12345);
+        assert_eq!(b.board_type, EthBoardType::Ems4);
+        assert_eq!(b.name, "left_arm-eb1-j0_3");
+        assert_eq!((b.max_rx_packet, b.max_rop), (768, 384));
+        assert_eq!(b.appl.cycletime, 1000);
+        assert_eq!(b.appl.txratedivider, 5);
+        assert_eq!(b.regulars_period(), Duration::from_millis(5));
+        assert_eq!(b.presence_timeout, Some(Duration::from_millis(20)));
+        assert_eq!(b.who(), "10.0.1.1 (left_arm-eb1-j0_3)");
+        let pc = read_pc104(&p).unwrap();
+        assert_eq!(pc.ip, Ipv4Addr::new(10, 0, 1, 104));
+        assert_eq!((pc.port, pc.tx_rate, pc.rx_rate), (12345, 1, 5));
+        let s = read_service(&p).unwrap();
+        assert_eq!(s.category, category::MC);
+        assert_eq!(s.service_type, service_type::MC_FOC);
+    }
+
+    #[test]
+    fn running_mode_that_does_not_add_up_falls_back_to_defaults() {
+        let p = Property::from_text("(ETH_BOARD (ETH_BOARD_PROPERTIES (IpAddress \"10.0.1.9\") (Type MC4PLUS)) (ETH_BOARD_SETTINGS (Name \"\") (RUNNINGMODE (period 2000) (maxTimeOfRXactivity 400) (maxTimeOfDOactivity 300) (maxTimeOfTXactivity 300) (TXrateOfRegularROPs 50))) (ETH_BOARD_ACTIONS (MONITOR_ITS_PRESENCE (enabled false))))");
+        let b = read_eth_board(&p).unwrap();
+        assert_eq!(b.board_type, EthBoardType::Mc4plus);
+        assert_eq!(b.appl.cycletime, 1000);
+        assert_eq!(b.appl.txratedivider, 20);
+        assert_eq!(b.name, "NOT-NAMED");
+        assert_eq!(b.presence_timeout, None);
+        assert_eq!(b.port, 12345);
+    }
+
+    #[test]
+    fn missing_groups_are_named() {
+        let e = read_eth_board(&Property::from_text(
+            "(ETH_BOARD (ETH_BOARD_SETTINGS (Name x)))",
+        ))
+        .unwrap_err();
+        assert_eq!(e.param, "ETH_BOARD/ETH_BOARD_PROPERTIES");
+        let e = read_pc104(&Property::from_text(
+            "(PC104 (PC104IpAddress \"10.0.1.x\"))",
+        ))
+        .unwrap_err();
+        assert_eq!(e.param, "PC104/PC104IpAddress");
+        assert!(read_service(&Property::from_text("(SERVICE (type eomn_serv_nope))")).is_err());
+    }
+
+    #[test]
+    fn address_map_both_ways() {
+        let m = AddressMap::parse("10.0.1.0/24=127.0.1.0/24").unwrap();
+        assert_eq!(
+            m.map(Ipv4Addr::new(10, 0, 1, 104)),
+            Ipv4Addr::new(127, 0, 1, 104)
+        );
+        assert_eq!(
+            m.unmap(Ipv4Addr::new(127, 0, 1, 7)),
+            Ipv4Addr::new(10, 0, 1, 7)
+        );
+        assert_eq!(
+            m.map(Ipv4Addr::new(10, 0, 2, 1)),
+            Ipv4Addr::new(10, 0, 2, 1)
+        );
+        assert_eq!(AddressMap::parse("").unwrap(), AddressMap::default());
+        assert!(AddressMap::parse("10.0.1.0/24=127.0.0.0/8").is_err());
+        assert!(AddressMap::parse("nonsense").is_err());
+    }
+}

@@ -1,0 +1,204 @@
+//! A device's service on its board, in the order and with the timeouts of icub-main's
+//! `EthResource`: `verifyEPprotocol(ep)` (endpoint descriptors, 0.1 s; a different
+//! protocol version is refused naming both), `serviceVerifyActivate` (0.5 s × 3),
+//! configuration `setcheck`s (10 × 10 ms, 50 ms), `serviceSetRegulars` (0.5 s × 3),
+//! `serviceStart` (0.5 s × 3).
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use icub_eth::entities::mn::{
+    opc, versions, QueryArray, ReplyArray, ServiceCommand, ServiceCommandResult, ServiceOperation,
+};
+use icub_eth::host::StartupError;
+use icub_eth::id::{endpoint as ep, endpoint_name, ids};
+use icub_eth::{Entity, Id32};
+
+use super::manager::{Board, EthError};
+
+const SERVICE_TIMEOUT: Duration = Duration::from_millis(500);
+const SERVICE_TIMES: u32 = 3;
+
+/// The endpoint that carries a service category.
+pub fn endpoint_of(category: u8) -> u8 {
+    use icub_eth::entities::mn::category as c;
+    match category {
+        c::MC => ep::MOTION_CONTROL,
+        c::SKIN => ep::SKIN,
+        _ => ep::ANALOG_SENSORS,
+    }
+}
+
+fn service_name(category: u8) -> &'static str {
+    const N: [&str; 10] = [
+        "mc",
+        "strain",
+        "mais",
+        "skin",
+        "inertials3",
+        "temperatures",
+        "psc",
+        "pos",
+        "ft",
+        "battery",
+    ];
+    N.get(usize::from(category)).copied().unwrap_or("unknown")
+}
+
+/// `EthResource::verifyEPprotocol(ep)`: the board's version of the endpoint must be ours.
+pub fn verify_endpoint(board: &Board, endpoint: u8) -> Result<(), EthError> {
+    let q = QueryArray {
+        opc: opc::QUERY_ARRAY_EPDES,
+        endpoint: ep::ALL,
+        set_number: 0,
+        set_size: 0,
+    };
+    let reply = board.command(
+        ids::COMM_QUERY_ARRAY,
+        &q.to_bytes(),
+        ids::COMM_REPLY_ARRAY,
+        Duration::from_millis(100),
+    )?;
+    let reply = ReplyArray::from_bytes(&reply).map_err(|e| EthError::Board {
+        who: board.who(),
+        reason: e.to_string(),
+    })?;
+    let local = versions::of_endpoint(endpoint).unwrap_or(versions::MN);
+    match reply
+        .descriptors()
+        .into_iter()
+        .find(|d| d.endpoint == endpoint)
+    {
+        Some(d) if d.version != local => Err(EthError::Startup(StartupError::ProtocolVersion {
+            board: board.params().name.clone(),
+            ip: board.params().ip,
+            endpoint: endpoint_name(endpoint),
+            local,
+            remote: d.version,
+        })),
+        Some(_) => Ok(()),
+        None => Err(EthError::Board {
+            who: board.who(),
+            reason: format!(
+                "EthResource::verifyEPprotocol(): the board does not offer {}",
+                endpoint_name(endpoint)
+            ),
+        }),
+    }
+}
+
+/// One service command (`set<service cmmnds command>` → `sig<commandresult>`), tried
+/// three times; fails unless the board says `latestcommandisok`.
+fn service_command(board: &Board, what: &str, cmd: &ServiceCommand) -> Result<(), EthError> {
+    let mut last = String::new();
+    for _ in 0..SERVICE_TIMES {
+        match board.command(
+            ids::SERVICE_COMMAND,
+            &cmd.to_bytes(),
+            ids::SERVICE_COMMAND_RESULT,
+            SERVICE_TIMEOUT,
+        ) {
+            Ok(v) => match ServiceCommandResult::from_bytes(&v) {
+                Ok(r) if r.latest_command_is_ok => return Ok(()),
+                Ok(_) => {
+                    return Err(EthError::Board {
+                        who: board.who(),
+                        reason: format!("{what}: the board replied latestcommandisok = false"),
+                    })
+                }
+                Err(e) => last = e.to_string(),
+            },
+            Err(e) => last = e.to_string(),
+        }
+    }
+    Err(EthError::Board {
+        who: board.who(),
+        reason: format!("{what} failed after {SERVICE_TIMES} attempts: {last}"),
+    })
+}
+
+/// `serviceVerifyActivate(category, param)`.
+pub fn verify_activate(board: &Board, cmd: &ServiceCommand) -> Result<(), EthError> {
+    let mut cmd = cmd.clone();
+    cmd.operation = ServiceOperation::VerifyActivate as u8;
+    let what = format!(
+        "serviceVerifyActivate(eomn_serv_category_{})",
+        service_name(cmd.category)
+    );
+    service_command(board, &what, &cmd)
+}
+
+/// `serviceSetRegulars(category, id32s)`.
+pub fn set_regulars(board: &Board, category: u8, regulars: &[Id32]) -> Result<(), EthError> {
+    let what = format!(
+        "serviceSetRegulars(eomn_serv_category_{})",
+        service_name(category)
+    );
+    service_command(
+        board,
+        &what,
+        &ServiceCommand::regsig_load(category, regulars),
+    )
+}
+
+/// `serviceStart(category)`.
+pub fn start(board: &Board, category: u8) -> Result<(), EthError> {
+    let what = format!(
+        "serviceStart(eomn_serv_category_{})",
+        service_name(category)
+    );
+    service_command(
+        board,
+        &what,
+        &ServiceCommand::bare(ServiceOperation::Start, category),
+    )
+}
+
+/// `serviceStop(category)` (at close).
+pub fn stop(board: &Board, category: u8) -> Result<(), EthError> {
+    let what = format!("serviceStop(eomn_serv_category_{})", service_name(category));
+    service_command(
+        board,
+        &what,
+        &ServiceCommand::bare(ServiceOperation::Stop, category),
+    )
+}
+
+/// `setcheckRemoteValue(id, value, 10, 0.010, 0.050)`, as the devices configure entities.
+pub fn setcheck(board: &Board, id: Id32, data: &[u8]) -> Result<(), EthError> {
+    board.setcheck(
+        id,
+        data,
+        10,
+        Duration::from_millis(10),
+        Duration::from_millis(50),
+    )
+}
+
+/// What a sensor device needs to bring its service up in one go.
+pub struct SensorService {
+    pub activate: ServiceCommand,
+    pub configs: Vec<(Id32, Vec<u8>)>,
+    pub regulars: Vec<Id32>,
+    /// Sets after the start (e.g. `cmmnds enable`).
+    pub after_start: Vec<(Id32, Vec<u8>)>,
+}
+
+/// The open sequence of the `embObj*` sensor devices: board up, endpoint version,
+/// verify-activate, configs, regulars, start.
+pub fn open_sensor(board: &Arc<Board>, s: &SensorService) -> Result<(), EthError> {
+    board.bring_up()?;
+    verify_endpoint(board, endpoint_of(s.activate.category))?;
+    verify_activate(board, &s.activate)?;
+    for (id, data) in &s.configs {
+        setcheck(board, *id, data)?;
+    }
+    if !s.regulars.is_empty() {
+        set_regulars(board, s.activate.category, &s.regulars)?;
+    }
+    start(board, s.activate.category)?;
+    for (id, data) in &s.after_start {
+        board.set(*id, data)?;
+    }
+    Ok(())
+}

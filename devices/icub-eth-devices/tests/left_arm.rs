@@ -1,0 +1,142 @@
+//! iCubGenova02's left arm, unmodified from robots-configuration, against the emulated
+//! Ethernet boards on loopback (through the address map 10.0.1.0/24 -> 127.0.1.0/24):
+//! `embObjMotionControl` opens both boards (bring-up, service activation, joint and
+//! motor configuration, regulars), a position move reaches the encoders, a calibration
+//! ends, and a board that stops answering is reported naming its IP and name.
+//!
+//! The host's socket is a process singleton (as C++'s `TheEthManager`), so everything
+//! runs in one test function.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use icub_eth_devices::emulator::{robot_boards, serve};
+use icub_eth_devices::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use icub_eth_devices::eth::EmbObjMotionControl;
+use yarp_devices::interfaces::CalibrationParameters;
+use yarp_devices::robotinterface::read_robot_file;
+use yarp_devices::vocabs::{CM_IDLE, CM_POSITION};
+use yarp_devices::DeviceDriver;
+use yarp_proto::Property;
+
+const MAP: &str = "10.0.1.0/24=127.0.1.0/24";
+
+fn robot_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/robots-configuration/iCubGenova02")
+}
+
+fn wait_for(what: &str, timeout: Duration, mut f: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !f() {
+        assert!(start.elapsed() < timeout, "{what}: not within {timeout:?}");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[test]
+fn left_arm_boards_open_move_calibrate_and_report_silence() {
+    std::env::set_var(ADDRESS_MAP_ENV, MAP);
+    let dir = robot_dir();
+    let top = dir.join("icub_left_arm.xml");
+    let specs = robot_boards(&dir, Some(&top)).expect("robot boards");
+    let stop = Arc::new(AtomicBool::new(false));
+    let (_served, threads) = serve(specs, &AddressMap::parse(MAP).unwrap(), stop.clone())
+        .expect("the emulator binds 127.0.1.x");
+
+    let robot = read_robot_file(&top, &Property::default())
+        .expect("icub_left_arm.xml")
+        .robot;
+    let cfg = |name: &str| robot.device(name).expect(name).to_property().unwrap();
+
+    let t0 = Instant::now();
+    let mut eb1 = EmbObjMotionControl::new();
+    eb1.open(&cfg("left_arm-eb1-j0_3-mc")).expect("eb1 opens");
+    let mut eb2 = EmbObjMotionControl::new();
+    eb2.open(&cfg("left_arm-eb2-j4_15-mc")).expect("eb2 opens");
+    eprintln!("two boards up in {:?}", t0.elapsed());
+
+    let enc = eb1.as_encoders().unwrap();
+    assert_eq!(enc.get_axes().unwrap(), 4);
+    assert_eq!(eb2.as_encoders().unwrap().get_axes().unwrap(), 12);
+    assert_eq!(
+        eb1.as_axis_info().unwrap().get_axis_name(3).unwrap(),
+        "l_elbow"
+    );
+    // Joints start idle, inside their limits (l_shoulder_roll: 9..160 deg).
+    assert_eq!(
+        eb1.as_control_mode().unwrap().get_control_mode(0).unwrap(),
+        CM_IDLE
+    );
+    let roll = eb1.as_encoders().unwrap().get_encoder(1).unwrap();
+    assert!((roll - 9.0).abs() < 0.1, "l_shoulder_roll at {roll}");
+    let (lo, hi) = eb1.as_control_limits().unwrap().get_limits(0).unwrap();
+    assert!(
+        (lo + 95.5).abs() < 0.01 && (hi - 8.0).abs() < 0.01,
+        "{lo} {hi}"
+    );
+
+    // Calibration (type 12, as left_arm-calib.xml) ends in position control.
+    let cal = eb1.as_control_calibration().unwrap();
+    cal.set_calibration_parameters(
+        0,
+        &CalibrationParameters {
+            kind: 12,
+            param1: 35711.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    wait_for("calibration done", Duration::from_secs(5), || {
+        eb1.as_control_calibration()
+            .unwrap()
+            .calibration_done(0)
+            .unwrap()
+    });
+
+    // Position control: the encoder follows.
+    eb1.as_control_mode()
+        .unwrap()
+        .set_control_mode(0, CM_POSITION)
+        .unwrap();
+    let pc = eb1.as_position_control().unwrap();
+    pc.set_ref_speed(0, 50.0).unwrap();
+    pc.position_move(0, -20.0).unwrap();
+    let sent = Instant::now();
+    wait_for("joint 0 at -20 deg", Duration::from_secs(5), || {
+        (eb1.as_encoders().unwrap().get_encoder(0).unwrap() + 20.0).abs() < 0.5
+    });
+    eprintln!("command to encoder within 0.5 deg: {:?}", sent.elapsed());
+    wait_for("motion done", Duration::from_secs(5), || {
+        eb1.as_position_control()
+            .unwrap()
+            .check_motion_done(0)
+            .unwrap()
+    });
+
+    // The board falls silent: readings fail within its 20 ms presence timeout (+ margin),
+    // naming IP and board.
+    stop.store(true, Ordering::SeqCst);
+    for t in threads {
+        t.join().unwrap();
+    }
+    let silent = Instant::now();
+    let mut err = None;
+    wait_for("silence reported", Duration::from_secs(2), || {
+        match eb1.as_encoders().unwrap().get_encoder(0) {
+            Err(e) => {
+                err = Some(e.to_string());
+                true
+            }
+            Ok(_) => false,
+        }
+    });
+    let err = err.unwrap();
+    eprintln!("after {:?}: {err}", silent.elapsed());
+    assert!(silent.elapsed() < Duration::from_millis(500));
+    assert!(err.contains("10.0.1.1 (left_arm-eb1-j0_3)"), "{err}");
+    eb1.close().unwrap();
+    eb2.close().unwrap();
+}
