@@ -19,7 +19,9 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use icub_eth::board::{BoardConfig, BoardEngine};
-use icub_eth::entities::analog::{FtStatus, FtTimedValue};
+use icub_eth::entities::analog::{
+    ByteArray, FtStatus, FtTimedValue, Inertial3Data, Inertial3Status, MaisStatus, StrainStatus,
+};
 use icub_eth::id::{entity as en, ids, tag};
 use icub_eth::plant::{JointModel, SimpleJoint};
 use yarp_devices::robotinterface::read_robot_str;
@@ -42,6 +44,8 @@ pub struct BoardSpec {
     pub fts: u8,
     pub batteries: u8,
     pub skins: u8,
+    /// The `eOas_sensor_t` of each enabled inertial sensor (in the board's order).
+    pub inertials: Vec<u8>,
     /// The devices that use the board (for the start-up listing).
     pub users: Vec<String>,
 }
@@ -59,6 +63,7 @@ impl BoardSpec {
             fts: 0,
             batteries: 0,
             skins: 0,
+            inertials: Vec::new(),
             users: Vec::new(),
         }
     }
@@ -179,7 +184,13 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
             }
             "embObjMultipleFTsensors" => b.fts = b.fts.saturating_add(1).min(4),
             "embObjMais" => b.maises = 1,
-            "embObjIMU" | "embObjInertials" => b.inertials3 = 1,
+            "embObjIMU" | "embObjInertials" => {
+                b.inertials3 = 1;
+                match crate::eth::sensors::inertial_sensors(&cfg) {
+                    Ok(list) => b.inertials = list.iter().map(|s| s.kind).collect(),
+                    Err(e) => tracing::warn!("device {}: {e}", dev.name),
+                }
+            }
             "embObjSkin" => b.skins = b.skins.max(1),
             "embObjPOS" => b.poses = 1,
             "embObjBattery" => b.batteries = 1,
@@ -191,9 +202,69 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
 
 /// Writes the sensors' values of a board (slowly varying, so that streams visibly
 /// change).
-fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u64) {
+fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u64, tick: u64) {
+    use crate::eth::sensors::sensor_type as st;
+    let s = (t * 0.5).sin();
+    let store = engine.store_mut();
+    if spec.strains > 0 {
+        // Full scale 2000 N / 50 N·m (strain2 defaults); values as fractions of it.
+        let full = [2000u16, 2000, 2000, 50, 50, 50];
+        let frac = [0.01 * s, 0.02 * s, 0.1, 0.01 * s, 0.02, 0.03 * s];
+        let raw: Vec<u16> = frac.iter().map(|f| ((f * 32768.0) as i16) as u16).collect();
+        let status = StrainStatus {
+            fullscale: ByteArray::from_u16(&full),
+            calibrated: ByteArray::from_u16(&raw),
+            uncalibrated: ByteArray::from_u16(&raw),
+        };
+        let _ = store.write(
+            ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_STATUS),
+            &status,
+        );
+    }
+    if spec.maises > 0 {
+        let v: Vec<u8> = (0..15)
+            .map(|k| (128.0 + 100.0 * (t + k as f64).sin()) as u8)
+            .collect();
+        let status = MaisStatus {
+            the15values: ByteArray::from_u8(&v),
+        };
+        let _ = store.write(ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS), &status);
+    }
+    if !spec.inertials.is_empty() {
+        // Four readings per status, the sensors taken in turn (as the boards fill it).
+        let n = spec.inertials.len();
+        let data = (0..n.min(4))
+            .map(|k| {
+                let id = ((tick as usize * 4 + k) % n) as u8;
+                let (x, y, z) = match spec.inertials[id as usize] {
+                    st::IMU_ACC | st::ACCEL_MTB_INT | st::ACCEL_MTB_EXT | st::ACCEL_ST_LIS3X => {
+                        (0.0, 0.0, 981.0)
+                    }
+                    st::IMU_GYR | st::GYROS_MTB_EXT | st::GYROS_ST_L3G4200D => (16.0 * s, 0.0, 0.0),
+                    st::IMU_MAG => (320.0, 0.0, -640.0),
+                    st::IMU_EUL => (0.0, 0.0, 16.0 * 10.0 * s),
+                    _ => (0.0, 0.0, 0.0),
+                };
+                Inertial3Data {
+                    id,
+                    type_of_sensor: spec.inertials[id as usize],
+                    status: 0,
+                    seq: tick as u8,
+                    timestamp: (age_us / 1000) as u32,
+                    w: 0,
+                    x: x as i16,
+                    y: y as i16,
+                    z: z as i16,
+                }
+            })
+            .collect();
+        let _ = store.write(
+            ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_STATUS),
+            &Inertial3Status { data },
+        );
+    }
     for i in 0..spec.fts {
-        let s = (t * 0.5).sin() as f32;
+        let s = s as f32;
         let ft = FtStatus {
             timed_value: FtTimedValue {
                 age: age_us,
@@ -202,9 +273,7 @@ fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u6
             },
             ..Default::default()
         };
-        let _ = engine
-            .store_mut()
-            .write(ids::analog(en::AS_FT, i, tag::AS_FT_STATUS), &ft);
+        let _ = store.write(ids::analog(en::AS_FT, i, tag::AS_FT_STATUS), &ft);
     }
 }
 
@@ -255,6 +324,7 @@ fn run_board(socket: UdpSocket, mut engine: BoardEngine, spec: BoardSpec, stop: 
     let mut last_step = Instant::now();
     let mut peer: Option<SocketAddr> = None;
     let mut buf = vec![0u8; 65536];
+    let mut tick = 0u64;
     while !stop.load(Ordering::Relaxed) {
         let now = epoch.elapsed();
         let wait = engine
@@ -273,11 +343,13 @@ fn run_board(socket: UdpSocket, mut engine: BoardEngine, spec: BoardSpec, stop: 
             last_step = Instant::now();
             engine.step(dt.as_secs_f64());
             let now = epoch.elapsed();
+            tick += 1;
             update_sensors(
                 &mut engine,
                 &spec,
                 now.as_secs_f64(),
                 now.as_micros() as u64,
+                tick,
             );
         }
         let now = epoch.elapsed();

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 
 use icub_eth_devices::emulator::{robot_boards, serve};
 use icub_eth_devices::eth::params::{AddressMap, ADDRESS_MAP_ENV};
-use icub_eth_devices::eth::EmbObjMotionControl;
+use icub_eth_devices::eth::{EmbObjFtSensor, EmbObjMais, EmbObjMotionControl};
 use yarp_devices::interfaces::CalibrationParameters;
 use yarp_devices::robotinterface::read_robot_file;
 use yarp_devices::vocabs::{CM_IDLE, CM_POSITION};
@@ -40,7 +40,7 @@ fn wait_for(what: &str, timeout: Duration, mut f: impl FnMut() -> bool) {
 fn left_arm_boards_open_move_calibrate_and_report_silence() {
     std::env::set_var(ADDRESS_MAP_ENV, MAP);
     let dir = robot_dir();
-    let top = dir.join("icub_left_arm.xml");
+    let top = dir.join("icub_all.xml");
     let specs = robot_boards(&dir, Some(&top)).expect("robot boards");
     let stop = Arc::new(AtomicBool::new(false));
     let (_served, threads) = serve(specs, &AddressMap::parse(MAP).unwrap(), stop.clone())
@@ -114,6 +114,32 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
             .unwrap()
             .check_motion_done(0)
             .unwrap()
+    });
+
+    // The arm's F/T sensor (strain on eb1) and the hand's MAIS (eb2) stream.
+    let mut ft = EmbObjFtSensor::new();
+    ft.open(&cfg("left_arm-eb1-j0_3-strain"))
+        .expect("strain opens");
+    let fts = ft.as_six_axis_force_torque_sensors().unwrap();
+    assert_eq!(
+        fts.get_six_axis_force_torque_sensor_name(0).unwrap(),
+        "l_arm_ft"
+    );
+    wait_for("an F/T reading", Duration::from_secs(2), || {
+        ft.as_six_axis_force_torque_sensors()
+            .unwrap()
+            .get_six_axis_force_torque_sensor_measure(0)
+            .is_ok_and(|m| m.values.len() == 6 && (m.values[2] - 200.0).abs() < 1.0)
+    });
+    let mut mais = EmbObjMais::new();
+    mais.open(&cfg("left_arm-eb2-j4_15-mais"))
+        .expect("mais opens");
+    let mut v = Vec::new();
+    wait_for("MAIS values", Duration::from_secs(2), || {
+        mais.as_analog_sensor().unwrap().read(&mut v)
+            == yarp_devices::sensors::interfaces::AnalogStatus::Ok
+            && v.len() == 15
+            && v.iter().any(|x| *x != 0.0)
     });
 
     // The board falls silent: readings fail within its 20 ms presence timeout (+ margin),

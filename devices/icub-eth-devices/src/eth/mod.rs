@@ -5,6 +5,10 @@
 //! |--------|--------|------------|
 //! | `embObjMotionControl` | [`motion_control`] | encoders, position, velocity, position direct, torque, current, PWM, impedance, calibration, PIDs, control/interaction modes, limits, axis info, motor encoders, amplifiers, motors (temperature) |
 //! | `parametricCalibratorEth` | [`calibrator`] | `ICalibrator` |
+//! | `embObjFTsensor` | [`sensors`] | `ISixAxisForceTorqueSensors`, `IAnalogSensor` (strain) |
+//! | `embObjMultipleFTsensors` | [`sensors`] | `ISixAxisForceTorqueSensors`, `ITemperatureSensors` |
+//! | `embObjIMU`, `embObjInertials` | [`sensors`] | gyroscopes, accelerometers, magnetometers, orientation |
+//! | `embObjMais` | [`sensors`] | `IAnalogSensor` (15 channels) |
 //!
 //! Parameters: [`params`] (`PC104`, `ETH_BOARD`, `SERVICE`), [`mc_params`]; the host's
 //! socket and the boards: [`manager`]; a device's service on its board: [`service`].
@@ -15,10 +19,12 @@ pub mod manager;
 pub mod mc_params;
 pub mod motion_control;
 pub mod params;
+pub mod sensors;
 pub mod service;
 
 pub use calibrator::ParametricCalibratorEth;
 pub use motion_control::EmbObjMotionControl;
+pub use sensors::{EmbObjFtSensor, EmbObjImu, EmbObjMais, EmbObjMultipleFtSensors};
 
 use yarp_devices::driver::Factory;
 

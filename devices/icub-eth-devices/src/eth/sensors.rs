@@ -1,0 +1,758 @@
+//! The analog sensors of the Ethernet boards (icub-main `embObjFTsensor`,
+//! `embObjMultipleFTsensors`, `embObjIMU` / `embObjInertials`, `embObjMais`): each opens
+//! its service on its board (as `embObjMotionControl` does: `ETH_BOARD`, `PC104`,
+//! `SERVICE`) and reads the status the board streams as a regular ROP.
+//!
+//! - `embObjFTsensor` (`eomn_serv_AS_strain`, iCub): one strain sensor, named by
+//!   `SERVICE/PROPERTIES/SENSORS/id`; `SETTINGS/acquisitionRate` (ms) and
+//!   `STRAIN_SETTINGS/useCalibration` (calibrated or raw values) configure it. Values are
+//!   the board's 16-bit readings scaled by the sensor's full scale (N, N·m).
+//! - `embObjMultipleFTsensors` (`eomn_serv_AS_ft`, ergoCub): the FT sensors of
+//!   `SETTINGS/enabledSensors` with `ftPeriod`, `temperaturePeriod` (ms) and
+//!   `useCalibration`; the board streams N and N·m as floats, temperature in 0.1 °C.
+//! - `embObjIMU`, `embObjInertials` (`eomn_serv_AS_inertials3`): the sensors of
+//!   `SETTINGS/enabledSensors` (`SENSORS/id`, `type`, `sensorName`), sampled every
+//!   `acquisitionRate` ms; BNO055 units as the boards send them: acceleration 100 LSB per
+//!   m/s², angular rate and Euler angles 16 LSB per ° (/s), magnetic field 16 LSB per µT.
+//! - `embObjMais` (`eomn_serv_AS_mais`): the 15 hall-sensor channels of the hand.
+//!
+//! A board that falls silent makes every reading fail within its presence timeout,
+//! naming IP and board.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use icub_eth::entities::analog::{
+    FtConfig, FtStatus, Inertial3Config, Inertial3Status, MaisConfig, MaisStatus, StrainConfig,
+    StrainStatus,
+};
+use icub_eth::entities::mn::{category, ServiceCommand};
+use icub_eth::id::{entity as en, ids, tag};
+use icub_eth::{Entity, Id32};
+use yarp_devices::sensors::interfaces::*;
+use yarp_devices::{DevResult, DeviceDriver, DeviceError};
+use yarp_proto::Property;
+
+use super::config::{text, Node, ParamError};
+use super::manager::{Board, EthManager};
+use super::params::{read_eth_board, read_pc104, read_service};
+use super::service::{open_sensor, SensorService};
+
+fn now() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
+/// What every sensor device shares: its name, its board, its service.
+#[derive(Default)]
+struct Common {
+    id: String,
+    board: Option<Arc<Board>>,
+}
+
+impl Common {
+    /// Reads the Ethernet groups, brings the board and the service up.
+    fn open(
+        &mut self,
+        default_name: &str,
+        config: &Property,
+        expected_category: u8,
+        service: impl FnOnce(&Node, u8) -> Result<SensorService, ParamError>,
+    ) -> DevResult<()> {
+        self.id = config
+            .find("id")
+            .map_or_else(|| default_name.to_string(), text);
+        let id = self.id.clone();
+        let pc104 = read_pc104(config).map_err(|e| e.for_device(&id))?;
+        let eth = read_eth_board(config).map_err(|e| e.for_device(&id))?;
+        let kind = read_service(config).map_err(|e| e.for_device(&id))?;
+        if kind.category != expected_category {
+            return Err(ParamError::bad(
+                "SERVICE/type",
+                "the service type of this device",
+                format!("category {}", kind.category),
+            )
+            .for_device(&id));
+        }
+        let spec =
+            service(&Node::root(config), kind.service_type).map_err(|e| e.for_device(&id))?;
+        let mgr = EthManager::instance(&pc104).map_err(|e| DeviceError::failed(&id, e))?;
+        let board = mgr.board(&eth);
+        if let Err(e) = open_sensor(&board, &spec) {
+            tracing::error!(device = %id, "{default_name}::open() fails for BOARD {}: {e}", board.who());
+            return Err(DeviceError::failed(&id, e));
+        }
+        tracing::info!(device = %id, board = %board.who(), "{default_name} open");
+        self.board = Some(board);
+        Ok(())
+    }
+
+    fn read<T: Entity>(&self, id: Id32) -> DevResult<T> {
+        let b = self.board.as_ref().ok_or(DeviceError::NotOpen)?;
+        b.read(id).map_err(|e| DeviceError::failed(&self.id, e))
+    }
+
+    fn status(&self) -> MasStatus {
+        match &self.board {
+            Some(b) if !b.is_lost() => MasStatus::Ok,
+            Some(_) => MasStatus::Timeout,
+            None => MasStatus::Error,
+        }
+    }
+}
+
+fn no_sensor(device: &str, i: usize, n: usize) -> DeviceError {
+    DeviceError::BadParam {
+        device: device.to_string(),
+        param: "sens_index".into(),
+        expected: "an index below the number of sensors",
+        got: format!("{i} (nr of sensors: {n})"),
+    }
+}
+
+/// `SERVICE/SETTINGS` and `SERVICE/PROPERTIES/SENSORS`.
+fn settings<'a>(root: &Node<'a>) -> Result<(Node<'a>, Node<'a>), ParamError> {
+    let s = root.need_group("SERVICE")?;
+    let settings = s.need_group("SETTINGS")?;
+    let sensors = s.need_group("PROPERTIES")?.need_group("SENSORS")?;
+    Ok((settings, sensors))
+}
+
+fn verify(cat: u8, service_type: u8) -> ServiceCommand {
+    ServiceCommand::verify_activate(cat, service_type, 0, 0, &[])
+}
+
+// ---- embObjFTsensor ----
+
+/// `embObjFTsensor`: one strain sensor (iCub).
+#[derive(Default)]
+pub struct EmbObjFtSensor {
+    c: Common,
+    name: String,
+}
+
+pub const FT_SENSOR: &str = "embObjFTsensor";
+
+impl EmbObjFtSensor {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn values(&self) -> DevResult<Vec<f64>> {
+        let st: StrainStatus = self
+            .c
+            .read(ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_STATUS))?;
+        let full = st.fullscale.u16_values();
+        Ok(st
+            .calibrated
+            .u16_values()
+            .iter()
+            .take(6)
+            .enumerate()
+            .map(|(k, raw)| {
+                let v = f64::from(*raw as i16);
+                match full.get(k) {
+                    Some(f) if *f != 0 => v * f64::from(*f) / 32768.0,
+                    _ => v,
+                }
+            })
+            .collect())
+    }
+}
+
+impl DeviceDriver for EmbObjFtSensor {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let mut name = String::new();
+        self.c
+            .open(FT_SENSOR, config, category::STRAIN, |root, st| {
+                let (set, sensors) = settings(root)?;
+                name = sensors.need_string("id", "the sensor's name")?;
+                let rate = set.number("acquisitionRate")?.unwrap_or(10.0);
+                let calibrated = root
+                    .group("SERVICE")
+                    .and_then(|s| s.group("STRAIN_SETTINGS"))
+                    .and_then(|s| s.boolean("useCalibration"))
+                    .unwrap_or(true);
+                let cfg = StrainConfig {
+                    mode: if calibrated { 0 } else { 3 },
+                    datarate: rate.clamp(1.0, 255.0) as u8,
+                    signal_once_fullscale: true,
+                };
+                Ok(SensorService {
+                    activate: verify(category::STRAIN, st),
+                    configs: vec![(
+                        ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_CONFIG),
+                        cfg.to_bytes(),
+                    )],
+                    regulars: vec![ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_STATUS)],
+                    after_start: Vec::new(),
+                })
+            })?;
+        self.name = name;
+        Ok(())
+    }
+    fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
+        Some(self)
+    }
+    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
+        Some(self)
+    }
+}
+
+impl ISixAxisForceTorqueSensors for EmbObjFtSensor {
+    fn get_nr_of_six_axis_force_torque_sensors(&self) -> usize {
+        1
+    }
+    fn get_six_axis_force_torque_sensor_status(&self, i: usize) -> MasStatus {
+        if i == 0 {
+            self.c.status()
+        } else {
+            MasStatus::Error
+        }
+    }
+    fn get_six_axis_force_torque_sensor_name(&self, i: usize) -> DevResult<String> {
+        if i != 0 {
+            return Err(no_sensor(&self.c.id, i, 1));
+        }
+        Ok(self.name.clone())
+    }
+    fn get_six_axis_force_torque_sensor_frame_name(&self, i: usize) -> DevResult<String> {
+        self.get_six_axis_force_torque_sensor_name(i)
+    }
+    fn get_six_axis_force_torque_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+        if i != 0 {
+            return Err(no_sensor(&self.c.id, i, 1));
+        }
+        Ok(SensorMeasurement::new(self.values()?, now()))
+    }
+}
+
+impl IAnalogSensor for EmbObjFtSensor {
+    fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
+        match self.values() {
+            Ok(v) => {
+                *out = v;
+                AnalogStatus::Ok
+            }
+            Err(_) => AnalogStatus::Timeout,
+        }
+    }
+    fn get_state(&mut self, _ch: usize) -> AnalogStatus {
+        match self.c.status() {
+            MasStatus::Ok => AnalogStatus::Ok,
+            _ => AnalogStatus::Timeout,
+        }
+    }
+    fn get_channels(&mut self) -> usize {
+        6
+    }
+    fn calibrate_sensor(&mut self) -> DevResult<()> {
+        Ok(())
+    }
+}
+
+// ---- embObjMultipleFTsensors ----
+
+/// `embObjMultipleFTsensors`: the FT sensors of a board (ergoCub), with temperatures.
+#[derive(Default)]
+pub struct EmbObjMultipleFtSensors {
+    c: Common,
+    names: Vec<String>,
+}
+
+pub const MULTIPLE_FT: &str = "embObjMultipleFTsensors";
+
+impl EmbObjMultipleFtSensors {
+    pub fn new() -> Self {
+        Self::default()
+    }
+    fn status_of(&self, i: usize) -> DevResult<FtStatus> {
+        if i >= self.names.len() {
+            return Err(no_sensor(&self.c.id, i, self.names.len()));
+        }
+        self.c
+            .read(ids::analog(en::AS_FT, i as u8, tag::AS_FT_STATUS))
+    }
+}
+
+impl DeviceDriver for EmbObjMultipleFtSensors {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let mut names = Vec::new();
+        self.c.open(MULTIPLE_FT, config, category::FT, |root, st| {
+            let (set, _sensors) = settings(root)?;
+            names = set
+                .strings("enabledSensors")
+                .filter(|v| !v.is_empty())
+                .ok_or_else(|| ParamError::missing("SETTINGS/enabledSensors", "sensor names"))?;
+            let ft_period = set.number("ftPeriod")?.unwrap_or(10.0);
+            let t_period = set.number("temperaturePeriod")?.unwrap_or(1000.0);
+            let calibrated = set.boolean("useCalibration").unwrap_or(true);
+            let mut configs = Vec::new();
+            let mut regulars = Vec::new();
+            let mut after = Vec::new();
+            for i in 0..names.len().min(4) as u8 {
+                let cfg = FtConfig {
+                    mode: if calibrated { 0 } else { 3 },
+                    ftperiod: ft_period.clamp(1.0, 255.0) as u8,
+                    calibration_set: 0,
+                    temperature_period: (t_period / 1000.0).clamp(1.0, 255.0) as u8,
+                };
+                configs.push((ids::analog(en::AS_FT, i, tag::AS_FT_CONFIG), cfg.to_bytes()));
+                regulars.push(ids::analog(en::AS_FT, i, tag::AS_FT_STATUS));
+                after.push((ids::analog(en::AS_FT, i, tag::AS_FT_CMMNDS_ENABLE), vec![1]));
+            }
+            Ok(SensorService {
+                activate: verify(category::FT, st),
+                configs,
+                regulars,
+                after_start: after,
+            })
+        })?;
+        self.names = names;
+        Ok(())
+    }
+    fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
+        Some(self)
+    }
+    fn as_temperature_sensors(&mut self) -> Option<&mut dyn ITemperatureSensors> {
+        Some(self)
+    }
+}
+
+impl ISixAxisForceTorqueSensors for EmbObjMultipleFtSensors {
+    fn get_nr_of_six_axis_force_torque_sensors(&self) -> usize {
+        self.names.len()
+    }
+    fn get_six_axis_force_torque_sensor_status(&self, i: usize) -> MasStatus {
+        if i < self.names.len() {
+            self.c.status()
+        } else {
+            MasStatus::Error
+        }
+    }
+    fn get_six_axis_force_torque_sensor_name(&self, i: usize) -> DevResult<String> {
+        self.names
+            .get(i)
+            .cloned()
+            .ok_or_else(|| no_sensor(&self.c.id, i, self.names.len()))
+    }
+    fn get_six_axis_force_torque_sensor_frame_name(&self, i: usize) -> DevResult<String> {
+        self.get_six_axis_force_torque_sensor_name(i)
+    }
+    fn get_six_axis_force_torque_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+        let s = self.status_of(i)?;
+        Ok(SensorMeasurement::new(
+            s.timed_value.values.iter().map(|v| f64::from(*v)).collect(),
+            now(),
+        ))
+    }
+}
+
+impl ITemperatureSensors for EmbObjMultipleFtSensors {
+    fn get_nr_of_temperature_sensors(&self) -> usize {
+        self.names.len()
+    }
+    fn get_temperature_sensor_status(&self, i: usize) -> MasStatus {
+        self.get_six_axis_force_torque_sensor_status(i)
+    }
+    fn get_temperature_sensor_name(&self, i: usize) -> DevResult<String> {
+        self.get_six_axis_force_torque_sensor_name(i)
+    }
+    fn get_temperature_sensor_frame_name(&self, i: usize) -> DevResult<String> {
+        self.get_six_axis_force_torque_sensor_name(i)
+    }
+    /// °C (the board's 0.1 °C units).
+    fn get_temperature_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+        let s = self.status_of(i)?;
+        Ok(SensorMeasurement::new(
+            vec![f64::from(s.timed_value.temperature) / 10.0],
+            now(),
+        ))
+    }
+}
+
+// ---- embObjIMU / embObjInertials ----
+
+/// `eOas_sensor_t` of the inertial sensors.
+pub mod sensor_type {
+    pub const ACCEL_MTB_INT: u8 = 2;
+    pub const ACCEL_MTB_EXT: u8 = 3;
+    pub const GYROS_MTB_EXT: u8 = 4;
+    pub const ACCEL_ST_LIS3X: u8 = 5;
+    pub const GYROS_ST_L3G4200D: u8 = 6;
+    pub const IMU_ACC: u8 = 7;
+    pub const IMU_MAG: u8 = 8;
+    pub const IMU_GYR: u8 = 9;
+    pub const IMU_EUL: u8 = 10;
+    pub const IMU_QUA: u8 = 11;
+    pub const IMU_LIA: u8 = 12;
+    pub const IMU_GRV: u8 = 13;
+    pub const IMU_STATUS: u8 = 14;
+
+    /// The `eoas_*` names of `SENSORS/type`.
+    pub fn from_name(s: &str) -> Option<u8> {
+        Some(match s.trim_matches('"') {
+            "eoas_accel_mtb_int" => ACCEL_MTB_INT,
+            "eoas_accel_mtb_ext" => ACCEL_MTB_EXT,
+            "eoas_gyros_mtb_ext" => GYROS_MTB_EXT,
+            "eoas_accel_st_lis3x" => ACCEL_ST_LIS3X,
+            "eoas_gyros_st_l3g4200d" => GYROS_ST_L3G4200D,
+            "eoas_imu_acc" => IMU_ACC,
+            "eoas_imu_mag" => IMU_MAG,
+            "eoas_imu_gyr" => IMU_GYR,
+            "eoas_imu_eul" => IMU_EUL,
+            "eoas_imu_qua" => IMU_QUA,
+            "eoas_imu_lia" => IMU_LIA,
+            "eoas_imu_grv" => IMU_GRV,
+            "eoas_imu_status" => IMU_STATUS,
+            _ => return None,
+        })
+    }
+}
+
+/// One enabled inertial sensor.
+#[derive(Debug, Clone)]
+pub struct InertialSensor {
+    pub id: String,
+    /// `sensorName` (the IMU the reading belongs to), else the id.
+    pub name: String,
+    pub kind: u8,
+}
+
+/// The enabled sensors of an inertials3 service (`SETTINGS/enabledSensors` looked up in
+/// `PROPERTIES/SENSORS`), in the order the board numbers them.
+pub fn inertial_sensors(config: &Property) -> Result<Vec<InertialSensor>, ParamError> {
+    let root = Node::root(config);
+    let (set, sensors) = settings(&root)?;
+    let ids = sensors
+        .strings("id")
+        .ok_or_else(|| ParamError::missing("SENSORS/id", "sensor ids"))?;
+    let types = sensors.need_strings("type", ids.len())?;
+    let names = sensors
+        .strings("sensorName")
+        .filter(|v| v.len() == ids.len())
+        .unwrap_or_else(|| ids.clone());
+    let enabled = set.strings("enabledSensors").unwrap_or_else(|| ids.clone());
+    enabled
+        .iter()
+        .map(|e| {
+            let k = ids.iter().position(|i| i == e).ok_or_else(|| {
+                ParamError::bad("SETTINGS/enabledSensors", "ids of SENSORS/id", e)
+            })?;
+            let kind = sensor_type::from_name(&types[k]).ok_or_else(|| {
+                ParamError::bad("SENSORS/type", "an eoas_* inertial type", &types[k])
+            })?;
+            Ok(InertialSensor {
+                id: e.clone(),
+                name: names[k].clone(),
+                kind,
+            })
+        })
+        .collect()
+}
+
+/// The latest reading of every sensor of an inertials3 service (the board sends at
+/// most four per status ROP, so readings are accumulated by sensor index).
+#[derive(Default)]
+struct InertialCache {
+    by_id: HashMap<u8, [i16; 4]>,
+    last_seq: Option<Vec<u8>>,
+}
+
+/// `embObjIMU` / `embObjInertials`: the IMUs (or MTB accelerometers / gyroscopes) of a
+/// board.
+#[derive(Default)]
+pub struct EmbObjImu {
+    kind_name: &'static str,
+    c: Common,
+    sensors: Vec<InertialSensor>,
+    cache: Mutex<InertialCache>,
+}
+
+pub const IMU: &str = "embObjIMU";
+pub const INERTIALS: &str = "embObjInertials";
+
+impl EmbObjImu {
+    pub fn new(kind_name: &'static str) -> Self {
+        Self {
+            kind_name,
+            ..Default::default()
+        }
+    }
+
+    /// Folds the latest status into the cache and returns the reading of sensor `k`.
+    fn reading(&self, k: usize) -> DevResult<[i16; 4]> {
+        let st: Inertial3Status =
+            self.c
+                .read(ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_STATUS))?;
+        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        let seq: Vec<u8> = st.data.iter().map(|d| d.seq).collect();
+        if cache.last_seq.as_ref() != Some(&seq) {
+            for d in &st.data {
+                cache.by_id.insert(d.id, [d.x, d.y, d.z, d.w]);
+            }
+            cache.last_seq = Some(seq);
+        }
+        Ok(cache.by_id.get(&(k as u8)).copied().unwrap_or_default())
+    }
+
+    fn of_kind(&self, kinds: &[u8]) -> Vec<usize> {
+        self.sensors
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| kinds.contains(&s.kind))
+            .map(|(k, _)| k)
+            .collect()
+    }
+
+    fn nth(&self, kinds: &[u8], i: usize) -> DevResult<usize> {
+        let v = self.of_kind(kinds);
+        v.get(i)
+            .copied()
+            .ok_or_else(|| no_sensor(&self.c.id, i, v.len()))
+    }
+
+    fn measure(&self, kinds: &[u8], i: usize, scale: f64) -> DevResult<SensorMeasurement> {
+        let k = self.nth(kinds, i)?;
+        let r = self.reading(k)?;
+        Ok(SensorMeasurement::new(
+            r[..3].iter().map(|v| f64::from(*v) / scale).collect(),
+            now(),
+        ))
+    }
+
+    fn name(&self, kinds: &[u8], i: usize) -> DevResult<String> {
+        Ok(self.sensors[self.nth(kinds, i)?].name.clone())
+    }
+
+    fn status(&self, kinds: &[u8], i: usize) -> MasStatus {
+        if i < self.of_kind(kinds).len() {
+            self.c.status()
+        } else {
+            MasStatus::Error
+        }
+    }
+}
+
+const ACC: &[u8] = &[
+    sensor_type::IMU_ACC,
+    sensor_type::ACCEL_MTB_INT,
+    sensor_type::ACCEL_MTB_EXT,
+    sensor_type::ACCEL_ST_LIS3X,
+];
+const GYR: &[u8] = &[
+    sensor_type::IMU_GYR,
+    sensor_type::GYROS_MTB_EXT,
+    sensor_type::GYROS_ST_L3G4200D,
+];
+const MAG: &[u8] = &[sensor_type::IMU_MAG];
+const EUL: &[u8] = &[sensor_type::IMU_EUL];
+
+impl DeviceDriver for EmbObjImu {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let name = if self.kind_name.is_empty() {
+            IMU
+        } else {
+            self.kind_name
+        };
+        let sensors = inertial_sensors(config).map_err(|e| e.for_device(name))?;
+        let n = sensors.len();
+        self.c
+            .open(name, config, category::INERTIALS3, |root, st| {
+                let (set, _) = settings(root)?;
+                let rate = set.number("acquisitionRate")?.unwrap_or(10.0);
+                let cfg = Inertial3Config {
+                    datarate: rate.clamp(1.0, 255.0) as u8,
+                    items_to_fill_at_each_tick: 0,
+                    enabled: if n >= 32 { u32::MAX } else { (1u32 << n) - 1 },
+                };
+                Ok(SensorService {
+                    activate: verify(category::INERTIALS3, st),
+                    configs: vec![(
+                        ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_CONFIG),
+                        cfg.to_bytes(),
+                    )],
+                    regulars: vec![ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_STATUS)],
+                    after_start: vec![(
+                        ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_CMMNDS_ENABLE),
+                        vec![1],
+                    )],
+                })
+            })?;
+        self.sensors = sensors;
+        Ok(())
+    }
+    fn as_three_axis_gyroscopes(&mut self) -> Option<&mut dyn IThreeAxisGyroscopes> {
+        Some(self)
+    }
+    fn as_three_axis_linear_accelerometers(
+        &mut self,
+    ) -> Option<&mut dyn IThreeAxisLinearAccelerometers> {
+        Some(self)
+    }
+    fn as_three_axis_magnetometers(&mut self) -> Option<&mut dyn IThreeAxisMagnetometers> {
+        Some(self)
+    }
+    fn as_orientation_sensors(&mut self) -> Option<&mut dyn IOrientationSensors> {
+        Some(self)
+    }
+}
+
+impl IThreeAxisGyroscopes for EmbObjImu {
+    fn get_nr_of_three_axis_gyroscopes(&self) -> usize {
+        self.of_kind(GYR).len()
+    }
+    fn get_three_axis_gyroscope_status(&self, i: usize) -> MasStatus {
+        self.status(GYR, i)
+    }
+    fn get_three_axis_gyroscope_name(&self, i: usize) -> DevResult<String> {
+        self.name(GYR, i)
+    }
+    fn get_three_axis_gyroscope_frame_name(&self, i: usize) -> DevResult<String> {
+        self.name(GYR, i)
+    }
+    fn get_three_axis_gyroscope_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+        self.measure(GYR, i, 16.0)
+    }
+}
+
+impl IThreeAxisLinearAccelerometers for EmbObjImu {
+    fn get_nr_of_three_axis_linear_accelerometers(&self) -> usize {
+        self.of_kind(ACC).len()
+    }
+    fn get_three_axis_linear_accelerometer_status(&self, i: usize) -> MasStatus {
+        self.status(ACC, i)
+    }
+    fn get_three_axis_linear_accelerometer_name(&self, i: usize) -> DevResult<String> {
+        self.name(ACC, i)
+    }
+    fn get_three_axis_linear_accelerometer_frame_name(&self, i: usize) -> DevResult<String> {
+        self.name(ACC, i)
+    }
+    fn get_three_axis_linear_accelerometer_measure(
+        &self,
+        i: usize,
+    ) -> DevResult<SensorMeasurement> {
+        self.measure(ACC, i, 100.0)
+    }
+}
+
+impl IThreeAxisMagnetometers for EmbObjImu {
+    fn get_nr_of_three_axis_magnetometers(&self) -> usize {
+        self.of_kind(MAG).len()
+    }
+    fn get_three_axis_magnetometer_status(&self, i: usize) -> MasStatus {
+        self.status(MAG, i)
+    }
+    fn get_three_axis_magnetometer_name(&self, i: usize) -> DevResult<String> {
+        self.name(MAG, i)
+    }
+    fn get_three_axis_magnetometer_frame_name(&self, i: usize) -> DevResult<String> {
+        self.name(MAG, i)
+    }
+    /// Tesla (16 LSB per µT).
+    fn get_three_axis_magnetometer_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+        self.measure(MAG, i, 16.0e6)
+    }
+}
+
+impl IOrientationSensors for EmbObjImu {
+    fn get_nr_of_orientation_sensors(&self) -> usize {
+        self.of_kind(EUL).len()
+    }
+    fn get_orientation_sensor_status(&self, i: usize) -> MasStatus {
+        self.status(EUL, i)
+    }
+    fn get_orientation_sensor_name(&self, i: usize) -> DevResult<String> {
+        self.name(EUL, i)
+    }
+    fn get_orientation_sensor_frame_name(&self, i: usize) -> DevResult<String> {
+        self.name(EUL, i)
+    }
+    fn get_orientation_sensor_measure_as_roll_pitch_yaw(
+        &self,
+        i: usize,
+    ) -> DevResult<SensorMeasurement> {
+        self.measure(EUL, i, 16.0)
+    }
+}
+
+// ---- embObjMais ----
+
+/// `embObjMais`: the 15 channels of a hand's MAIS board.
+#[derive(Default)]
+pub struct EmbObjMais {
+    c: Common,
+}
+
+pub const MAIS: &str = "embObjMais";
+
+impl EmbObjMais {
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+impl DeviceDriver for EmbObjMais {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        self.c.open(MAIS, config, category::MAIS, |root, st| {
+            let rate = root
+                .group("SERVICE")
+                .and_then(|s| s.group("SETTINGS"))
+                .and_then(|s| s.number("acquisitionRate").ok().flatten())
+                .unwrap_or(10.0);
+            let cfg = MaisConfig {
+                mode: 0,
+                datarate: rate.clamp(1.0, 255.0) as u8,
+                resolution: 0,
+            };
+            Ok(SensorService {
+                activate: verify(category::MAIS, st),
+                configs: vec![(
+                    ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_CONFIG),
+                    cfg.to_bytes(),
+                )],
+                regulars: vec![ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS)],
+                after_start: Vec::new(),
+            })
+        })
+    }
+    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
+        Some(self)
+    }
+}
+
+impl IAnalogSensor for EmbObjMais {
+    fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
+        match self
+            .c
+            .read::<MaisStatus>(ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS))
+        {
+            Ok(s) => {
+                *out = s
+                    .the15values
+                    .u8_values()
+                    .iter()
+                    .take(15)
+                    .map(|v| f64::from(*v))
+                    .collect();
+                out.resize(15, 0.0);
+                AnalogStatus::Ok
+            }
+            Err(_) => AnalogStatus::Timeout,
+        }
+    }
+    fn get_state(&mut self, _ch: usize) -> AnalogStatus {
+        match self.c.status() {
+            MasStatus::Ok => AnalogStatus::Ok,
+            _ => AnalogStatus::Timeout,
+        }
+    }
+    fn get_channels(&mut self) -> usize {
+        15
+    }
+    fn calibrate_sensor(&mut self) -> DevResult<()> {
+        Ok(())
+    }
+}
