@@ -142,8 +142,8 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
             && v.iter().any(|x| *x != 0.0)
     });
 
-    // The board falls silent: readings fail within its 20 ms presence timeout (+ margin),
-    // naming IP and board.
+    // The board falls silent: reported after its 20 ms presence timeout; readings fail
+    // after ten times that (at least 0.5 s), naming IP and board.
     stop.store(true, Ordering::SeqCst);
     for t in threads {
         t.join().unwrap();
@@ -161,7 +161,7 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
     });
     let err = err.unwrap();
     eprintln!("after {:?}: {err}", silent.elapsed());
-    assert!(silent.elapsed() < Duration::from_millis(500));
+    assert!(silent.elapsed() < Duration::from_millis(1000));
     assert!(err.contains("10.0.1.1 (left_arm-eb1-j0_3)"), "{err}");
     eb1.close().unwrap();
     eb2.close().unwrap();

@@ -46,6 +46,8 @@ enum BringUp {
 
 struct Inner {
     host: HostTransceiver,
+    /// When the board's last datagram arrived.
+    last_rx: Option<Instant>,
     bring_up: BringUp,
     last_missing_report: Option<Instant>,
 }
@@ -254,21 +256,36 @@ impl Board {
         })
     }
 
-    /// The board's variable as last received (`getLocalValue`), and whether the board is
-    /// currently reported silent.
+    /// How long a board may be silent before its values are refused: ten times its
+    /// presence timeout, at least 0.5 s (the silence itself is reported after the
+    /// presence timeout, as C++ does; a loaded host may see short gaps).
+    pub fn stale_after(&self) -> Duration {
+        (self
+            .params
+            .presence_timeout
+            .unwrap_or(Duration::from_millis(50))
+            * 10)
+            .max(Duration::from_millis(500))
+    }
+
+    /// The board's variable as last received (`getLocalValue`); an error naming the
+    /// board once it has been silent longer than [`Self::stale_after`].
     pub fn read<T: Entity>(&self, id: Id32) -> Result<T, EthError> {
         let inner = self.lock();
-        if inner.host.board_lost() {
-            return Err(EthError::Board {
-                who: self.who(),
-                reason: format!(
-                    "has been silent longer than its timeout of {:.3} s",
-                    self.params
-                        .presence_timeout
-                        .unwrap_or_default()
-                        .as_secs_f64()
-                ),
-            });
+        if let Some(silent) = inner.last_rx.map(|t| t.elapsed()) {
+            if silent > self.stale_after() {
+                return Err(EthError::Board {
+                    who: self.who(),
+                    reason: format!(
+                        "has been silent for {:.3} s (its presence timeout is {:.3} s)",
+                        silent.as_secs_f64(),
+                        self.params
+                            .presence_timeout
+                            .unwrap_or_default()
+                            .as_secs_f64()
+                    ),
+                });
+            }
         }
         inner.host.read(id).map_err(|e| EthError::Board {
             who: self.who(),
@@ -285,6 +302,7 @@ impl Board {
     fn on_datagram(&self, d: &[u8]) {
         let mut inner = self.lock();
         let now = self.now();
+        inner.last_rx = Some(Instant::now());
         let _ = inner.host.handle_datagram(d, now);
         self.events(&mut inner);
         drop(inner);
@@ -418,6 +436,7 @@ impl EthManager {
                     inner: Mutex::new(Inner {
                         host: HostTransceiver::new(cfg),
                         bring_up: BringUp::NotYet,
+                        last_rx: None,
                         last_missing_report: None,
                     }),
                     changed: Condvar::new(),

@@ -38,4 +38,13 @@ pub const DRIVERS: &[(&str, Factory)] = &[
         calibrator::NAME,
         || Box::new(ParametricCalibratorEth::new()),
     ),
+    (sensors::FT_SENSOR, || Box::new(EmbObjFtSensor::new())),
+    (sensors::MULTIPLE_FT, || {
+        Box::new(EmbObjMultipleFtSensors::new())
+    }),
+    (sensors::IMU, || Box::new(EmbObjImu::new(sensors::IMU))),
+    (sensors::INERTIALS, || {
+        Box::new(EmbObjImu::new(sensors::INERTIALS))
+    }),
+    (sensors::MAIS, || Box::new(EmbObjMais::new())),
 ];

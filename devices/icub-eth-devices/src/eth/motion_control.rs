@@ -25,6 +25,7 @@ use icub_eth::entities::mn::{category, ServiceCommand};
 use icub_eth::id::{ids, tag};
 use icub_eth::{Entity, Id32};
 use yarp_devices::interfaces::*;
+use yarp_devices::sensors::virtual_analog::{IVirtualAnalogSensor, VasStatus};
 use yarp_devices::vocabs::*;
 use yarp_devices::{DevResult, DeviceDriver, DeviceError};
 use yarp_proto::{Property, Vocab32};
@@ -505,6 +506,37 @@ impl DeviceDriver for EmbObjMotionControl {
     }
     fn as_control_calibration(&mut self) -> Option<&mut dyn IControlCalibration> {
         Some(self)
+    }
+    fn as_virtual_analog_sensor(&mut self) -> Option<&mut dyn IVirtualAnalogSensor> {
+        Some(self)
+    }
+}
+
+/// C++ `embObjMotionControl` as `IVirtualAnalogSensor`: the joint torques estimated by
+/// the host (wholeBodyDynamics through `virtualAnalogServer`) go to the boards as
+/// `joint inputs externallymeasuredtorque`.
+impl IVirtualAnalogSensor for EmbObjMotionControl {
+    fn get_virtual_analog_sensor_status(&mut self, ch: usize) -> VasStatus {
+        match (self.phys(ch), self.b()) {
+            (Ok(_), Ok(b)) if !b.is_lost() => VasStatus::Ok,
+            (Ok(_), Ok(_)) => VasStatus::Timeout,
+            _ => VasStatus::Error,
+        }
+    }
+    fn get_virtual_analog_sensor_channels(&mut self) -> usize {
+        self.axes().unwrap_or(0)
+    }
+    fn update_virtual_analog_sensor_measure(&mut self, measure: &[f64]) -> DevResult<()> {
+        for (j, v) in measure.iter().enumerate().take(self.axes()?) {
+            self.update_virtual_analog_sensor_channel(j, *v)?;
+        }
+        Ok(())
+    }
+    fn update_virtual_analog_sensor_channel(&mut self, ch: usize, measure: f64) -> DevResult<()> {
+        let id = self.joint_id(ch, tag::MC_JOINT_INPUTS_EXTERNALLYMEASUREDTORQUE)?;
+        let mut bytes = (measure as f32).to_le_bytes().to_vec();
+        bytes.resize(id.size().unwrap_or(4), 0);
+        self.b()?.set(id, &bytes).map_err(|e| self.fail(e))
     }
 }
 

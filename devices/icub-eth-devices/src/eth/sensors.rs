@@ -198,6 +198,40 @@ impl DeviceDriver for EmbObjFtSensor {
     fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
         Some(self)
     }
+    fn as_temperature_sensors(&mut self) -> Option<&mut dyn ITemperatureSensors> {
+        Some(self)
+    }
+}
+
+/// The strain's temperature (C++ `embObjFTsensor` as `ITemperatureSensors`): the
+/// board's temperature service, 0.1 °C units; an error while the board sends none.
+impl ITemperatureSensors for EmbObjFtSensor {
+    fn get_nr_of_temperature_sensors(&self) -> usize {
+        1
+    }
+    fn get_temperature_sensor_status(&self, i: usize) -> MasStatus {
+        self.get_six_axis_force_torque_sensor_status(i)
+    }
+    fn get_temperature_sensor_name(&self, i: usize) -> DevResult<String> {
+        self.get_six_axis_force_torque_sensor_name(i)
+    }
+    fn get_temperature_sensor_frame_name(&self, i: usize) -> DevResult<String> {
+        self.get_six_axis_force_torque_sensor_name(i)
+    }
+    fn get_temperature_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+        if i != 0 {
+            return Err(no_sensor(&self.c.id, i, 1));
+        }
+        let st: icub_eth::entities::analog::TemperatureStatus =
+            self.c
+                .read(ids::analog(en::AS_TEMPERATURE, 0, tag::AS_XX_STATUS))?;
+        let v = st
+            .data
+            .first()
+            .map(|d| f64::from(d.value) / 10.0)
+            .ok_or_else(|| DeviceError::failed(&self.c.id, "no temperature from the board yet"))?;
+        Ok(SensorMeasurement::new(vec![v], now()))
+    }
 }
 
 impl ISixAxisForceTorqueSensors for EmbObjFtSensor {
