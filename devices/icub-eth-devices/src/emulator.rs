@@ -46,6 +46,8 @@ pub struct BoardSpec {
     pub skins: u8,
     /// The `eOas_sensor_t` of each enabled inertial sensor (in the board's order).
     pub inertials: Vec<u8>,
+    /// The MTB addresses of each skin patch.
+    pub skin_patches: Vec<Vec<u8>>,
     /// The devices that use the board (for the start-up listing).
     pub users: Vec<String>,
 }
@@ -64,6 +66,7 @@ impl BoardSpec {
             batteries: 0,
             skins: 0,
             inertials: Vec::new(),
+            skin_patches: Vec::new(),
             users: Vec::new(),
         }
     }
@@ -182,7 +185,14 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
                 b.strains = b.strains.max(1);
                 b.temperatures = b.temperatures.max(1);
             }
-            "embObjMultipleFTsensors" => b.fts = b.fts.saturating_add(1).min(4),
+            "embObjMultipleFTsensors" => {
+                let n = root
+                    .group("SERVICE")
+                    .and_then(|s| s.group("SETTINGS"))
+                    .and_then(|s| s.strings("enabledSensors"))
+                    .map_or(1, |v| v.len());
+                b.fts = b.fts.saturating_add(n as u8).min(4);
+            }
             "embObjMais" => b.maises = 1,
             "embObjIMU" | "embObjInertials" => {
                 b.inertials3 = 1;
@@ -191,7 +201,13 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
                     Err(e) => tracing::warn!("device {}: {e}", dev.name),
                 }
             }
-            "embObjSkin" => b.skins = b.skins.max(1),
+            "embObjSkin" => match crate::eth::sensors::skin_patches(&cfg) {
+                Ok(p) => {
+                    b.skins = p.len() as u8;
+                    b.skin_patches = p;
+                }
+                Err(e) => tracing::warn!("device {}: {e}", dev.name),
+            },
             "embObjPOS" => b.poses = 1,
             "embObjBattery" => b.batteries = 1,
             _ => {}
@@ -229,6 +245,39 @@ fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u6
             the15values: ByteArray::from_u8(&v),
         };
         let _ = store.write(ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS), &status);
+    }
+    if spec.poses > 0 {
+        let values: Vec<i16> = (0..4).map(|k| (100.0 * s) as i16 + 100 * k).collect();
+        let _ = store.write(
+            ids::analog(en::AS_POS, 0, tag::AS_XX_STATUS),
+            &icub_eth::entities::analog::PosStatus { values },
+        );
+    }
+    for (p, addrs) in spec.skin_patches.iter().enumerate() {
+        // Two CAN frames per triangle (7 + 5 taxels), 24 frames per status, in turn.
+        let all: Vec<(u8, u8, bool)> = addrs
+            .iter()
+            .flat_map(|a| (0..16u8).flat_map(move |t| [(*a, t, false), (*a, t, true)]))
+            .collect();
+        if all.is_empty() {
+            continue;
+        }
+        let start = (tick as usize * 24) % all.len();
+        let level = (128.0 + 100.0 * s) as u8;
+        let frames = (0..24.min(all.len()))
+            .map(|k| {
+                let (a, t, second) = all[(start + k) % all.len()];
+                let head = if second { 0xC0 } else { 0x40 };
+                icub_eth::entities::skin::SkinCanData::new(
+                    crate::eth::sensors::skin_can_id(a, t),
+                    &[head, level, level, level, level, level, level, level],
+                )
+            })
+            .collect();
+        let _ = store.write(
+            ids::skin(p as u8, tag::SK_SKIN_STATUS_ARRAYOFCANDATA),
+            &icub_eth::entities::skin::SkinStatus { frames },
+        );
     }
     if !spec.inertials.is_empty() {
         // Four readings per status, the sensors taken in turn (as the boards fill it).

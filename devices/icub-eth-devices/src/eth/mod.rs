@@ -9,6 +9,8 @@
 //! | `embObjMultipleFTsensors` | [`sensors`] | `ISixAxisForceTorqueSensors`, `ITemperatureSensors` |
 //! | `embObjIMU`, `embObjInertials` | [`sensors`] | gyroscopes, accelerometers, magnetometers, orientation |
 //! | `embObjMais` | [`sensors`] | `IAnalogSensor` (15 channels) |
+//! | `embObjSkin` | [`sensors`] | `IAnalogSensor` (192 taxels per MTB) |
+//! | `embObjPOS` | [`sensors`] | none yet (C++ `IEncoderArrays`); the service runs |
 //!
 //! Parameters: [`params`] (`PC104`, `ETH_BOARD`, `SERVICE`), [`mc_params`]; the host's
 //! socket and the boards: [`manager`]; a device's service on its board: [`service`].
@@ -24,7 +26,9 @@ pub mod service;
 
 pub use calibrator::ParametricCalibratorEth;
 pub use motion_control::EmbObjMotionControl;
-pub use sensors::{EmbObjFtSensor, EmbObjImu, EmbObjMais, EmbObjMultipleFtSensors};
+pub use sensors::{
+    EmbObjFtSensor, EmbObjImu, EmbObjMais, EmbObjMultipleFtSensors, EmbObjPos, EmbObjSkin,
+};
 
 use yarp_devices::driver::Factory;
 
@@ -47,4 +51,6 @@ pub const DRIVERS: &[(&str, Factory)] = &[
         Box::new(EmbObjImu::new(sensors::INERTIALS))
     }),
     (sensors::MAIS, || Box::new(EmbObjMais::new())),
+    (sensors::SKIN, || Box::new(EmbObjSkin::new())),
+    (sensors::POS, || Box::new(EmbObjPos::new())),
 ];

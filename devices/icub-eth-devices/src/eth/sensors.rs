@@ -790,3 +790,229 @@ impl IAnalogSensor for EmbObjMais {
         Ok(())
     }
 }
+
+// ---- embObjSkin ----
+
+/// The skin patches of a board: `patches/skinCanAddrsPatchN` (N = the CAN port) list the
+/// MTB addresses of each patch; every MTB has 16 triangles of 12 taxels.
+pub fn skin_patches(config: &Property) -> Result<Vec<Vec<u8>>, ParamError> {
+    let g = Node::root(config).need_group("patches")?;
+    let mut patches = Vec::new();
+    for port in 1..=4 {
+        let key = format!("skinCanAddrsPatch{port}");
+        if let Some(v) = g.strings(&key) {
+            let addrs: Option<Vec<u8>> = v
+                .iter()
+                .map(|s| super::config::parse_number(s).map(|n| n as u8))
+                .collect();
+            patches.push(addrs.ok_or_else(|| {
+                ParamError::bad(format!("patches/{key}"), "MTB CAN addresses", v.join(" "))
+            })?);
+        }
+    }
+    if patches.is_empty() {
+        return Err(ParamError::missing(
+            "patches/skinCanAddrsPatchN",
+            "MTB CAN addresses",
+        ));
+    }
+    Ok(patches)
+}
+
+/// The iCub CAN id of a skin triangle's periodic message (`ICUBCANPROTO_CLASS_PERIODIC_SKIN`).
+pub fn skin_can_id(addr: u8, triangle: u8) -> u16 {
+    (4 << 8) | (u16::from(addr & 0xf) << 4) | u16::from(triangle & 0xf)
+}
+
+/// `embObjSkin`: the taxels of a board's skin patches, as `IAnalogSensor` (the
+/// `skinWrapper` splits them into parts).
+#[derive(Default)]
+pub struct EmbObjSkin {
+    c: Common,
+    patches: Vec<Vec<u8>>,
+    taxels: Mutex<Vec<f64>>,
+    last: Mutex<Vec<Option<Vec<u8>>>>,
+}
+
+pub const SKIN: &str = "embObjSkin";
+
+impl EmbObjSkin {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The first taxel of MTB `addr` of patch `p` (C++ `EmbObjSkin::update`: with two
+    /// patches the second one's boards come first).
+    fn board_index(&self, p: usize, addr: u8) -> Option<usize> {
+        let i = self.patches.get(p)?.iter().position(|a| *a == addr)?;
+        Some(if self.patches.len() == 2 && p == 0 {
+            i + self.patches[1].len()
+        } else {
+            i
+        })
+    }
+
+    fn update(&self) -> DevResult<()> {
+        let mut taxels = self.taxels.lock().unwrap_or_else(|e| e.into_inner());
+        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
+        for p in 0..self.patches.len() {
+            let st: icub_eth::entities::skin::SkinStatus = self
+                .c
+                .read(ids::skin(p as u8, tag::SK_SKIN_STATUS_ARRAYOFCANDATA))?;
+            let raw = st.to_bytes();
+            if last.get(p).and_then(|l| l.as_ref()) == Some(&raw) {
+                continue;
+            }
+            for f in &st.frames {
+                let id = f.can_id();
+                if !matches!((id >> 8) & 0xf, 3 | 4) {
+                    continue;
+                }
+                let Some(b) = self.board_index(p, ((id >> 4) & 0xf) as u8) else {
+                    continue;
+                };
+                let base = b * 192 + usize::from(id & 0xf) * 12;
+                let d = f.payload();
+                match d.first() {
+                    Some(0x40) => {
+                        for k in 0..7 {
+                            if let (Some(v), Some(t)) = (d.get(k + 1), taxels.get_mut(base + k)) {
+                                *t = f64::from(*v);
+                            }
+                        }
+                    }
+                    Some(0xC0) => {
+                        for k in 0..5 {
+                            if let (Some(v), Some(t)) = (d.get(k + 1), taxels.get_mut(base + 7 + k))
+                            {
+                                *t = f64::from(*v);
+                            }
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            if last.len() <= p {
+                last.resize(p + 1, None);
+            }
+            last[p] = Some(raw);
+        }
+        Ok(())
+    }
+}
+
+impl DeviceDriver for EmbObjSkin {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let patches = skin_patches(config)
+            .map_err(|e| e.for_device(&config.find("id").map_or_else(|| SKIN.to_string(), text)))?;
+        let n = patches.len();
+        self.c.open(SKIN, config, category::SKIN, |_, st| {
+            let mut configs = Vec::new();
+            let mut regulars = Vec::new();
+            for p in 0..n as u8 {
+                configs.push((
+                    ids::skin(p, tag::SK_SKIN_CONFIG_SIGMODE),
+                    vec![icub_eth::entities::skin::sigmode::SIGNAL],
+                ));
+                regulars.push(ids::skin(p, tag::SK_SKIN_STATUS_ARRAYOFCANDATA));
+            }
+            Ok(SensorService {
+                activate: verify(category::SKIN, st),
+                configs,
+                regulars,
+                after_start: Vec::new(),
+            })
+        })?;
+        let boards: usize = patches.iter().map(Vec::len).sum();
+        self.patches = patches;
+        *self.taxels.lock().unwrap_or_else(|e| e.into_inner()) = vec![0.0; boards * 192];
+        Ok(())
+    }
+    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
+        Some(self)
+    }
+}
+
+impl IAnalogSensor for EmbObjSkin {
+    fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
+        if self.update().is_err() {
+            return AnalogStatus::Timeout;
+        }
+        out.clone_from(&self.taxels.lock().unwrap_or_else(|e| e.into_inner()));
+        AnalogStatus::Ok
+    }
+    fn get_state(&mut self, _ch: usize) -> AnalogStatus {
+        match self.c.status() {
+            MasStatus::Ok => AnalogStatus::Ok,
+            _ => AnalogStatus::Timeout,
+        }
+    }
+    fn get_channels(&mut self) -> usize {
+        self.taxels.lock().unwrap_or_else(|e| e.into_inner()).len()
+    }
+    fn calibrate_sensor(&mut self) -> DevResult<()> {
+        Ok(())
+    }
+}
+
+// ---- embObjPOS ----
+
+/// `embObjPOS`: the position sensors of the hands (FAP encoders, deci-degrees on the
+/// wire). C++ offers them as `IEncoderArrays`, which this framework does not have yet:
+/// the device opens its service and gives the angles through [`EmbObjPos::angles`].
+#[derive(Default)]
+pub struct EmbObjPos {
+    c: Common,
+    names: Vec<String>,
+}
+
+pub const POS: &str = "embObjPOS";
+
+impl EmbObjPos {
+    pub fn new() -> Self {
+        Self::default()
+    }
+    /// The enabled sensors' names.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+    /// The angles (degrees) of the enabled sensors.
+    pub fn angles(&self) -> DevResult<Vec<f64>> {
+        let st: icub_eth::entities::analog::PosStatus =
+            self.c.read(ids::analog(en::AS_POS, 0, tag::AS_XX_STATUS))?;
+        Ok(st
+            .values
+            .iter()
+            .take(self.names.len())
+            .map(|v| f64::from(*v) / 10.0)
+            .collect())
+    }
+}
+
+impl DeviceDriver for EmbObjPos {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let mut names = Vec::new();
+        self.c.open(POS, config, category::POS, |root, st| {
+            let (set, _) = settings(root)?;
+            names = set.strings("enabledSensors").unwrap_or_default();
+            let rate = set.number("acquisitionRate")?.unwrap_or(50.0);
+            let cfg = icub_eth::entities::analog::PosConfig {
+                datarate: rate.clamp(1.0, 255.0) as u8,
+            };
+            Ok(SensorService {
+                activate: verify(category::POS, st),
+                configs: vec![(
+                    ids::analog(en::AS_POS, 0, tag::AS_XX_CONFIG),
+                    cfg.to_bytes(),
+                )],
+                regulars: vec![ids::analog(en::AS_POS, 0, tag::AS_XX_STATUS)],
+                after_start: vec![(
+                    ids::analog(en::AS_POS, 0, tag::AS_XX_CMMNDS_ENABLE),
+                    vec![1],
+                )],
+            })
+        })?;
+        self.names = names;
+        Ok(())
+    }
+}

@@ -1,0 +1,158 @@
+//! What the whole-robot tests share: the device factory with the embObj drivers, an
+//! in-process name server, the emulated boards, our `yarp` program as a child process.
+
+#![allow(dead_code)]
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::AtomicBool;
+use std::sync::{mpsc, Arc};
+use std::time::{Duration, Instant};
+
+use icub_eth_devices::emulator::{robot_boards, serve};
+use icub_eth_devices::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use yarp_devices::robotinterface::{
+    read_robot_file, ActionPhase, DeviceFactory, RegistryFactory, RobotRunner,
+};
+use yarp_devices::{DevResult, PolyDriver};
+use yarp_proto::Property;
+
+pub const T: Duration = Duration::from_secs(30);
+
+pub fn robot_dir(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/robots-configuration")
+        .join(name)
+}
+
+/// The framework's drivers plus the embObj ones.
+pub struct WithEth;
+
+impl DeviceFactory for WithEth {
+    fn knows(&self, kind: &str) -> bool {
+        icub_eth_devices::eth::DRIVERS
+            .iter()
+            .any(|(n, _)| *n == kind)
+            || RegistryFactory.knows(kind)
+    }
+    fn open(&self, config: &Property) -> DevResult<PolyDriver> {
+        let kind = config
+            .find("device")
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
+        match icub_eth_devices::eth::DRIVERS
+            .iter()
+            .find(|(n, _)| *n == kind)
+        {
+            Some((name, make)) => {
+                let mut d = make();
+                d.open(config)?;
+                Ok(PolyDriver::from_driver(name, d))
+            }
+            None => RegistryFactory.open(config),
+        }
+    }
+}
+
+/// The workspace's `yarp` program (same target directory), or `None` after a loud
+/// notice; under CI its absence fails.
+pub fn our_yarp() -> Option<PathBuf> {
+    let exe = std::env::current_exe().ok()?;
+    let p = exe.parent()?.parent()?.join("yarp");
+    if p.is_file() {
+        return Some(p);
+    }
+    assert!(
+        std::env::var("CI").is_err(),
+        "{} not built (cargo build -p yarp-cli)",
+        p.display()
+    );
+    eprintln!(
+        "\n*** SKIPPED: {} not built; run `cargo build -p yarp-cli` ***\n",
+        p.display()
+    );
+    None
+}
+
+/// A child process whose stdout lines arrive on a channel; killed and reaped on drop.
+pub struct Peer {
+    pub child: Child,
+    pub lines: mpsc::Receiver<String>,
+}
+
+impl Peer {
+    pub fn spawn(mut cmd: Command) -> Peer {
+        let mut child = cmd
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn");
+        let out = child.stdout.take().unwrap();
+        let (tx, lines) = mpsc::channel();
+        std::thread::spawn(move || {
+            for l in BufReader::new(out).lines().map_while(Result::ok) {
+                if tx.send(l).is_err() {
+                    break;
+                }
+            }
+        });
+        Peer { child, lines }
+    }
+    pub fn line(&self, timeout: Duration) -> Option<String> {
+        self.lines.recv_timeout(timeout).ok()
+    }
+}
+
+impl Drop for Peer {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+pub fn start_name_server() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().expect("temp dir");
+    std::env::set_var("YARP_CONFIG_HOME", dir.path());
+    let addr = yarp_devices::runtime::block_on(async {
+        let ns = yarp_interop_tests::bind_name_server().await;
+        let addr = ns.local_addr();
+        tokio::spawn(ns.serve());
+        addr
+    });
+    yarp_net::network::write_conf("127.0.0.1", addr.port()).expect("write yarp.conf");
+    dir
+}
+
+/// A robot of robots-configuration, unmodified, brought up by the robot-interface runner
+/// (keep-going: what does not open is named) against its emulated boards, served at the
+/// robot's addresses through `map`; returns the runner and the guards to keep.
+pub fn bring_up(dir: &Path, top: &Path, map: &str) -> (RobotRunner, tempfile::TempDir) {
+    std::env::set_var(ADDRESS_MAP_ENV, map);
+    let specs = robot_boards(dir, Some(top)).expect("robot boards");
+    let (_served, _threads) = serve(
+        specs,
+        &AddressMap::parse(map).unwrap(),
+        Arc::new(AtomicBool::new(false)),
+    )
+    .expect("the emulator binds its addresses");
+    let conf = start_name_server();
+    let robot = read_robot_file(top, &Property::default())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .robot;
+    let mut runner = RobotRunner::with_factory(robot, Box::new(WithEth));
+    runner.set_keep_going(true);
+    eprintln!(
+        "device types this build lacks: {:?}",
+        runner.unavailable_devices()
+    );
+    let start = Instant::now();
+    runner
+        .enter_phase(ActionPhase::Startup)
+        .unwrap_or_else(|e| panic!("{e}"));
+    eprintln!("startup (open, attach, calibrate): {:?}", start.elapsed());
+    eprintln!("given up at start-up: {:?}", runner.failures());
+    runner.enter_phase(ActionPhase::Run).unwrap();
+    (runner, conf)
+}
