@@ -48,6 +48,9 @@ pub struct BoardSpec {
     pub inertials: Vec<u8>,
     /// The MTB addresses of each skin patch.
     pub skin_patches: Vec<Vec<u8>>,
+    /// The protocol versions the board announces (management, motion control, analog
+    /// sensors, skin); `None`: those of the host (a board with matching firmware).
+    pub protocol: Option<[icub_eth::entities::mn::Version; 4]>,
     /// The devices that use the board (for the start-up listing).
     pub users: Vec<String>,
 }
@@ -67,6 +70,7 @@ impl BoardSpec {
             skins: 0,
             inertials: Vec::new(),
             skin_patches: Vec::new(),
+            protocol: None,
             users: Vec::new(),
         }
     }
@@ -84,6 +88,9 @@ impl BoardSpec {
         c.batteries = self.batteries;
         c.skins = self.skins;
         c.max_rx_packet = p.max_rx_packet;
+        if let Some(v) = self.protocol {
+            c.protocol = v;
+        }
         c
     }
 }
