@@ -394,8 +394,14 @@ fn run_board(socket: UdpSocket, mut engine: BoardEngine, spec: BoardSpec, stop: 
                 tracing::debug!(board = %spec.params.who(), "dropped a datagram: {e}");
             }
         }
+        // The control loop runs once per regulars period (what the host sees of it), at
+        // least every 5 ms: the status streams as often as on the board, at a fraction of
+        // the CPU of a 1 kHz loop.
         let dt = last_step.elapsed();
-        if dt >= Duration::from_millis(1) {
+        let every = engine
+            .regular_period()
+            .clamp(Duration::from_millis(1), Duration::from_millis(5));
+        if dt >= every {
             last_step = Instant::now();
             engine.step(dt.as_secs_f64());
             let now = epoch.elapsed();

@@ -48,6 +48,10 @@ struct Inner {
     host: HostTransceiver,
     /// When the board's last datagram arrived.
     last_rx: Option<Instant>,
+    /// Datagrams received and the longest silence between two of them since
+    /// [`Board::reset_rx_stats`].
+    rx_count: u64,
+    max_gap: Duration,
     bring_up: BringUp,
     last_missing_report: Option<Instant>,
 }
@@ -293,6 +297,19 @@ impl Board {
         })
     }
 
+    /// Datagrams received and the longest gap between two since the last reset, with the
+    /// host's counters (sequence gaps, bad frames, timeouts).
+    pub fn rx_stats(&self) -> (u64, Duration, icub_eth::host::HostCounters) {
+        let inner = self.lock();
+        (inner.rx_count, inner.max_gap, inner.host.counters())
+    }
+
+    pub fn reset_rx_stats(&self) {
+        let mut inner = self.lock();
+        inner.rx_count = 0;
+        inner.max_gap = Duration::ZERO;
+    }
+
     /// Whether the board is currently reported silent.
     pub fn is_lost(&self) -> bool {
         self.lock().host.board_lost()
@@ -302,7 +319,12 @@ impl Board {
     fn on_datagram(&self, d: &[u8]) {
         let mut inner = self.lock();
         let now = self.now();
-        inner.last_rx = Some(Instant::now());
+        let at = Instant::now();
+        if let Some(prev) = inner.last_rx {
+            inner.max_gap = inner.max_gap.max(at - prev);
+        }
+        inner.last_rx = Some(at);
+        inner.rx_count += 1;
         let _ = inner.host.handle_datagram(d, now);
         self.events(&mut inner);
         drop(inner);
@@ -390,6 +412,7 @@ impl EthManager {
                 super::params::ADDRESS_MAP_ENV
             ),
         })?;
+        enlarge_receive_buffer(&socket);
         socket
             .set_read_timeout(Some(TICK))
             .map_err(|e| EthError::Board {
@@ -437,6 +460,8 @@ impl EthManager {
                         host: HostTransceiver::new(cfg),
                         bring_up: BringUp::NotYet,
                         last_rx: None,
+                        rx_count: 0,
+                        max_gap: Duration::ZERO,
                         last_missing_report: None,
                     }),
                     changed: Condvar::new(),
@@ -455,13 +480,43 @@ impl EthManager {
             .cloned()
     }
 
-    fn all_boards(&self) -> Vec<Arc<Board>> {
+    /// The process's manager, if a device has created it.
+    pub fn current() -> Option<Arc<EthManager>> {
+        manager_slot()
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
+    }
+
+    /// Every board in use.
+    pub fn all_boards(&self) -> Vec<Arc<Board>> {
         self.boards
             .lock()
             .unwrap_or_else(|e| e.into_inner())
             .values()
             .cloned()
             .collect()
+    }
+}
+
+/// Every board streams to this one socket (17 boards at 200 datagrams/s each on an
+/// ergoCub): a large receive buffer rides out moments when the reader is not scheduled.
+fn enlarge_receive_buffer(socket: &UdpSocket) {
+    use std::os::fd::AsRawFd;
+    let size: libc::c_int = 8 << 20;
+    // SAFETY: setsockopt on a socket we own, with a valid pointer to an int of the
+    // size given; failure only leaves the default size.
+    let rc = unsafe {
+        libc::setsockopt(
+            socket.as_raw_fd(),
+            libc::SOL_SOCKET,
+            libc::SO_RCVBUF,
+            (&size as *const libc::c_int).cast(),
+            std::mem::size_of::<libc::c_int>() as libc::socklen_t,
+        )
+    };
+    if rc != 0 {
+        tracing::debug!("SO_RCVBUF not enlarged: {}", std::io::Error::last_os_error());
     }
 }
 

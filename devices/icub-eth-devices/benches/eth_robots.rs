@@ -1,0 +1,191 @@
+//! Whole-robot figures of the Ethernet robots (a bench program, not a timed test):
+//! iCubGenova02 and ergoCubSN001, unmodified, brought up by the robot-interface runner
+//! against `icub-eth-emulator`'s boards in the same process (so the process's CPU time is
+//! the robot's and the emulator's together), at the rates of their files.
+//!
+//!   ../shared/netns-run cargo bench -p icub-eth-devices --bench eth_robots [-- SECONDS]
+//!
+//! For each robot (one child process each, since the host socket is per process): the
+//! start-up time (open, attach, calibrate every part), the CPU over SECONDS (default 20)
+//! of running, as a share of one core, the command-to-encoder latency (position command
+//! on the left arm's remapper until its encoder moves, median of 20), and the boards'
+//! status streams: datagrams, the longest gap between two, sequence gaps.
+
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use icub_eth_devices::emulator::{robot_boards, serve};
+use icub_eth_devices::eth::manager::EthManager;
+use icub_eth_devices::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use yarp_devices::robotinterface::{
+    read_robot_file, ActionPhase, DeviceFactory, RegistryFactory, RobotRunner,
+};
+use yarp_devices::vocabs::CM_POSITION;
+use yarp_devices::{DevResult, PolyDriver};
+use yarp_proto::Property;
+
+struct WithEth;
+
+impl DeviceFactory for WithEth {
+    fn knows(&self, kind: &str) -> bool {
+        icub_eth_devices::eth::DRIVERS.iter().any(|(n, _)| *n == kind)
+            || RegistryFactory.knows(kind)
+    }
+    fn open(&self, config: &Property) -> DevResult<PolyDriver> {
+        let kind = config
+            .find("device")
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
+        match icub_eth_devices::eth::DRIVERS.iter().find(|(n, _)| *n == kind) {
+            Some((name, make)) => {
+                let mut d = make();
+                d.open(config)?;
+                Ok(PolyDriver::from_driver(name, d))
+            }
+            None => RegistryFactory.open(config),
+        }
+    }
+}
+
+/// User + system CPU time of this process, s.
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let after = stat.rsplit(')').next().unwrap_or("");
+    let f: Vec<&str> = after.split_whitespace().collect();
+    let tick = 100.0; // USER_HZ on Linux
+    let ut: f64 = f.get(11).and_then(|v| v.parse().ok()).unwrap_or(0.0);
+    let st: f64 = f.get(12).and_then(|v| v.parse().ok()).unwrap_or(0.0);
+    (ut + st) / tick
+}
+
+fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
+    let map = "10.0.1.0/24=127.0.5.0/24";
+    std::env::set_var(ADDRESS_MAP_ENV, map);
+    let conf = tempfile::tempdir().unwrap();
+    std::env::set_var("YARP_CONFIG_HOME", conf.path());
+    let addr = yarp_devices::runtime::block_on(async {
+        let ns = yarp_interop_tests::bind_name_server().await;
+        let addr = ns.local_addr();
+        tokio::spawn(ns.serve());
+        addr
+    });
+    yarp_net::network::write_conf("127.0.0.1", addr.port()).unwrap();
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/robots-configuration")
+        .join(robot);
+    let top = dir.join(xml);
+    let specs = robot_boards(&dir, Some(&top)).unwrap();
+    let boards = specs.len();
+    let (_s, _t) = serve(
+        specs,
+        &AddressMap::parse(map).unwrap(),
+        Arc::new(AtomicBool::new(false)),
+    )
+    .unwrap();
+    let r = read_robot_file(&top, &Property::default()).unwrap().robot;
+    let mut runner = RobotRunner::with_factory(r, Box::new(WithEth));
+    runner.set_keep_going(true);
+    let t0 = Instant::now();
+    runner.enter_phase(ActionPhase::Startup).unwrap();
+    let startup = t0.elapsed();
+    runner.enter_phase(ActionPhase::Run).unwrap();
+    for f in runner.failures() {
+        eprintln!("start-up failure: {f}");
+    }
+
+    let mgr = EthManager::current().expect("the embObj devices made the manager");
+    for b in mgr.all_boards() {
+        b.reset_rx_stats();
+    }
+    let c0 = cpu_seconds();
+    let w0 = Instant::now();
+    std::thread::sleep(Duration::from_secs(seconds));
+    let cpu = (cpu_seconds() - c0) / w0.elapsed().as_secs_f64();
+    let mut worst = (Duration::ZERO, String::new());
+    let (mut frames, mut seq_gaps) = (0u64, 0u64);
+    for b in mgr.all_boards() {
+        let (n, gap, c) = b.rx_stats();
+        eprintln!("board {}: {n} datagrams, max gap {gap:?}, {c:?}", b.who());
+        frames += n;
+        seq_gaps += c.sequence_gaps;
+        if gap > worst.0 {
+            worst = (gap, format!("{} (period {:?})", b.who(), b.params().regulars_period()));
+        }
+    }
+
+    let dev = runner.device(part).expect(part);
+    {
+        let mut pd = dev.lock().unwrap();
+        let d = pd.device();
+        eprintln!("probe mode {:?}", d.as_control_mode().unwrap().get_control_mode(joint));
+        eprintln!("probe done {:?}", d.as_position_control().unwrap().check_motion_done(joint));
+        eprintln!("probe done0 {:?}", d.as_position_control().unwrap().check_motion_done(0));
+        for j in 0..16 {
+            let t = Instant::now();
+            eprintln!("probe set mode {j} {:?} {:?}", d.as_control_mode().unwrap().set_control_mode(j, CM_POSITION), t.elapsed());
+        }
+    }
+    let mut lat = Vec::new();
+    for k in 0..20 {
+        let mut pd = dev.lock().unwrap();
+        let d = pd.device();
+        d.as_control_mode().unwrap().set_control_mode(joint, CM_POSITION).unwrap();
+        let q = d.as_encoders().unwrap().get_encoder(joint).unwrap();
+        let target = q + if k % 2 == 0 { 5.0 } else { -5.0 };
+        d.as_position_control().unwrap().set_ref_speed(joint, 100.0).unwrap();
+        let t = Instant::now();
+        d.as_position_control().unwrap().position_move(joint, target).unwrap();
+        while (d.as_encoders().unwrap().get_encoder(joint).unwrap() - q).abs() < 0.01 {
+            assert!(t.elapsed() < Duration::from_secs(5), "joint does not move");
+            std::thread::sleep(Duration::from_micros(200));
+        }
+        lat.push(t.elapsed());
+        drop(pd);
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    lat.sort();
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    println!(
+        "{robot}: {boards} boards; startup {:.1} s; CPU {:.1} % of one core over {seconds} s (robot + emulator); \
+         command-to-encoder median {:.1} ms (min {:.1}, max {:.1}); {frames} status datagrams, \
+         longest gap {:.1} ms at {}, {seq_gaps} sequence gaps; failures at start-up: {}; loadavg {}",
+        startup.as_secs_f64(),
+        cpu * 100.0,
+        lat[lat.len() / 2].as_secs_f64() * 1e3,
+        lat[0].as_secs_f64() * 1e3,
+        lat[lat.len() - 1].as_secs_f64() * 1e3,
+        worst.0.as_secs_f64() * 1e3,
+        worst.1,
+        runner.failures().len(),
+        load.trim()
+    );
+    let _ = runner.enter_phase(ActionPhase::Interrupt1);
+    let _ = runner.enter_phase(ActionPhase::Shutdown);
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(i) = args.iter().position(|a| a == "--robot") {
+        let seconds = args.get(i + 2).and_then(|s| s.parse().ok()).unwrap_or(20);
+        match args[i + 1].as_str() {
+            "iCubGenova02" => run("iCubGenova02", "icub_all.xml", "left_arm-mc_remapper", 3, seconds),
+            _ => run("ergoCubSN001", "ergocub.xml", "left_arm-mc_remapper", 1, seconds),
+        }
+        return;
+    }
+    let seconds = args
+        .iter()
+        .skip(1)
+        .find_map(|a| a.parse::<u64>().ok())
+        .unwrap_or(20);
+    for robot in ["iCubGenova02", "ergoCubSN001"] {
+        let status = std::process::Command::new(std::env::current_exe().unwrap())
+            .args(["--robot", robot, &seconds.to_string()])
+            .env("RUST_LOG", "error")
+            .status()
+            .expect("run the bench child");
+        assert!(status.success(), "{robot}: {status}");
+    }
+}
