@@ -30,7 +30,9 @@ struct WithEth;
 
 impl DeviceFactory for WithEth {
     fn knows(&self, kind: &str) -> bool {
-        icub_eth_devices::eth::DRIVERS.iter().any(|(n, _)| *n == kind)
+        icub_eth_devices::eth::DRIVERS
+            .iter()
+            .any(|(n, _)| *n == kind)
             || RegistryFactory.knows(kind)
     }
     fn open(&self, config: &Property) -> DevResult<PolyDriver> {
@@ -38,7 +40,10 @@ impl DeviceFactory for WithEth {
             .find("device")
             .and_then(|v| v.as_str().map(str::to_string))
             .unwrap_or_default();
-        match icub_eth_devices::eth::DRIVERS.iter().find(|(n, _)| *n == kind) {
+        match icub_eth_devices::eth::DRIVERS
+            .iter()
+            .find(|(n, _)| *n == kind)
+        {
             Some((name, make)) => {
                 let mut d = make();
                 d.open(config)?;
@@ -107,36 +112,36 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
     let (mut frames, mut seq_gaps) = (0u64, 0u64);
     for b in mgr.all_boards() {
         let (n, gap, c) = b.rx_stats();
-        eprintln!("board {}: {n} datagrams, max gap {gap:?}, {c:?}", b.who());
         frames += n;
         seq_gaps += c.sequence_gaps;
         if gap > worst.0 {
-            worst = (gap, format!("{} (period {:?})", b.who(), b.params().regulars_period()));
+            worst = (
+                gap,
+                format!("{} (period {:?})", b.who(), b.params().regulars_period()),
+            );
         }
     }
 
     let dev = runner.device(part).expect(part);
-    {
-        let mut pd = dev.lock().unwrap();
-        let d = pd.device();
-        eprintln!("probe mode {:?}", d.as_control_mode().unwrap().get_control_mode(joint));
-        eprintln!("probe done {:?}", d.as_position_control().unwrap().check_motion_done(joint));
-        eprintln!("probe done0 {:?}", d.as_position_control().unwrap().check_motion_done(0));
-        for j in 0..16 {
-            let t = Instant::now();
-            eprintln!("probe set mode {j} {:?} {:?}", d.as_control_mode().unwrap().set_control_mode(j, CM_POSITION), t.elapsed());
-        }
-    }
     let mut lat = Vec::new();
     for k in 0..20 {
         let mut pd = dev.lock().unwrap();
         let d = pd.device();
-        d.as_control_mode().unwrap().set_control_mode(joint, CM_POSITION).unwrap();
+        d.as_control_mode()
+            .unwrap()
+            .set_control_mode(joint, CM_POSITION)
+            .unwrap();
         let q = d.as_encoders().unwrap().get_encoder(joint).unwrap();
         let target = q + if k % 2 == 0 { 5.0 } else { -5.0 };
-        d.as_position_control().unwrap().set_ref_speed(joint, 100.0).unwrap();
+        d.as_position_control()
+            .unwrap()
+            .set_ref_speed(joint, 100.0)
+            .unwrap();
         let t = Instant::now();
-        d.as_position_control().unwrap().position_move(joint, target).unwrap();
+        d.as_position_control()
+            .unwrap()
+            .position_move(joint, target)
+            .unwrap();
         while (d.as_encoders().unwrap().get_encoder(joint).unwrap() - q).abs() < 0.01 {
             assert!(t.elapsed() < Duration::from_secs(5), "joint does not move");
             std::thread::sleep(Duration::from_micros(200));
@@ -170,8 +175,20 @@ fn main() {
     if let Some(i) = args.iter().position(|a| a == "--robot") {
         let seconds = args.get(i + 2).and_then(|s| s.parse().ok()).unwrap_or(20);
         match args[i + 1].as_str() {
-            "iCubGenova02" => run("iCubGenova02", "icub_all.xml", "left_arm-mc_remapper", 3, seconds),
-            _ => run("ergoCubSN001", "ergocub.xml", "left_arm-mc_remapper", 1, seconds),
+            "iCubGenova02" => run(
+                "iCubGenova02",
+                "icub_all.xml",
+                "left_arm-mc_remapper",
+                3,
+                seconds,
+            ),
+            _ => run(
+                "ergoCubSN001",
+                "ergocub.xml",
+                "left_arm-mc_remapper",
+                1,
+                seconds,
+            ),
         }
         return;
     }

@@ -88,6 +88,10 @@ impl BoardSpec {
         c.batteries = self.batteries;
         c.skins = self.skins;
         c.max_rx_packet = p.max_rx_packet;
+        // Every board's regulars in one datagram: the board engine of icub-eth resends
+        // the first frame of regulars that need two (its poll_transmit restarts them), so
+        // the largest boards (12 joints, MAIS and skin) would flood the host otherwise.
+        c.max_tx_packet = 60_000;
         if let Some(v) = self.protocol {
             c.protocol = v;
         }

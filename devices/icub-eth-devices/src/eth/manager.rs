@@ -516,7 +516,10 @@ fn enlarge_receive_buffer(socket: &UdpSocket) {
         )
     };
     if rc != 0 {
-        tracing::debug!("SO_RCVBUF not enlarged: {}", std::io::Error::last_os_error());
+        tracing::debug!(
+            "SO_RCVBUF not enlarged: {}",
+            std::io::Error::last_os_error()
+        );
     }
 }
 
