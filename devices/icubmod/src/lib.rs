@@ -29,6 +29,7 @@ pub mod boards;
 pub mod calibrator;
 pub mod cartesian;
 pub mod common;
+pub mod eth;
 pub mod imu_filter;
 pub mod inertial;
 pub mod motion_control;
@@ -79,4 +80,5 @@ pub const DRIVERS: &[(&str, Factory)] = &[
 /// Adds the iCub drivers to `registry` (`Registry::install(icubmod::register)`).
 pub fn register(registry: &mut Registry) {
     registry.add(PROVIDER, DRIVERS);
+    registry.add(PROVIDER, eth::DRIVERS);
 }

@@ -22,7 +22,7 @@ pub fn package_of(program: &str) -> &'static str {
         "yarpserver" => "yarp-net",
         "yarpdev" | "yarprobotinterface" => "yarp-device-programs",
         "yarp-ros2-gateway" => "yarp-ros2-gateway",
-        "icub-board-emulator" => "icub-emulators",
+        "icub-board-emulator" | "icub-eth-emulator" => "icub-emulators",
         "yarp-launch" => "yarp-launch",
         _ => "<package>",
     }

@@ -27,8 +27,8 @@ use icub_eth::plant::{JointModel, SimpleJoint};
 use yarp_devices::robotinterface::read_robot_str;
 use yarp_proto::Property;
 
-use crate::eth::config::Node;
-use crate::eth::params::{read_eth_board, AddressMap, EthBoardParams};
+use icubmod::eth::config::Node;
+use icubmod::eth::params::{read_eth_board, AddressMap, EthBoardParams};
 
 /// What one emulated board carries.
 #[derive(Debug, Clone)]
@@ -207,12 +207,12 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
             "embObjMais" => b.maises = 1,
             "embObjIMU" | "embObjInertials" => {
                 b.inertials3 = 1;
-                match crate::eth::sensors::inertial_sensors(&cfg) {
+                match icubmod::eth::sensors::inertial_sensors(&cfg) {
                     Ok(list) => b.inertials = list.iter().map(|s| s.kind).collect(),
                     Err(e) => tracing::warn!("device {}: {e}", dev.name),
                 }
             }
-            "embObjSkin" => match crate::eth::sensors::skin_patches(&cfg) {
+            "embObjSkin" => match icubmod::eth::sensors::skin_patches(&cfg) {
                 Ok(p) => {
                     b.skins = p.len() as u8;
                     b.skin_patches = p;
@@ -230,7 +230,7 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
 /// Writes the sensors' values of a board (slowly varying, so that streams visibly
 /// change).
 fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u64, tick: u64) {
-    use crate::eth::sensors::sensor_type as st;
+    use icubmod::eth::sensors::sensor_type as st;
     let s = (t * 0.5).sin();
     let store = engine.store_mut();
     if spec.strains > 0 {
@@ -280,7 +280,7 @@ fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u6
                 let (a, t, second) = all[(start + k) % all.len()];
                 let head = if second { 0xC0 } else { 0x40 };
                 icub_eth::entities::skin::SkinCanData::new(
-                    crate::eth::sensors::skin_can_id(a, t),
+                    icubmod::eth::sensors::skin_can_id(a, t),
                     &[head, level, level, level, level, level, level, level],
                 )
             })

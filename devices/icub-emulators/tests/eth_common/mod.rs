@@ -1,4 +1,4 @@
-//! What the whole-robot tests share: the device factory with the embObj drivers, an
+//! What the whole-robot tests share: the drivers yarprobotinterface registers, an
 //! in-process name server, the emulated boards, our `yarp` program as a child process.
 
 #![allow(dead_code)]
@@ -10,12 +10,9 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
-use icub_eth_devices::emulator::{robot_boards, serve};
-use icub_eth_devices::eth::params::{AddressMap, ADDRESS_MAP_ENV};
-use yarp_devices::robotinterface::{
-    read_robot_file, ActionPhase, DeviceFactory, RegistryFactory, RobotRunner,
-};
-use yarp_devices::{DevResult, PolyDriver};
+use icub_emulators::eth::{robot_boards, serve};
+use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use yarp_devices::robotinterface::{read_robot_file, ActionPhase, RobotRunner};
 use yarp_proto::Property;
 
 pub const T: Duration = Duration::from_secs(30);
@@ -24,35 +21,6 @@ pub fn robot_dir(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/robots-configuration")
         .join(name)
-}
-
-/// The framework's drivers plus the embObj ones.
-pub struct WithEth;
-
-impl DeviceFactory for WithEth {
-    fn knows(&self, kind: &str) -> bool {
-        icub_eth_devices::eth::DRIVERS
-            .iter()
-            .any(|(n, _)| *n == kind)
-            || RegistryFactory.knows(kind)
-    }
-    fn open(&self, config: &Property) -> DevResult<PolyDriver> {
-        let kind = config
-            .find("device")
-            .and_then(|v| v.as_str().map(str::to_string))
-            .unwrap_or_default();
-        match icub_eth_devices::eth::DRIVERS
-            .iter()
-            .find(|(n, _)| *n == kind)
-        {
-            Some((name, make)) => {
-                let mut d = make();
-                d.open(config)?;
-                Ok(PolyDriver::from_driver(name, d))
-            }
-            None => RegistryFactory.open(config),
-        }
-    }
 }
 
 /// The workspace's `yarp` program (same target directory), or `None` after a loud
@@ -141,7 +109,9 @@ pub fn bring_up(dir: &Path, top: &Path, map: &str) -> (RobotRunner, tempfile::Te
     let robot = read_robot_file(top, &Property::default())
         .unwrap_or_else(|e| panic!("{e}"))
         .robot;
-    let mut runner = RobotRunner::with_factory(robot, Box::new(WithEth));
+    // What yarprobotinterface registers: the framework's drivers and icubmod's.
+    yarp_devices::Registry::install(icubmod::register);
+    let mut runner = RobotRunner::new(robot);
     runner.set_keep_going(true);
     eprintln!(
         "device types this build lacks: {:?}",

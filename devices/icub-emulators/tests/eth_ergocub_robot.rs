@@ -5,13 +5,13 @@
 //! `set pos` on `/ergocub/left_arm/rpc:i` moves the shoulder roll on `state:o`; our `yarp read`
 //! receives the left arm's F/T and IMU streams.
 
-mod common;
+mod eth_common;
 
 use std::io::Write;
 use std::process::Command;
 use std::time::Instant;
 
-use common::{bring_up, our_yarp, robot_dir, Peer, T};
+use eth_common::{bring_up, our_yarp, robot_dir, Peer, T};
 use yarp_devices::robotinterface::ActionPhase;
 use yarp_net::blocking::{BufferedPort, Network};
 

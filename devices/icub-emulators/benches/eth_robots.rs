@@ -3,7 +3,7 @@
 //! against `icub-eth-emulator`'s boards in the same process (so the process's CPU time is
 //! the robot's and the emulator's together), at the rates of their files.
 //!
-//!   ../shared/netns-run cargo bench -p icub-eth-devices --bench eth_robots [-- SECONDS]
+//!   ../shared/netns-run cargo bench -p icub-emulators --bench eth_robots [-- SECONDS]
 //!
 //! For each robot (one child process each, since the host socket is per process): the
 //! start-up time (open, attach, calibrate every part), the CPU over SECONDS (default 20)
@@ -16,43 +16,12 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use icub_eth_devices::emulator::{robot_boards, serve};
-use icub_eth_devices::eth::manager::EthManager;
-use icub_eth_devices::eth::params::{AddressMap, ADDRESS_MAP_ENV};
-use yarp_devices::robotinterface::{
-    read_robot_file, ActionPhase, DeviceFactory, RegistryFactory, RobotRunner,
-};
+use icub_emulators::eth::{robot_boards, serve};
+use icubmod::eth::manager::EthManager;
+use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use yarp_devices::robotinterface::{read_robot_file, ActionPhase, RobotRunner};
 use yarp_devices::vocabs::CM_POSITION;
-use yarp_devices::{DevResult, PolyDriver};
 use yarp_proto::Property;
-
-struct WithEth;
-
-impl DeviceFactory for WithEth {
-    fn knows(&self, kind: &str) -> bool {
-        icub_eth_devices::eth::DRIVERS
-            .iter()
-            .any(|(n, _)| *n == kind)
-            || RegistryFactory.knows(kind)
-    }
-    fn open(&self, config: &Property) -> DevResult<PolyDriver> {
-        let kind = config
-            .find("device")
-            .and_then(|v| v.as_str().map(str::to_string))
-            .unwrap_or_default();
-        match icub_eth_devices::eth::DRIVERS
-            .iter()
-            .find(|(n, _)| *n == kind)
-        {
-            Some((name, make)) => {
-                let mut d = make();
-                d.open(config)?;
-                Ok(PolyDriver::from_driver(name, d))
-            }
-            None => RegistryFactory.open(config),
-        }
-    }
-}
 
 /// User + system CPU time of this process, s.
 fn cpu_seconds() -> f64 {
@@ -90,7 +59,8 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
     )
     .unwrap();
     let r = read_robot_file(&top, &Property::default()).unwrap().robot;
-    let mut runner = RobotRunner::with_factory(r, Box::new(WithEth));
+    yarp_devices::Registry::install(icubmod::register);
+    let mut runner = RobotRunner::new(r);
     runner.set_keep_going(true);
     let t0 = Instant::now();
     runner.enter_phase(ActionPhase::Startup).unwrap();

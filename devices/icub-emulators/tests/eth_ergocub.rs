@@ -8,9 +8,9 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use icub_eth_devices::emulator::{robot_boards, serve};
-use icub_eth_devices::eth::params::{AddressMap, ADDRESS_MAP_ENV};
-use icub_eth_devices::eth::{EmbObjImu, EmbObjMotionControl, EmbObjMultipleFtSensors};
+use icub_emulators::eth::{robot_boards, serve};
+use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use icubmod::eth::{EmbObjImu, EmbObjMotionControl, EmbObjMultipleFtSensors};
 use yarp_devices::robotinterface::read_robot_file;
 use yarp_devices::vocabs::CM_POSITION;
 use yarp_devices::DeviceDriver;

@@ -7,13 +7,13 @@
 //! `/icub/left_arm/state:o`; our `yarp read` receives the left arm's F/T stream; the
 //! Ctrl-C phases park the arms and close everything.
 
-mod common;
+mod eth_common;
 
 use std::io::Write;
 use std::process::Command;
 use std::time::Instant;
 
-use common::{bring_up, our_yarp, robot_dir, Peer, T};
+use eth_common::{bring_up, our_yarp, robot_dir, Peer, T};
 use yarp_devices::robotinterface::ActionPhase;
 use yarp_net::blocking::{BufferedPort, Network};
 

@@ -8,8 +8,8 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use icub_eth_devices::emulator::{robot_boards, serve};
-use icub_eth_devices::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use icub_emulators::eth::{robot_boards, serve};
+use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
 
 fn usage() -> ! {
     eprintln!(

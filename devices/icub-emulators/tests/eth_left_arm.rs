@@ -12,9 +12,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use icub_eth_devices::emulator::{robot_boards, serve};
-use icub_eth_devices::eth::params::{AddressMap, ADDRESS_MAP_ENV};
-use icub_eth_devices::eth::{EmbObjFtSensor, EmbObjMais, EmbObjMotionControl};
+use icub_emulators::eth::{robot_boards, serve};
+use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use icubmod::eth::{EmbObjFtSensor, EmbObjMais, EmbObjMotionControl};
 use yarp_devices::interfaces::CalibrationParameters;
 use yarp_devices::robotinterface::read_robot_file;
 use yarp_devices::vocabs::{CM_IDLE, CM_POSITION};
