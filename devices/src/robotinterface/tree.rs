@@ -235,6 +235,25 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_declaration_after_blank_lines_is_accepted_and_lines_kept() {
+        // ergoCubSN001's hardware/FT/*-strain.xml start with an empty line.
+        let doc = load_str(
+            "\n<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<robot name=\"r\">\n  <x/>\n</robot>\n",
+            "t.xml",
+            Path::new("."),
+        )
+        .unwrap();
+        assert_eq!(doc.root.at.line, 3);
+        let e = load_str(
+            "\n<?xml version=\"1.0\"?>\n<robot>\n<a></b>\n</robot>",
+            "t.xml",
+            Path::new("."),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains(":4"), "{e}");
+    }
+
+    #[test]
     fn condenses_like_tinyxml() {
         assert_eq!(condense("  1 \n\t 2   3 \n"), "1 2 3");
         assert_eq!(condense(" \n "), "");

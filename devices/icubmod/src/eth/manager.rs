@@ -54,6 +54,7 @@ struct Inner {
     max_gap: Duration,
     bring_up: BringUp,
     last_missing_report: Option<Instant>,
+    last_lost_report: Option<Instant>,
 }
 
 /// One Ethernet board of the robot.
@@ -337,17 +338,19 @@ impl Board {
         inner.host.handle_timeout(now);
         self.events(&mut inner);
         self.flush(&mut inner);
-        if inner.host.board_lost() {
+        // A board silent past the point where its values are refused is an error, once
+        // per `periodOfMissingReport` while it lasts.
+        let silent = inner.last_rx.map(|t| t.elapsed());
+        if silent.is_some_and(|s| s > self.stale_after()) {
             let due = inner
                 .last_missing_report
                 .is_none_or(|t| t.elapsed() >= self.params.missing_report_period);
-            if due && inner.last_missing_report.is_some() {
-                tracing::error!(
-                    "eth::EthMonitorPresence: BOARD {} is still silent",
-                    self.who()
-                );
-            }
             if due {
+                tracing::error!(
+                    "eth::EthMonitorPresence: BOARD {} has been silent for {:.3} sec: its values are refused until it talks again",
+                    self.who(),
+                    silent.unwrap_or_default().as_secs_f64()
+                );
                 inner.last_missing_report = Some(Instant::now());
             }
         } else {
@@ -357,12 +360,24 @@ impl Board {
         self.changed.notify_all();
     }
 
+    /// The presence monitor's reports (C++ prints them as debug messages): a board lost
+    /// for its timeout is a warning at most once per `periodOfMissingReport`, so that a
+    /// loaded host's short gaps do not flood the log; a long silence is an error (above).
     fn events(&self, inner: &mut Inner) {
         let cfg = inner.host.config().clone();
         while let Some(ev) = inner.host.poll_event() {
             match &ev {
-                HostEvent::BoardLost { .. } => tracing::error!("{}", ev.describe(&cfg)),
-                HostEvent::BoardRecovered { .. } => tracing::warn!("{}", ev.describe(&cfg)),
+                HostEvent::BoardLost { .. } => {
+                    let due = inner
+                        .last_lost_report
+                        .is_none_or(|t| t.elapsed() >= self.params.missing_report_period);
+                    if due {
+                        inner.last_lost_report = Some(Instant::now());
+                        tracing::warn!("{}", ev.describe(&cfg));
+                    } else {
+                        tracing::debug!("{}", ev.describe(&cfg));
+                    }
+                }
                 HostEvent::Signal(_) => {}
                 _ => tracing::debug!("{}", ev.describe(&cfg)),
             }
@@ -463,6 +478,7 @@ impl EthManager {
                         rx_count: 0,
                         max_gap: Duration::ZERO,
                         last_missing_report: None,
+                        last_lost_report: None,
                     }),
                     changed: Condvar::new(),
                     bring_up_lock: Mutex::new(()),
