@@ -94,38 +94,42 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
 
     let dev = runner.device(part).expect(part);
     let mut lat = Vec::new();
+    let mut missed = 0;
     for k in 0..20 {
         let mut pd = dev.lock().unwrap();
         let d = pd.device();
-        d.as_control_mode()
-            .unwrap()
-            .set_control_mode(joint, CM_POSITION)
-            .unwrap();
-        let q = d.as_encoders().unwrap().get_encoder(joint).unwrap();
-        let target = q + if k % 2 == 0 { 5.0 } else { -5.0 };
-        d.as_position_control()
-            .unwrap()
-            .set_ref_speed(joint, 100.0)
-            .unwrap();
-        let t = Instant::now();
-        d.as_position_control()
-            .unwrap()
-            .position_move(joint, target)
-            .unwrap();
-        while (d.as_encoders().unwrap().get_encoder(joint).unwrap() - q).abs() < 0.01 {
-            assert!(t.elapsed() < Duration::from_secs(5), "joint does not move");
-            std::thread::sleep(Duration::from_micros(200));
+        let step = |d: &mut dyn yarp_devices::DeviceDriver| -> yarp_devices::DevResult<Duration> {
+            d.as_control_mode().unwrap().set_control_mode(joint, CM_POSITION)?;
+            let q = d.as_encoders().unwrap().get_encoder(joint)?;
+            let target = q + if k % 2 == 0 { 5.0 } else { -5.0 };
+            d.as_position_control().unwrap().set_ref_speed(joint, 100.0)?;
+            let t = Instant::now();
+            d.as_position_control().unwrap().position_move(joint, target)?;
+            while (d.as_encoders().unwrap().get_encoder(joint)? - q).abs() < 0.01 {
+                if t.elapsed() > Duration::from_secs(5) {
+                    return Err(yarp_devices::DeviceError::Unsupported("the joint does not move"));
+                }
+                std::thread::sleep(Duration::from_micros(200));
+            }
+            Ok(t.elapsed())
+        };
+        match step(d) {
+            Ok(l) => lat.push(l),
+            Err(e) => {
+                eprintln!("move {k}: {e}");
+                missed += 1;
+            }
         }
-        lat.push(t.elapsed());
         drop(pd);
         std::thread::sleep(Duration::from_millis(200));
     }
+    assert!(!lat.is_empty(), "no move succeeded");
     lat.sort();
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!(
         "{robot}: {boards} boards; startup {:.1} s; CPU {:.1} % of one core over {seconds} s (robot + emulator); \
          command-to-encoder median {:.1} ms (min {:.1}, max {:.1}); {frames} status datagrams, \
-         longest gap {:.1} ms at {}, {seq_gaps} sequence gaps; failures at start-up: {}; loadavg {}",
+         longest gap {:.1} ms at {}, {seq_gaps} sequence gaps; failures at start-up: {}; moves that failed: {missed}; loadavg {}",
         startup.as_secs_f64(),
         cpu * 100.0,
         lat[lat.len() / 2].as_secs_f64() * 1e3,

@@ -53,12 +53,24 @@ pub fn verify_endpoint(board: &Board, endpoint: u8) -> Result<(), EthError> {
         set_number: 0,
         set_size: 0,
     };
-    let reply = board.command(
-        ids::COMM_QUERY_ARRAY,
-        &q.to_bytes(),
-        ids::COMM_REPLY_ARRAY,
-        Duration::from_millis(100),
-    )?;
+    // C++ asks once with 0.1 s; a loaded host may miss that reply, so it is asked up to
+    // three times.
+    let mut reply = Err(EthError::Board {
+        who: board.who(),
+        reason: "no reply".into(),
+    });
+    for _ in 0..3 {
+        reply = board.command(
+            ids::COMM_QUERY_ARRAY,
+            &q.to_bytes(),
+            ids::COMM_REPLY_ARRAY,
+            Duration::from_millis(100),
+        );
+        if reply.is_ok() {
+            break;
+        }
+    }
+    let reply = reply?;
     let reply = ReplyArray::from_bytes(&reply).map_err(|e| EthError::Board {
         who: board.who(),
         reason: e.to_string(),
