@@ -99,15 +99,23 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         let mut pd = dev.lock().unwrap();
         let d = pd.device();
         let step = |d: &mut dyn yarp_devices::DeviceDriver| -> yarp_devices::DevResult<Duration> {
-            d.as_control_mode().unwrap().set_control_mode(joint, CM_POSITION)?;
+            d.as_control_mode()
+                .unwrap()
+                .set_control_mode(joint, CM_POSITION)?;
             let q = d.as_encoders().unwrap().get_encoder(joint)?;
             let target = q + if k % 2 == 0 { 5.0 } else { -5.0 };
-            d.as_position_control().unwrap().set_ref_speed(joint, 100.0)?;
+            d.as_position_control()
+                .unwrap()
+                .set_ref_speed(joint, 100.0)?;
             let t = Instant::now();
-            d.as_position_control().unwrap().position_move(joint, target)?;
+            d.as_position_control()
+                .unwrap()
+                .position_move(joint, target)?;
             while (d.as_encoders().unwrap().get_encoder(joint)? - q).abs() < 0.01 {
                 if t.elapsed() > Duration::from_secs(5) {
-                    return Err(yarp_devices::DeviceError::Unsupported("the joint does not move"));
+                    return Err(yarp_devices::DeviceError::Unsupported(
+                        "the joint does not move",
+                    ));
                 }
                 std::thread::sleep(Duration::from_micros(200));
             }
