@@ -97,9 +97,7 @@ impl CanBus for VirtualEndpoint {
                 .collect()
         };
         for peer in &peers {
-            for f in frames {
-                peer.push(*f);
-            }
+            peer.push_all(frames.iter().copied());
         }
         self.queue
             .tx_frames

@@ -204,18 +204,30 @@ impl RxQueue {
 
     /// Queues a frame if the filter accepts it; drops the oldest frame when full.
     pub(crate) fn push(&self, frame: CanFrame) {
+        self.push_all(std::iter::once(frame));
+    }
+
+    /// Queues the frames the filter accepts, under one lock and with one wake-up of the
+    /// reader (a datagram carries many frames).
+    pub(crate) fn push_all(&self, frames: impl IntoIterator<Item = CanFrame>) {
         let mut st = self.lock();
-        if !st.filter.accepts(&frame) {
-            return;
+        let mut queued = false;
+        for frame in frames {
+            if !st.filter.accepts(&frame) {
+                continue;
+            }
+            if st.frames.len() >= self.capacity {
+                st.frames.pop_front();
+                st.rx_overruns += 1;
+            }
+            st.frames.push_back(frame);
+            st.rx_frames += 1;
+            queued = true;
         }
-        if st.frames.len() >= self.capacity {
-            st.frames.pop_front();
-            st.rx_overruns += 1;
-        }
-        st.frames.push_back(frame);
-        st.rx_frames += 1;
         drop(st);
-        self.ready.notify_one();
+        if queued {
+            self.ready.notify_one();
+        }
     }
 
     /// Marks the queue closed: readers get `BusError::Closed` once it is drained.

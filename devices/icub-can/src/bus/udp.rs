@@ -28,8 +28,9 @@ use crate::frame::CanFrame;
 pub const KEEPALIVE: Duration = Duration::from_secs(1);
 /// How long a hub keeps a silent peer.
 pub const PEER_EXPIRY: Duration = Duration::from_secs(5);
-/// Poll period of the reader thread (bounds how long dropping an endpoint takes).
-const READ_POLL: Duration = Duration::from_millis(50);
+/// Longest wait of the reader thread for a datagram: it then sends its keepalive if due.
+/// (Dropping an endpoint wakes the reader at once with a datagram to itself.)
+const READ_POLL: Duration = Duration::from_millis(500);
 
 struct Shared {
     name: String,
@@ -134,22 +135,24 @@ impl UdpBus {
     }
 
     fn send_raw(&self, frames: &[CanFrame], to: SocketAddr) -> Result<(), BusError> {
-        let packets = {
-            let mut seq = self.shared.seq.lock().unwrap_or_else(|e| e.into_inner());
-            let packets = if frames.is_empty() {
-                let mut p = Vec::new();
-                cannelloni::encode(*seq, &[], &mut p);
-                vec![p]
-            } else {
-                cannelloni::encode_packets(*seq, frames)
-            };
-            *seq = seq.wrapping_add(packets.len() as u8);
-            packets
-        };
-        for p in &packets {
+        for p in &self.encode(frames) {
             send_datagram(&self.shared, p, to)?;
         }
         Ok(())
+    }
+
+    /// The datagrams carrying `frames` (one empty one for none), numbered in sequence.
+    fn encode(&self, frames: &[CanFrame]) -> Vec<Vec<u8>> {
+        let mut seq = self.shared.seq.lock().unwrap_or_else(|e| e.into_inner());
+        let packets = if frames.is_empty() {
+            let mut p = Vec::new();
+            cannelloni::encode(*seq, &[], &mut p);
+            vec![p]
+        } else {
+            cannelloni::encode_packets(*seq, frames)
+        };
+        *seq = seq.wrapping_add(packets.len() as u8);
+        packets
     }
 }
 
@@ -185,6 +188,7 @@ fn reader_loop(shared: &Shared) {
             }
         }
         let (n, from) = match shared.socket.recv_from(&mut buf) {
+            Ok(_) if shared.stop.load(Ordering::Relaxed) => return,
             Ok(x) => x,
             Err(e)
                 if matches!(
@@ -218,7 +222,7 @@ fn reader_loop(shared: &Shared) {
                     for peer in others {
                         let _ = send_datagram(shared, datagram, peer);
                     }
-                    packet.frames.into_iter().for_each(|f| shared.queue.push(f));
+                    shared.queue.push_all(packet.frames);
                 }
                 Err(e) => {
                     shared.queue.malformed.fetch_add(1, Ordering::Relaxed);
@@ -227,7 +231,7 @@ fn reader_loop(shared: &Shared) {
             }
         } else {
             match cannelloni::decode(datagram) {
-                Ok(packet) => packet.frames.into_iter().for_each(|f| shared.queue.push(f)),
+                Ok(packet) => shared.queue.push_all(packet.frames),
                 Err(e) => {
                     shared.queue.malformed.fetch_add(1, Ordering::Relaxed);
                     tracing::debug!(bus = %shared.name, %from, "dropping malformed datagram: {e}");
@@ -240,6 +244,16 @@ fn reader_loop(shared: &Shared) {
 impl Drop for UdpBus {
     fn drop(&mut self) {
         self.shared.stop.store(true, Ordering::Relaxed);
+        // Wake the reader now rather than at its next poll.
+        if let Ok(mut me) = self.shared.socket.local_addr() {
+            if me.ip().is_unspecified() {
+                me.set_ip(match me {
+                    SocketAddr::V4(_) => std::net::Ipv4Addr::LOCALHOST.into(),
+                    SocketAddr::V6(_) => std::net::Ipv6Addr::LOCALHOST.into(),
+                });
+            }
+            let _ = self.shared.socket.send_to(&[], me);
+        }
         if let Some(h) = self.reader.take() {
             let _ = h.join();
         }
@@ -267,8 +281,14 @@ impl CanBus for UdpBus {
             }
             peers.iter().map(|p| p.0).collect()
         };
-        for to in targets {
-            self.send_raw(frames, to)?;
+        if !targets.is_empty() {
+            // Encoded once for every peer: a hub relays the same datagrams to all.
+            let packets = self.encode(frames);
+            for to in targets {
+                for p in &packets {
+                    send_datagram(&self.shared, p, to)?;
+                }
+            }
         }
         self.shared
             .queue

@@ -916,6 +916,19 @@ impl Board for McBoard {
         }
     }
 
+    fn next_output(&self) -> Option<Duration> {
+        use per::*;
+        let bcast = [POSITION, VELOCITY, PID_VAL, MOTOR_POSITION, CURRENT]
+            .into_iter()
+            .any(|k| self.enabled(k));
+        let status = self.enabled(STATUS) || self.enabled(ADDITIONAL_STATUS);
+        // The torque hub is fed at broadcast time too: its sensors read it in order.
+        let hub = self.cfg.torque_hub.is_some();
+        let a = super::due_in(bcast || hub, self.cfg.broadcast_period, self.since_bcast);
+        let b = super::due_in(status, self.cfg.status_period, self.since_status);
+        a.into_iter().chain(b).min()
+    }
+
     fn tick(&mut self, dt: Duration, out: &mut Vec<CanFrame>) {
         let secs = dt.as_secs_f64();
         for j in &mut self.joints {
@@ -1046,6 +1059,10 @@ impl Board for JointTorqueSensor {
         {
             self.host_quiet = HOST_TORQUE_TIMEOUT;
         }
+    }
+
+    fn next_output(&self) -> Option<Duration> {
+        super::due_in(true, self.period, self.since)
     }
 
     fn tick(&mut self, dt: Duration, out: &mut Vec<CanFrame>) {

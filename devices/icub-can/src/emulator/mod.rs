@@ -5,6 +5,12 @@
 //! set of boards on one bus in a thread with a fixed tick (1 ms by default): frames are
 //! decoded as they arrive (malformed ones are counted and ignored) and replies are sent
 //! at once; broadcasts produced during a tick are sent as one batch.
+//!
+//! The simulation is stepped lazily: the thread sleeps until a board has something to
+//! say ([`Board::next_output`]) or a frame arrives, then runs every tick due by then, in
+//! order, as if it had woken for each. Results are those of a thread waking every tick,
+//! without a thousand wake-ups per second. [`BusEmulator::with_batch`] additionally
+//! gathers broadcasts into one datagram per batch period, as cannelloni gathers frames.
 //! [`preset`] builds a whole 53-DOF iCub from the CAN layout of iCubGenova01.
 
 pub mod mc;
@@ -38,6 +44,18 @@ pub trait Board: Send {
     /// Starts streaming as if a host had configured the board (sensors wait for a
     /// host command otherwise); used for benchmarks and host-less demos.
     fn start_streaming(&mut self) {}
+    /// How long until a [`Board::tick`] may emit something, if no message reaches the
+    /// board meanwhile: the tick that brings the board's clock this far along is the
+    /// first that can. `None`: never on its own. The default, zero, means every tick.
+    fn next_output(&self) -> Option<Duration> {
+        Some(Duration::ZERO)
+    }
+}
+
+/// Time until a periodic output of `period` is due, `since` into the period; `None`
+/// when the output is off.
+pub(crate) fn due_in(on: bool, period: Duration, since: Duration) -> Option<Duration> {
+    on.then(|| period.saturating_sub(since))
 }
 
 /// Errors building boards from a textual description.
@@ -96,7 +114,22 @@ pub struct BusEmulator {
     bus: Arc<dyn CanBus>,
     boards: Vec<Box<dyn Board>>,
     tick: Duration,
+    batch: Duration,
 }
+
+/// The emulator thread's simulation clock: the next tick to run, by number (from 1)
+/// and by the time it is due.
+struct Clock {
+    n: u64,
+    next: Instant,
+}
+
+/// The longest the thread sleeps without a board output due (bounds the ticks run
+/// in one go when every board is quiet).
+const MAX_SLEEP: Duration = Duration::from_millis(100);
+/// Further behind than this (a suspended process), the backlog of ticks is dropped
+/// instead of being run.
+const STALL: Duration = Duration::from_millis(500);
 
 impl BusEmulator {
     pub fn new(bus: Arc<dyn CanBus>, boards: Vec<Box<dyn Board>>) -> Self {
@@ -104,7 +137,23 @@ impl BusEmulator {
             bus,
             boards,
             tick: Duration::from_millis(1),
+            batch: Duration::ZERO,
         }
+    }
+
+    /// Sends broadcasts once every `batch` (rounded to whole ticks, counted from the
+    /// start) instead of after each tick that produced some: several frames then share
+    /// one datagram, as with cannelloni's send timeout. Frames keep their order and
+    /// their rate; replies to requests still go out at once (taking pending
+    /// broadcasts along). Default: every tick.
+    pub fn with_batch(mut self, batch: Duration) -> Self {
+        self.batch = batch;
+        self
+    }
+
+    /// The batch period in ticks (at least one).
+    fn batch_ticks(&self) -> u64 {
+        (self.batch.as_nanos() / self.tick.as_nanos()).max(1) as u64
     }
 
     /// Starts every sensor board streaming without waiting for a host.
@@ -140,60 +189,117 @@ impl BusEmulator {
     }
 
     fn run(mut self, stop: &AtomicBool, stats: &EmulatorStats, silent: &AtomicU16) {
-        let mut out = Vec::with_capacity(256);
-        let mut next = Instant::now() + self.tick;
+        // Broadcasts produced by ticks and not sent yet.
+        let mut pending = Vec::with_capacity(256);
+        let mut replies = Vec::with_capacity(16);
+        let mut clock = Clock {
+            n: 1,
+            next: Instant::now() + self.tick,
+        };
         while !stop.load(Ordering::Relaxed) {
-            let now = Instant::now();
-            if now < next {
-                match self.bus.recv(next - now) {
-                    Ok(frame) => {
-                        stats.frames_in.fetch_add(1, Ordering::Relaxed);
-                        let msg = match Message::decode(&frame) {
-                            Ok(m) => m,
-                            Err(e) => {
-                                stats.malformed.fetch_add(1, Ordering::Relaxed);
-                                tracing::debug!(bus = self.bus.name(), %frame, "ignoring malformed frame: {e}");
-                                continue;
-                            }
-                        };
-                        let mute = silent.load(Ordering::Relaxed);
-                        out.clear();
-                        for b in self
-                            .boards
-                            .iter_mut()
-                            .filter(|b| mute & (1 << (b.address() & 0xF)) == 0)
-                        {
-                            b.on_message(&msg, &mut out);
+            self.catch_up(&mut clock, &mut pending, stats, silent);
+            let wake = clock.next + self.tick * self.ticks_to_wake(clock.n, !pending.is_empty());
+            match self
+                .bus
+                .recv(wake.saturating_duration_since(Instant::now()))
+            {
+                Ok(frame) => {
+                    stats.frames_in.fetch_add(1, Ordering::Relaxed);
+                    let msg = match Message::decode(&frame) {
+                        Ok(m) => m,
+                        Err(e) => {
+                            stats.malformed.fetch_add(1, Ordering::Relaxed);
+                            tracing::debug!(bus = self.bus.name(), %frame, "ignoring malformed frame: {e}");
+                            continue;
                         }
-                        self.flush(&out, stats);
+                    };
+                    // The boards first live up to now, then see the message.
+                    self.catch_up(&mut clock, &mut pending, stats, silent);
+                    let mute = silent.load(Ordering::Relaxed);
+                    replies.clear();
+                    for b in self
+                        .boards
+                        .iter_mut()
+                        .filter(|b| mute & (1 << (b.address() & 0xF)) == 0)
+                    {
+                        b.on_message(&msg, &mut replies);
                     }
-                    Err(BusError::Timeout(_)) => {}
-                    Err(BusError::Closed(_)) => return,
-                    Err(e) => {
-                        tracing::warn!(bus = self.bus.name(), "emulator receive error: {e}");
-                        std::thread::sleep(self.tick);
+                    if !replies.is_empty() {
+                        pending.append(&mut replies);
+                        self.flush(&pending, stats);
+                        pending.clear();
                     }
                 }
-                continue;
-            }
-            let mute = silent.load(Ordering::Relaxed);
-            out.clear();
-            for b in self.boards.iter_mut() {
-                let start = out.len();
-                b.tick(self.tick, &mut out);
-                if mute & (1 << (b.address() & 0xF)) != 0 {
-                    // A silent board keeps simulating; its output is dropped.
-                    out.truncate(start);
+                Err(BusError::Timeout(_)) => {}
+                Err(BusError::Closed(_)) => return,
+                Err(e) => {
+                    tracing::warn!(bus = self.bus.name(), "emulator receive error: {e}");
+                    std::thread::sleep(self.tick);
                 }
-            }
-            self.flush(&out, stats);
-            stats.ticks.fetch_add(1, Ordering::Relaxed);
-            next += self.tick;
-            // After a stall (e.g. a suspended process) resynchronise instead of bursting.
-            if Instant::now() > next + Duration::from_millis(100) {
-                next = Instant::now() + self.tick;
             }
         }
+    }
+
+    /// Runs every tick due by now, sending broadcasts at the end of each batch.
+    fn catch_up(
+        &mut self,
+        clock: &mut Clock,
+        pending: &mut Vec<CanFrame>,
+        stats: &EmulatorStats,
+        silent: &AtomicU16,
+    ) {
+        let now = Instant::now();
+        if now > clock.next + STALL {
+            // After a stall (e.g. a suspended process) resynchronise instead of bursting.
+            clock.next = now;
+        }
+        while clock.next <= now {
+            self.tick_all(pending, silent.load(Ordering::Relaxed));
+            stats.ticks.fetch_add(1, Ordering::Relaxed);
+            if clock.n % self.batch_ticks() == 0 {
+                self.flush(pending, stats);
+                pending.clear();
+            }
+            clock.n += 1;
+            clock.next += self.tick;
+        }
+    }
+
+    /// One tick of every board; a silent board keeps simulating, its output is dropped.
+    fn tick_all(&mut self, out: &mut Vec<CanFrame>, mute: u16) {
+        for b in self.boards.iter_mut() {
+            let start = out.len();
+            b.tick(self.tick, out);
+            if mute & (1 << (b.address() & 0xF)) != 0 {
+                out.truncate(start);
+            }
+        }
+    }
+
+    /// How many ticks after tick `n` (the next to run) the thread must be awake to send
+    /// what is due: the first tick that may produce output, or, when batching, the end
+    /// of the batch it falls in (or of the current one if output is pending).
+    fn ticks_to_wake(&self, n: u64, pending: bool) -> u32 {
+        let max = (MAX_SLEEP.as_nanos() / self.tick.as_nanos()).max(1) as u64;
+        let first = self
+            .boards
+            .iter()
+            .filter_map(|b| b.next_output())
+            .map(|d| {
+                // the k-th tick from now (k >= 1) is the first whose clock reaches `d`
+                let k = d.as_nanos().div_ceil(self.tick.as_nanos()) as u64;
+                k.max(1) - 1
+            })
+            .min()
+            .unwrap_or(max)
+            .min(max);
+        let b = self.batch_ticks();
+        let end_of_batch = |t: u64| (n + t).div_ceil(b) * b - n;
+        let mut wake = end_of_batch(first);
+        if pending {
+            wake = wake.min(end_of_batch(0));
+        }
+        wake.min(max) as u32
     }
 
     fn flush(&self, out: &[CanFrame], stats: &EmulatorStats) {

@@ -134,6 +134,10 @@ impl Board for StrainBoard {
         }
     }
 
+    fn next_output(&self) -> Option<Duration> {
+        super::due_in(self.mode.is_some(), self.period, self.since)
+    }
+
     fn tick(&mut self, dt: Duration, out: &mut Vec<CanFrame>) {
         self.time += dt.as_secs_f64();
         let Some(mode) = self.mode else { return };
@@ -211,6 +215,10 @@ impl Board for MaisBoard {
             _ => {}
         }
     }
+    fn next_output(&self) -> Option<Duration> {
+        super::due_in(self.streaming, self.period, self.since)
+    }
+
     fn tick(&mut self, dt: Duration, out: &mut Vec<CanFrame>) {
         if !self.streaming {
             return;
@@ -311,6 +319,12 @@ impl Board for MtbBoard {
             _ => {}
         }
     }
+    fn next_output(&self) -> Option<Duration> {
+        let skin = super::due_in(self.skin, self.skin_period, self.since_skin);
+        let inertial = super::due_in(self.sensors != 0, self.inertial_period, self.since_inertial);
+        skin.into_iter().chain(inertial).min()
+    }
+
     fn tick(&mut self, dt: Duration, out: &mut Vec<CanFrame>) {
         if self.skin {
             self.since_skin += dt;

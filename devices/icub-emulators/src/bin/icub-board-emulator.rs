@@ -46,6 +46,11 @@ struct Args {
     /// Simulation step in milliseconds.
     #[arg(long, default_value_t = 1.0)]
     tick_ms: f64,
+    /// Broadcasts of a bus go out together once every this many milliseconds (one
+    /// datagram for many frames, as cannelloni's send timeout does); frame rates are
+    /// unchanged, replies go out at once. 0: after every simulation step.
+    #[arg(long, default_value_t = 10.0)]
+    batch_ms: f64,
     /// Exit after this many seconds (default: run until killed).
     #[arg(long)]
     duration_s: Option<f64>,
@@ -128,7 +133,11 @@ fn run(args: Args) -> Result<(), String> {
     if !(0.1..=100.0).contains(&args.tick_ms) {
         return Err("--tick-ms must be within 0.1..=100".into());
     }
+    if !(0.0..=100.0).contains(&args.batch_ms) {
+        return Err("--batch-ms must be within 0..=100".into());
+    }
     let tick = Duration::from_secs_f64(args.tick_ms / 1000.0);
+    let batch = Duration::from_secs_f64(args.batch_ms / 1000.0);
     let mut running: Vec<EmulatorHandle> = Vec::new();
     for (bus, local, boards) in plan {
         let kinds: Vec<String> = boards
@@ -141,7 +150,9 @@ fn run(args: Args) -> Result<(), String> {
             local,
             kinds.join(",")
         ));
-        let mut emu = BusEmulator::new(bus, boards).with_tick(tick);
+        let mut emu = BusEmulator::new(bus, boards)
+            .with_tick(tick)
+            .with_batch(batch);
         if args.stream {
             emu = emu.start_streaming();
         }
