@@ -12,7 +12,10 @@
 //! every output, reversed text connections included.
 //!
 //! As in C++, the ports open first and the device comes later through `attach`;
-//! publishing starts at attach and stops at detach.
+//! publishing starts at attach and stops at detach. The state is published from a thread
+//! of its own (C++ `PeriodicThread`): reading the device may block (a
+//! `remote_controlboard` attached here waits for its own RPC on the device runtime), and a
+//! plain thread does that without handing a runtime worker over every period.
 
 use super::rpc::{handle_rpc, RpcStamp};
 use super::single_port::handle_single_port;
@@ -21,8 +24,10 @@ use super::streaming::{handle_command, CommandMessage};
 use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
+use crate::sensors::periodic::Ticker;
 use crate::vocabs::FAILED;
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard, Weak};
 use std::time::Duration;
 use tokio::runtime::Handle;
 use tokio::task::JoinHandle;
@@ -72,9 +77,47 @@ pub struct ControlBoardNws {
     state_ext: Option<usize>,
     slot: Slot,
     period: Duration,
-    handle: Handle,
     tasks: Vec<JoinHandle<()>>,
-    publisher: Option<JoinHandle<()>>,
+    publisher: Option<Publisher>,
+}
+
+/// The state publisher thread; it ends within a period once stopped.
+struct Publisher {
+    stop: Arc<AtomicBool>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Publisher {
+    fn start(
+        slot: Slot,
+        state: &Arc<Port>,
+        state_ext: Option<&Arc<Port>>,
+        period: Duration,
+    ) -> Option<Self> {
+        let stop = Arc::new(AtomicBool::new(false));
+        let (s, st, ext) = (
+            stop.clone(),
+            Arc::downgrade(state),
+            state_ext.map(Arc::downgrade),
+        );
+        match std::thread::Builder::new()
+            .name("cb_nws state:o".into())
+            .spawn(move || publish(&slot, &st, ext.as_ref(), period, &s))
+        {
+            Ok(thread) => Some(Publisher { stop, thread }),
+            Err(e) => {
+                tracing::error!(
+                    "{NAME} {}: cannot start the state publisher: {e}",
+                    state.name()
+                );
+                None
+            }
+        }
+    }
+
+    fn stop(&self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
 }
 
 impl ControlBoardNws {
@@ -120,7 +163,6 @@ impl ControlBoardNws {
             state_ext: Some(3),
             slot,
             period,
-            handle: Handle::current(),
             tasks,
             publisher: None,
         })
@@ -147,7 +189,6 @@ impl ControlBoardNws {
             state_ext: None,
             slot,
             period,
-            handle: Handle::current(),
             tasks,
             publisher: None,
         })
@@ -186,25 +227,30 @@ impl ControlBoardNws {
             axes_of(pd.device())?
         };
         *lock(&self.slot) = Some(Attached { device, axes });
-        self.publisher = Some(self.handle.spawn(publish(
+        self.publisher = Publisher::start(
             self.slot.clone(),
-            self.ports[self.state].clone(),
-            self.state_ext.map(|i| self.ports[i].clone()),
+            &self.ports[self.state],
+            self.state_ext.map(|i| &self.ports[i]),
             self.period,
-        )));
+        );
         Ok(())
     }
 
     /// Stops serving the device (the ports stay open).
     pub fn detach(&mut self) {
         if let Some(p) = self.publisher.take() {
-            p.abort();
+            p.stop();
         }
         *lock(&self.slot) = None;
     }
 
     /// Stops serving and closes the ports (unregistering them).
     pub async fn close(mut self) {
+        if let Some(p) = self.publisher.take() {
+            p.stop();
+            // it holds the state ports now and then: let go of them before closing
+            let _ = tokio::task::spawn_blocking(move || p.thread.join()).await;
+        }
         self.detach();
         for t in self.tasks.drain(..) {
             t.abort();
@@ -221,7 +267,7 @@ impl ControlBoardNws {
 impl Drop for ControlBoardNws {
     fn drop(&mut self) {
         if let Some(p) = self.publisher.take() {
-            p.abort();
+            p.stop();
         }
         for t in &self.tasks {
             t.abort();
@@ -400,25 +446,39 @@ async fn serve_commands(port: Arc<Port>, slot: Slot) {
     }
 }
 
-/// Publishes `state:o` and `stateExt:o` every `period` (C++ `ControlBoard_nws_yarp::run`);
-/// in single-port mode the positions go out on the single port and there is no
-/// `stateExt:o`.
-async fn publish(slot: Slot, state: Arc<Port>, state_ext: Option<Arc<Port>>, period: Duration) {
-    let mut tick = tokio::time::interval(period);
-    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+/// Publishes `state:o` and `stateExt:o` every `period` (C++ `ControlBoard_nws_yarp::run`)
+/// until stopped, detached or the ports are gone; in single-port mode the positions go
+/// out on the single port and there is no `stateExt:o`.
+fn publish(
+    slot: &Slot,
+    state: &Weak<Port>,
+    state_ext: Option<&Weak<Port>>,
+    period: Duration,
+    stop: &AtomicBool,
+) {
+    let mut tick = Ticker::new(period);
     let mut count: i32 = 0;
     let mut warned = false;
     loop {
-        tick.tick().await;
-        let Some(a) = attached(&slot) else { return };
-        let to_state = !state.outputs().is_empty();
-        let to_ext = state_ext.as_ref().filter(|p| !p.outputs().is_empty());
+        tick.tick_blocking();
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
+        let Some(state) = state.upgrade() else { return };
+        let state_ext = match state_ext.map(Weak::upgrade) {
+            Some(None) => return,
+            Some(Some(p)) => Some(p),
+            None => None,
+        };
+        let Some(a) = attached(slot) else { return };
+        let to_state = state.has_outputs();
+        let to_ext = state_ext.filter(|p| p.has_outputs());
         if !to_state && to_ext.is_none() {
             // nobody listens: keep the sequence going without reading the board
             count = if count == i32::MAX { 0 } else { count + 1 };
             continue;
         }
-        let (data, times) = device_call(|| JointData::read(lock(&a.device).device(), a.axes));
+        let (data, times) = JointData::read(lock(&a.device).device(), a.axes);
         // without encoder timestamps C++ averages its zero-initialised times
         let time = if times.is_empty() {
             Some(0.0)

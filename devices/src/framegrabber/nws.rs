@@ -132,7 +132,7 @@ fn stream(
             // fell behind (slow device): start counting again from now
             next = Instant::now();
         }
-        if port.outputs().is_empty() {
+        if !port.has_outputs() {
             continue;
         }
         let got = {

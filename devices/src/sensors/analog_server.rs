@@ -193,6 +193,11 @@ async fn stream(
         let Some(dev) = attached.lock().unwrap_or_else(|e| e.into_inner()).clone() else {
             continue;
         };
+        if !ports.iter().any(|(_, p)| p.has_outputs()) {
+            // nobody listens: keep the sequence going without reading the sensor
+            count = count.wrapping_add(1);
+            continue;
+        }
         let status = {
             let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
             match pd.device().as_analog_sensor() {

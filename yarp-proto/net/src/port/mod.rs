@@ -418,6 +418,12 @@ impl Port {
             .collect()
     }
 
+    /// Whether anything is connected to receive from this port (cheaper than
+    /// [`Port::outputs`] for a writer that skips work nobody would receive).
+    pub fn has_outputs(&self) -> bool {
+        !self.shared.lock().outputs.is_empty()
+    }
+
     /// Names of the ports sending to this one.
     pub fn inputs(&self) -> Vec<String> {
         self.shared
@@ -474,7 +480,6 @@ impl Port {
     }
 
     fn send(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
-        let msg = Arc::new(output::Outgoing::new(Arc::new(b.clone()), stamp));
         let outs: Vec<_> = self
             .shared
             .lock()
@@ -482,6 +487,10 @@ impl Port {
             .values()
             .map(|o| o.sender())
             .collect();
+        if outs.is_empty() {
+            return 0; // no copy of the Bottle for nobody
+        }
+        let msg = Arc::new(output::Outgoing::new(Arc::new(b.clone()), stamp));
         let mut n = 0;
         for tx in outs {
             if tx.try_send(output::Job::Data(msg.clone())).is_ok() {
