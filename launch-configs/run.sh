@@ -7,6 +7,7 @@
 #   launch-configs/run.sh FILE.toml|FILE.xml [yarp-launch options...]
 #
 # Ctrl-C stops every module in reverse order. The dashboard is on http://127.0.0.1:8080/.
+# Programs are built optimised (YARP_RS_PROFILE=debug: the debug build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 config=${1:-icub-sim}
@@ -19,7 +20,16 @@ if [[ ! -f $file ]]; then
     echo "run.sh: no launch config $file (try icub-sim, fake-devices, demo)" >&2
     exit 2
 fi
-echo "building the programs (first time: several minutes)..." >&2
-cargo build --quiet --workspace --bins
-bin=${CARGO_TARGET_DIR:-target}/debug
+# Optimised programs: a main job runs for long and a debug build costs several times the
+# CPU (the tests build and use debug programs of their own). YARP_RS_PROFILE=debug runs
+# the debug build instead.
+profile=${YARP_RS_PROFILE:-release}
+case $profile in
+    release) flags=(--release) ;;
+    debug) flags=() ;;
+    *) echo "run.sh: YARP_RS_PROFILE is release or debug, not $profile" >&2; exit 2 ;;
+esac
+echo "building the programs ($profile; first time: several minutes)..." >&2
+cargo build --quiet "${flags[@]}" --workspace --bins
+bin=${CARGO_TARGET_DIR:-target}/$profile
 exec "$bin/yarp-launch" "$file" "$@"

@@ -46,11 +46,21 @@ impl Drop for MtxHandle {
     }
 }
 
+/// The emulator's end of a serial line: bytes both ways, and reads that give up after
+/// a settable time.
+pub trait MtxPort: Read + Write + Send + 'static {
+    /// How long the next reads may wait for a byte.
+    fn set_read_timeout(&mut self, timeout: Duration) -> std::io::Result<()>;
+}
+
+/// The longest read of the emulator thread (bounds how long stopping takes).
+const MAX_READ_WAIT: Duration = Duration::from_millis(50);
+
 /// Serves `mtx` on `port` in a thread until the handle is dropped, streaming
-/// `motion(seconds since start)`. `port`'s reads should time out (a few ms) so that the
-/// thread can stream and stop.
+/// `motion(seconds since start)`. The thread waits in its reads until the next sample
+/// is due.
 pub fn serve(
-    mut port: impl Read + Write + Send + 'static,
+    mut port: impl MtxPort,
     mut mtx: EmulatedMtx,
     motion: fn(f64) -> Sample,
 ) -> std::io::Result<MtxHandle> {
@@ -65,6 +75,9 @@ pub fn serve(
             let mut dec = Decoder::new();
             let mut buf = [0u8; 256];
             while !st.load(Ordering::SeqCst) {
+                let wait = next.saturating_duration_since(Instant::now());
+                let _ =
+                    port.set_read_timeout(wait.clamp(Duration::from_micros(100), MAX_READ_WAIT));
                 match port.read(&mut buf) {
                     Ok(n) if !si.load(Ordering::SeqCst) => dec.push(&buf[..n]),
                     Ok(_) => {}
@@ -108,9 +121,9 @@ pub fn serve(
     })
 }
 
-/// A pseudo-terminal pair: the emulator's end (reads time out after 2 ms), and the path
-/// a host opens.
-pub fn pty() -> std::io::Result<(impl Read + Write + Send + 'static, PathBuf)> {
+/// A pseudo-terminal pair: the emulator's end (reads time out after 2 ms until set
+/// otherwise), and the path a host opens.
+pub fn pty() -> std::io::Result<(impl MtxPort, PathBuf)> {
     let (mut master, slave) = TTYPort::pair().map_err(std::io::Error::other)?;
     master
         .set_timeout(Duration::from_millis(2))
@@ -152,6 +165,14 @@ struct PtyEnds {
 impl Read for PtyEnds {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         self.master.read(buf)
+    }
+}
+
+impl MtxPort for PtyEnds {
+    fn set_read_timeout(&mut self, timeout: Duration) -> std::io::Result<()> {
+        self.master
+            .set_timeout(timeout)
+            .map_err(std::io::Error::other)
     }
 }
 
