@@ -256,7 +256,7 @@ impl BusEmulator {
         while clock.next <= now {
             self.tick_all(pending, silent.load(Ordering::Relaxed));
             stats.ticks.fetch_add(1, Ordering::Relaxed);
-            if clock.n % self.batch_ticks() == 0 {
+            if clock.n.is_multiple_of(self.batch_ticks()) {
                 self.flush(pending, stats);
                 pending.clear();
             }
