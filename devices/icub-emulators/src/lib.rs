@@ -1,5 +1,11 @@
-//! Emulated iCub robots. [`eth`]: the Ethernet boards of a robots-configuration robot
-//! (`icub-eth-emulator`); the CAN boards are `icub-board-emulator`'s (over crate
-//! `icub_can`'s emulated boards).
+//! Emulated iCub robots as programs, each bringing up the boards a robots-configuration
+//! directory describes, read with the robot interface's own XML reader (crate
+//! `yarp-devices`), so an emulator sees exactly the devices and parameters
+//! `yarprobotinterface` opens:
+//!
+//! - [`can_robot`]: the CAN boards (`icub-board-emulator`, over crate `icub_can`'s
+//!   emulated boards);
+//! - [`eth`]: the Ethernet boards (`icub-eth-emulator`).
 
+pub mod can_robot;
 pub mod eth;

@@ -8,8 +8,10 @@ use std::time::{Duration, Instant};
 
 use icub_can::bus::inproc::VirtualBus;
 use icub_can::bus::udp::UdpBus;
-use icub_can::emulator::{preset, BusEmulator, EmulatorHandle};
+use icub_can::emulator::network;
+use icub_can::emulator::{BusEmulator, EmulatorHandle};
 use icub_can::CanBus;
+use icub_emulators::can_robot;
 use yarp_devices::robotinterface::{read_robot_str, Param};
 use yarp_devices::sensors::{AnalogStatus, MasStatus};
 use yarp_devices::vocabs::{
@@ -63,12 +65,17 @@ fn udp_network(num: u32) -> (String, EmulatorHandle) {
 }
 
 fn emulate(bus: Arc<dyn CanBus>, num: u32) -> EmulatorHandle {
-    let dir = icub_dir();
-    let net = preset::icub_networks(dir.exists().then_some(dir.as_path()))
+    // iCubGenova01's boards, else those of the shipped simulated iCub (the same layout).
+    let dir = Some(icub_dir()).filter(|d| d.exists()).unwrap_or_else(|| {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../launch-configs/icub-sim/robot")
+    });
+    let file = can_robot::robot_file(&dir).expect("robot file");
+    let net = can_robot::networks(&file)
+        .expect("CAN layout of the robot files")
         .into_iter()
         .find(|n| n.num == num)
         .expect("network");
-    BusEmulator::new(bus, preset::build(&net))
+    BusEmulator::new(bus, network::build(&net))
         .spawn()
         .expect("emulator")
 }

@@ -12,8 +12,10 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use icub_can::bus::inproc::VirtualBus;
-use icub_can::emulator::{preset, BusEmulator, EmulatorHandle};
+use icub_can::emulator::network;
+use icub_can::emulator::{BusEmulator, EmulatorHandle};
 use icub_can::CanBus;
+use icub_emulators::can_robot;
 use icub_ikin::Limb;
 use yarp_devices::robotinterface::{read_robot_file, ActionPhase, Robot, RobotRunner};
 use yarp_devices::sensors::AnalogStatus;
@@ -63,13 +65,15 @@ fn emulate_head_imu() -> icub_can::emulator::mtx::MtxHandle {
 }
 
 fn emulate_icub(tag: &str) -> Vec<EmulatorHandle> {
-    let dir = genova_dir();
-    preset::icub_networks(dir.exists().then_some(dir.as_path()))
+    // The boards of the robot files this test runs (the same layout as iCubGenova01).
+    let file = can_robot::robot_file(&robot_dir()).expect("robot file");
+    can_robot::networks(&file)
+        .expect("CAN layout of the robot files")
         .iter()
         .map(|net| {
             let bus: Arc<dyn CanBus> =
                 Arc::new(VirtualBus::named(&format!("{tag}-{}", net.num)).endpoint());
-            BusEmulator::new(bus, preset::build(net))
+            BusEmulator::new(bus, network::build(net))
                 .spawn()
                 .expect("emulator")
         })

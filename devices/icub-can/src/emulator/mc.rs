@@ -64,7 +64,7 @@
 //! friction` (= `J·q̈` in free motion, the stop's reaction against a hard stop),
 //! measured through a first-order sensor filter ([`TORQUE_SENSOR_FILTER`]) and
 //! expressed in sensor units `σ·τj·0x8000/TorqueMax`. The sign `σ` relates the sensor to
-//! the encoder: the whole-iCub preset uses the sign of the joint's `Encoder` (so
+//! the encoder: [`super::network::mc_boards`] uses the sign of the joint's `Encoder` (so
 //! positive torques turn the joint in its positive YARP direction); otherwise it is the
 //! one the host's torque gains assume. `s` follows the sign of the position `kp` the host
 //! sets (a tuned robot's gains match its wiring: iCubGenova01 uses negative `kp` for

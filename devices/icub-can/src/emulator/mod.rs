@@ -11,11 +11,12 @@
 //! order, as if it had woken for each. Results are those of a thread waking every tick,
 //! without a thousand wake-ups per second. [`BusEmulator::with_batch`] additionally
 //! gathers broadcasts into one datagram per batch period, as cannelloni gathers frames.
-//! [`preset`] builds a whole 53-DOF iCub from the CAN layout of iCubGenova01.
+//! [`network`] lays out the boards of one network; crate `icub-emulators` reads a robot's
+//! configuration files into networks.
 
 pub mod mc;
 pub mod mtx;
-pub mod preset;
+pub mod network;
 pub mod sensors;
 
 use std::sync::atomic::{AtomicBool, AtomicU16, AtomicU64, Ordering};

@@ -3,7 +3,6 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::preset;
 use super::*;
 use crate::bus::inproc::VirtualBus;
 use crate::bus::udp::UdpBus;
@@ -381,116 +380,6 @@ fn board_specs_and_files() {
     assert!(board_from_spec("15:mc").is_err());
     assert!(board_from_spec("3:robot").is_err());
     assert!(board_from_spec("3").is_err());
-    let nets = preset::parse_file("f", "# x\nbus inproc://a\nboard 1 mc\nboard 0xD strain\n\nbus inproc://b\nboard 14 skin # palm\n").unwrap();
-    assert_eq!(nets.len(), 2);
-    assert_eq!(nets[0].1.len(), 2);
-    assert_eq!(nets[1].1[0].kind(), "skin");
-    assert!(matches!(
-        preset::parse_file("f", "board 1 mc"),
-        Err(SpecError::File { line: 1, .. })
-    ));
-    assert!(matches!(
-        preset::parse_file("f", "bus x\nboard 1 zz"),
-        Err(SpecError::File { line: 2, .. })
-    ));
-}
-
-#[test]
-fn icub_preset_matches_the_robot_configuration() {
-    assert_eq!(preset::dof(), 53);
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/robots-configuration/iCubGenova01");
-    let nets = preset::icub_networks(dir.exists().then_some(dir.as_path()));
-    assert_eq!(nets.len(), 10);
-    let mc: usize = nets
-        .iter()
-        .flat_map(|n| &n.boards)
-        .filter(|b| matches!(b, preset::BoardKind::Mc { .. }))
-        .count();
-    assert_eq!(mc, 27);
-    if dir.exists() {
-        // Left arm joint 0 (board 1, axis 0): 0 deg clamped to [-95.5, 10] is 0 deg;
-        // ticks = (0 + zero) * encoder = -179.73 * -11.375.
-        let preset::BoardKind::Mc { initial, .. } = &nets[1].boards[0] else {
-            panic!()
-        };
-        assert!(
-            (initial[0] - (-179.73 * -11.375)).abs() < 1e-6,
-            "{initial:?}"
-        );
-        // Left leg user joint 2 is axis 0 (AxisMap 2 3 0 1 4 5) on board 5.
-        let preset::BoardKind::Mc {
-            address, initial, ..
-        } = &nets[3].boards[0]
-        else {
-            panic!()
-        };
-        assert_eq!(*address, 5);
-        assert!((initial[0] - 172.8 * 11.375).abs() < 1e-6, "{initial:?}");
-        // Joint torques: icub_left_arm.xml TorqueId 0x0C, TorqueChan 0..4, TorqueMax 8
-        // (2 for the wrist), Encoder -11.375 (706.67 for joint 4).
-        let preset::BoardKind::Mc { plants, .. } = &nets[1].boards[0] else {
-            panic!()
-        };
-        let link = |ch| {
-            Some(TorqueLink {
-                address: 0x0C,
-                channel: ch,
-            })
-        };
-        assert_eq!((plants[0].sensor, plants[1].sensor), (link(0), link(1)));
-        assert_eq!(plants[0].torque_max, 8.0);
-        assert_eq!(plants[0].sensor_sign, Some(-1.0));
-        // board 3 axis 0 is joint 4 (wrist pronosupination), axis 1 joint 5: no sensor
-        let Some(preset::BoardKind::Mc { plants: wrist, .. }) = nets[1]
-            .boards
-            .iter()
-            .find(|b| matches!(b, preset::BoardKind::Mc { address: 3, .. }))
-        else {
-            panic!()
-        };
-        assert_eq!(wrist[0].sensor, link(4));
-        assert_eq!(
-            (wrist[0].torque_max, wrist[0].sensor_sign),
-            (2.0, Some(1.0))
-        );
-        assert_eq!(wrist[1].sensor, None);
-        let sensors = |n: usize| -> Vec<u8> {
-            nets[n]
-                .boards
-                .iter()
-                .filter_map(|b| match b {
-                    preset::BoardKind::JointTorque(a) => Some(*a),
-                    _ => None,
-                })
-                .collect()
-        };
-        // torso 0x0C on network 0, arms and left leg 0x0C, right leg 0x0B, hands none.
-        assert_eq!(
-            (0..7).map(sensors).collect::<Vec<_>>(),
-            [
-                vec![0x0C],
-                vec![0x0C],
-                vec![0x0C],
-                vec![0x0C],
-                vec![0x0B],
-                vec![],
-                vec![]
-            ]
-        );
-    }
-    for n in &nets {
-        assert_eq!(preset::build(n).len(), n.boards.len());
-    }
-}
-
-#[test]
-fn xml_param_extraction() {
-    let p = preset::xml_params(
-        "<group name=\"A\"><param name=\"x\"> 1 2 \"three\" </param>\n<!-- <param name=\"y\">9</param> -->\n<param name=\"x\">7</param><param name=\"y\">5</param>",
-    );
-    assert_eq!(p["x"], vec!["1", "2", "three"]);
-    assert_eq!(p["y"], vec!["5"]);
 }
 
 #[test]

@@ -3,9 +3,14 @@
 //! ```text
 //! icub-board-emulator --bus udp-hub://127.0.0.1:20001 --board 1:mc --board 2:mc --board 13:strain
 //! icub-board-emulator --preset icub --bus udp-hub://127.0.0.1:20000+n --robot-dir ../shared/robots-configuration/iCubGenova01
+//! icub-board-emulator --preset icub --bus udp-hub://127.0.0.1:20000+n   # launch-configs/icub-sim/robot
 //! icub-board-emulator --config boards.txt
 //! icub-board-emulator --xsens /tmp/ttyXSENS      # the head's Xsens MTx on a pseudo-terminal
 //! ```
+//!
+//! With `--preset icub` the boards are those of the robot directory's CAN devices, read
+//! with the robot interface's XML reader (see `icub_emulators::can_robot`); without
+//! `--robot-dir` it is the simulated iCub shipped in `launch-configs/icub-sim/robot`.
 //!
 //! On start it prints one `bus <name> <local address>` line per bus, then `ready`.
 //! SIGINT or SIGTERM stops it cleanly (exit 0; its `--xsens` link is removed).
@@ -18,8 +23,10 @@ use std::time::{Duration, Instant};
 use clap::Parser;
 use icub_can::bus::config::BusSpec;
 use icub_can::bus::udp::UdpBus;
-use icub_can::emulator::{board_from_spec, preset, Board, BusEmulator, EmulatorHandle};
+use icub_can::emulator::network::{self, parse_file};
+use icub_can::emulator::{board_from_spec, Board, BusEmulator, EmulatorHandle};
 use icub_can::CanBus;
+use icub_emulators::can_robot;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -37,12 +44,18 @@ struct Args {
     /// Description file with `bus URL` and `board ADDRESS KIND` lines.
     #[arg(long)]
     config: Option<String>,
-    /// A whole robot: `icub` (53 DOF on 10 networks, as iCubGenova01).
+    /// A whole robot: `icub`, every CAN board of the robot in --robot-dir, one bus per
+    /// network (`CanDeviceNum`).
     #[arg(long)]
     preset: Option<String>,
-    /// Robot configuration directory used by --preset for initial joint positions.
+    /// The robots-configuration directory of --preset (default: the simulated iCub of
+    /// launch-configs/icub-sim/robot).
     #[arg(long)]
     robot_dir: Option<String>,
+    /// The robot file in --robot-dir (default: icub_all.xml, else the `config` of its
+    /// yarprobotinterface.ini).
+    #[arg(long)]
+    robot_file: Option<String>,
     /// Simulation step in milliseconds.
     #[arg(long, default_value_t = 1.0)]
     tick_ms: f64,
@@ -102,10 +115,18 @@ fn run(args: Args) -> Result<(), String> {
         if !url.contains("+n") && !url.contains("{n}") {
             return Err("--preset needs one bus per network: put `+n` or `{n}` in --bus".into());
         }
-        let dir = args.robot_dir.as_deref().map(std::path::Path::new);
-        for net in preset::icub_networks(dir) {
+        let dir = match &args.robot_dir {
+            Some(d) => std::path::PathBuf::from(d),
+            None => std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../launch-configs/icub-sim/robot"),
+        };
+        let file = match &args.robot_file {
+            Some(f) => dir.join(f),
+            None => can_robot::robot_file(&dir).map_err(|e| e.to_string())?,
+        };
+        for net in can_robot::networks(&file).map_err(|e| e.to_string())? {
             let (bus, local) = open(url, Some(net.num))?;
-            plan.push((bus, local, preset::build(&net)));
+            plan.push((bus, local, network::build(&net)));
         }
     } else if !args.boards.is_empty() {
         let url = args.bus.as_deref().ok_or("--board needs --bus")?;
@@ -120,7 +141,7 @@ fn run(args: Args) -> Result<(), String> {
     }
     if let Some(path) = &args.config {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
-        for (url, boards) in preset::parse_file(path, &text).map_err(|e| e.to_string())? {
+        for (url, boards) in parse_file(path, &text).map_err(|e| e.to_string())? {
             let (bus, local) = open(&url, None)?;
             plan.push((bus, local, boards));
         }
