@@ -5,10 +5,11 @@
 //! the driver implements that interface (the Rust form of C++ `PolyDriver::view`).
 
 use crate::error::{DevResult, DeviceError};
-use crate::framegrabber::{IFrameGrabberControls, IFrameGrabberImage};
+use crate::framegrabber::interfaces::{IFrameGrabberControls, IFrameGrabberImage};
 use crate::interfaces::*;
 use crate::kind::{interfaces_of, kind_of, suggest, Kind};
-use crate::sensors::*;
+use crate::sensors::interfaces::*;
+use crate::sensors::virtual_analog::IVirtualAnalogSensor;
 use std::sync::{Arc, LazyLock, Mutex, RwLock};
 use yarp_proto::{Bottle, Property, Value};
 
