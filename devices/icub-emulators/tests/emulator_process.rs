@@ -117,7 +117,11 @@ fn emulator_process_serves_motor_and_strain_boards() {
     assert!((pos - 25.0).abs() < 0.5);
 
     // A second client process-side endpoint on the same bus: the strain.
-    let ft = StrainClient::open(open(), StrainParams::strain(0x0D)).unwrap();
+    // The same reply allowance as the motor client above: a loaded CI machine may keep
+    // the emulator process off the CPU for longer than the driver's 100 ms default.
+    let mut strain = StrainParams::strain(0x0D);
+    strain.reply_timeout = Duration::from_millis(300);
+    let ft = StrainClient::open(open(), strain).unwrap();
     let deadline = Instant::now() + Duration::from_secs(2);
     let v = loop {
         if let Ok(v) = ft.read_checked() {
