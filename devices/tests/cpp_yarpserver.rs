@@ -22,11 +22,12 @@ fn cpp_server(bin: &Path) {
     SERVER.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
         std::env::set_var("YARP_CONFIG_HOME", dir.path());
-        let port = TcpListener::bind("127.0.0.1:0")
-            .unwrap()
-            .local_addr()
-            .unwrap()
-            .port();
+        // Below the ephemeral range: yarpserver hands out numbers from its own port up,
+        // and an ephemeral one collides with outgoing connections (C++ yarpdev then fails
+        // to open its ports and never registers).
+        let port = yarp_interop_tests::low_ports()
+            .find(|p| TcpListener::bind(("127.0.0.1", *p)).is_ok())
+            .expect("a free port below the ephemeral range");
         std::fs::File::create(dir.path().join("yarp.conf"))
             .and_then(|mut f| writeln!(f, "127.0.0.1 {port} yarp"))
             .unwrap();

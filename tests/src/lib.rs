@@ -81,6 +81,24 @@ struct Net {
     _rt: tokio::runtime::Runtime,
 }
 
+/// Candidate ports for a test name server (ours or C++ `yarpserver`), below the kernel's
+/// ephemeral range: see [`bind_name_server`] for why.
+pub fn low_ports() -> impl Iterator<Item = u16> {
+    let seed = std::process::id() as u64
+        ^ std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.subsec_nanos() as u64)
+            .unwrap_or(0);
+    let mut x = seed | 1;
+    (0..200).map(move |_| {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        // the pool reaches base + 9999: keep it below 32768
+        10_000 + (x % 12_000) as u16
+    })
+}
+
 /// Binds a name server for a test process on 127.0.0.1 below the kernel's ephemeral
 /// port range (32768 and up here). The server hands out port numbers from its own
 /// upwards, as `yarpserver` does; from an ephemeral base those numbers collide with the
@@ -88,18 +106,7 @@ struct Net {
 /// with "address conflict". The base is picked from the process id and the clock, so
 /// concurrent test processes start their pools apart.
 pub async fn bind_name_server() -> NameServer {
-    let seed = std::process::id() as u64
-        ^ std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map(|d| d.subsec_nanos() as u64)
-            .unwrap_or(0);
-    let mut x = seed | 1;
-    for _ in 0..200 {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        // the pool reaches base + 9999: keep it below 32768
-        let port = 10_000 + (x % 12_000) as u16;
+    for port in low_ports() {
         if let Ok(ns) = NameServer::bind(("127.0.0.1", port), "127.0.0.1").await {
             return ns;
         }
