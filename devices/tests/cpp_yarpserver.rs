@@ -8,7 +8,7 @@
 use std::io::Write;
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
-use std::process::Stdio;
+use std::process::{ChildStdin, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 use yarp_devices::PolyDriver;
@@ -18,7 +18,7 @@ use yarp_proto::Property;
 /// A C++ `yarpserver` on 127.0.0.1 for this test process, announced by a private
 /// `yarp.conf` (`YARP_CONFIG_HOME`, so our devices and the C++ programs both use it).
 fn cpp_server(bin: &Path) {
-    static SERVER: OnceLock<(Reaped, tempfile::TempDir)> = OnceLock::new();
+    static SERVER: OnceLock<(Reaped, ChildStdin, tempfile::TempDir)> = OnceLock::new();
     SERVER.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
         std::env::set_var("YARP_CONFIG_HOME", dir.path());
@@ -31,21 +31,19 @@ fn cpp_server(bin: &Path) {
         std::fs::File::create(dir.path().join("yarp.conf"))
             .and_then(|mut f| writeln!(f, "127.0.0.1 {port} yarp"))
             .unwrap();
-        let child = cpp_command(&bin.join("yarpserver"))
-            .args(["--ip", "127.0.0.1", "--socket", &port.to_string(), "--read"])
-            .env("YARP_CONFIG_HOME", dir.path())
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("spawn C++ yarpserver");
-        let server = Reaped(child);
+        let mut cmd = cpp_command(&bin.join("yarpserver"));
+        cmd.args(["--ip", "127.0.0.1", "--socket", &port.to_string(), "--read"])
+            .env("YARP_CONFIG_HOME", dir.path());
+        // Kept in a static for every test of this process: tied to the process, so it
+        // does not outlive it.
+        let (server, tie) =
+            yarp_interop_tests::spawn_tied_to_process(&cmd).expect("spawn C++ yarpserver");
         let start = Instant::now();
         while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
             assert!(start.elapsed() < T, "C++ yarpserver did not listen");
             std::thread::sleep(Duration::from_millis(20));
         }
-        (server, dir)
+        (server, tie, dir)
     });
 }
 

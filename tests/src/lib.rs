@@ -10,7 +10,7 @@ pub use peer::*;
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
-use std::process::Child;
+use std::process::{Child, ChildStdin, Command, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 use yarp_net::nameserver::{NameClient, NameServer};
@@ -148,6 +148,35 @@ pub fn name_server() -> SocketAddr {
 /// A client of [`name_server`] (starting it if needed).
 pub fn name_client() -> NameClient {
     NameClient::new(name_server()).with_timeout(T)
+}
+
+/// Spawns `cmd` so that it ends with this test process even when its handle is kept in a
+/// `static` (statics are never dropped, so a [`Reaped`] there never runs): it runs under
+/// `sh`, which kills it once this process's end of a pipe closes. Keep the returned
+/// `ChildStdin` as long as the program should run.
+pub fn spawn_tied_to_process(cmd: &Command) -> std::io::Result<(Reaped, ChildStdin)> {
+    let mut sh = Command::new("sh");
+    sh.arg("-c")
+        .arg(r#""$@" & p=$!; read _; kill $p 2>/dev/null; wait $p"#)
+        .arg("sh")
+        .arg(cmd.get_program())
+        .args(cmd.get_args());
+    for (k, v) in cmd.get_envs() {
+        match v {
+            Some(v) => sh.env(k, v),
+            None => sh.env_remove(k),
+        };
+    }
+    if let Some(dir) = cmd.get_current_dir() {
+        sh.current_dir(dir);
+    }
+    let mut child = sh
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()?;
+    let stdin = child.stdin.take().expect("piped stdin");
+    Ok((Reaped(child), stdin))
 }
 
 /// A child process killed and reaped when dropped, so no test leaves one behind.
