@@ -153,12 +153,20 @@ fn cpp_yarp_read_reads_our_images() {
         assert!(start.elapsed() < WAIT, "C++ yarp read did not register");
         std::thread::sleep(Duration::from_millis(20));
     }
-    let (ok, msg) =
-        runtime::block_on(
-            async move { yarp_net::network::connect(&ns, "/cam", "/rd", None).await },
-        )
-        .expect("connect");
-    assert!(ok, "{msg}");
+    // C++ registers the name before its port listens: connect once it accepts.
+    loop {
+        let ns = ns.clone();
+        let (ok, msg) =
+            runtime::block_on(
+                async move { yarp_net::network::connect(&ns, "/cam", "/rd", None).await },
+            )
+            .expect("connect");
+        if ok {
+            break;
+        }
+        assert!(start.elapsed() < WAIT, "{msg}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
     let stdout = child.0.stdout.take().unwrap();
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
