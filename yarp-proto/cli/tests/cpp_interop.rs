@@ -1014,7 +1014,15 @@ fn latency_case(test: &str, server: Side, client: Side, extra: &[&str]) {
         &prefix,
     ];
     args.extend_from_slice(extra);
-    let out = w.run(client, &args);
+    let mut out = w.run(client, &args);
+    // A C++ 3.5 server sometimes answers our client's first frame with an empty reply
+    // (unexplained; tests/bench/latency_vs_cpp.py retries too): up to three attempts.
+    for _ in 0..2 {
+        if out.ok || !matches!(server, Side::Cpp) || !out.stderr.contains("empty reply") {
+            break;
+        }
+        out = w.run(client, &args);
+    }
     assert!(out.ok, "{out:?}");
     // one `latency copytime` line per frame, as C++ writes them
     let log = std::fs::read_to_string(format!("{prefix}100.txt")).expect("latency log");
