@@ -1,10 +1,12 @@
 //! What `yarpdev` and `yarprobotinterface` serve: the YARP device framework
 //! (`yarp-devices`, which registers its own drivers) and every device crate of the
-//! workspace, each added here with its `register` function.
+//! workspace (the iCub drivers of `icubmod`, yarp-devices-ros2's ROS 2 wrappers), each
+//! added here with its `register` function.
 
 use yarp_devices::Registry;
 
 /// Registers the drivers of every linked device crate (idempotent).
 pub fn register_all() {
     Registry::install(icubmod::register);
+    Registry::install(yarp_devices_ros2::register);
 }
