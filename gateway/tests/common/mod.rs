@@ -34,7 +34,7 @@ impl std::ops::Deref for Distro {
 impl Distro {
     /// The ROS domain of test `index` for this distro (see [`domain_id`]).
     pub fn domain(&self, index: u16) -> u16 {
-        domain_slot(index) + 26 * self.slot
+        domain_slot(index) + PER_DISTRO * self.slot
     }
 }
 
@@ -86,21 +86,24 @@ pub fn first_distro(test: &str) -> Vec<Distro> {
 /// A ROS domain id unique to this test within this test run (the first distro's; see
 /// [`Distro::domain`] for the others).
 ///
-/// `index` is the test's own number (unique across the gateway's tests, < 26). The run
-/// picks one of 4 slots of 52 domains (26 per distro) from nextest's run id (or the
+/// `index` is the test's own number (unique across the gateway's tests, < 35). The run
+/// picks one of 3 slots of 70 domains (35 per distro) from nextest's run id (or the
 /// process id under plain `cargo test`), so two suites running at once rarely share a
 /// domain either; the slots stay below 232, the highest domain RTPS's port formula allows.
 pub fn domain_id(index: u16) -> u16 {
     domain_slot(index)
 }
 
+/// Domain indices per distro and run slot.
+const PER_DISTRO: u16 = 35;
+
 fn domain_slot(index: u16) -> u16 {
-    assert!(index < 26, "domain index {index} out of range");
+    assert!(index < PER_DISTRO, "domain index {index} out of range");
     let seed = std::env::var("NEXTEST_RUN_ID").unwrap_or_else(|_| std::process::id().to_string());
     let h = seed.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
         (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
     });
-    20 + (h % 4) as u16 * 52 + index
+    20 + (h % 3) as u16 * 2 * PER_DISTRO + index
 }
 
 /// A running rclpy peer (`gateway/tests/peers/peer.py`); killed and reaped on drop.
