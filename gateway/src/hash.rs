@@ -155,6 +155,36 @@ mod tests {
                 "std_srvs/srv/Empty_Request",
                 "RIHS01_458eaf200a3f63d9cc53d19436edebc0c140ef4c93ca75d5bd4ce19fd7759e35",
             ),
+            // The wrappers' sensor, odometry and transform topics (tf2_msgs: the hash
+            // Kilted's `rosidl hash` gives for ros2/geometry2's TFMessage).
+            (
+                "sensor_msgs/msg/CameraInfo",
+                "RIHS01_b3dfd68ff46c9d56c80fd3bd4ed22c7a4ddce8c8348f2f59c299e73118e7e275",
+            ),
+            (
+                "sensor_msgs/msg/LaserScan",
+                "RIHS01_64c191398013af96509d518dac71d5164f9382553fce5c1f8cca5be7924bd828",
+            ),
+            (
+                "sensor_msgs/msg/PointCloud2",
+                "RIHS01_9198cabf7da3796ae6fe19c4cb3bdd3525492988c70522628af5daa124bae2b5",
+            ),
+            (
+                "sensor_msgs/msg/BatteryState",
+                "RIHS01_4bee5dfce981c98faa6828b868307a0a73f992ed0789f374ee96c8f840e69741",
+            ),
+            (
+                "nav_msgs/msg/Odometry",
+                "RIHS01_3cc97dc7fb7502f8714462c526d369e35b603cfc34d946e3f2eda2766dfec6e0",
+            ),
+            (
+                "geometry_msgs/msg/TwistStamped",
+                "RIHS01_5f0fcd4f81d5d06ad9b4c4c63e3ea51b82d6ae4d0558f1d475229b1121db6f64",
+            ),
+            (
+                "tf2_msgs/msg/TFMessage",
+                "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087",
+            ),
         ];
         for (name, want) in cases {
             assert_eq!(rihs01(name).unwrap(), want, "{name}");

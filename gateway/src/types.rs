@@ -276,6 +276,153 @@ pub static MESSAGES: &[MsgType] = &[
             seq("data", Prim::U8),
         ],
     ),
+    // Cameras, lasers, point clouds, batteries, odometry and transforms: the topics of
+    // yarp-devices-ros2's wrappers (frameGrabber, rgbdSensor, rangefinder2D, battery,
+    // odometry2D, mobileBaseVelocityControl, frameTransform).
+    msg(
+        "sensor_msgs/msg/RegionOfInterest",
+        &[
+            f("x_offset", Prim::U32),
+            f("y_offset", Prim::U32),
+            f("height", Prim::U32),
+            f("width", Prim::U32),
+            f("do_rectify", Prim::Bool),
+        ],
+    ),
+    msg(
+        "sensor_msgs/msg/CameraInfo",
+        &[
+            HEADER,
+            f("height", Prim::U32),
+            f("width", Prim::U32),
+            f("distortion_model", Prim::String),
+            seq("d", Prim::F64),
+            arr("k", Prim::F64, 9),
+            arr("r", Prim::F64, 9),
+            arr("p", Prim::F64, 12),
+            f("binning_x", Prim::U32),
+            f("binning_y", Prim::U32),
+            nested("roi", "sensor_msgs/msg/RegionOfInterest"),
+        ],
+    ),
+    msg(
+        "sensor_msgs/msg/LaserScan",
+        &[
+            HEADER,
+            f("angle_min", Prim::F32),
+            f("angle_max", Prim::F32),
+            f("angle_increment", Prim::F32),
+            f("time_increment", Prim::F32),
+            f("scan_time", Prim::F32),
+            f("range_min", Prim::F32),
+            f("range_max", Prim::F32),
+            seq("ranges", Prim::F32),
+            seq("intensities", Prim::F32),
+        ],
+    ),
+    msg(
+        "sensor_msgs/msg/PointField",
+        &[
+            f("name", Prim::String),
+            f("offset", Prim::U32),
+            f("datatype", Prim::U8),
+            f("count", Prim::U32),
+        ],
+    ),
+    msg(
+        "sensor_msgs/msg/PointCloud2",
+        &[
+            HEADER,
+            f("height", Prim::U32),
+            f("width", Prim::U32),
+            nested_seq("fields", "sensor_msgs/msg/PointField"),
+            f("is_bigendian", Prim::Bool),
+            f("point_step", Prim::U32),
+            f("row_step", Prim::U32),
+            seq("data", Prim::U8),
+            f("is_dense", Prim::Bool),
+        ],
+    ),
+    msg(
+        "sensor_msgs/msg/BatteryState",
+        &[
+            HEADER,
+            f("voltage", Prim::F32),
+            f("temperature", Prim::F32),
+            f("current", Prim::F32),
+            f("charge", Prim::F32),
+            f("capacity", Prim::F32),
+            f("design_capacity", Prim::F32),
+            f("percentage", Prim::F32),
+            f("power_supply_status", Prim::U8),
+            f("power_supply_health", Prim::U8),
+            f("power_supply_technology", Prim::U8),
+            f("present", Prim::Bool),
+            seq("cell_voltage", Prim::F32),
+            seq("cell_temperature", Prim::F32),
+            f("location", Prim::String),
+            f("serial_number", Prim::String),
+        ],
+    ),
+    msg("geometry_msgs/msg/Point", XYZ),
+    msg(
+        "geometry_msgs/msg/Pose",
+        &[
+            nested("position", "geometry_msgs/msg/Point"),
+            nested("orientation", "geometry_msgs/msg/Quaternion"),
+        ],
+    ),
+    msg(
+        "geometry_msgs/msg/PoseWithCovariance",
+        &[
+            nested("pose", "geometry_msgs/msg/Pose"),
+            arr("covariance", Prim::F64, 36),
+        ],
+    ),
+    msg(
+        "geometry_msgs/msg/TwistWithCovariance",
+        &[
+            nested("twist", "geometry_msgs/msg/Twist"),
+            arr("covariance", Prim::F64, 36),
+        ],
+    ),
+    msg(
+        "nav_msgs/msg/Odometry",
+        &[
+            HEADER,
+            f("child_frame_id", Prim::String),
+            nested("pose", "geometry_msgs/msg/PoseWithCovariance"),
+            nested("twist", "geometry_msgs/msg/TwistWithCovariance"),
+        ],
+    ),
+    msg(
+        "geometry_msgs/msg/TwistStamped",
+        &[HEADER, nested("twist", "geometry_msgs/msg/Twist")],
+    ),
+    msg(
+        "geometry_msgs/msg/Transform",
+        &[
+            nested("translation", "geometry_msgs/msg/Vector3"),
+            nested("rotation", "geometry_msgs/msg/Quaternion"),
+        ],
+    ),
+    msg(
+        "geometry_msgs/msg/TransformStamped",
+        &[
+            HEADER,
+            f("child_frame_id", Prim::String),
+            nested("transform", "geometry_msgs/msg/Transform"),
+        ],
+    ),
+    // Not on PyPI: its type-description JSON is generated into the test venvs by
+    // tests/peers/install-ros2.sh from tests/peers/interfaces/.
+    msg(
+        "tf2_msgs/msg/TFMessage",
+        &[nested_seq(
+            "transforms",
+            "geometry_msgs/msg/TransformStamped",
+        )],
+    ),
     msg(
         "sensor_msgs/msg/Imu",
         &[

@@ -14,8 +14,8 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 distro=${1:-kilted}
 names=(rclpy std-msgs sensor-msgs geometry-msgs std-srvs trajectory-msgs diagnostic-msgs
-       rmw-fastrtps-cpp)
-probe='import rclpy, std_msgs.msg, sensor_msgs.msg, geometry_msgs.msg, std_srvs.srv, trajectory_msgs.msg, diagnostic_msgs.msg'
+       nav-msgs rmw-fastrtps-cpp)
+probe='import rclpy, std_msgs.msg, sensor_msgs.msg, geometry_msgs.msg, std_srvs.srv, trajectory_msgs.msg, diagnostic_msgs.msg, nav_msgs.msg'
 case $distro in
     kilted)
         venv=${ROS_VENV:-$PWD/.venv-ros}
@@ -32,7 +32,34 @@ case $distro in
         exit 2
         ;;
 esac
+# Interfaces PyPI has no wheel for (tests/peers/interfaces/<pkg>/msg/*.idl): only their
+# type-description JSON (with the REP-2016 hashes), made by the venv's own `rosidl hash`,
+# lands in the venv's share/<pkg>/msg/, where the catalog test reads every type's hash.
+extra_interfaces() {
+    local src=$PWD/tests/peers/interfaces dir pkg idl out
+    for dir in "$src"/*/; do
+        pkg=$(basename "$dir")
+        for idl in "$dir"msg/*.idl; do
+            out=$(mktemp -d)
+            AMENT_PREFIX_PATH=$venv "$venv/bin/rosidl" hash -o "$out" \
+                -I "$venv/share/geometry_msgs" -I "$venv/share/std_msgs" \
+                -I "$venv/share/builtin_interfaces" \
+                "$pkg" "${dir%/}:msg/$(basename "$idl")" >/dev/null 2>&1
+            mkdir -p "$venv/share/$pkg/msg"
+            cp "$out/msg/"*.json "$venv/share/$pkg/msg/"
+            rm -rf "$out"
+        done
+    done
+}
+extra_done() {
+    local idl rel
+    for idl in tests/peers/interfaces/*/msg/*.idl; do
+        rel=${idl#tests/peers/interfaces/}
+        [[ -f $venv/share/${rel%.idl}.json ]] || return 1
+    done
+}
 if [[ -x $venv/bin/python ]] && "$venv/bin/python" -c "$probe" 2>/dev/null; then
+    extra_done || extra_interfaces
     echo "$venv"; exit 0
 fi
 if [[ $distro == jazzy && -z $python ]]; then
@@ -55,4 +82,5 @@ fi
 "$python" -m venv "$venv" >&2
 "$venv/bin/pip" install -q "${names[@]/#/$prefix}" >&2
 "$venv/bin/python" -c "$probe" >&2
+extra_interfaces
 echo "$venv"
