@@ -17,6 +17,8 @@ pub mod joint_command;
 pub mod mapping;
 pub mod mas;
 pub mod pattern;
+pub mod robot;
+pub mod robot_state;
 pub mod ros;
 pub mod service;
 pub mod types;

@@ -4,6 +4,7 @@
 //! [`LoadError`]s that name the file, the entry and the key.
 
 use crate::joint_command::Mode;
+use crate::robot::{self, RobotEntry};
 use crate::types;
 use serde::Deserialize;
 use std::fmt;
@@ -307,6 +308,8 @@ impl ServiceEntry {
 pub struct Mappings {
     pub topics: Vec<TopicEntry>,
     pub services: Vec<ServiceEntry>,
+    /// `[[robot]]` entries (see [`crate::robot`]).
+    pub robots: Vec<RobotEntry>,
 }
 
 /// A mapping file that cannot be used.
@@ -319,7 +322,7 @@ pub enum LoadError {
     },
     #[error("{file}: not valid TOML: {message}")]
     Syntax { file: PathBuf, message: String },
-    #[error("{file}: top-level key `{key}` is unknown (expected `topic` or `service`)")]
+    #[error("{file}: top-level key `{key}` is unknown (expected `topic`, `service` or `robot`)")]
     UnknownSection { file: PathBuf, key: String },
     #[error("{file}: entry {entry}: key `{key}`: {message}")]
     Entry {
@@ -341,7 +344,8 @@ impl LoadError {
 }
 
 impl Mappings {
-    /// Loads and validates mapping files; entry names must be unique across all of them.
+    /// Loads and validates mapping files; entry names must be unique across all of them,
+    /// and a `[[robot]]` entry's parts may be in any of them.
     pub fn load(files: &[impl AsRef<Path>]) -> Result<Mappings, LoadError> {
         let mut all = Mappings::default();
         for f in files {
@@ -350,7 +354,7 @@ impl Mappings {
                 file: f.to_path_buf(),
                 source,
             })?;
-            let one = Mappings::parse(&text, f)?;
+            let one = Mappings::parse_one(&text, f)?;
             for t in one.topics {
                 check_unique(&all, &t.name, f)?;
                 all.topics.push(t);
@@ -359,12 +363,37 @@ impl Mappings {
                 check_unique(&all, &s.name, f)?;
                 all.services.push(s);
             }
+            for r in one.robots {
+                check_unique(&all, &r.name, f)?;
+                all.robots.push(r);
+            }
         }
+        all.check_robot_parts()?;
         Ok(all)
     }
 
-    /// Parses and validates one file's text (`file` only names it in errors).
+    /// Parses and validates one file's text (`file` names it in errors; relative paths in
+    /// it, such as a URDF, are relative to its directory).
     pub fn parse(text: &str, file: &Path) -> Result<Mappings, LoadError> {
+        let m = Mappings::parse_one(text, file)?;
+        m.check_robot_parts()?;
+        Ok(m)
+    }
+
+    /// A `[[robot]]` entry's parts must be JointState entries of the files loaded.
+    fn check_robot_parts(&self) -> Result<(), LoadError> {
+        for r in &self.robots {
+            robot::check_parts(r, &self.topics).map_err(|(key, message)| LoadError::Entry {
+                file: r.file.clone(),
+                entry: format!("robot \"{}\"", r.name),
+                key: key.into(),
+                message,
+            })?;
+        }
+        Ok(())
+    }
+
+    fn parse_one(text: &str, file: &Path) -> Result<Mappings, LoadError> {
         let table: toml::Table = text
             .parse()
             .map_err(|e: toml::de::Error| LoadError::Syntax {
@@ -374,8 +403,8 @@ impl Mappings {
         let mut out = Mappings::default();
         for (key, value) in table {
             let entries = match (key.as_str(), value) {
-                ("topic" | "service", toml::Value::Array(a)) => a,
-                ("topic" | "service", _) => {
+                ("topic" | "service" | "robot", toml::Value::Array(a)) => a,
+                ("topic" | "service" | "robot", _) => {
                     return Err(LoadError::Entry {
                         file: file.to_path_buf(),
                         entry: key.clone(),
@@ -404,6 +433,11 @@ impl Mappings {
                     t.qos.reliability = Some(t.qos.reliability.unwrap_or(default_reliability(&t)));
                     check_unique(&out, &t.name, file)?;
                     out.topics.push(t);
+                } else if key == "robot" {
+                    let mut r: RobotEntry = deserialize(v).map_err(|(k, m)| err(&k, m))?;
+                    robot::validate(&mut r, file).map_err(|(k, m)| err(k, m))?;
+                    check_unique(&out, &r.name, file)?;
+                    out.robots.push(r);
                 } else {
                     let s: ServiceEntry = deserialize(v).map_err(|(k, m)| err(&k, m))?;
                     validate_service(&s).map_err(|(k, m)| err(k, m))?;
@@ -424,8 +458,9 @@ fn entry_label(section: &str, i: usize, v: &toml::Value) -> String {
 }
 
 fn check_unique(m: &Mappings, name: &str, file: &Path) -> Result<(), LoadError> {
-    let taken =
-        m.topics.iter().any(|t| t.name == name) || m.services.iter().any(|s| s.name == name);
+    let taken = m.topics.iter().any(|t| t.name == name)
+        || m.services.iter().any(|s| s.name == name)
+        || m.robots.iter().any(|r| r.name == name);
     if taken {
         return Err(LoadError::Entry {
             file: file.to_path_buf(),
@@ -455,7 +490,8 @@ fn deserialize<T: serde::de::DeserializeOwned>(v: toml::Value) -> Result<T, (Str
     })
 }
 
-type Invalid = (&'static str, String);
+/// A validation error: the key and what is wrong with it.
+pub(crate) type Invalid = (&'static str, String);
 
 /// The explicit conversion, else `joint_command` when a control board is named, else the
 /// type's default.
@@ -766,7 +802,7 @@ fn check_port(key: &'static str, p: &str) -> Result<(), Invalid> {
 
 /// ROS names: `/`-separated tokens of letters, digits and `_`, not starting with a digit,
 /// without `__`.
-fn check_ros_name(key: &'static str, n: &str) -> Result<(), Invalid> {
+pub(crate) fn check_ros_name(key: &'static str, n: &str) -> Result<(), Invalid> {
     let body = n.strip_prefix('/').unwrap_or(n);
     let ok = !body.is_empty()
         && !body.contains("__")

@@ -116,7 +116,14 @@ async fn start_one(
     );
     let names = JointNameSource::new(t, ns, me);
     let tasks = vec![
-        tokio::spawn(yarp_to_ros(port.clone(), publisher, t.clone(), names, c)),
+        tokio::spawn(yarp_to_ros(
+            port.clone(),
+            publisher,
+            t.clone(),
+            names,
+            Default::default(),
+            c,
+        )),
         tokio::spawn(keep_connected(
             ns.clone(),
             port.clone(),

@@ -4,6 +4,7 @@
 
 mod commands;
 mod dynamic;
+mod robot;
 mod services;
 mod topics;
 mod yarp_rpc;
@@ -137,12 +138,17 @@ impl Gateway {
             deferred: Vec::new(),
             bridges: Vec::new(),
             ports: Vec::new(),
+            robots: robot::Robots::new(&m.robots),
         };
         for t in &m.topics {
             g.topic(&mut node, t).await?;
         }
         for s in &m.services {
             g.service(&mut node, s).await?;
+        }
+        let robots = std::mem::take(&mut g.robots);
+        for r in &m.robots {
+            g.robot(&mut node, r, &robots)?;
         }
         g.diagnostics(&mut node, &opt).await?;
         let node = Arc::new(node);
@@ -298,6 +304,8 @@ struct Builder {
     deferred: Vec<Deferred>,
     bridges: Vec<Bridge>,
     ports: Vec<Arc<Port>>,
+    /// The `[[robot]]` entries' merged joint states, fed by their parts' bridges.
+    robots: robot::Robots,
 }
 
 /// A start that fails half-way must not leave bridges running behind the caller's back.
@@ -351,8 +359,10 @@ impl Builder {
             own = Some(publisher.gid());
             let (port, t2, c) = (port.clone(), t.clone(), counters.clone());
             let names = JointNameSource::new(t, &self.ns, &node.fully_qualified_name());
-            self.tasks
-                .push(tokio::spawn(yarp_to_ros(port, publisher, t2, names, c)));
+            let tap = self.robots.tap(&t.name);
+            self.tasks.push(tokio::spawn(yarp_to_ros(
+                port, publisher, t2, names, tap, c,
+            )));
         }
         if t.direction.to_yarp() {
             let sub: Subscription<Ros> = node

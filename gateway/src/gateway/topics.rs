@@ -1,5 +1,6 @@
 //! Topic bridges: YARP port <-> ROS topic tasks, and keeping YARP connections up.
 
+use super::robot::Tap;
 use super::yarp_rpc::YarpRpc;
 use super::{now_ns, RECONNECT_PERIOD};
 use crate::axis_info;
@@ -97,6 +98,7 @@ pub(super) async fn yarp_to_ros(
     publisher: Publisher<Ros>,
     t: TopicEntry,
     mut names: JointNameSource,
+    tap: Tap,
     c: Arc<Counters>,
 ) {
     let conv = t.conversion();
@@ -135,6 +137,9 @@ pub(super) async fn yarp_to_ros(
         let msg = inc.take_bottle().map_err(|e| e.to_string()).and_then(|b| {
             convert::to_ros_owned(conv, &t.ros_type, b, &ctx).map_err(|e| e.to_string())
         });
+        if let Ok(m) = &msg {
+            tap.feed(m);
+        }
         match msg {
             Ok(m) => match publisher.async_publish(m).await {
                 Ok(()) => c.forwarded(t0.elapsed()),

@@ -1,0 +1,241 @@
+//! The whole robot as ROS tools expect it, against rclpy (run under netns-run): two real
+//! control boards (`fakeMotionControl` behind `controlBoard_nws_yarp`) merged into one
+//! `/joint_states` that a default-QoS rclpy node receives, and `/robot_description` from
+//! a URDF named in the mapping, received by a transient-local subscriber that joins after
+//! the gateway published it. Domain index: 10 (shared with latency.rs's `--ignored`
+//! measurement, whose topics differ).
+
+mod common;
+
+use common::{blocking, Peer, T};
+use serde_json::Value as Json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use yarp_ros2_gateway::gateway::{Gateway, Options};
+use yarp_ros2_gateway::mapping::Mappings;
+
+/// A directory of its own for this test's files (removed on drop).
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> TempDir {
+        let d = std::env::temp_dir().join(format!("gw-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).expect("temp dir");
+        TempDir(d)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Starts a gateway for the mapping file `file` in `domain`, DDS on loopback only.
+async fn gateway_for(file: &Path, ns: &yarp_net::nameserver::NameClient, domain: u16) -> Gateway {
+    std::env::set_var("ROS_DISTRO", "kilted");
+    let m = Mappings::load(&[file]).expect("test mapping");
+    let opt = Options {
+        domain_id: domain,
+        networks: vec!["127.0.0.1".parse().unwrap()],
+        ..Default::default()
+    };
+    Gateway::start(&m, ns.clone(), opt)
+        .await
+        .expect("gateway starts")
+}
+
+const URDF: &str = r#"<?xml version="1.0"?>
+<robot name="t10_bot">
+  <link name="base"/><link name="neck"/><link name="head"/>
+  <link name="shoulder"/><link name="forearm"/><link name="slider"/>
+  <joint name="neck_pitch" type="revolute"><parent link="base"/><child link="neck"/>
+    <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="neck_yaw" type="revolute"><parent link="neck"/><child link="head"/>
+    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="shoulder"/>
+    <axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+  <joint name="elbow" type="revolute"><parent link="shoulder"/><child link="forearm"/>
+    <axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+  <joint name="rail" type="prismatic"><parent link="forearm"/><child link="slider"/>
+    <axis xyz="1 0 0"/><limit lower="0" upper="0.5" effort="1" velocity="1"/></joint>
+</robot>
+"#;
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn merged_joint_states_and_latched_robot_description() {
+    for d in common::distros("merged_joint_states_and_latched_robot_description") {
+        merged_joint_states_and_latched_robot_description_on(&d).await;
+    }
+}
+
+async fn merged_joint_states_and_latched_robot_description_on(venv: &common::Distro) {
+    let domain = venv.domain(10);
+    let ns = common::device_name_server();
+    let boards = [
+        (
+            "/t10/head",
+            "neck_pitch neck_yaw",
+            "revolute revolute",
+            vec![10.0, -20.0],
+        ),
+        (
+            "/t10/arm",
+            "shoulder elbow rail",
+            "revolute revolute prismatic",
+            vec![30.0, 45.0, 0.25],
+        ),
+    ];
+    let mut devices = Vec::new();
+    for (name, axes, types, pos) in boards.clone() {
+        let quoted = |s: &str| {
+            s.split(' ')
+                .map(|w| format!("\"{w}\""))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let n = pos.len();
+        let (axes, types) = (quoted(axes), quoted(types));
+        devices.push(
+            blocking(move || {
+                common::open_device(&format!(
+                    "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname {name}\n\
+                     period 0.01\n[GENERAL]\njoints {n}\nAxisName {axes}\nAxisType {types}\n"
+                ))
+            })
+            .await,
+        );
+        // Move the joints (instantly: the fake's reference speed is 0) through a client.
+        devices.push(
+            blocking(move || {
+                let mut c = common::open_device(&format!(
+                    "device remote_controlboard\nremote {name}\nlocal {name}/mover\ncarrier tcp\n"
+                ));
+                c.device()
+                    .as_position_control()
+                    .unwrap()
+                    .position_moves(&pos)
+                    .unwrap();
+                c
+            })
+            .await,
+        );
+    }
+    let dir = TempDir::new("robot");
+    std::fs::create_dir_all(dir.0.join("description")).unwrap();
+    std::fs::write(dir.0.join("description/t10.urdf"), URDF).unwrap();
+    let file = dir.0.join("robot.toml");
+    std::fs::write(
+        &file,
+        r#"
+[[topic]]
+name = "head_joints"
+direction = "yarp_to_ros"
+yarp_port = "/gw10/head/state:i"
+yarp_source = "/t10/head/state:o"
+ros_topic = "/t10/head/joint_states"
+ros_type = "sensor_msgs/msg/JointState"
+joint_names = { from = "axis_info", rpc_port = "/t10/head/rpc:i" }
+
+[[topic]]
+name = "arm_joints"
+direction = "yarp_to_ros"
+yarp_port = "/gw10/arm/state:i"
+yarp_source = "/t10/arm/state:o"
+ros_topic = "/t10/arm/joint_states"
+ros_type = "sensor_msgs/msg/JointState"
+joint_names = { from = "axis_info", rpc_port = "/t10/arm/rpc:i" }
+
+[[robot]]
+name = "t10_bot"
+joint_states = { parts = ["head_joints", "arm_joints"], rate_hz = 20 }
+robot_description = { urdf = "description/t10.urdf" }
+"#,
+    )
+    .unwrap();
+    let gw = gateway_for(&file, &ns, domain).await;
+
+    // A default-QoS rclpy node (reliable, volatile, keep-last 10) on /joint_states.
+    let sub = Peer::start(
+        venv,
+        domain,
+        &[
+            "sub",
+            "sensor_msgs/msg/JointState",
+            "/joint_states",
+            "--count",
+            "1000",
+        ],
+    );
+    sub.expect_async("READY", T).await;
+    let names = ["neck_pitch", "neck_yaw", "shoulder", "elbow", "rail"];
+    let want = [
+        10f64.to_radians(),
+        (-20f64).to_radians(),
+        30f64.to_radians(),
+        45f64.to_radians(),
+        0.25,
+    ];
+    // Until both boards answered their axis names, a message may hold one part only; and
+    // the first states may predate the moves.
+    let end = Instant::now() + T;
+    let (m, first) = loop {
+        let line = sub.expect_async("MSG", T).await;
+        let m: Json = serde_json::from_str(&line).unwrap();
+        let pos: Vec<f64> = m["position"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(Json::as_f64)
+            .collect();
+        if m["name"] == serde_json::json!(names)
+            && pos.len() == want.len()
+            && pos.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-9)
+        {
+            break (m, Instant::now());
+        }
+        assert!(Instant::now() < end, "no merged state matched: {m}");
+    };
+    assert_eq!(m["velocity"], serde_json::json!([]), "{m}");
+    assert_eq!(m["header"]["frame_id"], "");
+    let stamp = m["header"]["stamp"]["sec"].as_f64().unwrap()
+        + m["header"]["stamp"]["nanosec"].as_f64().unwrap() * 1e-9;
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64();
+    assert!((now - stamp).abs() < 10.0, "stamp {stamp}, now {now}");
+    // At most rate_hz (20) merged messages a second: count one second's worth.
+    let mut n = 0;
+    while first.elapsed().as_secs_f64() < 1.0 {
+        if sub.try_line("MSG").is_some() {
+            n += 1;
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(5)).await;
+    }
+    assert!(
+        (5..=22).contains(&n),
+        "{n} merged messages in 1 s at rate_hz 20"
+    );
+    eprintln!("merged /joint_states: {m} ({n} in 1 s)");
+
+    // The description was published at start: a transient-local subscriber that joins
+    // now still gets it (latched), as robot_state_publisher's readers do.
+    let desc = Peer::start(
+        venv,
+        domain,
+        &[
+            "sub",
+            "std_msgs/msg/String",
+            "/robot_description",
+            "--transient",
+            "--depth",
+            "1",
+        ],
+    );
+    desc.expect_async("READY", T).await;
+    let m: Json = serde_json::from_str(&desc.expect_async("MSG", T).await).unwrap();
+    assert_eq!(m["data"], URDF);
+    gw.shutdown().await;
+    drop(devices);
+}
