@@ -5,8 +5,10 @@
 
 mod cpp_tools;
 mod peer;
+mod procs;
 pub use cpp_tools::*;
 pub use peer::*;
+pub use procs::*;
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
