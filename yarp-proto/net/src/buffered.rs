@@ -8,7 +8,8 @@
 //! back on the senders.
 //!
 //! Writing: `write` never waits; a message that has not left yet is replaced by the next
-//! one (C++ "drop if busy"); `write_strict` waits its turn. Envelopes (`Stamp`) can be
+//! one, and a connection whose queue is full (its reader stopped reading) misses it while
+//! the others get it (C++ "drop if busy"); `write_strict` waits its turn. Envelopes (`Stamp`) can be
 //! attached automatically, as C++ `setEnvelope` + `Stamp::update`.
 //!
 //! ```no_run
@@ -267,11 +268,11 @@ struct Pending {
 }
 
 impl Pending {
-    async fn send(&self, port: &Port) -> usize {
-        match self.stamp {
-            Some(s) => port.write_stamped(&self.bottle, s).await,
-            None => port.write(&self.bottle).await,
-        }
+    /// Hands the message to every output with room in its queue: a connection whose
+    /// reader stopped reading misses it instead of holding up the others (C++ drops a
+    /// message for a busy connection of a BufferedPort).
+    fn send(&self, port: &Port) -> usize {
+        port.write_nowait(&self.bottle, self.stamp)
     }
 
     async fn send_strict(&self, port: &Port) -> usize {
@@ -324,7 +325,7 @@ impl WriteSide {
         let _turn = self.send_lock.lock().await;
         let queued = lock(&self.slot).take();
         if let Some(q) = queued {
-            q.send(port).await;
+            q.send(port);
         }
         let Some(p) = p else {
             return 0;

@@ -47,6 +47,9 @@ pub enum OutputError {
     AckTimeout(String, Duration),
 }
 
+/// How long a closing connection may take to send its `q` before it is ended without.
+const CLOSE_WAIT: Duration = Duration::from_secs(2);
+
 /// A message ready to go out on any carrier.
 ///
 /// It keeps the Bottle; binary connections write it as index + port command + the
@@ -213,18 +216,30 @@ impl OutputHandle {
         self.tx.clone()
     }
 
-    /// Asks the connection to send `q` and close; does not wait.
+    /// Asks the connection to send `q` and close; does not wait. A connection that has
+    /// not closed within [`CLOSE_WAIT`] (stuck writing to a reader that stopped reading,
+    /// with its `q` queued behind) is ended without it.
     pub(crate) fn close(self) {
         if self.tx.try_send(Job::Close(None)).is_err() {
             self.task.abort();
+            return;
+        }
+        if let Ok(rt) = tokio::runtime::Handle::try_current() {
+            let abort = self.task.abort_handle();
+            let task = self.task;
+            rt.spawn(async move {
+                if timeout(CLOSE_WAIT, task).await.is_err() {
+                    abort.abort();
+                }
+            });
         }
     }
 
     /// Sends `q`, waits (bounded) for the connection to finish.
     pub(crate) async fn close_and_wait(self) {
         let (tx, rx) = oneshot::channel();
-        if self.tx.send(Job::Close(Some(tx))).await.is_ok() {
-            let _ = timeout(Duration::from_secs(2), rx).await;
+        if let Ok(Ok(())) = timeout(CLOSE_WAIT, self.tx.send(Job::Close(Some(tx)))).await {
+            let _ = timeout(CLOSE_WAIT, rx).await;
         }
         self.task.abort();
     }
