@@ -60,7 +60,13 @@ impl Net {
 
     fn server(&self) -> Proc {
         let mut c = self.cmd("yarpserver", "yarp-net");
-        c.args(["--ip", "127.0.0.1", "--socket", &self.port.to_string(), "--write"]);
+        c.args([
+            "--ip",
+            "127.0.0.1",
+            "--socket",
+            &self.port.to_string(),
+            "--write",
+        ]);
         let mut p = Proc::spawn("yarpserver", c);
         p.wait_line("Ok. Ready!", STEP);
         p
@@ -170,16 +176,26 @@ fn name_server_killed_and_restarted() {
     let _server = net.server();
     for (port, was) in ["/fault/in", "/fault/out", gw_port].iter().zip(&before) {
         let again = net.wait_registered(port);
-        assert_eq!(Some(again), *was, "{port} registered again where it listens");
+        assert_eq!(
+            Some(again),
+            *was,
+            "{port} registered again where it listens"
+        );
     }
     let took = t0.elapsed();
     // REGISTRATION_CHECK is 2 s; allow a loaded machine its start-up time on top
-    assert!(took < Duration::from_secs(12), "re-registration took {took:?}");
+    assert!(
+        took < Duration::from_secs(12),
+        "re-registration took {took:?}"
+    );
     println!("every port registered again {took:?} after the server restarted");
 
     // connections by name work again: a new reader, and the gateway's input
     let mut reader2 = net.reader("/fault/in2");
-    assert!(net.connect("/fault/out", "/fault/in2"), "connect to a new reader");
+    assert!(
+        net.connect("/fault/out", "/fault/in2"),
+        "connect to a new reader"
+    );
     assert!(net.connect("/fault/out", gw_port), "connect to the gateway");
     send_line(&mut writer, "after 1");
     reader.wait_line("after 1", STEP);
@@ -288,7 +304,11 @@ fn half_messages_block_nothing_else() {
 
     let targets = [
         ("reader", net.query("/fault/in").unwrap(), reader.pid()),
-        ("rpc server", net.query("/fault/motors").unwrap(), motor.pid()),
+        (
+            "rpc server",
+            net.query("/fault/motors").unwrap(),
+            motor.pid(),
+        ),
         ("gateway", net.query(gw_port).unwrap(), gateway.pid()),
     ];
     std::thread::sleep(Duration::from_millis(500));
@@ -323,13 +343,19 @@ fn half_messages_block_nothing_else() {
     let reply = rpc(&net, "/fault/motors", "[get] [axes]\n");
     assert!(reply.contains("[is] [axes] 2"), "rpc while hung: {reply}");
     assert!(net.query("/fault/in").is_some(), "name server while hung");
-    assert!(net.connect("/fault/out", gw_port), "gateway accepts while hung");
+    assert!(
+        net.connect("/fault/out", gw_port),
+        "gateway accepts while hung"
+    );
 
     // the reader is told to drop the half connections (admin `del`, as `yarp disconnect`
     // asks a destination): without any peer closing
     let (_, reader_port, reader_pid) = targets[0];
     let reply = admin_text(reader_port, "[del] /fault/half");
-    assert!(reply.contains("Removing connection from /fault/half"), "admin del: {reply:?}");
+    assert!(
+        reply.contains("Removing connection from /fault/half"),
+        "admin del: {reply:?}"
+    );
     assert!(
         eventually(STEP, || fd_count(reader_pid) <= base[0].0 + HALF / 2),
         "reader still holds {} descriptors (baseline {})",
@@ -347,7 +373,10 @@ fn half_messages_block_nothing_else() {
             fd_count(*pid)
         );
         let now = thread_count(*pid);
-        assert!(now <= threads + 2, "{what}: {now} threads (baseline {threads})");
+        assert!(
+            now <= threads + 2,
+            "{what}: {now} threads (baseline {threads})"
+        );
     }
     assert!(
         eventually(STEP, || fd_count(server.pid()) <= ns_base + 1),
@@ -365,7 +394,14 @@ fn stalled_reader(net: &Net, name: &str) -> (TcpListener, std::thread::JoinHandl
     let port = l.local_addr().expect("addr").port();
     let ok = net
         .yarp()
-        .args(["name", "register", name, "tcp", "127.0.0.1", &port.to_string()])
+        .args([
+            "name",
+            "register",
+            name,
+            "tcp",
+            "127.0.0.1",
+            &port.to_string(),
+        ])
         .output()
         .expect("yarp name register");
     assert!(ok.status.success(), "register {name}");
@@ -402,8 +438,13 @@ fn stalled_reader_keeps_writer_memory_bounded() {
     let cam = Proc::spawn("yarpdev fakeFrameGrabber", cam);
     net.wait_registered("/fault/cam");
 
+    std::thread::sleep(Duration::from_millis(500));
+    let (fds_alone, rss_alone) = (fd_count(cam.pid()), rss_kib(cam.pid()));
     let (_l, accepted) = stalled_reader(&net, "/fault/stuck");
-    assert!(net.connect("/fault/cam", "/fault/stuck"), "connect the stalled reader");
+    assert!(
+        net.connect("/fault/cam", "/fault/stuck"),
+        "connect the stalled reader"
+    );
     let _stuck = accepted.join().expect("stalled reader accepted");
     // a reader that keeps reading, in this process
     let yarp = yarp_net::blocking::Network::with_name_server(
@@ -411,7 +452,10 @@ fn stalled_reader_keeps_writer_memory_bounded() {
     )
     .expect("network");
     let live = yarp_net::blocking::Port::open(&yarp, "/fault/live").expect("open reader");
-    assert!(net.connect("/fault/cam", "/fault/live"), "connect the live reader");
+    assert!(
+        net.connect("/fault/cam", "/fault/live"),
+        "connect the live reader"
+    );
 
     // warm-up: the stalled connection's socket buffers and queue fill
     std::thread::sleep(Duration::from_secs(3));
@@ -427,13 +471,29 @@ fn stalled_reader_keeps_writer_memory_bounded() {
     }
     let rss1 = rss_kib(cam.pid());
     println!(
-        "writer RSS {rss0} kB after warm-up, {rss1} kB 6 s later (peak {peak} kB); \
-         live reader got {frames} frames meanwhile"
+        "writer RSS {rss_alone} kB without readers, {rss0} kB after 3 s with the stalled \
+         one, {rss1} kB 6 s later (peak {peak} kB); live reader got {frames} frames meanwhile"
     );
     // an unbounded queue would grow by 23 MB/s here
     assert!(
         peak < rss0 + 8 * 1024,
         "writer memory grew from {rss0} kB to {peak} kB with a stalled reader"
     );
-    assert!(frames >= 100, "the live reader starved: {frames} frames in 6 s");
+    assert!(
+        frames >= 100,
+        "the live reader starved: {frames} frames in 6 s"
+    );
+
+    // removing the stalled connection frees it, although its writer is stuck mid-write
+    let out = net
+        .yarp()
+        .args(["disconnect", "/fault/cam", "/fault/stuck"])
+        .output()
+        .expect("yarp disconnect");
+    assert!(out.status.success(), "yarp disconnect");
+    assert!(
+        eventually(STEP, || fd_count(cam.pid()) <= fds_alone + 1),
+        "writer holds {} descriptors, {fds_alone} before the readers came",
+        fd_count(cam.pid())
+    );
 }

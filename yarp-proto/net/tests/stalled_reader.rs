@@ -67,7 +67,9 @@ fn count(reader: std::sync::Arc<Port>) -> tokio::task::JoinHandle<usize> {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn buffered_port_write_keeps_live_readers_fed_past_a_stalled_one() {
     let ns = name_server().await;
-    let w = BufferedPort::open("/st/w", ns.clone()).await.expect("open w");
+    let w = BufferedPort::open("/st/w", ns.clone())
+        .await
+        .expect("open w");
     let live = std::sync::Arc::new(Port::open("/st/live", ns.clone()).await.expect("live"));
     let stuck = stalled_reader(&ns, "/st/stuck").await;
     w.connect("/st/stuck", None).await.expect("connect stuck");
