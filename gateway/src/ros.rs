@@ -37,6 +37,15 @@ pub fn start_node(
     namespace: &str,
     node_name: &str,
 ) -> Result<(Context, Node), RosError> {
+    let ctx = start_context(domain, networks)?;
+    let node = new_node(&ctx, namespace, node_name)?;
+    Ok((ctx, node))
+}
+
+/// A DDS participant as a ros2-client context, announcing the type hash of every catalog
+/// type; nodes are added with [`new_node`] (the gateway has one, yarp-devices-ros2's
+/// devices one each, all on one participant per process).
+pub fn start_context(domain: u16, networks: &[IpAddr]) -> Result<Context, RosError> {
     let mut b = DomainParticipantBuilder::new(domain);
     if !networks.is_empty() {
         b = b.with_only_networks(networks.iter().copied());
@@ -50,12 +59,30 @@ pub fn start_node(
     for (dds_type, user_data) in crate::hash::endpoint_user_data() {
         dp.set_endpoint_user_data(&dds_type, user_data.into_bytes());
     }
-    let ctx = Context::from_domain_participant(dp).map_err(|e| RosError::Participant {
+    Context::from_domain_participant(dp).map_err(|e| RosError::Participant {
         domain,
         message: format!("{e:?}"),
-    })?;
-    let node = new_node(&ctx, namespace, node_name)?;
-    Ok((ctx, node))
+    })
+}
+
+/// The ROS domain of this process as rcl reads it: `$ROS_DOMAIN_ID`, else 0.
+pub fn domain_from_env() -> Result<u16, RosError> {
+    match std::env::var("ROS_DOMAIN_ID") {
+        Ok(s) if !s.trim().is_empty() => s.trim().parse().map_err(|_| RosError::Participant {
+            domain: 0,
+            message: format!("ROS_DOMAIN_ID `{s}` is not a domain number"),
+        }),
+        _ => Ok(0),
+    }
+}
+
+/// The interfaces discovery may use, as rmw reads `$ROS_AUTOMATIC_DISCOVERY_RANGE`:
+/// `LOCALHOST` keeps to the loopback interface, anything else (or unset) uses all.
+pub fn networks_from_env() -> Vec<IpAddr> {
+    match std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE").as_deref() {
+        Ok("LOCALHOST") => vec![IpAddr::from([127, 0, 0, 1])],
+        _ => Vec::new(),
+    }
 }
 
 /// Another node on the same participant (dynamic mode creates endpoints at run time on
@@ -87,6 +114,77 @@ pub fn publisher(
         .map_err(|e| err("topic", &e))?;
     node.create_publisher(&t, None)
         .map_err(|e| err("publisher", &e))
+}
+
+/// A subscription of dynamic messages of `ros_type` on `topic` (decode them with
+/// [`crate::dynmsg::MsgSeed`]).
+pub fn subscription(
+    node: &mut Node,
+    topic: &str,
+    ros_type: &str,
+    q: &mapping::Qos,
+) -> Result<ros2_client::Subscription<crate::dynmsg::Value>, RosError> {
+    let err = |what, e: &dyn std::fmt::Debug| RosError::Entity {
+        what,
+        name: topic.to_string(),
+        message: format!("{e:?}"),
+    };
+    let t = node
+        .create_topic(&name(topic)?, message_type(ros_type), &qos(q))
+        .map_err(|e| err("topic", &e))?;
+    node.create_subscription(&t, None)
+        .map_err(|e| err("subscription", &e))
+}
+
+/// A server of service `name` of type `pkg/srv/Name` (Enhanced service mapping, as
+/// rmw_fastrtps; [`service_qos`]).
+pub fn server<Req, Resp>(
+    node: &mut Node,
+    name_: &str,
+    srv_type: &str,
+) -> Result<ros2_client::Server<Req, Resp>, RosError>
+where
+    Req: ros2_client::Message + Clone + 'static,
+    Resp: ros2_client::Message + 'static,
+{
+    let q = service_qos();
+    node.create_server(
+        ros2_client::ServiceMapping::Enhanced,
+        &name(name_)?,
+        &service_type(srv_type),
+        q.clone(),
+        q,
+    )
+    .map_err(|e| RosError::Entity {
+        what: "service",
+        name: name_.to_string(),
+        message: format!("{e:?}"),
+    })
+}
+
+/// A client of service `name` of type `pkg/srv/Name` (as [`server`]).
+pub fn client<Req, Resp>(
+    node: &mut Node,
+    name_: &str,
+    srv_type: &str,
+) -> Result<ros2_client::Client<Req, Resp>, RosError>
+where
+    Req: ros2_client::Message + Clone + 'static,
+    Resp: ros2_client::Message + 'static,
+{
+    let q = service_qos();
+    node.create_client(
+        ros2_client::ServiceMapping::Enhanced,
+        &name(name_)?,
+        &service_type(srv_type),
+        q.clone(),
+        q,
+    )
+    .map_err(|e| RosError::Entity {
+        what: "client",
+        name: name_.to_string(),
+        message: format!("{e:?}"),
+    })
 }
 
 /// A ROS topic or service name (`/a/b`, or relative `b`).

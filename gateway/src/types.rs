@@ -152,6 +152,13 @@ const DUMMY: &[Field] = &[f("structure_needs_at_least_one_member", Prim::U8)];
 const XYZ: &[Field] = &[f("x", Prim::F64), f("y", Prim::F64), f("z", Prim::F64)];
 const HEADER: Field = nested("header", "std_msgs/msg/Header");
 const LAYOUT: Field = nested("layout", "std_msgs/msg/MultiArrayLayout");
+// Fields shared by the yarp_control_msgs types (`string response "NOT_SPECIFIED"`: default
+// values are not part of a type description, so not of its hash).
+const NAMES: Field = seq("names", Prim::String);
+const MODES: Field = seq("modes", Prim::String);
+const RESPONSE: Field = f("response", Prim::String);
+const OPT_DESCR: Field = f("opt_descr", Prim::String);
+const EVENT_INFO: Field = nested("info", "service_msgs/msg/ServiceEventInfo");
 
 /// Every message type the gateway knows.
 pub static MESSAGES: &[MsgType] = &[
@@ -240,6 +247,238 @@ pub static MESSAGES: &[MsgType] = &[
             seq("position", Prim::F64),
             seq("velocity", Prim::F64),
             seq("effort", Prim::F64),
+        ],
+    ),
+    // yarp-devices-ros2 (`controlBoard_nws_ros2`, the multiple-analog-sensors wrappers):
+    // robotology/yarp-devices-ros2's `ros2_interfaces_ws/src/yarp_control_msgs` and the
+    // standard types those devices publish.
+    msg(
+        "std_msgs/msg/Int8MultiArray",
+        &[LAYOUT, seq("data", Prim::I8)],
+    ),
+    msg(
+        "sensor_msgs/msg/MagneticField",
+        &[
+            HEADER,
+            nested("magnetic_field", "geometry_msgs/msg/Vector3"),
+            arr("magnetic_field_covariance", Prim::F64, 9),
+        ],
+    ),
+    msg(
+        "sensor_msgs/msg/Temperature",
+        &[
+            HEADER,
+            f("temperature", Prim::F64),
+            f("variance", Prim::F64),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/msg/Position",
+        &[
+            NAMES,
+            seq("positions", Prim::F64),
+            seq("ref_velocities", Prim::F64),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/msg/PositionDirect",
+        &[NAMES, seq("positions", Prim::F64)],
+    ),
+    msg(
+        "yarp_control_msgs/msg/Velocity",
+        &[
+            NAMES,
+            seq("velocities", Prim::F64),
+            seq("ref_accelerations", Prim::F64),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetJointsNames_Request",
+        &[seq("joint_indexes", Prim::I32)],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetJointsNames_Response",
+        &[NAMES, RESPONSE, OPT_DESCR],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetJointsNames_Event",
+        &[
+            EVENT_INFO,
+            nested_opt("request", "yarp_control_msgs/srv/GetJointsNames_Request"),
+            nested_opt("response", "yarp_control_msgs/srv/GetJointsNames_Response"),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetJointsNames",
+        &[
+            nested(
+                "request_message",
+                "yarp_control_msgs/srv/GetJointsNames_Request",
+            ),
+            nested(
+                "response_message",
+                "yarp_control_msgs/srv/GetJointsNames_Response",
+            ),
+            nested(
+                "event_message",
+                "yarp_control_msgs/srv/GetJointsNames_Event",
+            ),
+        ],
+    ),
+    msg("yarp_control_msgs/srv/GetControlModes_Request", &[NAMES]),
+    msg(
+        "yarp_control_msgs/srv/GetControlModes_Response",
+        &[MODES, RESPONSE, OPT_DESCR],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetControlModes_Event",
+        &[
+            EVENT_INFO,
+            nested_opt("request", "yarp_control_msgs/srv/GetControlModes_Request"),
+            nested_opt("response", "yarp_control_msgs/srv/GetControlModes_Response"),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetControlModes",
+        &[
+            nested(
+                "request_message",
+                "yarp_control_msgs/srv/GetControlModes_Request",
+            ),
+            nested(
+                "response_message",
+                "yarp_control_msgs/srv/GetControlModes_Response",
+            ),
+            nested(
+                "event_message",
+                "yarp_control_msgs/srv/GetControlModes_Event",
+            ),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/srv/SetControlModes_Request",
+        &[NAMES, MODES],
+    ),
+    msg(
+        "yarp_control_msgs/srv/SetControlModes_Response",
+        &[RESPONSE, OPT_DESCR],
+    ),
+    msg(
+        "yarp_control_msgs/srv/SetControlModes_Event",
+        &[
+            EVENT_INFO,
+            nested_opt("request", "yarp_control_msgs/srv/SetControlModes_Request"),
+            nested_opt("response", "yarp_control_msgs/srv/SetControlModes_Response"),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/srv/SetControlModes",
+        &[
+            nested(
+                "request_message",
+                "yarp_control_msgs/srv/SetControlModes_Request",
+            ),
+            nested(
+                "response_message",
+                "yarp_control_msgs/srv/SetControlModes_Response",
+            ),
+            nested(
+                "event_message",
+                "yarp_control_msgs/srv/SetControlModes_Event",
+            ),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetAvailableControlModes_Request",
+        &[f("only_implemented", Prim::Bool)],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetAvailableControlModes_Response",
+        &[MODES, RESPONSE, OPT_DESCR],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetAvailableControlModes_Event",
+        &[
+            EVENT_INFO,
+            nested_opt(
+                "request",
+                "yarp_control_msgs/srv/GetAvailableControlModes_Request",
+            ),
+            nested_opt(
+                "response",
+                "yarp_control_msgs/srv/GetAvailableControlModes_Response",
+            ),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetAvailableControlModes",
+        &[
+            nested(
+                "request_message",
+                "yarp_control_msgs/srv/GetAvailableControlModes_Request",
+            ),
+            nested(
+                "response_message",
+                "yarp_control_msgs/srv/GetAvailableControlModes_Response",
+            ),
+            nested(
+                "event_message",
+                "yarp_control_msgs/srv/GetAvailableControlModes_Event",
+            ),
+        ],
+    ),
+    msg("yarp_control_msgs/srv/GetPosition_Request", &[NAMES]),
+    msg(
+        "yarp_control_msgs/srv/GetPosition_Response",
+        &[seq("positions", Prim::F64), RESPONSE, OPT_DESCR],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetPosition_Event",
+        &[
+            EVENT_INFO,
+            nested_opt("request", "yarp_control_msgs/srv/GetPosition_Request"),
+            nested_opt("response", "yarp_control_msgs/srv/GetPosition_Response"),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetPosition",
+        &[
+            nested(
+                "request_message",
+                "yarp_control_msgs/srv/GetPosition_Request",
+            ),
+            nested(
+                "response_message",
+                "yarp_control_msgs/srv/GetPosition_Response",
+            ),
+            nested("event_message", "yarp_control_msgs/srv/GetPosition_Event"),
+        ],
+    ),
+    msg("yarp_control_msgs/srv/GetVelocity_Request", &[NAMES]),
+    msg(
+        "yarp_control_msgs/srv/GetVelocity_Response",
+        &[seq("velocities", Prim::F64), RESPONSE, OPT_DESCR],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetVelocity_Event",
+        &[
+            EVENT_INFO,
+            nested_opt("request", "yarp_control_msgs/srv/GetVelocity_Request"),
+            nested_opt("response", "yarp_control_msgs/srv/GetVelocity_Response"),
+        ],
+    ),
+    msg(
+        "yarp_control_msgs/srv/GetVelocity",
+        &[
+            nested(
+                "request_message",
+                "yarp_control_msgs/srv/GetVelocity_Request",
+            ),
+            nested(
+                "response_message",
+                "yarp_control_msgs/srv/GetVelocity_Response",
+            ),
+            nested("event_message", "yarp_control_msgs/srv/GetVelocity_Event"),
         ],
     ),
     msg(
