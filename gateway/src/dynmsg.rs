@@ -26,6 +26,8 @@ pub enum Value {
     F32(f32),
     F64(f64),
     Str(String),
+    /// A `wstring` (UTF-16 on the wire).
+    WStr(String),
     /// `uint8[]` / `byte[]` sequences.
     Bytes(Vec<u8>),
     /// Unbounded or bounded sequences of anything else.
@@ -37,13 +39,13 @@ pub enum Value {
 }
 
 impl Value {
-    /// The all-zero value of a catalog type (what rosidl's default constructor gives,
-    /// without `.msg` default values, which the gateway's types do not use).
+    /// The default value of a type, as rosidl's default constructor gives it: the
+    /// `.msg` default values where the definition has them, else zeros and empties.
     pub fn zero(type_name: &str) -> Option<Value> {
         let t = lookup(type_name)?;
         t.fields
             .iter()
-            .map(zero_field)
+            .map(field_default)
             .collect::<Option<Vec<_>>>()
             .map(Value::Struct)
     }
@@ -99,7 +101,87 @@ fn zero_prim(p: Prim) -> Value {
         Prim::F32 => Value::F32(0.0),
         Prim::F64 => Value::F64(0.0),
         Prim::String => Value::Str(String::new()),
+        Prim::WString => Value::WStr(String::new()),
     }
+}
+
+/// One primitive value from its `.msg` text (rosidl's rules: `true`/`1`/`false`/`0`,
+/// decimal or `0x` integers, quoted or bare strings).
+pub fn parse_prim(p: Prim, text: &str) -> Option<Value> {
+    let t = text.trim();
+    let int = || -> Option<i128> {
+        let (neg, digits) = match t.strip_prefix('-') {
+            Some(d) => (true, d),
+            None => (false, t.strip_prefix('+').unwrap_or(t)),
+        };
+        let v = if let Some(h) = digits
+            .strip_prefix("0x")
+            .or_else(|| digits.strip_prefix("0X"))
+        {
+            i128::from_str_radix(h, 16).ok()?
+        } else if let Some(o) = digits.strip_prefix("0o") {
+            i128::from_str_radix(o, 8).ok()?
+        } else if let Some(b) = digits.strip_prefix("0b") {
+            i128::from_str_radix(b, 2).ok()?
+        } else {
+            digits.parse().ok()?
+        };
+        Some(if neg { -v } else { v })
+    };
+    Some(match p {
+        Prim::Bool => match t.to_ascii_lowercase().as_str() {
+            "true" | "1" => Value::Bool(true),
+            "false" | "0" => Value::Bool(false),
+            _ => return None,
+        },
+        Prim::Byte | Prim::U8 => Value::U8(int()?.try_into().ok()?),
+        Prim::I8 => Value::I8(int()?.try_into().ok()?),
+        Prim::I16 => Value::I16(int()?.try_into().ok()?),
+        Prim::U16 => Value::U16(int()?.try_into().ok()?),
+        Prim::I32 => Value::I32(int()?.try_into().ok()?),
+        Prim::U32 => Value::U32(int()?.try_into().ok()?),
+        Prim::I64 => Value::I64(int()?.try_into().ok()?),
+        Prim::U64 => Value::U64(int()?.try_into().ok()?),
+        Prim::F32 => Value::F32(t.parse().ok()?),
+        Prim::F64 => Value::F64(t.parse().ok()?),
+        Prim::String => Value::Str(crate::msgdef::unquote(t)),
+        Prim::WString => Value::WStr(crate::msgdef::unquote(t)),
+    })
+}
+
+/// A field's value in a default-constructed message: its `.msg` default, else zero.
+pub fn field_default(f: &Field) -> Option<Value> {
+    default_field(f).or_else(|| zero_field(f))
+}
+
+/// A field's `.msg` default value, if it has one that fits.
+fn default_field(f: &Field) -> Option<Value> {
+    let (Base::Prim(p), Some(text)) = (f.base, f.default) else {
+        return None;
+    };
+    let items = || -> Option<Vec<Value>> {
+        crate::msgdef::split_array_default(text)?
+            .iter()
+            .map(|e| parse_prim(p, e))
+            .collect()
+    };
+    Some(match f.shape {
+        Shape::Single => parse_prim(p, text)?,
+        Shape::Array(n) => {
+            let v = items()?;
+            (v.len() as u64 == n).then_some(Value::Array(v))?
+        }
+        Shape::Seq | Shape::BoundedSeq(_) if is_bytes(f.base) => Value::Bytes(
+            items()?
+                .into_iter()
+                .map(|v| match v {
+                    Value::U8(b) => Some(b),
+                    _ => None,
+                })
+                .collect::<Option<_>>()?,
+        ),
+        Shape::Seq | Shape::BoundedSeq(_) => Value::List(items()?),
+    })
 }
 
 fn zero_single(b: Base) -> Option<Value> {
@@ -143,6 +225,7 @@ fn single_conforms(b: Base, v: &Value) -> bool {
                 | (Prim::F32, Value::F32(_))
                 | (Prim::F64, Value::F64(_))
                 | (Prim::String, Value::Str(_))
+                | (Prim::WString, Value::WStr(_))
         ),
     }
 }
@@ -181,6 +264,15 @@ impl Serialize for Value {
             Value::F32(v) => s.serialize_f32(*v),
             Value::F64(v) => s.serialize_f64(*v),
             Value::Str(v) => s.serialize_str(v),
+            // rmw_fastrtps: a u32 length, then each UTF-16 unit as a 4-byte wchar.
+            Value::WStr(v) => {
+                let units: Vec<u16> = v.encode_utf16().collect();
+                let mut seq = s.serialize_seq(Some(units.len()))?;
+                for u in units {
+                    seq.serialize_element(&u32::from(u))?;
+                }
+                seq.end()
+            }
             Value::Bytes(v) => s.serialize_bytes(v),
             Value::List(items) => {
                 let mut seq = s.serialize_seq(Some(items.len()))?;
@@ -275,8 +367,17 @@ impl<'de> Visitor<'de> for ListVisitor {
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
         // Cap the pre-allocation: the length prefix comes from the network.
         let mut out = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(4096));
-        while let Some(v) = seq.next_element_seed(SingleSeed(self.base))? {
-            out.push(v);
+        if let Base::Nested(n) = self.base {
+            // Resolved once for the whole sequence, not per element.
+            let t =
+                lookup(n).ok_or_else(|| de::Error::custom(format!("unknown nested type {n}")))?;
+            while let Some(v) = seq.next_element_seed(MsgSeed(t))? {
+                out.push(v);
+            }
+        } else {
+            while let Some(v) = seq.next_element_seed(SingleSeed(self.base))? {
+                out.push(v);
+            }
         }
         Ok(if self.fixed {
             Value::Array(out)
@@ -313,7 +414,25 @@ impl<'de> DeserializeSeed<'de> for SingleSeed {
             Prim::F32 => d.deserialize_f32(PrimVisitor),
             Prim::F64 => d.deserialize_f64(PrimVisitor),
             Prim::String => d.deserialize_string(PrimVisitor),
+            Prim::WString => d.deserialize_seq(WStrVisitor),
         }
+    }
+}
+
+/// A `wstring`: its wchars (4 bytes each) as UTF-16 units.
+struct WStrVisitor;
+
+impl<'de> Visitor<'de> for WStrVisitor {
+    type Value = Value;
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a wstring")
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let mut units = Vec::with_capacity(seq.size_hint().unwrap_or(0).min(4096));
+        while let Some(u) = seq.next_element::<u32>()? {
+            units.push(u as u16);
+        }
+        Ok(Value::WStr(String::from_utf16_lossy(&units)))
     }
 }
 

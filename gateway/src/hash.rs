@@ -1,4 +1,5 @@
-//! REP-2016 type hashes (`RIHS01_<sha256 hex>`), computed from the [`crate::types`] catalog.
+//! REP-2016 type hashes (`RIHS01_<sha256 hex>`), computed from the type descriptions of
+//! [`crate::types::lookup`] (run-time definitions, else the built-in catalog).
 //!
 //! The hash is SHA-256 over the canonical JSON of the type description, as
 //! `rosidl_generator_type_description` writes it: the `TypeDescription` of the type itself
@@ -117,10 +118,11 @@ fn write_description(out: &mut String, t: &MsgType) {
         let _ = write!(
             out,
             "{{\"name\": \"{}\", \"type\": {{\"type_id\": {}, \"capacity\": {}, \
-             \"string_capacity\": 0, \"nested_type_name\": \"{}\"}}}}",
+             \"string_capacity\": {}, \"nested_type_name\": \"{}\"}}}}",
             field.name,
             field.type_id(),
             field.capacity(),
+            field.string_capacity,
             nested
         );
     }

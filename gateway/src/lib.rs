@@ -1,7 +1,9 @@
 //! YARP <-> ROS 2 gateway.
 //!
 //! Pure logic lives in its own modules and is unit-tested without sockets: the ROS type
-//! catalog ([`types`]), REP-2016 hashes ([`hash`]), dynamic CDR messages ([`dynmsg`]),
+//! catalog ([`types`]) with the types read at run time from their definitions
+//! ([`msgdef`], [`interfaces`]), REP-2016 hashes ([`hash`]), the generic Bottle layout of
+//! any type ([`generic`]), dynamic CDR messages ([`dynmsg`]),
 //! Bottle conversions ([`convert`], [`image`], [`mas`]), joint commands ([`joint_command`]), service mapping ([`service`],
 //! [`axis_info`]), counters ([`counters`]) and mapping files ([`mapping`]). The tokio/DDS
 //! runtime ([`gateway`], over one ros2-client node from [`ros`]) only moves messages.
@@ -11,11 +13,14 @@ pub mod convert;
 pub mod counters;
 pub mod dynmsg;
 pub mod gateway;
+pub mod generic;
 pub mod hash;
 pub mod image;
+pub mod interfaces;
 pub mod joint_command;
 pub mod mapping;
 pub mod mas;
+pub mod msgdef;
 pub mod pattern;
 pub mod robot;
 pub mod robot_state;

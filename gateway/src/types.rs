@@ -22,6 +22,8 @@ pub enum Prim {
     F32,
     F64,
     String,
+    /// `wstring` (UTF-16 in ROS 2): only in types read from their definitions.
+    WString,
 }
 
 impl Prim {
@@ -41,6 +43,7 @@ impl Prim {
             Prim::Bool => 15,
             Prim::Byte => 16,
             Prim::String => 17,
+            Prim::WString => 18,
         }
     }
 }
@@ -67,6 +70,10 @@ pub struct Field {
     pub name: &'static str,
     pub base: Base,
     pub shape: Shape,
+    /// The bound of a bounded string (`string<=N`, `wstring<=N`), else 0.
+    pub string_capacity: u64,
+    /// The default value as written in the `.msg` file (`int32 x 5`), if any.
+    pub default: Option<&'static str>,
 }
 
 impl Field {
@@ -74,6 +81,9 @@ impl Field {
     /// 144 (unbounded sequence).
     pub fn type_id(&self) -> u8 {
         let single = match self.base {
+            // BOUNDED_STRING (21) and BOUNDED_WSTRING (22)
+            Base::Prim(Prim::String) if self.string_capacity > 0 => 21,
+            Base::Prim(Prim::WString) if self.string_capacity > 0 => 22,
             Base::Prim(p) => p.type_id(),
             Base::Nested(_) => 1,
         };
@@ -95,11 +105,21 @@ impl Field {
     }
 }
 
+/// A constant of a message type (`uint8 ARROW=0`): its type and value as written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Constant {
+    pub name: &'static str,
+    pub prim: Prim,
+    pub value: &'static str,
+}
+
 /// A message (or service/event structure) type: full name such as `std_msgs/msg/String`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct MsgType {
     pub name: &'static str,
     pub fields: &'static [Field],
+    /// Constants (types read from their definitions; the built-in catalog lists none).
+    pub constants: &'static [Constant],
 }
 
 const fn f(name: &'static str, p: Prim) -> Field {
@@ -107,6 +127,8 @@ const fn f(name: &'static str, p: Prim) -> Field {
         name,
         base: Base::Prim(p),
         shape: Shape::Single,
+        string_capacity: 0,
+        default: None,
     }
 }
 const fn seq(name: &'static str, p: Prim) -> Field {
@@ -114,6 +136,8 @@ const fn seq(name: &'static str, p: Prim) -> Field {
         name,
         base: Base::Prim(p),
         shape: Shape::Seq,
+        string_capacity: 0,
+        default: None,
     }
 }
 const fn arr(name: &'static str, p: Prim, n: u64) -> Field {
@@ -121,6 +145,8 @@ const fn arr(name: &'static str, p: Prim, n: u64) -> Field {
         name,
         base: Base::Prim(p),
         shape: Shape::Array(n),
+        string_capacity: 0,
+        default: None,
     }
 }
 const fn nested(name: &'static str, ty: &'static str) -> Field {
@@ -128,6 +154,8 @@ const fn nested(name: &'static str, ty: &'static str) -> Field {
         name,
         base: Base::Nested(ty),
         shape: Shape::Single,
+        string_capacity: 0,
+        default: None,
     }
 }
 const fn nested_seq(name: &'static str, ty: &'static str) -> Field {
@@ -135,6 +163,8 @@ const fn nested_seq(name: &'static str, ty: &'static str) -> Field {
         name,
         base: Base::Nested(ty),
         shape: Shape::Seq,
+        string_capacity: 0,
+        default: None,
     }
 }
 const fn nested_opt(name: &'static str, ty: &'static str) -> Field {
@@ -142,10 +172,16 @@ const fn nested_opt(name: &'static str, ty: &'static str) -> Field {
         name,
         base: Base::Nested(ty),
         shape: Shape::BoundedSeq(1),
+        string_capacity: 0,
+        default: None,
     }
 }
 const fn msg(name: &'static str, fields: &'static [Field]) -> MsgType {
-    MsgType { name, fields }
+    MsgType {
+        name,
+        fields,
+        constants: &[],
+    }
 }
 
 const DUMMY: &[Field] = &[f("structure_needs_at_least_one_member", Prim::U8)];
@@ -767,8 +803,15 @@ pub static MESSAGES: &[MsgType] = &[
     ),
 ];
 
-/// Looks a type up by its full name (`pkg/msg/Name` or `pkg/srv/Name`).
+/// Looks a type up by its full name (`pkg/msg/Name` or `pkg/srv/Name`): from the
+/// interface definitions found at run time ([`crate::interfaces`]), else from the built-in
+/// catalog.
 pub fn lookup(name: &str) -> Option<&'static MsgType> {
+    crate::interfaces::lookup(name).or_else(|| builtin(name))
+}
+
+/// A type of the built-in catalog only.
+pub fn builtin(name: &str) -> Option<&'static MsgType> {
     MESSAGES.iter().find(|m| m.name == name)
 }
 

@@ -4,7 +4,7 @@
 
 mod common;
 
-use yarp_ros2_gateway::{hash::rihs01, types::MESSAGES};
+use yarp_ros2_gateway::{hash::rihs01, interfaces, types::MESSAGES};
 
 #[test]
 fn every_catalog_type_matches_the_installed_type_descriptions() {
@@ -36,6 +36,62 @@ fn every_catalog_type_matches_the_installed_type_descriptions_on(venv: &common::
         checked += 1;
     }
     assert_eq!(checked, MESSAGES.len());
+}
+
+/// Every message and service definition the wheels install (`share/<pkg>/msg/*.msg`,
+/// `srv/*.srv`; nav_msgs and visualization_msgs among them), read at run time, hashes as
+/// rosidl hashed it (the `type_hashes` of the `.json` beside each file).
+#[test]
+fn every_installed_definition_hashes_as_rosidl() {
+    for d in common::distros("every_installed_definition_hashes_as_rosidl") {
+        every_installed_definition_hashes_as_rosidl_on(&d);
+    }
+}
+
+fn every_installed_definition_hashes_as_rosidl_on(venv: &common::Distro) {
+    assert!(interfaces::add_dir(venv) > 100, "{}", venv.display());
+    let (mut checked, mut mismatched) = (0, Vec::new());
+    let share = venv.join("share");
+    for pkg in std::fs::read_dir(&share).unwrap().flatten() {
+        for kind in ["msg", "srv"] {
+            let Ok(files) = std::fs::read_dir(pkg.path().join(kind)) else {
+                continue;
+            };
+            for f in files.flatten() {
+                let p = f.path();
+                if p.extension().is_none_or(|e| e != "json") || !p.with_extension(kind).exists() {
+                    continue;
+                }
+                let json: serde_json::Value =
+                    serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+                for h in json["type_hashes"].as_array().unwrap() {
+                    let name = h["type_name"].as_str().unwrap();
+                    if !name.contains(&format!("/{kind}/")) {
+                        continue; // a referenced type of another kind
+                    }
+                    let got = interfaces::lookup(name)
+                        .map(|_| rihs01(name).unwrap_or_else(|e| e.to_string()))
+                        .unwrap_or_else(|| {
+                            format!("no definition: {:?}", interfaces::problem(name))
+                        });
+                    if got != h["hash_string"].as_str().unwrap() {
+                        mismatched.push(format!("{name}: {got}"));
+                    }
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(mismatched.is_empty(), "{mismatched:#?}");
+    for t in ["nav_msgs/msg/Odometry", "visualization_msgs/msg/Marker"] {
+        assert!(
+            interfaces::lookup(t).is_some(),
+            "{t} not installed in {}",
+            venv.display()
+        );
+    }
+    eprintln!("[{}] {checked} installed types hash as rosidl", venv.name);
+    assert!(checked > 150, "{checked}");
 }
 
 #[test]
