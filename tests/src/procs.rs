@@ -25,6 +25,120 @@ pub fn workspace_program(name: &str, package: &str) -> PathBuf {
     p
 }
 
+/// Longest a step of [`YarpNet`] may take (a loaded 2-core machine starts programs slowly).
+pub const STEP: Duration = Duration::from_secs(20);
+
+/// A private YARP network for child processes: a config dir (`YARP_CONFIG_HOME`) naming
+/// a name server on a free port below the ephemeral range ([`crate::low_ports`]).
+pub struct YarpNet {
+    pub dir: tempfile::TempDir,
+    pub port: u16,
+}
+
+impl Default for YarpNet {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl YarpNet {
+    pub fn new() -> YarpNet {
+        let port = crate::low_ports()
+            .find(|&p| (0..4).all(|i| std::net::TcpListener::bind(("127.0.0.1", p + i)).is_ok()))
+            .expect("a free port for the name server (run under netns-run)");
+        YarpNet {
+            dir: tempfile::tempdir().expect("temp dir"),
+            port,
+        }
+    }
+
+    /// A workspace program (see [`workspace_program`]) on this network.
+    pub fn cmd(&self, program: &str, package: &str) -> Command {
+        let mut c = Command::new(workspace_program(program, package));
+        c.env("YARP_CONFIG_HOME", self.dir.path())
+            .env_remove("YARP_NAMESPACE")
+            .env("RUST_LOG", "info");
+        c
+    }
+
+    /// Our `yarp` companion.
+    pub fn yarp(&self) -> Command {
+        self.cmd("yarp", "yarp-cli")
+    }
+
+    /// Starts our `yarpserver` on the network's port (again after a kill: same port).
+    pub fn server(&self) -> Proc {
+        let mut c = self.cmd("yarpserver", "yarp-net");
+        c.args([
+            "--ip",
+            "127.0.0.1",
+            "--socket",
+            &self.port.to_string(),
+            "--write",
+        ]);
+        let mut p = Proc::spawn("yarpserver", c);
+        p.wait_line("Ok. Ready!", STEP);
+        p
+    }
+
+    /// `yarp name query PORT`: the registered TCP port, if any.
+    pub fn query(&self, port: &str) -> Option<u16> {
+        let out = self.yarp().args(["name", "query", port]).output().ok()?;
+        if !out.status.success() {
+            return None;
+        }
+        // registration name /p ip 127.0.0.1 port 10002 type tcp
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        let words: Vec<&str> = text.split_whitespace().collect();
+        let at = words.iter().position(|w| *w == "port")?;
+        words.get(at + 1)?.parse().ok()
+    }
+
+    /// Waits (at most `limit`) until `port` is registered; its TCP port.
+    pub fn wait_registered_within(&self, port: &str, limit: Duration) -> u16 {
+        let start = Instant::now();
+        loop {
+            if let Some(p) = self.query(port) {
+                return p;
+            }
+            assert!(start.elapsed() < limit, "{port} never registered");
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    }
+
+    /// As [`YarpNet::wait_registered_within`], at most [`STEP`].
+    pub fn wait_registered(&self, port: &str) -> u16 {
+        self.wait_registered_within(port, STEP)
+    }
+
+    /// `yarp connect FROM TO`: whether it succeeded.
+    pub fn connect(&self, from: &str, to: &str) -> bool {
+        self.yarp()
+            .args(["connect", from, to])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    }
+
+    /// `yarp rpc PORT` fed `input`: every line it printed, bounded by [`STEP`].
+    pub fn rpc(&self, port: &str, input: &str) -> String {
+        let mut c = self.yarp();
+        c.args(["rpc", port]);
+        let mut p = Proc::spawn("yarp rpc", c);
+        {
+            use std::io::Write;
+            let mut stdin = p.child.stdin.take().expect("stdin");
+            let _ = stdin.write_all(input.as_bytes());
+        }
+        let start = Instant::now();
+        while p.child.try_wait().ok().flatten().is_none() && start.elapsed() < STEP {
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        // the reader threads deliver what is left once the pipes close
+        let _ = p.try_wait_line("\u{0}", Duration::from_millis(300));
+        p.seen.join("\n")
+    }
+}
+
 /// A child whose stdout and stderr lines arrive on one channel; killed and reaped when
 /// dropped (or by [`Proc::kill`]).
 pub struct Proc {

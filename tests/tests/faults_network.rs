@@ -19,89 +19,23 @@
 
 use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
-use std::process::Command;
 use std::time::{Duration, Instant};
-use yarp_interop_tests::{
-    eventually, fd_count, low_ports, rss_kib, thread_count, workspace_program, Proc,
-};
+use yarp_interop_tests::{eventually, fd_count, rss_kib, thread_count, Proc, YarpNet, STEP};
 use yarp_proto::wire::{self, Carrier, PortCommand};
 
-/// Longest any single step may take (a loaded 2-core machine starts programs slowly).
-const STEP: Duration = Duration::from_secs(20);
+/// The network of one test, with the programs these tests start on it.
+struct Net(YarpNet);
 
-/// A private YARP network: a config dir naming a name server on a free low port.
-struct Net {
-    dir: tempfile::TempDir,
-    port: u16,
+impl std::ops::Deref for Net {
+    type Target = YarpNet;
+    fn deref(&self) -> &YarpNet {
+        &self.0
+    }
 }
 
 impl Net {
     fn new() -> Net {
-        let port = low_ports()
-            .find(|&p| (0..4).all(|i| TcpListener::bind(("127.0.0.1", p + i)).is_ok()))
-            .expect("a free port for the name server (run under netns-run)");
-        Net {
-            dir: tempfile::tempdir().expect("temp dir"),
-            port,
-        }
-    }
-
-    fn cmd(&self, program: &str, package: &str) -> Command {
-        let mut c = Command::new(workspace_program(program, package));
-        c.env("YARP_CONFIG_HOME", self.dir.path())
-            .env_remove("YARP_NAMESPACE")
-            .env("RUST_LOG", "info");
-        c
-    }
-
-    fn yarp(&self) -> Command {
-        self.cmd("yarp", "yarp-cli")
-    }
-
-    fn server(&self) -> Proc {
-        let mut c = self.cmd("yarpserver", "yarp-net");
-        c.args([
-            "--ip",
-            "127.0.0.1",
-            "--socket",
-            &self.port.to_string(),
-            "--write",
-        ]);
-        let mut p = Proc::spawn("yarpserver", c);
-        p.wait_line("Ok. Ready!", STEP);
-        p
-    }
-
-    /// `yarp name query PORT`: the registered TCP port, if any.
-    fn query(&self, port: &str) -> Option<u16> {
-        let out = self.yarp().args(["name", "query", port]).output().ok()?;
-        if !out.status.success() {
-            return None;
-        }
-        // registration name /p ip 127.0.0.1 port 10002 type tcp
-        let text = String::from_utf8_lossy(&out.stdout).into_owned();
-        let words: Vec<&str> = text.split_whitespace().collect();
-        let at = words.iter().position(|w| *w == "port")?;
-        words.get(at + 1)?.parse().ok()
-    }
-
-    fn wait_registered(&self, port: &str) -> u16 {
-        let start = Instant::now();
-        loop {
-            if let Some(p) = self.query(port) {
-                return p;
-            }
-            assert!(start.elapsed() < STEP, "{port} never registered");
-            std::thread::sleep(Duration::from_millis(100));
-        }
-    }
-
-    /// `yarp connect FROM TO`: whether it succeeded.
-    fn connect(&self, from: &str, to: &str) -> bool {
-        self.yarp()
-            .args(["connect", from, to])
-            .output()
-            .is_ok_and(|o| o.status.success())
+        Net(YarpNet::new())
     }
 
     fn reader(&self, name: &str) -> Proc {
@@ -261,21 +195,8 @@ fn admin_text(port: u16, cmd: &str) -> String {
     String::from_utf8_lossy(&got).into_owned()
 }
 
-/// `yarp rpc PORT` with `input`; its stdout.
 fn rpc(net: &Net, port: &str, input: &str) -> String {
-    let mut c = net.yarp();
-    c.args(["rpc", port]);
-    let mut p = Proc::spawn("yarp rpc", c);
-    {
-        let mut stdin = p.child.stdin.take().expect("stdin");
-        stdin.write_all(input.as_bytes()).expect("rpc input");
-    }
-    let start = Instant::now();
-    while p.child.try_wait().ok().flatten().is_none() && start.elapsed() < STEP {
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    p.try_wait_line("Response", Duration::from_millis(500))
-        .unwrap_or_else(|| p.seen.join("\n"))
+    net.rpc(port, input)
 }
 
 #[test]

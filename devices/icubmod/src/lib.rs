@@ -33,6 +33,7 @@ pub mod eth;
 pub mod imu_filter;
 pub mod inertial;
 pub mod motion_control;
+pub mod presence;
 pub mod skin;
 pub mod skin_wrapper;
 pub mod virtual_analog;

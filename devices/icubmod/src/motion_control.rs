@@ -23,7 +23,9 @@
 //!
 //! Positions, encoders and modes come from the boards' broadcasts; a board that stops
 //! broadcasting makes reads fail after 500 ms, one that does not answer a poll fails
-//! after `CanTimeout`. Nothing blocks longer.
+//! after `CanTimeout`. Nothing blocks longer. A board that falls silent is reported (as
+//! icub-main's "have not heard from board N"), and when it talks again its reads work
+//! again and the log says what a reset board lost ([`crate::presence`]).
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -108,6 +110,7 @@ pub struct CanMotionControl {
     id: String,
     client: Option<Arc<MotorControlClient>>,
     _registration: Option<Registration>,
+    _presence: Option<crate::presence::PresenceWatch>,
     joint_types: Vec<Vocab32>,
     targets: Vec<f64>,
     ref_velocities: Vec<f64>,
@@ -218,6 +221,7 @@ impl DeviceDriver for CanMotionControl {
             }
         }
         self._registration = Some(boards::register(&client));
+        self._presence = Some(crate::presence::PresenceWatch::start(&self.id, &client));
         self.client = Some(client);
         tracing::info!(device = %self.id, joints = n, "canmotioncontrol open");
         Ok(())
@@ -225,6 +229,7 @@ impl DeviceDriver for CanMotionControl {
 
     fn close(&mut self) -> DevResult<()> {
         self._registration = None;
+        self._presence = None;
         self.client = None;
         Ok(())
     }

@@ -323,6 +323,13 @@ impl Board {
         let at = Instant::now();
         if let Some(prev) = inner.last_rx {
             inner.max_gap = inner.max_gap.max(at - prev);
+            if inner.last_missing_report.take().is_some() {
+                tracing::warn!(
+                    "eth::EthMonitorPresence: BOARD {} has shown after being lost for {:.3} sec",
+                    self.who(),
+                    (at - prev).as_secs_f64()
+                );
+            }
         }
         inner.last_rx = Some(at);
         inner.rx_count += 1;
@@ -346,8 +353,10 @@ impl Board {
                 .last_missing_report
                 .is_none_or(|t| t.elapsed() >= self.params.missing_report_period);
             if due {
+                // A board that restarts waits in its configuration state for a host's
+                // start-up sequence, which (as in C++) only a new open sends.
                 tracing::error!(
-                    "eth::EthMonitorPresence: BOARD {} has been silent for {:.3} sec: its values are refused until it talks again",
+                    "eth::EthMonitorPresence: BOARD {} has been silent for {:.3} sec: its values are refused until it talks again. Check its power and network cable; a board that was reset (power cycle, restarted emulator) waits to be configured again: restart yarprobotinterface",
                     self.who(),
                     silent.unwrap_or_default().as_secs_f64()
                 );

@@ -1,0 +1,233 @@
+//! Board emulators killed and restarted under a running `yarprobotinterface` (all real
+//! processes on loopback; run under netns-run): the CAN robot (iCubGenova01's left arm,
+//! `canmotioncontrol`, against `icub-board-emulator` over a cannelloni hub) and the
+//! Ethernet robot (iCubGenova02's left arm board `left_arm-eb1-j0_3`, `embObjMotionControl`,
+//! against `icub-eth-emulator`), each behind `controlBoard_nws_yarp`.
+//!
+//! What icub-main does, we do: a CAN board that falls silent is reported ("have not heard
+//! from board N", `CanBusMotionControl`), its reads fail instead of hanging, and when it
+//! broadcasts again its encoders flow again (a reset board lost its configuration: the log
+//! says to restart yarprobotinterface). An Ethernet board that falls silent is reported by
+//! `eth::EthMonitorPresence`; a restarted one waits in its configuration state for a host
+//! start-up sequence that (as in C++) only a new open sends, so the report names what to
+//! do: restart yarprobotinterface.
+//!
+//! Needs the workspace programs in the same target directory (`cargo build --workspace
+//! --bins`; `tests/run.sh` does) and `../shared/robots-configuration`.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use yarp_interop_tests::{Proc, YarpNet, STEP};
+
+fn robots_configuration() -> Option<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/robots-configuration")
+        .canonicalize()
+        .ok()?;
+    if dir.join("iCubGenova01").is_dir() && dir.join("iCubGenova02").is_dir() {
+        Some(dir)
+    } else {
+        None
+    }
+}
+
+/// A robot file with `included` (device files, absolute paths) and one
+/// `controlBoard_nws_yarp` as `/fault/left_arm` attached to `attach`.
+fn robot_xml(
+    dir: &Path,
+    name: &str,
+    params: Option<&Path>,
+    included: &[PathBuf],
+    attach: &str,
+) -> PathBuf {
+    let params = params.map_or(String::new(), |p| {
+        format!("<params><xi:include href=\"{}\" /></params>", p.display())
+    });
+    let devices: String = included
+        .iter()
+        .map(|f| format!("<xi:include href=\"{}\" />\n", f.display()))
+        .collect();
+    let xml = format!(
+        r#"<?xml version="1.0" encoding="UTF-8" ?>
+<!DOCTYPE robot PUBLIC "-//YARP//DTD yarprobotinterface 3.0//EN" "http://www.yarp.it/DTD/yarprobotinterfaceV3.0.dtd">
+<robot name="{name}" build="1" portprefix="/icub" xmlns:xi="http://www.w3.org/2001/XInclude">
+{params}
+<devices>
+{devices}
+<device name="fault_nws" type="controlBoard_nws_yarp">
+  <param name="name">/fault/left_arm</param>
+  <param name="period">0.01</param>
+  <action phase="startup" level="5" type="attach"><param name="device">{attach}</param></action>
+  <action phase="shutdown" level="5" type="detach" />
+</device>
+</devices>
+</robot>
+"#
+    );
+    let path = dir.join(format!("{name}-fault.xml"));
+    std::fs::write(&path, xml).expect("robot file");
+    path
+}
+
+/// `get encs` over `yarp rpc`: the values when the device answers.
+fn encoders(net: &YarpNet) -> Option<Vec<f64>> {
+    let out = net.rpc("/fault/left_arm/rpc:i", "get encs\n");
+    let line = out.lines().find(|l| l.contains("Response: [is] encs"))?;
+    let inside = line.split('(').nth(1)?.split(')').next()?;
+    inside.split_whitespace().map(|v| v.parse().ok()).collect()
+}
+
+/// Polls `get encs` until it gives values (or not, per `want`), at most `limit`.
+fn encoders_become(net: &YarpNet, want: bool, limit: Duration) -> bool {
+    let start = Instant::now();
+    while start.elapsed() < limit {
+        if encoders(net).is_some() == want {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    false
+}
+
+/// `yarprobotinterface --config FILE` on `net`; returns once its wrapper port is up.
+fn robot_interface(net: &YarpNet, file: &Path, env: &[(&str, String)]) -> Proc {
+    let mut c = net.cmd("yarprobotinterface", "yarp-device-programs");
+    c.args(["--config", file.to_str().expect("utf-8 path")]);
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    let mut p = Proc::spawn("yarprobotinterface", c);
+    p.wait_line(
+        "yarprobotinterface running happily",
+        Duration::from_secs(60),
+    );
+    net.wait_registered("/fault/left_arm/rpc:i");
+    p
+}
+
+#[test]
+fn can_board_emulator_killed_and_restarted() {
+    let Some(rc) = robots_configuration() else {
+        eprintln!("SKIPPED: ../shared/robots-configuration not found");
+        return;
+    };
+    let net = YarpNet::new();
+    let _server = net.server();
+    // one cannelloni hub for the left arm's network (CanDeviceNum 1): base + 1
+    let base = free_udp_pair();
+    let emulator = || {
+        let mut c = net.cmd("icub-board-emulator", "icub-emulators");
+        c.args(["--bus", &format!("udp-hub://127.0.0.1:{}", base + 1)]);
+        for b in 1..=4 {
+            c.args(["--board", &format!("{b}:mc")]);
+        }
+        let mut p = Proc::spawn("icub-board-emulator", c);
+        p.wait_line("ready", STEP);
+        p
+    };
+    let mut emu = emulator();
+    let file = robot_xml(
+        net.dir.path(),
+        "iCubGenova01",
+        None,
+        &[rc.join("iCubGenova01/hardware/motorControl/icub_left_arm.xml")],
+        "left_arm_mc",
+    );
+    let backend = format!("udp://127.0.0.1:{base}+n");
+    let mut robot = robot_interface(&net, &file, &[("YARP_ICUB_CAN_BACKEND", backend)]);
+    let before = encoders(&net).expect("encoders before the fault");
+    assert_eq!(before.len(), 8);
+
+    emu.kill();
+    let t0 = Instant::now();
+    // reads fail after the broadcast timeout (500 ms), never hang
+    assert!(encoders_become(&net, false, STEP), "encoders still read");
+    let report = robot.wait_line("have not heard from board", STEP);
+    let took = t0.elapsed();
+    println!("CAN fault reported after {took:?}: {report}");
+    assert!(took < Duration::from_secs(5), "reported after {took:?}");
+    assert!(report.contains("left_arm_mc"), "{report}");
+
+    let _emu = emulator();
+    let t1 = Instant::now();
+    assert!(
+        encoders_become(&net, true, STEP),
+        "encoders never came back; yarprobotinterface printed:\n{}",
+        robot.seen.join("\n")
+    );
+    println!("CAN encoders back {:?} after the restart", t1.elapsed());
+    let back = robot.wait_line("talks again after", STEP);
+    assert!(back.contains("restart yarprobotinterface"), "{back}");
+    assert_eq!(encoders(&net).map(|e| e.len()), Some(8));
+}
+
+#[test]
+fn eth_board_emulator_killed_and_restarted() {
+    let Some(rc) = robots_configuration() else {
+        eprintln!("SKIPPED: ../shared/robots-configuration not found");
+        return;
+    };
+    let net = YarpNet::new();
+    let _server = net.server();
+    let robot_dir = rc.join("iCubGenova02");
+    let file = robot_xml(
+        net.dir.path(),
+        "iCubGenova02",
+        Some(&robot_dir.join("hardware/electronics/pc104.xml")),
+        &[robot_dir.join("hardware/motorControl/left_arm-eb1-j0_3-mc.xml")],
+        "left_arm-eb1-j0_3-mc",
+    );
+    // the robot's 10.0.1.x boards and host on a 127.x net of their own (one per test
+    // process, so that concurrent tests do not share addresses)
+    let net_byte = 2 + std::process::id() % 200;
+    let map = format!("10.0.1.0/24=127.{net_byte}.1.0/24");
+    let emulator = || {
+        let mut c = net.cmd("icub-eth-emulator", "icub-emulators");
+        c.arg(&robot_dir)
+            .args(["--config", file.to_str().expect("utf-8 path")])
+            .args(["--address-map", &map]);
+        let mut p = Proc::spawn("icub-eth-emulator", c);
+        p.wait_line("left_arm-eb1-j0_3", STEP);
+        p
+    };
+    let mut emu = emulator();
+    let mut robot = robot_interface(&net, &file, &[("YARP_ICUB_ETH_ADDRESS_MAP", map.clone())]);
+    let before = encoders(&net).expect("encoders before the fault");
+    assert_eq!(before.len(), 4);
+
+    emu.kill();
+    let t0 = Instant::now();
+    assert!(encoders_become(&net, false, STEP), "encoders still read");
+    let report = robot.wait_line("refused until it talks again", STEP);
+    let took = t0.elapsed();
+    println!("Ethernet fault reported after {took:?}: {report}");
+    assert!(took < Duration::from_secs(5), "reported after {took:?}");
+    assert!(
+        report.contains("left_arm-eb1-j0_3") && report.contains("restart yarprobotinterface"),
+        "{report}"
+    );
+
+    // a restarted board waits to be configured: reads keep failing (no hang), the report
+    // stays the same, and a new yarprobotinterface brings the part back
+    let _emu = emulator();
+    std::thread::sleep(Duration::from_secs(2));
+    assert_eq!(encoders(&net), None, "a reset board is not running");
+    robot.kill();
+    let _robot = robot_interface(&net, &file, &[("YARP_ICUB_ETH_ADDRESS_MAP", map)]);
+    assert!(
+        encoders_become(&net, true, STEP),
+        "the restarted robot reads encoders"
+    );
+}
+
+/// A UDP port `p` with `p + 1` free too (the hub of network 1 is `base + 1`).
+fn free_udp_pair() -> u16 {
+    for base in (30_000..60_000).step_by(97) {
+        let a = std::net::UdpSocket::bind(("127.0.0.1", base));
+        let b = std::net::UdpSocket::bind(("127.0.0.1", base + 1));
+        if a.is_ok() && b.is_ok() {
+            return base;
+        }
+    }
+    panic!("no free UDP ports (run under netns-run)");
+}
