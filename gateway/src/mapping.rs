@@ -3,6 +3,7 @@
 //! Loading is strict: unknown keys, unknown ROS types and impossible combinations are
 //! [`LoadError`]s that name the file, the entry and the key.
 
+use crate::camera_info::{self, CameraInfoSource};
 use crate::joint_command::Mode;
 use crate::robot::{self, RobotEntry};
 use crate::types;
@@ -247,6 +248,8 @@ pub struct TopicEntry {
     pub sensor_index: Option<usize>,
     /// Joint commands: the board driven (`joint_command` conversion).
     pub control_board: Option<ControlBoard>,
+    /// Images: a `sensor_msgs/CameraInfo` beside each Image (see [`crate::camera_info`]).
+    pub camera_info: Option<CameraInfoSource>,
 }
 
 impl TopicEntry {
@@ -430,6 +433,7 @@ impl Mappings {
                 if key == "topic" {
                     let mut t: TopicEntry = deserialize(v).map_err(|(k, m)| err(&k, m))?;
                     validate_topic(&t).map_err(|(k, m)| err(k, m))?;
+                    camera_info::validate(&mut t, file).map_err(|(k, m)| err(k, m))?;
                     t.qos.reliability = Some(t.qos.reliability.unwrap_or(default_reliability(&t)));
                     check_unique(&out, &t.name, file)?;
                     out.topics.push(t);

@@ -2,8 +2,7 @@
 //! control boards (`fakeMotionControl` behind `controlBoard_nws_yarp`) merged into one
 //! `/joint_states` that a default-QoS rclpy node receives, and `/robot_description` from
 //! a URDF named in the mapping, received by a transient-local subscriber that joins after
-//! the gateway published it. Domain index: 10 (shared with latency.rs's `--ignored`
-//! measurement, whose topics differ).
+//! the gateway published it. Domain indices: 33, 34.
 
 mod common;
 
@@ -70,7 +69,7 @@ async fn merged_joint_states_and_latched_robot_description() {
 }
 
 async fn merged_joint_states_and_latched_robot_description_on(venv: &common::Distro) {
-    let domain = venv.domain(10);
+    let domain = venv.domain(33);
     let ns = common::device_name_server();
     let boards = [
         (
@@ -238,4 +237,177 @@ robot_description = { urdf = "description/t10.urdf" }
     assert_eq!(m["data"], URDF);
     gw.shutdown().await;
     drop(devices);
+}
+
+const EYES_INI: &str = "\
+// as icub-main's stereoCalib writes it
+[CAMERA_CALIBRATION_LEFT]
+projection pinhole
+drawCenterCross 0
+w 320
+h 240
+fx 215.622
+fy 215.056
+cx 163.367
+cy 111.212
+k1 -0.367522
+k2 0.132343
+p1 -0.000399841
+p2 -0.00016906
+";
+
+/// A real camera (`fakeFrameGrabber` served by `frameGrabber_nws_yarp`, 320x240 at 10 Hz)
+/// as sensor_msgs/Image, and beside it `camera_info` with the intrinsics of an
+/// icubEyes.ini-style group: a default-QoS rclpy node gets a CameraInfo with the same
+/// stamp and frame_id as each Image.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn camera_info_beside_each_image() {
+    for d in common::distros("camera_info_beside_each_image") {
+        camera_info_beside_each_image_on(&d).await;
+    }
+}
+
+async fn camera_info_beside_each_image_on(venv: &common::Distro) {
+    let domain = venv.domain(34);
+    // YARP names of their own per distro: the device name server lives on in the process.
+    let t34 = format!("/t34{}", venv.name);
+    let ns = common::device_name_server();
+    let _cam = blocking({
+        let t34 = t34.clone();
+        move || {
+            common::open_device(&format!(
+                "device frameGrabber_nws_yarp\nsubdevice fakeFrameGrabber\nname {t34}/cam\n\
+                 width 320\nheight 240\nmode line\nfreq 10\nperiod 0.1\n"
+            ))
+        }
+    })
+    .await;
+    let dir = TempDir::new(&format!("camera-{}", venv.name));
+    std::fs::create_dir_all(dir.0.join("calib")).unwrap();
+    std::fs::write(dir.0.join("calib/icubEyes.ini"), EYES_INI).unwrap();
+    let file = dir.0.join("camera.toml");
+    std::fs::write(
+        &file,
+        r#"
+[[topic]]
+name = "left_camera"
+direction = "yarp_to_ros"
+yarp_port = "/gw34/cam:i"
+yarp_source = "/t34/cam"
+ros_topic = "/cam/left/image_raw"
+ros_type = "sensor_msgs/msg/Image"
+frame_id = "left_camera"
+qos = { reliability = "best_effort", depth = 2 }
+camera_info = { ini = "calib/icubEyes.ini", group = "CAMERA_CALIBRATION_LEFT" }
+"#
+        .replace("/t34", &t34)
+        .replace("/gw34", &format!("/gw{t34}")),
+    )
+    .unwrap();
+    let gw = gateway_for(&file, &ns, domain).await;
+    let images = Peer::start_with_profile(
+        venv,
+        domain,
+        &[
+            "sub",
+            "sensor_msgs/msg/Image",
+            "/cam/left/image_raw",
+            "--summary",
+            "--best-effort",
+            "--count",
+            "100000",
+        ],
+        Some("fastdds_large_data.xml"),
+    );
+    // Default QoS: reliable, volatile, keep-last 10.
+    let infos = Peer::start(
+        venv,
+        domain,
+        &[
+            "sub",
+            "sensor_msgs/msg/CameraInfo",
+            "/cam/left/camera_info",
+            "--count",
+            "100000",
+        ],
+    );
+    images.expect_async("READY", T).await;
+    infos.expect_async("READY", T).await;
+    let first: Json = serde_json::from_str(&infos.expect_async("MSG", T).await).unwrap();
+    assert_eq!(first["width"], 320);
+    assert_eq!(first["height"], 240);
+    assert_eq!(first["distortion_model"], "plumb_bob");
+    assert_eq!(
+        first["d"],
+        serde_json::json!([-0.367522, 0.132343, -0.000399841, -0.00016906, 0.0])
+    );
+    assert_eq!(
+        first["k"],
+        serde_json::json!([215.622, 0.0, 163.367, 0.0, 215.056, 111.212, 0.0, 0.0, 1.0])
+    );
+    assert_eq!(
+        first["p"],
+        serde_json::json!([
+            215.622, 0.0, 163.367, 0.0, 0.0, 215.056, 111.212, 0.0, 0.0, 0.0, 1.0, 0.0
+        ])
+    );
+    assert_eq!(
+        first["r"],
+        serde_json::json!([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])
+    );
+    assert_eq!(first["header"]["frame_id"], "left_camera");
+    // Each Image has its CameraInfo: same stamp, same frame (images older than the first
+    // CameraInfo this subscriber got were sent before it matched the gateway).
+    let s = &first["header"]["stamp"];
+    let since = (s["sec"].as_i64().unwrap(), s["nanosec"].as_i64().unwrap());
+    let (mut image_stamps, mut info_stamps) = (Vec::new(), vec![since]);
+    // Ten images (a busy machine may take a while to match the best-effort reader).
+    let end = Instant::now() + T;
+    while image_stamps.len() < 10 && Instant::now() < end {
+        while let Some(l) = images.try_line("MSG") {
+            let m: Json = serde_json::from_str(&l).unwrap();
+            assert_eq!(m["frame_id"], "left_camera");
+            assert_eq!(
+                (m["width"].as_u64(), m["height"].as_u64()),
+                (Some(320), Some(240))
+            );
+            let stamp = (m["sec"].as_i64().unwrap(), m["nanosec"].as_i64().unwrap());
+            if stamp >= since {
+                image_stamps.push(stamp);
+            }
+        }
+        while let Some(l) = infos.try_line("MSG") {
+            let m: Json = serde_json::from_str(&l).unwrap();
+            assert_eq!(m["header"]["frame_id"], "left_camera");
+            assert_eq!(m["k"], first["k"]);
+            let s = &m["header"]["stamp"];
+            info_stamps.push((s["sec"].as_i64().unwrap(), s["nanosec"].as_i64().unwrap()));
+        }
+        tokio::time::sleep(std::time::Duration::from_millis(10)).await;
+    }
+    // The last image's info may still be on its way; images are best effort (a lost
+    // one has no partner to check).
+    tokio::time::sleep(std::time::Duration::from_millis(300)).await;
+    while let Some(l) = infos.try_line("MSG") {
+        let m: Json = serde_json::from_str(&l).unwrap();
+        let s = &m["header"]["stamp"];
+        info_stamps.push((s["sec"].as_i64().unwrap(), s["nanosec"].as_i64().unwrap()));
+    }
+    assert!(
+        image_stamps.len() >= 5,
+        "{} images within {T:?}",
+        image_stamps.len()
+    );
+    for s in &image_stamps {
+        assert!(
+            info_stamps.contains(s),
+            "image stamped {s:?} has no CameraInfo (got those of {info_stamps:?})"
+        );
+    }
+    eprintln!(
+        "{} images, {} camera infos; each image's stamp has its CameraInfo",
+        image_stamps.len(),
+        info_stamps.len()
+    );
+    gw.shutdown().await;
 }

@@ -2,6 +2,7 @@
 //! main ROS node, plus one node per dynamic-mode entry) and the YARP network. Conversions live in [`crate::convert`] and
 //! [`crate::service`]; this module only moves messages and counts them.
 
+mod beside;
 mod commands;
 mod dynamic;
 mod robot;
@@ -352,6 +353,7 @@ impl Builder {
             .map_err(|e| entity_err("topic", &t.ros_topic, e))?;
         let counters = Arc::new(Counters::default());
         let mut own = None;
+        let mut camera_info = None;
         if t.direction.to_ros() {
             let publisher: Publisher<Ros> = node
                 .create_publisher(&topic, None)
@@ -359,9 +361,15 @@ impl Builder {
             own = Some(publisher.gid());
             let (port, t2, c) = (port.clone(), t.clone(), counters.clone());
             let names = JointNameSource::new(t, &self.ns, &node.fully_qualified_name());
-            let tap = self.robots.tap(&t.name);
+            let beside = beside::Beside {
+                tap: self.robots.tap(&t.name),
+                camera_info: beside::CameraInfoOut::of(node, t)?,
+            };
+            if let Some(ci) = &beside.camera_info {
+                camera_info = Some(ci.topic.clone());
+            }
             self.tasks.push(tokio::spawn(yarp_to_ros(
-                port, publisher, t2, names, tap, c,
+                port, publisher, t2, names, beside, c,
             )));
         }
         if t.direction.to_yarp() {
@@ -388,6 +396,9 @@ impl Builder {
         let mut detail = format!("{conv:?} {}/{}", t.qos.reliability(), t.qos.depth);
         if let Some(r) = t.rate_limit_hz {
             detail.push_str(&format!(" <={r}Hz"));
+        }
+        if let Some(ci) = camera_info {
+            detail.push_str(&format!(" +CameraInfo {ci}"));
         }
         self.bridges.push(Bridge {
             name: t.name.clone(),

@@ -1,6 +1,6 @@
 //! Topic bridges: YARP port <-> ROS topic tasks, and keeping YARP connections up.
 
-use super::robot::Tap;
+use super::beside::Beside;
 use super::yarp_rpc::YarpRpc;
 use super::{now_ns, RECONNECT_PERIOD};
 use crate::axis_info;
@@ -98,7 +98,7 @@ pub(super) async fn yarp_to_ros(
     publisher: Publisher<Ros>,
     t: TopicEntry,
     mut names: JointNameSource,
-    tap: Tap,
+    beside: Beside,
     c: Arc<Counters>,
 ) {
     let conv = t.conversion();
@@ -138,7 +138,7 @@ pub(super) async fn yarp_to_ros(
             convert::to_ros_owned(conv, &t.ros_type, b, &ctx).map_err(|e| e.to_string())
         });
         if let Ok(m) = &msg {
-            tap.feed(m);
+            beside.publish(m).await;
         }
         match msg {
             Ok(m) => match publisher.async_publish(m).await {
