@@ -9,6 +9,7 @@
 //! | `joint_state` | a control board's `state:o` (positions, degrees) | `sensor_msgs/JointState` (radians) |
 //! | `imu` | multiple-analog-sensors stream ([`crate::mas`]) | `sensor_msgs/Imu` |
 //! | `wrench` | multiple-analog-sensors stream | `geometry_msgs/WrenchStamped` |
+//! | `generic` | the message's fields in order ([`crate::generic`]) | any message type |
 
 use crate::counters::header;
 use crate::dynmsg::Value as Ros;
@@ -96,6 +97,13 @@ pub fn to_ros(
             ])
         }
         Conversion::Imu => imu(b, ctx)?,
+        Conversion::Generic => {
+            let t = crate::types::lookup(ros_type)
+                .ok_or_else(|| ConvertError::Layout(ros_type.to_string()))?;
+            let mut m = crate::generic::to_ros(t, b, ctx.stamp_ns)?;
+            crate::generic::fill_frame_id(t, &mut m, ctx.frame_id);
+            m
+        }
         Conversion::JointCommand => return Err(ConvertError::Unsupported(conv)),
         Conversion::Image => crate::image::to_ros(b.clone(), ctx.frame_id, ctx.stamp_ns)?,
         Conversion::JointState => joint_state(b, ctx)?,
@@ -116,6 +124,12 @@ pub fn to_ros(
 
 /// Converts a message of `ros_type` received from ROS into the Bottle written to YARP.
 pub fn to_yarp(conv: Conversion, ros_type: &str, m: &Ros) -> Result<Bottle, ConvertError> {
+    if conv == Conversion::Generic {
+        // Checks the layout as it goes.
+        let t = crate::types::lookup(ros_type)
+            .ok_or_else(|| ConvertError::Layout(ros_type.to_string()))?;
+        return crate::generic::to_yarp(t, m);
+    }
     if !m.conforms_to(ros_type) {
         return Err(ConvertError::Layout(ros_type.to_string()));
     }

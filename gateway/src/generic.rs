@@ -28,8 +28,8 @@ const MAX_DEPTH: usize = 64;
 /// unset top-level `header.stamp`.
 pub fn to_ros(t: &'static MsgType, b: &Bottle, stamp_ns: u64) -> Result<Ros, ConvertError> {
     let mut m = structure(t, b.items(), 0)?;
-    if let (Some(0), Ros::Struct(fields)) = (header_index(t), &mut m) {
-        if let Some(Ros::Struct(h)) = fields.get_mut(0) {
+    if let (Some(i), Ros::Struct(fields)) = (header_index(t), &mut m) {
+        if let Some(Ros::Struct(h)) = fields.get_mut(i) {
             if matches!(h.first(), Some(Ros::Struct(s)) if s.iter().all(is_zero)) {
                 h[0] = Ros::Struct(vec![
                     Ros::I32((stamp_ns / 1_000_000_000) as i32),
@@ -62,6 +62,25 @@ pub fn header_time(t: &MsgType, m: &Ros) -> Option<f64> {
     match h.first()?.fields()? {
         [Ros::I32(s), Ros::U32(ns)] => Some(*s as f64 + *ns as f64 * 1e-9),
         _ => None,
+    }
+}
+
+/// Sets an empty top-level `header.frame_id` to `frame_id` (the mapping entry's).
+pub fn fill_frame_id(t: &MsgType, m: &mut Ros, frame_id: &str) {
+    if frame_id.is_empty() {
+        return;
+    }
+    let Some(i) = header_index(t) else {
+        return;
+    };
+    if let Ros::Struct(fields) = m {
+        if let Some(Ros::Struct(h)) = fields.get_mut(i) {
+            if let Some(Ros::Str(f)) = h.get_mut(1) {
+                if f.is_empty() {
+                    *f = frame_id.to_string();
+                }
+            }
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! mapping files say (format: `mappings/README.md`).
 
 use anyhow::{bail, Context as _};
-use clap::Parser;
+use clap::{Parser, Subcommand};
 use std::net::{IpAddr, SocketAddr, ToSocketAddrs};
 use std::path::PathBuf;
 use std::time::Duration;
@@ -12,11 +12,18 @@ use yarp_ros2_gateway::gateway::{Gateway, Options};
 use yarp_ros2_gateway::mapping::Mappings;
 
 #[derive(Parser, Debug)]
-#[command(name = "yarp-ros2-gateway", version, about)]
+#[command(name = "yarp-ros2-gateway", version, about, subcommand_negates_reqs = true)]
 struct Args {
+    #[command(subcommand)]
+    command: Option<Command>,
     /// Mapping files (TOML) to load; entry names must be unique across them.
     #[arg(long, num_args = 1.., required = true)]
     mappings: Vec<PathBuf>,
+    /// Directories of ROS interface definitions (`.msg`, `.srv`) besides
+    /// $AMENT_PREFIX_PATH's: an install prefix, a directory of packages or one package
+    /// (repeatable; they take precedence).
+    #[arg(long = "interfaces", global = true)]
+    interfaces: Vec<PathBuf>,
     /// ROS domain id (default: $ROS_DOMAIN_ID, else 0).
     #[arg(long)]
     domain_id: Option<u16>,
@@ -49,8 +56,72 @@ struct Args {
     check: bool,
 }
 
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Print the Bottle layout of a ROS message type (as the generic conversion reads
+    /// and writes it) and an example Bottle, e.g. `show-type nav_msgs/msg/Odometry`.
+    ShowType {
+        /// `pkg/msg/Type` (or `pkg/Type`).
+        ros_type: String,
+    },
+}
+
+/// `show-type`: the layout of a type, its constants and an example for `yarp write`.
+fn show_type(name: &str) -> anyhow::Result<()> {
+    use yarp_ros2_gateway::{generic, interfaces, types};
+    let full = match name.split('/').collect::<Vec<_>>().as_slice() {
+        [p, t] => format!("{p}/msg/{t}"),
+        _ => name.to_string(),
+    };
+    let Some(t) = types::lookup(&full) else {
+        match interfaces::problem(&full) {
+            Some(p) => bail!("{full}: its definition does not parse: {p}"),
+            None => bail!(
+                "{full}: unknown type (not built in, and no definition under \
+                 $AMENT_PREFIX_PATH or --interfaces)"
+            ),
+        }
+    };
+    let source = if interfaces::lookup(&full).is_some() {
+        "its definition"
+    } else {
+        "the built-in catalog"
+    };
+    println!("{full} (from {source}; hash {})", yarp_ros2_gateway::hash::rihs01(&full)?);
+    println!("Bottle layout (fields in order; nested messages are lists; trailing fields");
+    println!("may be left out when writing):");
+    print!("{}", generic::layout(t));
+    if !t.constants.is_empty() {
+        println!("constants:");
+        for c in t.constants {
+            println!("  {} = {}", c.name, c.value);
+        }
+    }
+    let ex = generic::example(t).map_err(|e| anyhow::anyhow!("{full}: {e}"))?;
+    println!("example (for `yarp write`):");
+    println!("{ex}");
+    Ok(())
+}
+
 fn main() -> std::process::ExitCode {
     let args = Args::parse();
+    for d in &args.interfaces {
+        if yarp_ros2_gateway::interfaces::add_dir(d) == 0 {
+            eprintln!(
+                "yarp-ros2-gateway: --interfaces {}: no .msg or .srv definitions there",
+                d.display()
+            );
+        }
+    }
+    if let Some(Command::ShowType { ros_type }) = &args.command {
+        return match show_type(ros_type) {
+            Ok(()) => std::process::ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("yarp-ros2-gateway: {e:#}");
+                std::process::ExitCode::FAILURE
+            }
+        };
+    }
     // RustDDS and ros2-client log many harmless warnings (and errors while a node shuts
     // down); show them only when RUST_LOG asks, e.g. RUST_LOG=info,rustdds=warn.
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()

@@ -62,6 +62,9 @@ pub enum Conversion {
     /// `sensor_msgs/JointState`, `std_msgs/Float64MultiArray` or
     /// `trajectory_msgs/JointTrajectory` -> a control board (see [`crate::joint_command`]).
     JointCommand,
+    /// Any message type <-> its fields as a Bottle, both ways ([`crate::generic`]); the
+    /// default for types no other conversion carries.
+    Generic,
 }
 
 impl Conversion {
@@ -84,6 +87,9 @@ impl Conversion {
             "sensor_msgs/msg/Image" => Conversion::Image,
             "geometry_msgs/msg/WrenchStamped" => Conversion::Wrench,
             "trajectory_msgs/msg/JointTrajectory" => Conversion::JointCommand,
+            // no type: a ROS-topic pattern mirroring whatever types its topics have
+            "" => Conversion::Generic,
+            t if is_message_type(t) => Conversion::Generic,
             _ => return None,
         })
     }
@@ -92,6 +98,7 @@ impl Conversion {
     pub fn fits(self, ros_type: &str) -> bool {
         match self {
             Conversion::JointCommand => JOINT_COMMAND_TYPES.contains(&ros_type),
+            Conversion::Generic => ros_type.is_empty() || is_message_type(ros_type),
             _ => Conversion::default_for(ros_type) == Some(self),
         }
     }
@@ -99,9 +106,11 @@ impl Conversion {
     /// Whether this conversion works in `dir`.
     pub fn supports(self, dir: Direction) -> bool {
         match self {
-            Conversion::Text | Conversion::Scalar | Conversion::MultiArray | Conversion::Twist => {
-                true
-            }
+            Conversion::Text
+            | Conversion::Scalar
+            | Conversion::MultiArray
+            | Conversion::Twist
+            | Conversion::Generic => true,
             Conversion::JointState | Conversion::Image | Conversion::Imu | Conversion::Wrench => {
                 dir == Direction::YarpToRos
             }
@@ -116,6 +125,11 @@ impl Conversion {
             Conversion::JointState | Conversion::Image | Conversion::Imu | Conversion::Wrench
         )
     }
+}
+
+/// Whether `t` names a message type the gateway knows (built in or read at run time).
+fn is_message_type(t: &str) -> bool {
+    t.contains("/msg/") && types::lookup(t).is_some()
 }
 
 /// The ROS types a `joint_command` entry takes.
@@ -236,6 +250,9 @@ pub struct TopicEntry {
     /// An existing port the gateway connects `yarp_port` to (kept connected).
     pub yarp_sink: Option<String>,
     pub ros_topic: String,
+    /// Empty (left out) only in a `ros_to_yarp` ROS-topic pattern: each matching topic is
+    /// mirrored with the type its publishers announce (generic conversion).
+    #[serde(default)]
     pub ros_type: String,
     pub conversion: Option<Conversion>,
     #[serde(default)]
@@ -313,6 +330,9 @@ pub struct Mappings {
     pub services: Vec<ServiceEntry>,
     /// `[[robot]]` entries (see [`crate::robot`]).
     pub robots: Vec<RobotEntry>,
+    /// `interfaces = [...]`: directories of interface definitions the files name (added
+    /// to [`crate::interfaces`] as they load).
+    pub interfaces: Vec<PathBuf>,
 }
 
 /// A mapping file that cannot be used.
@@ -325,7 +345,7 @@ pub enum LoadError {
     },
     #[error("{file}: not valid TOML: {message}")]
     Syntax { file: PathBuf, message: String },
-    #[error("{file}: top-level key `{key}` is unknown (expected `topic`, `service` or `robot`)")]
+    #[error("{file}: top-level key `{key}` is unknown (expected `topic`, `service`, `robot` or `interfaces`)")]
     UnknownSection { file: PathBuf, key: String },
     #[error("{file}: entry {entry}: key `{key}`: {message}")]
     Entry {
@@ -370,6 +390,7 @@ impl Mappings {
                 check_unique(&all, &r.name, f)?;
                 all.robots.push(r);
             }
+            all.interfaces.extend(one.interfaces);
         }
         all.check_robot_parts()?;
         Ok(all)
@@ -404,6 +425,14 @@ impl Mappings {
                 message: e.message().to_string(),
             })?;
         let mut out = Mappings::default();
+        let mut table = table;
+        // Interface directories first: the entries' types may be defined there.
+        if let Some(dirs) = table.remove("interfaces") {
+            out.interfaces = interface_dirs(dirs, file)?;
+            for d in &out.interfaces {
+                crate::interfaces::add_dir(d);
+            }
+        }
         for (key, value) in table {
             let entries = match (key.as_str(), value) {
                 ("topic" | "service" | "robot", toml::Value::Array(a)) => a,
@@ -452,6 +481,35 @@ impl Mappings {
         }
         Ok(out)
     }
+}
+
+/// `interfaces = ["dir", ...]`: directories of interface definitions (relative to the
+/// mapping file's directory), each a prefix, a directory of packages or one package.
+fn interface_dirs(v: toml::Value, file: &Path) -> Result<Vec<PathBuf>, LoadError> {
+    let err = |message: String| LoadError::Entry {
+        file: file.to_path_buf(),
+        entry: "interfaces".into(),
+        key: "interfaces".into(),
+        message,
+    };
+    let toml::Value::Array(items) = v else {
+        return Err(err("must be an array of directories".into()));
+    };
+    let base = file.parent().unwrap_or(Path::new(""));
+    items
+        .into_iter()
+        .map(|i| match i {
+            toml::Value::String(d) => {
+                let p = base.join(&d);
+                if p.is_dir() {
+                    Ok(p)
+                } else {
+                    Err(err(format!("`{}` is not a directory", p.display())))
+                }
+            }
+            other => Err(err(format!("`{other}` is not a directory name"))),
+        })
+        .collect()
 }
 
 fn entry_label(section: &str, i: usize, v: &toml::Value) -> String {
@@ -515,8 +573,31 @@ fn validate_topic(t: &TopicEntry) -> Result<(), Invalid> {
     } else {
         check_ros_name("ros_topic", &t.ros_topic)?;
     }
-    if types::lookup(&t.ros_type).is_none() || !t.ros_type.contains("/msg/") {
-        return Err(("ros_type", format!("unknown message type `{}`", t.ros_type)));
+    if t.ros_type.is_empty() {
+        if !t.is_ros_pattern() {
+            return Err((
+                "ros_type",
+                "required (only a ros_topic pattern may leave it out)".into(),
+            ));
+        }
+        if t.conversion.is_some_and(|c| c != Conversion::Generic) {
+            return Err((
+                "conversion",
+                "a pattern without ros_type mirrors any type: generic only".into(),
+            ));
+        }
+    } else if !is_message_type(&t.ros_type) {
+        let why = crate::interfaces::problem(&t.ros_type)
+            .map(|p| format!(" (its definition: {p})"))
+            .unwrap_or_else(|| {
+                " (not built in, and no definition in AMENT_PREFIX_PATH, --interfaces or \
+                 the mapping's `interfaces`)"
+                    .into()
+            });
+        return Err((
+            "ros_type",
+            format!("unknown message type `{}`{why}", t.ros_type),
+        ));
     }
     let conv = match t.conversion {
         Some(c) if !c.fits(&t.ros_type) => {
@@ -607,7 +688,14 @@ fn validate_topic(t: &TopicEntry) -> Result<(), Invalid> {
             ));
         }
     }
-    if t.frame_id.is_some() && !conv.has_header() {
+    let header = conv.has_header()
+        || (conv == Conversion::Generic
+            && types::lookup(&t.ros_type).is_some_and(|m| {
+                m.fields
+                    .iter()
+                    .any(|f| f.base == types::Base::Nested("std_msgs/msg/Header"))
+            }));
+    if t.frame_id.is_some() && !header {
         return Err((
             "frame_id",
             format!("{} has no header to carry a frame_id", t.ros_type),

@@ -187,6 +187,20 @@ where
     })
 }
 
+/// Makes the endpoints of `ros_type` that `dp` creates from now on announce its REP-2016
+/// hash, as rmw does (the built-in catalog's are set when the participant starts; a type
+/// read from its definition at run time is set here, before its first endpoint).
+pub fn announce_type_hash(dp: &ros2_client::dds::rustdds::DomainParticipant, ros_type: &str) {
+    let Some(dds) = crate::types::dds_type_name(ros_type) else {
+        return;
+    };
+    if dp.endpoint_user_data(&dds).is_empty() {
+        if let Ok(ud) = crate::hash::user_data(ros_type) {
+            dp.set_endpoint_user_data(&dds, ud.into_bytes());
+        }
+    }
+}
+
 /// A ROS topic or service name (`/a/b`, or relative `b`).
 pub fn name(n: &str) -> Result<Name, RosError> {
     Name::parse(n).map_err(|e| RosError::Name {

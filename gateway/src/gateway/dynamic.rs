@@ -14,7 +14,7 @@ use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 use std::time::Duration;
 use tokio::task::JoinHandle;
-use tracing::{debug, info};
+use tracing::{debug, info, warn};
 use yarp_net::nameserver::NameClient;
 use yarp_net::port::Port;
 
@@ -140,28 +140,42 @@ struct Mirror {
     port: Arc<Port>,
 }
 
-/// The ROS topics (absolute names) that some other participant publishes with the DDS
-/// type `dds_type` and whose names match `pat`.
+/// The ROS topics (absolute names) that some other participant publishes, whose names
+/// match `pat`, with their ROS types (`pkg/msg/Name`): of DDS type `dds_type` only, or
+/// of any type when `dds_type` is `None`.
 fn published_topics(
     dp: &ros2_client::dds::rustdds::DomainParticipant,
     pat: &str,
-    dds_type: &str,
-) -> HashSet<String> {
+    dds_type: Option<&str>,
+) -> HashMap<String, String> {
     use ros2_client::dds::rustdds::RTPSEntity;
     let me = dp.guid().prefix;
     dp.discovered_writers()
         .into_iter()
         .filter(|w| w.writer_proxy.remote_writer_guid.prefix != me)
-        .filter(|w| w.publication_topic_data.type_name == dds_type)
+        .filter(|w| dds_type.is_none_or(|d| w.publication_topic_data.type_name == d))
         .filter_map(|w| {
-            w.publication_topic_data
+            let topic = w
+                .publication_topic_data
                 .topic_name
                 .strip_prefix("rt")
-                .filter(|n| n.starts_with('/'))
-                .map(str::to_string)
+                .filter(|n| n.starts_with('/') && pattern::matches(pat, n))?
+                .to_string();
+            let ty = ros_type_of(&w.publication_topic_data.type_name)?;
+            Some((topic, ty))
         })
-        .filter(|n| pattern::matches(pat, n))
         .collect()
+}
+
+/// `pkg::msg::dds_::Name_` (the DDS type name rmw gives a message type) as `pkg/msg/Name`.
+pub fn ros_type_of(dds_type: &str) -> Option<String> {
+    let mut it = dds_type.split("::");
+    match (it.next(), it.next(), it.next(), it.next(), it.next()) {
+        (Some(p), Some(k @ "msg"), Some("dds_"), Some(n), None) if !p.is_empty() => {
+            Some(format!("{p}/{k}/{}", n.strip_suffix('_')?))
+        }
+        _ => None,
+    }
 }
 
 /// Runs the ROS-pattern entry `t` until aborted: every ROS topic matching `t.ros_topic`
@@ -174,18 +188,21 @@ pub(super) async fn run_ros(
     t: TopicEntry,
     c: Arc<Counters>,
 ) {
-    let Some(dds_type) = crate::types::dds_type_name(&t.ros_type) else {
+    // No ros_type: every matching topic, with the type its publishers announce.
+    let dds_type = crate::types::dds_type_name(&t.ros_type);
+    if dds_type.is_none() && !t.ros_type.is_empty() {
         return;
-    };
+    }
     let prefix = t.yarp_port.clone().unwrap_or_default();
     let mut live: HashMap<String, Mirror> = HashMap::new();
+    let mut unknown: HashSet<String> = HashSet::new();
     let mut tick = tokio::time::interval(SCAN_PERIOD);
     loop {
         tick.tick().await;
-        let topics = published_topics(&dp, &t.ros_topic, &dds_type);
+        let topics = published_topics(&dp, &t.ros_topic, dds_type.as_deref());
         let gone: Vec<String> = live
             .keys()
-            .filter(|n| !topics.contains(*n))
+            .filter(|n| !topics.contains_key(*n))
             .cloned()
             .collect();
         for n in gone {
@@ -201,13 +218,29 @@ pub(super) async fn run_ros(
                 }
             }
         }
-        for n in topics {
+        for (n, ty) in topics {
             if live.contains_key(&n) {
                 continue;
             }
-            match mirror_one(&mut node, &ns, &t, &n, &prefix, c.clone()).await {
+            let mut entry = t.clone();
+            if t.ros_type.is_empty() {
+                if crate::types::lookup(&ty).is_none() {
+                    if unknown.insert(ty.clone()) {
+                        warn!(
+                            "{}: ROS topic {n} has type {ty}, which has no definition here \
+                             (AMENT_PREFIX_PATH, --interfaces): not mirrored",
+                            t.name
+                        );
+                    }
+                    continue;
+                }
+                entry.ros_type = ty;
+                entry.conversion = Some(crate::mapping::Conversion::Generic);
+                ros::announce_type_hash(&dp, &entry.ros_type);
+            }
+            match mirror_one(&mut node, &ns, &entry, &n, &prefix, c.clone()).await {
                 Ok(m) => {
-                    info!("{}: mirroring ROS topic {n}", t.name);
+                    info!("{}: mirroring ROS topic {n} ({})", t.name, entry.ros_type);
                     live.insert(n, m);
                 }
                 Err(e) => debug!("{}: {n}: {e}", t.name),

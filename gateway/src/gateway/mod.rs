@@ -332,6 +332,7 @@ impl Builder {
     }
 
     async fn topic(&mut self, node: &mut Node, t: &TopicEntry) -> Result<(), StartError> {
+        ros::announce_type_hash(&self.ctx.domain_participant(), &t.ros_type);
         if t.is_ros_pattern() {
             return self.ros_pattern(t);
         }

@@ -170,6 +170,11 @@ pub(super) async fn ros_to_yarp(
         return;
     };
     let mut limit = t.rate_limit_hz.map(RateLimit::new);
+    // The generic layout's header.stamp travels in the envelope too.
+    let stamped = (conv == Conversion::Generic)
+        .then(|| crate::types::lookup(&t.ros_type))
+        .flatten();
+    let mut count = 0i32;
     let stream = sub.async_stream_seed(seed);
     pin_mut!(stream);
     while let Some(r) = stream.next().await {
@@ -191,7 +196,13 @@ pub(super) async fn ros_to_yarp(
         }
         match convert::to_yarp(conv, &t.ros_type, &m) {
             Ok(b) => {
-                port.write_nowait(&b, None);
+                let stamp = stamped
+                    .and_then(|ty| crate::generic::header_time(ty, &m))
+                    .map(|time| {
+                        count = count.wrapping_add(1);
+                        yarp_proto::Stamp::new(count, time)
+                    });
+                port.write_nowait(&b, stamp);
                 c.forwarded(t0.elapsed());
             }
             Err(e) => {
