@@ -12,7 +12,12 @@ use yarp_ros2_gateway::gateway::{Gateway, Options};
 use yarp_ros2_gateway::mapping::Mappings;
 
 #[derive(Parser, Debug)]
-#[command(name = "yarp-ros2-gateway", version, about, subcommand_negates_reqs = true)]
+#[command(
+    name = "yarp-ros2-gateway",
+    version,
+    about,
+    subcommand_negates_reqs = true
+)]
 struct Args {
     #[command(subcommand)]
     command: Option<Command>,
@@ -87,7 +92,10 @@ fn show_type(name: &str) -> anyhow::Result<()> {
     } else {
         "the built-in catalog"
     };
-    println!("{full} (from {source}; hash {})", yarp_ros2_gateway::hash::rihs01(&full)?);
+    println!(
+        "{full} (from {source}; hash {})",
+        yarp_ros2_gateway::hash::rihs01(&full)?
+    );
     println!("Bottle layout (fields in order; nested messages are lists; trailing fields");
     println!("may be left out when writing):");
     print!("{}", generic::layout(t));

@@ -1243,6 +1243,86 @@ ros_type = "std_msgs/msg/Float64"
     }
 
     #[test]
+    fn generic_conversion_in_every_mode() {
+        let fixed = r#"
+[[topic]]
+name = "js"
+direction = "both"
+yarp_port = "/gw/js"
+ros_topic = "/js"
+ros_type = "sensor_msgs/msg/JointState"
+conversion = "generic"
+frame_id = "base"
+"#;
+        let m = parse(fixed).unwrap();
+        assert_eq!(m.topics[0].conversion(), Conversion::Generic);
+        // a type no other conversion carries defaults to generic
+        let diag = fixed
+            .replace("sensor_msgs/msg/JointState", "diagnostic_msgs/msg/KeyValue")
+            .replace("conversion = \"generic\"\n", "")
+            .replace("frame_id = \"base\"\n", "");
+        assert_eq!(
+            parse(&diag).unwrap().topics[0].conversion(),
+            Conversion::Generic
+        );
+        // a frame_id needs a header
+        assert_eq!(
+            entry_error(&format!("{diag}frame_id = \"x\"\n")).1,
+            "frame_id"
+        );
+        let yarp_pattern = diag
+            .replace("direction = \"both\"", "direction = \"yarp_to_ros\"")
+            .replace("yarp_port = \"/gw/js\"", "yarp_pattern = \"/kv/*\"");
+        assert_eq!(
+            parse(&yarp_pattern).unwrap().topics[0].conversion(),
+            Conversion::Generic
+        );
+        let any = r#"
+[[topic]]
+name = "all"
+direction = "ros_to_yarp"
+yarp_port = "/mirror"
+ros_topic = "/robot/*"
+"#;
+        let m = parse(any).unwrap();
+        assert_eq!(m.topics[0].ros_type, "");
+        assert_eq!(m.topics[0].conversion(), Conversion::Generic);
+        assert_eq!(
+            entry_error(&format!("{any}conversion = \"text\"\n")).1,
+            "conversion"
+        );
+        assert_eq!(
+            entry_error(&any.replace("/robot/*", "/robot/one")).1,
+            "ros_type"
+        );
+    }
+
+    #[test]
+    fn interface_directories() {
+        let dir = std::env::temp_dir().join(format!("gw-map-ifaces-{}", std::process::id()));
+        let pkg = dir.join("share/gw_map_pkg/msg");
+        std::fs::create_dir_all(&pkg).unwrap();
+        std::fs::write(pkg.join("Level.msg"), "float64 litres\n").unwrap();
+        let text = r#"
+interfaces = ["share"]
+
+[[topic]]
+name = "tank"
+direction = "yarp_to_ros"
+yarp_port = "/tank:i"
+ros_topic = "/tank"
+ros_type = "gw_map_pkg/msg/Level"
+"#;
+        let m = Mappings::parse(text, &dir.join("m.toml")).unwrap();
+        assert_eq!(m.interfaces, [dir.join("share")]);
+        assert_eq!(m.topics[0].conversion(), Conversion::Generic);
+        let err = Mappings::parse(&text.replace("\"share\"", "\"nope\""), &dir.join("m.toml"))
+            .unwrap_err();
+        assert_eq!(err.key(), Some("interfaces"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
     fn setbool_commands() {
         let text = r#"
 [[service]]
