@@ -43,8 +43,8 @@ pub fn start_node(
 }
 
 /// A DDS participant as a ros2-client context, announcing the type hash of every catalog
-/// type; nodes are added with [`new_node`] (the gateway has one, yarp-devices-ros2's
-/// devices one each, all on one participant per process).
+/// type; nodes are added with [`new_node`]. Only one node of a participant may spin: the
+/// spinners of several would share (split) the participant's discovery events.
 pub fn start_context(domain: u16, networks: &[IpAddr]) -> Result<Context, RosError> {
     let mut b = DomainParticipantBuilder::new(domain);
     if !networks.is_empty() {

@@ -874,6 +874,24 @@ mod tests {
         assert_eq!((r.values.len(), r.response.as_str()), (2, "OK"));
     }
 
+    /// `string[] names, float64[] positions, float64[] ref_velocities` (Position.msg) in
+    /// CDR, worked out by hand: what a client on this ROS layer puts on the wire.
+    #[test]
+    fn position_bytes_follow_the_msg_definition() {
+        let m = Ros::Struct(vec![
+            Ros::List(vec![Ros::Str("ab".into())]),
+            Ros::List(vec![Ros::F64(1.5)]),
+            Ros::List(vec![]),
+        ]);
+        assert!(m.conforms_to(Topic::Position.ros_type()));
+        let bytes = cdr_encoding::to_vec::<_, byteorder::LittleEndian>(&m).unwrap();
+        let mut want = vec![1, 0, 0, 0, 3, 0, 0, 0, b'a', b'b', 0]; // 1 name: "ab\0"
+        want.extend([0, 1, 0, 0, 0]); // pad to 4, 1 position
+        want.extend(1.5f64.to_le_bytes()); // at offset 16: 8-aligned already
+        want.extend([0, 0, 0, 0]); // no reference velocities
+        assert_eq!(bytes, want);
+    }
+
     #[test]
     fn joint_state_has_the_catalog_layout() {
         let b = fake_board(4);

@@ -1,27 +1,24 @@
-//! The ROS side of a device: one DDS participant per process (the gateway's
-//! [`ros::start_context`], domain and interfaces from `ROS_DOMAIN_ID` and
-//! `ROS_AUTOMATIC_DISCOVERY_RANGE` as rcl reads them) and one ROS node per device, as
-//! yarp-devices-ros2's `NodeCreator` gives each device its own rclcpp node in one context.
-//! Nodes spin on the device runtime.
+//! The ROS side of a device: its own ROS node (as yarp-devices-ros2's `NodeCreator` gives
+//! each device an rclcpp node) on its own DDS participant (the gateway's
+//! [`ros::start_context`]; domain and interfaces from `ROS_DOMAIN_ID` and
+//! `ROS_AUTOMATIC_DISCOVERY_RANGE` as rcl reads them), spun on the device runtime.
+//!
+//! One participant per node, not one per process: ros2-client's spinner takes the
+//! participant's discovery events from one shared queue, so two spinning nodes of one
+//! participant each miss the events the other took (a publisher then never learns of its
+//! subscribers, a service server of its clients).
 
 use ros2_client::{Context, Node, Publisher, Server, Subscription};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use tokio::task::JoinHandle;
 use yarp_devices::{runtime, DevResult, DeviceError, Params};
 use yarp_ros2_gateway::dynmsg::Value as Ros;
 use yarp_ros2_gateway::mapping::Qos;
 use yarp_ros2_gateway::ros::{self, RosError};
 
-/// The process-wide participant, made by the first device that needs it.
+/// A participant for one device's node.
 fn context() -> Result<Context, RosError> {
-    static CONTEXT: Mutex<Option<Context>> = Mutex::new(None);
-    let mut slot = CONTEXT.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some(c) = slot.as_ref() {
-        return Ok(c.clone());
-    }
-    let c = ros::start_context(ros::domain_from_env()?, &ros::networks_from_env())?;
-    *slot = Some(c.clone());
-    Ok(c)
+    ros::start_context(ros::domain_from_env()?, &ros::networks_from_env())
 }
 
 /// What every wrapper of this crate reads (yarp-devices-ros2's `node_name`, `namespace`,
@@ -92,7 +89,13 @@ fn qos() -> Qos {
 impl NodeBuilder {
     pub fn new(device: &'static str, namespace: &str, node_name: &str) -> DevResult<NodeBuilder> {
         let ctx = context().map_err(|e| failed(device, e))?;
-        let node = ros::new_node(&ctx, namespace, node_name).map_err(|e| failed(device, e))?;
+        // rclcpp takes "" for the root namespace and a relative one as absolute
+        let namespace = match namespace.trim_end_matches('/') {
+            "" => "/".to_string(),
+            n if n.starts_with('/') => n.to_string(),
+            n => format!("/{n}"),
+        };
+        let node = ros::new_node(&ctx, &namespace, node_name).map_err(|e| failed(device, e))?;
         Ok(NodeBuilder { device, node })
     }
 
