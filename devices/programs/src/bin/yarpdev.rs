@@ -97,6 +97,10 @@ fn cxx_info(name: &str) -> (&'static str, Option<&'static str>) {
         ),
         "multipleanalogsensorsclient" => ("MultipleAnalogSensorsClient", None),
         "deviceBundler" => ("DeviceBundler", None),
+        // yarp-devices-ros2's plugins (their manifests name each its own wrapper)
+        "controlBoard_nws_ros2" => ("ControlBoard_nws_ros2", Some("controlBoard_nws_ros2")),
+        "imu_nws_ros2" => ("Imu_nws_ros2", Some("imu_nws_ros2")),
+        "wrenchStamped_nws_ros2" => ("WrenchStamped_nws_ros2", Some("wrenchStamped_nws_ros2")),
         _ => ("unknown", None),
     }
 }
