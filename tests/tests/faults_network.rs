@@ -10,7 +10,8 @@
 //! - Peers that send half a message (or half a name-server line) and hang: every other
 //!   connection of the same port (reader, rpc server, gateway) and the name server keep
 //!   working, and what the hung connections held (descriptors, tasks) is released when
-//!   they go away or when the port is told to drop them (`yarp disconnect`).
+//!   the port is told to drop them (admin `del`), after `STALL_TIMEOUT` without a byte in
+//!   the middle of a header or binary message, and when the peers go away.
 //! - A reader that stops reading: the writer's memory stays bounded (its per-connection
 //!   queue) and its other readers keep receiving.
 //!
@@ -21,6 +22,7 @@ use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::time::{Duration, Instant};
 use yarp_interop_tests::{eventually, fd_count, rss_kib, thread_count, Proc, YarpNet, STEP};
+use yarp_net::port::STALL_TIMEOUT;
 use yarp_proto::wire::{self, Carrier, PortCommand};
 
 /// The network of one test, with the programs these tests start on it.
@@ -240,6 +242,7 @@ fn half_messages_block_nothing_else() {
     let ns_base = fd_count(server.pid());
 
     const HALF: usize = 8;
+    let hung_at = Instant::now();
     let mut hung = Vec::new();
     for (_, port, _) in &targets {
         for how in 0..HALF {
@@ -277,11 +280,31 @@ fn half_messages_block_nothing_else() {
         reply.contains("Removing connection from /fault/half"),
         "admin del: {reply:?}"
     );
+    // (left: the two that never finished their header)
     assert!(
-        eventually(STEP, || fd_count(reader_pid) <= base[0].0 + HALF / 2),
+        eventually(STEP, || fd_count(reader_pid) <= base[0].0 + HALF / 4 + 1),
         "reader still holds {} descriptors (baseline {})",
         fd_count(reader_pid),
         base[0].0
+    );
+
+    // the peers never close: every connection stuck in a header or a binary message is
+    // closed by its port after STALL_TIMEOUT; the text ones (a person typing) stay open,
+    // as in C++
+    let stalled = hung_at.elapsed();
+    for ((what, _, pid), (fds, _)) in targets.iter().zip(&base) {
+        let text_left = if *what == "reader" { 0 } else { HALF / 4 };
+        let limit = (STALL_TIMEOUT + STEP).saturating_sub(stalled);
+        assert!(
+            eventually(limit, || fd_count(*pid) <= fds + text_left + 1),
+            "{what}: {} descriptors {:?} after the half messages (baseline {fds})",
+            fd_count(*pid),
+            hung_at.elapsed()
+        );
+    }
+    println!(
+        "stalled connections closed by their ports {:?} after they stopped",
+        hung_at.elapsed()
     );
 
     // the peers go away: everything they held is released

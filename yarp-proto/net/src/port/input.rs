@@ -4,9 +4,11 @@
 use super::output::{self, next_event, write_all_parts, OutputError};
 use super::{Incoming, ReplyBody, Shared};
 use std::sync::Arc;
-use tokio::io::AsyncWriteExt;
+use std::time::Duration;
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::{oneshot, Notify};
+use tokio::time::timeout;
 use yarp_proto::port_admin::{
     self, add_output_text, format_add_result, format_del_result, handle_admin, remove_input_text,
     remove_output_text, AddOutcome, AdminAction, Pending, Route,
@@ -17,6 +19,13 @@ use yarp_proto::wire::{
     Message,
 };
 use yarp_proto::Bottle;
+
+/// How long an input connection may go without a byte while it owes the rest of its
+/// connection header or of a binary message (then it is closed).
+pub const STALL_TIMEOUT: Duration = Duration::from_secs(20);
+/// How long a new connection may stay silent before its header (the name server gives an
+/// idle client as long).
+pub const HEADER_TIMEOUT: Duration = Duration::from_secs(60);
 
 /// An input connection as the port keeps it.
 pub(crate) struct InputEntry {
@@ -156,7 +165,7 @@ struct Conn<'a> {
 impl Conn<'_> {
     async fn run(&mut self, stream: &mut TcpStream) -> Result<End, OutputError> {
         loop {
-            let ev = match next_event(stream, &mut self.decoder, &self.from).await {
+            let ev = match self.next_event(stream).await {
                 Ok(ev) => ev,
                 Err(OutputError::PeerClosed(_)) => return Ok(End::Closed),
                 Err(e) => return Err(e),
@@ -237,6 +246,50 @@ impl Conn<'_> {
                     );
                 }
                 _ => {}
+            }
+        }
+    }
+
+    /// The next event, reading as needed. While the peer owes the rest of something (its
+    /// connection header, or a binary message it has begun) each read may wait at most
+    /// [`STALL_TIMEOUT`], and a connection that sends nothing at all gets
+    /// [`HEADER_TIMEOUT`] for its header: a peer that sends half a message and hangs does
+    /// not hold the connection for ever. Between messages, and inside the messages of a
+    /// text connection (a person typing), the wait is as long as C++'s: unbounded.
+    async fn next_event(&mut self, stream: &mut TcpStream) -> Result<Event, OutputError> {
+        loop {
+            match self.decoder.poll() {
+                Ok(Some(ev)) => return Ok(ev),
+                Ok(None) => {}
+                Err(source) => {
+                    return Err(OutputError::Protocol {
+                        target: self.from.clone(),
+                        source,
+                    })
+                }
+            }
+            let begun = !self.decoder.is_idle();
+            let limit = match self.spec {
+                None if begun => Some(STALL_TIMEOUT),
+                None => Some(HEADER_TIMEOUT),
+                Some(_) if begun && !self.is_text() => Some(STALL_TIMEOUT),
+                Some(_) => None,
+            };
+            let mut space = self.decoder.read_buf(output::READ_CHUNK);
+            let read = stream.read_buf(&mut space);
+            let n = if let Some(limit) = limit {
+                timeout(limit, read)
+                    .await
+                    .map_err(|_| OutputError::Stalled(self.from.clone(), limit))?
+            } else {
+                read.await
+            }
+            .map_err(|source| OutputError::Io {
+                target: self.from.clone(),
+                source,
+            })?;
+            if n == 0 {
+                return Err(OutputError::PeerClosed(self.from.clone()));
             }
         }
     }

@@ -37,6 +37,7 @@ use yarp_proto::port_admin::{Connection, PortSnapshot};
 use yarp_proto::wire::Carrier;
 use yarp_proto::{Bottle, Contact, DecodeError, PortRef, Stamp, Value};
 
+pub use input::{HEADER_TIMEOUT, STALL_TIMEOUT};
 pub use output::OutputError;
 
 /// How long connection set-up steps (TCP connect, header reply, welcome) may take.

@@ -45,6 +45,8 @@ pub enum OutputError {
     },
     #[error("{0} did not acknowledge within {1:?}")]
     AckTimeout(String, Duration),
+    #[error("peer {0:?} stopped before the end of its header or message (nothing for {1:?})")]
+    Stalled(String, Duration),
 }
 
 /// How long a closing connection may take to send its `q` before it is ended without.
