@@ -10,7 +10,7 @@ use tokio::net::{TcpListener, TcpStream};
 use tokio::time::timeout;
 use yarp_net::buffered::BufferedPort;
 use yarp_net::nameserver::{NameClient, NameServer};
-use yarp_net::port::{Port, OUTPUT_QUEUE};
+use yarp_net::port::{Port, OUTPUT_QUEUE, OUTPUT_QUEUE_BYTES};
 use yarp_proto::nameserver::RegisterRequest;
 use yarp_proto::{bottle, Bottle};
 
@@ -141,4 +141,35 @@ async fn port_write_nowait_bounds_the_stalled_queue_and_disconnect_frees_it() {
 /// Descriptors open in this process.
 fn open_fds() -> usize {
     std::fs::read_dir("/proc/self/fd").map_or(0, |d| d.count())
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn large_messages_to_a_stalled_reader_are_bounded_in_bytes() {
+    let ns = name_server().await;
+    let w = Port::open("/sb/w", ns.clone()).await.expect("open w");
+    let live = std::sync::Arc::new(Port::open("/sb/live", ns.clone()).await.expect("live"));
+    let stuck = stalled_reader(&ns, "/sb/stuck").await;
+    w.connect("/sb/stuck", None).await.expect("connect stuck");
+    let _stuck = timeout(T, stuck).await.expect("accepted").expect("task");
+    w.connect("/sb/live", None).await.expect("connect live");
+    let got = count(live.clone());
+
+    // 2 MiB messages (a 1280x720 rgb image is 2.7 MB): 64 of them would be 128 MiB
+    let n = 120;
+    let mut both = 0;
+    for i in 0..n {
+        if w.write_nowait(&big(2048, i), None) == 2 {
+            both += 1;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    let got = got.await.expect("counter");
+    // queued bytes within the budget, plus what the two sockets' buffers hold
+    let budget = OUTPUT_QUEUE_BYTES / (2048 * 1024) + 8;
+    println!("2 MiB messages: {n} written, the stalled output took {both}, live got {got}");
+    assert!(
+        both <= budget,
+        "the stalled output took {both} messages of 2 MiB (budget {budget})"
+    );
+    assert!(got as i32 >= n - 5, "live reader got {got} of {n}");
 }

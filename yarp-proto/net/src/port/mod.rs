@@ -46,6 +46,10 @@ pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
 pub const ACK_TIMEOUT: Duration = Duration::from_secs(30);
 /// Messages queued per output connection before new ones are dropped (slow reader).
 pub const OUTPUT_QUEUE: usize = 64;
+/// Bytes of messages an output connection may have queued before `write_nowait` skips
+/// it: with large messages (images) a reader that stopped reading costs at most this
+/// much (plus the sockets' buffers), not `OUTPUT_QUEUE` of them.
+pub const OUTPUT_QUEUE_BYTES: usize = 16 * 1024 * 1024;
 /// Messages queued for the owner before the inputs stop reading (back-pressure).
 pub const INPUT_QUEUE: usize = 64;
 
@@ -492,8 +496,15 @@ impl Port {
             return 0; // no copy of the Bottle for nobody
         }
         let msg = Arc::new(output::Outgoing::new(Arc::new(b.clone()), stamp));
+        let size = msg.encoded_len();
         let mut n = 0;
         for tx in outs {
+            // a connection behind on large messages misses this one (as when its queue
+            // is full): what it holds stays within OUTPUT_QUEUE_BYTES
+            let queued = tx.max_capacity() - tx.capacity();
+            if queued > 0 && queued.saturating_mul(size) >= OUTPUT_QUEUE_BYTES {
+                continue;
+            }
             if tx.try_send(output::Job::Data(msg.clone())).is_ok() {
                 n += 1;
             }

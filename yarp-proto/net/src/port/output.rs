@@ -91,6 +91,17 @@ impl Outgoing {
         &self.bottle
     }
 
+    /// Length of the Bottle's encoding (without encoding it into one buffer).
+    pub(crate) fn encoded_len(&self) -> usize {
+        match self.binary.get() {
+            Some(b) => b.len(),
+            None => yarp_proto::binary::encode_segments(&self.bottle)
+                .iter()
+                .map(|s| s.len())
+                .sum(),
+        }
+    }
+
     /// The encoded Bottle.
     pub(crate) fn payload(&self) -> &[u8] {
         self.binary.get_or_init(|| self.bottle.encode())
