@@ -173,6 +173,21 @@ async fn run(args: Args) -> anyhow::Result<()> {
                 s.ros_service
             );
         }
+        for r in &mappings.robots {
+            let mut topics = Vec::new();
+            if let Some(js) = &r.joint_states {
+                topics.push(format!("{} ({})", js.ros_topic, js.parts.join(" ")));
+            }
+            if let Some(d) = &r.robot_description {
+                topics.push(format!("{} ({})", d.ros_topic, d.urdf.display()));
+            }
+            println!(
+                "robot   {:<20} {:<10} {}",
+                r.name,
+                "yarp->ros",
+                topics.join(", ")
+            );
+        }
         return Ok(());
     }
     let domain_id = match args.domain_id {

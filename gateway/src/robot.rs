@@ -142,16 +142,32 @@ pub fn check_parts(r: &RobotEntry, topics: &[TopicEntry]) -> Result<(), Invalid>
     Ok(())
 }
 
-/// The movable joints of a URDF document; an error unless its root is a named `<robot>`.
+/// The movable joints of a URDF document, checked as robot_state_publisher needs it: the
+/// root is a named `<robot>`, every joint has a known type and joins two of its links,
+/// and the links form one tree (one root, one parent each).
 pub fn urdf_joints(text: &str) -> Result<Vec<String>, String> {
     let doc = roxmltree::Document::parse(text).map_err(|e| format!("not XML: {e}"))?;
     let root = doc.root_element();
     if root.tag_name().name() != "robot" || root.attribute("name").is_none() {
         return Err("not a URDF: the root element must be <robot name=\"...\">".into());
     }
+    let mut links = Vec::new();
+    for l in root.children().filter(|n| n.has_tag_name("link")) {
+        let name = l.attribute("name").ok_or("a <link> has no name")?;
+        if links.contains(&name) {
+            return Err(format!("two links are named `{name}`"));
+        }
+        links.push(name);
+    }
     let mut joints = Vec::new();
+    let mut children: Vec<&str> = Vec::new();
+    let mut joint_names: Vec<&str> = Vec::new();
     for j in root.children().filter(|n| n.has_tag_name("joint")) {
         let name = j.attribute("name").ok_or("a <joint> has no name")?;
+        if joint_names.contains(&name) {
+            return Err(format!("two joints are named `{name}`"));
+        }
+        joint_names.push(name);
         let kind = j
             .attribute("type")
             .ok_or_else(|| format!("joint `{name}` has no type"))?;
@@ -162,6 +178,31 @@ pub fn urdf_joints(text: &str) -> Result<Vec<String>, String> {
             }
             other => return Err(format!("joint `{name}` has an unknown type `{other}`")),
         }
+        let end = |tag: &str| -> Result<&str, String> {
+            let l = j
+                .children()
+                .find(|n| n.has_tag_name(tag))
+                .and_then(|n| n.attribute("link"))
+                .ok_or_else(|| format!("joint `{name}` has no <{tag} link=...>"))?;
+            if links.contains(&l) {
+                Ok(l)
+            } else {
+                Err(format!("joint `{name}`: no link `{l}`"))
+            }
+        };
+        end("parent")?;
+        let child = end("child")?;
+        if children.contains(&child) {
+            return Err(format!("link `{child}` has two parent joints"));
+        }
+        children.push(child);
+    }
+    let roots: Vec<&&str> = links.iter().filter(|l| !children.contains(l)).collect();
+    if roots.len() != 1 {
+        return Err(format!(
+            "the links must form one tree, found {} roots: {roots:?}",
+            roots.len()
+        ));
     }
     Ok(joints)
 }
@@ -311,5 +352,15 @@ robot_description = { urdf = "urdf/r.urdf" }
                 .unwrap_err()
                 .contains("hinge")
         );
+        // Two trees, a missing link, a link with two parents.
+        let two_roots = urdf.replace(
+            r#"<joint name="mount" type="fixed"><parent link="b"/><child link="c"/></joint>"#,
+            "",
+        );
+        assert!(urdf_joints(&two_roots).unwrap_err().contains("roots"));
+        let missing = urdf.replace(r#"<child link="c"/>"#, r#"<child link="d"/>"#);
+        assert!(urdf_joints(&missing).unwrap_err().contains("no link `d`"));
+        let twice = urdf.replace(r#"<child link="c"/>"#, r#"<child link="b"/>"#);
+        assert!(urdf_joints(&twice).unwrap_err().contains("two parent"));
     }
 }
