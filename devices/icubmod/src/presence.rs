@@ -6,7 +6,7 @@
 //! Reads of a silent board's joints already fail after the broadcast timeout (500 ms);
 //! this only tells the user why, once per change and then every [`REPEAT`].
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::{Arc, Weak};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -19,27 +19,32 @@ const CHECK: Duration = Duration::from_millis(250);
 /// `BCAST_STATUS_TIMEOUT`).
 pub const REPEAT: Duration = Duration::from_secs(6);
 
-/// The watching thread of one device; stops when dropped (or when the client goes).
+/// The watching thread of one device; stops at once when dropped (or when the client
+/// goes).
 pub struct PresenceWatch {
-    stop: Arc<AtomicBool>,
+    stop: Option<mpsc::Sender<()>>,
     thread: Option<JoinHandle<()>>,
 }
 
 impl PresenceWatch {
     pub fn start(device: &str, client: &Arc<MotorControlClient>) -> PresenceWatch {
-        let stop = Arc::new(AtomicBool::new(false));
-        let (s, c, id) = (stop.clone(), Arc::downgrade(client), device.to_string());
+        let (stop, stopped) = mpsc::channel();
+        let (c, id) = (Arc::downgrade(client), device.to_string());
         let thread = std::thread::Builder::new()
             .name(format!("{device} presence"))
-            .spawn(move || watch(&id, &c, &s))
+            .spawn(move || watch(&id, &c, &stopped))
             .ok();
-        PresenceWatch { stop, thread }
+        PresenceWatch {
+            stop: Some(stop),
+            thread,
+        }
     }
 }
 
 impl Drop for PresenceWatch {
     fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
+        // the watcher wakes as soon as its channel closes
+        self.stop = None;
         if let Some(t) = self.thread.take() {
             let _ = t.join();
         }
@@ -53,10 +58,9 @@ struct Silence {
     reported: Option<Instant>,
 }
 
-fn watch(device: &str, client: &Weak<MotorControlClient>, stop: &AtomicBool) {
+fn watch(device: &str, client: &Weak<MotorControlClient>, stop: &mpsc::Receiver<()>) {
     let mut boards: Vec<Silence> = Vec::new();
-    while !stop.load(Ordering::Relaxed) {
-        std::thread::sleep(CHECK);
+    while let Err(RecvTimeoutError::Timeout) = stop.recv_timeout(CHECK) {
         let Some(c) = client.upgrade() else { return };
         let health = c.board_health();
         boards.resize(health.len(), Silence::default());
