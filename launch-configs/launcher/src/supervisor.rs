@@ -323,6 +323,10 @@ impl Launcher {
         if !self.cfg.name_server.write_conf {
             m.args.push("--local".into());
         }
+        // a name server that dies is started again on the same address: our ports register
+        // again by themselves (yarp-net's REGISTRATION_CHECK) and the connections are kept
+        m.restart = RestartPolicy::OnFailure;
+        m.max_restarts = 0;
         m.ready = Some(Readiness {
             port: None,
             tcp: Some(self.ns_addr.to_string()),

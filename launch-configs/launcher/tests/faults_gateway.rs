@@ -1,6 +1,8 @@
 //! The gateway killed (SIGKILL) and restarted under `yarp-launch` (`fake-devices.toml`,
 //! whose gateway module restarts on failure): an rclpy subscriber that runs throughout,
 //! never restarted, receives `/icub/left_arm/joint_states` again from the new gateway.
+//! Then the launch's name server is killed: the launcher starts it again, every port is
+//! registered again, and the subscriber keeps receiving.
 //! Needs the rclpy venv (`tests/peers/install-ros2.sh`, `ROS_VENV`); skips loudly without
 //! it (fails under CI=true). Run under netns-run.
 
@@ -84,20 +86,35 @@ impl Drop for Counter {
     }
 }
 
-/// The gateway module's pid and state from the dashboard's status.
-fn gateway(url: &str) -> (Option<i64>, String) {
+/// A module's pid and state from the dashboard's status.
+fn module(url: &str, name: &str) -> (Option<i64>, String) {
     let s = get_json(&format!("{url}api/status"));
     let m = s["modules"]
         .as_array()
         .expect("modules")
         .iter()
-        .find(|m| m["name"] == "gateway")
+        .find(|m| m["name"] == name)
         .cloned()
-        .expect("a gateway module");
+        .unwrap_or_else(|| panic!("no module {name}"));
     (
         m["pid"].as_i64(),
         m["state"].as_str().unwrap_or("").to_string(),
     )
+}
+
+fn gateway(url: &str) -> (Option<i64>, String) {
+    module(url, "gateway")
+}
+
+/// Whether `yarp name query PORT` finds it (on the launch's name server).
+fn registered(l: &Launch, port: &str) -> bool {
+    Command::new(program("yarp", "yarp-cli"))
+        .args(["name", "query", port])
+        .env("YARP_CONFIG_HOME", l.conf_home.path())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
 }
 
 #[test]
@@ -168,6 +185,37 @@ fn gateway_killed_and_restarted_ros_subscriber_receives_again() {
         println!(
             "joint_states flow again {:?} after the kill (the rclpy node never restarted)",
             t0.elapsed()
+        );
+
+        // the name server killed: the launcher starts it again, every port registers
+        // again, and the stream never needed it
+        let ns_pid = module(&url, "yarpserver")
+            .0
+            .expect("the embedded name server runs");
+        let gw_port = "/yarp_ros2_gateway/left_arm/state:i";
+        assert!(registered(&l, gw_port), "{gw_port} registered before");
+        kill(
+            Pid::from_raw(ns_pid as i32),
+            nix::sys::signal::Signal::SIGKILL,
+        )
+        .expect("kill");
+        let t1 = Instant::now();
+        l.wait_line("yarpserver: restarting", Duration::from_secs(20));
+        for port in [gw_port, "/icub/left_arm/state:o", "/icub/left_arm/rpc:i"] {
+            let again = eventually(Duration::from_secs(20), || {
+                registered(&l, port).then_some(())
+            });
+            assert!(again.is_some(), "{port} not registered again");
+        }
+        println!(
+            "every port registered again {:?} after the name server was killed",
+            t1.elapsed()
+        );
+        let now = probe.now();
+        assert!(
+            probe.reaches(now + 20, Duration::from_secs(30)),
+            "joint_states stopped with the name server ({now} then {})",
+            probe.now()
         );
     }));
     if let Err(e) = r {
