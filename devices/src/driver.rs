@@ -4,10 +4,14 @@
 //! Interface access is through `as_*` methods on `DeviceDriver` that return `None` unless
 //! the driver implements that interface (the Rust form of C++ `PolyDriver::view`).
 
+use crate::battery::IBattery;
 use crate::error::{DevResult, DeviceError};
 use crate::framegrabber::interfaces::{IFrameGrabberControls, IFrameGrabberImage};
 use crate::interfaces::*;
 use crate::kind::{interfaces_of, kind_of, suggest, Kind};
+use crate::navigation::{INavigation2DVelocityActions, IOdometry2D};
+use crate::rangefinder::IRangefinder2D;
+use crate::rgbd::IRGBDSensor;
 use crate::sensors::interfaces::*;
 use crate::sensors::virtual_analog::IVirtualAnalogSensor;
 use std::sync::{Arc, LazyLock, Mutex, RwLock};
@@ -147,6 +151,23 @@ pub trait DeviceDriver: Send {
         None
     }
     fn as_virtual_analog_sensor(&mut self) -> Option<&mut dyn IVirtualAnalogSensor> {
+        None
+    }
+
+    // Lasers, RGB-D cameras, batteries, mobile bases.
+    fn as_rangefinder_2d(&mut self) -> Option<&mut dyn IRangefinder2D> {
+        None
+    }
+    fn as_rgbd_sensor(&mut self) -> Option<&mut dyn IRGBDSensor> {
+        None
+    }
+    fn as_battery(&mut self) -> Option<&mut dyn IBattery> {
+        None
+    }
+    fn as_odometry_2d(&mut self) -> Option<&mut dyn IOdometry2D> {
+        None
+    }
+    fn as_navigation_2d_velocity(&mut self) -> Option<&mut dyn INavigation2DVelocityActions> {
         None
     }
 

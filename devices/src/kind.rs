@@ -37,7 +37,7 @@ impl Kind {
 
 /// The C++ names of the interfaces `d` offers, in the order of `DeviceDriver`'s views.
 pub fn interfaces_of(d: &mut dyn DeviceDriver) -> Vec<&'static str> {
-    let views: [(bool, &'static str); 32] = [
+    let views: [(bool, &'static str); 37] = [
         (d.as_encoders().is_some(), "IEncodersTimed"),
         (d.as_position_control().is_some(), "IPositionControl"),
         (d.as_velocity_control().is_some(), "IVelocityControl"),
@@ -85,6 +85,14 @@ pub fn interfaces_of(d: &mut dyn DeviceDriver) -> Vec<&'static str> {
             d.as_virtual_analog_sensor().is_some(),
             "IVirtualAnalogSensor",
         ),
+        (d.as_rangefinder_2d().is_some(), "IRangefinder2D"),
+        (d.as_rgbd_sensor().is_some(), "IRGBDSensor"),
+        (d.as_battery().is_some(), "IBattery"),
+        (d.as_odometry_2d().is_some(), "IOdometry2D"),
+        (
+            d.as_navigation_2d_velocity().is_some(),
+            "INavigation2DVelocityActions",
+        ),
         (d.as_wrapper().is_some(), "IWrapper"),
         (d.as_multiple_wrapper().is_some(), "IMultipleWrapper"),
         (d.as_calibrator().is_some(), "ICalibrator"),
@@ -108,9 +116,10 @@ pub fn kind_of(interfaces: &[&str]) -> Kind {
         "IControlMode",
         "IPWMControl",
         "ICurrentControl",
+        "INavigation2DVelocityActions",
     ]) {
         Kind::Motor
-    } else if any(&["IFrameGrabberImage"]) {
+    } else if any(&["IFrameGrabberImage", "IRGBDSensor"]) {
         Kind::Camera
     } else if any(&[
         "IThreeAxisGyroscopes",
@@ -122,6 +131,9 @@ pub fn kind_of(interfaces: &[&str]) -> Kind {
         "ITemperatureSensors",
         "IAnalogSensor",
         "IVirtualAnalogSensor",
+        "IRangefinder2D",
+        "IBattery",
+        "IOdometry2D",
     ]) {
         Kind::Sensor
     } else if any(&["ICalibrator"]) {

@@ -6,6 +6,7 @@
 //! It names no robot's drivers: those live in crates of their own (the iCub's in
 //! `icubmod`), which add themselves to the [`Registry`] with their `register` function.
 
+pub mod battery;
 pub mod bundler;
 pub mod controlboard;
 pub mod driver;
@@ -14,8 +15,11 @@ pub mod fake_motion_control;
 pub mod framegrabber;
 pub mod interfaces;
 pub mod kind;
+pub mod navigation;
+pub mod rangefinder;
 pub mod remapper;
 pub mod remote_controlboard;
+pub mod rgbd;
 pub mod robotinterface;
 pub mod runtime;
 pub mod sensors;
@@ -46,6 +50,10 @@ pub fn register(registry: &mut Registry) {
         framegrabber::DRIVERS,
         sensors::DRIVERS,
         bundler::DRIVERS,
+        rangefinder::DRIVERS,
+        rgbd::DRIVERS,
+        battery::DRIVERS,
+        navigation::DRIVERS,
     ] {
         registry.add(PROVIDER, family);
     }

@@ -1,0 +1,350 @@
+//! `fakeLaser`: a simulated 2D laser (C++ `FakeLaser` on `Lidar2DDeviceBase`).
+//!
+//! Parameters as in C++ 3.12: `test` (`no_obstacles`, `use_pattern` (default),
+//! `use_constant`; `use_mapfile` and `use_square_trap` need a map and a localization,
+//! which this fake does not have), `CONSTANT_MODE::const_distance` (1 m), `GENERAL::period`
+//! (0.02 s) and `Lidar2DDeviceBase`'s `SENSOR` group: `min_angle` (0), `max_angle` (360),
+//! `resolution` (1 degree), `min_distance` / `max_distance` (0.1 / 8 m; a given one
+//! clips), `allow_infinity` (clipped values become infinity instead of the limit), and
+//! the `SKIP` group's `min` / `max` angle ranges left unclipped.
+//!
+//! Scans follow the clock: the one returned is the one due at the time of the call,
+//! counted in periods since `open` (C++ makes one per period on its thread).
+
+use super::{IRangefinder2D, LaserStatus};
+use crate::driver::{DeviceDriver, Params};
+use crate::error::{DevResult, DeviceError};
+use std::time::{Instant, SystemTime, UNIX_EPOCH};
+use yarp_proto::Property;
+
+const NAME: &str = "fakeLaser";
+
+/// What the fake sees.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TestMode {
+    /// Infinity everywhere.
+    NoObstacles,
+    /// C++'s three patterns, 60 scans each: `i/100`, a growing wall, two short arcs.
+    Pattern,
+    /// The same distance everywhere.
+    Constant(f64),
+}
+
+/// The scan geometry and clipping (C++ `Lidar2DDeviceBase`'s parameters).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LaserGeometry {
+    pub min_angle: f64,
+    pub max_angle: f64,
+    pub resolution: f64,
+    pub min_distance: f64,
+    pub max_distance: f64,
+    pub clip_min: bool,
+    pub clip_max: bool,
+    pub allow_infinity: bool,
+    /// Angle ranges (degrees from the first step) left as measured.
+    pub skip: Vec<(f64, f64)>,
+}
+
+impl LaserGeometry {
+    /// Number of steps in a scan (C++ `(int)(fov / resolution)`).
+    pub fn samples(&self) -> usize {
+        ((self.max_angle - self.min_angle) / self.resolution) as usize
+    }
+
+    /// C++ `applyLimitsOnLaserData`.
+    pub fn apply_limits(&self, data: &mut [f64]) {
+        for (i, d) in data.iter_mut().enumerate() {
+            let angle = i as f64 * self.resolution;
+            if d.is_nan() || self.skip.iter().any(|&(lo, hi)| angle > lo && angle < hi) {
+                continue;
+            }
+            if self.clip_min && *d < self.min_distance {
+                *d = if self.allow_infinity {
+                    f64::INFINITY
+                } else {
+                    self.min_distance
+                };
+            }
+            if self.clip_max && *d > self.max_distance {
+                *d = if self.allow_infinity {
+                    f64::INFINITY
+                } else {
+                    self.max_distance
+                };
+            }
+        }
+    }
+}
+
+/// One scan of `mode` (pure): `index` counts scans since open, `elapsed` is the time in
+/// seconds since the current pattern began (C++ `size`).
+pub fn scan(mode: TestMode, samples: usize, index: u64, elapsed: f64, min: f64) -> Vec<f64> {
+    (0..samples)
+        .map(|i| match mode {
+            TestMode::NoObstacles => f64::INFINITY,
+            TestMode::Constant(d) => d,
+            TestMode::Pattern => match (index / 60) % 3 {
+                0 => i as f64 / 100.0,
+                1 => elapsed * 2.0,
+                _ if i <= 10 => 1.0 + i as f64 / 20.0,
+                _ if (90..=100).contains(&i) => 2.0 + (i - 90) as f64 / 20.0,
+                _ => min,
+            },
+        })
+        .collect()
+}
+
+pub struct FakeLaser {
+    mode: TestMode,
+    geometry: LaserGeometry,
+    period: f64,
+    opened: Option<Instant>,
+    status: LaserStatus,
+}
+
+impl Default for FakeLaser {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl FakeLaser {
+    pub fn new() -> FakeLaser {
+        FakeLaser {
+            mode: TestMode::Pattern,
+            geometry: LaserGeometry {
+                min_angle: 0.0,
+                max_angle: 360.0,
+                resolution: 1.0,
+                min_distance: 0.1,
+                max_distance: 8.0,
+                clip_min: false,
+                clip_max: false,
+                allow_infinity: true,
+                skip: Vec::new(),
+            },
+            period: 0.02,
+            opened: None,
+            status: LaserStatus::GeneralError,
+        }
+    }
+
+    pub fn geometry(&self) -> &LaserGeometry {
+        &self.geometry
+    }
+
+    fn bad(param: &str, expected: &'static str, got: impl ToString) -> DeviceError {
+        DeviceError::BadParam {
+            device: NAME.into(),
+            param: param.into(),
+            expected,
+            got: got.to_string(),
+        }
+    }
+}
+
+fn now_s() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
+impl DeviceDriver for FakeLaser {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let test = p.string("test")?.unwrap_or_else(|| "use_pattern".into());
+        let constant = p.float("CONSTANT_MODE::const_distance")?.unwrap_or(1.0);
+        self.mode = match test.as_str() {
+            "no_obstacles" => TestMode::NoObstacles,
+            "use_pattern" => TestMode::Pattern,
+            "use_constant" => TestMode::Constant(constant),
+            "use_mapfile" | "use_square_trap" => {
+                return Err(DeviceError::Unsupported(
+                    "fakeLaser test modes use_mapfile and use_square_trap (no maps here)",
+                ))
+            }
+            other => {
+                return Err(Self::bad(
+                    "test",
+                    "no_obstacles, use_pattern or use_constant",
+                    other,
+                ))
+            }
+        };
+        if let Some(period) = p.float("GENERAL::period")?.or(p.float("period")?) {
+            if period <= 0.0 {
+                return Err(Self::bad("period", "a period in seconds > 0", period));
+            }
+            self.period = period;
+        }
+        let g = &mut self.geometry;
+        if config.find_group("SENSOR").is_some() {
+            let num = |k: &str| p.float(&format!("SENSOR::{k}"));
+            g.min_angle = num("min_angle")?.unwrap_or(g.min_angle);
+            g.max_angle = num("max_angle")?.unwrap_or(g.max_angle);
+            g.resolution = num("resolution")?.unwrap_or(g.resolution);
+            if let Some(v) = num("min_distance")? {
+                (g.min_distance, g.clip_min) = (v, true);
+            }
+            if let Some(v) = num("max_distance")? {
+                (g.max_distance, g.clip_max) = (v, true);
+            }
+            g.allow_infinity = p.int("SENSOR::allow_infinity")? == Some(1);
+        }
+        if let Some(skip) = config.find_group("SKIP") {
+            let list = |k: &str| -> Vec<f64> {
+                skip.find_group(k)
+                    .map(|b| b.iter().skip(1).filter_map(|v| v.as_f64()).collect())
+                    .unwrap_or_default()
+            };
+            for (lo, hi) in list("min").into_iter().zip(list("max")) {
+                if !(0.0..=360.0).contains(&lo) || !(0.0..=360.0).contains(&hi) || hi <= lo {
+                    return Err(Self::bad(
+                        "SKIP",
+                        "ranges within 0..360",
+                        format!("{lo} {hi}"),
+                    ));
+                }
+                g.skip.push((lo, hi));
+            }
+        }
+        if g.max_distance - g.min_distance <= 0.0 {
+            return Err(Self::bad(
+                "SENSOR::max_distance",
+                "more than min_distance",
+                g.max_distance,
+            ));
+        }
+        let fov = g.max_angle - g.min_angle;
+        if fov <= 0.0 || fov > 360.0 {
+            return Err(Self::bad(
+                "SENSOR::max_angle",
+                "above min_angle by at most 360",
+                g.max_angle,
+            ));
+        }
+        if g.resolution <= 0.0 {
+            return Err(Self::bad("SENSOR::resolution", "> 0", g.resolution));
+        }
+        self.opened = Some(Instant::now());
+        self.status = LaserStatus::OkInUse;
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        self.opened = None;
+        Ok(())
+    }
+
+    fn as_rangefinder_2d(&mut self) -> Option<&mut dyn IRangefinder2D> {
+        Some(self)
+    }
+}
+
+impl IRangefinder2D for FakeLaser {
+    fn get_raw_data(&mut self) -> DevResult<(Vec<f64>, f64)> {
+        let opened = self.opened.ok_or(DeviceError::NotOpen)?;
+        let t = opened.elapsed().as_secs_f64();
+        let index = (t / self.period) as u64;
+        let elapsed = t - (index / 60 * 60) as f64 * self.period;
+        let g = &self.geometry;
+        let mut data = scan(self.mode, g.samples(), index, elapsed, g.min_distance);
+        g.apply_limits(&mut data);
+        Ok((data, now_s()))
+    }
+    fn get_device_status(&mut self) -> DevResult<LaserStatus> {
+        Ok(self.status)
+    }
+    fn get_distance_range(&mut self) -> DevResult<(f64, f64)> {
+        Ok((self.geometry.min_distance, self.geometry.max_distance))
+    }
+    fn set_distance_range(&mut self, min: f64, max: f64) -> DevResult<()> {
+        (self.geometry.min_distance, self.geometry.max_distance) = (min, max);
+        Ok(())
+    }
+    fn get_scan_limits(&mut self) -> DevResult<(f64, f64)> {
+        Ok((self.geometry.min_angle, self.geometry.max_angle))
+    }
+    fn set_scan_limits(&mut self, min: f64, max: f64) -> DevResult<()> {
+        (self.geometry.min_angle, self.geometry.max_angle) = (min, max);
+        Ok(())
+    }
+    fn get_horizontal_resolution(&mut self) -> DevResult<f64> {
+        Ok(self.geometry.resolution)
+    }
+    fn set_horizontal_resolution(&mut self, step: f64) -> DevResult<()> {
+        self.geometry.resolution = step;
+        Ok(())
+    }
+    fn get_scan_rate(&mut self) -> DevResult<f64> {
+        Ok(1.0 / self.period)
+    }
+    fn set_scan_rate(&mut self, rate: f64) -> DevResult<()> {
+        if rate <= 0.0 {
+            return Err(Self::bad("scan rate", "> 0", rate));
+        }
+        self.period = 1.0 / rate;
+        Ok(())
+    }
+    fn get_device_info(&mut self) -> DevResult<String> {
+        Ok("Fake Laser device for test/debugging".into())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn open(text: &str) -> FakeLaser {
+        let mut l = FakeLaser::new();
+        l.open(&Property::from_config_text(text).unwrap()).unwrap();
+        l
+    }
+
+    #[test]
+    fn defaults_and_robot_geometry() {
+        let mut l = open("test use_constant\n[CONSTANT_MODE]\nconst_distance 2.5");
+        let (d, t) = l.get_raw_data().unwrap();
+        assert_eq!(d.len(), 360);
+        assert!(d.iter().all(|&v| v == 2.5));
+        assert!(t > 1.6e9);
+        // ergoCubSN001's rplidar SENSOR group
+        let mut l = open(
+            "test use_constant\n[SENSOR]\nmax_distance 30.0\nmin_distance 0.1\nmax_angle 360\n\
+             min_angle 0\nresolution 0.12\nallow_infinity 1\n[CONSTANT_MODE]\nconst_distance 40",
+        );
+        let (d, _) = l.get_raw_data().unwrap();
+        assert_eq!(d.len(), 3000);
+        assert!(d.iter().all(|v| v.is_infinite()), "clipped to infinity");
+        assert_eq!(l.get_distance_range().unwrap(), (0.1, 30.0));
+        assert_eq!(l.get_scan_limits().unwrap(), (0.0, 360.0));
+    }
+
+    #[test]
+    fn pattern_and_clipping() {
+        let s = scan(TestMode::Pattern, 360, 0, 0.0, 0.1);
+        assert_eq!(s[150], 1.5);
+        let s = scan(TestMode::Pattern, 360, 130, 0.0, 0.1);
+        assert_eq!((s[5], s[95], s[50]), (1.25, 2.25, 0.1));
+        let mut g = FakeLaser::new().geometry().clone();
+        (g.clip_max, g.allow_infinity, g.skip) = (true, false, vec![(10.0, 20.0)]);
+        let mut d = vec![9.0; 30];
+        g.apply_limits(&mut d);
+        assert_eq!((d[0], d[15]), (8.0, 9.0));
+    }
+
+    #[test]
+    fn bad_parameters() {
+        for text in [
+            "test sideways",
+            "[SENSOR]\nmin_angle 10\nmax_angle 5",
+            "test use_mapfile",
+        ] {
+            let mut l = FakeLaser::new();
+            assert!(
+                l.open(&Property::from_config_text(text).unwrap()).is_err(),
+                "{text}"
+            );
+        }
+    }
+}
