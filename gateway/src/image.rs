@@ -11,13 +11,15 @@ use crate::dynmsg::Value as Ros;
 use yarp_proto::{Bottle, Value, Vocab32};
 
 /// A YARP pixel code and the ROS encoding it becomes (bytes per pixel).
-const ENCODINGS: [(&str, &str, usize); 6] = [
+const ENCODINGS: [(&str, &str, usize); 7] = [
     ("rgb", "rgb8", 3),
     ("bgr", "bgr8", 3),
     ("mono", "mono8", 1),
     ("mo16", "mono16", 2),
     ("rgba", "rgba8", 4),
     ("bgra", "bgra8", 4),
+    // C++ `PixelFloat` (depth images in meters), as yarp-devices-ros2 names it.
+    ("dec", "32FC1", 4),
 ];
 
 /// Converts a YARP image Bottle (taken by value: the pixels move, not copy) into a
@@ -84,6 +86,16 @@ pub fn to_ros(b: Bottle, frame_id: &str, stamp_ns: u64) -> Result<Ros, ConvertEr
         Ros::U32(step as u32),
         Ros::Bytes(pixels),
     ]))
+}
+
+/// Converts a device's image (`yarp_proto::image::Image`, e.g. from `IFrameGrabberImage`
+/// or `IRGBDSensor`) into a `sensor_msgs/msg/Image`.
+pub fn from_image(
+    img: &yarp_proto::image::Image,
+    frame_id: &str,
+    stamp_ns: u64,
+) -> Result<Ros, ConvertError> {
+    to_ros(img.to_bottle(), frame_id, stamp_ns)
 }
 
 /// Builds the YARP image Bottle for `pixels` (rows of `width * depth` bytes, quantum 1),
@@ -160,6 +172,23 @@ mod tests {
         b.push(Value::Blob(vec![1, 2, 3]));
         let m = to_ros(b, "", 0).unwrap();
         assert_eq!(m.fields().unwrap()[6], Ros::Bytes(vec![3, 2, 1]));
+    }
+
+    #[test]
+    fn device_images_with_row_padding_and_float_depth() {
+        use yarp_proto::image::{Image, PixelCode};
+        let mut depth = Image::new(PixelCode::MONO_FLOAT, 3, 2).unwrap();
+        depth.pixel_mut(2, 1).copy_from_slice(&1.5f32.to_ne_bytes());
+        let m = from_image(&depth, "depth", 7).unwrap();
+        assert!(m.conforms_to("sensor_msgs/msg/Image"));
+        let f = m.fields().unwrap();
+        assert_eq!(f[3], Ros::Str("32FC1".into()));
+        let (Ros::U32(step), Ros::Bytes(px)) = (&f[5], &f[6]) else {
+            panic!("{f:?}")
+        };
+        assert_eq!(px.len(), *step as usize * 2);
+        let at = *step as usize + 8;
+        assert_eq!(px[at..at + 4], 1.5f32.to_ne_bytes());
     }
 
     #[test]

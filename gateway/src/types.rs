@@ -213,6 +213,7 @@ pub static MESSAGES: &[MsgType] = &[
     msg("std_msgs/msg/Bool", &[f("data", Prim::Bool)]),
     msg("std_msgs/msg/Int32", &[f("data", Prim::I32)]),
     msg("std_msgs/msg/Int64", &[f("data", Prim::I64)]),
+    msg("std_msgs/msg/UInt8", &[f("data", Prim::U8)]),
     msg("std_msgs/msg/Float32", &[f("data", Prim::F32)]),
     msg("std_msgs/msg/Float64", &[f("data", Prim::F64)]),
     msg("std_msgs/msg/Empty", DUMMY),

@@ -12,10 +12,20 @@
 //! |---|---|
 //! | [`control_board`] | `controlBoard_nws_ros2` (with [`control_msgs`]: `yarp_control_msgs`) |
 //! | [`sensors`] | `imu_nws_ros2`, `wrenchStamped_nws_ros2`, `magneticField_nws_ros2`, `temperature_nws_ros2` |
+//! | [`rangefinder`] | `rangefinder2D_nws_ros2`, `rangefinder2D_nwc_ros2` |
+//! | [`camera`] | `frameGrabber_nws_ros2`, `rgbdSensor_nws_ros2`, `rgbdToPointCloudSensor_nws_ros2` |
+//! | [`mobile_base`] | `battery_nws_ros2`, `odometry2D_nws_ros2`, `mobileBaseVelocityControl_nws_ros2` |
+//!
+//! [`msgs`] builds their messages (pure), [`periodic`] runs their publishing threads.
 
+pub mod camera;
 pub mod control_board;
 pub mod control_msgs;
+pub mod mobile_base;
+pub mod msgs;
 pub mod node;
+pub mod periodic;
+pub mod rangefinder;
 pub mod sensors;
 
 use yarp_devices::{Factory, Registry};
@@ -27,9 +37,43 @@ const CONTROL_BOARD: &[(&str, Factory)] = &[(control_board::NAME, || {
     Box::new(control_board::ControlBoardNwsRos2::new())
 })];
 
+const LASERS_CAMERAS_BASES: &[(&str, Factory)] = &[
+    (rangefinder::NWS, || {
+        Box::new(rangefinder::Rangefinder2DNwsRos2::default())
+    }),
+    (rangefinder::NWC, || {
+        Box::new(rangefinder::Rangefinder2DNwcRos2::default())
+    }),
+    (camera::FRAME_GRABBER, || {
+        Box::new(camera::CameraNwsRos2::new(camera::Kind::FrameGrabber))
+    }),
+    (camera::RGBD, || {
+        Box::new(camera::CameraNwsRos2::new(camera::Kind::Rgbd))
+    }),
+    (camera::POINT_CLOUD, || {
+        Box::new(camera::CameraNwsRos2::new(camera::Kind::PointCloud))
+    }),
+    (mobile_base::BATTERY, || {
+        Box::new(mobile_base::StateNwsRos2::new(mobile_base::Kind::Battery))
+    }),
+    (mobile_base::ODOMETRY, || {
+        Box::new(mobile_base::StateNwsRos2::new(mobile_base::Kind::Odometry))
+    }),
+    (mobile_base::VELOCITY, || {
+        Box::new(mobile_base::MobileBaseVelocityControlNwsRos2::default())
+    }),
+];
+
+/// Seconds since the epoch (YARP's clock).
+pub(crate) fn now_s() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
 /// Adds this crate's drivers to the device table (one line per module's family).
 pub fn register(registry: &mut Registry) {
-    for family in [CONTROL_BOARD, sensors::DRIVERS] {
+    for family in [CONTROL_BOARD, sensors::DRIVERS, LASERS_CAMERAS_BASES] {
         registry.add(PROVIDER, family);
     }
 }

@@ -1,0 +1,251 @@
+//! 2D lasers: `rangefinder2D_nws_ros2` publishes an attached `IRangefinder2D` as
+//! `sensor_msgs/LaserScan`; `rangefinder2D_nwc_ros2` is an `IRangefinder2D` fed by a
+//! `LaserScan` topic.
+//!
+//! Parameters as yarp-devices-ros2's: `node_name`, `namespace`, `topic_name`, `period`
+//! (0.02 s) and, for the server, `frame_id` (`laser_frame`); the client also accepts
+//! `verbose_on`. The client gives angles in degrees, as `IRangefinder2D` says (C++'s
+//! client passes the message's radians through).
+
+use crate::msgs::{laser_scan, read_laser_scan, stamp_ns, LaserInfo};
+use crate::node::{CommonParams, DeviceNode, NodeBuilder};
+use crate::periodic::{Periodic, Throttle};
+use futures::StreamExt;
+use ros2_client::Publisher;
+use std::sync::{Arc, Mutex};
+use yarp_devices::rangefinder::{IRangefinder2D, LaserStatus};
+use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, Params, SharedDevice};
+use yarp_proto::Property;
+use yarp_ros2_gateway::dynmsg::{MsgSeed, Value as Ros};
+
+pub const NWS: &str = "rangefinder2D_nws_ros2";
+pub const NWC: &str = "rangefinder2D_nwc_ros2";
+const LASER_SCAN: &str = "sensor_msgs/msg/LaserScan";
+
+struct Opened {
+    params: CommonParams,
+    frame_id: String,
+    node: DeviceNode,
+    publisher: Arc<Publisher<Ros>>,
+}
+
+/// `rangefinder2D_nws_ros2`.
+#[derive(Default)]
+pub struct Rangefinder2DNwsRos2 {
+    opened: Option<Opened>,
+    streamer: Option<Periodic>,
+}
+
+impl DeviceDriver for Rangefinder2DNwsRos2 {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        self.close()?;
+        let p = Params::new(NWS, config);
+        let params = CommonParams::read(&p, 0.02)?;
+        let frame_id = p
+            .string("frame_id")?
+            .unwrap_or_else(|| "laser_frame".into());
+        let mut b = NodeBuilder::new(NWS, &params.namespace, &params.node_name)?;
+        let publisher = Arc::new(b.publisher(&params.topic_name, LASER_SCAN)?);
+        let node = b.spin()?;
+        self.opened = Some(Opened {
+            params,
+            frame_id,
+            node,
+            publisher,
+        });
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        self.streamer = None;
+        self.opened = None;
+        Ok(())
+    }
+
+    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
+        Some(self)
+    }
+}
+
+impl IWrapper for Rangefinder2DNwsRos2 {
+    fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
+        let o = self.opened.as_ref().ok_or(DeviceError::NotOpen)?;
+        let info = {
+            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let laser = pd
+                .device()
+                .as_rangefinder_2d()
+                .ok_or(DeviceError::Unsupported(
+                    "rangefinder2D_nws_ros2 needs an IRangefinder2D device",
+                ))?;
+            let (min_distance, max_distance) = laser.get_distance_range()?;
+            let (min_angle, max_angle) = laser.get_scan_limits()?;
+            LaserInfo {
+                min_angle,
+                max_angle,
+                resolution: laser.get_horizontal_resolution()?,
+                min_distance,
+                max_distance,
+            }
+        };
+        let (node, publisher) = (o.node.node.clone(), o.publisher.clone());
+        let (frame, period) = (o.frame_id.clone(), o.params.period);
+        let mut errors = Throttle::default();
+        self.streamer = Some(Periodic::start(
+            &format!("{NWS} {}", o.params.topic_name),
+            period,
+            device,
+            move |dev| {
+                let Some(laser) = dev.as_rangefinder_2d() else {
+                    return;
+                };
+                let data = laser.get_raw_data();
+                if let Err(e) = laser.get_device_status() {
+                    errors.warn(NWS, format!("sensor returned error: {e}"));
+                }
+                let (ranges, t) = match data {
+                    Ok(d) => d,
+                    Err(e) => return errors.warn(NWS, format!("sensor returned error: {e}")),
+                };
+                if publisher.get_subscription_count(&node) == 0 {
+                    return;
+                }
+                let stamp = if t.is_nan() { crate::now_s() } else { t };
+                let msg = laser_scan(
+                    &info,
+                    &ranges,
+                    stamp_ns(stamp),
+                    &frame,
+                    period.as_secs_f64(),
+                );
+                let _ = publisher.publish(msg);
+            },
+        )?);
+        Ok(())
+    }
+
+    fn detach(&mut self) -> DevResult<()> {
+        self.streamer = None;
+        Ok(())
+    }
+}
+
+/// The latest scan a client received.
+#[derive(Default)]
+struct Latest {
+    info: Option<LaserInfo>,
+    ranges: Vec<f64>,
+    stamp: f64,
+}
+
+/// `rangefinder2D_nwc_ros2`.
+#[derive(Default)]
+pub struct Rangefinder2DNwcRos2 {
+    latest: Arc<Mutex<Latest>>,
+    node: Option<DeviceNode>,
+    task: Option<tokio::task::JoinHandle<()>>,
+}
+
+impl Rangefinder2DNwcRos2 {
+    fn with<R>(&self, f: impl FnOnce(&Latest, &LaserInfo) -> R) -> DevResult<R> {
+        let l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let info = l.info.ok_or_else(|| DeviceError::Failed {
+            device: NWC.into(),
+            reason: "no LaserScan received yet".into(),
+        })?;
+        Ok(f(&l, &info))
+    }
+}
+
+impl DeviceDriver for Rangefinder2DNwcRos2 {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        self.close()?;
+        let p = Params::new(NWC, config);
+        let params = CommonParams::read(&p, 0.02)?;
+        p.int("verbose_on")?;
+        let mut b = NodeBuilder::new(NWC, &params.namespace, &params.node_name)?;
+        let sub = b.subscription(&params.topic_name, LASER_SCAN)?;
+        let node = b.spin()?;
+        let latest = self.latest.clone();
+        let seed = MsgSeed::new(LASER_SCAN).expect("LaserScan is in the catalog");
+        self.task = Some(yarp_devices::runtime::handle().spawn(async move {
+            let stream = sub.async_stream_seed(seed);
+            futures::pin_mut!(stream);
+            while let Some(r) = stream.next().await {
+                let Ok((m, _)) = r else { continue };
+                let Some((info, ranges, stamp)) = read_laser_scan(&m) else {
+                    continue;
+                };
+                let mut l = latest.lock().unwrap_or_else(|e| e.into_inner());
+                if l.info.is_some() && l.ranges.len() != ranges.len() {
+                    tracing::warn!("{NWC}: the scan changed its size");
+                }
+                *l = Latest {
+                    info: Some(info),
+                    ranges,
+                    stamp,
+                };
+            }
+        }));
+        self.node = Some(node);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        if let Some(t) = self.task.take() {
+            t.abort();
+        }
+        self.node = None;
+        Ok(())
+    }
+
+    fn as_rangefinder_2d(&mut self) -> Option<&mut dyn IRangefinder2D> {
+        Some(self)
+    }
+}
+
+impl IRangefinder2D for Rangefinder2DNwcRos2 {
+    fn get_raw_data(&mut self) -> DevResult<(Vec<f64>, f64)> {
+        self.with(|l, _| (l.ranges.clone(), l.stamp))
+    }
+    fn get_device_status(&mut self) -> DevResult<LaserStatus> {
+        self.with(|_, _| LaserStatus::OkInUse)
+    }
+    fn get_distance_range(&mut self) -> DevResult<(f64, f64)> {
+        self.with(|_, i| (i.min_distance, i.max_distance))
+    }
+    fn set_distance_range(&mut self, _: f64, _: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported(
+            "rangefinder2D_nwc_ros2 is read-only",
+        ))
+    }
+    fn get_scan_limits(&mut self) -> DevResult<(f64, f64)> {
+        self.with(|_, i| (i.min_angle, i.max_angle))
+    }
+    fn set_scan_limits(&mut self, _: f64, _: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported(
+            "rangefinder2D_nwc_ros2 is read-only",
+        ))
+    }
+    fn get_horizontal_resolution(&mut self) -> DevResult<f64> {
+        self.with(|_, i| i.resolution)
+    }
+    fn set_horizontal_resolution(&mut self, _: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported(
+            "rangefinder2D_nwc_ros2 is read-only",
+        ))
+    }
+    fn get_scan_rate(&mut self) -> DevResult<f64> {
+        Err(DeviceError::Unsupported(
+            "rangefinder2D_nwc_ros2 has no scan rate",
+        ))
+    }
+    fn set_scan_rate(&mut self, _: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported(
+            "rangefinder2D_nwc_ros2 is read-only",
+        ))
+    }
+    fn get_device_info(&mut self) -> DevResult<String> {
+        Ok(format!("{NWC}: a ROS 2 LaserScan topic"))
+    }
+}
