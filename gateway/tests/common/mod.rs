@@ -38,6 +38,18 @@ impl Distro {
     }
 }
 
+/// The gateway crate's directory (its peers and default venvs): this harness is also
+/// included (`#[path]`) by tests of other packages, e.g. the programs' ROS 2 robot files.
+pub fn gateway_dir() -> PathBuf {
+    let here = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    for dir in here.ancestors() {
+        if dir.join("Cargo.lock").exists() {
+            return dir.join("gateway");
+        }
+    }
+    here
+}
+
 /// The distros, their venv variables and default venv directories.
 const KNOWN: [(&str, &str, &str); 2] = [
     ("kilted", "ROS_VENV", "../.venv-ros"),
@@ -58,7 +70,7 @@ pub fn distros(test: &str) -> Vec<Distro> {
         let (name, var, default) = KNOWN[slot];
         let venv = std::env::var_os(var)
             .map(PathBuf::from)
-            .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(default));
+            .unwrap_or_else(|| gateway_dir().join(default));
         if venv.join("bin/python").exists() {
             found.push(Distro {
                 name,
@@ -127,7 +139,7 @@ impl Peer {
         args: &[&str],
         profile: Option<&str>,
     ) -> Peer {
-        let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/peers/peer.py");
+        let script = gateway_dir().join("tests/peers/peer.py");
         let mut cmd = Command::new(distro.join("bin/python"));
         cmd.arg("-u")
             .arg(script)
@@ -138,9 +150,7 @@ impl Peer {
             // UDP only: Fast DDS's /dev/shm segments are not isolated by netns-run.
             .env("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4");
         if let Some(p) = profile {
-            let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-                .join("tests/peers")
-                .join(p);
+            let path = gateway_dir().join("tests/peers").join(p);
             cmd.env_remove("FASTDDS_BUILTIN_TRANSPORTS")
                 .env("FASTDDS_DEFAULT_PROFILES_FILE", path);
         }

@@ -73,17 +73,22 @@ def from_json(cls, data):
 
 
 def summary(m, received):
-    """A large message (Image) without its data: sizes, SHA-256 and age of the stamp when
+    """A large message (Image, PointCloud2) without its data: sizes, SHA-256 and age of the stamp when
     the callback got it (`received`, time.time(): before the digest, which is the test's
     own cost)."""
     import hashlib
     data = bytes(m.data)
     stamp = m.header.stamp.sec + m.header.stamp.nanosec * 1e-9
-    return {"width": m.width, "height": m.height, "encoding": m.encoding, "step": m.step,
-            "len": len(data), "sha256": hashlib.sha256(data).hexdigest(),
-            "frame_id": m.header.frame_id, "age_ms": (received - stamp) * 1e3,
-            "sec": m.header.stamp.sec, "nanosec": m.header.stamp.nanosec,
-            "head": int.from_bytes(data[:4], "little")}
+    out = {"width": m.width, "height": m.height, "encoding": getattr(m, "encoding", None),
+           "step": getattr(m, "step", getattr(m, "row_step", None)),
+           "len": len(data), "sha256": hashlib.sha256(data).hexdigest(),
+           "frame_id": m.header.frame_id, "age_ms": (received - stamp) * 1e3,
+           "sec": m.header.stamp.sec, "nanosec": m.header.stamp.nanosec,
+           "head": int.from_bytes(data[:4], "little")}
+    if hasattr(m, "fields"):  # PointCloud2
+        out["fields"] = [[f.name, f.offset, f.datatype, f.count] for f in m.fields]
+        out["point_step"] = m.point_step
+    return out
 
 
 def qos(args):
