@@ -155,6 +155,7 @@ def measure(pids, seconds):
             "top_thread_cpu": per[0][0] if per else 0.0,
             "rss_mb": rss_mb(p),
             "threads": len(tha),
+            "top_threads": [(round(c, 2), n) for c, n in per[:12]],
         })
     return rows, dt
 
@@ -287,6 +288,8 @@ def main():
     ap.add_argument("--no-load", action="store_true")
     ap.add_argument("--command-part", default="/icub/left_arm")
     ap.add_argument("--json", help="also write the figures here")
+    ap.add_argument("--threads", action="store_true",
+                    help="also list each process's busiest threads at rest")
     ap.add_argument("--no-netns", action="store_true", help="do not re-run under netns-run")
     args = ap.parse_args()
 
@@ -335,6 +338,10 @@ def main():
         report["rest"] = {"rows": rows, "window_s": dt, "loadavg": load_before}
         print(table(f"at rest, {args.config} ({args.profile}), load avg "
                     f"{load_before[0]:.2f} at the start", rows, dt))
+        if args.threads:
+            for r in sorted(rows, key=lambda r: -r["cpu"]):
+                print(f"\n{r['process']}: " + ", ".join(
+                    f"{n} {c:.1f}" for c, n in r["top_threads"] if c > 0.05))
         if args.no_load:
             return
         # ---- the load
