@@ -4,9 +4,10 @@
 //! gateway offers and `/icub/left_arm/joint_states`, and command a joint through the
 //! gateway once the part is calibrated; our `yarp read` reads a YARP port, headless
 //! Chromium loads the dashboard, and everything stops with no process left behind. Prints
-//! the time from the start to the first JointState. Needs the rclpy venvs
-//! (`tests/peers/install-ros2.sh [jazzy]`, `ROS_VENV`, `ROS_JAZZY_VENV`); skips loudly
-//! without them (fails under CI=true).
+//! the time from the start to the first JointState; for the iCub, the whole robot as ROS
+//! tools read it (merged /joint_states, latched /robot_description, CameraInfo). Needs
+//! the rclpy venvs (`tests/peers/install-ros2.sh [jazzy]`, `ROS_VENV`, `ROS_JAZZY_VENV`);
+//! skips loudly without them (fails under CI=true).
 
 mod common;
 
@@ -107,6 +108,9 @@ struct Scenario<'a> {
     /// The ROS domain is 1 + 2 * (pid % 50) + this (this file uses 1..=100).
     domain_offset: u32,
     imu_topic: Option<&'a str>,
+    /// The whole robot as ROS tools read it: the joints of the merged `/joint_states`
+    /// (with `/robot_description` latched) and a CameraInfo topic.
+    whole_robot: Option<(usize, &'a str)>,
 }
 
 /// Runs the scenario's config and checks the whole chain, for every ROS 2 distro at once
@@ -262,6 +266,41 @@ fn checks(l: &mut Launch, nodes: &[Nodes], s: &Scenario, t0: Instant, ros_env: &
         eprintln!("{topic} in rclpy: {m}");
     }
 
+    // One /joint_states with every joint, the latched URDF, CameraInfo beside the camera.
+    if let Some((joints, camera_info)) = s.whole_robot {
+        let mut cmd = Command::new(venv.join("bin/python"));
+        cmd.arg("-u")
+            .arg(configs_dir().join("launcher/tests/peers/robot_probe.py"))
+            .arg(joints.to_string())
+            .args(["--camera-info", camera_info, "--timeout", "60"])
+            .envs(ros_env.iter().copied());
+        let probe = Lines::spawn(cmd);
+        let limit = Duration::from_secs(90);
+        let js: serde_json::Value =
+            serde_json::from_str(&probe.expect("JOINTS", limit)).expect("json");
+        assert!(
+            js["name"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|n| n == "l_elbow"),
+            "{js}"
+        );
+        let urdf: serde_json::Value =
+            serde_json::from_str(&probe.expect("URDF", limit)).expect("json");
+        assert!(urdf["head"].as_str().unwrap().contains("<?xml"), "{urdf}");
+        let info: serde_json::Value =
+            serde_json::from_str(&probe.expect("CAMERA_INFO", limit)).expect("json");
+        assert_eq!(info["width"], 320, "{info}");
+        assert_eq!(info["distortion_model"], "plumb_bob", "{info}");
+        probe.expect("DONE", limit);
+        eprintln!(
+            "/joint_states with {joints} joints, /robot_description ({} bytes, latched), \
+             {camera_info}: {info}",
+            urdf["len"]
+        );
+    }
+
     // Our `yarp read` sees the same joint on the YARP side.
     let conf_home = l.conf_home.path().to_path_buf();
     let mut read_cmd = Command::new(program("yarp", "yarp-cli"));
@@ -322,6 +361,7 @@ fn fake_devices_to_rclpy_and_back() {
         calibrated: None,
         domain_offset: 0,
         imu_topic: None,
+        whole_robot: None,
     });
 }
 
@@ -348,5 +388,6 @@ fn icub_sim_to_rclpy_and_back() {
         calibrated: Some("calibration done device=Left_Arm_Calibrator"),
         domain_offset: 1,
         imu_topic: Some("/icub/head/imu"),
+        whole_robot: Some((53, "/icub/cam/left/camera_info")),
     });
 }
