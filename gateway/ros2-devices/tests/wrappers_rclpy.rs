@@ -1,0 +1,250 @@
+//! The laser, camera and mobile-base wrappers opened as devices in this process (as
+//! `yarpdev --device W --subdevice fake...` does), with rclpy on the other side: rclpy
+//! receives `frameGrabber_nws_ros2`'s Image + CameraInfo, `battery_nws_ros2`'s
+//! BatteryState and `odometry2D_nws_ros2`'s Odometry (and sees `/tf` with the TFMessage
+//! hash); rclpy's Twist commands reach `fakeNavigation` through
+//! `mobileBaseVelocityControl_nws_ros2`; rclpy's LaserScan feeds `rangefinder2D_nwc_ros2`.
+//! Domain indices 30..33 of the gateway's harness; each test is its own process, so
+//! `ROS_DOMAIN_ID` set here is the devices' alone.
+
+#[path = "../../tests/common/mod.rs"]
+mod common;
+
+use serde_json::Value as Json;
+use std::time::{Duration, Instant};
+use yarp_devices::{shared, PolyDriver, Registry};
+use yarp_proto::Property;
+use yarp_ros2_gateway::hash::rihs01;
+
+/// Sets the devices' ROS domain (before their first node) and registers the wrappers.
+fn setup(test: &str, index: u16) -> Option<(common::Distro, u16)> {
+    let distro = common::first_distro(test).into_iter().next()?;
+    let domain = distro.domain(index);
+    std::env::set_var("ROS_DOMAIN_ID", domain.to_string());
+    std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
+    Registry::install(yarp_devices_ros2::register);
+    Some((distro, domain))
+}
+
+fn open(text: &str) -> PolyDriver {
+    PolyDriver::open(&Property::from_text(text)).unwrap_or_else(|e| panic!("{text}: {e}"))
+}
+
+fn json(line: &str) -> Json {
+    serde_json::from_str(&line.replace("NaN", "null")).unwrap_or_else(|e| panic!("{e}: {line}"))
+}
+
+fn near(v: &Json, want: f64) -> bool {
+    v.as_f64().is_some_and(|x| (x - want).abs() < 1e-4)
+}
+
+#[test]
+fn frame_grabber_publishes_image_and_camera_info() {
+    let Some((distro, d)) = setup("frame_grabber_publishes_image_and_camera_info", 30) else {
+        return;
+    };
+    let _fg = open(
+        "(device frameGrabber_nws_ros2) (subdevice fakeFrameGrabber) (width 64) (height 48) \
+         (node_name h16b_camera) (topic_name /h16b/cam/image_raw) (frame_id cam_optical) \
+         (period 0.05)",
+    );
+    let img = common::Peer::start(
+        &distro,
+        d,
+        &[
+            "sub",
+            "sensor_msgs/msg/Image",
+            "/h16b/cam/image_raw",
+            "--summary",
+        ],
+    );
+    let info = common::Peer::start(
+        &distro,
+        d,
+        &["sub", "sensor_msgs/msg/CameraInfo", "/h16b/cam/camera_info"],
+    );
+    let m = json(&img.expect("MSG", common::T));
+    assert_eq!(
+        (m["width"].as_u64(), m["height"].as_u64()),
+        (Some(64), Some(48)),
+        "{m}"
+    );
+    assert_eq!(m["encoding"], "rgb8");
+    assert_eq!(m["frame_id"], "cam_optical");
+    assert_eq!(m["len"].as_u64(), Some(64 * 3 * 48));
+    let ci = json(&info.expect("MSG", common::T));
+    assert_eq!(ci["header"]["frame_id"], "cam_optical", "{ci}");
+    assert_eq!(
+        (ci["width"].as_u64(), ci["height"].as_u64()),
+        (Some(64), Some(48))
+    );
+    assert!(ci["k"][0].as_f64().is_some_and(|f| f > 0.0), "{ci}");
+}
+
+#[test]
+fn battery_and_odometry_reach_rclpy() {
+    let Some((distro, d)) = setup("battery_and_odometry_reach_rclpy", 31) else {
+        return;
+    };
+    let _battery = open(
+        "(device battery_nws_ros2) (subdevice fakeBattery) (voltage 24.5) (charge 80) \
+         (node_name h16b_battery) (topic_name /h16b/battery) (period 0.05)",
+    );
+    let _odometry = open(
+        "(device odometry2D_nws_ros2) (subdevice fakeOdometry2D) (node_name h16b_odometry) \
+         (topic_name /h16b/odom) (odom_frame odom) (base_frame base_link) (period 0.05)",
+    );
+    let battery = common::Peer::start(
+        &distro,
+        d,
+        &["sub", "sensor_msgs/msg/BatteryState", "/h16b/battery"],
+    );
+    let odom = common::Peer::start(&distro, d, &["sub", "nav_msgs/msg/Odometry", "/h16b/odom"]);
+    let info = common::Peer::start(
+        &distro,
+        d,
+        &[
+            "info_many",
+            "/h16b/battery",
+            "/h16b/odom",
+            "/tf",
+            "--timeout",
+            "20",
+        ],
+    );
+    let b = json(&battery.expect("MSG", common::T));
+    assert!(near(&b["voltage"], 24.5), "{b}");
+    assert!(
+        near(&b["current"], 3.0) && near(&b["temperature"], 20.0),
+        "{b}"
+    );
+    let pct = b["percentage"].as_f64().unwrap();
+    assert!(
+        pct <= 80.0 && pct > 79.0,
+        "the YARP charge (%), as C++ sends it: {b}"
+    );
+    assert!(b["present"].as_bool().unwrap());
+    let o = json(&odom.expect("MSG", common::T));
+    assert_eq!(o["header"]["frame_id"], "odom", "{o}");
+    assert_eq!(o["child_frame_id"], "base_link");
+    let vx = o["twist"]["twist"]["linear"]["x"].as_f64().unwrap();
+    assert!((0.0..5.0).contains(&vx), "{o}");
+    let q = &o["pose"]["pose"]["orientation"];
+    let norm: f64 = ["x", "y", "z", "w"]
+        .iter()
+        .map(|k| q[k].as_f64().unwrap().powi(2))
+        .sum();
+    assert!((norm - 1.0).abs() < 1e-9, "{o}");
+    let info = json(&info.expect("INFO", common::T));
+    for (topic, ty) in [
+        ("/h16b/battery", "sensor_msgs/msg/BatteryState"),
+        ("/h16b/odom", "nav_msgs/msg/Odometry"),
+        ("/tf", "tf2_msgs/msg/TFMessage"),
+    ] {
+        let hash = rihs01(ty).unwrap();
+        let e = &info[topic][0];
+        assert_eq!(e["type"], ty, "{info}");
+        assert!(
+            e["hash"].as_str().unwrap().contains(&hash[7..]),
+            "{topic}: {e}"
+        );
+    }
+}
+
+#[test]
+fn rclpy_twist_commands_the_mobile_base() {
+    let Some((distro, d)) = setup("rclpy_twist_commands_the_mobile_base", 32) else {
+        return;
+    };
+    let nav = shared(open("(device fakeNavigation)"));
+    let mut wrapper = open(
+        "(device mobileBaseVelocityControl_nws_ros2) (node_name h16b_base) \
+         (topic_name /h16b/cmd_vel)",
+    );
+    wrapper
+        .device()
+        .as_wrapper()
+        .unwrap()
+        .attach(nav.clone())
+        .unwrap();
+    let twist =
+        r#"{"linear": {"x": 0.5, "y": -0.1, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 1.0}}"#;
+    let _pub = common::Peer::start(
+        &distro,
+        d,
+        &[
+            "pub",
+            "geometry_msgs/msg/Twist",
+            "/h16b/cmd_vel",
+            twist,
+            "--wait-sub",
+            "--count",
+            "50",
+            "--rate",
+            "10",
+        ],
+    );
+    let end = Instant::now() + common::T;
+    let last = loop {
+        let last = nav
+            .lock()
+            .unwrap()
+            .device()
+            .as_navigation_2d_velocity()
+            .unwrap()
+            .get_last_velocity_command()
+            .unwrap();
+        if last != (0.0, 0.0, 0.0) || Instant::now() > end {
+            break last;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    // angular z in rad/s becomes degrees/s, as C++ converts it
+    assert_eq!((last.0, last.1), (0.5, -0.1));
+    assert!((last.2 - 1f64.to_degrees()).abs() < 1e-9, "{last:?}");
+}
+
+#[test]
+fn rclpy_laser_scans_feed_the_rangefinder_client() {
+    let Some((distro, d)) = setup("rclpy_laser_scans_feed_the_rangefinder_client", 33) else {
+        return;
+    };
+    let mut client = open(
+        "(device rangefinder2D_nwc_ros2) (node_name h16b_laser_client) (topic_name /h16b/scan)",
+    );
+    let scan = r#"{"header": {"frame_id": "laser"}, "angle_min": -1.5707964, "angle_max": 1.5707964,
+        "angle_increment": 0.7853982, "range_min": 0.1, "range_max": 10.0,
+        "ranges": [1.0, 2.0, 3.0, 4.0, 5.0]}"#;
+    let _pub = common::Peer::start(
+        &distro,
+        d,
+        &[
+            "pub",
+            "sensor_msgs/msg/LaserScan",
+            "/h16b/scan",
+            scan,
+            "--wait-sub",
+            "--count",
+            "50",
+            "--rate",
+            "10",
+        ],
+    );
+    let laser = client.device().as_rangefinder_2d().unwrap();
+    let end = Instant::now() + common::T;
+    let (ranges, _) = loop {
+        match laser.get_raw_data() {
+            Ok(r) => break r,
+            Err(e) if Instant::now() > end => panic!("no scan: {e}"),
+            Err(_) => std::thread::sleep(Duration::from_millis(20)),
+        }
+    };
+    assert_eq!(ranges, vec![1.0, 2.0, 3.0, 4.0, 5.0]);
+    let (lo, hi) = laser.get_scan_limits().unwrap();
+    assert!(
+        (lo + 90.0).abs() < 1e-4 && (hi - 90.0).abs() < 1e-4,
+        "{lo} {hi}"
+    );
+    assert!((laser.get_horizontal_resolution().unwrap() - 45.0).abs() < 1e-4);
+    assert_eq!(laser.get_distance_range().unwrap(), (0.1f32 as f64, 10.0));
+}
