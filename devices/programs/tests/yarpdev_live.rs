@@ -52,6 +52,31 @@ async fn list_prints_every_registered_device_in_cpp_form() {
         out.contains("Device \"canmotioncontrol\", C++ class unknown, has no network wrapper (found in crate icubmod)"),
         "{out}"
     );
+    // issue 16's lasers, cameras and mobile bases, ROS 2 wrappers and their fakes
+    for name in [
+        "fakeLaser",
+        "fakeDepthCamera",
+        "fakeBattery",
+        "fakeOdometry2D",
+        "fakeNavigation",
+        "rangefinder2D_nws_ros2",
+        "rangefinder2D_nwc_ros2",
+        "frameGrabber_nws_ros2",
+        "rgbdSensor_nws_ros2",
+        "rgbdToPointCloudSensor_nws_ros2",
+        "battery_nws_ros2",
+        "odometry2D_nws_ros2",
+        "mobileBaseVelocityControl_nws_ros2",
+    ] {
+        assert!(
+            out.contains(&format!("Device \"{name}\", C++ class ")),
+            "{name}:\n{out}"
+        );
+    }
+    assert!(
+        out.contains("Device \"fakeLaser\", C++ class FakeLaser, wrapped by \"rangefinder2D_nws_yarp\" (found in crate yarp-devices)\n[INFO] |yarp.dev.Drivers|     sensor: IRangefinder2D\n"),
+        "{out}"
+    );
     // each device's kind and interfaces follow C++'s line
     assert!(
         out.contains("Device \"test_motor\", C++ class TestMotor, wrapped by \"controlBoard_nws_yarp\" (found in crate yarp-devices)\n[INFO] |yarp.dev.Drivers|     motor: IEncodersTimed, IPositionControl, IVelocityControl\n"),

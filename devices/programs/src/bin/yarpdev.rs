@@ -97,10 +97,29 @@ fn cxx_info(name: &str) -> (&'static str, Option<&'static str>) {
         ),
         "multipleanalogsensorsclient" => ("MultipleAnalogSensorsClient", None),
         "deviceBundler" => ("DeviceBundler", None),
+        "fakeLaser" => ("FakeLaser", Some("rangefinder2D_nws_yarp")),
+        "fakeDepthCamera" => ("FakeDepthCameraDriver", Some("rgbdSensor_nws_yarp")),
+        "fakeBattery" => ("FakeBattery", Some("battery_nws_yarp")),
+        "fakeOdometry2D" => ("FakeOdometry2D", Some("odometry2D_nws_yarp")),
+        "fakeNavigation" => ("FakeNavigation", Some("navigation2D_nws_yarp")),
         // yarp-devices-ros2's plugins (their manifests name each its own wrapper)
         "controlBoard_nws_ros2" => ("ControlBoard_nws_ros2", Some("controlBoard_nws_ros2")),
         "imu_nws_ros2" => ("Imu_nws_ros2", Some("imu_nws_ros2")),
         "wrenchStamped_nws_ros2" => ("WrenchStamped_nws_ros2", Some("wrenchStamped_nws_ros2")),
+        "rangefinder2D_nws_ros2" => ("Rangefinder2D_nws_ros2", Some("rangefinder2D_nws_ros2")),
+        "rangefinder2D_nwc_ros2" => ("Rangefinder2D_nwc_ros2", None),
+        "frameGrabber_nws_ros2" => ("FrameGrabber_nws_ros2", Some("frameGrabber_nws_ros2")),
+        "rgbdSensor_nws_ros2" => ("RgbdSensor_nws_ros2", Some("rgbdSensor_nws_ros2")),
+        "rgbdToPointCloudSensor_nws_ros2" => (
+            "RgbdToPointCloudSensor_nws_ros2",
+            Some("rgbdToPointCloudSensor_nws_ros2"),
+        ),
+        "battery_nws_ros2" => ("Battery_nws_ros2", Some("battery_nws_ros2")),
+        "odometry2D_nws_ros2" => ("Odometry2D_nws_ros2", Some("odometry2D_nws_ros2")),
+        "mobileBaseVelocityControl_nws_ros2" => (
+            "MobileBaseVelocityControl_nws_ros2",
+            Some("mobileBaseVelocityControl_nws_ros2"),
+        ),
         _ => ("unknown", None),
     }
 }
