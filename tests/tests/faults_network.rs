@@ -69,7 +69,9 @@ impl Net {
             ),
         )
         .expect("mapping file");
-        let domain = 100 + std::process::id() % 100;
+        // no ROS peer here: a domain above those of the gateway's and launcher's tests
+        // (20..229), so that this gateway's DDS traffic meets none of theirs
+        let domain = 231;
         let mut c = self.cmd("yarp-ros2-gateway", "yarp-ros2-gateway");
         c.args(["--mappings", mapping.to_str().expect("utf-8 path")])
             .args(["--network", "127.0.0.1", "--domain-id", &domain.to_string()])

@@ -129,8 +129,9 @@ fn gateway_killed_and_restarted_ros_subscriber_receives_again() {
         );
         return;
     };
-    // a ROS domain of its own (the e2e tests use odd ones below 101)
-    let domain = (120 + std::process::id() % 40 * 2).to_string();
+    // a ROS domain of its own: above those of the gateway's tests (20..229) and of the
+    // launcher's e2e tests (below 101)
+    let domain = "230".to_string();
     let ros_env = [
         ("ROS_DOMAIN_ID", domain.as_str()),
         ("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST"),
