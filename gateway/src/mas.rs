@@ -81,8 +81,35 @@ pub fn rpy_deg_to_quaternion(rpy: &[f64]) -> [f64; 4] {
     ]
 }
 
+/// A quaternion `(x, y, z, w)` as roll, pitch, yaw in degrees (the inverse of
+/// [`rpy_deg_to_quaternion`]; tf2's `Matrix3x3::getRPY`, as yarp-devices-ros2's
+/// `imu_nwc_ros2` reads a `sensor_msgs/Imu`).
+pub fn quaternion_to_rpy_deg(q: [f64; 4]) -> [f64; 3] {
+    let [x, y, z, w] = q;
+    let n = (x * x + y * y + z * z + w * w).sqrt();
+    let [x, y, z, w] = if n > 0.0 {
+        [x / n, y / n, z / n, w / n]
+    } else {
+        [0.0, 0.0, 0.0, 1.0]
+    };
+    let roll = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
+    let pitch = (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin();
+    let yaw = (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z));
+    [roll.to_degrees(), pitch.to_degrees(), yaw.to_degrees()]
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn quaternion_back_to_rpy() {
+        for rpy in [[10.0, -20.0, 30.0], [0.0, 0.0, 90.0], [-170.0, 45.0, -5.0]] {
+            let back = super::quaternion_to_rpy_deg(super::rpy_deg_to_quaternion(&rpy));
+            for (a, b) in rpy.iter().zip(back) {
+                assert!((a - b).abs() < 1e-9, "{rpy:?} -> {back:?}");
+            }
+        }
+    }
+
     use super::*;
 
     /// A stream with one gyro, one accelerometer, no magnetometer, one orientation.

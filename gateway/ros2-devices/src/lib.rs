@@ -12,6 +12,7 @@
 //! |---|---|
 //! | [`control_board`] | `controlBoard_nws_ros2` (with [`control_msgs`]: `yarp_control_msgs`) |
 //! | [`sensors`] | `imu_nws_ros2`, `wrenchStamped_nws_ros2`, `magneticField_nws_ros2`, `temperature_nws_ros2` |
+//! | [`imu_client`] | `imu_nwc_ros2` |
 //! | [`rangefinder`] | `rangefinder2D_nws_ros2`, `rangefinder2D_nwc_ros2` |
 //! | [`camera`] | `frameGrabber_nws_ros2`, `rgbdSensor_nws_ros2`, `rgbdToPointCloudSensor_nws_ros2` |
 //! | [`mobile_base`] | `battery_nws_ros2`, `odometry2D_nws_ros2`, `mobileBaseVelocityControl_nws_ros2` |
@@ -21,6 +22,7 @@
 pub mod camera;
 pub mod control_board;
 pub mod control_msgs;
+pub mod imu_client;
 pub mod mobile_base;
 pub mod msgs;
 pub mod node;
@@ -58,6 +60,9 @@ const LASERS_CAMERAS_BASES: &[(&str, Factory)] = &[
     }),
     (mobile_base::ODOMETRY, || {
         Box::new(mobile_base::StateNwsRos2::new(mobile_base::Kind::Odometry))
+    }),
+    (imu_client::NAME, || {
+        Box::new(imu_client::ImuNwcRos2::default())
     }),
     (mobile_base::VELOCITY, || {
         Box::new(mobile_base::MobileBaseVelocityControlNwsRos2::default())

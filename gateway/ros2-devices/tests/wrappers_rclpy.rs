@@ -3,8 +3,8 @@
 //! receives `frameGrabber_nws_ros2`'s Image + CameraInfo, `battery_nws_ros2`'s
 //! BatteryState and `odometry2D_nws_ros2`'s Odometry (and sees `/tf` with the TFMessage
 //! hash); rclpy's Twist commands reach `fakeNavigation` through
-//! `mobileBaseVelocityControl_nws_ros2`; rclpy's LaserScan feeds `rangefinder2D_nwc_ros2`.
-//! Domain indices 30..33 of the gateway's harness; each test is its own process, so
+//! `mobileBaseVelocityControl_nws_ros2`; rclpy's LaserScan feeds `rangefinder2D_nwc_ros2`
+//! and its Imu `imu_nwc_ros2`. Domain indices 29..33 of the gateway's harness; each test is its own process, so
 //! `ROS_DOMAIN_ID` set here is the devices' alone.
 
 #[path = "../../tests/common/mod.rs"]
@@ -247,4 +247,74 @@ fn rclpy_laser_scans_feed_the_rangefinder_client() {
     );
     assert!((laser.get_horizontal_resolution().unwrap() - 45.0).abs() < 1e-4);
     assert_eq!(laser.get_distance_range().unwrap(), (0.1f32 as f64, 10.0));
+}
+
+#[test]
+fn rclpy_imu_feeds_the_imu_client() {
+    let Some((distro, d)) = setup("rclpy_imu_feeds_the_imu_client", 29) else {
+        return;
+    };
+    let mut client = open(
+        "(device imu_nwc_ros2) (node_name h16b_imu_client) (topic_name /h16b/imu) \
+         (sensor_name head_imu)",
+    );
+    // yaw 90 degrees; 1 rad/s about x
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let imu = format!(
+        r#"{{"header": {{"frame_id": "head_imu_frame", "stamp": {{"sec": 100, "nanosec": 500000000}}}},
+            "orientation": {{"x": 0.0, "y": 0.0, "z": {h}, "w": {h}}},
+            "angular_velocity": {{"x": 1.0, "y": 0.0, "z": 0.0}},
+            "linear_acceleration": {{"x": 0.0, "y": 0.0, "z": 9.81}}}}"#
+    );
+    let _pub = common::Peer::start(
+        &distro,
+        d,
+        &[
+            "pub",
+            "sensor_msgs/msg/Imu",
+            "/h16b/imu",
+            &imu,
+            "--wait-sub",
+            "--count",
+            "50",
+            "--rate",
+            "10",
+        ],
+    );
+    let dev = client.device();
+    let end = Instant::now() + common::T;
+    while dev
+        .as_orientation_sensors()
+        .unwrap()
+        .get_orientation_sensor_status(0)
+        != yarp_devices::sensors::MasStatus::Ok
+    {
+        assert!(Instant::now() < end, "no Imu received");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let rpy = dev
+        .as_orientation_sensors()
+        .unwrap()
+        .get_orientation_sensor_measure_as_roll_pitch_yaw(0)
+        .unwrap();
+    assert!(
+        (rpy.values[2] - 90.0).abs() < 1e-6 && rpy.values[0].abs() < 1e-6,
+        "{rpy:?}"
+    );
+    assert_eq!(rpy.timestamp, 100.5);
+    let gyro = dev.as_three_axis_gyroscopes().unwrap();
+    let g = gyro.get_three_axis_gyroscope_measure(0).unwrap();
+    assert!((g.values[0] - 1f64.to_degrees()).abs() < 1e-9, "{g:?}");
+    assert_eq!(gyro.get_three_axis_gyroscope_name(0).unwrap(), "head_imu");
+    assert_eq!(
+        gyro.get_three_axis_gyroscope_frame_name(0).unwrap(),
+        "head_imu_frame"
+    );
+    let acc = dev.as_three_axis_linear_accelerometers().unwrap();
+    assert_eq!(
+        acc.get_three_axis_linear_accelerometer_measure(0)
+            .unwrap()
+            .values,
+        vec![0.0, 0.0, 9.81]
+    );
 }

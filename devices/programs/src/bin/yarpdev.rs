@@ -108,6 +108,7 @@ fn cxx_info(name: &str) -> (&'static str, Option<&'static str>) {
         "wrenchStamped_nws_ros2" => ("WrenchStamped_nws_ros2", Some("wrenchStamped_nws_ros2")),
         "rangefinder2D_nws_ros2" => ("Rangefinder2D_nws_ros2", Some("rangefinder2D_nws_ros2")),
         "rangefinder2D_nwc_ros2" => ("Rangefinder2D_nwc_ros2", None),
+        "imu_nwc_ros2" => ("Imu_nwc_ros2", None),
         "frameGrabber_nws_ros2" => ("FrameGrabber_nws_ros2", Some("frameGrabber_nws_ros2")),
         "rgbdSensor_nws_ros2" => ("RgbdSensor_nws_ros2", Some("rgbdSensor_nws_ros2")),
         "rgbdToPointCloudSensor_nws_ros2" => (
