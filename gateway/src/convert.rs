@@ -68,6 +68,13 @@ pub fn to_ros_owned(
 ) -> Result<Ros, ConvertError> {
     match conv {
         Conversion::Image => crate::image::to_ros(b, ctx.frame_id, ctx.stamp_ns),
+        Conversion::Generic => {
+            let t = crate::types::lookup(ros_type)
+                .ok_or_else(|| ConvertError::Layout(ros_type.to_string()))?;
+            let mut m = crate::generic::to_ros_owned(t, b, ctx.stamp_ns)?;
+            crate::generic::fill_frame_id(t, &mut m, ctx.frame_id);
+            Ok(m)
+        }
         _ => to_ros(conv, ros_type, &b, ctx),
     }
 }

@@ -27,7 +27,13 @@ const MAX_DEPTH: usize = 64;
 /// Converts a Bottle in the generic layout of `t` into a message; `stamp_ns` fills an
 /// unset top-level `header.stamp`.
 pub fn to_ros(t: &'static MsgType, b: &Bottle, stamp_ns: u64) -> Result<Ros, ConvertError> {
-    let mut m = structure(t, b.items(), 0)?;
+    to_ros_owned(t, b.clone(), stamp_ns)
+}
+
+/// Like [`to_ros`], taking the Bottle: blobs (image pixels) and strings move into the
+/// message instead of being copied.
+pub fn to_ros_owned(t: &'static MsgType, b: Bottle, stamp_ns: u64) -> Result<Ros, ConvertError> {
+    let mut m = structure(t, b.into_items(), 0)?;
     if let (Some(i), Ros::Struct(fields)) = (header_index(t), &mut m) {
         if let Some(Ros::Struct(h)) = fields.get_mut(i) {
             if matches!(h.first(), Some(Ros::Struct(s)) if s.iter().all(is_zero)) {
@@ -99,7 +105,7 @@ fn nested_type(name: &str) -> Result<&'static MsgType, ConvertError> {
     lookup(name).ok_or_else(|| ConvertError::Layout(format!("unknown nested type {name}")))
 }
 
-fn structure(t: &'static MsgType, items: &[Yv], depth: usize) -> Result<Ros, ConvertError> {
+fn structure(t: &'static MsgType, items: Vec<Yv>, depth: usize) -> Result<Ros, ConvertError> {
     if depth > MAX_DEPTH {
         return Err(ConvertError::Shape(format!("{} nests too deep", t.name)));
     }
@@ -110,8 +116,9 @@ fn structure(t: &'static MsgType, items: &[Yv], depth: usize) -> Result<Ros, Con
         });
     }
     let mut out = Vec::with_capacity(t.fields.len());
-    for (i, f) in t.fields.iter().enumerate() {
-        out.push(match items.get(i) {
+    let mut items = items.into_iter();
+    for f in t.fields {
+        out.push(match items.next() {
             Some(v) => field(f, v, depth).map_err(|e| in_field(t, f, e))?,
             None => default_of(f)?,
         });
@@ -136,13 +143,13 @@ fn default_of(f: &Field) -> Result<Ros, ConvertError> {
         .ok_or_else(|| ConvertError::Layout(format!("no default for field {}", f.name)))
 }
 
-fn field(f: &Field, v: &Yv, depth: usize) -> Result<Ros, ConvertError> {
+fn field(f: &Field, v: Yv, depth: usize) -> Result<Ros, ConvertError> {
     let bytes = matches!(f.base, Base::Prim(Prim::U8 | Prim::Byte));
     match f.shape {
         Shape::Single => single(f, v, depth),
         _ if bytes => {
             let data: Vec<u8> = match v {
-                Yv::Blob(b) => b.clone(),
+                Yv::Blob(b) => b,
                 Yv::List(l) => l
                     .items()
                     .iter()
@@ -154,7 +161,7 @@ fn field(f: &Field, v: &Yv, depth: usize) -> Result<Ros, ConvertError> {
                             .ok_or_else(|| type_err(i, "a byte (0..255)", x))
                     })
                     .collect::<Result<_, _>>()?,
-                other => return Err(type_err(0, "a blob or a list of bytes", other)),
+                other => return Err(type_err(0, "a blob or a list of bytes", &other)),
             };
             check_len(f.shape, data.len())?;
             Ok(match f.shape {
@@ -164,25 +171,21 @@ fn field(f: &Field, v: &Yv, depth: usize) -> Result<Ros, ConvertError> {
         }
         Shape::Array(_) | Shape::BoundedSeq(_) | Shape::Seq => {
             let Yv::List(l) = v else {
-                return Err(type_err(0, "a list", v));
+                return Err(type_err(0, "a list", &v));
             };
-            let items = l.items();
-            check_len(f.shape, items.len())?;
+            check_len(f.shape, l.len())?;
+            let items = l.into_items().into_iter().enumerate();
             let elems = match f.base {
                 Base::Nested(name) => {
                     let t = nested_type(name)?;
                     items
-                        .iter()
-                        .enumerate()
                         .map(|(i, x)| match x {
-                            Yv::List(inner) => structure(t, inner.items(), depth + 1),
-                            other => Err(type_err(i, "a list (a nested message)", other)),
+                            Yv::List(inner) => structure(t, inner.into_items(), depth + 1),
+                            other => Err(type_err(i, "a list (a nested message)", &other)),
                         })
                         .collect::<Result<Vec<_>, _>>()?
                 }
                 Base::Prim(p) => items
-                    .iter()
-                    .enumerate()
                     .map(|(i, x)| prim(p, f.string_capacity, x).map_err(|e| at(i, e)))
                     .collect::<Result<Vec<_>, _>>()?,
             };
@@ -219,11 +222,11 @@ fn at(i: usize, e: ConvertError) -> ConvertError {
     }
 }
 
-fn single(f: &Field, v: &Yv, depth: usize) -> Result<Ros, ConvertError> {
+fn single(f: &Field, v: Yv, depth: usize) -> Result<Ros, ConvertError> {
     match f.base {
         Base::Nested(name) => match v {
-            Yv::List(l) => structure(nested_type(name)?, l.items(), depth + 1),
-            other => Err(type_err(0, "a list (a nested message)", other)),
+            Yv::List(l) => structure(nested_type(name)?, l.into_items(), depth + 1),
+            other => Err(type_err(0, "a list (a nested message)", &other)),
         },
         Base::Prim(p) => prim(p, f.string_capacity, v),
     }
@@ -237,7 +240,27 @@ fn type_err(index: usize, want: &'static str, v: &Yv) -> ConvertError {
     }
 }
 
-fn prim(p: Prim, string_capacity: u64, v: &Yv) -> Result<Ros, ConvertError> {
+fn prim(p: Prim, string_capacity: u64, v: Yv) -> Result<Ros, ConvertError> {
+    // Strings move out of the Bottle (no copy unless they are not UTF-8).
+    if let (Prim::String | Prim::WString, Yv::String(bytes)) = (p, &v) {
+        if string_capacity > 0 && bytes.len() as u64 > string_capacity {
+            return Err(ConvertError::Range(format!(
+                "a string of {} bytes (at most {string_capacity})",
+                bytes.len()
+            )));
+        }
+        let Yv::String(bytes) = v else {
+            unreachable!("matched above")
+        };
+        let s = String::from_utf8(bytes)
+            .unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned());
+        return Ok(if p == Prim::String {
+            Ros::Str(s)
+        } else {
+            Ros::WStr(s)
+        });
+    }
+    let v = &v;
     let int = || -> Result<i64, ConvertError> {
         if v.is_int() {
             Ok(v.as_i64().unwrap_or_default())
@@ -252,19 +275,6 @@ fn prim(p: Prim, string_capacity: u64, v: &Yv) -> Result<Ros, ConvertError> {
         } else {
             Err(type_err(0, "a number", v))
         }
-    };
-    let text = || -> Result<String, ConvertError> {
-        let s = match v {
-            Yv::String(s) => String::from_utf8_lossy(s).into_owned(),
-            other => return Err(type_err(0, "a string", other)),
-        };
-        if string_capacity > 0 && s.len() as u64 > string_capacity {
-            return Err(ConvertError::Range(format!(
-                "a string of {} bytes (at most {string_capacity})",
-                s.len()
-            )));
-        }
-        Ok(s)
     };
     Ok(match p {
         Prim::Bool => match v {
@@ -292,8 +302,7 @@ fn prim(p: Prim, string_capacity: u64, v: &Yv) -> Result<Ros, ConvertError> {
         },
         Prim::F32 => Ros::F32(float()? as f32),
         Prim::F64 => Ros::F64(float()?),
-        Prim::String => Ros::Str(text()?),
-        Prim::WString => Ros::WStr(text()?),
+        Prim::String | Prim::WString => return Err(type_err(0, "a string", v)),
     })
 }
 

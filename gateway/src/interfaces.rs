@@ -19,6 +19,8 @@ use std::sync::{OnceLock, RwLock};
 enum Source {
     Msg(PathBuf),
     Srv(PathBuf),
+    /// An `.idl` without a `.msg`/`.srv` beside it.
+    Idl(PathBuf),
 }
 
 #[derive(Default)]
@@ -70,6 +72,8 @@ pub fn lookup(name: &str) -> Option<&'static MsgType> {
             read(p)
                 .and_then(|text| msgdef::parse_srv(pkg, &service, &text).map_err(|e| e.to_string()))
         }
+        Source::Idl(p) => read(p)
+            .and_then(|text| crate::idl::parse(&text).map_err(|e| format!("{}: {e}", p.display()))),
     };
     let mut r = reg.write().ok()?;
     match parsed {
@@ -113,7 +117,7 @@ pub fn message_names() -> Vec<String> {
     let mut v: Vec<String> = r
         .files
         .iter()
-        .filter(|(_, s)| matches!(s, Source::Msg(_)))
+        .filter(|(n, _)| n.contains("/msg/"))
         .map(|(n, _)| n.clone())
         .collect();
     v.sort();
@@ -162,26 +166,31 @@ fn is_package(dir: &Path) -> bool {
 
 fn index_package(r: &mut Registry, pkg: &str, dir: &Path) -> usize {
     let mut n = 0;
-    for (kind, ext) in [("msg", "msg"), ("srv", "srv")] {
+    for kind in ["msg", "srv"] {
         let Ok(entries) = std::fs::read_dir(dir.join(kind)) else {
             continue;
         };
-        for e in entries.flatten() {
-            let p = e.path();
-            if p.extension().is_none_or(|x| x != ext) {
-                continue;
-            }
-            let stem = file_stem(&p);
-            if kind == "msg" {
-                r.files
-                    .insert(format!("{pkg}/msg/{stem}"), Source::Msg(p.clone()));
-                n += 1;
+        let mut files: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
+        files.sort();
+        for p in &files {
+            let ext = p.extension().map(|x| x.to_string_lossy().into_owned());
+            let source = match ext.as_deref() {
+                Some("msg") if kind == "msg" => Source::Msg(p.clone()),
+                Some("srv") if kind == "srv" => Source::Srv(p.clone()),
+                // `.idl` only where the package has no `.msg`/`.srv` of that name
+                Some("idl") if !p.with_extension(kind).exists() => Source::Idl(p.clone()),
+                _ => continue,
+            };
+            let stem = file_stem(p);
+            let suffixes: &[&str] = if kind == "msg" {
+                &[""]
             } else {
-                for suffix in ["", "_Request", "_Response", "_Event"] {
-                    r.files
-                        .insert(format!("{pkg}/srv/{stem}{suffix}"), Source::Srv(p.clone()));
-                    n += 1;
-                }
+                &["", "_Request", "_Response", "_Event"]
+            };
+            for suffix in suffixes {
+                r.files
+                    .insert(format!("{pkg}/{kind}/{stem}{suffix}"), source.clone());
+                n += 1;
             }
         }
     }
@@ -238,7 +247,20 @@ mod tests {
         .unwrap();
         std::fs::write(pkg.join("msg/Broken.msg"), "nonsense\n").unwrap();
         std::fs::write(pkg.join("srv/Ask.srv"), "Pair q\n---\nbool ok\n").unwrap();
-        assert_eq!(add_dir(&dir), 6);
+        std::fs::write(pkg.join("msg/Pair.idl"), "not read: Pair.msg is there").unwrap();
+        std::fs::write(
+            pkg.join("msg/OnlyIdl.idl"),
+            "module gw_test_pkg { module msg { struct OnlyIdl { double__x v; }; }; };",
+        )
+        .unwrap();
+        std::fs::write(
+            pkg.join("msg/Idl.idl"),
+            "module gw_test_pkg { module msg { struct Idl { sequence<Pair> p; }; }; };",
+        )
+        .unwrap();
+        assert_eq!(add_dir(&dir), 8);
+        let idl = lookup("gw_test_pkg/msg/Idl").unwrap();
+        assert_eq!(idl.fields[0].base, Base::Nested("gw_test_pkg/msg/Pair"));
         let t = lookup("gw_test_pkg/msg/Pair").unwrap();
         assert_eq!(t.fields.len(), 2);
         assert_eq!(t.fields[0].base, Base::Nested("std_msgs/msg/String"));
@@ -252,7 +274,7 @@ mod tests {
         assert!(problem("gw_test_pkg/msg/Broken").is_some());
         assert!(message_names().contains(&"gw_test_pkg/msg/Pair".to_string()));
         // the package directory itself works too
-        assert_eq!(add_dir(&pkg), 6);
+        assert_eq!(add_dir(&pkg), 8);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -16,6 +16,7 @@ pub mod dynmsg;
 pub mod gateway;
 pub mod generic;
 pub mod hash;
+pub mod idl;
 pub mod image;
 pub mod interfaces;
 pub mod joint_command;

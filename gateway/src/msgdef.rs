@@ -86,6 +86,12 @@ pub fn parse_srv(pkg: &str, name: &str, text: &str) -> Result<Vec<MsgDef>, DefEr
         &lines[split + 1..].join("\n"),
         split + 1,
     )?;
+    Ok(service_structures(&full, req, resp))
+}
+
+/// A service's request and response with the `_Event` structure and the service
+/// description rosidl derives from them: `[Request, Response, Event, service]`.
+pub fn service_structures(full: &str, req: MsgDef, resp: MsgDef) -> Vec<MsgDef> {
     let nested = |n: &str, t: String, shape| FieldDef {
         name: n.into(),
         base: BaseDef::Nested(t),
@@ -107,7 +113,7 @@ pub fn parse_srv(pkg: &str, name: &str, text: &str) -> Result<Vec<MsgDef>, DefEr
         constants: Vec::new(),
     };
     let service = MsgDef {
-        name: full,
+        name: full.to_string(),
         fields: vec![
             nested("request_message", req.name.clone(), Shape::Single),
             nested("response_message", resp.name.clone(), Shape::Single),
@@ -115,7 +121,7 @@ pub fn parse_srv(pkg: &str, name: &str, text: &str) -> Result<Vec<MsgDef>, DefEr
         ],
         constants: Vec::new(),
     };
-    Ok(vec![req, resp, event, service])
+    vec![req, resp, event, service]
 }
 
 fn parse_body(

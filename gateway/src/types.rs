@@ -813,7 +813,12 @@ pub fn lookup(name: &str) -> Option<&'static MsgType> {
 
 /// A type of the built-in catalog only.
 pub fn builtin(name: &str) -> Option<&'static MsgType> {
-    MESSAGES.iter().find(|m| m.name == name)
+    static BY_NAME: std::sync::OnceLock<std::collections::HashMap<&'static str, &'static MsgType>> =
+        std::sync::OnceLock::new();
+    BY_NAME
+        .get_or_init(|| MESSAGES.iter().map(|m| (m.name, m)).collect())
+        .get(name)
+        .copied()
 }
 
 /// Splits `pkg/msg/Name` into (`pkg`, `msg`, `Name`).

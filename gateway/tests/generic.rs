@@ -362,3 +362,36 @@ ros_topic = "/mixed/*"
     gw.shutdown().await;
     stop.shutdown();
 }
+
+/// `show-type` prints the layout of a type read from its definition (named with
+/// `--interfaces`) and an example Bottle that the generic conversion takes back.
+#[test]
+fn show_type_prints_layout_and_example() {
+    for venv in common::distros("show_type_prints_layout_and_example") {
+        let out = Command::new(env!("CARGO_BIN_EXE_yarp-ros2-gateway"))
+            .args(["show-type", "nav_msgs/Odometry", "--interfaces"])
+            .arg(&venv.venv)
+            .env_remove("AMENT_PREFIX_PATH")
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{text}");
+        assert!(
+            text.contains("nav_msgs/msg/Odometry (from its definition"),
+            "{text}"
+        );
+        assert!(text.contains("covariance"), "{text}");
+        let example = text.lines().last().unwrap();
+        yarp_ros2_gateway::interfaces::add_dir(&venv.venv);
+        let t = yarp_ros2_gateway::types::lookup("nav_msgs/msg/Odometry").unwrap();
+        let m = yarp_ros2_gateway::generic::to_ros(t, &Bottle::from_text(example), 1).unwrap();
+        assert!(m.conforms_to(t.name));
+        let bad = Command::new(env!("CARGO_BIN_EXE_yarp-ros2-gateway"))
+            .args(["show-type", "nope_msgs/msg/Nope"])
+            .env_remove("AMENT_PREFIX_PATH")
+            .output()
+            .unwrap();
+        assert!(!bad.status.success());
+        assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown type"));
+    }
+}

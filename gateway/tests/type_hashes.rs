@@ -103,6 +103,57 @@ fn every_installed_definition_hashes_as_rosidl_on(venv: &common::Distro) {
     assert!(checked > 150, "{checked}");
 }
 
+/// The `.idl` files rosidl generated from every installed `.msg`/`.srv` describe the same
+/// structures as those, read by the gateway's IDL reader (the one used for packages that
+/// ship `.idl` only): same fields, types, shapes, bounds and constants, so same hashes.
+#[test]
+fn every_installed_idl_reads_as_its_msg() {
+    for d in common::distros("every_installed_idl_reads_as_its_msg") {
+        every_installed_idl_reads_as_its_msg_on(&d);
+    }
+}
+
+fn every_installed_idl_reads_as_its_msg_on(venv: &common::Distro) {
+    use yarp_ros2_gateway::{idl, msgdef};
+    let mut checked = 0;
+    for pkg in std::fs::read_dir(venv.join("share")).unwrap().flatten() {
+        let name = pkg.file_name().to_string_lossy().into_owned();
+        for kind in ["msg", "srv"] {
+            let Ok(files) = std::fs::read_dir(pkg.path().join(kind)) else {
+                continue;
+            };
+            for f in files.flatten() {
+                let p = f.path();
+                let def = p.with_extension(kind);
+                if p.extension().is_none_or(|e| e != "idl") || !def.exists() {
+                    continue;
+                }
+                let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
+                let text = std::fs::read_to_string(&def).unwrap();
+                let mut want = if kind == "msg" {
+                    vec![msgdef::parse_msg(&name, &stem, &text).unwrap()]
+                } else {
+                    msgdef::parse_srv(&name, &stem, &text).unwrap()
+                };
+                let mut got = idl::parse(&std::fs::read_to_string(&p).unwrap())
+                    .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+                // Defaults are written differently (`FALSE`, `false`); compare the rest.
+                for d in want.iter_mut().chain(got.iter_mut()) {
+                    d.fields.iter_mut().for_each(|f| f.default = None);
+                    d.constants.iter_mut().for_each(|c| c.value.clear());
+                }
+                assert_eq!(got, want, "{}", p.display());
+                checked += 1;
+            }
+        }
+    }
+    eprintln!(
+        "[{}] {checked} .idl files read as their .msg/.srv",
+        venv.name
+    );
+    assert!(checked > 100, "{checked}");
+}
+
 #[test]
 fn rclpy_reports_the_same_hash_for_its_own_endpoints() {
     for d in common::distros("rclpy_reports_the_same_hash_for_its_own_endpoints") {
