@@ -98,6 +98,49 @@ pub fn from_image(
     to_ros(img.to_bottle(), frame_id, stamp_ns)
 }
 
+/// Converts a `sensor_msgs/msg/Image` into a device image (rows packed, quantum 1): the
+/// encodings of [`to_ros`] and `16UC1` (as `mono16`). Rows of `step` bytes may carry
+/// padding after the pixels, which is dropped.
+pub fn to_image(m: &Ros) -> Result<yarp_proto::image::Image, ConvertError> {
+    use yarp_proto::image::{Image, PixelCode};
+    let bad = |what: String| ConvertError::Shape(format!("ROS image: {what}"));
+    let f = m.fields().ok_or_else(|| bad("not a message".into()))?;
+    let (
+        Some(Ros::U32(h)),
+        Some(Ros::U32(w)),
+        Some(Ros::Str(enc)),
+        Some(Ros::U32(step)),
+        Some(Ros::Bytes(data)),
+    ) = (f.get(1), f.get(2), f.get(3), f.get(5), f.get(6))
+    else {
+        return Err(bad("not a sensor_msgs/Image".into()));
+    };
+    let enc = if enc == "16UC1" {
+        "mono16"
+    } else {
+        enc.as_str()
+    };
+    let (code, _, depth) = ENCODINGS
+        .iter()
+        .find(|(_, e, _)| *e == enc)
+        .ok_or_else(|| bad(format!("encoding {enc} has no YARP pixel code")))?;
+    let (w, h, step) = (*w as usize, *h as usize, *step as usize);
+    let row = w * depth;
+    if step < row || data.len() < step * h.saturating_sub(1) + row {
+        return Err(bad(format!(
+            "{} bytes for {w}x{h} {enc}, step {step}",
+            data.len()
+        )));
+    }
+    let code = PixelCode(Vocab32::encode(code).0);
+    let mut img = Image::with_layout(code, w, h, 1, true).map_err(|e| bad(e.to_string()))?;
+    for y in 0..h {
+        img.row_mut(y)
+            .copy_from_slice(&data[y * step..y * step + row]);
+    }
+    Ok(img)
+}
+
 /// Builds the YARP image Bottle for `pixels` (rows of `width * depth` bytes, quantum 1),
 /// as C++ writes it (tests, tools).
 pub fn yarp_image(
@@ -189,6 +232,39 @@ mod tests {
         assert_eq!(px.len(), *step as usize * 2);
         let at = *step as usize + 8;
         assert_eq!(px[at..at + 4], 1.5f32.to_ne_bytes());
+    }
+
+    #[test]
+    fn ros_images_back_to_device_images() {
+        use yarp_proto::image::PixelCode;
+        let px: Vec<u8> = (0..2 * 4).map(|i| i as u8).collect();
+        // mono 3x2 with rows padded to 4 bytes
+        let mut m = Ros::zero("sensor_msgs/msg/Image").unwrap();
+        if let Ros::Struct(f) = &mut m {
+            f[1] = Ros::U32(2);
+            f[2] = Ros::U32(3);
+            f[3] = Ros::Str("mono8".into());
+            f[5] = Ros::U32(4);
+            f[6] = Ros::Bytes(px);
+        }
+        let img = to_image(&m).unwrap();
+        assert_eq!(
+            (img.width(), img.height(), img.pixel_code()),
+            (3, 2, PixelCode::MONO)
+        );
+        assert_eq!(
+            (img.row(0), img.row(1)),
+            (&[0u8, 1, 2][..], &[4u8, 5, 6][..])
+        );
+        let back = from_image(&img, "", 0).unwrap();
+        assert_eq!(
+            back.fields().unwrap()[6],
+            Ros::Bytes(vec![0, 1, 2, 4, 5, 6])
+        );
+        if let Ros::Struct(f) = &mut m {
+            f[3] = Ros::Str("yuv422".into());
+        }
+        assert!(to_image(&m).is_err());
     }
 
     #[test]

@@ -42,6 +42,8 @@ pub fn depth_of(rgb: &Image) -> Image {
     let (w, h) = (rgb.width(), rgb.height());
     let mut depth = Image::new(PixelCode::MONO_FLOAT, w, h)
         .unwrap_or_else(|_| Image::empty(PixelCode::MONO_FLOAT));
+    // Same rows, same orientation flag: fakeFrameGrabber's images are bottom-up.
+    depth.set_top_is_low(rgb.top_is_low());
     for y in 0..h {
         for x in 0..w {
             let p = rgb.pixel(x, y);

@@ -32,10 +32,7 @@ const IMAGE: &str = "sensor_msgs/msg/Image";
 const CAMERA_INFO: &str = "sensor_msgs/msg/CameraInfo";
 
 /// `/a/b/image` -> `/a/b/camera_info` (C++ `substr(0, rfind('/')) + "/camera_info"`).
-pub fn info_topic(image_topic: &str) -> String {
-    let dir = image_topic.rfind('/').map_or("", |i| &image_topic[..i]);
-    format!("{dir}/camera_info")
-}
+pub use yarp_ros2_gateway::camera_info::topic_beside as info_topic;
 
 fn time_of(stamp: Option<Stamp>) -> f64 {
     match stamp {
@@ -437,5 +434,6 @@ mod tests {
             "/camera_rgbd/color/camera_info"
         );
         assert_eq!(info_topic("/img"), "/camera_info");
+        assert_eq!(info_topic("/a/b/image_raw"), "/a/b/camera_info");
     }
 }

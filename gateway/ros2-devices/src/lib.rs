@@ -12,6 +12,7 @@
 //! |---|---|
 //! | [`control_board`] | `controlBoard_nws_ros2` (with [`control_msgs`]: `yarp_control_msgs`) |
 //! | [`sensors`] | `imu_nws_ros2`, `wrenchStamped_nws_ros2`, `magneticField_nws_ros2`, `temperature_nws_ros2` |
+//! | [`camera_client`] | `rgbdSensor_nwc_ros2` |
 //! | [`imu_client`] | `imu_nwc_ros2` |
 //! | [`rangefinder`] | `rangefinder2D_nws_ros2`, `rangefinder2D_nwc_ros2` |
 //! | [`camera`] | `frameGrabber_nws_ros2`, `rgbdSensor_nws_ros2`, `rgbdToPointCloudSensor_nws_ros2` |
@@ -20,6 +21,7 @@
 //! [`msgs`] builds their messages (pure), [`periodic`] runs their publishing threads.
 
 pub mod camera;
+pub mod camera_client;
 pub mod control_board;
 pub mod control_msgs;
 pub mod imu_client;
@@ -60,6 +62,9 @@ const LASERS_CAMERAS_BASES: &[(&str, Factory)] = &[
     }),
     (mobile_base::ODOMETRY, || {
         Box::new(mobile_base::StateNwsRos2::new(mobile_base::Kind::Odometry))
+    }),
+    (camera_client::NAME, || {
+        Box::new(camera_client::RgbdSensorNwcRos2::default())
     }),
     (imu_client::NAME, || {
         Box::new(imu_client::ImuNwcRos2::default())

@@ -6,6 +6,7 @@ use yarp_devices::battery::BatteryStatus;
 use yarp_devices::navigation::OdometryData;
 use yarp_proto::image::{Image, PixelCode};
 use yarp_proto::Property;
+use yarp_ros2_gateway::camera_info::{Intrinsics, Model};
 use yarp_ros2_gateway::counters::header;
 use yarp_ros2_gateway::dynmsg::Value as Ros;
 
@@ -103,9 +104,10 @@ pub fn read_laser_scan(m: &Ros) -> Option<(LaserInfo, Vec<f64>, f64)> {
     ))
 }
 
-/// `sensor_msgs/CameraInfo` from a camera's intrinsic parameters (C++ `setCamInfo`):
-/// `None` when `distortionModel` or one of the parameters is missing, as C++ then sends
-/// none. `d` is `k1 k2 t1 t2 k3` unless the model is `none`; R is the identity.
+/// `sensor_msgs/CameraInfo` from a camera's intrinsic parameters (C++ `setCamInfo`),
+/// through the gateway's [`Intrinsics::message`]: `None` when `distortionModel` or one of
+/// the parameters is missing, as C++ then sends none. `d` is `k1 k2 t1 t2 k3` (zeros for
+/// the model `none`, which C++ sends as `none` with no coefficients).
 pub fn camera_info(
     intrinsics: &Property,
     width: u32,
@@ -115,42 +117,61 @@ pub fn camera_info(
 ) -> Option<Ros> {
     let get = |k: &str| intrinsics.find(k).and_then(|v| v.as_f64());
     let model = intrinsics.find("distortionModel")?.as_str()?.to_string();
-    let (fx, fy, cx, cy) = (
-        get("focalLengthX")?,
-        get("focalLengthY")?,
-        get("principalPointX")?,
-        get("principalPointY")?,
-    );
     get("physFocalLength")?;
     let d = if model == "none" {
-        Vec::new()
+        vec![0.0; 5]
     } else {
         ["k1", "k2", "t1", "t2", "k3"]
             .iter()
             .map(|k| get(k))
             .collect::<Option<Vec<f64>>>()?
     };
-    Some(Ros::Struct(vec![
-        header(stamp_ns, frame),
-        Ros::U32(height),
-        Ros::U32(width),
-        Ros::Str(model),
-        Ros::List(f64s(d)),
-        Ros::Array(f64s([fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0])),
-        Ros::Array(f64s([1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0])),
-        Ros::Array(f64s([
-            fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0,
-        ])),
-        Ros::U32(0),
-        Ros::U32(0),
-        Ros::Struct(vec![
-            Ros::U32(0),
-            Ros::U32(0),
-            Ros::U32(0),
-            Ros::U32(0),
-            Ros::Bool(false),
-        ]),
-    ]))
+    let k = Intrinsics {
+        size: None,
+        fx: get("focalLengthX")?,
+        fy: get("focalLengthY")?,
+        cx: get("principalPointX")?,
+        cy: get("principalPointY")?,
+        model: Model::PlumbBob,
+        d,
+    };
+    Some(k.message(header(stamp_ns, frame), width, height))
+}
+
+/// A received `sensor_msgs/CameraInfo` as YARP intrinsic parameters (C++
+/// `saveIntrinsics`: K's focal lengths and principal point, D as k1 k2 t1 t2 k3), its
+/// frame, stamp and image size.
+pub fn read_camera_info(m: &Ros) -> Option<(Property, String, f64, u32, u32)> {
+    let f = m.fields()?;
+    let (Ros::U32(h), Ros::U32(w), Ros::Str(model)) = (f.get(1)?, f.get(2)?, f.get(3)?) else {
+        return None;
+    };
+    let k = match f.get(5)? {
+        Ros::Array(k) if k.len() == 9 => k.iter().filter_map(Ros::as_f64).collect::<Vec<_>>(),
+        _ => return None,
+    };
+    let d: Vec<f64> = match f.get(4)? {
+        Ros::List(d) => d.iter().filter_map(Ros::as_f64).collect(),
+        _ => return None,
+    };
+    let mut p = Property::new();
+    p.put("physFocalLength", yarp_proto::Value::Float64(0.0));
+    for (name, v) in [
+        ("focalLengthX", k[0]),
+        ("focalLengthY", k[4]),
+        ("principalPointX", k[2]),
+        ("principalPointY", k[5]),
+    ] {
+        p.put(name, yarp_proto::Value::Float64(v));
+    }
+    p.put("distortionModel", yarp_proto::Value::from(model.as_str()));
+    for (i, name) in ["k1", "k2", "t1", "t2", "k3"].iter().enumerate() {
+        p.put(
+            *name,
+            yarp_proto::Value::Float64(d.get(i).copied().unwrap_or(0.0)),
+        );
+    }
+    Some((p, header_frame(&f[0]), header_time(&f[0]), *w, *h))
 }
 
 /// Bytes of one point of `rgbdToPointCloudSensor_nws_ros2`'s cloud (C++
@@ -330,6 +351,19 @@ mod tests {
         k.put("distortionModel", Value::from("none"));
         let ci = camera_info(&k, 320, 240, "cam", 0).unwrap();
         assert!(ci.conforms_to("sensor_msgs/msg/CameraInfo"));
+        let (back, frame, _, w, h) = read_camera_info(&ci).unwrap();
+        assert_eq!((frame.as_str(), w, h), ("cam", 320, 240));
+        for key in [
+            "focalLengthX",
+            "focalLengthY",
+            "principalPointX",
+            "principalPointY",
+        ] {
+            assert_eq!(
+                back.find(key).and_then(Value::as_f64),
+                k.find(key).and_then(Value::as_f64)
+            );
+        }
         assert_eq!(
             ci.fields().unwrap()[5].clone(),
             Ros::Array(f64s([512.0, 0.0, 235.0, 0.0, 500.0, 231.0, 0.0, 0.0, 1.0]))

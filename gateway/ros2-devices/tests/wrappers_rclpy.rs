@@ -4,7 +4,8 @@
 //! BatteryState and `odometry2D_nws_ros2`'s Odometry (and sees `/tf` with the TFMessage
 //! hash); rclpy's Twist commands reach `fakeNavigation` through
 //! `mobileBaseVelocityControl_nws_ros2`; rclpy's LaserScan feeds `rangefinder2D_nwc_ros2`
-//! and its Imu `imu_nwc_ros2`. Domain indices 29..33 of the gateway's harness; each test is its own process, so
+//! and its Imu `imu_nwc_ros2`; `rgbdSensor_nwc_ros2` reads `rgbdSensor_nws_ros2`. Domain
+//! indices 28..33 of the gateway's harness; each test is its own process, so
 //! `ROS_DOMAIN_ID` set here is the devices' alone.
 
 #[path = "../../tests/common/mod.rs"]
@@ -317,4 +318,55 @@ fn rclpy_imu_feeds_the_imu_client() {
             .values,
         vec![0.0, 0.0, 9.81]
     );
+}
+
+/// Not rclpy: our own server and client over DDS, the colour and depth images (and the
+/// intrinsics from CameraInfo) arriving as `fakeDepthCamera` made them.
+#[test]
+fn rgbd_client_reads_the_rgbd_server() {
+    let Some((_distro, _d)) = setup("rgbd_client_reads_the_rgbd_server", 28) else {
+        return;
+    };
+    let camera = shared(open(
+        "(device fakeDepthCamera) (width 32) (height 24) (mode grid)",
+    ));
+    let mut server = open(
+        "(device rgbdSensor_nws_ros2) (node_name h16b_rgbd) (period 0.05) \
+         (color_topic_name /h16b/rgbd/color/image_raw) (depth_topic_name /h16b/rgbd/depth/image_raw) \
+         (color_frame_id rgb_frame) (depth_frame_id depth_frame)",
+    );
+    server
+        .device()
+        .as_wrapper()
+        .unwrap()
+        .attach(camera.clone())
+        .unwrap();
+    let mut client = open(
+        "(device rgbdSensor_nwc_ros2) (node_name h16b_rgbd_client) \
+         (color_topic_name /h16b/rgbd/color/image_raw) (depth_topic_name /h16b/rgbd/depth/image_raw)",
+    );
+    let rgbd = client.device().as_rgbd_sensor().unwrap();
+    let end = Instant::now() + common::T;
+    while rgbd.sensor_status() != yarp_devices::rgbd::RgbdStatus::OkInUse {
+        assert!(Instant::now() < end, "no images from the server");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let ((color, cs), (depth, ds)) = rgbd.get_images().unwrap();
+    assert_eq!((color.width(), color.height()), (32, 24));
+    assert_eq!(depth.pixel_code(), yarp_proto::image::PixelCode::MONO_FLOAT);
+    assert!(cs.time > 1.6e9 && ds.time > 1.6e9, "{cs:?} {ds:?}");
+    // the grid pattern: red grows along x, green along y (fakeFrameGrabber's images are
+    // bottom-up: ROS's top row is the grid's last), one scrolling blue row; depth is the
+    // mean of the channels over 255 (the two images may be of adjacent frames, whose
+    // blue rows differ)
+    let p = color.pixel(31, 0).to_vec();
+    assert_eq!((p[0], p[1]), (255, 255), "{p:?}");
+    let d = f32::from_ne_bytes(depth.pixel(31, 0).try_into().unwrap());
+    assert!(
+        (d - 2.0 / 3.0).abs() < 1e-3 || (d - 1.0).abs() < 1e-3,
+        "{d}"
+    );
+    let k = rgbd.rgb_intrinsic_param().unwrap();
+    assert_eq!(k.find("focalLengthX").and_then(|v| v.as_f64()), Some(512.0));
+    assert_eq!((rgbd.rgb_width(), rgbd.depth_height()), (32, 24));
 }

@@ -109,6 +109,7 @@ fn cxx_info(name: &str) -> (&'static str, Option<&'static str>) {
         "rangefinder2D_nws_ros2" => ("Rangefinder2D_nws_ros2", Some("rangefinder2D_nws_ros2")),
         "rangefinder2D_nwc_ros2" => ("Rangefinder2D_nwc_ros2", None),
         "imu_nwc_ros2" => ("Imu_nwc_ros2", None),
+        "rgbdSensor_nwc_ros2" => ("RgbdSensor_nwc_ros2", None),
         "frameGrabber_nws_ros2" => ("FrameGrabber_nws_ros2", Some("frameGrabber_nws_ros2")),
         "rgbdSensor_nws_ros2" => ("RgbdSensor_nws_ros2", Some("rgbdSensor_nws_ros2")),
         "rgbdToPointCloudSensor_nws_ros2" => (
