@@ -7,6 +7,7 @@
 use crate::battery::IBattery;
 use crate::error::{DevResult, DeviceError};
 use crate::framegrabber::interfaces::{IFrameGrabberControls, IFrameGrabberImage};
+use crate::frames::{IFrameTransformStorageGet, IFrameTransformStorageSet};
 use crate::interfaces::*;
 use crate::kind::{interfaces_of, kind_of, suggest, Kind};
 use crate::navigation::{INavigation2DVelocityActions, IOdometry2D};
@@ -168,6 +169,12 @@ pub trait DeviceDriver: Send {
         None
     }
     fn as_navigation_2d_velocity(&mut self) -> Option<&mut dyn INavigation2DVelocityActions> {
+        None
+    }
+    fn as_frame_transform_storage_get(&mut self) -> Option<&mut dyn IFrameTransformStorageGet> {
+        None
+    }
+    fn as_frame_transform_storage_set(&mut self) -> Option<&mut dyn IFrameTransformStorageSet> {
         None
     }
 

@@ -37,7 +37,7 @@ impl Kind {
 
 /// The C++ names of the interfaces `d` offers, in the order of `DeviceDriver`'s views.
 pub fn interfaces_of(d: &mut dyn DeviceDriver) -> Vec<&'static str> {
-    let views: [(bool, &'static str); 37] = [
+    let views: [(bool, &'static str); 39] = [
         (d.as_encoders().is_some(), "IEncodersTimed"),
         (d.as_position_control().is_some(), "IPositionControl"),
         (d.as_velocity_control().is_some(), "IVelocityControl"),
@@ -92,6 +92,14 @@ pub fn interfaces_of(d: &mut dyn DeviceDriver) -> Vec<&'static str> {
         (
             d.as_navigation_2d_velocity().is_some(),
             "INavigation2DVelocityActions",
+        ),
+        (
+            d.as_frame_transform_storage_get().is_some(),
+            "IFrameTransformStorageGet",
+        ),
+        (
+            d.as_frame_transform_storage_set().is_some(),
+            "IFrameTransformStorageSet",
         ),
         (d.as_wrapper().is_some(), "IWrapper"),
         (d.as_multiple_wrapper().is_some(), "IMultipleWrapper"),

@@ -13,6 +13,7 @@ pub mod driver;
 pub mod error;
 pub mod fake_motion_control;
 pub mod framegrabber;
+pub mod frames;
 pub mod interfaces;
 pub mod kind;
 pub mod navigation;

@@ -63,6 +63,8 @@ async fn list_prints_every_registered_device_in_cpp_form() {
         "rangefinder2D_nwc_ros2",
         "imu_nwc_ros2",
         "rgbdSensor_nwc_ros2",
+        "frameTransformGet_nwc_ros2",
+        "frameTransformSet_nwc_ros2",
         "frameGrabber_nws_ros2",
         "rgbdSensor_nws_ros2",
         "rgbdToPointCloudSensor_nws_ros2",

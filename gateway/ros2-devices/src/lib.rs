@@ -14,6 +14,7 @@
 //! | [`sensors`] | `imu_nws_ros2`, `wrenchStamped_nws_ros2`, `magneticField_nws_ros2`, `temperature_nws_ros2` |
 //! | [`camera_client`] | `rgbdSensor_nwc_ros2` |
 //! | [`imu_client`] | `imu_nwc_ros2` |
+//! | [`frames`] | `frameTransformGet_nwc_ros2`, `frameTransformSet_nwc_ros2` |
 //! | [`rangefinder`] | `rangefinder2D_nws_ros2`, `rangefinder2D_nwc_ros2` |
 //! | [`camera`] | `frameGrabber_nws_ros2`, `rgbdSensor_nws_ros2`, `rgbdToPointCloudSensor_nws_ros2` |
 //! | [`mobile_base`] | `battery_nws_ros2`, `odometry2D_nws_ros2`, `mobileBaseVelocityControl_nws_ros2` |
@@ -24,6 +25,7 @@ pub mod camera;
 pub mod camera_client;
 pub mod control_board;
 pub mod control_msgs;
+pub mod frames;
 pub mod imu_client;
 pub mod mobile_base;
 pub mod msgs;
@@ -65,6 +67,12 @@ const LASERS_CAMERAS_BASES: &[(&str, Factory)] = &[
     }),
     (camera_client::NAME, || {
         Box::new(camera_client::RgbdSensorNwcRos2::default())
+    }),
+    (frames::GET, || {
+        Box::new(frames::FrameTransformGetNwcRos2::default())
+    }),
+    (frames::SET, || {
+        Box::new(frames::FrameTransformSetNwcRos2::default())
     }),
     (imu_client::NAME, || {
         Box::new(imu_client::ImuNwcRos2::default())

@@ -5,7 +5,7 @@
 //! hash); rclpy's Twist commands reach `fakeNavigation` through
 //! `mobileBaseVelocityControl_nws_ros2`; rclpy's LaserScan feeds `rangefinder2D_nwc_ros2`
 //! and its Imu `imu_nwc_ros2`; `rgbdSensor_nwc_ros2` reads `rgbdSensor_nws_ros2`. Domain
-//! indices 28..33 of the gateway's harness; each test is its own process, so
+//! indices 27..33; the frame-transform clients talk to each other of the gateway's harness; each test is its own process, so
 //! `ROS_DOMAIN_ID` set here is the devices' alone.
 
 #[path = "../../tests/common/mod.rs"]
@@ -369,4 +369,81 @@ fn rgbd_client_reads_the_rgbd_server() {
     let k = rgbd.rgb_intrinsic_param().unwrap();
     assert_eq!(k.find("focalLengthX").and_then(|v| v.as_f64()), Some(512.0));
     assert_eq!((rgbd.rgb_width(), rgbd.depth_height()), (32, 24));
+}
+
+/// `frameTransformSet_nwc_ros2` publishes what it is given on its `/tf` and `/tf_static`
+/// topics (rclpy sees them with the TFMessage hash) and `frameTransformGet_nwc_ros2`
+/// reads them back.
+#[test]
+fn frame_transforms_go_out_and_come_back() {
+    let Some((distro, d)) = setup("frame_transforms_go_out_and_come_back", 27) else {
+        return;
+    };
+    let groups = "(ROS2 (ft_topic /h16b/tf) (ft_topic_static /h16b/tf_static)) \
+                  (GENERAL (period 0.02) (refresh_interval 5.0))";
+    let mut get = open(&format!("(device frameTransformGet_nwc_ros2) {groups}"));
+    let mut set = open(&format!("(device frameTransformSet_nwc_ros2) {groups}"));
+    let info = common::Peer::start(
+        &distro,
+        d,
+        &[
+            "info_many",
+            "/h16b/tf",
+            "/h16b/tf_static",
+            "--timeout",
+            "20",
+        ],
+    );
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64();
+    let ft = |src: &str, dst: &str, is_static, x| yarp_devices::frames::FrameTransform {
+        src_frame_id: src.into(),
+        dst_frame_id: dst.into(),
+        timestamp: now,
+        is_static,
+        translation: [x, 0.0, 0.5],
+        rotation: [0.0, 0.0, 0.0, 1.0],
+    };
+    let sent = vec![
+        ft("map", "odom", true, 1.0),
+        ft("odom", "base_link", false, 2.0),
+    ];
+    let setter = set.device().as_frame_transform_storage_set().unwrap();
+    setter.set_transforms(&sent).unwrap();
+    let getter = get.device().as_frame_transform_storage_get().unwrap();
+    let end = Instant::now() + common::T;
+    let got = loop {
+        let mut got = getter.get_transforms().unwrap();
+        if got.len() == 2 || Instant::now() > end {
+            got.sort_by(|a, b| a.src_frame_id.cmp(&b.src_frame_id));
+            break got;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(got.len(), 2, "{got:?}");
+    assert_eq!(
+        (got[0].src_frame_id.as_str(), got[0].is_static),
+        ("map", true)
+    );
+    assert_eq!(got[1].dst_frame_id, "base_link");
+    assert_eq!(got[1].translation, [2.0, 0.0, 0.5]);
+    assert!((got[1].timestamp - now).abs() < 1e-6);
+    let info = json(&info.expect("INFO", common::T));
+    let hash = rihs01("tf2_msgs/msg/TFMessage").unwrap();
+    for topic in ["/h16b/tf", "/h16b/tf_static"] {
+        let endpoints = info[topic].as_array().unwrap();
+        assert!(
+            endpoints.len() >= 2,
+            "the setter's writer, the getter's reader: {info}"
+        );
+        for e in endpoints {
+            assert_eq!(e["type"], "tf2_msgs/msg/TFMessage", "{info}");
+            assert!(
+                e["hash"].as_str().unwrap().contains(&hash[7..]),
+                "{topic}: {e}"
+            );
+        }
+    }
 }

@@ -110,6 +110,8 @@ fn cxx_info(name: &str) -> (&'static str, Option<&'static str>) {
         "rangefinder2D_nwc_ros2" => ("Rangefinder2D_nwc_ros2", None),
         "imu_nwc_ros2" => ("Imu_nwc_ros2", None),
         "rgbdSensor_nwc_ros2" => ("RgbdSensor_nwc_ros2", None),
+        "frameTransformGet_nwc_ros2" => ("FrameTransformGet_nwc_ros2", None),
+        "frameTransformSet_nwc_ros2" => ("FrameTransformSet_nwc_ros2", None),
         "frameGrabber_nws_ros2" => ("FrameGrabber_nws_ros2", Some("frameGrabber_nws_ros2")),
         "rgbdSensor_nws_ros2" => ("RgbdSensor_nws_ros2", Some("rgbdSensor_nws_ros2")),
         "rgbdToPointCloudSensor_nws_ros2" => (
