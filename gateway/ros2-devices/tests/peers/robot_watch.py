@@ -6,8 +6,8 @@ Subscribes (reliable, volatile, depth 10: rclpy's default) to every TOPIC (TYPE 
 sensor_msgs/msg/JointState), and prints, one line each, flushed:
 
   FIRST <topic> <json>       the first message of each topic (a summary)
-  HASH <topic> <json>        once matched: the type hashes of the topic's publishers (as
-                             their USER_DATA announces them) and of this subscriber (rclpy's own)
+  HASH <topic> <json>        once matched and named: the publishers' nodes and type hashes
+                             (as their USER_DATA announces them), this subscriber's (rclpy's own)
   INFO <topic> <json>        for each --info topic (a type this venv may lack): every
                              endpoint's node, type and hash, once one publisher and one
                              subscription are seen
@@ -50,12 +50,19 @@ def summary(m):
         o, a, w = m.orientation, m.linear_acceleration, m.angular_velocity
         out.update(orientation=[o.x, o.y, o.z, o.w], linear_acceleration=[a.x, a.y, a.z],
                    angular_velocity=[w.x, w.y, w.z])
+    elif t == "MagneticField":
+        f = m.magnetic_field
+        out.update(magnetic_field=[f.x, f.y, f.z])
+    elif t == "Temperature":
+        out.update(temperature=m.temperature, variance=m.variance)
+    elif t == "Int8MultiArray":
+        out.update(data=list(m.data))
     return out
 
 
 def endpoints(infos):
-    return [{"node": i.node_name, "type": i.topic_type, "hash": str(i.topic_type_hash)}
-            for i in infos]
+    return [{"node": i.node_name, "namespace": i.node_namespace, "type": i.topic_type,
+             "hash": str(i.topic_type_hash)} for i in infos]
 
 
 def main():
@@ -99,7 +106,9 @@ def main():
                 pubs = node.get_publishers_info_by_topic(topic)
                 subs = [s for s in node.get_subscriptions_info_by_topic(topic)
                         if s.node_name == node.get_name()]
-                if pubs and subs:
+                # ROS node names come with the graph's ros_discovery_info, after DDS's
+                named = all(p.node_name != "_CREATED_BY_BARE_DDS_APP_" for p in pubs)
+                if pubs and subs and named:
                     hashed.add(topic)
                     say("HASH", topic, json.dumps({"pubs": endpoints(pubs),
                                                    "own": str(subs[0].topic_type_hash)}))
