@@ -15,6 +15,8 @@
 //! topic. Per topic: messages, rate, and the gaps between arrivals at rclpy (mean,
 //! standard deviation, p99, max).
 
+#[path = "../../tests/common/mod.rs"]
+mod common;
 #[path = "../tests/ergocub/mod.rs"]
 mod ergocub;
 
@@ -23,7 +25,6 @@ use serde_json::Value as Json;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-const DOMAIN: u16 = 231;
 const MAP: &str = "10.0.1.0/24=127.0.6.0/24";
 
 /// User + system CPU seconds of process `pid`.
@@ -100,10 +101,12 @@ fn main() {
     let Some(venv) = ros_venv("ergocub_rates") else {
         return;
     };
+    // a domain of the gateway's test harness, index 23 (unused by the tests)
+    let domain = common::domain_id(23);
     let conf = tempfile::tempdir().unwrap();
     std::env::set_var("YARP_CONFIG_HOME", conf.path());
     std::env::set_var(icubmod::eth::params::ADDRESS_MAP_ENV, MAP);
-    std::env::set_var("ROS_DOMAIN_ID", DOMAIN.to_string());
+    std::env::set_var("ROS_DOMAIN_ID", domain.to_string());
     std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
     let addr = yarp_devices::runtime::block_on(async {
         let ns = yarp_interop_tests::bind_name_server().await;
@@ -137,7 +140,7 @@ fn main() {
         "120".into(),
     ]);
     let topics = wargs.iter().filter(|a| a.contains('=')).count();
-    let watch = watch(&venv, DOMAIN, &wargs);
+    let watch = watch(&venv, domain, &wargs);
     watch.expect("READY", Duration::from_secs(30));
     let (mut firsts, mut hashes) = (0, 0);
     while firsts < topics || hashes < topics {

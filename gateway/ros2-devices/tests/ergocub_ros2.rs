@@ -12,6 +12,8 @@
 //! left shoulder roll moves, seen on `/ergocub/left_arm/state:o`. rclpy sees that topic's
 //! endpoints with rosidl's hash of Position.
 
+#[path = "../../tests/common/mod.rs"]
+mod common;
 mod ergocub;
 #[path = "../../../devices/icub-emulators/tests/eth_common/mod.rs"]
 mod eth_common;
@@ -32,9 +34,6 @@ use yarp_ros2_gateway::hash::rihs01;
 use yarp_ros2_gateway::mapping::Qos;
 use yarp_ros2_gateway::ros;
 
-/// This test's ROS domain (the gateway's tests use 20..229).
-const DOMAIN: u16 = 230;
-
 /// rosidl's hash of `yarp_control_msgs/msg/Position` (tests/type_hashes.rs).
 const POSITION_HASH: &str =
     "RIHS01_499fa67073eb1080970ec46ebdeba1d0180d81609bd09a28b0691257a7aa4967";
@@ -50,13 +49,13 @@ struct RosClient {
 }
 
 impl RosClient {
-    fn start() -> RosClient {
+    fn start(domain: u16) -> RosClient {
         let rt = tokio::runtime::Builder::new_multi_thread()
             .worker_threads(2)
             .enable_all()
             .build()
             .unwrap();
-        let ctx = ros::start_context(DOMAIN, &["127.0.0.1".parse().unwrap()]).unwrap();
+        let ctx = ros::start_context(domain, &["127.0.0.1".parse().unwrap()]).unwrap();
         let mut node = ros::new_node(&ctx, "/", "ergocub_ros2_test").unwrap();
         let srv = |s: &str| format!("yarp_control_msgs/srv/{s}");
         let position = ros::publisher(
@@ -142,7 +141,9 @@ fn ergocub_ros2_wrappers_serve_rclpy_and_take_ros_commands() {
     let Some(venv) = ros_venv("ergocub_ros2") else {
         return;
     };
-    std::env::set_var("ROS_DOMAIN_ID", DOMAIN.to_string());
+    // a domain of the gateway's test harness (index 19: no other test's)
+    let domain = common::domain_id(19);
+    std::env::set_var("ROS_DOMAIN_ID", domain.to_string());
     std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
     // What yarprobotinterface registers besides the framework's and icubmod's drivers.
     yarp_devices::Registry::install(yarp_devices_ros2::register);
@@ -178,7 +179,7 @@ fn ergocub_ros2_wrappers_serve_rclpy_and_take_ros_commands() {
     imu_runner.enter_phase(ActionPhase::Run).unwrap();
 
     // The ROS client exists before rclpy looks at the Position topic's endpoints.
-    let client = RosClient::start();
+    let client = RosClient::start(domain);
 
     let mut args = watched(true);
     args.extend([
@@ -187,7 +188,7 @@ fn ergocub_ros2_wrappers_serve_rclpy_and_take_ros_commands() {
         "--timeout".into(),
         "120".into(),
     ]);
-    let watch = watch(&venv, DOMAIN, &args);
+    let watch = watch(&venv, domain, &args);
     let started = Instant::now();
     watch.expect("READY", T);
     let mut first = std::collections::HashMap::new();

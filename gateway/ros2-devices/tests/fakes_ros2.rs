@@ -4,6 +4,8 @@
 //! `imu_nws_ros2` and `magneticField_nws_ros2` over `fakeIMU`; `wrenchStamped_nws_ros2` and
 //! `temperature_nws_ros2` over `fakeFTs`).
 
+#[path = "../../tests/common/mod.rs"]
+mod common;
 mod ergocub;
 
 use ergocub::{ros_venv, watch};
@@ -12,15 +14,14 @@ use yarp_devices::PolyDriver;
 use yarp_proto::Property;
 use yarp_ros2_gateway::hash::rihs01;
 
-/// This test's ROS domain (the gateway's tests use 20..229, ergocub_ros2 230).
-const DOMAIN: u16 = 232;
-
 #[test]
 fn every_server_over_fakes_reaches_rclpy() {
     let Some(venv) = ros_venv("fakes_ros2") else {
         return;
     };
-    std::env::set_var("ROS_DOMAIN_ID", DOMAIN.to_string());
+    // a domain of the gateway's test harness (index 21: no other test's)
+    let domain = common::domain_id(21);
+    std::env::set_var("ROS_DOMAIN_ID", domain.to_string());
     std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
     yarp_devices::Registry::install(yarp_devices_ros2::register);
     let open = |text: &str| {
@@ -63,7 +64,7 @@ fn every_server_over_fakes_reaches_rclpy() {
         .map(|(t, ty)| format!("{t}={ty}"))
         .chain(["--timeout".into(), "60".into()])
         .collect();
-    let w = watch(&venv, DOMAIN, &args);
+    let w = watch(&venv, domain, &args);
     w.expect("READY", Duration::from_secs(30));
     let (mut first, mut hashes) = (Vec::new(), Vec::new());
     let end = Instant::now() + Duration::from_secs(60);
