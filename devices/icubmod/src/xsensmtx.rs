@@ -16,6 +16,8 @@
 //! Unlike C++ (whose multiple-analog-sensors status is always OK), a sensor that sent no
 //! sample for 0.5 s (C++'s read timeout) reads as `Timeout` and its measures are errors;
 //! a sensor that does not answer `GoToConfig` fails the open within 2 s, naming the port.
+//! A serial port that fails while measuring is reported and opened and configured again
+//! every second, so a replugged sensor (or a restarted emulator) measures again.
 
 use crate::common::device_id;
 use icub_can::xsens::{
@@ -141,9 +143,27 @@ fn configure(port: &mut dyn SerialPort) -> Result<(), String> {
     Ok(())
 }
 
-/// Keeps `latest` up to date from the sensor's `MTData` until `stop`.
+/// Opens the serial port as C++ does: 115200 baud, 8N2, no flow control.
+fn open_port(serial: &str) -> Result<Box<dyn SerialPort>, String> {
+    serialport::new(serial, 115_200)
+        .data_bits(serialport::DataBits::Eight)
+        .parity(serialport::Parity::None)
+        .stop_bits(serialport::StopBits::Two)
+        .flow_control(serialport::FlowControl::None)
+        .timeout(Duration::from_millis(20))
+        .open()
+        .map_err(|e| format!("cannot open the serial port: {e}"))
+}
+
+/// How often a serial port that failed is opened again.
+const REOPEN_EVERY: Duration = Duration::from_secs(1);
+
+/// Keeps `latest` up to date from the sensor's `MTData` until `stop`. A port that fails
+/// (USB cable pulled, emulator restarted) is reported once and opened and configured
+/// again every [`REOPEN_EVERY`] (C++ stays in error until the device is reopened).
 fn read_samples(
     id: String,
+    serial: String,
     mut port: Box<dyn SerialPort>,
     latest: Arc<Mutex<Option<Latest>>>,
     stop: Arc<AtomicBool>,
@@ -151,15 +171,47 @@ fn read_samples(
     let mut dec = Decoder::new();
     let mut buf = [0u8; 512];
     let mut bad = 0u64;
+    let mut lost: Option<(Instant, Instant)> = None;
     while !stop.load(Ordering::SeqCst) {
-        match port.read(&mut buf) {
-            Ok(n) => dec.push(&buf[..n]),
-            Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::Interrupted) => {}
-            Err(e) => {
-                // Unplugged: the samples go stale and readers see Timeout.
-                tracing::debug!("{id}: {e}");
-                std::thread::sleep(Duration::from_millis(50));
+        if let Some((since, tried)) = lost {
+            std::thread::sleep(Duration::from_millis(50));
+            if tried.elapsed() < REOPEN_EVERY {
+                continue;
             }
+            let again = open_port(&serial).and_then(|mut p| configure(p.as_mut()).map(|()| p));
+            match again {
+                Ok(p) => {
+                    port = p;
+                    dec = Decoder::new();
+                    lost = None;
+                    tracing::warn!(
+                        "{id}: MTx on {serial} measuring again after {:.1} s",
+                        since.elapsed().as_secs_f64()
+                    );
+                }
+                Err(e) => {
+                    tracing::debug!("{id}: reopening {serial}: {e}");
+                    lost = Some((since, Instant::now()));
+                }
+            }
+            continue;
+        }
+        let failed = match port.read(&mut buf) {
+            Ok(0) => Some("the port hung up".to_string()),
+            Ok(n) => {
+                dec.push(&buf[..n]);
+                None
+            }
+            Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::Interrupted) => None,
+            Err(e) => Some(e.to_string()),
+        };
+        if let Some(why) = failed {
+            // the samples go stale and readers see Timeout meanwhile
+            tracing::error!(
+                "{id}: the MTx on {serial} fails ({why}): its measures read as Timeout; opening {serial} again every {REOPEN_EVERY:?} (check the sensor's cable)"
+            );
+            lost = Some((Instant::now(), Instant::now()));
+            continue;
         }
         while let Some(r) = dec.next_message() {
             let sample = match r {
@@ -275,20 +327,14 @@ impl DeviceDriver for XsensMtx {
         }
         let fail =
             |what: String| DeviceError::failed(self.id.as_str(), format!("{serial}: {what}"));
-        let mut port = serialport::new(serial.as_str(), 115_200)
-            .data_bits(serialport::DataBits::Eight)
-            .parity(serialport::Parity::None)
-            .stop_bits(serialport::StopBits::Two)
-            .flow_control(serialport::FlowControl::None)
-            .timeout(Duration::from_millis(20))
-            .open()
-            .map_err(|e| fail(format!("cannot open the serial port: {e}")))?;
+        let mut port = open_port(&serial).map_err(fail)?;
         configure(port.as_mut()).map_err(fail)?;
         self.stop.store(false, Ordering::SeqCst);
         let (id, latest, stop) = (self.id.clone(), self.latest.clone(), self.stop.clone());
+        let path = serial.clone();
         let reader = std::thread::Builder::new()
             .name(format!("{NAME} {serial}"))
-            .spawn(move || read_samples(id, port, latest, stop))
+            .spawn(move || read_samples(id, path, port, latest, stop))
             .map_err(|e| fail(format!("cannot start the reader: {e}")))?;
         self.reader = Some(reader);
         tracing::info!("{}: MTx on {serial} measuring", self.id);

@@ -222,3 +222,30 @@ fn the_port_is_exclusive_while_open_and_released_on_close() {
     assert!(open(&quiet_path).is_err());
     assert!(!exclusive(&quiet_path));
 }
+
+/// The emulator killed and started again on the same link (a new terminal behind it, as
+/// `icub-board-emulator --xsens PATH` does; or a sensor's USB cable pulled and plugged
+/// back): the device reads `Timeout` meanwhile and measures again without being reopened.
+#[test]
+fn a_restarted_emulator_on_the_same_link_is_measured_again() {
+    yarp_devices::Registry::install(icubmod::register);
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("ttyXSENS");
+    let (first, _pts) = mtx::pty_link(&link).unwrap();
+    let mut pd = open(&link).unwrap_or_else(|e| panic!("{e}"));
+    let dev = pd.device();
+    let status = |dev: &mut dyn yarp_devices::DeviceDriver| {
+        dev.as_three_axis_gyroscopes()
+            .unwrap()
+            .get_three_axis_gyroscope_status(0)
+    };
+    assert!(eventually(Duration::from_secs(2), || status(dev) == MasStatus::Ok));
+    drop(first);
+    assert!(eventually(Duration::from_secs(2), || status(dev) == MasStatus::Timeout));
+    let (_second, _pts) = mtx::pty_link(&link).unwrap();
+    assert!(
+        eventually(Duration::from_secs(5), || status(dev) == MasStatus::Ok),
+        "not measuring again"
+    );
+    pd.close().unwrap();
+}
