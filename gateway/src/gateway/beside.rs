@@ -18,7 +18,7 @@ pub(super) struct Beside {
 
 /// The CameraInfo publisher of an image entry.
 pub(super) struct CameraInfoOut {
-    publisher: Publisher<Ros>,
+    pub(super) publisher: std::sync::Arc<Publisher<Ros>>,
     intrinsics: Intrinsics,
     pub(super) topic: String,
 }
@@ -42,7 +42,7 @@ impl CameraInfoOut {
         let publisher = ros::publisher(node, &topic, "sensor_msgs/msg/CameraInfo", &q)?;
         let intrinsics = ci.intrinsics.clone().expect("read at load time");
         Ok(Some(CameraInfoOut {
-            publisher,
+            publisher: std::sync::Arc::new(publisher),
             intrinsics,
             topic,
         }))

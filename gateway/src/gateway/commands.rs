@@ -6,14 +6,21 @@
 //! there), learns axis names and types from IAxisInfo, decodes each message with
 //! [`crate::joint_command`] and follows trajectories point by point. A board that stops
 //! answering is closed and opened again on the next command.
+//!
+//! A board is open only while a ROS publisher is matched to the command topic (or a
+//! trajectory is still being followed): an open `remote_controlboard` streams the board's
+//! state to the gateway, which nobody needs while nobody commands. The board is opened
+//! when a publisher appears (checked every [`RETRY`]) or, at the latest, by the first
+//! command, and closed [`LINGER`] after the last publisher went away.
 
 use crate::counters::Counters;
 use crate::dynmsg::{MsgSeed, Value as Ros};
 use crate::joint_command::{self, BoardInfo, Command, Mode, Target, TrajectoryPoint};
 use crate::mapping::{ControlBoard, TopicEntry};
 use futures::{pin_mut, StreamExt};
-use ros2_client::Subscription;
+use ros2_client::{Node, Subscription};
 use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, SyncSender, TrySendError};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -24,21 +31,31 @@ use yarp_proto::Property;
 
 /// How often an absent board is looked for again.
 const RETRY: Duration = Duration::from_secs(1);
+/// How long an idle board stays open after the command topic lost its last publisher.
+const LINGER: Duration = Duration::from_secs(5);
 
 /// Starts the board thread for entry `t`; returns the sender the ROS task feeds.
-pub(super) fn spawn_board(t: &TopicEntry, c: Arc<Counters>) -> std::io::Result<SyncSender<Ros>> {
+/// `wanted` says whether a ROS publisher is matched (kept by [`ros_to_board`]).
+pub(super) fn spawn_board(
+    t: &TopicEntry,
+    c: Arc<Counters>,
+    wanted: Arc<AtomicBool>,
+) -> std::io::Result<SyncSender<Ros>> {
     let (tx, rx) = mpsc::sync_channel(t.qos.depth.max(1) as usize);
     let t = t.clone();
     std::thread::Builder::new()
         .name(format!("gw-board-{}", t.name))
-        .spawn(move || board_thread(rx, t, c))?;
+        .spawn(move || board_thread(rx, t, c, wanted))?;
     Ok(tx)
 }
 
-/// ROS -> board: hands every received message to the board thread.
+/// ROS -> board: hands every received message to the board thread, and tells it
+/// whether a publisher is matched (`wanted`).
 pub(super) async fn ros_to_board(
+    node: Arc<Node>,
     sub: Subscription<Ros>,
     tx: SyncSender<Ros>,
+    wanted: Arc<AtomicBool>,
     t: TopicEntry,
     c: Arc<Counters>,
 ) {
@@ -47,7 +64,18 @@ pub(super) async fn ros_to_board(
     };
     let stream = sub.async_stream_seed(seed);
     pin_mut!(stream);
-    while let Some(r) = stream.next().await {
+    let mut tick = tokio::time::interval(RETRY);
+    loop {
+        let r = tokio::select! {
+            r = stream.next() => match r {
+                Some(r) => r,
+                None => return,
+            },
+            _ = tick.tick() => {
+                wanted.store(sub.get_publisher_count(&node) > 0, Ordering::Relaxed);
+                continue;
+            }
+        };
         match r {
             Ok((m, _)) => match tx.try_send(m) {
                 Ok(()) => {}
@@ -220,7 +248,7 @@ impl Plan {
     }
 }
 
-fn board_thread(rx: Receiver<Ros>, t: TopicEntry, c: Arc<Counters>) {
+fn board_thread(rx: Receiver<Ros>, t: TopicEntry, c: Arc<Counters>, wanted: Arc<AtomicBool>) {
     let Some(cb) = t.control_board.clone() else {
         return;
     };
@@ -229,8 +257,41 @@ fn board_thread(rx: Receiver<Ros>, t: TopicEntry, c: Arc<Counters>) {
     let mut next_open = Instant::now();
     let mut plan: Option<Plan> = None;
     let mut warned = false;
+    // When the command topic last had a publisher (or a command came).
+    let mut last_wanted = Instant::now();
+    let mut first = true;
     loop {
-        if board.is_none() && Instant::now() >= next_open {
+        let mut want = wanted.load(Ordering::Relaxed) || plan.is_some();
+        if want {
+            last_wanted = Instant::now();
+        }
+        if board.is_some() && !want && last_wanted.elapsed() >= LINGER {
+            if let Some(mut b) = board.take() {
+                info!(
+                    "{}: no ROS publisher: {} closed until one comes",
+                    t.name, cb.remote
+                );
+                let _ = b.dev.close();
+            }
+        }
+        // A command that arrives first opens the board on the spot.
+        let pending = if board.is_none() && !want {
+            match rx.recv_timeout(RETRY) {
+                Ok(m) => {
+                    want = true;
+                    last_wanted = Instant::now();
+                    Some(m)
+                }
+                Err(RecvTimeoutError::Timeout) => None,
+                Err(RecvTimeoutError::Disconnected) => break,
+            }
+        } else {
+            None
+        };
+        if board.is_none() && (want || first) && Instant::now() >= next_open {
+            // The first attempt happens at start even without a publisher: a wrong
+            // remote is reported at once, not at the first command.
+            first = false;
             match Board::open(&local, &cb) {
                 Ok(b) => {
                     info!(
@@ -257,7 +318,12 @@ fn board_thread(rx: Receiver<Ros>, t: TopicEntry, c: Arc<Counters>) {
         if let Some(due) = plan.as_ref().and_then(|p| p.due(cb.mode)) {
             wait = wait.min(due.saturating_duration_since(now));
         }
-        match rx.recv_timeout(wait) {
+        let next = match pending {
+            Some(m) => Ok(m),
+            None if board.is_none() && !want => continue,
+            None => rx.recv_timeout(wait),
+        };
+        match next {
             Ok(m) => {
                 let t0 = Instant::now();
                 let Some(b) = board.as_mut() else {

@@ -4,6 +4,7 @@
 //! are checked every [`SCAN_PERIOD`], on a node of their own that shares the gateway's
 //! DDS participant.
 
+use super::demand::Gate;
 use super::topics::{keep_connected, ros_to_yarp, yarp_to_ros, JointNameSource};
 use crate::counters::Counters;
 use crate::mapping::TopicEntry;
@@ -118,7 +119,7 @@ async fn start_one(
     let tasks = vec![
         tokio::spawn(yarp_to_ros(
             port.clone(),
-            publisher,
+            Arc::new(publisher),
             t.clone(),
             names,
             Default::default(),
@@ -129,6 +130,8 @@ async fn start_one(
             port.clone(),
             Some(source.to_string()),
             None,
+            // A pattern's ports come and go with the robot; keep them simply connected.
+            Gate::always(),
         )),
     ];
     Ok(Live { tasks, port })

@@ -4,24 +4,27 @@
 
 mod beside;
 mod commands;
+mod demand;
 mod dynamic;
 mod robot;
 mod services;
 mod topics;
 mod yarp_rpc;
 
+use self::demand::{Demand, Gate};
 use self::services::{call_ros, serve_ros, text_rpc};
 use self::topics::{keep_connected, ros_to_yarp, yarp_to_ros, JointNameSource};
 use self::yarp_rpc::YarpRpc;
 use crate::counters::{self, Counters, Row};
 use crate::dynmsg::Value as Ros;
 use crate::mapping::{
-    Conversion, Direction, Mappings, ServiceConversion, ServiceEntry, TopicEntry,
+    Conversion, Direction, Durability, Mappings, ServiceConversion, ServiceEntry, TopicEntry,
 };
 use crate::ros::{self, RosError};
 use crate::service::{self, EmptyMsg, OutcomeResponse, SetBoolRequest, StdSrv};
 use ros2_client::{Client, Context, Node, Publisher, Server, ServiceMapping, Subscription};
 use std::net::IpAddr;
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use tokio::task::JoinHandle;
@@ -355,11 +358,17 @@ impl Builder {
         let counters = Arc::new(Counters::default());
         let mut own = None;
         let mut camera_info = None;
+        let mut demand = Demand::always();
         if t.direction.to_ros() {
-            let publisher: Publisher<Ros> = node
-                .create_publisher(&topic, None)
-                .map_err(|e| entity_err("publisher", &t.ros_topic, e))?;
+            let publisher: Arc<Publisher<Ros>> = Arc::new(
+                node.create_publisher(&topic, None)
+                    .map_err(|e| entity_err("publisher", &t.ros_topic, e))?,
+            );
             own = Some(publisher.gid());
+            if t.qos.durability != Durability::TransientLocal {
+                demand = self.robots.demand(&t.name);
+                demand.add(publisher.clone());
+            }
             let (port, t2, c) = (port.clone(), t.clone(), counters.clone());
             let names = JointNameSource::new(t, &self.ns, &node.fully_qualified_name());
             let beside = beside::Beside {
@@ -368,6 +377,8 @@ impl Builder {
             };
             if let Some(ci) = &beside.camera_info {
                 camera_info = Some(ci.topic.clone());
+                // A CameraInfo subscriber alone wants the images too.
+                demand.add(ci.publisher.clone());
             }
             self.tasks.push(tokio::spawn(yarp_to_ros(
                 port, publisher, t2, names, beside, c,
@@ -384,8 +395,10 @@ impl Builder {
         if t.yarp_source.is_some() || t.yarp_sink.is_some() {
             let (ns, port) = (self.ns.clone(), port.clone());
             let (src, sink) = (t.yarp_source.clone(), t.yarp_sink.clone());
-            self.tasks
-                .push(tokio::spawn(keep_connected(ns, port, src, sink)));
+            // Deferred: whether a subscriber is matched is asked of the shared node.
+            self.deferred.push(Box::new(move |node| {
+                tokio::spawn(keep_connected(ns, port, src, sink, Gate::new(node, demand)))
+            }));
         }
         let mut yarp = port_name.clone();
         if let Some(s) = &t.yarp_source {
@@ -426,17 +439,18 @@ impl Builder {
             .create_subscription(&topic, None)
             .map_err(|e| entity_err("subscription", &t.ros_topic, e))?;
         let counters = Arc::new(Counters::default());
-        let tx =
-            commands::spawn_board(t, counters.clone()).map_err(|source| StartError::Thread {
+        let wanted = Arc::new(AtomicBool::new(false));
+        let tx = commands::spawn_board(t, counters.clone(), wanted.clone()).map_err(|source| {
+            StartError::Thread {
                 name: t.name.clone(),
                 source,
-            })?;
-        self.tasks.push(tokio::spawn(commands::ros_to_board(
-            sub,
-            tx,
-            t.clone(),
-            counters.clone(),
-        )));
+            }
+        })?;
+        let (t2, c) = (t.clone(), counters.clone());
+        // Deferred: whether a publisher is matched is asked of the shared node.
+        self.deferred.push(Box::new(move |node| {
+            tokio::spawn(commands::ros_to_board(node, sub, tx, wanted, t2, c))
+        }));
         let cb = t.control_board.as_ref().expect("validated at load time");
         self.bridges.push(Bridge {
             name: t.name.clone(),

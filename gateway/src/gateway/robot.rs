@@ -2,6 +2,7 @@
 //! JointState bridges through [`Tap`]s and published at most `rate_hz` times a second,
 //! and the latched `/robot_description`.
 
+use super::demand::Demand;
 use super::{Bridge, Builder, StartError};
 use crate::counters::Counters;
 use crate::dynmsg::Value as Ros;
@@ -42,6 +43,8 @@ impl Tap {
 pub(super) struct Robots {
     mergers: HashMap<String, Shared>,
     taps: HashMap<String, Tap>,
+    /// Per part entry: its demand, which the merged topic's publisher joins.
+    demands: HashMap<String, Demand>,
 }
 
 impl Robots {
@@ -62,6 +65,11 @@ impl Robots {
         out
     }
 
+    /// The demand of topic entry `name`: shared with the robots that merge it.
+    pub(super) fn demand(&mut self, name: &str) -> Demand {
+        self.demands.entry(name.to_string()).or_default().clone()
+    }
+
     /// The tap of topic entry `name` (empty when no robot merges it).
     pub(super) fn tap(&self, name: &str) -> Tap {
         self.taps.get(name).cloned().unwrap_or_default()
@@ -78,8 +86,20 @@ impl Builder {
     ) -> Result<(), StartError> {
         let urdf_joints = r.robot_description.as_ref().map(|d| d.joints.clone());
         if let (Some(js), Some(merger)) = (&r.joint_states, robots.mergers.get(&r.name)) {
-            let publisher =
-                ros::publisher(node, &js.ros_topic, "sensor_msgs/msg/JointState", &js.qos)?;
+            let publisher = Arc::new(ros::publisher(
+                node,
+                &js.ros_topic,
+                "sensor_msgs/msg/JointState",
+                &js.qos,
+            )?);
+            // The parts' sources are connected while the merged topic has subscribers too.
+            for p in &js.parts {
+                let demand = robots.demands.get(p).cloned().unwrap_or_default();
+                match js.qos.durability {
+                    Durability::TransientLocal => demand.set_always(),
+                    Durability::Volatile => demand.add(publisher.clone()),
+                }
+            }
             let counters = Arc::new(Counters::default());
             let period = Duration::from_secs_f64(1.0 / js.rate_hz);
             self.tasks.push(tokio::spawn(publish_joint_states(
@@ -156,7 +176,7 @@ impl Builder {
 
 /// Publishes the merged state at most once per `period`, when a part reported.
 async fn publish_joint_states(
-    publisher: Publisher<Ros>,
+    publisher: Arc<Publisher<Ros>>,
     merger: Shared,
     period: Duration,
     parts: Vec<String>,

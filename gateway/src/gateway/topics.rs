@@ -1,6 +1,7 @@
 //! Topic bridges: YARP port <-> ROS topic tasks, and keeping YARP connections up.
 
 use super::beside::Beside;
+use super::demand::Gate;
 use super::yarp_rpc::YarpRpc;
 use super::{now_ns, RECONNECT_PERIOD};
 use crate::axis_info;
@@ -95,7 +96,7 @@ async fn ask_joints(rpc: &mut YarpRpc) -> Result<Joints, String> {
 /// YARP -> ROS: every Bottle read on the gateway's port becomes one ROS message.
 pub(super) async fn yarp_to_ros(
     port: Arc<Port>,
-    publisher: Publisher<Ros>,
+    publisher: Arc<Publisher<Ros>>,
     t: TopicEntry,
     mut names: JointNameSource,
     beside: Beside,
@@ -213,22 +214,35 @@ pub(super) async fn ros_to_yarp(
     }
 }
 
-/// Keeps `source -> port` and `port -> sink` connected while those ports exist.
+/// Keeps `source -> port` and `port -> sink` connected while those ports exist; the
+/// source only while `gate` is open (someone on the ROS side wants its messages: see
+/// [`super::demand`]), so an unwatched stream costs neither side anything.
 pub(super) async fn keep_connected(
     ns: NameClient,
     port: Arc<Port>,
     source: Option<String>,
     sink: Option<String>,
+    gate: Gate,
 ) {
     let mut tick = tokio::time::interval(RECONNECT_PERIOD);
     loop {
         tick.tick().await;
         if let Some(src) = &source {
-            if !port.inputs().iter().any(|i| i == src) {
+            let connected = port.inputs().iter().any(|i| i == src);
+            let wanted = gate.open();
+            if wanted && !connected {
                 match network::connect(&ns, src, port.name(), None).await {
                     Ok((true, _)) => info!("connected {src} -> {}", port.name()),
                     Ok((false, why)) => debug!("connect {src} -> {}: {why}", port.name()),
                     Err(e) => debug!("connect {src} -> {}: {e}", port.name()),
+                }
+            } else if !wanted && connected {
+                match network::disconnect(&ns, src, port.name()).await {
+                    Ok((true, _)) => {
+                        info!("disconnected {src} -> {}: no ROS subscriber", port.name())
+                    }
+                    Ok((false, why)) => debug!("disconnect {src} -> {}: {why}", port.name()),
+                    Err(e) => debug!("disconnect {src} -> {}: {e}", port.name()),
                 }
             }
         }
