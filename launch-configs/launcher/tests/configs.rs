@@ -97,14 +97,14 @@ fn fake_devices_runs_with_plots_camera_and_bridge() {
         .expect("PNG");
     assert_eq!((reader.info().width, reader.info().height), (320, 240));
 
-    // Gateway counters: the joint states flow.
+    // Gateway counters: the joint-state bridge is up. (It carries messages only while a
+    // ROS subscriber is matched - the gateway works on demand; ros2_e2e subscribes.)
     let bridge = eventually(Duration::from_secs(20), || {
         let b = get_json(&format!("{url}api/bridge"));
-        let flowing = b["rows"].as_array().is_some_and(|rows| {
-            rows.iter()
-                .any(|r| r["name"] == "left_arm_joints" && r["messages"].as_i64() > Some(0))
-        });
-        flowing.then_some(b)
+        let up = b["rows"]
+            .as_array()
+            .is_some_and(|rows| rows.iter().any(|r| r["name"] == "left_arm_joints"));
+        up.then_some(b)
     });
     assert!(bridge.is_some(), "no gateway counters");
 
