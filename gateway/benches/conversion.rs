@@ -1,6 +1,10 @@
 //! The generic conversion against the built-in ones, per message, as the gateway does it
 //! from YARP to ROS: the Bottle (taken, not copied) to a ROS message, then CDR-encoded (as
-//! the publisher does). JointState of an arm (16 joints) and a 640x480 rgb8 Image.
+//! the publisher does). JointState of an arm (16 joints) and a 640x480 rgb8 Image. The
+//! `*_published` cases add what the gateway does next, a DDS write of the message
+//! (ros2-client best-effort publisher on a loopback participant, ROS domain 232, no
+//! reader; run under `netns-run`), so the
+//! difference can be read against the gateway's whole per-message time.
 //!
 //! Run: `cargo bench -p yarp-ros2-gateway --bench conversion -- --warm-up-time 1 --measurement-time 3`
 
@@ -57,6 +61,22 @@ fn generic_image() -> Bottle {
 }
 
 fn bench(c: &mut Criterion) {
+    let (_ctx, mut node) = yarp_ros2_gateway::ros::start_node(
+        232,
+        &["127.0.0.1".parse().unwrap()],
+        "/",
+        "conversion_bench",
+    )
+    .expect("DDS participant");
+    // Best effort: with no reader, a reliable writer's window would fill and block.
+    let q = yarp_ros2_gateway::mapping::Qos {
+        reliability: Some(yarp_ros2_gateway::mapping::Reliability::BestEffort),
+        ..Default::default()
+    };
+    let js_pub = yarp_ros2_gateway::ros::publisher(&mut node, "/bench/joint_states", JS, &q)
+        .expect("publisher");
+    let img_pub =
+        yarp_ros2_gateway::ros::publisher(&mut node, "/bench/image", IMAGE, &q).expect("publisher");
     let names = joint_names();
     let ctx = Ctx {
         joint_names: &names,
@@ -86,6 +106,21 @@ fn bench(c: &mut Criterion) {
             BatchSize::SmallInput,
         )
     });
+    for (label, conv, input) in [
+        ("builtin_published", Conversion::JointState, &state),
+        ("generic_published", Conversion::Generic, &gen),
+    ] {
+        g.bench_function(label, |b| {
+            b.iter_batched(
+                || input.clone(),
+                |s| {
+                    let m = convert::to_ros_owned(conv, JS, s, &ctx).unwrap();
+                    js_pub.publish(m).unwrap();
+                },
+                BatchSize::SmallInput,
+            )
+        });
+    }
     // ROS -> YARP (no built-in conversion of JointState this way): decode, then Bottle.
     let wire = publish(&convert::to_ros_owned(Conversion::Generic, JS, gen.clone(), &ctx).unwrap());
     let js = types::lookup(JS).unwrap();
@@ -123,6 +158,21 @@ fn bench(c: &mut Criterion) {
             BatchSize::LargeInput,
         )
     });
+    for (label, conv, input) in [
+        ("builtin_published", Conversion::Image, &yarp_img),
+        ("generic_published", Conversion::Generic, &gen),
+    ] {
+        g.bench_function(label, |b| {
+            b.iter_batched(
+                || input.clone(),
+                |s| {
+                    let m = convert::to_ros_owned(conv, IMAGE, s, &ctx).unwrap();
+                    img_pub.publish(m).unwrap();
+                },
+                BatchSize::LargeInput,
+            )
+        });
+    }
     g.finish();
 }
 

@@ -101,8 +101,27 @@ fn is_zero(v: &Ros) -> bool {
     v.as_f64() == Some(0.0)
 }
 
-fn nested_type(name: &str) -> Result<&'static MsgType, ConvertError> {
-    lookup(name).ok_or_else(|| ConvertError::Layout(format!("unknown nested type {name}")))
+/// A nested type by name. Field types name their nested types with `&'static str`s that
+/// live as long as the process, so each thread remembers them by address: the registry is
+/// asked once per name instead of once per nested value.
+fn nested_type(name: &'static str) -> Result<&'static MsgType, ConvertError> {
+    thread_local! {
+        static SEEN: std::cell::RefCell<Vec<((usize, usize), &'static MsgType)>> =
+            const { std::cell::RefCell::new(Vec::new()) };
+    }
+    let key = (name.as_ptr() as usize, name.len());
+    if let Some(t) = SEEN.with_borrow(|v| v.iter().find(|(k, _)| *k == key).map(|(_, t)| *t)) {
+        return Ok(t);
+    }
+    let t =
+        lookup(name).ok_or_else(|| ConvertError::Layout(format!("unknown nested type {name}")))?;
+    SEEN.with_borrow_mut(|v| {
+        // Bounded (a linear scan): beyond that, the registry is asked each time.
+        if v.len() < 256 {
+            v.push((key, t));
+        }
+    });
+    Ok(t)
 }
 
 fn structure(t: &'static MsgType, items: Vec<Yv>, depth: usize) -> Result<Ros, ConvertError> {
