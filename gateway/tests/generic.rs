@@ -3,7 +3,8 @@
 //! (`<venv>/share/<pkg>/msg`, named by the mapping's `interfaces`): nav_msgs/Odometry
 //! from rclpy to `yarp read` (ours and C++'s), a Bottle to rclpy as
 //! visualization_msgs/Marker with rosidl's type hash, and a ROS-topic pattern without
-//! `ros_type` mirroring topics of two types at once. Domain indices: 26, 27, 28.
+//! `ros_type` mirroring topics of two types at once, YARP ports matching a pattern
+//! published as such a type. Domain indices: 26, 27, 28, 29.
 
 mod common;
 
@@ -394,4 +395,62 @@ fn show_type_prints_layout_and_example() {
         assert!(!bad.status.success());
         assert!(String::from_utf8_lossy(&bad.stderr).contains("unknown type"));
     }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn yarp_ports_matching_a_pattern_publish_a_type_from_its_definition() {
+    for d in common::distros("yarp_ports_matching_a_pattern_publish_a_type_from_its_definition") {
+        yarp_ports_matching_a_pattern_publish_a_type_from_its_definition_on(&d).await;
+    }
+}
+
+/// YARP-port pattern mode with the generic conversion: each `/goals/*:o` port becomes a
+/// geometry_msgs/PoseStamped topic (not a built-in type). Domain index: 29.
+async fn yarp_ports_matching_a_pattern_publish_a_type_from_its_definition_on(
+    venv: &common::Distro,
+) {
+    let domain = venv.domain(29);
+    let (ns, stop) = common::name_server().await;
+    let gw = common::gateway(
+        &format!(
+            r#"{}
+[[topic]]
+name = "goals"
+direction = "yarp_to_ros"
+yarp_pattern = "/goals/*:o"
+ros_topic = "/yarp"
+ros_type = "geometry_msgs/msg/PoseStamped"
+frame_id = "map"
+"#,
+            interfaces_line(venv)
+        ),
+        &ns,
+        domain,
+    )
+    .await;
+    let a = Port::open("/goals/left:o", ns.clone()).await.unwrap();
+    let sub = Peer::start(
+        venv,
+        domain,
+        &["sub", "geometry_msgs/msg/PoseStamped", "/yarp/goals/left_o"],
+    );
+    sub.expect_async("READY", T).await;
+    let got = common::repeat_until(
+        "the port to be bridged",
+        Duration::from_millis(100),
+        async || {
+            a.write(&Bottle::from_text("() ((0.5 -1 0) (0 0 1 0))"))
+                .await;
+        },
+        || sub.try_line("MSG"),
+    )
+    .await;
+    let m: serde_json::Value = serde_json::from_str(&got).unwrap();
+    assert_eq!(m["pose"]["position"]["x"], 0.5, "{m}");
+    assert_eq!(m["pose"]["position"]["y"], -1.0, "{m}");
+    assert_eq!(m["pose"]["orientation"]["z"], 1.0, "{m}");
+    assert_eq!(m["header"]["frame_id"], "map", "{m}");
+    a.close().await;
+    gw.shutdown().await;
+    stop.shutdown();
 }

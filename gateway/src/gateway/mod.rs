@@ -491,7 +491,11 @@ impl Builder {
             direction: t.direction,
             yarp: format!("{prefix}/<topic>"),
             ros: t.ros_topic.clone(),
-            ros_type: t.ros_type.clone(),
+            ros_type: if t.ros_type.is_empty() {
+                "(each topic's own)".into()
+            } else {
+                t.ros_type.clone()
+            },
             detail: format!("{:?} dynamic, ROS topics as they appear", t.conversion()),
             counters,
         });
