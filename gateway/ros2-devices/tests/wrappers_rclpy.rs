@@ -447,3 +447,30 @@ fn frame_transforms_go_out_and_come_back() {
         }
     }
 }
+
+/// `rgbdSensor_nws_ros2` with `pub_status_topic`: `/<node_name>/publisher_status` says
+/// 3 (colour and depth published).
+#[test]
+fn rgbd_server_publishes_its_status() {
+    let Some((distro, d)) = setup("rgbd_server_publishes_its_status", 28) else {
+        return;
+    };
+    let _server = open(
+        "(device rgbdSensor_nws_ros2) (subdevice fakeDepthCamera) (width 16) (height 12) \
+         (node_name h16b_rgbd_status) (period 0.05) (pub_status_topic 1) \
+         (color_topic_name /h16b/status/color/image_raw) \
+         (depth_topic_name /h16b/status/depth/image_raw) \
+         (color_frame_id rgb_frame) (depth_frame_id depth_frame)",
+    );
+    let status = common::Peer::start(
+        &distro,
+        d,
+        &[
+            "sub",
+            "std_msgs/msg/UInt8",
+            "/h16b_rgbd_status/publisher_status",
+        ],
+    );
+    let m = json(&status.expect("MSG", common::T));
+    assert_eq!(m["data"].as_u64(), Some(3), "{m}");
+}
