@@ -1,7 +1,9 @@
 //! 2D laser rangefinders: the `IRangefinder2D` interface (C++ `yarp::dev::IRangefinder2D`)
-//! and `fakeLaser`.
+//!, `fakeLaser` and the YARP network wrapper `rangefinder2D_nws_yarp`.
 
 pub mod fake;
+pub mod nws;
+pub mod protocol;
 
 use crate::driver::Factory;
 use crate::error::DevResult;
@@ -38,5 +40,9 @@ pub trait IRangefinder2D {
 }
 
 /// Drivers of this family, by C++ name.
-pub(crate) const DRIVERS: &[(&str, Factory)] =
-    &[("fakeLaser", || Box::new(fake::FakeLaser::new()))];
+pub(crate) const DRIVERS: &[(&str, Factory)] = &[
+    ("fakeLaser", || Box::new(fake::FakeLaser::new())),
+    ("rangefinder2D_nws_yarp", || {
+        Box::new(nws::Rangefinder2DNwsYarp::new())
+    }),
+];

@@ -86,6 +86,12 @@ impl WireWriter {
         self
     }
 
+    pub fn int32(&mut self, x: i32) -> &mut Self {
+        self.i32(tags::INT32);
+        self.i32(x);
+        self
+    }
+
     pub fn vocab(&mut self, v: Vocab32) -> &mut Self {
         self.i32(tags::VOCAB32);
         self.i32(v.0);

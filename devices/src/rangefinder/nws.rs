@@ -1,0 +1,271 @@
+//! `rangefinder2D_nws_yarp` (C++ YARP 3.12 `Rangefinder2D_nws_yarp`): serves an attached
+//! `IRangefinder2D` on YARP ports.
+//!
+//! Parameters as C++: `name` (required: the streaming port itself, e.g.
+//! `/ergocub/laser:o`; the RPC port is `<name>/rpc:i`), `period` (s, default 0.02),
+//! `frame_id` (accepted, unused as in C++). The ports open with the device; the scan
+//! stream starts on attach (a `LaserScan2D` every period, with an envelope); RPC before
+//! attach answers `return_value_error_not_ready`.
+
+use super::protocol::{handle_rpc, LaserScan2D};
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::error::{DevResult, DeviceError};
+use crate::runtime;
+use crate::sensors::params::now;
+use crate::sensors::periodic::Ticker;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use yarp_net::port::Port;
+use yarp_proto::{Property, Stamp};
+
+const NAME: &str = "rangefinder2D_nws_yarp";
+
+/// The device the ports serve, shared with the RPC task.
+type Slot = Arc<Mutex<Option<SharedDevice>>>;
+
+struct Ports {
+    stream: Arc<Port>,
+    rpc: Arc<Port>,
+    rpc_task: tokio::task::JoinHandle<()>,
+}
+
+/// The `rangefinder2D_nws_yarp` device.
+#[derive(Default)]
+pub struct Rangefinder2DNwsYarp {
+    name: String,
+    period: Duration,
+    slot: Slot,
+    ports: Option<Ports>,
+    stream_task: Option<tokio::task::JoinHandle<()>>,
+}
+
+impl Rangefinder2DNwsYarp {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The streaming port (`name`).
+    pub fn streaming_port_name(&self) -> &str {
+        &self.name
+    }
+
+    /// The RPC port (`<name>/rpc:i`).
+    pub fn rpc_port_name(&self) -> String {
+        format!("{}/rpc:i", self.name)
+    }
+
+    fn bad(param: &str, expected: &'static str, got: impl ToString) -> DeviceError {
+        DeviceError::BadParam {
+            device: NAME.into(),
+            param: param.into(),
+            expected,
+            got: got.to_string(),
+        }
+    }
+}
+
+/// One scan of the attached device, or why not.
+fn read_scan(device: &SharedDevice) -> DevResult<(LaserScan2D, f64)> {
+    let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+    let dev = pd
+        .device()
+        .as_rangefinder_2d()
+        .ok_or(DeviceError::Unsupported(
+            "the attached device is no IRangefinder2D",
+        ))?;
+    let (scans, t) = dev.get_raw_data()?;
+    let status = dev.get_device_status()?;
+    let (range_min, range_max) = dev.get_distance_range()?;
+    let (angle_min, angle_max) = dev.get_scan_limits()?;
+    let scan = LaserScan2D {
+        angle_min,
+        angle_max,
+        range_min,
+        range_max,
+        scans,
+        status: status as i32,
+    };
+    Ok((scan, if t.is_nan() { now() } else { t }))
+}
+
+async fn stream_scans(port: Arc<Port>, period: Duration, device: SharedDevice) {
+    let mut ticker = Ticker::new(period);
+    let mut count: i32 = 0;
+    let mut failing = false;
+    loop {
+        ticker.tick().await;
+        if !port.has_outputs() {
+            continue;
+        }
+        match read_scan(&device) {
+            Ok((scan, t)) => {
+                failing = false;
+                port.write_nowait(&scan.to_bottle(), Some(Stamp::new(count, t)));
+                count = count.wrapping_add(1);
+            }
+            Err(e) => {
+                // once per failure streak, not every period
+                if !failing {
+                    tracing::error!("{NAME}: sensor returned error: {e}");
+                }
+                failing = true;
+            }
+        }
+    }
+}
+
+async fn serve_rpc(port: Arc<Port>, slot: Slot) {
+    while let Some(mut msg) = port.read().await {
+        let reply = match msg.bottle() {
+            Ok(cmd) => {
+                let device = slot.lock().unwrap_or_else(|e| e.into_inner()).clone();
+                match device {
+                    Some(d) => {
+                        let mut pd = d.lock().unwrap_or_else(|e| e.into_inner());
+                        handle_rpc(&cmd, pd.device().as_rangefinder_2d())
+                    }
+                    None => handle_rpc(&cmd, None),
+                }
+            }
+            Err(e) => {
+                tracing::warn!("{NAME}: undecodable request from {}: {e}", msg.from);
+                super::protocol::fail_reply()
+            }
+        };
+        if msg.wants_reply() {
+            msg.reply_encoded(reply);
+        }
+    }
+}
+
+/// Closes a port once the tasks that shared it are gone (unregistering it).
+async fn close_port(port: Arc<Port>) {
+    if let Ok(p) = Arc::try_unwrap(port) {
+        p.close().await;
+    }
+}
+
+impl DeviceDriver for Rangefinder2DNwsYarp {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let name = p.string("name")?.ok_or_else(|| p.missing("name"))?;
+        if !name.starts_with('/') {
+            return Err(Self::bad("name", "a port name starting with '/'", name));
+        }
+        let period = p.float("period")?.unwrap_or(0.02);
+        if !(period > 0.0 && period.is_finite()) {
+            return Err(Self::bad("period", "a period in seconds > 0", period));
+        }
+        let _frame_id = p.string("frame_id")?;
+        self.name = name;
+        self.period = Duration::from_secs_f64(period);
+        let ns =
+            yarp_net::network::name_client().map_err(|e| Self::bad("name", "a name server", e))?;
+        let (stream_name, rpc_name, slot) =
+            (self.name.clone(), self.rpc_port_name(), self.slot.clone());
+        let ports = runtime::block_on(async move {
+            let stream = Arc::new(
+                Port::open(&stream_name, ns.clone())
+                    .await
+                    .map_err(|e| e.to_string())?,
+            );
+            let rpc = match Port::open(&rpc_name, ns).await {
+                Ok(p) => Arc::new(p),
+                Err(e) => {
+                    close_port(stream).await;
+                    return Err(e.to_string());
+                }
+            };
+            let rpc_task = tokio::spawn(serve_rpc(rpc.clone(), slot));
+            Ok(Ports {
+                stream,
+                rpc,
+                rpc_task,
+            })
+        })
+        .map_err(|e| {
+            Self::bad(
+                "name",
+                "a port name that can be registered",
+                format!("{}: {e}", self.name),
+            )
+        })?;
+        self.ports = Some(ports);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        IWrapper::detach(self)?;
+        if let Some(p) = self.ports.take() {
+            runtime::block_on(async move {
+                p.rpc_task.abort();
+                let _ = p.rpc_task.await;
+                close_port(p.rpc).await;
+                close_port(p.stream).await;
+            });
+        }
+        Ok(())
+    }
+
+    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
+        Some(self)
+    }
+
+    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
+        Some(self)
+    }
+}
+
+impl IWrapper for Rangefinder2DNwsYarp {
+    fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
+        IWrapper::detach(self)?;
+        let Some(ports) = &self.ports else {
+            return Err(DeviceError::NotOpen);
+        };
+        {
+            // C++ refuses a device that cannot tell its geometry
+            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let dev = pd
+                .device()
+                .as_rangefinder_2d()
+                .ok_or(DeviceError::Unsupported(
+                    "rangefinder2D_nws_yarp attaches an IRangefinder2D",
+                ))?;
+            dev.get_distance_range()?;
+            dev.get_scan_limits()?;
+            dev.get_horizontal_resolution()?;
+        }
+        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
+        let (port, period) = (ports.stream.clone(), self.period);
+        self.stream_task = Some(runtime::block_on(async move {
+            tokio::spawn(stream_scans(port, period, device))
+        }));
+        Ok(())
+    }
+
+    fn detach(&mut self) -> DevResult<()> {
+        if let Some(t) = self.stream_task.take() {
+            t.abort();
+            runtime::block_on(async move {
+                let _ = t.await;
+            });
+        }
+        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        Ok(())
+    }
+}
+
+impl IMultipleWrapper for Rangefinder2DNwsYarp {
+    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
+        match devices {
+            [(_, d)] => self.attach(d.clone()),
+            _ => Err(DeviceError::Unsupported(
+                "rangefinder2D_nws_yarp attaches exactly one device",
+            )),
+        }
+    }
+
+    fn detach_all(&mut self) -> DevResult<()> {
+        IWrapper::detach(self)
+    }
+}

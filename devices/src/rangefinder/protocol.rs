@@ -1,0 +1,369 @@
+//! The wire forms of `rangefinder2D_nws_yarp` (C++ YARP 3.12), pure:
+//!
+//! - the stream, a `yarp::sig::LaserScan2D` (`LaserScan2D.thrift`): `(angle_min angle_max
+//!   range_min range_max (scans...) status)`, four tagged float64, the scans as a
+//!   `yarp::sig::Vector` (compact float64 list) and the status as int32;
+//! - the `IRangefinder2DMsgs` thrift service on `<name>/rpc:i`: commands are the method
+//!   name split at `_` (`getDistanceRange RPC`), replies a list whose first element is the
+//!   `yarp::dev::ReturnValue` (an int32 code) followed by the `return_*` struct's fields.
+
+use super::{IRangefinder2D, LaserStatus};
+use crate::error::DeviceError;
+use crate::sensors::wire::WireWriter;
+use thiserror::Error;
+use yarp_proto::{Bottle, Value, Vocab32};
+
+/// C++ `yarp::sig::LaserScan2D`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LaserScan2D {
+    pub angle_min: f64,
+    pub angle_max: f64,
+    pub range_min: f64,
+    pub range_max: f64,
+    pub scans: Vec<f64>,
+    /// An `IRangefinder2D::Device_status` (C++ default: 3, timeout).
+    pub status: i32,
+}
+
+/// A stream message that is not a `LaserScan2D`.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("not a LaserScan2D: {0}")]
+pub struct ScanError(&'static str);
+
+impl LaserScan2D {
+    /// The message bytes as C++'s `BufferedPort<LaserScan2D>` writes them.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut w = WireWriter::new();
+        w.list_header(6)
+            .float64(self.angle_min)
+            .float64(self.angle_max)
+            .float64(self.range_min)
+            .float64(self.range_max)
+            .float_vector(&self.scans)
+            .int32(self.status);
+        w.into_bytes()
+    }
+
+    /// The same message as a Bottle (what our ports write; a Bottle of these elements has
+    /// the same bytes as [`Self::encode`] unless the scan is empty).
+    pub fn to_bottle(&self) -> Bottle {
+        let scans = Bottle::from(
+            self.scans
+                .iter()
+                .map(|&d| Value::Float64(d))
+                .collect::<Vec<_>>(),
+        );
+        Bottle::new()
+            .with(self.angle_min)
+            .with(self.angle_max)
+            .with(self.range_min)
+            .with(self.range_max)
+            .with(Value::List(scans))
+            .with(self.status)
+    }
+
+    pub fn from_bottle(b: &Bottle) -> Result<LaserScan2D, ScanError> {
+        if b.len() != 6 {
+            return Err(ScanError("expected 6 elements"));
+        }
+        let num = |i: usize| {
+            b.get(i)
+                .filter(|v| v.is_float() || v.is_int())
+                .and_then(Value::as_f64)
+                .ok_or(ScanError("angles and ranges must be numbers"))
+        };
+        let scans = b
+            .get(4)
+            .and_then(Value::as_list)
+            .ok_or(ScanError("scans must be a list"))?
+            .iter()
+            .map(|v| v.as_f64().ok_or(ScanError("scans must be numbers")))
+            .collect::<Result<Vec<_>, _>>()?;
+        let status = b
+            .get(5)
+            .and_then(Value::as_i32)
+            .ok_or(ScanError("status must be an int32"))?;
+        Ok(LaserScan2D {
+            angle_min: num(0)?,
+            angle_max: num(1)?,
+            range_min: num(2)?,
+            range_max: num(3)?,
+            scans,
+            status,
+        })
+    }
+}
+
+/// C++ `yarp::dev::ReturnValue::return_code`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReturnCode {
+    Ok = 0,
+    Generic = 1,
+    NotImplemented = 2,
+    Communication = 3,
+    Deprecated = 4,
+    MethodFailed = 5,
+    NotReady = 6,
+}
+
+impl ReturnCode {
+    /// The code C++ would give for a device call that failed with `e`.
+    pub fn of(e: &DeviceError) -> ReturnCode {
+        match e {
+            DeviceError::NotOpen => ReturnCode::NotReady,
+            DeviceError::Unsupported(_) => ReturnCode::NotImplemented,
+            _ => ReturnCode::MethodFailed,
+        }
+    }
+}
+
+/// The methods of `IRangefinder2DMsgs`, by thrift name.
+const METHODS: &[&str] = &[
+    "getDeviceStatus_RPC",
+    "getDistanceRange_RPC",
+    "getScanLimits_RPC",
+    "getHorizontalResolution_RPC",
+    "getScanRate_RPC",
+    "getDeviceInfo_RPC",
+    "setDistanceRange_RPC",
+    "setScanLimits_RPC",
+    "setHorizontalResolution_RPC",
+    "setScanRate_RPC",
+];
+
+/// The `[fail]` reply of a request C++'s generated reader does not accept.
+pub fn fail_reply() -> Vec<u8> {
+    crate::sensors::rpc::fail_reply()
+}
+
+/// A command word: thrift tags may be strings or vocabs.
+fn word(v: &Value) -> Option<String> {
+    match v {
+        Value::String(s) => Some(String::from_utf8_lossy(s).into_owned()),
+        Value::Vocab32(v) => Some(v.as_string()),
+        _ => None,
+    }
+}
+
+/// Splits a request into its method and arguments, joining words with `_` as C++'s
+/// generated `read` does (`getScanRate RPC` and `getScanRate_RPC` are the same method).
+pub fn parse_request(cmd: &Bottle) -> Option<(&'static str, Vec<f64>)> {
+    let mut items = cmd.iter().peekable();
+    if items.peek().and_then(|v| word(v)).as_deref() == Some("__direct__") {
+        items.next();
+    }
+    let mut tag = String::new();
+    for v in items.by_ref() {
+        if !tag.is_empty() {
+            tag.push('_');
+        }
+        tag.push_str(&word(v)?);
+        if let Some(m) = METHODS.iter().find(|m| **m == tag) {
+            let args = items.map(Value::as_f64).collect::<Option<Vec<_>>>()?;
+            let wanted = if m.starts_with("set") {
+                if m.contains("Range") || m.contains("Limits") {
+                    2
+                } else {
+                    1
+                }
+            } else {
+                0
+            };
+            return (args.len() == wanted).then_some((*m, args));
+        }
+        if tag.matches('_').count() >= 1 {
+            return None;
+        }
+    }
+    None
+}
+
+/// Answers one request on `dev` (`None`: no device attached, every method answers
+/// `return_value_error_not_ready`).
+pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IRangefinder2D>) -> Vec<u8> {
+    let Some((method, args)) = parse_request(cmd) else {
+        return fail_reply();
+    };
+    let mut w = WireWriter::new();
+    let Some(dev) = dev else {
+        let fields = reply_len(method) - 1;
+        w.list_header(fields + 1).int32(ReturnCode::NotReady as i32);
+        default_fields(&mut w, method);
+        return w.into_bytes();
+    };
+    match method {
+        "getDeviceStatus_RPC" => {
+            let r = dev.get_device_status();
+            let status = r.as_ref().map_or(0, |s| *s as i32);
+            w.list_header(2)
+                .int32(code(r.as_ref().err()))
+                .vocab(Vocab32(status));
+        }
+        "getDistanceRange_RPC" | "getScanLimits_RPC" => {
+            let r = if method == "getDistanceRange_RPC" {
+                dev.get_distance_range()
+            } else {
+                dev.get_scan_limits()
+            };
+            let (min, max) = r.as_ref().map_or((0.0, 0.0), |p| *p);
+            w.list_header(3)
+                .int32(code(r.as_ref().err()))
+                .float64(min)
+                .float64(max);
+        }
+        "getHorizontalResolution_RPC" | "getScanRate_RPC" => {
+            let r = if method == "getScanRate_RPC" {
+                dev.get_scan_rate()
+            } else {
+                dev.get_horizontal_resolution()
+            };
+            let x = r.as_ref().map_or(0.0, |x| *x);
+            w.list_header(2).int32(code(r.as_ref().err())).float64(x);
+        }
+        "getDeviceInfo_RPC" => {
+            let r = dev.get_device_info();
+            let info = r.as_ref().map_or("", |s| s.as_str());
+            w.list_header(2).int32(code(r.as_ref().err())).string(info);
+        }
+        set => {
+            let r = match set {
+                "setDistanceRange_RPC" => dev.set_distance_range(args[0], args[1]),
+                "setScanLimits_RPC" => dev.set_scan_limits(args[0], args[1]),
+                "setHorizontalResolution_RPC" => dev.set_horizontal_resolution(args[0]),
+                _ => dev.set_scan_rate(args[0]),
+            };
+            w.list_header(1).int32(code(r.as_ref().err()));
+        }
+    }
+    w.into_bytes()
+}
+
+/// The int32 a reply starts with.
+fn code(err: Option<&DeviceError>) -> i32 {
+    err.map_or(ReturnCode::Ok, ReturnCode::of) as i32
+}
+
+/// Elements of a method's reply (C++ `s_reply_len`).
+fn reply_len(method: &str) -> usize {
+    match method {
+        "getDistanceRange_RPC" | "getScanLimits_RPC" => 3,
+        m if m.starts_with("get") => 2,
+        _ => 1,
+    }
+}
+
+/// The default-valued fields of a `return_*` struct after its return code.
+fn default_fields(w: &mut WireWriter, method: &str) {
+    match method {
+        "getDeviceStatus_RPC" => {
+            w.vocab(Vocab32(0));
+        }
+        "getDistanceRange_RPC" | "getScanLimits_RPC" => {
+            w.float64(0.0).float64(0.0);
+        }
+        "getHorizontalResolution_RPC" | "getScanRate_RPC" => {
+            w.float64(0.0);
+        }
+        "getDeviceInfo_RPC" => {
+            w.string("");
+        }
+        _ => {}
+    }
+}
+
+/// A decoded reply: the return code and the fields after it.
+pub fn parse_reply(reply: &Bottle) -> Option<(i32, Vec<Value>)> {
+    let code = reply.get(0)?.as_i32()?;
+    Some((code, reply.iter().skip(1).cloned().collect()))
+}
+
+/// The status a `getDeviceStatus_RPC` reply or a scan carries.
+pub fn status_of(code: i32) -> Option<LaserStatus> {
+    Some(match code {
+        0 => LaserStatus::OkStandby,
+        1 => LaserStatus::OkInUse,
+        2 => LaserStatus::GeneralError,
+        3 => LaserStatus::Timeout,
+        _ => return None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rangefinder::fake::FakeLaser;
+    use crate::DeviceDriver;
+    use yarp_proto::Property;
+
+    fn laser() -> FakeLaser {
+        let mut l = FakeLaser::new();
+        let cfg = "test use_constant\n[SENSOR]\nmin_distance 0.1\nmax_distance 30\nresolution 0.5\n[CONSTANT_MODE]\nconst_distance 2";
+        l.open(&Property::from_config_text(cfg).unwrap()).unwrap();
+        l
+    }
+
+    fn ask(text: &str, dev: Option<&mut dyn IRangefinder2D>) -> Bottle {
+        Bottle::decode(&handle_rpc(&Bottle::from_text(text), dev)).unwrap()
+    }
+
+    fn nums(b: &Bottle) -> Vec<f64> {
+        b.iter().filter_map(Value::as_f64).collect()
+    }
+
+    #[test]
+    fn scan_bytes_match_the_bottle() {
+        let s = LaserScan2D {
+            angle_min: 0.0,
+            angle_max: 360.0,
+            range_min: 0.1,
+            range_max: 30.0,
+            scans: vec![1.0, 2.5, f64::INFINITY],
+            status: 1,
+        };
+        assert_eq!(s.encode(), s.to_bottle().encode());
+        assert_eq!(LaserScan2D::from_bottle(&s.to_bottle()).unwrap(), s);
+        assert!(LaserScan2D::from_bottle(&Bottle::from_text("1 2 3")).is_err());
+    }
+
+    #[test]
+    fn getters_and_setters() {
+        let mut l = laser();
+        let r = ask("getDistanceRange RPC", Some(&mut l));
+        assert_eq!(nums(&r), [0.0, 0.1, 30.0]);
+        let r = ask("getScanLimits_RPC", Some(&mut l));
+        assert_eq!(nums(&r), [0.0, 0.0, 360.0]);
+        let r = ask("getHorizontalResolution RPC", Some(&mut l));
+        assert_eq!(r.get(1).and_then(Value::as_f64), Some(0.5));
+        let r = ask("getDeviceStatus RPC", Some(&mut l));
+        assert_eq!(r.get(1).and_then(Value::as_vocab), Some(Vocab32(1)));
+        let r = ask("getDeviceInfo RPC", Some(&mut l));
+        assert_eq!(
+            r.get(1).and_then(Value::as_str),
+            Some("Fake Laser device for test/debugging")
+        );
+        let r = ask("setScanRate RPC 25", Some(&mut l));
+        assert_eq!(r.to_string(), "0");
+        let r = ask("getScanRate RPC", Some(&mut l));
+        assert_eq!(r.get(1).and_then(Value::as_f64), Some(25.0));
+        let bytes = handle_rpc(&Bottle::from_text("setScanRate RPC 25"), Some(&mut l));
+        // a one-element thrift list stays mixed: list tag, count, tagged int32
+        assert_eq!(bytes, [0, 1, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0]);
+    }
+
+    #[test]
+    fn bad_requests_and_no_device() {
+        let mut l = laser();
+        for bad in [
+            "",
+            "getScanRate",
+            "getScanRate RPC 1",
+            "setScanRate RPC",
+            "fly RPC",
+            "12",
+        ] {
+            assert_eq!(ask(bad, Some(&mut l)).to_string(), "[fail]", "{bad}");
+        }
+        assert_eq!(nums(&ask("getDistanceRange RPC", None)), [6.0, 0.0, 0.0]);
+        assert_eq!(ask("setScanRate RPC 2", None).to_string(), "6");
+    }
+}
