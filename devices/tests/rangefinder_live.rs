@@ -1,0 +1,181 @@
+//! rangefinder2D_nws_yarp over fakeLaser on real sockets, with an in-process name server
+//! (run under netns-run): our reader gets `LaserScan2D` scans with envelopes on `<name>`,
+//! our RPC client and C++ `yarp rpc` / `yarp read` (3.5, when installed; in CI required)
+//! get the `IRangefinder2DMsgs` answers and the stream. Every wait is bounded.
+
+use std::io::{BufRead, BufReader};
+use std::process::Stdio;
+use std::time::{Duration, Instant};
+use yarp_devices::rangefinder::protocol::{parse_reply, LaserScan2D};
+use yarp_devices::{runtime, PolyDriver};
+use yarp_interop_tests::{name_client, T};
+use yarp_net::buffered::BufferedPort;
+use yarp_net::rpc::RpcClient;
+use yarp_proto::wire::Carrier;
+use yarp_proto::{Bottle, Property, Value};
+
+fn run<F>(fut: F) -> F::Output
+where
+    F: std::future::Future + Send + 'static,
+    F::Output: Send + 'static,
+{
+    runtime::block_on(async move { tokio::time::timeout(T, fut).await.expect("timed out") })
+}
+
+/// The wrapper over a fakeLaser seeing 2.5 m everywhere, 0.5 degree steps.
+fn laser(name: &str) -> PolyDriver {
+    name_client();
+    let cfg = format!(
+        "device rangefinder2D_nws_yarp\nsubdevice fakeLaser\nname {name}\nperiod 0.01\n\
+         test use_constant\n[SENSOR]\nmin_distance 0.1\nmax_distance 30\nresolution 0.5\n\
+         [CONSTANT_MODE]\nconst_distance 2.5\n"
+    );
+    PolyDriver::open(&Property::from_config_text(&cfg).unwrap())
+        .unwrap_or_else(|e| panic!("open {cfg:?}: {e}"))
+}
+
+#[test]
+fn our_reader_gets_scans_and_rpc_answers_ranges() {
+    let mut server = laser("/robot/laser:o");
+    let ns = name_client();
+    let (scans, replies) = run(async move {
+        let reader = BufferedPort::open("/laser_reader", ns.clone())
+            .await
+            .unwrap();
+        let (ok, msg) = yarp_net::network::connect(&ns, "/robot/laser:o", "/laser_reader", None)
+            .await
+            .unwrap();
+        assert!(ok, "{msg}");
+        let mut scans = Vec::new();
+        while scans.len() < 3 {
+            let m = reader.read().await.expect("a scan");
+            scans.push((
+                LaserScan2D::from_bottle(&m.bottle).unwrap(),
+                m.stamp.unwrap(),
+            ));
+        }
+        reader.close().await;
+        let c = ns
+            .query("/robot/laser:o/rpc:i")
+            .await
+            .unwrap()
+            .expect("rpc port");
+        let mut rpc = RpcClient::connect(&c, "/anon_rpc", Carrier::Tcp)
+            .await
+            .unwrap();
+        let mut replies = Vec::new();
+        for text in [
+            "getDistanceRange RPC",
+            "getScanLimits RPC",
+            "getHorizontalResolution RPC",
+            "getScanRate RPC",
+            "getDeviceStatus RPC",
+            "getDeviceInfo RPC",
+            "setScanRate RPC 50.0",
+            "getScanRate RPC",
+            "getDistanceRange",
+            "nonsense 1 2",
+        ] {
+            replies.push(rpc.call(&Bottle::from_text(text)).await.unwrap());
+        }
+        rpc.close().await;
+        (scans, replies)
+    });
+    for (scan, _) in &scans {
+        assert_eq!(scan.scans.len(), 720);
+        assert!(scan.scans.iter().all(|&d| d == 2.5));
+        assert_eq!((scan.angle_min, scan.angle_max), (0.0, 360.0));
+        assert_eq!((scan.range_min, scan.range_max), (0.1, 30.0));
+        assert_eq!(scan.status, 1, "DEVICE_OK_IN_USE");
+    }
+    assert!(scans[1].1.count > scans[0].1.count && scans[2].1.time >= scans[0].1.time);
+    let nums = |b: &Bottle| b.iter().filter_map(Value::as_f64).collect::<Vec<_>>();
+    assert_eq!(nums(&replies[0]), [0.0, 0.1, 30.0]);
+    assert_eq!(nums(&replies[1]), [0.0, 0.0, 360.0]);
+    assert_eq!(nums(&replies[2]), [0.0, 0.5]);
+    assert_eq!(nums(&replies[3]), [0.0, 100.0]);
+    let (code, status) = parse_reply(&replies[4]).unwrap();
+    assert_eq!((code, status[0].as_vocab().map(|v| v.0)), (0, Some(1)));
+    assert_eq!(
+        replies[5].get(1).and_then(Value::as_str),
+        Some("Fake Laser device for test/debugging")
+    );
+    assert_eq!(nums(&replies[6]), [0.0]);
+    assert_eq!(nums(&replies[7]), [0.0, 50.0]);
+    assert_eq!(replies[8].to_string(), "[fail]");
+    assert_eq!(replies[9].to_string(), "[fail]");
+    server.close().unwrap();
+    let ns = name_client();
+    assert!(run(async move { ns.query("/robot/laser:o").await.unwrap() }).is_none());
+}
+
+#[test]
+fn cpp_yarp_read_and_rpc_talk_to_our_wrapper() {
+    let Some(yarp) =
+        yarp_interop_tests::cpp_program("cpp_yarp_read_and_rpc_talk_to_our_wrapper", "yarp")
+    else {
+        return;
+    };
+    let mut server = laser("/cpplaser:o");
+    let out = yarp_interop_tests::cpp_rpc_output(
+        &yarp,
+        "/cpplaser:o/rpc:i",
+        "getDistanceRange RPC\ngetScanRate RPC\n",
+    );
+    // C++ 3.5 prints doubles with all their digits (0.100000000000000005551)
+    let responses: Vec<Vec<f64>> = out
+        .lines()
+        .filter_map(|l| l.strip_prefix("Response: "))
+        .map(|l| {
+            Bottle::from_text(l)
+                .iter()
+                .filter_map(Value::as_f64)
+                .collect()
+        })
+        .collect();
+    assert_eq!(responses, [vec![0.0, 0.1, 30.0], vec![0.0, 100.0]], "{out}");
+
+    let mut reader = Reaped(
+        yarp_interop_tests::cpp_command(&yarp)
+            .args(["read", "/cpp_laser_rd", "/cpplaser:o"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("C++ yarp read"),
+    );
+    let stdout = reader.0.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let start = Instant::now();
+    let line = loop {
+        let left = (3 * T).saturating_sub(start.elapsed());
+        assert!(!left.is_zero(), "C++ yarp read printed no scan");
+        if let Ok(l) = rx.recv_timeout(left.min(Duration::from_millis(200))) {
+            if l.contains("2.5") {
+                break l;
+            }
+        }
+    };
+    let scan = LaserScan2D::from_bottle(&Bottle::from_text(&line)).unwrap();
+    assert_eq!(scan.scans.len(), 720);
+    assert!(scan.scans.iter().all(|&d| d == 2.5));
+    assert_eq!((scan.range_max, scan.status), (30.0, 1));
+    eprintln!("interop: C++ yarp rpc and yarp read -> rangefinder2D_nws_yarp OK");
+    drop(reader);
+    server.close().unwrap();
+}
+
+/// Kills and reaps the child when dropped.
+struct Reaped(std::process::Child);
+impl Drop for Reaped {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
