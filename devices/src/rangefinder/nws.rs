@@ -237,9 +237,7 @@ impl IWrapper for Rangefinder2DNwsYarp {
         }
         *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
         let (port, period) = (ports.stream.clone(), self.period);
-        self.stream_task = Some(runtime::block_on(async move {
-            tokio::spawn(stream_scans(port, period, device))
-        }));
+        self.stream_task = Some(runtime::handle().spawn(stream_scans(port, period, device)));
         Ok(())
     }
 
