@@ -1,7 +1,10 @@
 //! RGB-D cameras: the `IRGBDSensor` interface (C++ `yarp::dev::IRGBDSensor`, with its
-//! `IRgbVisualParams` and `IDepthVisualParams` parts) and `fakeDepthCamera`.
+//! `IRgbVisualParams` and `IDepthVisualParams` parts), `fakeDepthCamera` and the YARP
+//! network wrapper `rgbdSensor_nws_yarp`.
 
 pub mod fake;
+pub mod nws;
+pub mod protocol;
 
 use crate::driver::Factory;
 use crate::error::DevResult;
@@ -50,5 +53,9 @@ pub trait IRGBDSensor {
 }
 
 /// Drivers of this family, by C++ name.
-pub(crate) const DRIVERS: &[(&str, Factory)] =
-    &[("fakeDepthCamera", || Box::new(fake::FakeDepthCamera::new()))];
+pub(crate) const DRIVERS: &[(&str, Factory)] = &[
+    ("fakeDepthCamera", || Box::new(fake::FakeDepthCamera::new())),
+    ("rgbdSensor_nws_yarp", || {
+        Box::new(nws::RgbdSensorNwsYarp::new())
+    }),
+];

@@ -1,0 +1,288 @@
+//! `rgbdSensor_nws_yarp` (C++ YARP 3.12 `RgbdSensor_nws_yarp`): serves an attached
+//! `IRGBDSensor` on YARP ports.
+//!
+//! Parameters as C++: `name` (required port prefix) and `period` (s, default 0.02). The
+//! ports open with the device: `<name>/rgbImage:o` (the colour image, with its
+//! envelope), `<name>/depthImage:o` (the depth image, `PixelFloat` in meters) and
+//! `<name>/rpc:i` (see [`super::protocol`]). Images stream from attach on, while the
+//! sensor is `OK_IN_USE`, each only when its time stamp moved forward, as C++ does.
+//! The images come from a thread of their own: a camera's `getImages` may block.
+
+use super::protocol::handle_rpc;
+use super::RgbdStatus;
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::error::{DevResult, DeviceError};
+use crate::runtime;
+use std::sync::{mpsc, Arc, Mutex};
+use std::time::{Duration, Instant};
+use yarp_net::port::Port;
+use yarp_proto::Property;
+
+const NAME: &str = "rgbdSensor_nws_yarp";
+
+/// The device the ports serve, shared with the RPC task.
+type Slot = Arc<Mutex<Option<SharedDevice>>>;
+
+struct Ports {
+    rgb: Arc<Port>,
+    depth: Arc<Port>,
+    rpc: Arc<Port>,
+    rpc_task: tokio::task::JoinHandle<()>,
+}
+
+struct Streaming {
+    stop: mpsc::Sender<()>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+/// The `rgbdSensor_nws_yarp` device.
+#[derive(Default)]
+pub struct RgbdSensorNwsYarp {
+    name: String,
+    period: Duration,
+    slot: Slot,
+    ports: Option<Ports>,
+    streaming: Option<Streaming>,
+}
+
+impl RgbdSensorNwsYarp {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn rgb_port_name(&self) -> String {
+        format!("{}/rgbImage:o", self.name)
+    }
+
+    pub fn depth_port_name(&self) -> String {
+        format!("{}/depthImage:o", self.name)
+    }
+
+    pub fn rpc_port_name(&self) -> String {
+        format!("{}/rpc:i", self.name)
+    }
+
+    fn bad(param: &str, expected: &'static str, got: impl ToString) -> DeviceError {
+        DeviceError::BadParam {
+            device: NAME.into(),
+            param: param.into(),
+            expected,
+            got: got.to_string(),
+        }
+    }
+}
+
+/// Writes the images of one period (C++ `writeData`); `last` holds the times of the
+/// images sent before.
+fn write_images(device: &SharedDevice, rgb: &Port, depth: &Port, last: &mut (f64, f64)) {
+    let got = {
+        let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+        let Some(dev) = pd.device().as_rgbd_sensor() else {
+            return;
+        };
+        match dev.sensor_status() {
+            RgbdStatus::OkInUse => dev.get_images(),
+            RgbdStatus::NotReady => return,
+            other => {
+                tracing::debug!("{NAME}: sensor status {other:?}");
+                return;
+            }
+        }
+    };
+    match got {
+        Ok(((color, cs), (dimg, ds))) => {
+            if cs.time > last.0 {
+                last.0 = cs.time;
+                if rgb.has_outputs() {
+                    rgb.write_nowait(&color.to_bottle(), Some(cs));
+                }
+            }
+            if ds.time > last.1 {
+                last.1 = ds.time;
+                if depth.has_outputs() {
+                    depth.write_nowait(&dimg.to_bottle(), Some(ds));
+                }
+            }
+        }
+        Err(e) => tracing::error!("{NAME}: image not captured: {e}"),
+    }
+}
+
+fn stream_images(
+    device: SharedDevice,
+    rgb: Arc<Port>,
+    depth: Arc<Port>,
+    period: Duration,
+    stop: mpsc::Receiver<()>,
+) {
+    let mut last = (0.0, 0.0);
+    let mut next = Instant::now();
+    loop {
+        next += period;
+        match stop.recv_timeout(next.saturating_duration_since(Instant::now())) {
+            Err(mpsc::RecvTimeoutError::Timeout) => {}
+            _ => return,
+        }
+        if next < Instant::now() {
+            // fell behind (slow camera): count again from now
+            next = Instant::now();
+        }
+        if rgb.has_outputs() || depth.has_outputs() {
+            write_images(&device, &rgb, &depth, &mut last);
+        }
+    }
+}
+
+async fn serve_rpc(port: Arc<Port>, slot: Slot) {
+    while let Some(mut msg) = port.read().await {
+        let reply = match msg.bottle() {
+            Ok(cmd) => {
+                let device = slot.lock().unwrap_or_else(|e| e.into_inner()).clone();
+                match device {
+                    Some(d) => {
+                        let mut pd = d.lock().unwrap_or_else(|e| e.into_inner());
+                        handle_rpc(&cmd, pd.device().as_rgbd_sensor())
+                    }
+                    None => handle_rpc(&cmd, None),
+                }
+            }
+            Err(e) => {
+                tracing::warn!("{NAME}: undecodable request from {}: {e}", msg.from);
+                handle_rpc(&yarp_proto::Bottle::new(), None)
+            }
+        };
+        if msg.wants_reply() {
+            msg.reply(reply);
+        }
+    }
+}
+
+/// Closes a port once the tasks that shared it are gone (unregistering it).
+async fn close_port(port: Arc<Port>) {
+    if let Ok(p) = Arc::try_unwrap(port) {
+        p.close().await;
+    }
+}
+
+impl DeviceDriver for RgbdSensorNwsYarp {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let name = p.string("name")?.ok_or_else(|| p.missing("name"))?;
+        if !name.starts_with('/') {
+            return Err(Self::bad("name", "a port prefix starting with '/'", name));
+        }
+        let period = p.float("period")?.unwrap_or(0.02);
+        if !(period > 0.0 && period.is_finite()) {
+            return Err(Self::bad("period", "a period in seconds > 0", period));
+        }
+        self.name = name.trim_end_matches('/').to_string();
+        self.period = Duration::from_secs_f64(period);
+        let ns =
+            yarp_net::network::name_client().map_err(|e| Self::bad("name", "a name server", e))?;
+        let names = [
+            self.rgb_port_name(),
+            self.depth_port_name(),
+            self.rpc_port_name(),
+        ];
+        let slot = self.slot.clone();
+        let ports = runtime::block_on(async move {
+            let mut opened = Vec::new();
+            for n in &names {
+                match Port::open(n, ns.clone()).await {
+                    Ok(p) => opened.push(Arc::new(p)),
+                    Err(e) => {
+                        for p in opened {
+                            close_port(p).await;
+                        }
+                        return Err(format!("{n}: {e}"));
+                    }
+                }
+            }
+            let rpc = opened.pop().expect("three ports");
+            let depth = opened.pop().expect("three ports");
+            let rgb = opened.pop().expect("three ports");
+            let rpc_task = tokio::spawn(serve_rpc(rpc.clone(), slot));
+            Ok(Ports {
+                rgb,
+                depth,
+                rpc,
+                rpc_task,
+            })
+        })
+        .map_err(|e| Self::bad("name", "port names that can be registered", e))?;
+        self.ports = Some(ports);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        IWrapper::detach(self)?;
+        if let Some(p) = self.ports.take() {
+            runtime::block_on(async move {
+                p.rpc_task.abort();
+                let _ = p.rpc_task.await;
+                close_port(p.rpc).await;
+                close_port(p.rgb).await;
+                close_port(p.depth).await;
+            });
+        }
+        Ok(())
+    }
+
+    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
+        Some(self)
+    }
+
+    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
+        Some(self)
+    }
+}
+
+impl IWrapper for RgbdSensorNwsYarp {
+    fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
+        IWrapper::detach(self)?;
+        let Some(ports) = &self.ports else {
+            return Err(DeviceError::NotOpen);
+        };
+        {
+            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            if pd.device().as_rgbd_sensor().is_none() {
+                return Err(DeviceError::Unsupported(
+                    "rgbdSensor_nws_yarp attaches an IRGBDSensor",
+                ));
+            }
+        }
+        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
+        let (rgb, depth, period) = (ports.rgb.clone(), ports.depth.clone(), self.period);
+        let (stop, rx) = mpsc::channel();
+        let thread = std::thread::Builder::new()
+            .name(NAME.into())
+            .spawn(move || stream_images(device, rgb, depth, period, rx))
+            .map_err(|e| Self::bad("period", "a thread for the images", e))?;
+        self.streaming = Some(Streaming { stop, thread });
+        Ok(())
+    }
+
+    fn detach(&mut self) -> DevResult<()> {
+        if let Some(s) = self.streaming.take() {
+            let _ = s.stop.send(());
+            let _ = s.thread.join();
+        }
+        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        Ok(())
+    }
+}
+
+impl IMultipleWrapper for RgbdSensorNwsYarp {
+    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
+        match devices {
+            [(_, d)] => self.attach(d.clone()),
+            _ => Err(DeviceError::Unsupported(
+                "rgbdSensor_nws_yarp attaches exactly one device",
+            )),
+        }
+    }
+
+    fn detach_all(&mut self) -> DevResult<()> {
+        IWrapper::detach(self)
+    }
+}
