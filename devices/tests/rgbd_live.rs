@@ -1,0 +1,139 @@
+//! rgbdSensor_nws_yarp over fakeDepthCamera on real sockets, with an in-process name
+//! server (run under netns-run): our readers get the colour and the float depth images
+//! with envelopes, our RPC client and C++ `yarp rpc` (3.5, when installed; in CI
+//! required) the visual parameters and the status. Every wait is bounded.
+
+use yarp_devices::rgbd::fake::depth_of;
+use yarp_devices::{runtime, PolyDriver};
+use yarp_interop_tests::{name_client, T};
+use yarp_net::buffered::BufferedPort;
+use yarp_net::rpc::RpcClient;
+use yarp_proto::image::{Image, PixelCode};
+use yarp_proto::wire::Carrier;
+use yarp_proto::{Bottle, Property, Value};
+
+fn run<F>(fut: F) -> F::Output
+where
+    F: std::future::Future + Send + 'static,
+    F::Output: Send + 'static,
+{
+    runtime::block_on(async move { tokio::time::timeout(T, fut).await.expect("timed out") })
+}
+
+fn camera(name: &str) -> PolyDriver {
+    name_client();
+    let cfg = format!(
+        "device rgbdSensor_nws_yarp\nsubdevice fakeDepthCamera\nname {name}\nperiod 0.03\n\
+         width 32\nheight 24\n"
+    );
+    PolyDriver::open(&Property::from_config_text(&cfg).unwrap())
+        .unwrap_or_else(|e| panic!("open {cfg:?}: {e}"))
+}
+
+/// The first image `port` sends to a fresh reader, with its envelope's time.
+async fn first_image(port: &str, reader: &str) -> (Image, f64) {
+    let ns = yarp_interop_tests::name_client();
+    let r = BufferedPort::open(reader, ns.clone()).await.unwrap();
+    let (ok, msg) = yarp_net::network::connect(&ns, port, reader, None)
+        .await
+        .unwrap();
+    assert!(ok, "{msg}");
+    let m = r.read().await.expect("an image");
+    r.close().await;
+    (
+        Image::from_bottle(&m.bottle).unwrap(),
+        m.stamp.unwrap().time,
+    )
+}
+
+#[test]
+fn our_readers_get_both_images_and_rpc_answers() {
+    let mut server = camera("/depthCamera");
+    let ns = name_client();
+    let ((rgb, t1), (depth, t2), replies) = run(async move {
+        let rgb = first_image("/depthCamera/rgbImage:o", "/rgb_reader").await;
+        let depth = first_image("/depthCamera/depthImage:o", "/depth_reader").await;
+        let c = ns
+            .query("/depthCamera/rpc:i")
+            .await
+            .unwrap()
+            .expect("rpc port");
+        let mut rpc = RpcClient::connect(&c, "/anon_rpc", Carrier::Tcp)
+            .await
+            .unwrap();
+        let mut replies = Vec::new();
+        for text in [
+            "[visr] [get] [w]",
+            "[visd] [get] [h]",
+            "[visd] [get] [clip]",
+            "[visr] [get] [intp]",
+            "[rgdb] [get] [stat]",
+            "[nope]",
+        ] {
+            replies.push(rpc.call(&Bottle::from_text(text)).await.unwrap());
+        }
+        rpc.close().await;
+        (rgb, depth, replies)
+    });
+    assert_eq!((rgb.width(), rgb.height()), (32, 24));
+    assert_eq!(rgb.pixel_code(), PixelCode::RGB);
+    assert_eq!(depth.pixel_code(), PixelCode::MONO_FLOAT);
+    assert_eq!((depth.width(), depth.height()), (32, 24));
+    // the depth is the mean of the colour channels, in [0, 1] m
+    for y in 0..24 {
+        for x in 0..32 {
+            let d = f32::from_ne_bytes(depth.pixel(x, y).try_into().unwrap());
+            assert!((0.0..=1.0).contains(&d));
+        }
+    }
+    assert_eq!(depth_of(&rgb).width(), 32);
+    assert!(t1 > 1.6e9 && t2 > 1.6e9);
+    assert_eq!(replies[0].to_string(), "[visr] [w] [is] 32");
+    assert_eq!(replies[1].to_string(), "[visd] [h] [is] 24");
+    let clip: Vec<f64> = replies[2]
+        .iter()
+        .skip(3)
+        .filter_map(Value::as_f64)
+        .collect();
+    assert_eq!(clip, [0.2, 6.0]);
+    let intp = replies[3]
+        .get(3)
+        .and_then(Value::as_list)
+        .unwrap()
+        .to_string();
+    assert!(intp.contains("focalLengthX"), "{intp}");
+    assert_eq!(replies[4].to_string(), "[rgdb] [stat] [is] 2");
+    assert_eq!(replies[5].to_string(), "[fail]");
+    server.close().unwrap();
+    let ns = name_client();
+    assert!(run(async move { ns.query("/depthCamera/rgbImage:o").await.unwrap() }).is_none());
+}
+
+#[test]
+fn cpp_yarp_rpc_asks_our_wrapper() {
+    let Some(yarp) = yarp_interop_tests::cpp_program("cpp_yarp_rpc_asks_our_wrapper", "yarp")
+    else {
+        return;
+    };
+    let mut server = camera("/cppdepth");
+    let out = yarp_interop_tests::cpp_rpc_output(
+        &yarp,
+        "/cppdepth/rpc:i",
+        "[visd] [get] [w]\n[rgdb] [get] [prot]\n[rgdb] [get] [stat]\n",
+    );
+    let responses: Vec<&str> = out
+        .lines()
+        .filter_map(|l| l.strip_prefix("Response: "))
+        .collect();
+    assert_eq!(
+        responses,
+        [
+            "[visd] [w] [is] 32",
+            "[rgdb] [prot] [is] 1 0",
+            "[rgdb] [stat] [is] 2"
+        ],
+        "{out}"
+    );
+    eprintln!("interop: C++ yarp rpc -> rgbdSensor_nws_yarp OK");
+    server.close().unwrap();
+}
