@@ -179,3 +179,44 @@ impl Drop for Reaped {
         let _ = self.0.wait();
     }
 }
+
+#[test]
+fn nwc_reads_scans_and_forwards_settings() {
+    let mut server = laser("/nwc_laser:o");
+    let mut client = PolyDriver::open(
+        &Property::from_config_text(
+            "device rangefinder2D_nwc_yarp\nlocal /nwc_laser_client\nremote /nwc_laser:o\n",
+        )
+        .unwrap(),
+    )
+    .expect("open the client");
+    let rf = client.device().as_rangefinder_2d().unwrap();
+    let (scans, t) = yarp_interop_tests::wait_for("a scan", || {
+        let (s, t) = rf.get_raw_data().ok()?;
+        (!s.is_empty()).then_some((s, t))
+    });
+    assert_eq!(scans.len(), 720);
+    assert!(scans.iter().all(|&d| d == 2.5) && t > 1.6e9);
+    assert_eq!(rf.get_device_status().unwrap() as i32, 1);
+    assert_eq!(rf.get_distance_range().unwrap(), (0.1, 30.0));
+    assert_eq!(rf.get_scan_limits().unwrap(), (0.0, 360.0));
+    assert_eq!(rf.get_horizontal_resolution().unwrap(), 0.5);
+    rf.set_scan_rate(40.0).unwrap();
+    assert_eq!(rf.get_scan_rate().unwrap(), 40.0);
+    assert_eq!(
+        rf.get_device_info().unwrap(),
+        "Fake Laser device for test/debugging"
+    );
+    client.close().unwrap();
+    server.close().unwrap();
+    // a client of nothing fails to open, clearly
+    let err = PolyDriver::open(
+        &Property::from_config_text(
+            "device rangefinder2D_nwc_yarp\nlocal /lonely\nremote /none:o\n",
+        )
+        .unwrap(),
+    )
+    .err()
+    .expect("no server");
+    assert!(err.to_string().contains("/none:o"), "{err}");
+}

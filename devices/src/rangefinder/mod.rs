@@ -1,7 +1,9 @@
-//! 2D laser rangefinders: the `IRangefinder2D` interface (C++ `yarp::dev::IRangefinder2D`)
-//!, `fakeLaser` and the YARP network wrapper `rangefinder2D_nws_yarp`.
+//! 2D laser rangefinders: the `IRangefinder2D` interface (C++ `yarp::dev::IRangefinder2D`),
+//! `fakeLaser`, the YARP network wrapper `rangefinder2D_nws_yarp` and its client
+//! `rangefinder2D_nwc_yarp`.
 
 pub mod fake;
+pub mod nwc;
 pub mod nws;
 pub mod protocol;
 
@@ -42,6 +44,9 @@ pub trait IRangefinder2D {
 /// Drivers of this family, by C++ name.
 pub(crate) const DRIVERS: &[(&str, Factory)] = &[
     ("fakeLaser", || Box::new(fake::FakeLaser::new())),
+    ("rangefinder2D_nwc_yarp", || {
+        Box::new(nwc::Rangefinder2DNwcYarp::new())
+    }),
     ("rangefinder2D_nws_yarp", || {
         Box::new(nws::Rangefinder2DNwsYarp::new())
     }),
