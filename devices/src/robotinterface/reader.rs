@@ -31,7 +31,7 @@ pub struct LoadedRobot {
 /// Reads the robot file `path` and everything it includes. `config` holds the
 /// command-line options (`portprefix`, values for `extern-name` params).
 pub fn read_robot_file(path: &Path, config: &Property) -> Result<LoadedRobot, XmlError> {
-    let doc = tree::load_file(path)?;
+    let doc = tree::load_file(path, &include_tags(config))?;
     read_document(&doc, &path.display().to_string(), config)
 }
 
@@ -41,7 +41,7 @@ pub fn read_robot_str(
     base_dir: &Path,
     config: &Property,
 ) -> Result<LoadedRobot, XmlError> {
-    let doc = tree::load_str(text, "<string>", base_dir)?;
+    let doc = tree::load_str(text, "<string>", base_dir, &include_tags(config))?;
     read_document(&doc, "<string>", config)
 }
 
@@ -94,6 +94,26 @@ fn parse_unsigned(s: &str) -> Option<u32> {
         .parse::<i64>()
         .ok()
         .and_then(|v| u32::try_from(v).ok())
+}
+
+/// The command line's `enable_tags` / `disable_tags`: C++ takes a list,
+/// `--enable_tags "(enable_ros2 other)"`; a single word is taken as well.
+pub fn include_tags(config: &Property) -> tree::IncludeTags {
+    let set = |key: &str| {
+        config
+            .find(key)
+            .map(|v| {
+                value_text(v)
+                    .split_ascii_whitespace()
+                    .map(str::to_owned)
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    tree::IncludeTags {
+        enable: set("enable_tags"),
+        disable: set("disable_tags"),
+    }
 }
 
 /// C++ `Value::toString`: strings unquoted, lists without their outer parentheses.

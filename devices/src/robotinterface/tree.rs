@@ -5,10 +5,16 @@
 //! element of the named file, whose own includes are resolved relative to its directory.
 //! Each element keeps the file and line it came from, so errors can point at the source.
 //!
+//! An include with `enabled_by="a b"` is expanded only when yarprobotinterface runs
+//! with one of those tags in `--enable_tags "(a ...)"` (or `enable_all`); one with
+//! `disabled_by="c"` is dropped when `--disable_tags "(c ...)"` names it, as C++'s
+//! `CheckIfIncludeSectionIsEnabled` decides ([`IncludeTags`]).
+//!
 //! Differences from C++ (which would hang or crash): include cycles and runaway nesting
 //! are errors, and an `href` without a directory part resolves next to the including file.
 
 use super::error::{Location, XmlError};
+use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -22,11 +28,38 @@ pub const MAX_INCLUDE_DEPTH: usize = 32;
 /// several times cannot multiply into an endless load (a whole iCub reads about 70).
 pub const MAX_INCLUDED_FILES: usize = 4096;
 
-/// The include chain being expanded and the files read so far.
+/// The tags of the command line's `enable_tags` / `disable_tags`.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct IncludeTags {
+    pub enable: BTreeSet<String>,
+    pub disable: BTreeSet<String>,
+}
+
+impl IncludeTags {
+    /// Whether an include with these `enabled_by` / `disabled_by` attributes (each a
+    /// space-separated list) is expanded: without `enabled_by` it is, with it only when
+    /// one of its tags (or `enable_all`) is enabled; any disabled tag drops it.
+    pub fn enabled(&self, enabled_by: Option<&str>, disabled_by: Option<&str>) -> bool {
+        let words = |s: Option<&str>| {
+            s.unwrap_or("")
+                .split_ascii_whitespace()
+                .map(str::to_owned)
+                .collect::<Vec<_>>()
+        };
+        let by = words(enabled_by);
+        let on = by.is_empty()
+            || self.enable.contains("enable_all")
+            || by.iter().any(|t| self.enable.contains(t));
+        on && !words(disabled_by).iter().any(|t| self.disable.contains(t))
+    }
+}
+
+/// The include chain being expanded, the files read so far and the include tags.
 #[derive(Default)]
 struct Includes {
     stack: Vec<PathBuf>,
     files_read: usize,
+    tags: IncludeTags,
 }
 
 /// One element: its name, attributes, condensed text and element children.
@@ -60,12 +93,13 @@ pub struct Document {
     pub doctype: Option<String>,
 }
 
-/// Loads `path` and every file it includes.
-pub fn load_file(path: &Path) -> Result<Document, XmlError> {
+/// Loads `path` and every file it includes (as `tags` enable them).
+pub fn load_file(path: &Path, tags: &IncludeTags) -> Result<Document, XmlError> {
     let text = read(path)?;
     let mut includes = Includes {
         stack: vec![canonical(path)],
         files_read: 1,
+        tags: tags.clone(),
     };
     let name: Arc<str> = Arc::from(path.display().to_string());
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
@@ -73,9 +107,18 @@ pub fn load_file(path: &Path) -> Result<Document, XmlError> {
 }
 
 /// Parses `text` (named `name` in errors); relative includes resolve against `base_dir`.
-pub fn load_str(text: &str, name: &str, base_dir: &Path) -> Result<Document, XmlError> {
+pub fn load_str(
+    text: &str,
+    name: &str,
+    base_dir: &Path,
+    tags: &IncludeTags,
+) -> Result<Document, XmlError> {
     let name: Arc<str> = Arc::from(name);
-    load_text(text, &name, base_dir, &mut Includes::default())
+    let mut includes = Includes {
+        tags: tags.clone(),
+        ..Includes::default()
+    };
+    load_text(text, &name, base_dir, &mut includes)
 }
 
 fn read(path: &Path) -> Result<String, XmlError> {
@@ -166,7 +209,13 @@ fn convert(
     let mut children = Vec::new();
     for child in node.children().filter(|c| c.is_element()) {
         if is_include(&child) {
-            children.push(include(&child, doc, file, dir, includes)?);
+            let on = includes.tags.enabled(
+                child.attribute("enabled_by"),
+                child.attribute("disabled_by"),
+            );
+            if on {
+                children.push(include(&child, doc, file, dir, includes)?);
+            }
         } else {
             children.push(convert(child, doc, file, dir, includes)?);
         }
@@ -241,6 +290,7 @@ mod tests {
             "\n<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<robot name=\"r\">\n  <x/>\n</robot>\n",
             "t.xml",
             Path::new("."),
+            &IncludeTags::default(),
         )
         .unwrap();
         assert_eq!(doc.root.at.line, 3);
@@ -248,9 +298,28 @@ mod tests {
             "\n<?xml version=\"1.0\"?>\n<robot>\n<a></b>\n</robot>",
             "t.xml",
             Path::new("."),
+            &IncludeTags::default(),
         )
         .unwrap_err();
         assert!(e.to_string().contains(":4"), "{e}");
+    }
+
+    #[test]
+    fn include_tags_decide_as_cpp() {
+        let tags = |e: &[&str], d: &[&str]| IncludeTags {
+            enable: e.iter().map(|s| s.to_string()).collect(),
+            disable: d.iter().map(|s| s.to_string()).collect(),
+        };
+        let none = tags(&[], &[]);
+        assert!(none.enabled(None, None));
+        assert!(!none.enabled(Some("enable_ros2"), None));
+        assert!(none.enabled(None, Some("disable_left_hand")));
+        let ros = tags(&["enable_ros2"], &["disable_left_hand"]);
+        assert!(ros.enabled(Some("enable_ros2"), None));
+        assert!(ros.enabled(Some("other enable_ros2"), None));
+        assert!(!ros.enabled(Some("enable_ros2"), Some("disable_left_hand")));
+        assert!(!ros.enabled(None, Some("x disable_left_hand")));
+        assert!(tags(&["enable_all"], &[]).enabled(Some("anything"), None));
     }
 
     #[test]
@@ -265,6 +334,7 @@ mod tests {
             "<robot name=\"r\">\n  <device name=\"d\" type=\"t\">\n    <param name=\"p\">  a\n b </param>\n  </device>\n</robot>\n",
             "mem.xml",
             Path::new("."),
+            &IncludeTags::default(),
         )
         .unwrap();
         let dev = &doc.root.children[0];
@@ -302,7 +372,7 @@ mod tests {
             "p.xml",
             "<params><param name=\"x\">1</param></params>",
         );
-        let doc = load_file(&top).unwrap();
+        let doc = load_file(&top, &IncludeTags::default()).unwrap();
         let dev = &doc.root.children[0];
         assert_eq!(dev.attr("name"), Some("a"));
         assert!(dev.at.file.ends_with("sub/a.xml"));
@@ -318,7 +388,9 @@ mod tests {
             "top.xml",
             &format!("<robot {XI} name=\"r\">\n\n<xi:include href=\"missing.xml\"/>\n</robot>"),
         );
-        let e = load_file(&top).unwrap_err().to_string();
+        let e = load_file(&top, &IncludeTags::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("top.xml:3") && e.contains("missing.xml"), "{e}");
 
         let cyc = write(
@@ -326,7 +398,7 @@ mod tests {
             "cycle.xml",
             &format!("<robot {XI} name=\"r\"><xi:include href=\"cycle.xml\"/></robot>"),
         );
-        let e = load_file(&cyc).unwrap_err();
+        let e = load_file(&cyc, &IncludeTags::default()).unwrap_err();
         assert!(matches!(e, XmlError::IncludeCycle { .. }), "{e}");
 
         let bad = write(
@@ -334,7 +406,9 @@ mod tests {
             "bad.xml",
             &format!("<robot {XI}><xi:include/></robot>"),
         );
-        let e = load_file(&bad).unwrap_err().to_string();
+        let e = load_file(&bad, &IncludeTags::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("href"), "{e}");
     }
 
@@ -351,7 +425,7 @@ mod tests {
             );
         }
         write(dir.path(), "f20.xml", "<params/>");
-        let e = load_file(&dir.path().join("f0.xml"))
+        let e = load_file(&dir.path().join("f0.xml"), &IncludeTags::default())
             .unwrap_err()
             .to_string();
         assert!(e.contains("files included"), "{e}");
@@ -359,7 +433,13 @@ mod tests {
 
     #[test]
     fn malformed_xml_names_file_and_line() {
-        let err = load_str("<robot>\n<device>\n</robot>", "bad.xml", Path::new(".")).unwrap_err();
+        let err = load_str(
+            "<robot>\n<device>\n</robot>",
+            "bad.xml",
+            Path::new("."),
+            &IncludeTags::default(),
+        )
+        .unwrap_err();
         let msg = err.to_string();
         assert!(msg.starts_with("bad.xml:"), "{msg}");
     }
