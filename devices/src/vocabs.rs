@@ -157,9 +157,9 @@ pub const CM_VELOCITY: Vocab32 = Vocab32::new("vel");
 pub const CM_TORQUE: Vocab32 = Vocab32::new("torq");
 pub const CM_CURRENT: Vocab32 = Vocab32::new("icur");
 pub const CM_PWM: Vocab32 = Vocab32::new("ipwm");
-pub const CM_MIXED: Vocab32 = Vocab32::new("mixd");
+pub const CM_MIXED: Vocab32 = Vocab32::new("mix");
 pub const CM_HW_FAULT: Vocab32 = Vocab32::new("hwfa");
-pub const CM_UNKNOWN: Vocab32 = Vocab32::new("unk");
+pub const CM_UNKNOWN: Vocab32 = Vocab32::new("unkw");
 
 // interaction mode values
 pub const IM_STIFF: Vocab32 = Vocab32::new("stif");

@@ -60,7 +60,7 @@ fn robot_role(top: &str) {
     yarp_devices::Registry::install(yarp_devices_ros2::register);
     let robot = yarp_devices::robotinterface::read_robot_file(
         std::path::Path::new(top),
-        &yarp_proto::Property::default(),
+        &yarp_proto::Property::from_text("(enable_tags (enable_ros2))"),
     )
     .unwrap_or_else(|e| panic!("{e}"))
     .robot;

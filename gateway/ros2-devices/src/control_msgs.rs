@@ -127,10 +127,6 @@ pub const IMPLEMENTED: &[&str] = &["POSITION", "POSITION_DIRECT", "VELOCITY"];
 
 /// The name of a mode a board reports; `None` for a vocab C++ has no name for.
 pub fn mode_name(m: Vocab32) -> Option<&'static str> {
-    // this framework's boards also say "mixd" for mixed
-    if m == vocab("mixd") {
-        return Some("MIXED");
-    }
     MODES.iter().find(|(_, v)| *v == m).map(|(n, _)| *n)
 }
 
@@ -217,7 +213,7 @@ mod tests {
     #[test]
     fn mode_names() {
         assert_eq!(mode_name(vocab("pos")), Some("POSITION"));
-        assert_eq!(mode_name(vocab("mixd")), Some("MIXED"));
+        assert_eq!(mode_name(vocab("mix")), Some("MIXED"));
         assert_eq!(mode_name(vocab("zzz")), None);
         assert_eq!(settable_mode("VELOCITY"), Some(vocab("vel")));
         assert_eq!(settable_mode("HW_FAULT"), None);

@@ -19,7 +19,7 @@ mod ergocub;
 mod eth_common;
 
 use ergocub::*;
-use eth_common::{bring_up, T};
+use eth_common::{bring_up_with, T};
 use ros2_client::{Client, Publisher};
 use serde_json::Value as Json;
 use std::time::{Duration, Instant};
@@ -151,7 +151,7 @@ fn ergocub_ros2_wrappers_serve_rclpy_and_take_ros_commands() {
     let dir = robot_dir();
     let tmp = tempfile::tempdir().unwrap();
     let top = top_file(&dir, tmp.path(), true);
-    let (mut runner, _conf) = bring_up(&dir, &top, "10.0.1.0/24=127.0.5.0/24");
+    let (mut runner, _conf) = bring_up_with(&dir, &top, "10.0.1.0/24=127.0.5.0/24", &ros2_tags());
     for f in runner.failures() {
         assert!(!f.contains("ros2") && !f.contains("strain"), "{f}");
     }

@@ -97,6 +97,17 @@ pub fn start_name_server() -> tempfile::TempDir {
 /// (keep-going: what does not open is named) against its emulated boards, served at the
 /// robot's addresses through `map`; returns the runner and the guards to keep.
 pub fn bring_up(dir: &Path, top: &Path, map: &str) -> (RobotRunner, tempfile::TempDir) {
+    bring_up_with(dir, top, map, &Property::default())
+}
+
+/// [`bring_up`] with yarprobotinterface's command-line options `config` (e.g.
+/// `enable_tags`).
+pub fn bring_up_with(
+    dir: &Path,
+    top: &Path,
+    map: &str,
+    config: &Property,
+) -> (RobotRunner, tempfile::TempDir) {
     std::env::set_var(ADDRESS_MAP_ENV, map);
     let specs = robot_boards(dir, Some(top)).expect("robot boards");
     let (_served, _threads) = serve(
@@ -106,7 +117,7 @@ pub fn bring_up(dir: &Path, top: &Path, map: &str) -> (RobotRunner, tempfile::Te
     )
     .expect("the emulator binds its addresses");
     let conf = start_name_server();
-    let robot = read_robot_file(top, &Property::default())
+    let robot = read_robot_file(top, config)
         .unwrap_or_else(|e| panic!("{e}"))
         .robot;
     // What yarprobotinterface registers: the framework's drivers and icubmod's.

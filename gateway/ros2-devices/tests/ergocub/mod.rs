@@ -9,9 +9,9 @@
 //!   with `msgs_name` `/ergocub_control` (the robot's `alljoints-mc_nws_ros2.xml` has none,
 //!   so it serves no commands), JointState on `/ergocub_control/joint_states`.
 //!
-//! `ergocub.xml` itself already includes `alljoints-mc_remapper.xml` and
-//! `alljoints-mc_nws_ros2.xml` (their `enabled_by="enable_ros2"` is not read by this
-//! reader, so they are on). `sensors/ros2_repeaters/head_imu_ros2.xml` is a robot of its
+//! `ergocub.xml` itself includes `alljoints-mc_remapper.xml` and
+//! `alljoints-mc_nws_ros2.xml` with `enabled_by="enable_ros2"`: they are read when the
+//! robot runs with `--enable_tags (enable_ros2)` ([`ros2_tags`]), as its owners start it. `sensors/ros2_repeaters/head_imu_ros2.xml` is a robot of its
 //! own (a `multipleanalogsensorsclient` of `/ergocub/head/inertials` and `imu_nws_ros2`).
 
 #![allow(dead_code)]
@@ -57,6 +57,11 @@ const CONTROL_DEVICE: &str = r#"
         <action phase="shutdown" level="20" type="detach" />
     </device>
 "#;
+
+/// yarprobotinterface's `--enable_tags (enable_ros2)`.
+pub fn ros2_tags() -> yarp_proto::Property {
+    yarp_proto::Property::from_text("(enable_tags (enable_ros2))")
+}
 
 /// Writes the test's top file (see the module comment) into `out` and returns its path.
 pub fn top_file(dir: &Path, out: &Path, control: bool) -> PathBuf {
