@@ -4,10 +4,14 @@
 //!
 //! ```text
 //! yarprobotinterface --config icub_all.xml [--portprefix /icub] [--verbose] [--dryrun]
-//!                    [--keep-going]
+//!                    [--keep-going] [--enable_tags "(enable_ros2 ...)"]
+//!                    [--disable_tags "(disable_left_hand ...)"]
 //! yarprobotinterface                # reads ./yarprobotinterface.ini (`config icub_all.xml`)
 //! yarprobotinterface --from robot.ini
 //! ```
+//!
+//! `--enable_tags` / `--disable_tags` decide which `xi:include`s with `enabled_by` /
+//! `disabled_by` attributes are read, as in C++ (`enable_all` enables every one).
 //!
 //! Devices whose type this build does not provide are named at startup and skipped, with
 //! the actions on them; the rest of the robot comes up. With `--keep-going` (not in C++),
