@@ -7,14 +7,13 @@
 
 use crate::camera::info_topic;
 use crate::msgs::read_camera_info;
-use crate::node::{DeviceNode, NodeBuilder};
-use futures::StreamExt;
+use crate::node::{on_messages, DeviceNode, NodeBuilder};
 use std::sync::{Arc, Mutex};
 use yarp_devices::rgbd::{IRGBDSensor, RgbdStatus};
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, Params};
 use yarp_proto::image::{Image, PixelCode};
 use yarp_proto::{Property, Stamp};
-use yarp_ros2_gateway::dynmsg::{MsgSeed, Value as Ros};
+use yarp_ros2_gateway::dynmsg::Value as Ros;
 use yarp_ros2_gateway::image::to_image;
 
 pub const NAME: &str = "rgbdSensor_nwc_ros2";
@@ -128,18 +127,10 @@ impl DeviceDriver for RgbdSensorNwcRos2 {
             ),
         ];
         let node = b.spin()?;
-        let rt = yarp_devices::runtime::handle();
         for (sub, feed, ty) in subs {
             let state = self.state.clone();
-            let seed = MsgSeed::new(ty).expect("catalog type");
-            self.tasks.push(rt.spawn(async move {
-                let stream = sub.async_stream_seed(seed);
-                futures::pin_mut!(stream);
-                while let Some(r) = stream.next().await {
-                    let Ok((m, _)) = r else { continue };
-                    update(&state, feed, &m);
-                }
-            }));
+            self.tasks
+                .push(on_messages(sub, ty, move |m| update(&state, feed, m)));
         }
         self.node = Some(node);
         Ok(())

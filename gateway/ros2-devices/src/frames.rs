@@ -9,8 +9,7 @@
 //! (`/tf`), `ROS2::ft_topic_static` (`/tf_static`).
 
 use crate::msgs::{header_frame, header_time, stamp_ns};
-use crate::node::{DeviceNode, NodeBuilder};
-use futures::StreamExt;
+use crate::node::{on_messages, DeviceNode, NodeBuilder};
 use ros2_client::Publisher;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -20,7 +19,7 @@ use yarp_devices::frames::{
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, Params};
 use yarp_proto::Property;
 use yarp_ros2_gateway::counters::header;
-use yarp_ros2_gateway::dynmsg::{MsgSeed, Value as Ros};
+use yarp_ros2_gateway::dynmsg::Value as Ros;
 
 pub const GET: &str = "frameTransformGet_nwc_ros2";
 pub const SET: &str = "frameTransformSet_nwc_ros2";
@@ -120,19 +119,12 @@ impl DeviceDriver for FrameTransformGetNwcRos2 {
         let node = b.spin()?;
         for (sub, is_static) in subs {
             let container = self.container.clone();
-            let seed = MsgSeed::new(TF).expect("TFMessage is in the catalog");
-            self.tasks
-                .push(yarp_devices::runtime::handle().spawn(async move {
-                    let stream = sub.async_stream_seed(seed);
-                    futures::pin_mut!(stream);
-                    while let Some(r) = stream.next().await {
-                        let Ok((m, _)) = r else { continue };
-                        let mut c = lock(&container);
-                        for t in read_tf_message(&m, is_static) {
-                            c.set(t);
-                        }
-                    }
-                }));
+            self.tasks.push(on_messages(sub, TF, move |m| {
+                let mut c = lock(&container);
+                for t in read_tf_message(m, is_static) {
+                    c.set(t);
+                }
+            }));
         }
         self.node = Some(node);
         Ok(())

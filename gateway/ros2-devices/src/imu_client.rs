@@ -4,8 +4,7 @@
 //! of the last message; `MAS_WAITING_FOR_FIRST_READ` until one arrives. Parameters:
 //! `node_name`, `namespace`, `topic_name`, `sensor_name`.
 
-use crate::node::{DeviceNode, NodeBuilder};
-use futures::StreamExt;
+use crate::node::{on_messages, DeviceNode, NodeBuilder};
 use std::sync::{Arc, Mutex};
 use yarp_devices::sensors::interfaces::{
     IOrientationSensors, IThreeAxisGyroscopes, IThreeAxisLinearAccelerometers,
@@ -13,7 +12,7 @@ use yarp_devices::sensors::interfaces::{
 use yarp_devices::sensors::{MasStatus, SensorMeasurement};
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, Params};
 use yarp_proto::Property;
-use yarp_ros2_gateway::dynmsg::{MsgSeed, Value as Ros};
+use yarp_ros2_gateway::dynmsg::Value as Ros;
 use yarp_ros2_gateway::mas::quaternion_to_rpy_deg;
 
 pub const NAME: &str = "imu_nwc_ros2";
@@ -116,14 +115,9 @@ impl DeviceDriver for ImuNwcRos2 {
         let sub = b.subscription(&topic, IMU)?;
         let node = b.spin()?;
         let latest = self.latest.clone();
-        let seed = MsgSeed::new(IMU).expect("Imu is in the catalog");
-        self.task = Some(yarp_devices::runtime::handle().spawn(async move {
-            let stream = sub.async_stream_seed(seed);
-            futures::pin_mut!(stream);
-            while let Some(r) = stream.next().await {
-                if let Some(reading) = r.ok().and_then(|(m, _)| read_imu(&m)) {
-                    *latest.lock().unwrap_or_else(|e| e.into_inner()) = Some(reading);
-                }
+        self.task = Some(on_messages(sub, IMU, move |m| {
+            if let Some(reading) = read_imu(m) {
+                *latest.lock().unwrap_or_else(|e| e.into_inner()) = Some(reading);
             }
         }));
         self.node = Some(node);

@@ -149,3 +149,26 @@ impl DeviceNode {
         !self.spinner.is_finished()
     }
 }
+
+/// Spawns on the device runtime a task that hands every message of `sub` (of catalog
+/// type `ros_type`) to `on_msg`, in order; messages that do not decode are skipped.
+pub fn on_messages(
+    sub: Subscription<Ros>,
+    ros_type: &str,
+    mut on_msg: impl FnMut(&Ros) + Send + 'static,
+) -> JoinHandle<()> {
+    let seed = yarp_ros2_gateway::dynmsg::MsgSeed::new(ros_type);
+    runtime::handle().spawn(async move {
+        use futures::StreamExt;
+        let Some(seed) = seed else {
+            return;
+        };
+        let stream = sub.async_stream_seed(seed);
+        futures::pin_mut!(stream);
+        while let Some(r) = stream.next().await {
+            if let Ok((m, _)) = r {
+                on_msg(&m);
+            }
+        }
+    })
+}

@@ -8,15 +8,14 @@
 //! client passes the message's radians through).
 
 use crate::msgs::{laser_scan, read_laser_scan, stamp_ns, LaserInfo};
-use crate::node::{CommonParams, DeviceNode, NodeBuilder};
+use crate::node::{on_messages, CommonParams, DeviceNode, NodeBuilder};
 use crate::periodic::{Periodic, Throttle};
-use futures::StreamExt;
 use ros2_client::Publisher;
 use std::sync::{Arc, Mutex};
 use yarp_devices::rangefinder::{IRangefinder2D, LaserStatus};
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, Params, SharedDevice};
 use yarp_proto::Property;
-use yarp_ros2_gateway::dynmsg::{MsgSeed, Value as Ros};
+use yarp_ros2_gateway::dynmsg::Value as Ros;
 
 pub const NWS: &str = "rangefinder2D_nws_ros2";
 pub const NWC: &str = "rangefinder2D_nwc_ros2";
@@ -167,25 +166,19 @@ impl DeviceDriver for Rangefinder2DNwcRos2 {
         let sub = b.subscription(&params.topic_name, LASER_SCAN)?;
         let node = b.spin()?;
         let latest = self.latest.clone();
-        let seed = MsgSeed::new(LASER_SCAN).expect("LaserScan is in the catalog");
-        self.task = Some(yarp_devices::runtime::handle().spawn(async move {
-            let stream = sub.async_stream_seed(seed);
-            futures::pin_mut!(stream);
-            while let Some(r) = stream.next().await {
-                let Ok((m, _)) = r else { continue };
-                let Some((info, ranges, stamp)) = read_laser_scan(&m) else {
-                    continue;
-                };
-                let mut l = latest.lock().unwrap_or_else(|e| e.into_inner());
-                if l.info.is_some() && l.ranges.len() != ranges.len() {
-                    tracing::warn!("{NWC}: the scan changed its size");
-                }
-                *l = Latest {
-                    info: Some(info),
-                    ranges,
-                    stamp,
-                };
+        self.task = Some(on_messages(sub, LASER_SCAN, move |m| {
+            let Some((info, ranges, stamp)) = read_laser_scan(m) else {
+                return;
+            };
+            let mut l = latest.lock().unwrap_or_else(|e| e.into_inner());
+            if l.info.is_some() && l.ranges.len() != ranges.len() {
+                tracing::warn!("{NWC}: the scan changed its size");
             }
+            *l = Latest {
+                info: Some(info),
+                ranges,
+                stamp,
+            };
         }));
         self.node = Some(node);
         Ok(())
