@@ -1,8 +1,12 @@
 //! rgbdSensor_nws_yarp over fakeDepthCamera on real sockets, with an in-process name
 //! server (run under netns-run): our readers get the colour and the float depth images
 //! with envelopes, our RPC client and C++ `yarp rpc` (3.5, when installed; in CI
-//! required) the visual parameters and the status. Every wait is bounded.
+//! required) the visual parameters and the status, C++ `yarp read` the depth image.
+//! Every wait is bounded.
 
+use std::io::{BufRead, BufReader};
+use std::process::Stdio;
+use std::time::{Duration, Instant};
 use yarp_devices::rgbd::fake::depth_of;
 use yarp_devices::{runtime, PolyDriver};
 use yarp_interop_tests::{name_client, T};
@@ -134,6 +138,48 @@ fn cpp_yarp_rpc_asks_our_wrapper() {
         ],
         "{out}"
     );
-    eprintln!("interop: C++ yarp rpc -> rgbdSensor_nws_yarp OK");
+
+    // C++ yarp read gets the float depth image (it prints the image Bottle, `[mat] ...`)
+    let mut reader = Reaped(
+        yarp_interop_tests::cpp_command(&yarp)
+            .args(["read", "/cpp_depth_rd", "/cppdepth/depthImage:o"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("C++ yarp read"),
+    );
+    let stdout = reader.0.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let start = Instant::now();
+    let line = loop {
+        let left = (3 * T).saturating_sub(start.elapsed());
+        assert!(!left.is_zero(), "C++ yarp read printed no image");
+        if let Ok(l) = rx.recv_timeout(left.min(Duration::from_millis(200))) {
+            if l.starts_with("[mat]") {
+                break l;
+            }
+        }
+    };
+    let img = Image::from_bottle(&Bottle::from_text(&line)).expect("an image");
+    assert_eq!(img.pixel_code(), PixelCode::MONO_FLOAT);
+    assert_eq!((img.width(), img.height()), (32, 24));
+    eprintln!("interop: C++ yarp rpc and yarp read -> rgbdSensor_nws_yarp OK");
+    drop(reader);
     server.close().unwrap();
+}
+
+/// Kills and reaps the child when dropped.
+struct Reaped(std::process::Child);
+impl Drop for Reaped {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
 }
