@@ -42,9 +42,10 @@ const DEFAULT_SERIAL: &str = "/dev/ttyUSB0";
 const DEFAULT_NAME: &str = "sensor_imu_xsens";
 /// A sample older than this is stale (C++ `TO_DEFAULT`).
 const STALE_AFTER: Duration = Duration::from_millis(500);
-/// `GoToConfig` attempts and the wait for each acknowledgement.
+/// `GoToConfig` attempts and the wait for each acknowledgement (a sensor answers in
+/// milliseconds; the margin is for a loaded machine and an emulated sensor behind a pty).
 const CONFIG_TRIES: usize = 4;
-const ACK_TIMEOUT: Duration = Duration::from_millis(500);
+const ACK_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// The latest sample, its YARP timestamp and when it arrived.
 #[derive(Debug, Clone, Copy)]
