@@ -275,9 +275,28 @@ fn checks(l: &mut Launch, nodes: &[Nodes], s: &Scenario, t0: Instant, ros_env: &
             .args(["--camera-info", camera_info, "--timeout", "60"])
             .envs(ros_env.iter().copied());
         let probe = Lines::spawn(cmd);
-        let limit = Duration::from_secs(90);
-        let js: serde_json::Value =
-            serde_json::from_str(&probe.expect("JOINTS", limit)).expect("json");
+        // The probe prints each of JOINTS, URDF and CAMERA_INFO as it arrives (in any
+        // order), then DONE.
+        let mut got = std::collections::HashMap::new();
+        let deadline = Instant::now() + Duration::from_secs(90);
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let line = match probe.rx.recv_timeout(left) {
+                Ok(l) => l,
+                Err(_) => panic!("the robot probe ended or timed out; it said {got:?}"),
+            };
+            if line.starts_with("DONE") {
+                break;
+            }
+            if let Some((key, rest)) = line.split_once(' ') {
+                got.insert(key.to_string(), rest.trim().to_string());
+            }
+        }
+        let field = |k: &str| -> serde_json::Value {
+            serde_json::from_str(got.get(k).unwrap_or_else(|| panic!("no {k}: {got:?}")))
+                .expect("json")
+        };
+        let js = field("JOINTS");
         assert!(
             js["name"]
                 .as_array()
@@ -286,14 +305,11 @@ fn checks(l: &mut Launch, nodes: &[Nodes], s: &Scenario, t0: Instant, ros_env: &
                 .any(|n| n == "l_elbow"),
             "{js}"
         );
-        let urdf: serde_json::Value =
-            serde_json::from_str(&probe.expect("URDF", limit)).expect("json");
+        let urdf = field("URDF");
         assert!(urdf["head"].as_str().unwrap().contains("<?xml"), "{urdf}");
-        let info: serde_json::Value =
-            serde_json::from_str(&probe.expect("CAMERA_INFO", limit)).expect("json");
+        let info = field("CAMERA_INFO");
         assert_eq!(info["width"], 320, "{info}");
         assert_eq!(info["distortion_model"], "plumb_bob", "{info}");
-        probe.expect("DONE", limit);
         eprintln!(
             "/joint_states with {joints} joints, /robot_description ({} bytes, latched), \
              {camera_info}: {info}",
