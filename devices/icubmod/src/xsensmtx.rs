@@ -42,9 +42,11 @@ const DEFAULT_SERIAL: &str = "/dev/ttyUSB0";
 const DEFAULT_NAME: &str = "sensor_imu_xsens";
 /// A sample older than this is stale (C++ `TO_DEFAULT`).
 const STALE_AFTER: Duration = Duration::from_millis(500);
-/// `GoToConfig` attempts and the wait for each acknowledgement (a sensor answers in
-/// milliseconds; the margin is for a loaded machine and an emulated sensor behind a pty).
+/// `GoToConfig` attempts and the wait for each: a silent port is reported in 2 s.
 const CONFIG_TRIES: usize = 4;
+const CONFIG_ACK_TIMEOUT: Duration = Duration::from_millis(500);
+/// The wait for the acknowledgements of a sensor that has answered (it answers in
+/// milliseconds; the margin is for a loaded machine and an emulated sensor behind a pty).
 const ACK_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// The latest sample, its YARP timestamp and when it arrived.
@@ -79,11 +81,16 @@ impl Default for XsensMtx {
 }
 
 /// Sends `m` and waits for its acknowledgement (samples in between are skipped).
-fn request(port: &mut dyn SerialPort, dec: &mut Decoder, m: &Message) -> Result<Message, String> {
+fn request(
+    port: &mut dyn SerialPort,
+    dec: &mut Decoder,
+    m: &Message,
+    timeout: Duration,
+) -> Result<Message, String> {
     port.write_all(&m.encode())
         .map_err(|e| format!("write: {e}"))?;
     let want = m.mid.wrapping_add(1);
-    let end = Instant::now() + ACK_TIMEOUT;
+    let end = Instant::now() + timeout;
     let mut buf = [0u8; 256];
     while Instant::now() < end {
         while let Some(r) = dec.next_message() {
@@ -106,7 +113,7 @@ fn request(port: &mut dyn SerialPort, dec: &mut Decoder, m: &Message) -> Result<
         }
     }
     Err(format!(
-        "no acknowledgement of {:#04x} within {ACK_TIMEOUT:?}",
+        "no acknowledgement of {:#04x} within {timeout:?}",
         m.mid
     ))
 }
@@ -116,30 +123,40 @@ fn configure(port: &mut dyn SerialPort) -> Result<(), String> {
     let mut dec = Decoder::new();
     let config = Message::new(mid::GO_TO_CONFIG, vec![]);
     let mut last = String::new();
-    let in_config = (0..CONFIG_TRIES).any(|_| match request(port, &mut dec, &config) {
-        Ok(_) => true,
-        Err(e) => {
-            last = e;
-            false
-        }
-    });
+    let in_config =
+        (0..CONFIG_TRIES).any(
+            |_| match request(port, &mut dec, &config, CONFIG_ACK_TIMEOUT) {
+                Ok(_) => true,
+                Err(e) => {
+                    last = e;
+                    false
+                }
+            },
+        );
     if !in_config {
         return Err(format!("no MTx answers ({last})"));
     }
     let mode = (OUTPUT_MODE_CALIB | OUTPUT_MODE_ORIENT)
         .to_be_bytes()
         .to_vec();
-    request(port, &mut dec, &Message::new(mid::SET_OUTPUT_MODE, mode))?;
+    request(
+        port,
+        &mut dec,
+        &Message::new(mid::SET_OUTPUT_MODE, mode),
+        ACK_TIMEOUT,
+    )?;
     let settings = OUTPUT_SETTINGS_EULER.to_be_bytes().to_vec();
     request(
         port,
         &mut dec,
         &Message::new(mid::SET_OUTPUT_SETTINGS, settings),
+        ACK_TIMEOUT,
     )?;
     request(
         port,
         &mut dec,
         &Message::new(mid::GO_TO_MEASUREMENT, vec![]),
+        ACK_TIMEOUT,
     )?;
     Ok(())
 }
