@@ -115,6 +115,7 @@ pub struct Gateway {
     /// The node's spinner: not aborted but stopped by dropping the node (ros2-client logs
     /// an error when a node outlives its spinner).
     spinner: Option<JoinHandle<()>>,
+    ctx: Context,
 }
 
 /// Tasks that can only start once the node is shared (after all entities exist).
@@ -135,7 +136,7 @@ impl Gateway {
         });
         let mut g = Builder {
             ns,
-            ctx,
+            ctx: ctx.clone(),
             namespace: opt.namespace.clone(),
             node_name: opt.node_name.clone(),
             tasks: Vec::new(),
@@ -164,7 +165,14 @@ impl Gateway {
             ports: std::mem::take(&mut g.ports),
             node: Some(node),
             spinner: Some(spinner),
+            ctx,
         })
+    }
+
+    /// How many received samples the DDS participant keeps per topic, by topic name: a
+    /// diagnostic of what stays in memory (discovery must forget nodes that left).
+    pub fn dds_topic_cache_samples(&self) -> Vec<(String, usize)> {
+        self.ctx.domain_participant().topic_cache_sample_counts()
     }
 
     pub fn bridges(&self) -> &[Bridge] {

@@ -381,6 +381,20 @@ impl Spinner {
               Some(GraphEvent::EntityUndeclared(guid_entity(EntityKind::Publisher, guid)))
             }
 
+            // yarp-rs: forget what a participant that left had: its ROS
+            // nodes (ros_discovery_info) and its matched readers and writers.
+            // Kept, they grew with every ROS node that was started and stopped.
+            DomainParticipantStatusEvent::ParticipantLost { id, .. } => {
+              self.external_nodes.lock().unwrap().retain(|gid, _| GUID::from(*gid).prefix != id);
+              for readers in self.writers_to_remote_readers.lock().unwrap().values_mut() {
+                readers.retain(|g| g.prefix != id);
+              }
+              for writers in self.readers_to_remote_writers.lock().unwrap().values_mut() {
+                writers.retain(|g| g.prefix != id);
+              }
+              None
+            }
+
             _ => None,
           };
 

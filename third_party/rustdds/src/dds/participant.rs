@@ -660,6 +660,14 @@ impl DomainParticipant {
     self.dpi.lock().unwrap().dds_cache()
   }
 
+  // yarp-rs: a diagnostic (not in the 0.15.1 release).
+  /// How many received samples each topic's cache holds, by topic name. The
+  /// built-in SEDP topics (`DCPSPublication`, `DCPSSubscription`) should hold
+  /// none of endpoints whose announcements were already processed.
+  pub fn topic_cache_sample_counts(&self) -> Vec<(String, usize)> {
+    self.dds_cache().read().unwrap().sample_counts()
+  }
+
   #[cfg(feature = "security")] // just to avoid warning
   pub(crate) fn qos(&self) -> QosPolicies {
     self.dpi.lock().unwrap().qos()

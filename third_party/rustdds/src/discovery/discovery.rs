@@ -1194,6 +1194,9 @@ impl Discovery {
         }
       };
 
+    // yarp-rs: the taken samples need not stay in the topic cache.
+    self.dcps_subscription.reader.forget_taken_changes();
+
     for d in drds {
       #[cfg(not(feature = "security"))]
       let permission = NormalDiscoveryPermission::Allow;
@@ -1273,6 +1276,9 @@ impl Discovery {
         }
       };
 
+    // yarp-rs: the taken samples need not stay in the topic cache.
+    self.dcps_publication.reader.forget_taken_changes();
+
     for d in dwds {
       #[cfg(not(feature = "security"))]
       let permission = NormalDiscoveryPermission::Allow;
@@ -1339,6 +1345,9 @@ impl Discovery {
         return;
       }
     };
+
+    // yarp-rs: the taken samples need not stay in the topic cache.
+    self.dcps_topic.reader.forget_taken_changes();
 
     for t in ts {
       #[cfg(not(feature = "security"))]

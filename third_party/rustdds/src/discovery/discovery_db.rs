@@ -69,6 +69,11 @@ pub(crate) struct DiscoveryDB {
   // was lost due to time-out. If we have a
   external_topic_readers_attic: BTreeMap<GUID, DiscoveredReaderData>,
   external_topic_writers_attic: BTreeMap<GUID, DiscoveredWriterData>,
+  // yarp-rs: when each participant's endpoints went to the attic. A participant
+  // that timed out (e.g. a killed process, whose GUID prefix never comes back)
+  // is dropped from the attic after ATTIC_KEEP, so the attic does not grow
+  // with every such participant.
+  attic_since: BTreeMap<GuidPrefix, Instant>,
 
   // Database of topic updates:
   // Outer level key is topic name
@@ -89,6 +94,10 @@ pub(crate) enum DiscoveredVia {
   Subscription, // we discovered a reader on this topic
   SelfDefined,  // not discovered, but defined by the local DomainParticipant
 }
+
+// yarp-rs: how long the endpoints of a participant that timed out are kept
+// for its return.
+const ATTIC_KEEP: std::time::Duration = std::time::Duration::from_secs(600);
 
 fn move_by_guid_prefix<D>(
   guid_prefix: GuidPrefix,
@@ -137,6 +146,7 @@ impl DiscoveryDB {
       external_topic_writers: BTreeMap::new(),
       external_topic_readers_attic: BTreeMap::new(),
       external_topic_writers_attic: BTreeMap::new(),
+      attic_since: BTreeMap::new(),
       topics: BTreeMap::new(),
       topic_updated_sender,
       participant_status_sender,
@@ -194,6 +204,7 @@ impl DiscoveryDB {
         &mut self.external_topic_writers_attic,
         &mut self.external_topic_writers,
       );
+      self.attic_since.remove(&guid.prefix);
     }
 
     // In any case:
@@ -247,6 +258,7 @@ impl DiscoveryDB {
         &mut self.external_topic_writers,
         &mut self.external_topic_writers_attic,
       );
+      self.attic_since.insert(guid_prefix, Instant::now());
     }
   }
 
@@ -343,6 +355,21 @@ impl DiscoveryDB {
 
     for (guid, _) in &to_remove {
       self.remove_participant(*guid, false); // false = removed due to timeout
+    }
+
+    // yarp-rs: empty the attic of participants that did not come back.
+    let expired: Vec<GuidPrefix> = self
+      .attic_since
+      .iter()
+      .filter(|(_, since)| inow.duration_since(**since) > ATTIC_KEEP)
+      .map(|(prefix, _)| *prefix)
+      .collect();
+    for prefix in expired {
+      self.attic_since.remove(&prefix);
+      let mut gone = BTreeMap::new();
+      move_by_guid_prefix(prefix, &mut self.external_topic_readers_attic, &mut gone);
+      let mut gone = BTreeMap::new();
+      move_by_guid_prefix(prefix, &mut self.external_topic_writers_attic, &mut gone);
     }
 
     to_remove

@@ -99,6 +99,15 @@ impl DDSCache {
     }
   }
 
+  // yarp-rs: see DomainParticipant::topic_cache_sample_counts.
+  pub(crate) fn sample_counts(&self) -> Vec<(String, usize)> {
+    self
+      .topic_caches
+      .iter()
+      .map(|(name, tc)| (name.clone(), tc.lock().unwrap().changes.len()))
+      .collect()
+  }
+
   pub fn garbage_collect(&mut self) {
     for tc in self.topic_caches.values_mut() {
       let mut tc = tc.lock().unwrap();
@@ -476,6 +485,30 @@ impl TopicCache {
     });
     if emptied {
       self.sequence_numbers.remove(&cc.writer_guid);
+    }
+  }
+
+  // yarp-rs: a topic cache read by a single DataReader (the built-in SEDP
+  // readers) may forget the changes that reader has already taken. Otherwise
+  // they stay until `max_keep_samples` (4096 for SEDP): every remote endpoint
+  // that ever came and went keeps its announcement and its disposal here, a
+  // few MiB that grow with each ROS node that is started and stopped.
+  // Changes not yet taken (e.g. withheld for a repair) are kept.
+  pub(crate) fn remove_taken(&mut self, taken: &BTreeMap<GUID, SequenceNumber>) {
+    let gone: Vec<Timestamp> = self
+      .changes
+      .iter()
+      .filter(|(_, cc)| {
+        taken
+          .get(&cc.writer_guid)
+          .is_some_and(|&last| cc.sequence_number <= last)
+      })
+      .map(|(ts, _)| *ts)
+      .collect();
+    for ts in gone {
+      if let Some(cc) = self.changes.remove(&ts) {
+        self.remove_sn(&cc);
+      }
     }
   }
 

@@ -493,6 +493,11 @@ where
   ///   // do something
   /// }
   /// ```
+  // yarp-rs: see SimpleDataReader::forget_taken_changes.
+  pub(crate) fn forget_taken_changes(&self) {
+    self.simple_data_reader.forget_taken_changes();
+  }
+
   pub fn into_iterator(&mut self) -> ReadResult<impl Iterator<Item = Sample<D, D::K>>> {
     // TODO: We could come up with a more efficient implementation than wrapping a
     // take call

@@ -473,6 +473,26 @@ where
     result
   }
 
+  // yarp-rs: an instance that is no longer alive and whose samples have all
+  // been taken is forgotten, as DDS allows ("the middleware can reclaim all
+  // local resources regarding the instance"). Otherwise each disposed
+  // instance (e.g. every remote endpoint ever seen by the built-in SEDP
+  // readers) kept its metadata for the life of the reader.
+  fn reclaim_not_alive_instances(&mut self, keys: &[(Timestamp, D::K)]) {
+    for (_, key) in keys {
+      let reclaim = self.instance_map.get(key).is_some_and(|imd| {
+        imd.instance_state != InstanceState::Alive
+          && !imd
+            .instance_samples
+            .iter()
+            .any(|ts| self.datasamples.contains_key(ts))
+      });
+      if reclaim {
+        self.instance_map.remove(key);
+      }
+    }
+  }
+
   // Panics: `keys` must only contain (Timestamp,Key)-pairs that were immediately
   // before this call obtained by select_*_for_access functions. This function
   // will blindly assume that the given keys and timestamps are present in the
@@ -519,6 +539,7 @@ where
     }
 
     self.mark_instances_viewed(&instance_generations);
+    self.reclaim_not_alive_instances(keys);
     result
   }
 
@@ -595,6 +616,7 @@ where
     }
 
     self.mark_instances_viewed(&instance_generations);
+    self.reclaim_not_alive_instances(keys);
     result
   }
 

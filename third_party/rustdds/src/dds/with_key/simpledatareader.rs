@@ -218,11 +218,19 @@ where
     hash_to_key_map: &mut BTreeMap<KeyHash, D::K>,
     deserialized: &Sample<D, D::K>,
   ) {
-    let instance_key = match deserialized {
-      Sample::Value(d) => d.key(),
-      Sample::Dispose(k) => k.clone(),
-    };
-    hash_to_key_map.insert(instance_key.hash_key(false), instance_key);
+    // yarp-rs: a disposed instance's hash is forgotten, so the map does not
+    // grow with every instance ever seen (each remote endpoint, for the
+    // built-in SEDP readers). A later dispose by that hash alone is ignored
+    // as an unknown key, as for an instance never seen.
+    match deserialized {
+      Sample::Value(d) => {
+        let instance_key = d.key();
+        hash_to_key_map.insert(instance_key.hash_key(false), instance_key);
+      }
+      Sample::Dispose(k) => {
+        hash_to_key_map.remove(&k.hash_key(false));
+      }
+    }
   }
 
   fn deserialize_with<S>(
@@ -306,12 +314,13 @@ where
 
       DDSData::DisposeByKeyHash { key_hash, .. } => {
         // The cache should know hash -> key mapping even if the sample
-        // has been disposed or .take()n
-        if let Some(key) = hash_to_key_map.get(&key_hash) {
+        // has been .take()n. yarp-rs: once disposed, it is forgotten (see
+        // update_hash_to_key_map).
+        if let Some(key) = hash_to_key_map.remove(&key_hash) {
           Ok(DeserializedCacheChange::new(
             timestamp,
             cc,
-            Sample::Dispose(key.clone()),
+            Sample::Dispose(key),
           ))
         } else {
           Err(ReadError::UnknownKey {
@@ -426,6 +435,15 @@ where
       simple_datareader: self,
       decoder,
     }
+  }
+
+  // yarp-rs: drops the changes this reader has taken from the topic cache. Only
+  // for a reader that is its topic's sole reader in the participant (the
+  // built-in SEDP readers): another reader may not have taken them yet.
+  pub(crate) fn forget_taken_changes(&self) {
+    let mut topic_cache = self.acquire_the_topic_cache_guard();
+    let read_state = self.read_state.lock().unwrap();
+    topic_cache.remove_taken(&read_state.last_read_sn);
   }
 
   fn acquire_the_topic_cache_guard(&self) -> MutexGuard<'_, TopicCache> {
