@@ -88,10 +88,9 @@ impl BoardSpec {
         c.batteries = self.batteries;
         c.skins = self.skins;
         c.max_rx_packet = p.max_rx_packet;
-        // Every board's regulars in one datagram: the board engine of icub-eth resends
-        // the first frame of regulars that need two (its poll_transmit restarts them), so
-        // the largest boards (12 joints, MAIS and skin) would flood the host otherwise.
-        c.max_tx_packet = 60_000;
+        // A real board's datagrams fit one Ethernet frame; the regulars of the largest
+        // boards (12 joints, MAIS and skin) then take several datagrams per period.
+        c.max_tx_packet = 1400;
         if let Some(v) = self.protocol {
             c.protocol = v;
         }

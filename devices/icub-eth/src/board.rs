@@ -170,6 +170,9 @@ pub struct BoardEngine {
     tx_sequence: u64,
     rx_sequence: Option<u64>,
     next_regulars: Option<Duration>,
+    /// Where the regulars of this period resume when they did not fit one frame: the next
+    /// frame carries the rest (the period's schedule waits until all went out).
+    regulars_resume: Option<usize>,
     counters: BoardCounters,
 }
 
@@ -224,6 +227,7 @@ impl BoardEngine {
             tx_sequence: 0,
             rx_sequence: None,
             next_regulars: None,
+            regulars_resume: None,
             counters: BoardCounters::default(),
         };
         b.init_management();
@@ -380,6 +384,7 @@ impl BoardEngine {
     fn set_state(&mut self, s: ApplState) {
         if s != self.state {
             self.state = s;
+            self.regulars_resume = None;
             self.write_appl_status();
             self.push_event(BoardEvent::State(s));
         }
@@ -798,7 +803,8 @@ impl BoardEngine {
         if self.replies.is_empty() && self.regulars_due(now) {
             let regs = self.regulars();
             let mut sent = 0;
-            for id in regs {
+            let start = self.regulars_resume.take().unwrap_or(0);
+            for (i, &id) in regs.iter().enumerate().skip(start) {
                 let Ok(data) = self.store.get(id) else {
                     continue;
                 };
@@ -807,6 +813,7 @@ impl BoardEngine {
                         continue;
                     }
                     // Flush this frame; the rest of the regulars go in the next one.
+                    self.regulars_resume = Some(i);
                     self.counters.regulars_sent += sent;
                     return Some(self.finish(&fb, now));
                 }
@@ -824,7 +831,7 @@ impl BoardEngine {
     fn regulars_due(&self, now: Duration) -> bool {
         self.state == ApplState::Running
             && self.regulars.iter().any(|r| !r.is_empty())
-            && self.next_regulars.is_none_or(|t| now >= t)
+            && (self.regulars_resume.is_some() || self.next_regulars.is_none_or(|t| now >= t))
     }
 
     fn schedule_regulars(&mut self, now: Duration) {
@@ -842,6 +849,9 @@ impl BoardEngine {
             return Some(Duration::ZERO);
         }
         if self.state == ApplState::Running && self.regulars.iter().any(|r| !r.is_empty()) {
+            if self.regulars_resume.is_some() {
+                return Some(Duration::ZERO);
+            }
             return Some(self.next_regulars.unwrap_or(Duration::ZERO));
         }
         None

@@ -444,3 +444,59 @@ fn calibration_ends_in_position_control() {
         "{done_after:?}"
     );
 }
+
+/// Regulars that do not fit one datagram go out in several, each once per period: the
+/// board engine used to restart them with every frame and so resent the first one for
+/// ever (the emulator worked around it with 60 kB datagrams).
+#[test]
+fn regulars_larger_than_a_datagram_go_out_in_several_once_per_period() {
+    let mut board = arm_board();
+    board.max_tx_packet = 300;
+    let mut l = Loop::new(board);
+    l.start(&[mc_service(4), ft_service()]).expect("start-up");
+    assert_eq!(l.board.regulars().len(), 13);
+
+    // Bounded by hand: the bug made `poll_transmit` endless.
+    let mut per_period = Vec::new();
+    for _ in 0..50 {
+        l.now += l.dt;
+        l.board.step(l.dt.as_secs_f64());
+        let mut frames = 0;
+        while let Some(d) = l.board.poll_transmit(l.now) {
+            assert!(d.len() <= 300, "a datagram of {} bytes", d.len());
+            l.host
+                .handle_datagram(&d, l.now)
+                .expect("board frames are valid");
+            frames += 1;
+            assert!(frames < 20, "the board never stops sending this period");
+        }
+        l.host.handle_timeout(l.now);
+        per_period.push(frames);
+    }
+    let n = per_period[10];
+    assert!(n >= 2, "13 regulars in {n} datagram(s) of 300 bytes");
+    assert!(per_period[10..].iter().all(|&f| f == n), "{per_period:?}");
+
+    // The last regular (the F/T status, after the joints') reaches the host.
+    let ft = FtStatus {
+        timed_value: FtTimedValue {
+            age: 7,
+            values: [6.0, 5.0, 4.0, 0.3, 0.2, 0.1],
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    l.board
+        .store_mut()
+        .write(ids::analog(en::AS_FT, 0, tag::AS_FT_STATUS), &ft)
+        .unwrap();
+    l.tick();
+    let got: FtStatus = l
+        .host
+        .read(ids::analog(en::AS_FT, 0, tag::AS_FT_STATUS))
+        .unwrap();
+    assert_eq!(got, ft);
+    let c = l.host.counters();
+    assert_eq!(c.sequence_gaps, 0);
+    assert_eq!(c.invalid_frames + c.bad_rops + c.unknown_rops, 0);
+}
