@@ -246,6 +246,7 @@ impl DiscoveryDB {
     if active_disposal {
       self.remove_topic_reader_with_prefix(guid_prefix);
       self.remove_topic_writer_with_prefix(guid_prefix);
+      self.forget_topic_sources(|g| g.prefix == guid_prefix);
     } else {
       // move to attic
       move_by_guid_prefix(
@@ -285,6 +286,17 @@ impl DiscoveryDB {
   pub fn remove_topic_reader(&mut self, guid: GUID) {
     info!("remove_topic_reader {guid:?}");
     self.external_topic_readers.remove(&guid);
+    self.forget_topic_sources(|g| *g == guid);
+  }
+
+  // yarp-rs: a remote endpoint (or participant) that is gone no longer describes
+  // its topics: its entries in `topics` go with it. 0.15.1 kept one per remote
+  // reader and writer ever seen (some 8 KB for each ROS node that came and went).
+  fn forget_topic_sources(&mut self, gone: impl Fn(&GUID) -> bool) {
+    for sources in self.topics.values_mut() {
+      sources.retain(|g, (via, _)| *via == DiscoveredVia::SelfDefined || !gone(g));
+    }
+    self.topics.retain(|_, sources| !sources.is_empty());
   }
 
   #[cfg(feature = "security")]
@@ -312,6 +324,7 @@ impl DiscoveryDB {
 
   pub fn remove_topic_writer(&mut self, guid: GUID) {
     self.external_topic_writers.remove(&guid);
+    self.forget_topic_sources(|g| *g == guid);
   }
 
   // Delete participant proxies, if we have not heard of them within
@@ -370,6 +383,7 @@ impl DiscoveryDB {
       move_by_guid_prefix(prefix, &mut self.external_topic_readers_attic, &mut gone);
       let mut gone = BTreeMap::new();
       move_by_guid_prefix(prefix, &mut self.external_topic_writers_attic, &mut gone);
+      self.forget_topic_sources(|g| g.prefix == prefix);
     }
 
     to_remove
