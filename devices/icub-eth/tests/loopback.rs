@@ -84,6 +84,28 @@ impl Loop {
     }
 }
 
+/// A sensor model writes the F/T status on the board; after a tick the host's copy equals it.
+fn ft_status_reaches_host(l: &mut Loop, age: u64, values: [f32; 6]) {
+    let ft = FtStatus {
+        timed_value: FtTimedValue {
+            age,
+            values,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    l.board
+        .store_mut()
+        .write(ids::analog(en::AS_FT, 0, tag::AS_FT_STATUS), &ft)
+        .unwrap();
+    l.tick();
+    let got: FtStatus = l
+        .host
+        .read(ids::analog(en::AS_FT, 0, tag::AS_FT_STATUS))
+        .unwrap();
+    assert_eq!(got, ft);
+}
+
 /// A board that knows only its address and type: the services' configurations tell it
 /// its joints and sensors.
 fn arm_board() -> BoardConfig {
@@ -215,24 +237,7 @@ fn startup_position_command_and_encoder_feedback() {
     assert_eq!(core1.position, 0);
 
     // A sensor model writes the F/T status on the board; it reaches the host's copy.
-    let ft = FtStatus {
-        timed_value: FtTimedValue {
-            age: 1,
-            values: [1.0, 2.0, 3.0, 0.1, 0.2, 0.3],
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    l.board
-        .store_mut()
-        .write(ids::analog(en::AS_FT, 0, tag::AS_FT_STATUS), &ft)
-        .unwrap();
-    l.tick();
-    let got: FtStatus = l
-        .host
-        .read(ids::analog(en::AS_FT, 0, tag::AS_FT_STATUS))
-        .unwrap();
-    assert_eq!(got, ft);
+    ft_status_reaches_host(&mut l, 1, [1.0, 2.0, 3.0, 0.1, 0.2, 0.3]);
 
     // Regulars at the configured period: 1 ms x txratedivider 1 -> one frame per ms.
     let before = l.host_frames;
@@ -478,24 +483,7 @@ fn regulars_larger_than_a_datagram_go_out_in_several_once_per_period() {
     assert!(per_period[10..].iter().all(|&f| f == n), "{per_period:?}");
 
     // The last regular (the F/T status, after the joints') reaches the host.
-    let ft = FtStatus {
-        timed_value: FtTimedValue {
-            age: 7,
-            values: [6.0, 5.0, 4.0, 0.3, 0.2, 0.1],
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    l.board
-        .store_mut()
-        .write(ids::analog(en::AS_FT, 0, tag::AS_FT_STATUS), &ft)
-        .unwrap();
-    l.tick();
-    let got: FtStatus = l
-        .host
-        .read(ids::analog(en::AS_FT, 0, tag::AS_FT_STATUS))
-        .unwrap();
-    assert_eq!(got, ft);
+    ft_status_reaches_host(&mut l, 7, [6.0, 5.0, 4.0, 0.3, 0.2, 0.1]);
     let c = l.host.counters();
     assert_eq!(c.sequence_gaps, 0);
     assert_eq!(c.invalid_frames + c.bad_rops + c.unknown_rops, 0);
