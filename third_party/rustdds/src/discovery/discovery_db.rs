@@ -379,10 +379,8 @@ impl DiscoveryDB {
       .collect();
     for prefix in expired {
       self.attic_since.remove(&prefix);
-      let mut gone = BTreeMap::new();
-      move_by_guid_prefix(prefix, &mut self.external_topic_readers_attic, &mut gone);
-      let mut gone = BTreeMap::new();
-      move_by_guid_prefix(prefix, &mut self.external_topic_writers_attic, &mut gone);
+      self.external_topic_readers_attic.retain(|g, _| g.prefix != prefix);
+      self.external_topic_writers_attic.retain(|g, _| g.prefix != prefix);
       self.forget_topic_sources(|g| g.prefix == prefix);
     }
 
