@@ -456,6 +456,11 @@ where
     Ok(self.read_bare(usize::MAX, read_condition)?.into_iter())
   }
 
+  // yarp-rs: see SimpleDataReader::forget_taken_changes.
+  pub(crate) fn forget_taken_changes(&self) {
+    self.simple_data_reader.forget_taken_changes();
+  }
+
   /// Produces an iterator over the currently available NOT_READ samples.
   /// Yields only payload data, not SampleInfo metadata
   /// Removes samples from `DataReader`.
@@ -493,11 +498,6 @@ where
   ///   // do something
   /// }
   /// ```
-  // yarp-rs: see SimpleDataReader::forget_taken_changes.
-  pub(crate) fn forget_taken_changes(&self) {
-    self.simple_data_reader.forget_taken_changes();
-  }
-
   pub fn into_iterator(&mut self) -> ReadResult<impl Iterator<Item = Sample<D, D::K>>> {
     // TODO: We could come up with a more efficient implementation than wrapping a
     // take call
