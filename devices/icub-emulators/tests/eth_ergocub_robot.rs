@@ -1,8 +1,8 @@
 //! ergoCubSN001 as a whole, unmodified from robots-configuration (`ergocub.xml`),
 //! brought up by the robot-interface runner against the emulated Ethernet boards (address
 //! map 10.0.1.0/24 -> 127.0.4.0/24), with an in-process name server, under netns-run.
-//! Every embObj device opens (device types this build lacks are named). Our `yarp rpc`
-//! `set pos` on `/ergocub/left_arm/rpc:i` moves the shoulder roll on `state:o`; our `yarp read`
+//! Every embObj device opens (device types this build lacks are named). Our `yarp rpc`,
+//! and C++'s, `set pos` on `/ergocub/left_arm/rpc:i` moves the shoulder roll on `state:o`; our `yarp read`
 //! receives the left arm's F/T and IMU streams.
 
 mod eth_common;
@@ -11,8 +11,9 @@ use std::io::Write;
 use std::process::Command;
 use std::time::Instant;
 
-use eth_common::{bring_up, our_yarp, robot_dir, Peer, T};
+use eth_common::{bring_up, cpp_yarp, our_yarp, robot_dir, Peer, T};
 use yarp_devices::robotinterface::ActionPhase;
+use yarp_interop_tests::cpp_rpc_output;
 use yarp_net::blocking::{BufferedPort, Network};
 
 #[test]
@@ -68,6 +69,22 @@ fn ergocub_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
         }
         eprintln!("set pos 1 60 seen on state:o after {:?}", sent.elapsed());
         drop(rpc);
+
+        // The same through C++ `yarp rpc` (the C++ peer; its absence fails under CI).
+        if let Some(cpp) = cpp_yarp("ergocub (C++ yarp rpc step)") {
+            let sent = Instant::now();
+            let out = cpp_rpc_output(&cpp, "/ergocub/left_arm/rpc:i", "set pos 1 55\n");
+            assert!(out.contains("[ok]"), "C++ yarp rpc: {out}");
+            let end = Instant::now() + T;
+            while (at - 55.0).abs() > 0.5 {
+                assert!(Instant::now() < end, "joint 1 at {at}, not 55");
+                at = joint1(T).unwrap_or(at);
+            }
+            eprintln!(
+                "C++ yarp rpc: set pos 1 55 seen on state:o after {:?}",
+                sent.elapsed()
+            );
+        }
 
         for port in [
             "/ergocub/left_arm/FT/measures:o",

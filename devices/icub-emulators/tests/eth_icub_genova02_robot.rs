@@ -2,8 +2,8 @@
 //! robot-interface runner (`icub_all.xml`: wrappers, remappers, the embObj devices,
 //! calibrators) against the emulated Ethernet boards, with an in-process name server
 //! (run under netns-run; the boards are reached through the address map
-//! 10.0.1.0/24 -> 127.0.3.0/24). Every device opens. Then our `yarp rpc` sends
-//! `set pos` to `/icub/left_arm/rpc:i` and the joint is seen moving on
+//! 10.0.1.0/24 -> 127.0.3.0/24). Every device opens. Then our `yarp rpc`, and C++'s,
+//! send `set pos` to `/icub/left_arm/rpc:i` and the joint is seen moving on
 //! `/icub/left_arm/state:o`; our `yarp read` receives the left arm's F/T stream; the
 //! Ctrl-C phases park the arms and close everything.
 
@@ -13,8 +13,9 @@ use std::io::Write;
 use std::process::Command;
 use std::time::Instant;
 
-use eth_common::{bring_up, our_yarp, robot_dir, Peer, T};
+use eth_common::{bring_up, cpp_yarp, our_yarp, robot_dir, Peer, T};
 use yarp_devices::robotinterface::ActionPhase;
+use yarp_interop_tests::cpp_rpc_output;
 use yarp_net::blocking::{BufferedPort, Network};
 
 #[test]
@@ -62,6 +63,22 @@ fn icub_genova02_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
         }
         eprintln!("set pos 0 -20 seen on state:o after {:?}", sent.elapsed());
         drop(rpc);
+
+        // The same through C++ `yarp rpc` (the C++ peer; its absence fails under CI).
+        if let Some(cpp) = cpp_yarp("icub_genova02 (C++ yarp rpc step)") {
+            let sent = Instant::now();
+            let out = cpp_rpc_output(&cpp, "/icub/left_arm/rpc:i", "set pos 0 -25\n");
+            assert!(out.contains("[ok]"), "C++ yarp rpc: {out}");
+            let end = Instant::now() + T;
+            while (at + 25.0).abs() > 0.5 {
+                assert!(Instant::now() < end, "joint 0 at {at}, not -25");
+                at = joint0(T).unwrap_or(at);
+            }
+            eprintln!(
+                "C++ yarp rpc: set pos 0 -25 seen on state:o after {:?}",
+                sent.elapsed()
+            );
+        }
 
         let mut cmd = Command::new(&yarp);
         cmd.args(["read", "/test/ft:i", "/icub/left_arm/FT/measures:o"]);

@@ -105,39 +105,6 @@ fn cpp_yarp() -> Option<PathBuf> {
     yarp_interop_tests::cpp_program("simulated_icub (C++ yarp rpc step)", "yarp")
 }
 
-/// Runs C++ `yarp rpc PORT` with `input` on stdin; its output, bounded by `T`.
-fn cpp_rpc(yarp: &std::path::Path, port: &str, input: &str) -> String {
-    use std::io::{Read, Write};
-    use std::process::{Command, Stdio};
-    let mut child = Command::new(yarp)
-        .args(["rpc", port])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn C++ yarp");
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(input.as_bytes())
-        .unwrap();
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() && start.elapsed() < T {
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let _ = child.kill();
-    let _ = child.wait();
-    let mut out = String::new();
-    child
-        .stdout
-        .take()
-        .unwrap()
-        .read_to_string(&mut out)
-        .unwrap();
-    out
-}
-
 /// The encoders (degrees) of the opened device `name` of `runner`.
 fn encoders_of(runner: &RobotRunner, name: &str) -> Vec<f64> {
     let dev = runner.device(name).unwrap_or_else(|| panic!("{name}"));
@@ -300,7 +267,8 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
 
     // C++ `yarp rpc` drives the same joint
     if let Some(yarp) = cpp_yarp() {
-        let out = cpp_rpc(&yarp, "/icub/left_arm/rpc:i", "set pos 3 50\n");
+        let out =
+            yarp_interop_tests::cpp_rpc_output(&yarp, "/icub/left_arm/rpc:i", "set pos 3 50\n");
         assert!(out.contains("[ok]"), "{out}");
         let dev = arm.device();
         assert!(eventually(T, || dev
@@ -308,7 +276,7 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
             .unwrap()
             .get_encoder(3)
             .is_ok_and(|q| (q - 50.0).abs() < 1.0)));
-        let out = cpp_rpc(&yarp, "/icub/left_arm/rpc:i", "get enc 3\n");
+        let out = yarp_interop_tests::cpp_rpc_output(&yarp, "/icub/left_arm/rpc:i", "get enc 3\n");
         assert!(
             out.contains("[is] enc 49.") || out.contains("[is] enc 50."),
             "{out}"

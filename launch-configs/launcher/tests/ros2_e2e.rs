@@ -1,7 +1,8 @@
 //! The mission end to end: `yarp-launch` starts a robot config (`icub-sim.toml`, the
-//! emulated iCub, and `fake-devices.toml`); for each ROS 2 distro (Kilted and Jazzy, see
+//! emulated iCub; `icub-genova02.toml` and `ergocub.toml`, the Ethernet robots of
+//! robots-configuration on emulated boards; `fake-devices.toml`); for each ROS 2 distro (Kilted and Jazzy, see
 //! `common::ros`) real rclpy nodes with rclpy's default QoS read every state topic the
-//! gateway offers and `/icub/left_arm/joint_states`, and command a joint through the
+//! gateway offers and the left arm's `joint_states`, and command a joint through the
 //! gateway once the part is calibrated; our `yarp read` reads a YARP port, headless
 //! Chromium loads the dashboard, and everything stops with no process left behind. Prints
 //! the time from the start to the first JointState; for the iCub, the whole robot as ROS
@@ -105,7 +106,11 @@ struct Scenario<'a> {
     targets: [f64; 2],
     /// The robot's log line that says the left arm is calibrated (commands wait for it).
     calibrated: Option<&'a str>,
-    /// The ROS domain is 1 + 2 * (pid % 50) + this (this file uses 1..=100).
+    /// The robot's port prefix (`/icub`, `/ergocub`).
+    prefix: &'a str,
+    /// Options for `yarp-launch` (e.g. `--set address_map=...`).
+    extra: &'a [&'a str],
+    /// The ROS domain is 1 + 4 * (pid % 25) + this (this file uses 1..=100).
     domain_offset: u32,
     imu_topic: Option<&'a str>,
     /// The whole robot as ROS tools read it: the joints of the merged `/joint_states`
@@ -130,7 +135,7 @@ fn e2e(s: Scenario) {
     }
     // A ROS domain per test: the two tests of this file may run at once, and other tests
     // run DDS in the same network namespace.
-    let domain = (1 + (std::process::id() % 50) * 2 + s.domain_offset).to_string();
+    let domain = (1 + (std::process::id() % 25) * 4 + s.domain_offset).to_string();
     let ros_env = |distro: &'static str| {
         [
             ("ROS_DOMAIN_ID", domain.clone()),
@@ -152,7 +157,8 @@ fn e2e(s: Scenario) {
         joint_cmd
             .arg("-u")
             .arg(configs_dir().join("launcher/tests/peers/joint_probe.py"))
-            .args(["left_arm", s.joint, &target, "--timeout", "240", "--go"])
+            .args(["left_arm", s.joint, &target, "--prefix", s.prefix])
+            .args(["--timeout", "240", "--go"])
             .arg(&go)
             .envs(ros_env(d.name));
         let mut state_cmd = Command::new(d.python());
@@ -176,7 +182,8 @@ fn e2e(s: Scenario) {
     }
 
     let t0 = Instant::now();
-    let args = ["--dashboard", "127.0.0.1:0"];
+    let mut args = vec!["--dashboard", "127.0.0.1:0"];
+    args.extend_from_slice(s.extra);
     let launch_env = ros_env(distros[0].name);
     let launch_env: Vec<(&str, &str)> = launch_env.iter().map(|(k, v)| (*k, v.as_str())).collect();
     let mut l = Launch::start_with_env(&configs_dir().join(s.config), &args, &launch_env);
@@ -321,7 +328,11 @@ fn checks(l: &mut Launch, nodes: &[Nodes], s: &Scenario, t0: Instant, ros_env: &
     let conf_home = l.conf_home.path().to_path_buf();
     let mut read_cmd = Command::new(program("yarp", "yarp-cli"));
     read_cmd
-        .args(["read", "/e2e/reader", "/icub/left_arm/state:o"])
+        .args([
+            "read",
+            "/e2e/reader",
+            &format!("{}/left_arm/state:o", s.prefix),
+        ])
         .env("YARP_CONFIG_HOME", &conf_home);
     let reader = Lines::spawn(read_cmd);
     let line = reader.expect("", Duration::from_secs(20));
@@ -346,11 +357,8 @@ fn checks(l: &mut Launch, nodes: &[Nodes], s: &Scenario, t0: Instant, ros_env: &
             &["--dump-dom".to_string(), url.clone()],
             Duration::from_secs(60),
         );
-        for needle in [
-            r#"id="port-graph""#,
-            r#"id="joint-plot""#,
-            r#"data-port="/icub/left_arm/state:o""#,
-        ] {
+        let port = format!(r#"data-port="{}/left_arm/state:o""#, s.prefix);
+        for needle in [r#"id="port-graph""#, r#"id="joint-plot""#, port.as_str()] {
             assert!(dom.contains(needle), "the dashboard's DOM lacks {needle}");
         }
     }
@@ -375,6 +383,8 @@ fn fake_devices_to_rclpy_and_back() {
         joint: "0",
         targets: [30.0, 20.0],
         calibrated: None,
+        prefix: "/icub",
+        extra: &[],
         domain_offset: 0,
         imu_topic: None,
         whole_robot: None,
@@ -402,8 +412,52 @@ fn icub_sim_to_rclpy_and_back() {
         joint: "3",
         targets: [60.0, 50.0],
         calibrated: Some("calibration done device=Left_Arm_Calibrator"),
+        prefix: "/icub",
+        extra: &[],
         domain_offset: 1,
         imu_topic: Some("/icub/head/imu"),
         whole_robot: Some((53, "/icub/cam/left/camera_info")),
+    });
+}
+
+/// The Ethernet iCub of robots-configuration, unmodified, against the emulated boards
+/// (served on 127.0.7.0/24, apart from other tests' boards). The left shoulder pitch
+/// (joint 0, calibrated to -35.97 degrees).
+#[test]
+fn icub_genova02_to_rclpy_and_back() {
+    program("icub-eth-emulator", "icub-emulators");
+    program("yarprobotinterface", "yarp-device-programs");
+    e2e(Scenario {
+        config: "icub-genova02.toml",
+        mapping: "icub-genova02.toml",
+        joint: "0",
+        targets: [-20.0, -25.0],
+        calibrated: Some("calibration done device=Left_Arm_Calibrator"),
+        prefix: "/icub",
+        extra: &["--set", "address_map=10.0.1.0/24=127.0.7.0/24"],
+        domain_offset: 2,
+        imu_topic: None,
+        whole_robot: None,
+    });
+}
+
+/// ergoCubSN001 of robots-configuration, unmodified, against the emulated boards (served on
+/// 127.0.8.0/24). The left shoulder roll (joint 1, calibrated to 50 degrees); the left
+/// arm's IMU as sensor_msgs/Imu.
+#[test]
+fn ergocub_to_rclpy_and_back() {
+    program("icub-eth-emulator", "icub-emulators");
+    program("yarprobotinterface", "yarp-device-programs");
+    e2e(Scenario {
+        config: "ergocub.toml",
+        mapping: "ergocub.toml",
+        joint: "1",
+        targets: [60.0, 55.0],
+        calibrated: Some("calibration done device=Left_Arm_Calibrator"),
+        prefix: "/ergocub",
+        extra: &["--set", "address_map=10.0.1.0/24=127.0.8.0/24"],
+        domain_offset: 3,
+        imu_topic: Some("/ergocub/left_arm/imu"),
+        whole_robot: None,
     });
 }

@@ -43,6 +43,12 @@ pub fn our_yarp() -> Option<PathBuf> {
     None
 }
 
+/// C++ `yarp` of the C++ peer for `test`, or `None` after the shared missing-peer rule
+/// (fails under CI).
+pub fn cpp_yarp(test: &str) -> Option<PathBuf> {
+    yarp_interop_tests::cpp_program(test, "yarp")
+}
+
 /// A child process whose stdout lines arrive on a channel; killed and reaped on drop.
 pub struct Peer {
     pub child: Child,

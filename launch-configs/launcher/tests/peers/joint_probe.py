@@ -1,7 +1,7 @@
 """An rclpy node for the launcher's end-to-end test: reads a part's JointState, commands a
 joint through the gateway's text-RPC topics, and watches the joint move.
 
-  joint_probe.py PART JOINT TARGET_DEG [--timeout S] [--go FILE]
+  joint_probe.py PART JOINT TARGET_DEG [--prefix /icub] [--timeout S] [--go FILE]
 
 Subscribes with rclpy's default QoS (reliable, keep last 10), as `ros2 topic echo` does.
 Prints, one line each, flushed: READY (node up), FIRST <json> (first JointState: names,
@@ -30,6 +30,7 @@ def main():
     ap.add_argument("part")
     ap.add_argument("joint", type=int)
     ap.add_argument("target", type=float)
+    ap.add_argument("--prefix", default="/icub", help="the robot's port prefix")
     ap.add_argument("--timeout", type=float, default=60.0)
     ap.add_argument("--go", help="command only once this file exists")
     a = ap.parse_args()
@@ -50,9 +51,9 @@ def main():
         if sent_at is not None:
             state["reply"] = msg.data
 
-    node.create_subscription(JointState, f"/icub/{a.part}/joint_states", on_joints, 10)
-    node.create_subscription(String, f"/icub/{a.part}/rpc/reply", on_reply, 10)
-    request = node.create_publisher(String, f"/icub/{a.part}/rpc/request", 10)
+    node.create_subscription(JointState, f"{a.prefix}/{a.part}/joint_states", on_joints, 10)
+    node.create_subscription(String, f"{a.prefix}/{a.part}/rpc/reply", on_reply, 10)
+    request = node.create_publisher(String, f"{a.prefix}/{a.part}/rpc/request", 10)
     say("READY")
 
     deadline = time.monotonic() + a.timeout
