@@ -9,7 +9,8 @@
 //! start-up time (open, attach, calibrate every part), the CPU over SECONDS (default 20)
 //! of running, as a share of one core, the command-to-encoder latency (position command
 //! on the left arm's remapper until its encoder moves, median of 20), and the boards'
-//! status streams: datagrams, the longest gap between two, sequence gaps.
+//! status streams: datagrams, the longest gap between two, the gaps longer than three
+//! periods, sequence gaps (in all and per board).
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -79,16 +80,25 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
     std::thread::sleep(Duration::from_secs(seconds));
     let cpu = (cpu_seconds() - c0) / w0.elapsed().as_secs_f64();
     let mut worst = (Duration::ZERO, String::new());
-    let (mut frames, mut seq_gaps) = (0u64, 0u64);
+    let (mut frames, mut seq_gaps, mut late) = (0u64, 0u64, 0u64);
+    let mut per_board = Vec::new();
     for b in mgr.all_boards() {
-        let (n, gap, c) = b.rx_stats();
-        frames += n;
-        seq_gaps += c.sequence_gaps;
-        if gap > worst.0 {
-            worst = (
-                gap,
-                format!("{} (period {:?})", b.who(), b.params().regulars_period()),
-            );
+        let st = b.rx_stats();
+        let period = b.params().regulars_period();
+        frames += st.datagrams;
+        seq_gaps += st.counters.sequence_gaps;
+        late += st.late_gaps;
+        per_board.push(format!(
+            "  {}: period {:?}, {} datagrams ({:.0}/s), longest gap {:.1} ms, {} gaps over 3 periods",
+            b.who(),
+            period,
+            st.datagrams,
+            st.datagrams as f64 / seconds as f64,
+            st.longest_gap.as_secs_f64() * 1e3,
+            st.late_gaps
+        ));
+        if st.longest_gap > worst.0 {
+            worst = (st.longest_gap, format!("{} (period {period:?})", b.who()));
         }
     }
 
@@ -137,7 +147,7 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
     println!(
         "{robot}: {boards} boards; startup {:.1} s; CPU {:.1} % of one core over {seconds} s (robot + emulator); \
          command-to-encoder median {:.1} ms (min {:.1}, max {:.1}); {frames} status datagrams, \
-         longest gap {:.1} ms at {}, {seq_gaps} sequence gaps; failures at start-up: {}; moves that failed: {missed}; loadavg {}",
+         longest gap {:.1} ms at {}, {late} gaps over 3 periods, {seq_gaps} sequence gaps; failures at start-up: {}; moves that failed: {missed}; loadavg {}",
         startup.as_secs_f64(),
         cpu * 100.0,
         lat[lat.len() / 2].as_secs_f64() * 1e3,
@@ -148,6 +158,9 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         runner.failures().len(),
         load.trim()
     );
+    for line in per_board {
+        println!("{line}");
+    }
     let _ = runner.enter_phase(ActionPhase::Interrupt1);
     let _ = runner.enter_phase(ActionPhase::Shutdown);
 }

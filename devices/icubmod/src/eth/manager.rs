@@ -48,13 +48,27 @@ struct Inner {
     host: HostTransceiver,
     /// When the board's last datagram arrived.
     last_rx: Option<Instant>,
-    /// Datagrams received and the longest silence between two of them since
-    /// [`Board::reset_rx_stats`].
+    /// Datagrams received, the longest silence between two of them and the silences
+    /// longer than three regulars periods, since [`Board::reset_rx_stats`].
     rx_count: u64,
     max_gap: Duration,
+    late_gaps: u64,
     bring_up: BringUp,
     last_missing_report: Option<Instant>,
     last_lost_report: Option<Instant>,
+}
+
+/// The datagrams of one board as the host received them (see [`Board::rx_stats`]).
+#[derive(Debug, Clone)]
+pub struct RxStats {
+    pub datagrams: u64,
+    /// The longest silence between two datagrams.
+    pub longest_gap: Duration,
+    /// Silences longer than three regulars periods (the board streams one ropframe of
+    /// regulars per period while running).
+    pub late_gaps: u64,
+    /// The host's counters (sequence gaps, bad frames, timeouts).
+    pub counters: icub_eth::host::HostCounters,
 }
 
 /// One Ethernet board of the robot.
@@ -298,17 +312,22 @@ impl Board {
         })
     }
 
-    /// Datagrams received and the longest gap between two since the last reset, with the
-    /// host's counters (sequence gaps, bad frames, timeouts).
-    pub fn rx_stats(&self) -> (u64, Duration, icub_eth::host::HostCounters) {
+    /// What arrived from the board since the last [`Board::reset_rx_stats`].
+    pub fn rx_stats(&self) -> RxStats {
         let inner = self.lock();
-        (inner.rx_count, inner.max_gap, inner.host.counters())
+        RxStats {
+            datagrams: inner.rx_count,
+            longest_gap: inner.max_gap,
+            late_gaps: inner.late_gaps,
+            counters: inner.host.counters(),
+        }
     }
 
     pub fn reset_rx_stats(&self) {
         let mut inner = self.lock();
         inner.rx_count = 0;
         inner.max_gap = Duration::ZERO;
+        inner.late_gaps = 0;
     }
 
     /// Whether the board is currently reported silent.
@@ -323,6 +342,9 @@ impl Board {
         let at = Instant::now();
         if let Some(prev) = inner.last_rx {
             inner.max_gap = inner.max_gap.max(at - prev);
+            if at - prev > 3 * self.params.regulars_period() {
+                inner.late_gaps += 1;
+            }
             if inner.last_missing_report.take().is_some() {
                 tracing::warn!(
                     "eth::EthMonitorPresence: BOARD {} has shown after being lost for {:.3} sec",
@@ -486,6 +508,7 @@ impl EthManager {
                         last_rx: None,
                         rx_count: 0,
                         max_gap: Duration::ZERO,
+                        late_gaps: 0,
                         last_missing_report: None,
                         last_lost_report: None,
                     }),
