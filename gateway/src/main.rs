@@ -211,6 +211,8 @@ async fn run(args: Args) -> anyhow::Result<()> {
         diagnostics_port: Some(args.diagnostics_port.clone()),
     };
     let gw = Gateway::start(&mappings, ns.clone(), opt).await?;
+    // Runs for hours: keep glibc's freed pages from piling up in the RSS.
+    yarp_net::heap::trim_periodically(yarp_net::heap::TRIM_PERIOD);
     println!(
         "yarp-ros2-gateway: ROS domain {domain_id}, YARP name server {}, {} mapping(s):",
         ns.server(),

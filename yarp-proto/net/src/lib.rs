@@ -3,6 +3,7 @@
 pub mod blocking;
 pub mod buffered;
 pub mod dgram;
+pub mod heap;
 pub mod nameserver;
 pub mod network;
 pub mod port;

@@ -1,6 +1,8 @@
 //! `yarpserver`: the YARP name server program (see `yarp_net::nameserver::program`).
 
 fn main() -> std::process::ExitCode {
+    // Runs for hours: keep glibc's freed pages from piling up in the RSS.
+    yarp_net::heap::trim_periodically(yarp_net::heap::TRIM_PERIOD);
     match yarp_net::nameserver::program::main_with_args(std::env::args().skip(1)) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
