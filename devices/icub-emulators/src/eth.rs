@@ -263,6 +263,20 @@ fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u6
             &icub_eth::entities::analog::PosStatus { values },
         );
     }
+    if spec.batteries > 0 {
+        // A 48 V pack at 85 % in use, drawing ~2 A, at 25 °C.
+        let _ = store.write(
+            ids::analog(en::AS_BATTERY, 0, tag::AS_BATTERY_STATUS_TIMEDVALUE),
+            &icub_eth::entities::analog::BatteryStatus {
+                age: age_us,
+                temperature: 250,
+                status: 2,
+                voltage: 48.3,
+                current: 2.0 + 0.2 * s as f32,
+                charge: 85.0,
+            },
+        );
+    }
     for (p, addrs) in spec.skin_patches.iter().enumerate() {
         // Two CAN frames per triangle (7 + 5 taxels), 24 frames per status, in turn.
         let all: Vec<(u8, u8, bool)> = addrs

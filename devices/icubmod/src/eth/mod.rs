@@ -11,6 +11,7 @@
 //! | `embObjMais` | [`sensors`] | `IAnalogSensor` (15 channels) |
 //! | `embObjSkin` | [`sensors`] | `IAnalogSensor` (192 taxels per MTB) |
 //! | `embObjPOS` | [`sensors`] | none yet (C++ `IEncoderArrays`); the service runs |
+//! | `embObjBattery` | [`sensors`] | `IBattery` |
 //!
 //! Parameters: [`params`] (`PC104`, `ETH_BOARD`, `SERVICE`), [`mc_params`]; the host's
 //! socket and the boards: [`manager`]; a device's service on its board: [`service`].
@@ -27,7 +28,8 @@ pub mod service;
 pub use calibrator::ParametricCalibratorEth;
 pub use motion_control::EmbObjMotionControl;
 pub use sensors::{
-    EmbObjFtSensor, EmbObjImu, EmbObjMais, EmbObjMultipleFtSensors, EmbObjPos, EmbObjSkin,
+    EmbObjBattery, EmbObjFtSensor, EmbObjImu, EmbObjMais, EmbObjMultipleFtSensors, EmbObjPos,
+    EmbObjSkin,
 };
 
 use yarp_devices::driver::Factory;
@@ -53,4 +55,5 @@ pub const DRIVERS: &[(&str, Factory)] = &[
     (sensors::MAIS, || Box::new(EmbObjMais::new())),
     (sensors::SKIN, || Box::new(EmbObjSkin::new())),
     (sensors::POS, || Box::new(EmbObjPos::new())),
+    (sensors::BATTERY, || Box::new(EmbObjBattery::new())),
 ];

@@ -1016,3 +1016,110 @@ impl DeviceDriver for EmbObjPos {
         Ok(())
     }
 }
+
+// ---- embObjBattery ----
+
+/// `embObjBattery`: the battery behind a board (ergoCub's BMS or BAT on CAN), as
+/// `IBattery`, with C++'s units and roundings.
+#[derive(Default)]
+pub struct EmbObjBattery {
+    c: Common,
+}
+
+pub const BATTERY: &str = "embObjBattery";
+
+impl EmbObjBattery {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn status(&self) -> DevResult<icub_eth::entities::analog::BatteryStatus> {
+        self.c.read(ids::analog(
+            en::AS_BATTERY,
+            0,
+            tag::AS_BATTERY_STATUS_TIMEDVALUE,
+        ))
+    }
+}
+
+impl DeviceDriver for EmbObjBattery {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        self.c.open(BATTERY, config, category::BATTERY, |root, st| {
+            let (set, _) = settings(root)?;
+            let rate = set.number("acquisitionRate")?.unwrap_or(1000.0);
+            // C++ assigns acquisitionRate (ms) to the one-byte period as it is, so 1000
+            // goes out as 232: send what C++ sends.
+            let cfg = icub_eth::entities::analog::BatteryConfig {
+                period: (rate.max(0.0) as u32 & 0xff) as u8,
+            };
+            Ok(SensorService {
+                activate: verify(category::BATTERY, st),
+                configs: vec![(
+                    ids::analog(en::AS_BATTERY, 0, tag::AS_BATTERY_CONFIG),
+                    cfg.to_bytes(),
+                )],
+                regulars: vec![ids::analog(
+                    en::AS_BATTERY,
+                    0,
+                    tag::AS_BATTERY_STATUS_TIMEDVALUE,
+                )],
+                after_start: vec![(
+                    ids::analog(en::AS_BATTERY, 0, tag::AS_BATTERY_CMMNDS_ENABLE),
+                    vec![1],
+                )],
+            })
+        })
+    }
+
+    fn as_battery(&mut self) -> Option<&mut dyn yarp_devices::battery::IBattery> {
+        Some(self)
+    }
+}
+
+/// C++'s `std::trunc(10 * v) / 10` on the board's float.
+fn tenths(v: f32) -> f64 {
+    f64::from((10.0 * v).trunc() / 10.0)
+}
+
+impl yarp_devices::battery::IBattery for EmbObjBattery {
+    // Volts and amperes truncated to 0.1 (in single precision, as C++ computes them),
+    // degrees Celsius in whole degrees (the board's 0.1 °C divided as integers), as C++
+    // embObjBattery gives them.
+    fn get_battery_voltage(&mut self) -> DevResult<f64> {
+        Ok(tenths(self.status()?.voltage))
+    }
+    fn get_battery_current(&mut self) -> DevResult<f64> {
+        Ok(tenths(self.status()?.current))
+    }
+    fn get_battery_charge(&mut self) -> DevResult<f64> {
+        Ok(f64::from(self.status()?.charge))
+    }
+    fn get_battery_status(&mut self) -> DevResult<yarp_devices::battery::BatteryStatus> {
+        use yarp_devices::battery::BatteryStatus as S;
+        // C++ casts the board's status word to IBattery's enum as it is.
+        Ok(match self.status()?.status {
+            0 => S::OkStandby,
+            1 => S::OkInCharge,
+            2 => S::OkInUse,
+            4 => S::Timeout,
+            5 => S::LowWarning,
+            6 => S::CriticalWarning,
+            _ => S::GeneralError,
+        })
+    }
+    fn get_battery_temperature(&mut self) -> DevResult<f64> {
+        Ok(f64::from(self.status()?.temperature / 10))
+    }
+    fn get_battery_info(&mut self) -> DevResult<String> {
+        let s = self.status()?;
+        Ok(format!(
+            "{{\"temperature\":{},\"voltage\":{},\"current\":{},\"charge\":{},\"status\":{},\"ts\":{}}}",
+            s.temperature / 10,
+            (10.0 * s.voltage).trunc() / 10.0,
+            (10.0 * s.current).trunc() / 10.0,
+            s.charge,
+            s.status,
+            now()
+        ))
+    }
+}
