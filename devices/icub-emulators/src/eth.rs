@@ -472,6 +472,7 @@ const MAX_WAIT: Duration = Duration::from_millis(5);
 fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
     let epoch = Instant::now();
     let mut buf = vec![0u8; 65536];
+    let mut poller = Poller::new(boards.iter().map(|b| &b.socket));
     while !stop.load(Ordering::Relaxed) {
         let now = epoch.elapsed();
         let wait = boards
@@ -480,9 +481,9 @@ fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
             .min()
             .map_or(MAX_WAIT, |t| t.saturating_sub(now))
             .clamp(Duration::from_micros(100), MAX_WAIT);
-        let readable = wait_readable(boards.iter().map(|b| &b.socket), wait);
-        for (b, ready) in boards.iter_mut().zip(readable) {
-            if ready {
+        poller.wait(wait);
+        for (i, b) in boards.iter_mut().enumerate() {
+            if poller.readable(i) {
                 b.receive(&mut buf);
             }
         }
@@ -492,42 +493,69 @@ fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
     }
 }
 
-/// Waits until one of `sockets` has a datagram or `timeout` has passed; which ones are
-/// readable. On Linux with `ppoll`, on the high-resolution timers: a socket's receive
+/// Waits on every board's socket at once; built once, its poll set is reused on every
+/// wake-up. On Linux with `ppoll`, on the high-resolution timers: a socket's receive
 /// timeout (SO_RCVTIMEO) counts in scheduler ticks, so a 1 ms wait took ~9 ms and boards
 /// of 1 ms period sent ~115 ropframes a second instead of 1000.
 #[cfg(target_os = "linux")]
-fn wait_readable<'a>(sockets: impl Iterator<Item = &'a UdpSocket>, timeout: Duration) -> Vec<bool> {
-    use std::os::fd::AsRawFd;
-    let mut fds: Vec<libc::pollfd> = sockets
-        .map(|s| libc::pollfd {
-            fd: s.as_raw_fd(),
-            events: libc::POLLIN,
-            revents: 0,
-        })
-        .collect();
-    let ts = libc::timespec {
-        tv_sec: timeout.as_secs() as libc::time_t,
-        tv_nsec: timeout.subsec_nanos() as libc::c_long,
-    };
-    // SAFETY: `fds` holds fds.len() valid pollfds, `ts` a valid timespec; no signal mask
-    // is changed.
-    let n = unsafe {
-        libc::ppoll(
-            fds.as_mut_ptr(),
-            fds.len() as libc::nfds_t,
-            &ts,
-            std::ptr::null(),
-        )
-    };
-    fds.iter()
-        .map(|f| n > 0 && f.revents & libc::POLLIN != 0)
-        .collect()
+struct Poller {
+    fds: Vec<libc::pollfd>,
+}
+
+#[cfg(target_os = "linux")]
+impl Poller {
+    fn new<'a>(sockets: impl Iterator<Item = &'a UdpSocket>) -> Self {
+        use std::os::fd::AsRawFd;
+        let fds = sockets
+            .map(|s| libc::pollfd {
+                fd: s.as_raw_fd(),
+                events: libc::POLLIN,
+                revents: 0,
+            })
+            .collect();
+        Poller { fds }
+    }
+
+    /// Until one socket has a datagram or `timeout` has passed.
+    fn wait(&mut self, timeout: Duration) {
+        let ts = libc::timespec {
+            tv_sec: timeout.as_secs() as libc::time_t,
+            tv_nsec: timeout.subsec_nanos() as libc::c_long,
+        };
+        for f in &mut self.fds {
+            f.revents = 0;
+        }
+        // SAFETY: `fds` holds fds.len() valid pollfds, `ts` a valid timespec; no signal
+        // mask is changed. On an error (EINTR) every `revents` stays 0.
+        unsafe {
+            libc::ppoll(
+                self.fds.as_mut_ptr(),
+                self.fds.len() as libc::nfds_t,
+                &ts,
+                std::ptr::null(),
+            );
+        }
+    }
+
+    /// Whether socket `i` had a datagram at the last wait.
+    fn readable(&self, i: usize) -> bool {
+        self.fds[i].revents & libc::POLLIN != 0
+    }
 }
 
 /// Elsewhere: sleep, then try every socket (they are non-blocking).
 #[cfg(not(target_os = "linux"))]
-fn wait_readable<'a>(sockets: impl Iterator<Item = &'a UdpSocket>, timeout: Duration) -> Vec<bool> {
-    std::thread::sleep(timeout);
-    sockets.map(|_| true).collect()
+struct Poller;
+
+#[cfg(not(target_os = "linux"))]
+impl Poller {
+    fn new<'a>(_sockets: impl Iterator<Item = &'a UdpSocket>) -> Self {
+        Poller
+    }
+    fn wait(&mut self, timeout: Duration) {
+        std::thread::sleep(timeout);
+    }
+    fn readable(&self, _i: usize) -> bool {
+        true
+    }
 }
