@@ -1076,9 +1076,10 @@ impl DeviceDriver for EmbObjBattery {
     }
 }
 
-/// C++'s `std::trunc(10 * v) / 10` on the board's float.
-fn tenths(v: f32) -> f64 {
-    f64::from((10.0 * v).trunc() / 10.0)
+/// C++'s `std::trunc(10 * v) / 10` on the board's float (in single precision, so 48.3
+/// stays 48.3f: in double it would truncate to 48.2).
+fn tenths(v: f32) -> f32 {
+    (10.0 * v).trunc() / 10.0
 }
 
 impl yarp_devices::battery::IBattery for EmbObjBattery {
@@ -1086,10 +1087,10 @@ impl yarp_devices::battery::IBattery for EmbObjBattery {
     // degrees Celsius in whole degrees (the board's 0.1 °C divided as integers), as C++
     // embObjBattery gives them.
     fn get_battery_voltage(&mut self) -> DevResult<f64> {
-        Ok(tenths(self.status()?.voltage))
+        Ok(f64::from(tenths(self.status()?.voltage)))
     }
     fn get_battery_current(&mut self) -> DevResult<f64> {
-        Ok(tenths(self.status()?.current))
+        Ok(f64::from(tenths(self.status()?.current)))
     }
     fn get_battery_charge(&mut self) -> DevResult<f64> {
         Ok(f64::from(self.status()?.charge))
@@ -1115,8 +1116,8 @@ impl yarp_devices::battery::IBattery for EmbObjBattery {
         Ok(format!(
             "{{\"temperature\":{},\"voltage\":{},\"current\":{},\"charge\":{},\"status\":{},\"ts\":{}}}",
             s.temperature / 10,
-            (10.0 * s.voltage).trunc() / 10.0,
-            (10.0 * s.current).trunc() / 10.0,
+            tenths(s.voltage),
+            tenths(s.current),
             s.charge,
             s.status,
             now()
