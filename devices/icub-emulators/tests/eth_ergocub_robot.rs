@@ -11,7 +11,7 @@ use std::io::Write;
 use std::process::Command;
 use std::time::Instant;
 
-use eth_common::{bring_up, cpp_yarp, our_yarp, robot_dir, Peer, T};
+use eth_common::{bring_up, cpp_yarp, our_yarp, robot_dir, until_at, Peer, T};
 use yarp_devices::robotinterface::ActionPhase;
 use yarp_interop_tests::cpp_rpc_output;
 use yarp_net::blocking::{BufferedPort, Network};
@@ -61,12 +61,7 @@ fn ergocub_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
             .unwrap();
         let reply = rpc.line(T).expect("a reply from yarp rpc");
         assert!(reply.contains("[ok]"), "{reply}");
-        let end = Instant::now() + T;
-        let mut at = q0;
-        while (at - 60.0).abs() > 0.5 {
-            assert!(Instant::now() < end, "joint 1 at {at}, not 60");
-            at = joint1(T).unwrap_or(at);
-        }
+        let at = until_at("joint 1", &joint1, q0, 60.0);
         eprintln!("set pos 1 60 seen on state:o after {:?}", sent.elapsed());
         drop(rpc);
 
@@ -75,11 +70,7 @@ fn ergocub_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
             let sent = Instant::now();
             let out = cpp_rpc_output(&cpp, "/ergocub/left_arm/rpc:i", "set pos 1 55\n");
             assert!(out.contains("[ok]"), "C++ yarp rpc: {out}");
-            let end = Instant::now() + T;
-            while (at - 55.0).abs() > 0.5 {
-                assert!(Instant::now() < end, "joint 1 at {at}, not 55");
-                at = joint1(T).unwrap_or(at);
-            }
+            until_at("joint 1", &joint1, at, 55.0);
             eprintln!(
                 "C++ yarp rpc: set pos 1 55 seen on state:o after {:?}",
                 sent.elapsed()

@@ -13,7 +13,7 @@ use std::io::Write;
 use std::process::Command;
 use std::time::Instant;
 
-use eth_common::{bring_up, cpp_yarp, our_yarp, robot_dir, Peer, T};
+use eth_common::{bring_up, cpp_yarp, our_yarp, robot_dir, until_at, Peer, T};
 use yarp_devices::robotinterface::ActionPhase;
 use yarp_interop_tests::cpp_rpc_output;
 use yarp_net::blocking::{BufferedPort, Network};
@@ -55,12 +55,7 @@ fn icub_genova02_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
             .unwrap();
         let reply = rpc.line(T).expect("a reply from yarp rpc");
         assert!(reply.contains("[ok]"), "{reply}");
-        let end = Instant::now() + T;
-        let mut at = q0;
-        while (at + 20.0).abs() > 0.5 {
-            assert!(Instant::now() < end, "joint 0 at {at}, not -20");
-            at = joint0(T).unwrap_or(at);
-        }
+        let at = until_at("joint 0", &joint0, q0, -20.0);
         eprintln!("set pos 0 -20 seen on state:o after {:?}", sent.elapsed());
         drop(rpc);
 
@@ -69,11 +64,7 @@ fn icub_genova02_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
             let sent = Instant::now();
             let out = cpp_rpc_output(&cpp, "/icub/left_arm/rpc:i", "set pos 0 -25\n");
             assert!(out.contains("[ok]"), "C++ yarp rpc: {out}");
-            let end = Instant::now() + T;
-            while (at + 25.0).abs() > 0.5 {
-                assert!(Instant::now() < end, "joint 0 at {at}, not -25");
-                at = joint0(T).unwrap_or(at);
-            }
+            until_at("joint 0", &joint0, at, -25.0);
             eprintln!(
                 "C++ yarp rpc: set pos 0 -25 seen on state:o after {:?}",
                 sent.elapsed()

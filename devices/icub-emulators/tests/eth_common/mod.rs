@@ -49,6 +49,22 @@ pub fn cpp_yarp(test: &str) -> Option<PathBuf> {
     yarp_interop_tests::cpp_program(test, "yarp")
 }
 
+/// Reads `joint` (a reader of its angle, bounded by its timeout) until it is within
+/// 0.5° of `target`, starting from `at`; panics naming `what` after [`T`]. The angle.
+pub fn until_at(
+    what: &str,
+    mut joint: impl FnMut(Duration) -> Option<f64>,
+    mut at: f64,
+    target: f64,
+) -> f64 {
+    let end = Instant::now() + T;
+    while (at - target).abs() > 0.5 {
+        assert!(Instant::now() < end, "{what} at {at}, not {target}");
+        at = joint(T).unwrap_or(at);
+    }
+    at
+}
+
 /// A child process whose stdout lines arrive on a channel; killed and reaped on drop.
 pub struct Peer {
     pub child: Child,
