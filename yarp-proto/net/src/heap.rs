@@ -11,9 +11,10 @@ use std::time::Duration;
 /// gateway) trim.
 pub const TRIM_PERIOD: Duration = Duration::from_secs(10);
 
-/// Starts a thread that calls glibc's `malloc_trim(0)` every `period`, so the RSS stays
-/// at what is in use. A call walks the arenas' free chunks: short at these programs'
-/// heaps of a few MB. Does nothing on other C libraries.
+/// Starts a thread that calls glibc's `malloc_trim(0)` every `period`, handing the
+/// arenas' free pages back (not all of the gateway's growth in the soak: see its
+/// reports). A call walks the arenas' free chunks: short at these programs' heaps of a
+/// few MB. Does nothing on other C libraries.
 pub fn trim_periodically(period: Duration) {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
