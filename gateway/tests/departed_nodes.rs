@@ -62,8 +62,10 @@ ros_type = "std_msgs/msg/String"
                     "5",
                     "--rate",
                     "20",
+                    // Long enough for the gateway to match the writer and have the
+                    // samples repaired on a loaded machine (0.5 s was not, under CI).
                     "--linger",
-                    "0.5",
+                    "2",
                 ],
             );
             peer.finish(T)
