@@ -133,12 +133,33 @@ async fn program_bridges_and_reports_diagnostics_on(venv: &common::Distro) {
     assert!(row.get(1).and_then(|v| v.as_i64()).unwrap() >= 1, "{b}");
     r.close().await;
 
+    // Stopped and continued (Ctrl-Z and `fg`, a debugger attaching), it goes on
+    // bridging: its DDS threads took the interrupted poll for a fatal error and ended.
+    let signal = |sig: &str| {
+        let ok = Command::new("kill")
+            .args([sig, &gw.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(ok.success(), "kill {sig}");
+    };
+    signal("-STOP");
+    tokio::time::sleep(Duration::from_secs(1)).await;
+    signal("-CONT");
+    let later = Peer::start(venv, domain, &["sub", "std_msgs/msg/Int32", "/count"]);
+    later.expect_async("READY", T).await;
+    let got = common::repeat_until(
+        "the count on ROS after SIGSTOP and SIGCONT",
+        Duration::from_millis(50),
+        async || {
+            w.write(&Bottle::from_text("6")).await;
+        },
+        || later.try_line("MSG"),
+    )
+    .await;
+    assert_eq!(got, r#"{"data": 6}"#);
+
     // SIGINT stops it cleanly (unregistering its ports).
-    let ok = Command::new("kill")
-        .args(["-INT", &gw.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(ok.success());
+    signal("-INT");
     assert!(gw.finish(T), "exits with success after SIGINT");
     w.close().await;
     let _ = std::fs::remove_dir_all(&dir);

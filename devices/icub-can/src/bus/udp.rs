@@ -193,7 +193,10 @@ fn reader_loop(shared: &Shared) {
             Err(e)
                 if matches!(
                     e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::TimedOut
+                        // a signal (SIGSTOP/SIGCONT, a debugger) is no receive error
+                        | std::io::ErrorKind::Interrupted
                 ) =>
             {
                 continue

@@ -589,7 +589,10 @@ fn reader(m: std::sync::Weak<EthManager>) {
             Err(e)
                 if matches!(
                     e.kind(),
-                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::TimedOut
+                        // a signal (SIGSTOP/SIGCONT, a debugger) is no receive error
+                        | std::io::ErrorKind::Interrupted
                 ) => {}
             Err(e) => {
                 tracing::warn!("eth manager: receive error: {e}");
