@@ -470,6 +470,12 @@ impl ServedState {
 const MAX_WAIT: Duration = Duration::from_millis(5);
 
 fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
+    // A board keeps its period in firmware; here the thread asks for real-time
+    // scheduling like the host's receiver (best effort: refused without the capability).
+    yarp_net::realtime::try_fifo_current_thread(
+        "eth boards",
+        yarp_net::realtime::ETH_RECEIVER_PRIORITY,
+    );
     let epoch = Instant::now();
     let mut buf = vec![0u8; 65536];
     let mut poller = Poller::new(boards.iter().map(|b| &b.socket));

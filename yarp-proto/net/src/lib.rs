@@ -7,4 +7,5 @@ pub mod heap;
 pub mod nameserver;
 pub mod network;
 pub mod port;
+pub mod realtime;
 pub mod rpc;

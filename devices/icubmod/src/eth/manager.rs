@@ -337,9 +337,11 @@ impl Board {
 
     /// Receive and timer work of the reader thread.
     fn on_datagram(&self, d: &[u8]) {
+        // Arrival time before the lock, which a device thread may hold for a while:
+        // the gap statistics are the board's, not this host's lock contention.
+        let at = Instant::now();
         let mut inner = self.lock();
         let now = self.now();
-        let at = Instant::now();
         if let Some(prev) = inner.last_rx {
             inner.max_gap = inner.max_gap.max(at - prev);
             if at - prev > 3 * self.params.regulars_period() {
@@ -574,6 +576,11 @@ fn enlarge_receive_buffer(socket: &UdpSocket) {
 /// The reader thread: datagrams to their board, timers every [`TICK`]; it ends with the
 /// manager.
 fn reader(m: std::sync::Weak<EthManager>) {
+    // The boards' 1 ms periods: icub-main's EthReceiver runs SCHED_FIFO (best effort).
+    yarp_net::realtime::try_fifo_current_thread(
+        "eth manager",
+        yarp_net::realtime::ETH_RECEIVER_PRIORITY,
+    );
     let mut buf = vec![0u8; 65536];
     let mut last_tick = Instant::now();
     loop {
