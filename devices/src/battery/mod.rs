@@ -1,6 +1,9 @@
-//! Batteries: the `IBattery` interface (C++ `yarp::dev::IBattery`) and `fakeBattery`.
+//! Batteries: the `IBattery` interface (C++ `yarp::dev::IBattery`), `fakeBattery` and the
+//! YARP network wrapper `battery_nws_yarp`.
 
 pub mod fake;
+pub mod nws;
+pub mod protocol;
 
 use crate::driver::Factory;
 use crate::error::DevResult;
@@ -28,5 +31,7 @@ pub trait IBattery {
 }
 
 /// Drivers of this family, by C++ name.
-pub(crate) const DRIVERS: &[(&str, Factory)] =
-    &[("fakeBattery", || Box::new(fake::FakeBattery::new()))];
+pub(crate) const DRIVERS: &[(&str, Factory)] = &[
+    ("fakeBattery", || Box::new(fake::FakeBattery::new())),
+    ("battery_nws_yarp", || Box::new(nws::BatteryNwsYarp::new())),
+];

@@ -1,0 +1,290 @@
+//! `battery_nws_yarp` (C++ YARP 3.12 `Battery_nws_yarp`): serves an attached `IBattery`
+//! on YARP ports.
+//!
+//! Parameters as C++: `name` (required, starts with `/`: the ports are `<name>/data:o`
+//! and `<name>/rpc:i`), `period` (s, default 1.0), `enable_log` (a `batteryLog.txt` in the
+//! working directory, one line per period as C++ writes it, stamped in seconds since the
+//! epoch where C++ writes `asctime`), `enable_shutdown` and
+//! `quitPortName`. The stream starts on attach: a `BatteryData` with an envelope every
+//! period while the device reports its status; the low-charge warnings of C++ (15, 12,
+//! 10, 5 %) are logged. C++'s `enable_shutdown` powers the computer off below 5 %: this
+//! device refuses to open with it rather than pretend to.
+
+use super::protocol::{handle_rpc, read_battery, BatteryData, ChargeWarnings};
+use super::BatteryStatus;
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::error::{DevResult, DeviceError};
+use crate::runtime;
+use crate::sensors::params::{bool_param, now};
+use crate::sensors::periodic::Ticker;
+use std::io::Write;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use yarp_net::port::Port;
+use yarp_proto::{Property, Stamp};
+
+const NAME: &str = "battery_nws_yarp";
+
+/// The device the ports serve, shared with the RPC task.
+type Slot = Arc<Mutex<Option<SharedDevice>>>;
+
+struct Ports {
+    data: Arc<Port>,
+    rpc: Arc<Port>,
+    rpc_task: tokio::task::JoinHandle<()>,
+}
+
+/// The `battery_nws_yarp` device.
+#[derive(Default)]
+pub struct BatteryNwsYarp {
+    name: String,
+    period: Duration,
+    log: bool,
+    slot: Slot,
+    ports: Option<Ports>,
+    stream_task: Option<tokio::task::JoinHandle<()>>,
+}
+
+impl BatteryNwsYarp {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// `<name>/data:o`.
+    pub fn data_port_name(&self) -> String {
+        format!("{}/data:o", self.name)
+    }
+
+    /// `<name>/rpc:i`.
+    pub fn rpc_port_name(&self) -> String {
+        format!("{}/rpc:i", self.name)
+    }
+
+    fn bad(param: &str, expected: &'static str, got: impl ToString) -> DeviceError {
+        DeviceError::BadParam {
+            device: NAME.into(),
+            param: param.into(),
+            expected,
+            got: got.to_string(),
+        }
+    }
+}
+
+/// The line C++ appends to `batteryLog.txt` (the stamp in seconds, not `asctime`).
+fn log_line(d: &BatteryData) -> String {
+    format!(
+        "battery status: {:+6.1}A   {: >6.1}V   charge:{: >6.1}%    time: {}\n",
+        d.current,
+        d.voltage,
+        d.charge,
+        now()
+    )
+}
+
+async fn stream_battery(port: Arc<Port>, period: Duration, device: SharedDevice, log: bool) {
+    let mut ticker = Ticker::new(period);
+    let mut last = BatteryData::default();
+    let mut warnings = ChargeWarnings::default();
+    let mut count: i32 = 0;
+    let mut failing = false;
+    let mut log_file = log
+        .then(|| {
+            std::fs::File::create("batteryLog.txt")
+                .map_err(|e| tracing::error!("{NAME}: batteryLog.txt: {e}"))
+                .ok()
+        })
+        .flatten();
+    loop {
+        ticker.tick().await;
+        let read = {
+            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            match pd.device().as_battery() {
+                Some(b) => read_battery(b, &last),
+                None => Err(DeviceError::Unsupported(
+                    "the attached device is no IBattery",
+                )),
+            }
+        };
+        match read {
+            Ok(d) => {
+                failing = false;
+                port.write_nowait(&d.to_bottle(), Some(Stamp::new(count, now())));
+                count = count.wrapping_add(1);
+                if d.status != BatteryStatus::OkStandby as i32 {
+                    if let Some(msg) = warnings.check(d.charge) {
+                        tracing::warn!("{NAME}: {msg}");
+                    }
+                }
+                if let Some(f) = &mut log_file {
+                    let _ = f.write_all(log_line(&d).as_bytes());
+                }
+                last = d;
+            }
+            Err(e) => {
+                // once per failure streak, not every period
+                if !failing {
+                    tracing::error!("{NAME}: sensor returned error: {e}");
+                }
+                failing = true;
+            }
+        }
+    }
+}
+
+async fn serve_rpc(port: Arc<Port>, slot: Slot) {
+    while let Some(mut msg) = port.read().await {
+        let reply = match msg.bottle() {
+            Ok(cmd) => {
+                let device = slot.lock().unwrap_or_else(|e| e.into_inner()).clone();
+                match device {
+                    Some(d) => {
+                        let mut pd = d.lock().unwrap_or_else(|e| e.into_inner());
+                        handle_rpc(&cmd, pd.device().as_battery())
+                    }
+                    None => handle_rpc(&cmd, None),
+                }
+            }
+            Err(e) => {
+                tracing::warn!("{NAME}: undecodable request from {}: {e}", msg.from);
+                crate::sensors::rpc::fail_reply()
+            }
+        };
+        if msg.wants_reply() {
+            msg.reply_encoded(reply);
+        }
+    }
+}
+
+/// Closes a port once the tasks that shared it are gone (unregistering it).
+async fn close_port(port: Arc<Port>) {
+    if let Ok(p) = Arc::try_unwrap(port) {
+        p.close().await;
+    }
+}
+
+impl DeviceDriver for BatteryNwsYarp {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let name = p.string("name")?.ok_or_else(|| p.missing("name"))?;
+        if !name.starts_with('/') {
+            return Err(Self::bad("name", "a port name starting with '/'", name));
+        }
+        let period = p.float("period")?.unwrap_or(1.0);
+        if !(period > 0.0 && period.is_finite()) {
+            return Err(Self::bad("period", "a period in seconds > 0", period));
+        }
+        if bool_param(&p, "enable_shutdown")?.unwrap_or(false) {
+            return Err(Self::bad(
+                "enable_shutdown",
+                "false (this battery_nws_yarp never shuts the computer down)",
+                true,
+            ));
+        }
+        let _quit = p.string("quitPortName")?;
+        self.log = bool_param(&p, "enable_log")?.unwrap_or(false);
+        self.name = name;
+        self.period = Duration::from_secs_f64(period);
+        let ns =
+            yarp_net::network::name_client().map_err(|e| Self::bad("name", "a name server", e))?;
+        let (data_name, rpc_name, slot) = (
+            self.data_port_name(),
+            self.rpc_port_name(),
+            self.slot.clone(),
+        );
+        let ports = runtime::block_on(async move {
+            let data = Arc::new(
+                Port::open(&data_name, ns.clone())
+                    .await
+                    .map_err(|e| e.to_string())?,
+            );
+            let rpc = match Port::open(&rpc_name, ns).await {
+                Ok(p) => Arc::new(p),
+                Err(e) => {
+                    close_port(data).await;
+                    return Err(e.to_string());
+                }
+            };
+            let rpc_task = tokio::spawn(serve_rpc(rpc.clone(), slot));
+            Ok(Ports {
+                data,
+                rpc,
+                rpc_task,
+            })
+        })
+        .map_err(|e| {
+            Self::bad(
+                "name",
+                "a port name that can be registered",
+                format!("{}: {e}", self.name),
+            )
+        })?;
+        self.ports = Some(ports);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        IWrapper::detach(self)?;
+        if let Some(p) = self.ports.take() {
+            runtime::block_on(async move {
+                p.rpc_task.abort();
+                let _ = p.rpc_task.await;
+                close_port(p.rpc).await;
+                close_port(p.data).await;
+            });
+        }
+        Ok(())
+    }
+
+    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
+        Some(self)
+    }
+
+    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
+        Some(self)
+    }
+}
+
+impl IWrapper for BatteryNwsYarp {
+    fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
+        IWrapper::detach(self)?;
+        let Some(ports) = &self.ports else {
+            return Err(DeviceError::NotOpen);
+        };
+        {
+            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            pd.device().as_battery().ok_or(DeviceError::Unsupported(
+                "battery_nws_yarp attaches an IBattery",
+            ))?;
+        }
+        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
+        let (port, period, log) = (ports.data.clone(), self.period, self.log);
+        self.stream_task = Some(runtime::handle().spawn(stream_battery(port, period, device, log)));
+        Ok(())
+    }
+
+    fn detach(&mut self) -> DevResult<()> {
+        if let Some(t) = self.stream_task.take() {
+            t.abort();
+            runtime::block_on(async move {
+                let _ = t.await;
+            });
+        }
+        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        Ok(())
+    }
+}
+
+impl IMultipleWrapper for BatteryNwsYarp {
+    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
+        match devices {
+            [(_, d)] => self.attach(d.clone()),
+            _ => Err(DeviceError::Unsupported(
+                "battery_nws_yarp attaches exactly one device",
+            )),
+        }
+    }
+
+    fn detach_all(&mut self) -> DevResult<()> {
+        IWrapper::detach(self)
+    }
+}
