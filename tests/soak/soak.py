@@ -90,8 +90,9 @@ class Sampler(threading.Thread):
 class Clients:
     """Every client of the run; `halt` ends them all."""
 
-    def __init__(self, yarp, env, python_ros):
+    def __init__(self, yarp, env, python_ros, ros):
         self.yarp, self.env, self.python_ros = yarp, env, python_ros
+        self.ros_nodes, self.ros_seconds, self.ros_pause, self.ros_topics = ros
         self.halt = threading.Event()
         self.threads = []
         self.lock = threading.Lock()
@@ -222,7 +223,8 @@ class Clients:
             return
         while not self.halt.is_set():
             p = self.spawn([self.python_ros, "-u", os.path.join(HERE, "ros_sub.py"),
-                            "--seconds", "17", *ROS_TOPICS], env=self.ros_env,
+                            "--seconds", str(self.ros_seconds), *self.ros_topics],
+                           env=self.ros_env,
                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
             try:
                 out, _ = p.communicate(timeout=60)
@@ -239,7 +241,7 @@ class Clients:
                     self.stats["ros_runs_empty"] += 1
                 for k, v in counts.items():
                     self.stats["ros_msgs"][k] = self.stats["ros_msgs"].get(k, 0) + v
-            self.halt.wait(3.0)
+            self.halt.wait(self.ros_pause)
 
     # `[poss]` on left_arm/command:i: joint 0 to start-8°, back, ...; each move must show in
     # state:o within 15 s
@@ -302,8 +304,9 @@ class Clients:
     def start(self):
         for fn in (self.readers, self.rpc, self.slow_reader, self.lossless, self.commander):
             self.loop(fn)
-        self.loop(lambda: self.ros(0))
-        self.loop(lambda: self.ros(10))
+        # staggered over 10 s (the default two: at 0 and 10 s)
+        for i in range(self.ros_nodes):
+            self.loop(lambda i=i: self.ros(i * 20.0 / max(self.ros_nodes, 2)))
 
     def stop(self):
         self.halt.set()
@@ -359,6 +362,15 @@ def main():
     ap.add_argument("--settle", type=float, default=20.0,
                     help="seconds after `is up` before the baseline is taken")
     ap.add_argument("--out", help="report directory (default tests/soak/reports/DATE-...)")
+    ap.add_argument("--ros-nodes", type=int, default=2,
+                    help="rclpy subscribers alive at once, each restarting (default 2)")
+    ap.add_argument("--ros-seconds", type=float, default=17.0,
+                    help="life of one rclpy subscriber, s (default 17)")
+    ap.add_argument("--ros-pause", type=float, default=3.0,
+                    help="pause before a subscriber restarts, s (default 3)")
+    ap.add_argument("--ros-topics", nargs="+", default=ROS_TOPICS, metavar="TOPIC=TYPE",
+                    help="what they subscribe (ros_sub.py's form; default: "
+                    + " ".join(ROS_TOPICS) + ")")
     args = ap.parse_args()
 
     target = os.environ.get("CARGO_TARGET_DIR", "/root/.cache/yarp-rs/target")
@@ -378,6 +390,13 @@ def main():
     os.makedirs(out, exist_ok=True)
     command = f"tests/soak/run.sh --minutes {args.minutes:g}" + (
         f" --config {args.config}" if args.config != "icub-sim" else "")
+    for flag, value, default in (("--ros-nodes", args.ros_nodes, 2),
+                                 ("--ros-seconds", args.ros_seconds, 17.0),
+                                 ("--ros-pause", args.ros_pause, 3.0)):
+        if value != default:
+            command += f" {flag} {value:g}"
+    if args.ros_topics != ROS_TOPICS:
+        command += " --ros-topics " + " ".join(args.ros_topics)
 
     tmp = tempfile.mkdtemp(prefix="yarp-soak-")
     env = dict(os.environ, YARP_CONFIG_HOME=tmp, NO_COLOR="1",
@@ -408,7 +427,8 @@ def main():
         base = {(r["process"], r["pid"]): r for r in sampler.sample()}
         marks["baseline"] = sampler.now()
         log(f"baseline of {len(base)} processes; clients for {args.minutes:g} min")
-        clients = Clients(yarp, env, python_ros)
+        clients = Clients(yarp, env, python_ros,
+                          (args.ros_nodes, args.ros_seconds, args.ros_pause, args.ros_topics))
         t_start = sampler.now()
         marks["clients"] = t_start
         clients.start()
