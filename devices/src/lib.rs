@@ -26,6 +26,7 @@ pub mod runtime;
 pub mod sensors;
 pub mod test_motor;
 pub mod vocabs;
+mod wrapper_ports;
 
 pub use driver::{
     shared, DeviceDriver, ICalibrator, IMultipleWrapper, IWrapper, Params, PolyDriver, Registry,

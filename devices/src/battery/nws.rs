@@ -17,22 +17,14 @@ use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use crate::sensors::params::{bool_param, now};
 use crate::sensors::periodic::Ticker;
+use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
 use std::io::Write;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::port::Port;
-use yarp_proto::{Property, Stamp};
+use yarp_proto::{Bottle, Property, Stamp};
 
 const NAME: &str = "battery_nws_yarp";
-
-/// The device the ports serve, shared with the RPC task.
-type Slot = Arc<Mutex<Option<SharedDevice>>>;
-
-struct Ports {
-    data: Arc<Port>,
-    rpc: Arc<Port>,
-    rpc_task: tokio::task::JoinHandle<()>,
-}
 
 /// The `battery_nws_yarp` device.
 #[derive(Default)]
@@ -41,7 +33,7 @@ pub struct BatteryNwsYarp {
     period: Duration,
     log: bool,
     slot: Slot,
-    ports: Option<Ports>,
+    ports: Option<WrapperPorts>,
     stream_task: Option<tokio::task::JoinHandle<()>>,
 }
 
@@ -131,35 +123,8 @@ async fn stream_battery(port: Arc<Port>, period: Duration, device: SharedDevice,
     }
 }
 
-async fn serve_rpc(port: Arc<Port>, slot: Slot) {
-    while let Some(mut msg) = port.read().await {
-        let reply = match msg.bottle() {
-            Ok(cmd) => {
-                let device = slot.lock().unwrap_or_else(|e| e.into_inner()).clone();
-                match device {
-                    Some(d) => {
-                        let mut pd = d.lock().unwrap_or_else(|e| e.into_inner());
-                        handle_rpc(&cmd, pd.device().as_battery())
-                    }
-                    None => handle_rpc(&cmd, None),
-                }
-            }
-            Err(e) => {
-                tracing::warn!("{NAME}: undecodable request from {}: {e}", msg.from);
-                crate::sensors::rpc::fail_reply()
-            }
-        };
-        if msg.wants_reply() {
-            msg.reply_encoded(reply);
-        }
-    }
-}
-
-/// Closes a port once the tasks that shared it are gone (unregistering it).
-async fn close_port(port: Arc<Port>) {
-    if let Ok(p) = Arc::try_unwrap(port) {
-        p.close().await;
-    }
+fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
+    Reply::Encoded(handle_rpc(cmd, dev.and_then(|d| d.as_battery())))
 }
 
 impl DeviceDriver for BatteryNwsYarp {
@@ -184,40 +149,14 @@ impl DeviceDriver for BatteryNwsYarp {
         self.log = bool_param(&p, "enable_log")?.unwrap_or(false);
         self.name = name;
         self.period = Duration::from_secs_f64(period);
-        let ns =
-            yarp_net::network::name_client().map_err(|e| Self::bad("name", "a name server", e))?;
-        let (data_name, rpc_name, slot) = (
-            self.data_port_name(),
+        let ports = WrapperPorts::open(
+            NAME,
+            vec![self.data_port_name()],
             self.rpc_port_name(),
             self.slot.clone(),
-        );
-        let ports = runtime::block_on(async move {
-            let data = Arc::new(
-                Port::open(&data_name, ns.clone())
-                    .await
-                    .map_err(|e| e.to_string())?,
-            );
-            let rpc = match Port::open(&rpc_name, ns).await {
-                Ok(p) => Arc::new(p),
-                Err(e) => {
-                    close_port(data).await;
-                    return Err(e.to_string());
-                }
-            };
-            let rpc_task = tokio::spawn(serve_rpc(rpc.clone(), slot));
-            Ok(Ports {
-                data,
-                rpc,
-                rpc_task,
-            })
-        })
-        .map_err(|e| {
-            Self::bad(
-                "name",
-                "a port name that can be registered",
-                format!("{}: {e}", self.name),
-            )
-        })?;
+            answer,
+        )
+        .map_err(|e| Self::bad("name", "port names that can be registered", e))?;
         self.ports = Some(ports);
         Ok(())
     }
@@ -225,12 +164,7 @@ impl DeviceDriver for BatteryNwsYarp {
     fn close(&mut self) -> DevResult<()> {
         IWrapper::detach(self)?;
         if let Some(p) = self.ports.take() {
-            runtime::block_on(async move {
-                p.rpc_task.abort();
-                let _ = p.rpc_task.await;
-                close_port(p.rpc).await;
-                close_port(p.data).await;
-            });
+            p.close();
         }
         Ok(())
     }
@@ -257,7 +191,7 @@ impl IWrapper for BatteryNwsYarp {
             ))?;
         }
         *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
-        let (port, period, log) = (ports.data.clone(), self.period, self.log);
+        let (port, period, log) = (ports.streams[0].clone(), self.period, self.log);
         self.stream_task = Some(runtime::handle().spawn(stream_battery(port, period, device, log)));
         Ok(())
     }

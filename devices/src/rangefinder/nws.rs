@@ -13,21 +13,13 @@ use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use crate::sensors::params::now;
 use crate::sensors::periodic::Ticker;
-use std::sync::{Arc, Mutex};
+use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
+use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::port::Port;
-use yarp_proto::{Property, Stamp};
+use yarp_proto::{Bottle, Property, Stamp};
 
 const NAME: &str = "rangefinder2D_nws_yarp";
-
-/// The device the ports serve, shared with the RPC task.
-type Slot = Arc<Mutex<Option<SharedDevice>>>;
-
-struct Ports {
-    stream: Arc<Port>,
-    rpc: Arc<Port>,
-    rpc_task: tokio::task::JoinHandle<()>,
-}
 
 /// The `rangefinder2D_nws_yarp` device.
 #[derive(Default)]
@@ -35,7 +27,7 @@ pub struct Rangefinder2DNwsYarp {
     name: String,
     period: Duration,
     slot: Slot,
-    ports: Option<Ports>,
+    ports: Option<WrapperPorts>,
     stream_task: Option<tokio::task::JoinHandle<()>>,
 }
 
@@ -114,35 +106,8 @@ async fn stream_scans(port: Arc<Port>, period: Duration, device: SharedDevice) {
     }
 }
 
-async fn serve_rpc(port: Arc<Port>, slot: Slot) {
-    while let Some(mut msg) = port.read().await {
-        let reply = match msg.bottle() {
-            Ok(cmd) => {
-                let device = slot.lock().unwrap_or_else(|e| e.into_inner()).clone();
-                match device {
-                    Some(d) => {
-                        let mut pd = d.lock().unwrap_or_else(|e| e.into_inner());
-                        handle_rpc(&cmd, pd.device().as_rangefinder_2d())
-                    }
-                    None => handle_rpc(&cmd, None),
-                }
-            }
-            Err(e) => {
-                tracing::warn!("{NAME}: undecodable request from {}: {e}", msg.from);
-                super::protocol::fail_reply()
-            }
-        };
-        if msg.wants_reply() {
-            msg.reply_encoded(reply);
-        }
-    }
-}
-
-/// Closes a port once the tasks that shared it are gone (unregistering it).
-async fn close_port(port: Arc<Port>) {
-    if let Ok(p) = Arc::try_unwrap(port) {
-        p.close().await;
-    }
+fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
+    Reply::Encoded(handle_rpc(cmd, dev.and_then(|d| d.as_rangefinder_2d())))
 }
 
 impl DeviceDriver for Rangefinder2DNwsYarp {
@@ -159,37 +124,14 @@ impl DeviceDriver for Rangefinder2DNwsYarp {
         let _frame_id = p.string("frame_id")?;
         self.name = name;
         self.period = Duration::from_secs_f64(period);
-        let ns =
-            yarp_net::network::name_client().map_err(|e| Self::bad("name", "a name server", e))?;
-        let (stream_name, rpc_name, slot) =
-            (self.name.clone(), self.rpc_port_name(), self.slot.clone());
-        let ports = runtime::block_on(async move {
-            let stream = Arc::new(
-                Port::open(&stream_name, ns.clone())
-                    .await
-                    .map_err(|e| e.to_string())?,
-            );
-            let rpc = match Port::open(&rpc_name, ns).await {
-                Ok(p) => Arc::new(p),
-                Err(e) => {
-                    close_port(stream).await;
-                    return Err(e.to_string());
-                }
-            };
-            let rpc_task = tokio::spawn(serve_rpc(rpc.clone(), slot));
-            Ok(Ports {
-                stream,
-                rpc,
-                rpc_task,
-            })
-        })
-        .map_err(|e| {
-            Self::bad(
-                "name",
-                "a port name that can be registered",
-                format!("{}: {e}", self.name),
-            )
-        })?;
+        let ports = WrapperPorts::open(
+            NAME,
+            vec![self.name.clone()],
+            self.rpc_port_name(),
+            self.slot.clone(),
+            answer,
+        )
+        .map_err(|e| Self::bad("name", "port names that can be registered", e))?;
         self.ports = Some(ports);
         Ok(())
     }
@@ -197,12 +139,7 @@ impl DeviceDriver for Rangefinder2DNwsYarp {
     fn close(&mut self) -> DevResult<()> {
         IWrapper::detach(self)?;
         if let Some(p) = self.ports.take() {
-            runtime::block_on(async move {
-                p.rpc_task.abort();
-                let _ = p.rpc_task.await;
-                close_port(p.rpc).await;
-                close_port(p.stream).await;
-            });
+            p.close();
         }
         Ok(())
     }
@@ -236,7 +173,7 @@ impl IWrapper for Rangefinder2DNwsYarp {
             dev.get_horizontal_resolution()?;
         }
         *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
-        let (port, period) = (ports.stream.clone(), self.period);
+        let (port, period) = (ports.streams[0].clone(), self.period);
         self.stream_task = Some(runtime::handle().spawn(stream_scans(port, period, device)));
         Ok(())
     }

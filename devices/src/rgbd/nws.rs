@@ -12,23 +12,13 @@ use super::protocol::handle_rpc;
 use super::RgbdStatus;
 use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
 use crate::error::{DevResult, DeviceError};
-use crate::runtime;
-use std::sync::{mpsc, Arc, Mutex};
+use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
+use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 use yarp_net::port::Port;
-use yarp_proto::Property;
+use yarp_proto::{Bottle, Property};
 
 const NAME: &str = "rgbdSensor_nws_yarp";
-
-/// The device the ports serve, shared with the RPC task.
-type Slot = Arc<Mutex<Option<SharedDevice>>>;
-
-struct Ports {
-    rgb: Arc<Port>,
-    depth: Arc<Port>,
-    rpc: Arc<Port>,
-    rpc_task: tokio::task::JoinHandle<()>,
-}
 
 struct Streaming {
     stop: mpsc::Sender<()>,
@@ -41,7 +31,7 @@ pub struct RgbdSensorNwsYarp {
     name: String,
     period: Duration,
     slot: Slot,
-    ports: Option<Ports>,
+    ports: Option<WrapperPorts>,
     streaming: Option<Streaming>,
 }
 
@@ -133,35 +123,8 @@ fn stream_images(
     }
 }
 
-async fn serve_rpc(port: Arc<Port>, slot: Slot) {
-    while let Some(mut msg) = port.read().await {
-        let reply = match msg.bottle() {
-            Ok(cmd) => {
-                let device = slot.lock().unwrap_or_else(|e| e.into_inner()).clone();
-                match device {
-                    Some(d) => {
-                        let mut pd = d.lock().unwrap_or_else(|e| e.into_inner());
-                        handle_rpc(&cmd, pd.device().as_rgbd_sensor())
-                    }
-                    None => handle_rpc(&cmd, None),
-                }
-            }
-            Err(e) => {
-                tracing::warn!("{NAME}: undecodable request from {}: {e}", msg.from);
-                handle_rpc(&yarp_proto::Bottle::new(), None)
-            }
-        };
-        if msg.wants_reply() {
-            msg.reply(reply);
-        }
-    }
-}
-
-/// Closes a port once the tasks that shared it are gone (unregistering it).
-async fn close_port(port: Arc<Port>) {
-    if let Ok(p) = Arc::try_unwrap(port) {
-        p.close().await;
-    }
+fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
+    Reply::Bottle(handle_rpc(cmd, dev.and_then(|d| d.as_rgbd_sensor())))
 }
 
 impl DeviceDriver for RgbdSensorNwsYarp {
@@ -177,38 +140,13 @@ impl DeviceDriver for RgbdSensorNwsYarp {
         }
         self.name = name.trim_end_matches('/').to_string();
         self.period = Duration::from_secs_f64(period);
-        let ns =
-            yarp_net::network::name_client().map_err(|e| Self::bad("name", "a name server", e))?;
-        let names = [
-            self.rgb_port_name(),
-            self.depth_port_name(),
+        let ports = WrapperPorts::open(
+            NAME,
+            vec![self.rgb_port_name(), self.depth_port_name()],
             self.rpc_port_name(),
-        ];
-        let slot = self.slot.clone();
-        let ports = runtime::block_on(async move {
-            let mut opened = Vec::new();
-            for n in &names {
-                match Port::open(n, ns.clone()).await {
-                    Ok(p) => opened.push(Arc::new(p)),
-                    Err(e) => {
-                        for p in opened {
-                            close_port(p).await;
-                        }
-                        return Err(format!("{n}: {e}"));
-                    }
-                }
-            }
-            let rpc = opened.pop().expect("three ports");
-            let depth = opened.pop().expect("three ports");
-            let rgb = opened.pop().expect("three ports");
-            let rpc_task = tokio::spawn(serve_rpc(rpc.clone(), slot));
-            Ok(Ports {
-                rgb,
-                depth,
-                rpc,
-                rpc_task,
-            })
-        })
+            self.slot.clone(),
+            answer,
+        )
         .map_err(|e| Self::bad("name", "port names that can be registered", e))?;
         self.ports = Some(ports);
         Ok(())
@@ -217,13 +155,7 @@ impl DeviceDriver for RgbdSensorNwsYarp {
     fn close(&mut self) -> DevResult<()> {
         IWrapper::detach(self)?;
         if let Some(p) = self.ports.take() {
-            runtime::block_on(async move {
-                p.rpc_task.abort();
-                let _ = p.rpc_task.await;
-                close_port(p.rpc).await;
-                close_port(p.rgb).await;
-                close_port(p.depth).await;
-            });
+            p.close();
         }
         Ok(())
     }
@@ -252,7 +184,11 @@ impl IWrapper for RgbdSensorNwsYarp {
             }
         }
         *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
-        let (rgb, depth, period) = (ports.rgb.clone(), ports.depth.clone(), self.period);
+        let (rgb, depth, period) = (
+            ports.streams[0].clone(),
+            ports.streams[1].clone(),
+            self.period,
+        );
         let (stop, rx) = mpsc::channel();
         let thread = std::thread::Builder::new()
             .name(NAME.into())

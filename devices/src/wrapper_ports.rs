@@ -1,0 +1,109 @@
+//! The ports of a YARP network wrapper (an `*_nws_yarp` device): its stream ports and its
+//! RPC port open together with the device (one refused closes those already open), a
+//! task answers the RPC port with whatever device is attached at the time, and all close
+//! together. Shared by `rangefinder2D_nws_yarp`, `rgbdSensor_nws_yarp` and
+//! `battery_nws_yarp`.
+
+use crate::driver::{DeviceDriver, SharedDevice};
+use crate::runtime;
+use std::sync::{Arc, Mutex};
+use yarp_net::port::Port;
+use yarp_proto::Bottle;
+
+/// The device a wrapper serves, shared with its RPC task (`None` while detached).
+pub(crate) type Slot = Arc<Mutex<Option<SharedDevice>>>;
+
+/// A reply as the wrapper's protocol builds it.
+pub(crate) enum Reply {
+    Bottle(Bottle),
+    /// Already-encoded bytes (thrift replies with element-tagged lists).
+    Encoded(Vec<u8>),
+}
+
+/// Answers one request: the decoded command (empty when undecodable) and the attached
+/// device, if any.
+pub(crate) type Answer = fn(&Bottle, Option<&mut dyn DeviceDriver>) -> Reply;
+
+pub(crate) struct WrapperPorts {
+    /// The stream ports, in the order given to [`WrapperPorts::open`].
+    pub streams: Vec<Arc<Port>>,
+    rpc: Arc<Port>,
+    rpc_task: tokio::task::JoinHandle<()>,
+}
+
+impl WrapperPorts {
+    /// Opens `streams` and then `rpc` (registered with the name server) and starts
+    /// answering `rpc` with `answer`. The error names the port that could not be opened.
+    pub fn open(
+        wrapper: &'static str,
+        streams: Vec<String>,
+        rpc: String,
+        slot: Slot,
+        answer: Answer,
+    ) -> Result<WrapperPorts, String> {
+        let ns = yarp_net::network::name_client().map_err(|e| format!("name server: {e}"))?;
+        runtime::block_on(async move {
+            let mut opened = Vec::new();
+            for name in streams.iter().chain(std::iter::once(&rpc)) {
+                match Port::open(name, ns.clone()).await {
+                    Ok(p) => opened.push(Arc::new(p)),
+                    Err(e) => {
+                        for p in opened {
+                            close_port(p).await;
+                        }
+                        return Err(format!("{name}: {e}"));
+                    }
+                }
+            }
+            let rpc = opened.pop().expect("the rpc port was opened last");
+            let rpc_task = tokio::spawn(serve_rpc(wrapper, rpc.clone(), slot, answer));
+            Ok(WrapperPorts {
+                streams: opened,
+                rpc,
+                rpc_task,
+            })
+        })
+    }
+
+    /// Stops answering and closes every port (unregistering them).
+    pub fn close(self) {
+        runtime::block_on(async move {
+            self.rpc_task.abort();
+            let _ = self.rpc_task.await;
+            close_port(self.rpc).await;
+            for p in self.streams {
+                close_port(p).await;
+            }
+        });
+    }
+}
+
+async fn serve_rpc(wrapper: &'static str, port: Arc<Port>, slot: Slot, answer: Answer) {
+    while let Some(mut msg) = port.read().await {
+        let cmd = msg.bottle().unwrap_or_else(|e| {
+            tracing::warn!("{wrapper}: undecodable request from {}: {e}", msg.from);
+            Bottle::new()
+        });
+        let device = slot.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let reply = match device {
+            Some(d) => {
+                let mut pd = d.lock().unwrap_or_else(|e| e.into_inner());
+                answer(&cmd, Some(pd.device()))
+            }
+            None => answer(&cmd, None),
+        };
+        if msg.wants_reply() {
+            match reply {
+                Reply::Bottle(b) => msg.reply(b),
+                Reply::Encoded(bytes) => msg.reply_encoded(bytes),
+            }
+        }
+    }
+}
+
+/// Closes a port once the tasks that shared it are gone.
+async fn close_port(port: Arc<Port>) {
+    if let Ok(p) = Arc::try_unwrap(port) {
+        p.close().await;
+    }
+}
