@@ -3,9 +3,6 @@
 //! RPC client and C++ `yarp rpc` / `yarp read` (3.5, when installed; in CI required) get
 //! the `IBatteryMsgs` answer and the stream. Every wait is bounded.
 
-use std::io::{BufRead, BufReader};
-use std::process::Stdio;
-use std::time::{Duration, Instant};
 use yarp_devices::battery::protocol::BatteryData;
 use yarp_devices::{runtime, PolyDriver};
 use yarp_interop_tests::{name_client, T};
@@ -117,47 +114,14 @@ fn cpp_yarp_read_and_rpc_talk_to_our_battery_wrapper() {
         "{out}"
     );
 
-    let mut reader = Reaped(
-        yarp_interop_tests::cpp_command(&yarp)
-            .args(["read", "/cpp_battery_rd", "/cppbattery/data:o"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("C++ yarp read"),
-    );
-    let stdout = reader.0.stdout.take().unwrap();
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let start = Instant::now();
-    let d = loop {
-        let left = (3 * T).saturating_sub(start.elapsed());
-        assert!(!left.is_zero(), "C++ yarp read printed no battery data");
-        if let Ok(l) = rx.recv_timeout(left.min(Duration::from_millis(200))) {
-            if let Ok(d) = BatteryData::from_bottle(&Bottle::from_text(&l)) {
-                break d;
-            }
-        }
-    };
+    let d =
+        yarp_interop_tests::cpp_read_until(&yarp, "/cpp_battery_rd", "/cppbattery/data:o", |l| {
+            BatteryData::from_bottle(&Bottle::from_text(l)).ok()
+        });
     assert_eq!(
         (d.voltage, d.current, d.temperature, d.status),
         (30.0, 3.0, 20.0, 2)
     );
     eprintln!("interop: C++ yarp rpc and yarp read -> battery_nws_yarp OK");
-    drop(reader);
     server.close().unwrap();
-}
-
-/// Kills and reaps the child when dropped.
-struct Reaped(std::process::Child);
-impl Drop for Reaped {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
 }

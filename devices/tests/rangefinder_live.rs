@@ -3,9 +3,6 @@
 //! our RPC client and C++ `yarp rpc` / `yarp read` (3.5, when installed; in CI required)
 //! get the `IRangefinder2DMsgs` answers and the stream. Every wait is bounded.
 
-use std::io::{BufRead, BufReader};
-use std::process::Stdio;
-use std::time::{Duration, Instant};
 use yarp_devices::rangefinder::protocol::{parse_reply, LaserScan2D};
 use yarp_devices::{runtime, PolyDriver};
 use yarp_interop_tests::{name_client, T};
@@ -135,49 +132,15 @@ fn cpp_yarp_read_and_rpc_talk_to_our_wrapper() {
         .collect();
     assert_eq!(responses, [vec![0.0, 0.1, 30.0], vec![0.0, 100.0]], "{out}");
 
-    let mut reader = Reaped(
-        yarp_interop_tests::cpp_command(&yarp)
-            .args(["read", "/cpp_laser_rd", "/cpplaser:o"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("C++ yarp read"),
-    );
-    let stdout = reader.0.stdout.take().unwrap();
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
+    let line = yarp_interop_tests::cpp_read_until(&yarp, "/cpp_laser_rd", "/cpplaser:o", |l| {
+        l.contains("2.5").then(|| l.to_string())
     });
-    let start = Instant::now();
-    let line = loop {
-        let left = (3 * T).saturating_sub(start.elapsed());
-        assert!(!left.is_zero(), "C++ yarp read printed no scan");
-        if let Ok(l) = rx.recv_timeout(left.min(Duration::from_millis(200))) {
-            if l.contains("2.5") {
-                break l;
-            }
-        }
-    };
     let scan = LaserScan2D::from_bottle(&Bottle::from_text(&line)).unwrap();
     assert_eq!(scan.scans.len(), 720);
     assert!(scan.scans.iter().all(|&d| d == 2.5));
     assert_eq!((scan.range_max, scan.status), (30.0, 1));
     eprintln!("interop: C++ yarp rpc and yarp read -> rangefinder2D_nws_yarp OK");
-    drop(reader);
     server.close().unwrap();
-}
-
-/// Kills and reaps the child when dropped.
-struct Reaped(std::process::Child);
-impl Drop for Reaped {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
 }
 
 #[test]

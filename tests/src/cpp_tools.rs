@@ -36,6 +36,50 @@ pub fn cpp_rpc_output(yarp: &Path, port: &str, input: &str) -> String {
     reader.join().unwrap_or_default()
 }
 
+/// C++ `yarp read <reader> <port>`: the first printed line that `parse` accepts, within
+/// 3 [`T`] (panics otherwise); the reader is killed and reaped before this returns.
+pub fn cpp_read_until<R>(
+    yarp: &Path,
+    reader: &str,
+    port: &str,
+    mut parse: impl FnMut(&str) -> Option<R>,
+) -> R {
+    use std::io::BufRead;
+    let mut child = Reaped(
+        cpp_command(yarp)
+            .args(["read", reader, port])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("spawn C++ yarp read"),
+    );
+    let stdout = child.0.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stdout)
+            .lines()
+            .map_while(Result::ok)
+        {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let start = Instant::now();
+    loop {
+        let left = (3 * T).saturating_sub(start.elapsed());
+        assert!(
+            !left.is_zero(),
+            "C++ yarp read {port} printed nothing accepted"
+        );
+        if let Ok(l) = rx.recv_timeout(left.min(Duration::from_millis(200))) {
+            if let Some(r) = parse(&l) {
+                return r;
+            }
+        }
+    }
+}
+
 /// Whether `port` is registered with this process's name server.
 pub fn registered(port: &str) -> bool {
     let ns = name_client();
