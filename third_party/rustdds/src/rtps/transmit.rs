@@ -36,6 +36,11 @@ use crate::structure::{guid::GuidPrefix, locator::Locator};
 /// occasional stray packets on a secondary interface.
 pub(crate) const STICKY_SWITCH_MARGIN: Duration = Duration::from_secs(30);
 
+/// yarp-rs: how long a remote participant's observations outlive its last packet
+/// (SPDP leases are seconds to a few minutes; a participant is announced at least
+/// once per lease).
+const FORGET_AFTER: Duration = Duration::from_secs(600);
+
 /// Identifies a local network interface to use as the egress for multicast.
 ///
 /// Modelled as the interface's IP address for now; the enum leaves room for an
@@ -98,6 +103,9 @@ pub struct InterfaceObservation {
 /// What we have observed about how to reach a single remote participant.
 #[derive(Clone, Debug, Default)]
 pub struct ObservedRoutes {
+  /// When the last packet of this participant arrived (yarp-rs: to forget the
+  /// departed, see [`InterfaceObservations::record`]).
+  last_packet: Option<Instant>,
   /// Local interfaces on which we have seen this participant's traffic.
   by_iface: BTreeMap<InterfaceSelector, InterfaceObservation>,
   /// Most recent source socket address seen for this participant, regardless of
@@ -117,6 +125,7 @@ pub struct ObservedRoutes {
 }
 
 impl ObservedRoutes {
+  #[cfg(test)]
   fn record(&mut self, iface: Option<InterfaceSelector>, source: SocketAddr) {
     self.record_at(iface, source, Instant::now(), STICKY_SWITCH_MARGIN);
   }
@@ -131,6 +140,7 @@ impl ObservedRoutes {
     margin: Duration,
   ) {
     self.last_source = Some(source);
+    self.last_packet = Some(now);
     if source.ip().is_loopback() {
       self.seen_from_loopback = true;
     }
@@ -219,11 +229,38 @@ impl InterfaceObservations {
     iface: Option<InterfaceSelector>,
     source: SocketAddr,
   ) {
+    self.record_at(prefix, iface, source, Instant::now());
+  }
+
+  // yarp-rs: a packet of a participant that has just left (its last SEDP disposals,
+  // a late heartbeat) arrives after `remove` and records it again, and nothing
+  // removes it after that: one record per departed participant for ever (found by
+  // the gateway's soak run, ROS nodes coming and going). A live participant
+  // announces itself every few seconds, so a record silent for `FORGET_AFTER` is
+  // of one that left; they are dropped whenever a new participant is recorded.
+  fn record_at(
+    &mut self,
+    prefix: GuidPrefix,
+    iface: Option<InterfaceSelector>,
+    source: SocketAddr,
+    now: Instant,
+  ) {
+    if !self.by_participant.contains_key(&prefix) {
+      self.by_participant.retain(|_, o| {
+        o.last_packet
+          .is_some_and(|t| now.saturating_duration_since(t) < FORGET_AFTER)
+      });
+    }
     self
       .by_participant
       .entry(prefix)
       .or_default()
-      .record(iface, source);
+      .record_at(iface, source, now, STICKY_SWITCH_MARGIN);
+  }
+
+  #[cfg(test)]
+  fn len(&self) -> usize {
+    self.by_participant.len()
   }
 
   pub fn get(&self, prefix: GuidPrefix) -> Option<&ObservedRoutes> {
@@ -405,6 +442,25 @@ mod tests {
 
   fn iface(ip: [u8; 4]) -> InterfaceSelector {
     InterfaceSelector::Ip(IpAddr::V4(Ipv4Addr::new(ip[0], ip[1], ip[2], ip[3])))
+  }
+
+  #[test]
+  fn departed_participants_are_forgotten_when_a_new_one_is_recorded() {
+    let mut obs = InterfaceObservations::new();
+    let t0 = Instant::now();
+    let (old, live, new) = (
+      GuidPrefix::new(&[1; 12]),
+      GuidPrefix::new(&[2; 12]),
+      GuidPrefix::new(&[3; 12]),
+    );
+    let src = sockaddr([127, 0, 0, 1], 7410);
+    obs.record_at(old, None, src, t0);
+    obs.record_at(live, None, src, t0);
+    obs.record_at(live, None, src, t0 + FORGET_AFTER / 2);
+    obs.record_at(new, None, src, t0 + FORGET_AFTER);
+    assert_eq!(obs.len(), 2);
+    assert!(obs.get(old).is_none());
+    assert!(obs.get(live).is_some() && obs.get(new).is_some());
   }
 
   #[test]
