@@ -131,9 +131,14 @@ fn main() -> std::process::ExitCode {
         };
     }
     // RustDDS and ros2-client log many harmless warnings (and errors while a node shuts
-    // down); show them only when RUST_LOG asks, e.g. RUST_LOG=info,rustdds=warn.
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info,rustdds=off,ros2_client=off"));
+    // down); show them only when RUST_LOG asks, e.g. RUST_LOG=info,rustdds=warn. The
+    // errors of RustDDS's two threads stay visible: they are the ones that end DDS.
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+        tracing_subscriber::EnvFilter::new(
+            "info,rustdds=off,rustdds::rtps::dp_event_loop=error,\
+             rustdds::discovery::discovery=error,ros2_client=off",
+        )
+    });
     tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
