@@ -568,7 +568,8 @@ impl<'a> Params<'a> {
         }
     }
 
-    fn bad(&self, key: &str, expected: &'static str, got: &Value) -> DeviceError {
+    /// The error for parameter `key` holding `got` where `expected` was wanted.
+    pub fn invalid(&self, key: &str, expected: &'static str, got: impl ToString) -> DeviceError {
         DeviceError::BadParam {
             device: self.device.to_string(),
             param: key.to_string(),
@@ -589,7 +590,7 @@ impl<'a> Params<'a> {
         match self.find(key) {
             None => Ok(None),
             Some(v) if v.is_int() => Ok(v.as_i64()),
-            Some(v) => Err(self.bad(key, "an integer", v)),
+            Some(v) => Err(self.invalid(key, "an integer", v)),
         }
     }
 
@@ -598,7 +599,7 @@ impl<'a> Params<'a> {
         match self.find(key) {
             None => Ok(None),
             Some(v) if v.is_int() || v.is_float() => Ok(v.as_f64()),
-            Some(v) => Err(self.bad(key, "a number", v)),
+            Some(v) => Err(self.invalid(key, "a number", v)),
         }
     }
 
@@ -607,7 +608,7 @@ impl<'a> Params<'a> {
         match self.find(key) {
             None => Ok(None),
             Some(v) if v.is_string() || v.is_vocab() => Ok(Some(value_text(v))),
-            Some(v) => Err(self.bad(key, "a string", v)),
+            Some(v) => Err(self.invalid(key, "a string", v)),
         }
     }
 
@@ -635,7 +636,7 @@ impl<'a> Params<'a> {
         };
         items
             .iter()
-            .map(|v| f(v).ok_or_else(|| self.bad(key, expected, v)))
+            .map(|v| f(v).ok_or_else(|| self.invalid(key, expected, v)))
             .collect::<DevResult<Vec<T>>>()
             .map(Some)
     }

@@ -17,7 +17,7 @@ use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use crate::sensors::params::{bool_param, now};
 use crate::sensors::periodic::Ticker;
-use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
+use crate::wrapper_ports::{name_and_period, Reply, Slot, WrapperPorts};
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Duration;
@@ -50,15 +50,6 @@ impl BatteryNwsYarp {
     /// `<name>/rpc:i`.
     pub fn rpc_port_name(&self) -> String {
         format!("{}/rpc:i", self.name)
-    }
-
-    fn bad(param: &str, expected: &'static str, got: impl ToString) -> DeviceError {
-        DeviceError::BadParam {
-            device: NAME.into(),
-            param: param.into(),
-            expected,
-            got: got.to_string(),
-        }
     }
 }
 
@@ -130,16 +121,9 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 impl DeviceDriver for BatteryNwsYarp {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = Params::new(NAME, config);
-        let name = p.string("name")?.ok_or_else(|| p.missing("name"))?;
-        if !name.starts_with('/') {
-            return Err(Self::bad("name", "a port name starting with '/'", name));
-        }
-        let period = p.float("period")?.unwrap_or(1.0);
-        if !(period > 0.0 && period.is_finite()) {
-            return Err(Self::bad("period", "a period in seconds > 0", period));
-        }
+        let (name, period) = name_and_period(&p, "a port name starting with '/'", 1.0)?;
         if bool_param(&p, "enable_shutdown")?.unwrap_or(false) {
-            return Err(Self::bad(
+            return Err(p.invalid(
                 "enable_shutdown",
                 "false (this battery_nws_yarp never shuts the computer down)",
                 true,
@@ -148,15 +132,14 @@ impl DeviceDriver for BatteryNwsYarp {
         let _quit = p.string("quitPortName")?;
         self.log = bool_param(&p, "enable_log")?.unwrap_or(false);
         self.name = name;
-        self.period = Duration::from_secs_f64(period);
+        self.period = period;
         let ports = WrapperPorts::open(
             NAME,
             vec![self.data_port_name()],
             self.rpc_port_name(),
             self.slot.clone(),
             answer,
-        )
-        .map_err(|e| Self::bad("name", "port names that can be registered", e))?;
+        )?;
         self.ports = Some(ports);
         Ok(())
     }

@@ -13,7 +13,7 @@ use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use crate::sensors::params::now;
 use crate::sensors::periodic::Ticker;
-use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
+use crate::wrapper_ports::{name_and_period, Reply, Slot, WrapperPorts};
 use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::port::Port;
@@ -44,15 +44,6 @@ impl Rangefinder2DNwsYarp {
     /// The RPC port (`<name>/rpc:i`).
     pub fn rpc_port_name(&self) -> String {
         format!("{}/rpc:i", self.name)
-    }
-
-    fn bad(param: &str, expected: &'static str, got: impl ToString) -> DeviceError {
-        DeviceError::BadParam {
-            device: NAME.into(),
-            param: param.into(),
-            expected,
-            got: got.to_string(),
-        }
     }
 }
 
@@ -113,25 +104,17 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 impl DeviceDriver for Rangefinder2DNwsYarp {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = Params::new(NAME, config);
-        let name = p.string("name")?.ok_or_else(|| p.missing("name"))?;
-        if !name.starts_with('/') {
-            return Err(Self::bad("name", "a port name starting with '/'", name));
-        }
-        let period = p.float("period")?.unwrap_or(0.02);
-        if !(period > 0.0 && period.is_finite()) {
-            return Err(Self::bad("period", "a period in seconds > 0", period));
-        }
+        let (name, period) = name_and_period(&p, "a port name starting with '/'", 0.02)?;
         let _frame_id = p.string("frame_id")?;
         self.name = name;
-        self.period = Duration::from_secs_f64(period);
+        self.period = period;
         let ports = WrapperPorts::open(
             NAME,
             vec![self.name.clone()],
             self.rpc_port_name(),
             self.slot.clone(),
             answer,
-        )
-        .map_err(|e| Self::bad("name", "port names that can be registered", e))?;
+        )?;
         self.ports = Some(ports);
         Ok(())
     }

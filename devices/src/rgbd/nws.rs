@@ -12,7 +12,7 @@ use super::protocol::handle_rpc;
 use super::RgbdStatus;
 use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
 use crate::error::{DevResult, DeviceError};
-use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
+use crate::wrapper_ports::{name_and_period, Reply, Slot, WrapperPorts};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 use yarp_net::port::Port;
@@ -50,15 +50,6 @@ impl RgbdSensorNwsYarp {
 
     pub fn rpc_port_name(&self) -> String {
         format!("{}/rpc:i", self.name)
-    }
-
-    fn bad(param: &str, expected: &'static str, got: impl ToString) -> DeviceError {
-        DeviceError::BadParam {
-            device: NAME.into(),
-            param: param.into(),
-            expected,
-            got: got.to_string(),
-        }
     }
 }
 
@@ -130,24 +121,16 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 impl DeviceDriver for RgbdSensorNwsYarp {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = Params::new(NAME, config);
-        let name = p.string("name")?.ok_or_else(|| p.missing("name"))?;
-        if !name.starts_with('/') {
-            return Err(Self::bad("name", "a port prefix starting with '/'", name));
-        }
-        let period = p.float("period")?.unwrap_or(0.02);
-        if !(period > 0.0 && period.is_finite()) {
-            return Err(Self::bad("period", "a period in seconds > 0", period));
-        }
+        let (name, period) = name_and_period(&p, "a port prefix starting with '/'", 0.02)?;
         self.name = name.trim_end_matches('/').to_string();
-        self.period = Duration::from_secs_f64(period);
+        self.period = period;
         let ports = WrapperPorts::open(
             NAME,
             vec![self.rgb_port_name(), self.depth_port_name()],
             self.rpc_port_name(),
             self.slot.clone(),
             answer,
-        )
-        .map_err(|e| Self::bad("name", "port names that can be registered", e))?;
+        )?;
         self.ports = Some(ports);
         Ok(())
     }
@@ -193,7 +176,12 @@ impl IWrapper for RgbdSensorNwsYarp {
         let thread = std::thread::Builder::new()
             .name(NAME.into())
             .spawn(move || stream_images(device, rgb, depth, period, rx))
-            .map_err(|e| Self::bad("period", "a thread for the images", e))?;
+            .map_err(|e| DeviceError::BadParam {
+                device: NAME.into(),
+                param: "period".into(),
+                expected: "a thread for the images",
+                got: e.to_string(),
+            })?;
         self.streaming = Some(Streaming { stop, thread });
         Ok(())
     }
