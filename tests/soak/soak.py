@@ -304,7 +304,7 @@ class Clients:
     def start(self):
         for fn in (self.readers, self.rpc, self.slow_reader, self.lossless, self.commander):
             self.loop(fn)
-        # staggered over 10 s (the default two: at 0 and 10 s)
+        # staggered over 20 s (the default two start at 0 and 10 s)
         for i in range(self.ros_nodes):
             self.loop(lambda i=i: self.ros(i * 20.0 / max(self.ros_nodes, 2)))
 
@@ -390,12 +390,11 @@ def main():
     os.makedirs(out, exist_ok=True)
     command = f"tests/soak/run.sh --minutes {args.minutes:g}" + (
         f" --config {args.config}" if args.config != "icub-sim" else "")
-    for flag, value, default in (("--ros-nodes", args.ros_nodes, 2),
-                                 ("--ros-seconds", args.ros_seconds, 17.0),
-                                 ("--ros-pause", args.ros_pause, 3.0)):
-        if value != default:
-            command += f" {flag} {value:g}"
-    if args.ros_topics != ROS_TOPICS:
+    for dest in ("ros_nodes", "ros_seconds", "ros_pause"):
+        value = getattr(args, dest)
+        if value != ap.get_default(dest):
+            command += f" --{dest.replace('_', '-')} {value:g}"
+    if args.ros_topics != ap.get_default("ros_topics"):
         command += " --ros-topics " + " ".join(args.ros_topics)
 
     tmp = tempfile.mkdtemp(prefix="yarp-soak-")
