@@ -503,12 +503,19 @@ impl RtpsReaderProxy {
     self.pending_gap.insert(seq_num);
   }
 
-  pub fn set_pending_gap_up_to(&mut self, last_gap_sn: SequenceNumber) {
-    // form SN range from 1 to last_gap_sn (inclusive)
-    let gap_sn_range = SequenceNumberRange::new(SequenceNumber::new(1), last_gap_sn);
-    // Convert to a set and insert the SNs to pending_gap
-    let gap_sn_set = BTreeSet::from_iter(gap_sn_range);
-    self.pending_gap.extend(gap_sn_set);
+  // yarp-rs: the gap starts at the writer's oldest retained change. 0.15.1 put
+  // every SN from 1 into the set: a reader matched after an hour of 100 Hz
+  // samples got a 360 000-entry set (megabytes, cloned on each repair round),
+  // kept for its lifetime when best-effort (it never acknowledges). SNs older
+  // than the writer's first retained one are not offered by its heartbeats and
+  // are answered with a GAP if requested.
+  pub fn set_pending_gap(&mut self, first_gap_sn: SequenceNumber, last_gap_sn: SequenceNumber) {
+    let first_gap_sn = max(first_gap_sn, SequenceNumber::new(1));
+    if first_gap_sn > last_gap_sn {
+      return;
+    }
+    let gap_sn_range = SequenceNumberRange::new(first_gap_sn, last_gap_sn);
+    self.pending_gap.extend(gap_sn_range);
   }
 
   pub fn get_pending_gap(&self) -> &BTreeSet<SequenceNumber> {

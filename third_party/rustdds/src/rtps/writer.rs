@@ -2125,7 +2125,10 @@ impl Writer {
           // With Durabilty::Volatile QoS we won't send the sequence numbers which existed
           // before matching with this reader. Therefore we set the reader as pending GAP
           // for all existing sequence numbers
-          new_proxy.set_pending_gap_up_to(self.send_buffer.last_change_sequence_number());
+          new_proxy.set_pending_gap(
+            self.send_buffer.first_change_sequence_number(),
+            self.send_buffer.last_change_sequence_number(),
+          );
         }
         new_proxy.resolve_send_route(
           &self.interface_observations.borrow(),
