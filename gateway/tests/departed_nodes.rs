@@ -27,8 +27,19 @@ fn sedp_samples(gw: &yarp_ros2_gateway::gateway::Gateway) -> usize {
         .sum()
 }
 
+/// Announcements of our own participant kept by its SPDP writer.
+fn spdp_writer_samples(gw: &yarp_ros2_gateway::gateway::Gateway) -> usize {
+    let counts = gw.dds_writer_samples();
+    counts
+        .iter()
+        .find(|(topic, _)| topic == "DCPSParticipant")
+        .map(|(_, n)| *n)
+        .unwrap_or_else(|| panic!("no SPDP writer among {counts:?}"))
+}
+
 async fn discovery_forgets_rclpy_nodes_that_left_on(venv: &common::Distro) {
     let domain = venv.domain(20);
+    let started = std::time::Instant::now();
     let (ns, stop) = common::name_server().await;
     let gw = common::gateway(
         r#"
@@ -97,6 +108,24 @@ ros_type = "std_msgs/msg/String"
         left <= 4,
         "{left} SEDP samples kept after {NODES} nodes left"
     );
+
+    // Our own participant announcement (SPDP) is written again for every node that
+    // appears, to speed its discovery, and every 10 s. Its writer is best-effort with
+    // History depth 8: RustDDS 0.15.1 kept every announcement, for hours, as no
+    // best-effort reader ever acknowledges one. Writers are cleaned every 6 s. By 30 s
+    // after the start there were at least 1 + NODES + 2 announcements (9, over the depth).
+    tokio::time::sleep(Duration::from_secs(30).saturating_sub(started.elapsed())).await;
+    let spdp = common::repeat_until(
+        "the SPDP writer to keep its History depth (8) only",
+        Duration::from_millis(500),
+        async || {},
+        || {
+            let n = spdp_writer_samples(&gw);
+            (n <= 8).then_some(n)
+        },
+    )
+    .await;
+    assert!(spdp <= 8, "the SPDP writer keeps {spdp} announcements");
 
     gw.shutdown().await;
     stop.shutdown();

@@ -175,6 +175,14 @@ impl Gateway {
         self.ctx.domain_participant().topic_cache_sample_counts()
     }
 
+    /// How many samples each of the DDS participant's writers keeps for sending and
+    /// repair, by topic name, discovery's own writers included: a diagnostic of what
+    /// stays in memory (a writer keeps at most its History depth once its readers have
+    /// what they need).
+    pub fn dds_writer_samples(&self) -> Vec<(String, usize)> {
+        self.ctx.domain_participant().writer_sample_counts()
+    }
+
     pub fn bridges(&self) -> &[Bridge] {
         &self.bridges
     }

@@ -668,6 +668,13 @@ impl DomainParticipant {
     self.dds_cache().read().unwrap().sample_counts()
   }
 
+  // yarp-rs: a diagnostic (not in the 0.15.1 release).
+  /// How many samples each of this participant's writers keeps for sending and
+  /// repair, by topic name, built-in (discovery) writers included.
+  pub fn writer_sample_counts(&self) -> Vec<(String, usize)> {
+    self.dds_cache().read().unwrap().writer_sample_counts()
+  }
+
   #[cfg(feature = "security")] // just to avoid warning
   pub(crate) fn qos(&self) -> QosPolicies {
     self.dpi.lock().unwrap().qos()

@@ -556,6 +556,11 @@ impl InnerPublisher {
       backlog_limit,
       max_retain,
     );
+    // yarp-rs: known to DomainParticipant::writer_sample_counts.
+    dp.dds_cache()
+      .write()
+      .unwrap()
+      .register_writer_buffer(topic.name(), send_buffer.downgrade());
     // Doorbell: enqueue this writer's entity id and wake the participant poll.
     let doorbell = Doorbell::new(guid.entity_id, self.writer_ready.clone());
 

@@ -1689,12 +1689,24 @@ impl Writer {
     let first_keeper = if !self.like_stateless {
       // Regular stateful writer behavior
       // All readers have acked up to this point (SequenceNumber)
-      let acked_by_all_readers = self
-        .readers
-        .values()
-        .map(RtpsReaderProxy::acked_up_to_before)
-        .min()
-        .unwrap_or_else(SequenceNumber::zero);
+      // yarp-rs: only reliable readers acknowledge, and only a reliable writer
+      // repairs. A best-effort writer (the SPDP writer among them) or one with
+      // no reliable reader counts everything written as acknowledged, so its
+      // History depth bounds it; 0.15.1 took 0 here and such built-in writers,
+      // exempt from the trim on insert, kept every sample up to the 8192-sample
+      // backstop (the SPDP writer: one per announcement, for hours).
+      let all_written = self.send_buffer.last_change_sequence_number().plus_1();
+      let acked_by_all_readers = if self.is_reliable() {
+        self
+          .readers
+          .values()
+          .filter(|rp| rp.qos().is_reliable())
+          .map(RtpsReaderProxy::acked_up_to_before)
+          .min()
+          .unwrap_or(all_written)
+      } else {
+        all_written
+      };
       // If all readers have acked all up to before 5, and depth is 5, we need
       // to keep samples 0..4, i.e. from acked_up_to_before - depth .
       let depth_keeper = if let Some(depth) = depth {

@@ -92,6 +92,31 @@ struct Shared {
   topic_name: String,
 }
 
+/// yarp-rs: a weak handle on a writer's send buffer, for
+/// DomainParticipant::writer_sample_counts.
+#[derive(Clone)]
+pub(crate) struct WriterSendBufferWeak(std::sync::Weak<Shared>);
+
+impl WriterSendBufferWeak {
+  pub fn is_alive(&self) -> bool {
+    self.0.strong_count() > 0
+  }
+
+  /// Samples retained, or None once the writer is gone.
+  pub fn retained(&self) -> Option<usize> {
+    self
+      .0
+      .upgrade()
+      .map(|shared| shared.inner.lock().unwrap().changes.len())
+  }
+}
+
+impl std::fmt::Debug for WriterSendBufferWeak {
+  fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+    f.write_str("WriterSendBufferWeak")
+  }
+}
+
 /// A shared, flow-controlled buffer of samples between a `DataWriter`
 /// (producer, application threads) and its RTPS `Writer` (consumer, event
 /// loop).
@@ -360,6 +385,11 @@ impl WriterSendBuffer {
   #[cfg(test)]
   pub fn retained_len(&self) -> usize {
     self.shared.inner.lock().unwrap().changes.len()
+  }
+
+  /// yarp-rs: a handle that does not keep the buffer alive (diagnostics).
+  pub(crate) fn downgrade(&self) -> WriterSendBufferWeak {
+    WriterSendBufferWeak(Arc::downgrade(&self.shared))
   }
 
   /// The lowest sequence number still retained (or the next-to-be-written if

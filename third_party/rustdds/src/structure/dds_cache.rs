@@ -19,7 +19,7 @@ use crate::{
     typedesc::TypeDesc,
     CreateError, CreateResult,
   },
-  rtps::constant::MAX_WITHHELD_BYTES_PER_TOPIC,
+  rtps::{constant::MAX_WITHHELD_BYTES_PER_TOPIC, writer_send_buffer::WriterSendBufferWeak},
   structure::{sequence_number::SequenceNumber, time::Timestamp},
   GUID,
 };
@@ -49,6 +49,9 @@ use super::cache_change::CacheChange;
 #[derive(Debug, Default)]
 pub struct DDSCache {
   topic_caches: HashMap<String, Arc<Mutex<TopicCache>>>,
+  // yarp-rs: the send buffers of this participant's writers (built-in ones
+  // included), by topic name, for DomainParticipant::writer_sample_counts.
+  writer_buffers: Vec<(String, WriterSendBufferWeak)>,
 }
 
 impl DDSCache {
@@ -97,6 +100,20 @@ impl DDSCache {
     if self.topic_caches.contains_key(topic_name) {
       self.topic_caches.remove(topic_name);
     }
+  }
+
+  // yarp-rs: see DomainParticipant::writer_sample_counts.
+  pub(crate) fn register_writer_buffer(&mut self, topic_name: String, buffer: WriterSendBufferWeak) {
+    self.writer_buffers.retain(|(_, b)| b.is_alive());
+    self.writer_buffers.push((topic_name, buffer));
+  }
+
+  pub(crate) fn writer_sample_counts(&self) -> Vec<(String, usize)> {
+    self
+      .writer_buffers
+      .iter()
+      .filter_map(|(name, b)| b.retained().map(|n| (name.clone(), n)))
+      .collect()
   }
 
   // yarp-rs: see DomainParticipant::topic_cache_sample_counts.
