@@ -99,11 +99,18 @@ def threads(pid):
 
 
 def rss_mb(pid):
+    return rss_parts_mb(pid)[0]
+
+
+def rss_parts_mb(pid):
+    """(resident, of which file-backed or shared) in MB: statm's 2nd and 3rd fields.
+    The difference is the anonymous memory (heaps, stacks)."""
     try:
         with open(f"/proc/{pid}/statm") as f:
-            return int(f.read().split()[1]) * PAGE / 1e6
-    except OSError:
-        return 0.0
+            fields = f.read().split()
+        return int(fields[1]) * PAGE / 1e6, int(fields[2]) * PAGE / 1e6
+    except (OSError, IndexError, ValueError):
+        return 0.0, 0.0
 
 
 def label(pid):

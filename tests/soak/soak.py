@@ -45,7 +45,8 @@ class Sampler(threading.Thread):
         self.prev = {}
         self.file = open(path, "w", newline="")
         self.csv = csv.writer(self.file)
-        self.csv.writerow(["t_s", "pid", "process", "rss_mb", "fds", "threads", "cpu_pct"])
+        self.csv.writerow(["t_s", "pid", "process", "rss_mb", "rss_file_mb", "fds", "threads",
+                           "cpu_pct"])
 
     def sample(self):
         now = time.monotonic()
@@ -62,13 +63,16 @@ class Sampler(threading.Thread):
             prev = self.prev.get(pid)
             cpu = 0.0 if prev is None else (ticks - prev[1]) / cost.HZ / (now - prev[0]) * 100
             self.prev[pid] = (now, ticks)
+            rss, rss_file = cost.rss_parts_mb(pid)
             out.append({"t": now - self.t0, "pid": pid, "process": cost.label(pid),
-                        "rss": cost.rss_mb(pid), "fds": fds, "threads": nthreads, "cpu": cpu})
+                        "rss": rss, "anon": rss - rss_file, "fds": fds,
+                        "threads": nthreads, "cpu": cpu})
         with self.lock:
             self.rows.extend(out)
             for r in out:
                 self.csv.writerow([f"{r['t']:.1f}", r["pid"], r["process"], f"{r['rss']:.2f}",
-                                   r["fds"], r["threads"], f"{r['cpu']:.1f}"])
+                                   f"{r['rss'] - r['anon']:.2f}", r["fds"], r["threads"],
+                                   f"{r['cpu']:.1f}"])
             self.file.flush()
         return out
 
@@ -463,17 +467,22 @@ def main():
         series = by_process(sampler.rows)
         win = min(30.0, max(0.05 * duration, 5.0))
         lines.append("| process | RSS at warm-up (MB) | RSS at end (MB) | growth | "
-                     "fds base/after | threads base/after | mean CPU % | max CPU % |")
-        lines.append("|---|---:|---:|---:|---:|---:|---:|---:|")
+                     "of which anonymous (MB) | fds base/after | threads base/after | "
+                     "mean CPU % | max CPU % |")
+        lines.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
         for key in sorted(base):
             s = series.get(key, [])
             r0 = median_in(s, "rss", t_start + warm, t_start + warm + win)
             r1 = median_in(s, "rss", t_stop - win, t_stop)
             growth = (r1 - r0) / r0 * 100 if r0 and r1 else float("nan")
+            # anonymous memory (heaps, stacks) apart from the binary's pages touched
+            a0 = median_in(s, "anon", t_start + warm, t_start + warm + win)
+            a1 = median_in(s, "anon", t_stop - win, t_stop)
             a = after.get(key)
             run = [r["cpu"] for r in s if t_start <= r["t"] <= t_stop]
             lines.append(
                 f"| {key[0]} | {r0 or 0:.1f} | {r1 or 0:.1f} | {growth:+.1f} % | "
+                f"{a0 or 0:.1f} -> {a1 or 0:.1f} | "
                 f"{base[key]['fds']}/{a['fds'] if a else '-'} | "
                 f"{base[key]['threads']}/{a['threads'] if a else '-'} | "
                 f"{statistics.mean(run) if run else 0:.1f} | {max(run) if run else 0:.1f} |")
