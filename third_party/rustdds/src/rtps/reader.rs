@@ -1,5 +1,5 @@
 use std::{
-  collections::BTreeMap,
+  collections::{BTreeMap, BTreeSet},
   fmt, iter,
   rc::Rc,
   sync::{Arc, Mutex, MutexGuard},
@@ -43,7 +43,8 @@ use crate::{
   polling::{ReadySender, SharedTimer, WakeReceiver},
   rtps::{
     fragment_assembler::FragmentAssembler, message_receiver::MessageReceiverState,
-    rtps_writer_proxy::RtpsWriterProxy, timed_event::DpTimerEvent, Message,
+    early_writers::EarlyWriters, rtps_writer_proxy::RtpsWriterProxy, timed_event::DpTimerEvent,
+    Message,
   },
   structure::{
     cache_change::{CacheChange, ChangeKind},
@@ -136,6 +137,8 @@ pub(crate) struct Reader {
   fragment_assemblers: BTreeMap<GUID, FragmentAssembler>,
   last_fragment_garbage_collect: Timestamp,
   matched_writers: BTreeMap<GUID, RtpsWriterProxy>,
+  // yarp-rs: samples that writers sent us before we matched them, to ask for on matching.
+  early_writers: EarlyWriters,
   writer_match_count_total: i32, // total count, never decreases
 
   requested_deadline_missed_count: i32,
@@ -203,6 +206,7 @@ impl Reader {
       fragment_assemblers: BTreeMap::new(),
       last_fragment_garbage_collect: Timestamp::now(),
       matched_writers: BTreeMap::new(),
+      early_writers: EarlyWriters::default(),
       writer_match_count_total: 0,
       requested_deadline_missed_count: 0,
       offered_incompatible_qos_count: 0,
@@ -420,9 +424,18 @@ impl Reader {
           // knew it, so that HEARTBEAT was discarded. Without a request the next
           // one comes only after the writer's heartbeat period, and a Reliable
           // reader withholds all samples received in the meantime.
+          // yarp-rs: when it already sent us DATA or HEARTBEATs, the samples they named are
+          // asked for at once (Fast DDS answers a preemptive ACKNACK with base 1 only at
+          // its next periodic HEARTBEAT).
           if self.reliability != policy::Reliability::BestEffort {
+            let early = self.early_writers.take(writer);
             if let Some(mut writer_proxy) = self.matched_writers.remove(&writer) {
-              self.send_preemptive_acknack_to(&mut writer_proxy);
+              match early {
+                Some(named) => {
+                  self.request_missing_from(&mut writer_proxy, named.first, named.last)
+                }
+                None => self.send_preemptive_acknack_to(&mut writer_proxy),
+              }
               self.matched_writers.insert(writer, writer_proxy);
             }
           }
@@ -728,6 +741,8 @@ impl Reader {
     );
     if !self.like_stateless {
       let my_entity_id = self.my_guid.entity_id; // to please borrow checker
+      let reliable = self.reliability != policy::Reliability::BestEffort;
+      let mut gap_nack = None;
       if let Some(writer_proxy) = self.matched_writer_mut(writer_guid) {
         if writer_proxy.should_ignore_change(writer_sn) {
           // change already present
@@ -741,8 +756,17 @@ impl Reader {
             return;
           }
         }
+        // yarp-rs: a sample past the next expected one: those between were lost, or sent
+        // before we matched this writer and dropped. Ask for them now rather than at
+        // the writer's next periodic HEARTBEAT (3 s in Fast DDS, by which time a
+        // short-lived publisher has left with them).
+        let jumped =
+          writer_sn > writer_proxy.last_received_sequence_number() + SequenceNumber::new(1);
         // Add the change and get the instant
         writer_proxy.received_changes_add(writer_sn, receive_timestamp);
+        if jumped && reliable {
+          gap_nack = Some(writer_sn - SequenceNumber::new(1));
+        }
       } else {
         // no writer proxy found
         debug!(
@@ -753,7 +777,16 @@ impl Reader {
         // We just ignore the data in such a case
         // ... unless it is Discovery traffic.
         if writer_guid.entity_id.entity_kind.is_user_defined() {
+          if reliable {
+            self.early_writers.saw(writer_guid, writer_sn, writer_sn);
+          }
           return;
+        }
+      }
+      if let Some(last) = gap_nack {
+        if let Some(mut writer_proxy) = self.matched_writers.remove(&writer_guid) {
+          self.request_missing_from(&mut writer_proxy, SequenceNumber::new(1), last);
+          self.matched_writers.insert(writer_guid, writer_proxy);
         }
       }
     } else {
@@ -905,6 +938,13 @@ impl Reader {
         "HEARTBEAT from {:?}, but no writer proxy available. topic={:?} reader={:?}",
         writer_guid, self.topic_name, self.my_guid
       );
+      if writer_guid.entity_id.entity_kind.is_user_defined()
+        && heartbeat.first_sn <= heartbeat.last_sn
+      {
+        self
+          .early_writers
+          .saw(writer_guid, heartbeat.first_sn, heartbeat.last_sn);
+      }
       return false;
     }
     // sanity check
@@ -1417,6 +1457,42 @@ impl Reader {
     }
     // put writer proxies back
     self.matched_writers = writer_proxies;
+  }
+
+  /// yarp-rs: asks `writer_proxy` for the samples `first..=last` that we have not received (at
+  /// most the 256 an ACKNACK can name), without waiting for its HEARTBEAT: those it no
+  /// longer has, or that are not for us, it answers with a GAP. As for a HEARTBEAT's
+  /// range, samples before `first` are not asked for.
+  fn request_missing_from(
+    &self,
+    writer_proxy: &mut RtpsWriterProxy,
+    first: SequenceNumber,
+    last: SequenceNumber,
+  ) {
+    // Bounded before listing: a writer matched in mid-stream may be at SN 10^6.
+    let from = first.max(writer_proxy.all_ackable_before());
+    let to = last.min(from + SequenceNumber::new(255));
+    let requested: BTreeSet<SequenceNumber> =
+      writer_proxy.missing_seqnums(from, to).into_iter().collect();
+    let Some(&first) = requested.first() else {
+      return;
+    };
+    let acknack = AckNack {
+      reader_id: self.entity_id(),
+      writer_id: writer_proxy.remote_writer_guid.entity_id,
+      reader_sn_state: SequenceNumberSet::from_base_and_set(first, &requested),
+      count: writer_proxy.next_ack_nack_sequence_number(),
+    };
+    self.send_acknack_to(
+      BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Endianness)
+        | BitFlags::<ACKNACK_Flags>::from_flag(ACKNACK_Flags::Final),
+      acknack,
+      InfoDestination {
+        guid_prefix: writer_proxy.remote_writer_guid.prefix,
+      },
+      &writer_proxy.unicast_locator_list,
+      writer_proxy.remote_writer_guid,
+    );
   }
 
   // An ACKNACK without the final flag requests an immediate HEARTBEAT from the

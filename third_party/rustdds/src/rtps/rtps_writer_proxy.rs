@@ -100,10 +100,14 @@ impl RtpsWriterProxy {
     }
   }
 
+  // yarp-rs: counts start at 1: Fast DDS 2.6 (ROS 2 Humble) accepts an ACKNACK only when its count
+  // is above the last one seen, which starts at 0, so a first ACKNACK counted 0 was
+  // dropped. That first one is the preemptive ACKNACK sent on matching a writer, and
+  // without it a writer that sent its first samples before we matched it repaired them
+  // only at its next periodic HEARTBEAT (3 s in Fast DDS), if it was still there.
   pub fn next_ack_nack_sequence_number(&mut self) -> i32 {
-    let c = self.sent_ack_nack_count;
     self.sent_ack_nack_count += 1;
-    c
+    self.sent_ack_nack_count
   }
 
   // Returns a bound, below which everything can be acknowledged, i.e.
@@ -197,6 +201,11 @@ impl RtpsWriterProxy {
 
   // Check if we have already received this sequence number
   // or it has been marked as not_available
+  /// The highest sequence number received as DATA so far (0 before any).
+  pub fn last_received_sequence_number(&self) -> SequenceNumber {
+    self.last_received_sequence_number
+  }
+
   pub fn should_ignore_change(&self, seqnum: SequenceNumber) -> bool {
     seqnum < self.ack_base || self.changes.contains_key(&seqnum)
   }
