@@ -40,6 +40,31 @@ pub trait IMultipleWrapper {
     fn detach_all(&mut self) -> DevResult<()>;
 }
 
+/// Implements [`IMultipleWrapper`] for a wrapper that serves exactly one device, as the
+/// C++ network wrappers do: `attach_all` attaches the only device of the list and refuses
+/// any other count with `$why` (which names what joins several devices, where YARP has
+/// one); `detach_all` detaches it.
+#[macro_export]
+macro_rules! one_device_multiple_wrapper {
+    ($wrapper:ty, $why:expr) => {
+        impl $crate::driver::IMultipleWrapper for $wrapper {
+            fn attach_all(
+                &mut self,
+                devices: &[(String, $crate::driver::SharedDevice)],
+            ) -> $crate::error::DevResult<()> {
+                match devices {
+                    [(_, d)] => $crate::driver::IWrapper::attach(self, d.clone()),
+                    _ => Err($crate::error::DeviceError::Unsupported($why)),
+                }
+            }
+
+            fn detach_all(&mut self) -> $crate::error::DevResult<()> {
+                $crate::driver::IWrapper::detach(self)
+            }
+        }
+    };
+}
+
 /// A calibrator device (C++ `ICalibrator` as used by robotinterface's `calibrate` and
 /// `park` actions on their `target`).
 pub trait ICalibrator {

@@ -191,17 +191,7 @@ impl IWrapper for BatteryNwsYarp {
     }
 }
 
-impl IMultipleWrapper for BatteryNwsYarp {
-    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
-        match devices {
-            [(_, d)] => self.attach(d.clone()),
-            _ => Err(DeviceError::Unsupported(
-                "battery_nws_yarp attaches exactly one device",
-            )),
-        }
-    }
-
-    fn detach_all(&mut self) -> DevResult<()> {
-        IWrapper::detach(self)
-    }
-}
+crate::one_device_multiple_wrapper!(
+    BatteryNwsYarp,
+    "battery_nws_yarp attaches exactly one device"
+);

@@ -608,17 +608,7 @@ impl IWrapper for ControlBoardNwsDevice {
     }
 }
 
-impl IMultipleWrapper for ControlBoardNwsDevice {
-    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
-        match devices {
-            [(_, d)] => self.attach(d.clone()),
-            _ => Err(DeviceError::Unsupported(
-                "controlBoard_nws_yarp attaches exactly one device (join several with controlboardremapper)",
-            )),
-        }
-    }
-
-    fn detach_all(&mut self) -> DevResult<()> {
-        IWrapper::detach(self)
-    }
-}
+crate::one_device_multiple_wrapper!(
+    ControlBoardNwsDevice,
+    "controlBoard_nws_yarp attaches exactly one device (join several with controlboardremapper)"
+);

@@ -173,17 +173,7 @@ impl IWrapper for Rangefinder2DNwsYarp {
     }
 }
 
-impl IMultipleWrapper for Rangefinder2DNwsYarp {
-    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
-        match devices {
-            [(_, d)] => self.attach(d.clone()),
-            _ => Err(DeviceError::Unsupported(
-                "rangefinder2D_nws_yarp attaches exactly one device",
-            )),
-        }
-    }
-
-    fn detach_all(&mut self) -> DevResult<()> {
-        IWrapper::detach(self)
-    }
-}
+crate::one_device_multiple_wrapper!(
+    Rangefinder2DNwsYarp,
+    "rangefinder2D_nws_yarp attaches exactly one device"
+);

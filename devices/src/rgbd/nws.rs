@@ -196,17 +196,7 @@ impl IWrapper for RgbdSensorNwsYarp {
     }
 }
 
-impl IMultipleWrapper for RgbdSensorNwsYarp {
-    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
-        match devices {
-            [(_, d)] => self.attach(d.clone()),
-            _ => Err(DeviceError::Unsupported(
-                "rgbdSensor_nws_yarp attaches exactly one device",
-            )),
-        }
-    }
-
-    fn detach_all(&mut self) -> DevResult<()> {
-        IWrapper::detach(self)
-    }
-}
+crate::one_device_multiple_wrapper!(
+    RgbdSensorNwsYarp,
+    "rgbdSensor_nws_yarp attaches exactly one device"
+);

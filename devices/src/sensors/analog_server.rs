@@ -410,17 +410,4 @@ impl IWrapper for AnalogServer {
     }
 }
 
-impl IMultipleWrapper for AnalogServer {
-    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
-        match devices {
-            [(_, d)] => self.attach(d.clone()),
-            _ => Err(DeviceError::Unsupported(
-                "analogServer attaches exactly one device",
-            )),
-        }
-    }
-
-    fn detach_all(&mut self) -> DevResult<()> {
-        IWrapper::detach(self)
-    }
-}
+crate::one_device_multiple_wrapper!(AnalogServer, "analogServer attaches exactly one device");

@@ -293,17 +293,7 @@ impl IWrapper for MultipleAnalogSensorsServer {
     }
 }
 
-impl IMultipleWrapper for MultipleAnalogSensorsServer {
-    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
-        match devices {
-            [(_, d)] => self.attach(d.clone()),
-            _ => Err(DeviceError::Unsupported(
-                "multipleanalogsensorsserver attaches exactly one device (join several with multipleanalogsensorsremapper)",
-            )),
-        }
-    }
-
-    fn detach_all(&mut self) -> DevResult<()> {
-        IWrapper::detach(self)
-    }
-}
+crate::one_device_multiple_wrapper!(
+    MultipleAnalogSensorsServer,
+    "multipleanalogsensorsserver attaches exactly one device (join several with multipleanalogsensorsremapper)"
+);

@@ -765,20 +765,10 @@ impl IWrapper for ControlBoardNwsRos2 {
     }
 }
 
-impl IMultipleWrapper for ControlBoardNwsRos2 {
-    fn attach_all(&mut self, devices: &[(String, SharedDevice)]) -> DevResult<()> {
-        match devices {
-            [(_, d)] => self.attach(d.clone()),
-            _ => Err(DeviceError::Unsupported(
-                "controlBoard_nws_ros2 attaches exactly one device (join several with controlboardremapper)",
-            )),
-        }
-    }
-
-    fn detach_all(&mut self) -> DevResult<()> {
-        IWrapper::detach(self)
-    }
-}
+yarp_devices::one_device_multiple_wrapper!(
+    ControlBoardNwsRos2,
+    "controlBoard_nws_ros2 attaches exactly one device (join several with controlboardremapper)"
+);
 
 #[cfg(test)]
 mod tests {
