@@ -143,6 +143,9 @@ fn main() -> std::process::ExitCode {
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
         .init();
+    // Runs for hours: keep glibc's freed pages from piling up in the RSS (set before
+    // DDS's threads start allocating).
+    yarp_net::heap::for_long_runs();
     let rt = match tokio::runtime::Runtime::new() {
         Ok(rt) => rt,
         Err(e) => {
@@ -216,8 +219,6 @@ async fn run(args: Args) -> anyhow::Result<()> {
         diagnostics_port: Some(args.diagnostics_port.clone()),
     };
     let gw = Gateway::start(&mappings, ns.clone(), opt).await?;
-    // Runs for hours: keep glibc's freed pages from piling up in the RSS.
-    yarp_net::heap::trim_periodically(yarp_net::heap::TRIM_PERIOD);
     println!(
         "yarp-ros2-gateway: ROS domain {domain_id}, YARP name server {}, {} mapping(s):",
         ns.server(),

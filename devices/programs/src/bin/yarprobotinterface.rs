@@ -362,7 +362,7 @@ fn run() -> i32 {
 fn main() {
     yarp_device_programs::register_all();
     // Runs for hours: keep glibc's freed pages from piling up in the RSS.
-    yarp_net::heap::trim_periodically(yarp_net::heap::TRIM_PERIOD);
+    yarp_net::heap::for_long_runs();
     let code = run();
     // Serving tasks of closed devices may still be winding down on the device runtime;
     // they must not keep the process alive.

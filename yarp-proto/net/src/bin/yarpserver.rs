@@ -2,7 +2,7 @@
 
 fn main() -> std::process::ExitCode {
     // Runs for hours: keep glibc's freed pages from piling up in the RSS.
-    yarp_net::heap::trim_periodically(yarp_net::heap::TRIM_PERIOD);
+    yarp_net::heap::for_long_runs();
     match yarp_net::nameserver::program::main_with_args(std::env::args().skip(1)) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
