@@ -5,12 +5,12 @@
 //!   `IBattery::Battery_status` as int32;
 //! - the `IBatteryMsgs` thrift service on `<name>/rpc:i`, one method, `getBatteryInfoRPC`,
 //!   answered `(return_code info)` (`return_get_BatteryInfo`: a `yarp::dev::ReturnValue`
-//!   int32, then the string).
+//!   int32, then the string), and the `getRemoteProtocolVersion` of every 3.12 service.
 
 use super::{BatteryStatus, IBattery};
 use crate::error::DeviceError;
 use crate::rangefinder::protocol::ReturnCode;
-use crate::sensors::rpc::fail_reply;
+use crate::sensors::rpc::{fail_reply, protocol_version_reply, GET_PROTOCOL_VERSION};
 use crate::sensors::wire::WireWriter;
 use thiserror::Error;
 use yarp_proto::{Bottle, Value};
@@ -125,8 +125,13 @@ pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IBattery>) -> Vec<u8> {
         Value::Vocab32(v) => Some(v.as_string()),
         _ => None,
     });
-    if method.as_deref() != Some(GET_INFO) || items.next().is_some() {
+    if items.peek().is_some() {
         return fail_reply();
+    }
+    match method.as_deref() {
+        Some(GET_INFO) => {}
+        Some(GET_PROTOCOL_VERSION) => return protocol_version_reply(),
+        _ => return fail_reply(),
     }
     let (code, info) = match dev.map(|d| d.get_battery_info()) {
         None => (ReturnCode::NotReady, String::new()),
@@ -220,8 +225,20 @@ mod tests {
         );
         let r = ask("getBatteryInfoRPC", None);
         assert_eq!(r.get(0).and_then(Value::as_i32), Some(6));
-        for bad in ["", "getBatteryInfo", "getBatteryInfoRPC 1", "12"] {
+        for bad in [
+            "",
+            "getBatteryInfo",
+            "getBatteryInfoRPC 1",
+            "getRemoteProtocolVersion 1",
+            "12",
+        ] {
             assert_eq!(ask(bad, Some(&mut b)).to_string(), "[fail]", "{bad}");
+        }
+        for dev in [Some(&mut b as &mut dyn IBattery), None] {
+            assert_eq!(
+                handle_rpc(&Bottle::from_text("getRemoteProtocolVersion"), dev),
+                protocol_version_reply()
+            );
         }
     }
 

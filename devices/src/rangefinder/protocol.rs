@@ -5,10 +5,12 @@
 //!   `yarp::sig::Vector` (compact float64 list) and the status as int32;
 //! - the `IRangefinder2DMsgs` thrift service on `<name>/rpc:i`: commands are the method
 //!   name split at `_` (`getDistanceRange RPC`), replies a list whose first element is the
-//!   `yarp::dev::ReturnValue` (an int32 code) followed by the `return_*` struct's fields.
+//!   `yarp::dev::ReturnValue` (an int32 code) followed by the `return_*` struct's fields;
+//!   and the `getRemoteProtocolVersion` of every 3.12 service.
 
 use super::{IRangefinder2D, LaserStatus};
 use crate::error::DeviceError;
+use crate::sensors::rpc::{protocol_version_reply, GET_PROTOCOL_VERSION};
 use crate::sensors::wire::WireWriter;
 use thiserror::Error;
 use yarp_proto::{Bottle, Value, Vocab32};
@@ -145,6 +147,16 @@ fn word(v: &Value) -> Option<String> {
     }
 }
 
+/// `getRemoteProtocolVersion`, optionally behind `__direct__`, without arguments.
+fn is_protocol_version_request(cmd: &Bottle) -> bool {
+    let words: Vec<Option<String>> = cmd.iter().map(word).collect();
+    let words = match words.first() {
+        Some(Some(w)) if w == "__direct__" => &words[1..],
+        _ => &words[..],
+    };
+    matches!(words, [Some(w)] if w == GET_PROTOCOL_VERSION)
+}
+
 /// Splits a request into its method and arguments, joining words with `_` as C++'s
 /// generated `read` does (`getScanRate RPC` and `getScanRate_RPC` are the same method).
 pub fn parse_request(cmd: &Bottle) -> Option<(&'static str, Vec<f64>)> {
@@ -181,6 +193,9 @@ pub fn parse_request(cmd: &Bottle) -> Option<(&'static str, Vec<f64>)> {
 /// Answers one request on `dev` (`None`: no device attached, every method answers
 /// `return_value_error_not_ready`).
 pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IRangefinder2D>) -> Vec<u8> {
+    if is_protocol_version_request(cmd) {
+        return protocol_version_reply();
+    }
     let Some((method, args)) = parse_request(cmd) else {
         return fail_reply();
     };
@@ -365,5 +380,20 @@ mod tests {
         }
         assert_eq!(nums(&ask("getDistanceRange RPC", None)), [6.0, 0.0, 0.0]);
         assert_eq!(ask("setScanRate RPC 2", None).to_string(), "6");
+    }
+
+    #[test]
+    fn protocol_version_with_and_without_a_device() {
+        let mut l = laser();
+        let want = protocol_version_reply();
+        let ask = |text: &str, dev: Option<&mut dyn IRangefinder2D>| {
+            handle_rpc(&Bottle::from_text(text), dev)
+        };
+        assert_eq!(ask("getRemoteProtocolVersion", Some(&mut l)), want);
+        assert_eq!(ask("__direct__ getRemoteProtocolVersion", None), want);
+        assert_eq!(
+            ask("getRemoteProtocolVersion 1", None),
+            crate::sensors::rpc::fail_reply()
+        );
     }
 }

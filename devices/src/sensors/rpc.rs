@@ -1,8 +1,9 @@
 //! The `MultipleAnalogSensorsMetadata` thrift service served on `/<name>/rpc:o`, as a
 //! pure function from the request Bottle to the reply bytes.
 //!
-//! Commands (the C++ generated `read`): `getMetadata` (no arguments) and
-//! `help [function]`, optionally behind `__direct__`. Anything else, or extra arguments,
+//! Commands (the C++ generated `read`): `getMetadata` (no arguments),
+//! `getRemoteProtocolVersion` (every 3.12 thrift service has it) and `help [function]`,
+//! optionally behind `__direct__`. Anything else, or extra arguments,
 //! gets `[fail]`, as C++ `WireReader::fail` answers.
 
 use super::wire::{SensorRpcData, WireWriter};
@@ -14,6 +15,27 @@ const HELP: &str = "help";
 const PROTOTYPE: &str = "SensorRPCData MultipleAnalogSensorsMetadata::getMetadata()";
 const METHOD_HELP: &str =
     "Read the sensor metadata necessary to configure the MultipleAnalogSensorsClient device.";
+
+/// The method every thrift service of C++ YARP 3.12 answers besides its own (not listed
+/// by `help`): newer clients call it on connecting and refuse a server whose
+/// `protocol_version` differs from theirs.
+pub const GET_PROTOCOL_VERSION: &str = "getRemoteProtocolVersion";
+
+/// The YARP version this implementation speaks the protocols of, as C++ reports it in
+/// `getRemoteProtocolVersion`.
+pub const YARP_VERSION: [i16; 3] = [3, 12, 3];
+
+/// The `getRemoteProtocolVersion` reply: a one-element list header followed by an
+/// `ApplicationNetworkProtocolVersion` written untagged (four int16: the service's
+/// protocol version, 0 for every 3.12 service, then YARP's major, minor and patch).
+pub fn protocol_version_reply() -> Vec<u8> {
+    let mut w = WireWriter::new();
+    w.list_header(1).raw_int16(0);
+    for part in YARP_VERSION {
+        w.raw_int16(part);
+    }
+    w.into_bytes()
+}
 
 /// The `[fail]` reply (a plain Bottle, compact vocab list, as C++ writes it).
 pub fn fail_reply() -> Vec<u8> {
@@ -70,6 +92,7 @@ pub fn handle_rpc(cmd: &Bottle, metadata: &SensorRpcData) -> Vec<u8> {
     }
     match word.as_deref() {
         Some(GET_METADATA) if args.peek().is_none() => metadata.encode_reply(),
+        Some(GET_PROTOCOL_VERSION) if args.peek().is_none() => protocol_version_reply(),
         Some(HELP) => {
             let function = match args.next() {
                 Some(Value::String(s)) => String::from_utf8_lossy(s).into_owned(),
@@ -119,12 +142,32 @@ mod tests {
     }
 
     #[test]
+    fn protocol_version_as_cpp_writes_it() {
+        // WireWriter::writeListHeader(1), then ApplicationNetworkProtocolVersion::write:
+        // appendInt16 of protocol_version (0), yarp_major, yarp_minor, yarp_patch.
+        let want: [u8; 16] = [
+            0x00, 0x01, 0x00, 0x00, // BOTTLE_TAG_LIST (256)
+            0x01, 0x00, 0x00, 0x00, // one element
+            0x00, 0x00, // protocol_version 0
+            0x03, 0x00, // 3
+            0x0c, 0x00, // 12
+            0x03, 0x00, // 3
+        ];
+        for text in [
+            "getRemoteProtocolVersion",
+            "__direct__ getRemoteProtocolVersion",
+        ] {
+            assert_eq!(handle_rpc(&Bottle::from_text(text), &md()), want, "{text}");
+        }
+    }
+
+    #[test]
     fn anything_else_fails() {
         for text in [
             "",
             "42",
             "(getMetadata)",
-            "getRemoteProtocolVersion",
+            "getRemoteProtocolVersion 1",
             "[zzz] 1",
         ] {
             assert_eq!(reply(text), "[fail]", "{text:?}");

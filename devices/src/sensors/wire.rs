@@ -104,6 +104,13 @@ impl WireWriter {
         self
     }
 
+    /// `ConnectionWriter::appendInt16`: two bytes, untagged (how C++ writes an
+    /// `ApplicationNetworkProtocolVersion`).
+    pub fn raw_int16(&mut self, x: i16) -> &mut Self {
+        self.out.extend_from_slice(&x.to_le_bytes());
+        self
+    }
+
     /// A `yarp::sig::Vector`: its own compact float64 list.
     pub fn float_vector(&mut self, v: &[f64]) -> &mut Self {
         self.i32(tags::LIST | tags::FLOAT64);
