@@ -17,6 +17,7 @@ pub mod frames;
 pub mod interfaces;
 pub mod kind;
 pub mod navigation;
+mod nwc_ports;
 pub mod rangefinder;
 pub mod remapper;
 pub mod remote_controlboard;

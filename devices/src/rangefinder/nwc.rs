@@ -12,100 +12,16 @@ use super::protocol::{parse_reply, status_of, LaserScan2D, ReturnCode};
 use super::{IRangefinder2D, LaserStatus};
 use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
+use crate::nwc_ports::{NwcNames, NwcPorts};
 use crate::runtime;
-use std::sync::{Arc, Mutex};
-use std::time::Duration;
-use yarp_net::nameserver::NameClient;
-use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Value};
 
 const NAME: &str = "rangefinder2D_nwc_yarp";
-const RPC_TIMEOUT: Duration = Duration::from_secs(5);
 
-/// The latest scan and its envelope time.
-type Latest = Arc<Mutex<Option<(LaserScan2D, f64)>>>;
+type Client = NwcPorts<LaserScan2D>;
 
-struct Client {
-    stream: Arc<Port>,
-    task: tokio::task::JoinHandle<()>,
-    rpc: Arc<Port>,
-    latest: Latest,
-}
-
-async fn receive(port: Arc<Port>, latest: Latest) {
-    while let Some(msg) = port.read().await {
-        let scan = msg
-            .bottle()
-            .map_err(|e| e.to_string())
-            .and_then(|b| LaserScan2D::from_bottle(&b).map_err(|e| e.to_string()));
-        match scan {
-            Ok(s) => {
-                let t = msg.stamp.map_or(0.0, |s| s.time);
-                *latest.lock().unwrap_or_else(|e| e.into_inner()) = Some((s, t));
-            }
-            Err(e) => tracing::warn!("{NAME}: ignoring a message that is not a scan: {e}"),
-        }
-    }
-}
-
-async fn close_port(port: Arc<Port>) {
-    if let Ok(p) = Arc::try_unwrap(port) {
-        p.close().await;
-    }
-}
-
-impl Client {
-    async fn open(
-        ns: NameClient,
-        local: String,
-        remote: String,
-        carrier: String,
-    ) -> Result<Client, String> {
-        let stream = Arc::new(
-            Port::open(&local, ns.clone())
-                .await
-                .map_err(|e| format!("{local}: {e}"))?,
-        );
-        let connected = match yarp_net::network::connect(&ns, &remote, &local, Some(&carrier)).await
-        {
-            Ok((true, _)) => Ok(()),
-            Ok((false, msg)) => Err(msg),
-            Err(e) => Err(e.to_string()),
-        };
-        if let Err(e) = connected {
-            close_port(stream).await;
-            return Err(format!("connecting {remote} to {local}: {e}"));
-        }
-        let rpc_name = format!("{local}/rpc:o");
-        let rpc = match Port::open(&rpc_name, ns).await {
-            Ok(p) => p,
-            Err(e) => {
-                close_port(stream).await;
-                return Err(format!("{rpc_name}: {e}"));
-            }
-        };
-        let remote_rpc = format!("{remote}/rpc:i");
-        if let Err(e) = rpc.connect(&remote_rpc, None).await {
-            rpc.close().await;
-            close_port(stream).await;
-            return Err(format!("connecting {rpc_name} to {remote_rpc}: {e}"));
-        }
-        let latest = Latest::default();
-        let task = tokio::spawn(receive(stream.clone(), latest.clone()));
-        Ok(Client {
-            stream,
-            task,
-            rpc: Arc::new(rpc),
-            latest,
-        })
-    }
-
-    async fn close(self) {
-        self.task.abort();
-        let _ = self.task.await;
-        close_port(self.stream).await;
-        close_port(self.rpc).await;
-    }
+fn parse_scan(b: &Bottle) -> Result<LaserScan2D, String> {
+    LaserScan2D::from_bottle(b).map_err(|e| e.to_string())
 }
 
 /// The `rangefinder2D_nwc_yarp` device.
@@ -122,12 +38,7 @@ impl Rangefinder2DNwcYarp {
     /// Calls `method` (a thrift name such as `getScanRate_RPC`) with `args`; the fields
     /// after the return code, or the failure.
     fn call(&self, method: &str, args: &[f64]) -> DevResult<Vec<Value>> {
-        let port = self
-            .client
-            .as_ref()
-            .ok_or(DeviceError::NotOpen)?
-            .rpc
-            .clone();
+        let client = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
         let mut cmd = Bottle::new();
         for word in method.split('_') {
             cmd.push(word);
@@ -136,14 +47,7 @@ impl Rangefinder2DNwcYarp {
             cmd.push(a);
         }
         let what = cmd.to_string();
-        let reply =
-            runtime::block_on(
-                async move { tokio::time::timeout(RPC_TIMEOUT, port.rpc(&cmd)).await },
-            )
-            .map_err(|_| {
-                DeviceError::failed(NAME, format!("no reply to {what} in {RPC_TIMEOUT:?}"))
-            })?
-            .map_err(|e| DeviceError::failed(NAME, format!("{what}: {e}")))?;
+        let reply = client.call(cmd)?;
         match parse_reply(&reply) {
             Some((0, fields)) => Ok(fields),
             Some((code, _)) if code == ReturnCode::NotImplemented as i32 => Err(
@@ -183,8 +87,15 @@ impl DeviceDriver for Rangefinder2DNwcYarp {
             got: e,
         };
         let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
+        let names = NwcNames {
+            rpc: format!("{local}/rpc:o"),
+            remote_rpc: format!("{remote}/rpc:i"),
+            stream: local,
+            remote_stream: remote,
+            carrier,
+        };
         let client =
-            runtime::block_on(Client::open(ns, local, remote, carrier)).map_err(network)?;
+            runtime::block_on(Client::open(NAME, ns, names, parse_scan)).map_err(network)?;
         self.close()?;
         self.client = Some(client);
         Ok(())
@@ -211,14 +122,14 @@ impl Drop for Rangefinder2DNwcYarp {
 impl IRangefinder2D for Rangefinder2DNwcYarp {
     fn get_raw_data(&mut self) -> DevResult<(Vec<f64>, f64)> {
         let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
-        let latest = c.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let latest = c.latest();
         Ok(latest
             .as_ref()
             .map_or((Vec::new(), 0.0), |(s, t)| (s.scans.clone(), *t)))
     }
     fn get_device_status(&mut self) -> DevResult<LaserStatus> {
         let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
-        let latest = c.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let latest = c.latest();
         Ok(latest
             .as_ref()
             .and_then(|(s, _)| status_of(s.status))

@@ -1,0 +1,144 @@
+//! The ports of a YARP network client device (`*_nwc_yarp`): a stream port fed by the
+//! server's streaming port, keeping the latest message with its envelope time, and an RPC
+//! port connected to the server's RPC port. The counterpart of `wrapper_ports` (NWS).
+
+use crate::error::{DevResult, DeviceError};
+use crate::runtime;
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::Duration;
+use yarp_net::nameserver::NameClient;
+use yarp_net::port::Port;
+use yarp_proto::Bottle;
+
+/// How long an RPC call waits for the server's reply.
+pub(crate) const RPC_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// The latest stream message and its envelope time (0 without an envelope).
+type Latest<T> = Arc<Mutex<Option<(T, f64)>>>;
+
+/// The port names of one client: `stream` receives from `remote_stream`, `rpc` calls
+/// `remote_rpc`.
+pub(crate) struct NwcNames {
+    pub stream: String,
+    pub remote_stream: String,
+    /// Carrier of the stream connection.
+    pub carrier: String,
+    pub rpc: String,
+    pub remote_rpc: String,
+}
+
+/// Open client ports (closed by [`NwcPorts::close`]).
+pub(crate) struct NwcPorts<T> {
+    device: &'static str,
+    stream: Arc<Port>,
+    task: tokio::task::JoinHandle<()>,
+    rpc: Arc<Port>,
+    latest: Latest<T>,
+}
+
+async fn receive<T>(
+    device: &'static str,
+    port: Arc<Port>,
+    latest: Latest<T>,
+    parse: fn(&Bottle) -> Result<T, String>,
+) {
+    while let Some(msg) = port.read().await {
+        match msg
+            .bottle()
+            .map_err(|e| e.to_string())
+            .and_then(|b| parse(&b))
+        {
+            Ok(m) => {
+                let t = msg.stamp.map_or(0.0, |s| s.time);
+                *latest.lock().unwrap_or_else(|e| e.into_inner()) = Some((m, t));
+            }
+            Err(e) => tracing::warn!("{device}: ignoring a malformed stream message: {e}"),
+        }
+    }
+}
+
+async fn close_port(port: Arc<Port>) {
+    if let Ok(p) = Arc::try_unwrap(port) {
+        p.close().await;
+    }
+}
+
+impl<T: Send + 'static> NwcPorts<T> {
+    /// Opens both ports and connects them; what failed, with the port names, otherwise.
+    pub async fn open(
+        device: &'static str,
+        ns: NameClient,
+        names: NwcNames,
+        parse: fn(&Bottle) -> Result<T, String>,
+    ) -> Result<NwcPorts<T>, String> {
+        let NwcNames {
+            stream: local,
+            remote_stream,
+            carrier,
+            rpc: rpc_name,
+            remote_rpc,
+        } = names;
+        let stream = Arc::new(
+            Port::open(&local, ns.clone())
+                .await
+                .map_err(|e| format!("{local}: {e}"))?,
+        );
+        let connected =
+            match yarp_net::network::connect(&ns, &remote_stream, &local, Some(&carrier)).await {
+                Ok((true, _)) => Ok(()),
+                Ok((false, msg)) => Err(msg),
+                Err(e) => Err(e.to_string()),
+            };
+        if let Err(e) = connected {
+            close_port(stream).await;
+            return Err(format!("connecting {remote_stream} to {local}: {e}"));
+        }
+        let rpc = match Port::open(&rpc_name, ns).await {
+            Ok(p) => p,
+            Err(e) => {
+                close_port(stream).await;
+                return Err(format!("{rpc_name}: {e}"));
+            }
+        };
+        if let Err(e) = rpc.connect(&remote_rpc, None).await {
+            rpc.close().await;
+            close_port(stream).await;
+            return Err(format!("connecting {rpc_name} to {remote_rpc}: {e}"));
+        }
+        let latest = Latest::default();
+        let task = tokio::spawn(receive(device, stream.clone(), latest.clone(), parse));
+        Ok(NwcPorts {
+            device,
+            stream,
+            task,
+            rpc: Arc::new(rpc),
+            latest,
+        })
+    }
+
+    /// The latest stream message, if one came.
+    pub fn latest(&self) -> MutexGuard<'_, Option<(T, f64)>> {
+        self.latest.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Calls the server (blocking the caller, at most [`RPC_TIMEOUT`]).
+    pub fn call(&self, cmd: Bottle) -> DevResult<Bottle> {
+        let port = self.rpc.clone();
+        let what = cmd.to_string();
+        runtime::block_on(async move { tokio::time::timeout(RPC_TIMEOUT, port.rpc(&cmd)).await })
+            .map_err(|_| {
+                DeviceError::failed(
+                    self.device,
+                    format!("no reply to {what} in {RPC_TIMEOUT:?}"),
+                )
+            })?
+            .map_err(|e| DeviceError::failed(self.device, format!("{what}: {e}")))
+    }
+
+    pub async fn close(self) {
+        self.task.abort();
+        let _ = self.task.await;
+        close_port(self.stream).await;
+        close_port(self.rpc).await;
+    }
+}
