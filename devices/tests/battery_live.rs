@@ -1,7 +1,8 @@
 //! battery_nws_yarp over fakeBattery on real sockets, with an in-process name server (run
 //! under netns-run): our reader gets `BatteryData` with envelopes on `<name>/data:o`, our
 //! RPC client and C++ `yarp rpc` / `yarp read` (3.5, when installed; in CI required) get
-//! the `IBatteryMsgs` answer and the stream. Every wait is bounded.
+//! the `IBatteryMsgs` answer and the stream; our `battery_nwc_yarp` reads it all back.
+//! Every wait is bounded.
 
 use yarp_devices::battery::protocol::BatteryData;
 use yarp_devices::{runtime, PolyDriver};
@@ -124,4 +125,44 @@ fn cpp_yarp_read_and_rpc_talk_to_our_battery_wrapper() {
     );
     eprintln!("interop: C++ yarp rpc and yarp read -> battery_nws_yarp OK");
     server.close().unwrap();
+}
+
+#[test]
+fn nwc_reads_the_stream_and_asks_the_info() {
+    let mut server = battery("/nwc/battery");
+    let mut client = PolyDriver::open(
+        &Property::from_config_text(
+            "device battery_nwc_yarp\nlocal /nwc/battery_client\nremote /nwc/battery\n",
+        )
+        .unwrap(),
+    )
+    .expect("open the client");
+    let b = client.device().as_battery().unwrap();
+    // before the first message: C++'s thrift defaults (zeros, BATTERY_GENERAL_ERROR)
+    let v = yarp_interop_tests::wait_for("battery data", || {
+        let v = b.get_battery_voltage().ok()?;
+        (v != 0.0).then_some(v)
+    });
+    assert_eq!(v, 30.0);
+    assert_eq!(b.get_battery_current().unwrap(), 3.0);
+    assert_eq!(b.get_battery_temperature().unwrap(), 20.0);
+    let charge = b.get_battery_charge().unwrap();
+    assert!(charge > 49.0 && charge <= 50.0, "{charge}");
+    assert_eq!(
+        b.get_battery_status().unwrap(),
+        yarp_devices::battery::BatteryStatus::OkInUse
+    );
+    assert_eq!(b.get_battery_info().unwrap(), "Fake battery system v2.0");
+    client.close().unwrap();
+    server.close().unwrap();
+    // a client of nothing fails to open, naming what it could not reach
+    let err = PolyDriver::open(
+        &Property::from_config_text(
+            "device battery_nwc_yarp\nlocal /lonely_battery\nremote /no/battery\n",
+        )
+        .unwrap(),
+    )
+    .err()
+    .expect("no server");
+    assert!(err.to_string().contains("/no/battery/data:o"), "{err}");
 }

@@ -1,7 +1,8 @@
-//! Batteries: the `IBattery` interface (C++ `yarp::dev::IBattery`), `fakeBattery` and the
-//! YARP network wrapper `battery_nws_yarp`.
+//! Batteries: the `IBattery` interface (C++ `yarp::dev::IBattery`), `fakeBattery`, the
+//! YARP network wrapper `battery_nws_yarp` and its client `battery_nwc_yarp`.
 
 pub mod fake;
+pub mod nwc;
 pub mod nws;
 pub mod protocol;
 
@@ -34,4 +35,5 @@ pub trait IBattery {
 pub(crate) const DRIVERS: &[(&str, Factory)] = &[
     ("fakeBattery", || Box::new(fake::FakeBattery::new())),
     ("battery_nws_yarp", || Box::new(nws::BatteryNwsYarp::new())),
+    ("battery_nwc_yarp", || Box::new(nwc::BatteryNwcYarp::new())),
 ];

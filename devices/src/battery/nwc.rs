@@ -1,0 +1,150 @@
+//! `battery_nwc_yarp` (C++ YARP 3.12 `Battery_nwc_yarp`): an `IBattery` read from a
+//! `battery_nws_yarp`.
+//!
+//! Parameters as C++: `local` (the ports are `<local>/data:i` and `<local>/rpc:o`),
+//! `remote` (the server's `name`: its ports are `<remote>/data:o` and `<remote>/rpc:i`),
+//! `carrier` (of the stream, default `tcp`). Charge, voltage, current, temperature and
+//! status are the last `BatteryData` streamed (the thrift defaults before the first: zeros
+//! and `BATTERY_GENERAL_ERROR`, as C++); the info comes from the server's
+//! `getBatteryInfoRPC`.
+
+use super::protocol::BatteryData;
+use super::{BatteryStatus, IBattery};
+use crate::driver::{DeviceDriver, Params};
+use crate::error::{DevResult, DeviceError};
+use crate::nwc_ports::{NwcNames, NwcPorts};
+use crate::rangefinder::protocol::{parse_reply, ReturnCode};
+use crate::runtime;
+use yarp_proto::{Bottle, Property, Value};
+
+const NAME: &str = "battery_nwc_yarp";
+
+type Client = NwcPorts<BatteryData>;
+
+fn parse_data(b: &Bottle) -> Result<BatteryData, String> {
+    BatteryData::from_bottle(b).map_err(|e| e.to_string())
+}
+
+/// C++'s `IBattery::Battery_status` from the streamed int32 (unknown codes are errors).
+fn status_of(code: i32) -> BatteryStatus {
+    match code {
+        0 => BatteryStatus::OkStandby,
+        1 => BatteryStatus::OkInCharge,
+        2 => BatteryStatus::OkInUse,
+        4 => BatteryStatus::Timeout,
+        5 => BatteryStatus::LowWarning,
+        6 => BatteryStatus::CriticalWarning,
+        _ => BatteryStatus::GeneralError,
+    }
+}
+
+/// The `battery_nwc_yarp` device.
+#[derive(Default)]
+pub struct BatteryNwcYarp {
+    client: Option<Client>,
+}
+
+impl BatteryNwcYarp {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The last data streamed, or the thrift defaults before any.
+    fn last(&self) -> DevResult<BatteryData> {
+        let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
+        let latest = c.latest();
+        Ok(latest.as_ref().map_or(
+            BatteryData {
+                charge: 0.0,
+                voltage: 0.0,
+                current: 0.0,
+                temperature: 0.0,
+                status: BatteryStatus::GeneralError as i32,
+            },
+            |(d, _)| d.clone(),
+        ))
+    }
+}
+
+impl DeviceDriver for BatteryNwcYarp {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let local = p.string("local")?.ok_or_else(|| p.missing("local"))?;
+        let remote = p.string("remote")?.ok_or_else(|| p.missing("remote"))?;
+        let carrier = p.string("carrier")?.unwrap_or_else(|| "tcp".into());
+        let network = |e: String| DeviceError::BadParam {
+            device: NAME.into(),
+            param: "remote".into(),
+            expected: "a running battery_nws_yarp (is the name server running?)",
+            got: e,
+        };
+        let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
+        let names = NwcNames {
+            stream: format!("{local}/data:i"),
+            remote_stream: format!("{remote}/data:o"),
+            carrier,
+            rpc: format!("{local}/rpc:o"),
+            remote_rpc: format!("{remote}/rpc:i"),
+        };
+        let client =
+            runtime::block_on(Client::open(NAME, ns, names, parse_data)).map_err(network)?;
+        self.close()?;
+        self.client = Some(client);
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        if let Some(c) = self.client.take() {
+            runtime::block_on(c.close());
+        }
+        Ok(())
+    }
+
+    fn as_battery(&mut self) -> Option<&mut dyn IBattery> {
+        Some(self)
+    }
+}
+
+impl Drop for BatteryNwcYarp {
+    fn drop(&mut self) {
+        let _ = self.close();
+    }
+}
+
+impl IBattery for BatteryNwcYarp {
+    fn get_battery_voltage(&mut self) -> DevResult<f64> {
+        Ok(self.last()?.voltage)
+    }
+    fn get_battery_current(&mut self) -> DevResult<f64> {
+        Ok(self.last()?.current)
+    }
+    fn get_battery_charge(&mut self) -> DevResult<f64> {
+        Ok(self.last()?.charge)
+    }
+    fn get_battery_status(&mut self) -> DevResult<BatteryStatus> {
+        Ok(status_of(self.last()?.status))
+    }
+    fn get_battery_temperature(&mut self) -> DevResult<f64> {
+        Ok(self.last()?.temperature)
+    }
+    fn get_battery_info(&mut self) -> DevResult<String> {
+        let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
+        let reply = c.call(Bottle::new().with("getBatteryInfoRPC"))?;
+        match parse_reply(&reply) {
+            Some((0, fields)) => fields
+                .first()
+                .and_then(Value::as_str)
+                .map(str::to_string)
+                .ok_or_else(|| {
+                    DeviceError::failed(NAME, format!("getBatteryInfoRPC answered {reply}"))
+                }),
+            Some((code, _)) if code == ReturnCode::NotImplemented as i32 => Err(
+                DeviceError::Unsupported("the remote battery does not implement getBatteryInfo"),
+            ),
+            _ => Err(DeviceError::failed(
+                NAME,
+                format!("getBatteryInfoRPC answered {reply}"),
+            )),
+        }
+    }
+}
