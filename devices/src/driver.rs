@@ -170,6 +170,9 @@ pub trait DeviceDriver: Send {
     fn as_skin_patches(&mut self) -> Option<&mut dyn ISkinPatches> {
         None
     }
+    fn as_encoder_arrays(&mut self) -> Option<&mut dyn IEncoderArrays> {
+        None
+    }
     fn as_temperature_sensors(&mut self) -> Option<&mut dyn ITemperatureSensors> {
         None
     }

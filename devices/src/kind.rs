@@ -37,7 +37,7 @@ impl Kind {
 
 /// The C++ names of the interfaces `d` offers, in the order of `DeviceDriver`'s views.
 pub fn interfaces_of(d: &mut dyn DeviceDriver) -> Vec<&'static str> {
-    let views: [(bool, &'static str); 39] = [
+    let views: [(bool, &'static str); 40] = [
         (d.as_encoders().is_some(), "IEncodersTimed"),
         (d.as_position_control().is_some(), "IPositionControl"),
         (d.as_velocity_control().is_some(), "IVelocityControl"),
@@ -79,6 +79,7 @@ pub fn interfaces_of(d: &mut dyn DeviceDriver) -> Vec<&'static str> {
             "ISixAxisForceTorqueSensors",
         ),
         (d.as_skin_patches().is_some(), "ISkinPatches"),
+        (d.as_encoder_arrays().is_some(), "IEncoderArrays"),
         (d.as_temperature_sensors().is_some(), "ITemperatureSensors"),
         (d.as_analog_sensor().is_some(), "IAnalogSensor"),
         (
@@ -136,6 +137,7 @@ pub fn kind_of(interfaces: &[&str]) -> Kind {
         "IOrientationSensors",
         "ISixAxisForceTorqueSensors",
         "ISkinPatches",
+        "IEncoderArrays",
         "ITemperatureSensors",
         "IAnalogSensor",
         "IVirtualAnalogSensor",

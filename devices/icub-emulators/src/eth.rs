@@ -257,7 +257,9 @@ fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u6
         let _ = store.write(ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS), &status);
     }
     if spec.poses > 0 {
-        let values: Vec<i16> = (0..4).map(|k| (100.0 * s) as i16 + 100 * k).collect();
+        // One value per hand port (eObrd_portpos_t 0-6: open/close 0-3, abductions 4
+        // and 6), as the boards send them; embObjPOS picks its sensors' ports.
+        let values: Vec<i16> = (0..7).map(|k| (100.0 * s) as i16 + 100 * k).collect();
         let _ = store.write(
             ids::analog(en::AS_POS, 0, tag::AS_XX_STATUS),
             &icub_eth::entities::analog::PosStatus { values },

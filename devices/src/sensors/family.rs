@@ -103,6 +103,7 @@ pub fn access(
             Box::new(ForceTorqueAccess(&*dev.as_six_axis_force_torque_sensors()?))
         }
         SensorFamily::SkinPatches => Box::new(SkinPatchesAccess(&*dev.as_skin_patches()?)),
+        SensorFamily::EncoderArrays => Box::new(EncoderArraysAccess(&*dev.as_encoder_arrays()?)),
         _ => return None,
     })
 }

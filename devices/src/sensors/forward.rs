@@ -39,6 +39,33 @@ macro_rules! forward_interface {
     };
 }
 
+/// Implements one MAS interface trait of a family without frames for `$ty: FamilySource`
+/// (the size of a sensor is that of its latest measurement).
+macro_rules! forward_interface_without_frames {
+    ($ty:ty, $trait:ident, $family:ident,
+     $nr:ident, $status:ident, $name:ident, $size:ident, $measure:ident) => {
+        impl $crate::sensors::interfaces::$trait for $ty {
+            fn $nr(&self) -> usize {
+                FamilySource::family_count(self, SensorFamily::$family)
+            }
+            fn $status(&self, i: usize) -> MasStatus {
+                FamilySource::family_status(self, SensorFamily::$family, i)
+            }
+            fn $name(&self, i: usize) -> DevResult<String> {
+                FamilySource::family_name(self, SensorFamily::$family, i)
+            }
+            fn $size(&self, i: usize) -> usize {
+                FamilySource::family_measure(self, SensorFamily::$family, i)
+                    .map(|m| m.values.len())
+                    .unwrap_or(0)
+            }
+            fn $measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+                FamilySource::family_measure(self, SensorFamily::$family, i)
+            }
+        }
+    };
+}
+
 /// Implements every MAS interface trait for `$ty: FamilySource`.
 macro_rules! impl_mas_interfaces {
     ($ty:ty) => {
@@ -103,25 +130,27 @@ macro_rules! impl_mas_interfaces {
             get_temperature_sensor_measure
         );
 
-        impl $crate::sensors::interfaces::ISkinPatches for $ty {
-            fn get_nr_of_skin_patches(&self) -> usize {
-                FamilySource::family_count(self, SensorFamily::SkinPatches)
-            }
-            fn get_skin_patch_status(&self, i: usize) -> MasStatus {
-                FamilySource::family_status(self, SensorFamily::SkinPatches, i)
-            }
-            fn get_skin_patch_name(&self, i: usize) -> DevResult<String> {
-                FamilySource::family_name(self, SensorFamily::SkinPatches, i)
-            }
-            fn get_skin_patch_size(&self, i: usize) -> usize {
-                FamilySource::family_measure(self, SensorFamily::SkinPatches, i)
-                    .map(|m| m.values.len())
-                    .unwrap_or(0)
-            }
-            fn get_skin_patch_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-                FamilySource::family_measure(self, SensorFamily::SkinPatches, i)
-            }
-        }
+        $crate::sensors::forward::forward_interface_without_frames!(
+            $ty,
+            ISkinPatches,
+            SkinPatches,
+            get_nr_of_skin_patches,
+            get_skin_patch_status,
+            get_skin_patch_name,
+            get_skin_patch_size,
+            get_skin_patch_measure
+        );
+
+        $crate::sensors::forward::forward_interface_without_frames!(
+            $ty,
+            IEncoderArrays,
+            EncoderArrays,
+            get_nr_of_encoder_arrays,
+            get_encoder_array_status,
+            get_encoder_array_name,
+            get_encoder_array_size,
+            get_encoder_array_measure
+        );
     };
 }
 
@@ -163,9 +192,15 @@ macro_rules! mas_views {
         ) -> Option<&mut dyn $crate::sensors::interfaces::ISkinPatches> {
             Some(self)
         }
+        fn as_encoder_arrays(
+            &mut self,
+        ) -> Option<&mut dyn $crate::sensors::interfaces::IEncoderArrays> {
+            Some(self)
+        }
     };
 }
 
 pub(crate) use forward_interface;
+pub(crate) use forward_interface_without_frames;
 pub(crate) use impl_mas_interfaces;
 pub(crate) use mas_views;

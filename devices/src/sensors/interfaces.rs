@@ -168,35 +168,68 @@ pub fn temperature_value(dev: &dyn ITemperatureSensors, i: usize) -> DevResult<(
     Ok((v, m.timestamp))
 }
 
-/// C++ `ISkinPatches`: a patch of taxels, of variable size, without a frame.
-pub trait ISkinPatches {
-    fn get_nr_of_skin_patches(&self) -> usize;
-    fn get_skin_patch_status(&self, sens_index: usize) -> MasStatus;
-    fn get_skin_patch_name(&self, sens_index: usize) -> DevResult<String>;
-    fn get_skin_patch_size(&self, sens_index: usize) -> usize;
-    fn get_skin_patch_measure(&self, sens_index: usize) -> DevResult<SensorMeasurement>;
+/// Declares one MAS interface trait of a family without frames (C++ gives these a size
+/// instead), plus its [`SensorFamilyAccess`] adapter, whose frame names are empty.
+macro_rules! mas_interface_without_frames {
+    (
+        $(#[$doc:meta])*
+        $trait:ident, $adapter:ident,
+        $nr:ident, $status:ident, $name:ident, $size:ident, $measure:ident
+    ) => {
+        $(#[$doc])*
+        pub trait $trait {
+            fn $nr(&self) -> usize;
+            fn $status(&self, sens_index: usize) -> MasStatus;
+            fn $name(&self, sens_index: usize) -> DevResult<String>;
+            fn $size(&self, sens_index: usize) -> usize;
+            fn $measure(&self, sens_index: usize) -> DevResult<SensorMeasurement>;
+        }
+
+        pub(crate) struct $adapter<'a>(pub(crate) &'a dyn $trait);
+
+        impl SensorFamilyAccess for $adapter<'_> {
+            fn count(&self) -> usize {
+                self.0.$nr()
+            }
+            fn status(&self, i: usize) -> MasStatus {
+                self.0.$status(i)
+            }
+            fn name(&self, i: usize) -> DevResult<String> {
+                self.0.$name(i)
+            }
+            fn frame_name(&self, _i: usize) -> DevResult<String> {
+                // C++ fills "" for families without frames
+                Ok(String::new())
+            }
+            fn measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+                self.0.$measure(i)
+            }
+        }
+    };
 }
 
-pub(crate) struct SkinPatchesAccess<'a>(pub(crate) &'a dyn ISkinPatches);
+mas_interface_without_frames!(
+    /// C++ `ISkinPatches`: a patch of taxels, of variable size, without a frame.
+    ISkinPatches,
+    SkinPatchesAccess,
+    get_nr_of_skin_patches,
+    get_skin_patch_status,
+    get_skin_patch_name,
+    get_skin_patch_size,
+    get_skin_patch_measure
+);
 
-impl SensorFamilyAccess for SkinPatchesAccess<'_> {
-    fn count(&self) -> usize {
-        self.0.get_nr_of_skin_patches()
-    }
-    fn status(&self, i: usize) -> MasStatus {
-        self.0.get_skin_patch_status(i)
-    }
-    fn name(&self, i: usize) -> DevResult<String> {
-        self.0.get_skin_patch_name(i)
-    }
-    fn frame_name(&self, _i: usize) -> DevResult<String> {
-        // C++ fills "" for families without frames
-        Ok(String::new())
-    }
-    fn measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        self.0.get_skin_patch_measure(i)
-    }
-}
+mas_interface_without_frames!(
+    /// C++ `IEncoderArrays`: arrays of joint-like positions without a frame (the hands'
+    /// position sensors of `embObjPOS`: one angle each, in degrees).
+    IEncoderArrays,
+    EncoderArraysAccess,
+    get_nr_of_encoder_arrays,
+    get_encoder_array_status,
+    get_encoder_array_name,
+    get_encoder_array_size,
+    get_encoder_array_measure
+);
 
 /// C++ `IAnalogSensor` status codes (`AS_OK` ...).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -958,8 +958,7 @@ impl IAnalogSensor for EmbObjSkin {
 // ---- embObjPOS ----
 
 /// `embObjPOS`: the position sensors of the hands (FAP encoders, deci-degrees on the
-/// wire). C++ offers them as `IEncoderArrays`, which this framework does not have yet:
-/// the device opens its service and gives the angles through [`EmbObjPos::angles`].
+/// wire), as `IEncoderArrays` (one angle in degrees per enabled sensor), as C++.
 #[derive(Default)]
 pub struct EmbObjPos {
     c: Common,
@@ -976,16 +975,67 @@ impl EmbObjPos {
     pub fn names(&self) -> &[String] {
         &self.names
     }
-    /// The angles (degrees) of the enabled sensors.
+    /// The angles (degrees) of the enabled sensors, in their order.
     pub fn angles(&self) -> DevResult<Vec<f64>> {
         let st: icub_eth::entities::analog::PosStatus =
             self.c.read(ids::analog(en::AS_POS, 0, tag::AS_XX_STATUS))?;
-        Ok(st
-            .values
-            .iter()
-            .take(self.names.len())
-            .map(|v| f64::from(*v) / 10.0)
-            .collect())
+        (0..self.names.len())
+            .map(|i| {
+                let at = pos_data_index(self.names.len(), i).ok_or_else(|| {
+                    DeviceError::failed(
+                        POS,
+                        format!(
+                            "{} enabled sensors: C++ knows 4 (open/close) or 2 (abduction)",
+                            self.names.len()
+                        ),
+                    )
+                })?;
+                Ok(st.values.get(at).map_or(0.0, |v| f64::from(*v) / 10.0))
+            })
+            .collect()
+    }
+}
+
+/// Where sensor `i` of a POS service with `enabled` sensors is in the board's data: at
+/// its hand port (`eObrd_portpos_t`), as C++'s `helper_remapperFromSensorToDataIndex`.
+/// Four sensors are the open/close ones (thumb, index, middle, ring-pinky: 0-3), two the
+/// abductions (thumb 4, index 6).
+fn pos_data_index(enabled: usize, i: usize) -> Option<usize> {
+    match (enabled, i) {
+        (4, 0..=3) => Some(i),
+        (2, 0) => Some(4),
+        (2, 1) => Some(6),
+        _ => None,
+    }
+}
+
+impl IEncoderArrays for EmbObjPos {
+    fn get_nr_of_encoder_arrays(&self) -> usize {
+        self.names.len()
+    }
+    fn get_encoder_array_status(&self, sens_index: usize) -> MasStatus {
+        if sens_index < self.names.len() {
+            MasStatus::Ok
+        } else {
+            MasStatus::Unknown
+        }
+    }
+    fn get_encoder_array_name(&self, sens_index: usize) -> DevResult<String> {
+        self.names
+            .get(sens_index)
+            .cloned()
+            .ok_or_else(|| no_sensor(POS, sens_index, self.names.len()))
+    }
+    fn get_encoder_array_size(&self, sens_index: usize) -> usize {
+        usize::from(sens_index < self.names.len())
+    }
+    fn get_encoder_array_measure(&self, sens_index: usize) -> DevResult<SensorMeasurement> {
+        if sens_index >= self.names.len() {
+            return Err(no_sensor(POS, sens_index, self.names.len()));
+        }
+        let angle = self.angles()?[sens_index];
+        // C++ stamps the reading with the time it is asked for
+        Ok(SensorMeasurement::new(vec![angle], now()))
     }
 }
 
@@ -1014,6 +1064,10 @@ impl DeviceDriver for EmbObjPos {
         })?;
         self.names = names;
         Ok(())
+    }
+
+    fn as_encoder_arrays(&mut self) -> Option<&mut dyn IEncoderArrays> {
+        Some(self)
     }
 }
 
