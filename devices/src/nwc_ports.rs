@@ -135,6 +135,29 @@ impl<T: Send + 'static> NwcPorts<T> {
             .map_err(|e| DeviceError::failed(self.device, format!("{what}: {e}")))
     }
 
+    /// Opens the ports from a device's `open` (blocking): a failure is a `BadParam` on
+    /// `remote` naming what should be running there (`expected`).
+    pub fn open_for_device(
+        device: &'static str,
+        expected: &'static str,
+        names: NwcNames,
+        parse: fn(&Bottle) -> Result<T, String>,
+    ) -> DevResult<NwcPorts<T>> {
+        let network = |got: String| DeviceError::BadParam {
+            device: device.into(),
+            param: "remote".into(),
+            expected,
+            got,
+        };
+        let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
+        runtime::block_on(Self::open(device, ns, names, parse)).map_err(network)
+    }
+
+    /// Closes the ports from a device's `close` (blocking).
+    pub fn close_for_device(self) {
+        runtime::block_on(self.close());
+    }
+
     pub async fn close(self) {
         self.task.abort();
         let _ = self.task.await;

@@ -14,7 +14,6 @@ use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
 use crate::nwc_ports::{NwcNames, NwcPorts};
 use crate::rangefinder::protocol::{parse_reply, ReturnCode};
-use crate::runtime;
 use yarp_proto::{Bottle, Property, Value};
 
 const NAME: &str = "battery_nwc_yarp";
@@ -72,13 +71,6 @@ impl DeviceDriver for BatteryNwcYarp {
         let local = p.string("local")?.ok_or_else(|| p.missing("local"))?;
         let remote = p.string("remote")?.ok_or_else(|| p.missing("remote"))?;
         let carrier = p.string("carrier")?.unwrap_or_else(|| "tcp".into());
-        let network = |e: String| DeviceError::BadParam {
-            device: NAME.into(),
-            param: "remote".into(),
-            expected: "a running battery_nws_yarp (is the name server running?)",
-            got: e,
-        };
-        let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
         let names = NwcNames {
             stream: format!("{local}/data:i"),
             remote_stream: format!("{remote}/data:o"),
@@ -86,8 +78,12 @@ impl DeviceDriver for BatteryNwcYarp {
             rpc: format!("{local}/rpc:o"),
             remote_rpc: format!("{remote}/rpc:i"),
         };
-        let client =
-            runtime::block_on(Client::open(NAME, ns, names, parse_data)).map_err(network)?;
+        let client = Client::open_for_device(
+            NAME,
+            "a running battery_nws_yarp (is the name server running?)",
+            names,
+            parse_data,
+        )?;
         self.close()?;
         self.client = Some(client);
         Ok(())
@@ -95,7 +91,7 @@ impl DeviceDriver for BatteryNwcYarp {
 
     fn close(&mut self) -> DevResult<()> {
         if let Some(c) = self.client.take() {
-            runtime::block_on(c.close());
+            c.close_for_device();
         }
         Ok(())
     }

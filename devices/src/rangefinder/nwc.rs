@@ -13,7 +13,6 @@ use super::{IRangefinder2D, LaserStatus};
 use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
 use crate::nwc_ports::{NwcNames, NwcPorts};
-use crate::runtime;
 use yarp_proto::{Bottle, Property, Value};
 
 const NAME: &str = "rangefinder2D_nwc_yarp";
@@ -80,13 +79,6 @@ impl DeviceDriver for Rangefinder2DNwcYarp {
         let local = p.string("local")?.ok_or_else(|| p.missing("local"))?;
         let remote = p.string("remote")?.ok_or_else(|| p.missing("remote"))?;
         let carrier = p.string("carrier")?.unwrap_or_else(|| "tcp".into());
-        let network = |e: String| DeviceError::BadParam {
-            device: NAME.into(),
-            param: "remote".into(),
-            expected: "a running rangefinder2D_nws_yarp port (is the name server running?)",
-            got: e,
-        };
-        let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
         let names = NwcNames {
             rpc: format!("{local}/rpc:o"),
             remote_rpc: format!("{remote}/rpc:i"),
@@ -94,8 +86,12 @@ impl DeviceDriver for Rangefinder2DNwcYarp {
             remote_stream: remote,
             carrier,
         };
-        let client =
-            runtime::block_on(Client::open(NAME, ns, names, parse_scan)).map_err(network)?;
+        let client = Client::open_for_device(
+            NAME,
+            "a running rangefinder2D_nws_yarp port (is the name server running?)",
+            names,
+            parse_scan,
+        )?;
         self.close()?;
         self.client = Some(client);
         Ok(())
@@ -103,7 +99,7 @@ impl DeviceDriver for Rangefinder2DNwcYarp {
 
     fn close(&mut self) -> DevResult<()> {
         if let Some(c) = self.client.take() {
-            runtime::block_on(c.close());
+            c.close_for_device();
         }
         Ok(())
     }

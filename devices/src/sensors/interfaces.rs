@@ -51,6 +51,37 @@ pub trait SensorFamilyAccess {
     fn measure(&self, i: usize) -> DevResult<SensorMeasurement>;
 }
 
+/// The [`SensorFamilyAccess`] adapter of one MAS interface trait; `$frame` gives the
+/// frame name of sensor `$i` of `$dev`.
+macro_rules! family_access {
+    (
+        $trait:ident, $adapter:ident,
+        $nr:ident, $status:ident, $name:ident, $measure:ident,
+        |$dev:ident, $i:ident| $frame:expr
+    ) => {
+        pub(crate) struct $adapter<'a>(pub(crate) &'a dyn $trait);
+
+        impl SensorFamilyAccess for $adapter<'_> {
+            fn count(&self) -> usize {
+                self.0.$nr()
+            }
+            fn status(&self, i: usize) -> MasStatus {
+                self.0.$status(i)
+            }
+            fn name(&self, i: usize) -> DevResult<String> {
+                self.0.$name(i)
+            }
+            fn frame_name(&self, $i: usize) -> DevResult<String> {
+                let $dev = self.0;
+                $frame
+            }
+            fn measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+                self.0.$measure(i)
+            }
+        }
+    };
+}
+
 /// Declares one MAS interface trait with the C++ method names, plus its
 /// [`SensorFamilyAccess`] adapter.
 macro_rules! mas_interface {
@@ -68,25 +99,7 @@ macro_rules! mas_interface {
             fn $measure(&self, sens_index: usize) -> DevResult<SensorMeasurement>;
         }
 
-        pub(crate) struct $adapter<'a>(pub(crate) &'a dyn $trait);
-
-        impl SensorFamilyAccess for $adapter<'_> {
-            fn count(&self) -> usize {
-                self.0.$nr()
-            }
-            fn status(&self, i: usize) -> MasStatus {
-                self.0.$status(i)
-            }
-            fn name(&self, i: usize) -> DevResult<String> {
-                self.0.$name(i)
-            }
-            fn frame_name(&self, i: usize) -> DevResult<String> {
-                self.0.$frame(i)
-            }
-            fn measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-                self.0.$measure(i)
-            }
-        }
+        family_access!($trait, $adapter, $nr, $status, $name, $measure, |dev, i| dev.$frame(i));
     };
 }
 
@@ -185,26 +198,10 @@ macro_rules! mas_interface_without_frames {
             fn $measure(&self, sens_index: usize) -> DevResult<SensorMeasurement>;
         }
 
-        pub(crate) struct $adapter<'a>(pub(crate) &'a dyn $trait);
-
-        impl SensorFamilyAccess for $adapter<'_> {
-            fn count(&self) -> usize {
-                self.0.$nr()
-            }
-            fn status(&self, i: usize) -> MasStatus {
-                self.0.$status(i)
-            }
-            fn name(&self, i: usize) -> DevResult<String> {
-                self.0.$name(i)
-            }
-            fn frame_name(&self, _i: usize) -> DevResult<String> {
-                // C++ fills "" for families without frames
-                Ok(String::new())
-            }
-            fn measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-                self.0.$measure(i)
-            }
-        }
+        // C++ fills "" for families without frames
+        family_access!($trait, $adapter, $nr, $status, $name, $measure, |_dev, _i| Ok(
+            String::new()
+        ));
     };
 }
 
