@@ -57,6 +57,17 @@ fn icub_genova02_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
         assert!(reply.contains("[ok]"), "{reply}");
         let at = until_at("joint 0", &joint0, q0, -20.0);
         eprintln!("set pos 0 -20 seen on state:o after {:?}", sent.elapsed());
+        // parametricCalibratorEth lowered joint 0's PWM limit to its startupMaxPwm (2000)
+        // while calibrating, and gave the board's motorPwmLimit (10000) back once the
+        // joint reached its startup position.
+        rpc.child
+            .stdin
+            .as_mut()
+            .unwrap()
+            .write_all(b"get pwml 0\n")
+            .unwrap();
+        let reply = rpc.line(T).expect("a reply from yarp rpc");
+        assert!(reply.contains("10000") && reply.contains("[ok]"), "{reply}");
         drop(rpc);
 
         // The same through C++ `yarp rpc` (the C++ peer; its absence fails under CI).

@@ -2,7 +2,8 @@
 //! Ethernet boards on loopback (through the address map 10.0.1.0/24 -> 127.0.1.0/24):
 //! `embObjMotionControl` opens both boards (bring-up, service activation, joint and
 //! motor configuration, regulars), a position move reaches the encoders, a calibration
-//! ends, and a board that stops answering is reported naming its IP and name.
+//! ends, the PWM limit is asked and set, and a board that stops answering is reported
+//! naming its IP and name.
 //!
 //! The host's socket is a process singleton (as C++'s `TheEthManager`), so everything
 //! runs in one test function.
@@ -95,6 +96,20 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
             .calibration_done(0)
             .unwrap()
     });
+
+    // The motor config's PWM limit (what parametricCalibratorEth lowers to startupMaxPwm
+    // while calibrating), asked of and set on the board.
+    let amp = eb1.as_amplifier_control().unwrap();
+    let limit = amp.get_pwm_limit(0).unwrap();
+    assert!(limit > 0.0, "pwmLimit {limit}");
+    amp.set_pwm_limit(0, 1234.0).unwrap();
+    assert_eq!(amp.get_pwm_limit(0).unwrap(), 1234.0);
+    assert!(
+        amp.set_pwm_limit(0, -1.0).is_err(),
+        "a negative limit is refused"
+    );
+    amp.set_pwm_limit(0, limit).unwrap();
+    assert_eq!(amp.get_pwm_limit(0).unwrap(), limit);
 
     // Position control: the encoder follows.
     eb1.as_control_mode()

@@ -88,6 +88,22 @@ impl Entity for Pid {
     }
 }
 
+/// `eOmeas_pwm_t` (2 bytes): a PWM value or limit in the board's duty units (the motor
+/// config's `pwmLimit`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Pwm(pub i16);
+
+impl Entity for Pwm {
+    const C_TYPE: &'static str = "eOmeas_pwm_t";
+    const SIZE: usize = 2;
+    fn write(&self, w: &mut Writer) {
+        w.i16(self.0);
+    }
+    fn read(r: &mut Reader) -> Self {
+        Pwm(r.i16())
+    }
+}
+
 /// `eOmeas_position_limits_t` (8 bytes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct PositionLimits {

@@ -8,7 +8,10 @@
 //! `startupVelocity`, `startupMaxPwm`, `startupPosThreshold`; `HOME::positionHome`,
 //! `velocityHome`; `CALIB_ORDER` (the sets of joints calibrated together, in order).
 //!
-//! `calibrate`, per set as C++: every joint gets its calibration through
+//! `calibrate`, per set as C++: the PWM limit of each joint is lowered to its
+//! `startupMaxPwm` when that is lower (0: unchanged), and given back once the joint has
+//! reached its startup position (a joint that fails keeps the safe limit); every joint
+//! gets its calibration through
 //! `setCalibrationParameters` (all five parameters and the zero, which the board uses
 //! by type: 0 hard stops, 3 absolute digital sensor, 5 hard stops (MC4plus), 6 MAIS,
 //! 7 hall sensor, 10 absolute + hard stop, 12 absolute sensor, 14 quadrature encoder +
@@ -40,6 +43,8 @@ struct JointCalib {
     params: CalibrationParameters,
     startup_pos: f64,
     startup_vel: f64,
+    /// The PWM limit while calibrating and reaching `startup_pos` (0: left as it is).
+    startup_max_pwm: f64,
     threshold: f64,
     home_pos: f64,
     home_vel: f64,
@@ -102,10 +107,11 @@ impl ParametricCalibratorEth {
         let delta = cal
             .numbers("calibrationDelta", n)?
             .unwrap_or_else(|| vec![0.0; n]);
-        let (pos, vel, thr) = (
+        let (pos, vel, thr, max_pwm) = (
             c("startupPosition")?,
             c("startupVelocity")?,
             c("startupPosThreshold")?,
+            c("startupMaxPwm")?,
         );
         let (hpos, hvel) = (
             home.need_numbers("positionHome", n)?,
@@ -124,6 +130,7 @@ impl ParametricCalibratorEth {
                 },
                 startup_pos: pos[j],
                 startup_vel: vel[j],
+                startup_max_pwm: max_pwm[j],
                 threshold: thr[j],
                 home_pos: hpos[j],
                 home_vel: hvel[j],
@@ -223,7 +230,48 @@ impl ParametricCalibratorEth {
         }
     }
 
+    /// Lowers the PWM limit of each joint of `set` to its `startupMaxPwm` when that is
+    /// lower (0 keeps the limit), as C++ does before calibrating a set; the limits found.
+    fn limit_pwm(&self, target: &SharedDevice, set: &[usize]) -> DevResult<Vec<(usize, f64)>> {
+        with(target, |d| {
+            let amp = d
+                .as_amplifier_control()
+                .ok_or(missing("target without IAmplifierControl"))?;
+            let mut original = Vec::new();
+            for &j in set {
+                let limit = amp.get_pwm_limit(j).map_err(|e| {
+                    DeviceError::failed(
+                        &self.name,
+                        format!("getPWMLimit of joint {j} failed ({e}): aborting calibration"),
+                    )
+                })?;
+                original.push((j, limit));
+                let safe = self.joints[j].startup_max_pwm;
+                if safe != 0.0 && safe < limit {
+                    amp.set_pwm_limit(j, safe)?;
+                }
+            }
+            Ok(original)
+        })
+    }
+
+    /// Gives the joints of `original` their limits back.
+    fn restore_pwm(&self, target: &SharedDevice, original: &[(usize, f64)]) {
+        let restored = with(target, |d| {
+            let amp = d
+                .as_amplifier_control()
+                .ok_or(missing("target without IAmplifierControl"))?;
+            original
+                .iter()
+                .try_for_each(|&(j, limit)| amp.set_pwm_limit(j, limit))
+        });
+        if let Err(e) = restored {
+            tracing::error!(device = %self.name, "could not restore the PWM limits: {e}");
+        }
+    }
+
     fn calibrate_set(&self, target: &SharedDevice, set: &[usize]) -> DevResult<Vec<usize>> {
+        let original = self.limit_pwm(target, set)?;
         with(target, |d| {
             let c = d
                 .as_control_calibration()
@@ -262,6 +310,12 @@ impl ParametricCalibratorEth {
             tracing::error!(device = %self.name, "joints {far:?} did not reach their startupPosition within startupPosThreshold: idling them");
             self.idle(target, &far);
         }
+        // Those that reached it get their PWM limit back; the others keep the safe one.
+        let reached: Vec<(usize, f64)> = original
+            .into_iter()
+            .filter(|(j, _)| ok.contains(j) && !far.contains(j))
+            .collect();
+        self.restore_pwm(target, &reached);
         Ok(failed.into_iter().chain(far).collect())
     }
 }

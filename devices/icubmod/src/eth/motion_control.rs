@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 
 use icub_eth::entities::mc::{
     control_mode as cm, Calibrator, CurrentLimits, Impedance, JointConfig, JointStatusCore,
-    MotorConfig, MotorParams, MotorStatus, PositionLimits, Setpoint,
+    MotorConfig, MotorParams, MotorStatus, PositionLimits, Pwm, Setpoint,
 };
 use icub_eth::entities::mn::{category, ServiceCommand};
 use icub_eth::id::{ids, tag};
@@ -811,6 +811,31 @@ impl IAmplifierControl for EmbObjMotionControl {
         self.phys(j)?;
         let p = self.p()?;
         Ok(p.overload_current[j] / p.amps_to_sensor[j])
+    }
+    /// The motor config's `pwmLimit`, asked of the board (as C++).
+    fn get_pwm_limit(&mut self, j: usize) -> DevResult<f64> {
+        let id = self.motor_id(j, tag::MC_MOTOR_CONFIG_PWMLIMIT)?;
+        let v: Pwm = self
+            .b()?
+            .ask_value(id, ASK_TIMEOUT)
+            .map_err(|e| self.fail(e))?;
+        Ok(f64::from(v.0))
+    }
+    /// Sets the motor config's `pwmLimit` on the board; negative limits are refused.
+    fn set_pwm_limit(&mut self, j: usize, limit: f64) -> DevResult<()> {
+        if !(0.0..=f64::from(i16::MAX)).contains(&limit) {
+            return Err(DeviceError::BadParam {
+                device: NAME.into(),
+                param: "PWM limit".into(),
+                expected: "0 to 32767",
+                got: limit.to_string(),
+            });
+        }
+        let id = self.motor_id(j, tag::MC_MOTOR_CONFIG_PWMLIMIT)?;
+        let pwm = Pwm(limit as i16);
+        self.set(id, &pwm)?;
+        self.mconfig[j].pwm_limit = pwm.0;
+        Ok(())
     }
 }
 
