@@ -3,12 +3,13 @@
 //! port connected to the server's RPC port. The counterpart of `wrapper_ports` (NWS).
 
 use crate::error::{DevResult, DeviceError};
+use crate::rangefinder::protocol::{parse_reply, ReturnCode};
 use crate::runtime;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 use yarp_net::nameserver::NameClient;
 use yarp_net::port::Port;
-use yarp_proto::Bottle;
+use yarp_proto::{Bottle, Value};
 
 /// How long an RPC call waits for the server's reply.
 pub(crate) const RPC_TIMEOUT: Duration = Duration::from_secs(5);
@@ -133,6 +134,25 @@ impl<T: Send + 'static> NwcPorts<T> {
                 )
             })?
             .map_err(|e| DeviceError::failed(self.device, format!("{what}: {e}")))
+    }
+
+    /// Calls a thrift method of the server whose reply is a `yarp::dev::ReturnValue`
+    /// followed by the `return_*` struct's fields: those fields when the code is OK;
+    /// `Unsupported(unsupported)` when the server does not implement it; else a failure
+    /// naming the request and the reply.
+    pub fn call_returning(&self, cmd: Bottle, unsupported: &'static str) -> DevResult<Vec<Value>> {
+        let what = cmd.to_string();
+        let reply = self.call(cmd)?;
+        match parse_reply(&reply) {
+            Some((0, fields)) => Ok(fields),
+            Some((code, _)) if code == ReturnCode::NotImplemented as i32 => {
+                Err(DeviceError::Unsupported(unsupported))
+            }
+            _ => Err(DeviceError::failed(
+                self.device,
+                format!("{what} answered {reply}"),
+            )),
+        }
     }
 
     /// Opens the ports from a device's `open` (blocking): a failure is a `BadParam` on

@@ -13,7 +13,6 @@ use super::{BatteryStatus, IBattery};
 use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
 use crate::nwc_ports::{NwcNames, NwcPorts};
-use crate::rangefinder::protocol::{parse_reply, ReturnCode};
 use yarp_proto::{Bottle, Property, Value};
 
 const NAME: &str = "battery_nwc_yarp";
@@ -125,22 +124,16 @@ impl IBattery for BatteryNwcYarp {
     }
     fn get_battery_info(&mut self) -> DevResult<String> {
         let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
-        let reply = c.call(Bottle::new().with("getBatteryInfoRPC"))?;
-        match parse_reply(&reply) {
-            Some((0, fields)) => fields
-                .first()
-                .and_then(Value::as_str)
-                .map(str::to_string)
-                .ok_or_else(|| {
-                    DeviceError::failed(NAME, format!("getBatteryInfoRPC answered {reply}"))
-                }),
-            Some((code, _)) if code == ReturnCode::NotImplemented as i32 => Err(
-                DeviceError::Unsupported("the remote battery does not implement getBatteryInfo"),
-            ),
-            _ => Err(DeviceError::failed(
-                NAME,
-                format!("getBatteryInfoRPC answered {reply}"),
-            )),
-        }
+        let fields = c.call_returning(
+            Bottle::new().with("getBatteryInfoRPC"),
+            "the remote battery does not implement getBatteryInfo",
+        )?;
+        fields
+            .first()
+            .and_then(Value::as_str)
+            .map(str::to_string)
+            .ok_or_else(|| {
+                DeviceError::failed(NAME, format!("getBatteryInfoRPC answered {fields:?}"))
+            })
     }
 }

@@ -10,7 +10,7 @@
 use super::{BatteryStatus, IBattery};
 use crate::error::DeviceError;
 use crate::rangefinder::protocol::ReturnCode;
-use crate::sensors::rpc::{fail_reply, protocol_version_reply, GET_PROTOCOL_VERSION};
+use crate::sensors::rpc::{fail_reply, is_protocol_version_request, protocol_version_reply};
 use crate::sensors::wire::WireWriter;
 use thiserror::Error;
 use yarp_proto::{Bottle, Value};
@@ -116,6 +116,9 @@ const GET_INFO: &str = "getBatteryInfoRPC";
 
 /// Answers one request on `dev` (`None`: no device attached, `return_value_error_not_ready`).
 pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IBattery>) -> Vec<u8> {
+    if is_protocol_version_request(cmd) {
+        return protocol_version_reply();
+    }
     let mut items = cmd.iter().peekable();
     if items.peek().and_then(|v| v.as_str()) == Some("__direct__") {
         items.next();
@@ -125,13 +128,8 @@ pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IBattery>) -> Vec<u8> {
         Value::Vocab32(v) => Some(v.as_string()),
         _ => None,
     });
-    if items.peek().is_some() {
+    if method.as_deref() != Some(GET_INFO) || items.next().is_some() {
         return fail_reply();
-    }
-    match method.as_deref() {
-        Some(GET_INFO) => {}
-        Some(GET_PROTOCOL_VERSION) => return protocol_version_reply(),
-        _ => return fail_reply(),
     }
     let (code, info) = match dev.map(|d| d.get_battery_info()) {
         None => (ReturnCode::NotReady, String::new()),

@@ -8,7 +8,7 @@
 //! scan's (`DEVICE_TIMEOUT` before any); the rest goes through the server's
 //! `IRangefinder2DMsgs` service.
 
-use super::protocol::{parse_reply, status_of, LaserScan2D, ReturnCode};
+use super::protocol::{status_of, LaserScan2D};
 use super::{IRangefinder2D, LaserStatus};
 use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
@@ -45,18 +45,7 @@ impl Rangefinder2DNwcYarp {
         for &a in args {
             cmd.push(a);
         }
-        let what = cmd.to_string();
-        let reply = client.call(cmd)?;
-        match parse_reply(&reply) {
-            Some((0, fields)) => Ok(fields),
-            Some((code, _)) if code == ReturnCode::NotImplemented as i32 => Err(
-                DeviceError::Unsupported("the remote rangefinder does not implement this"),
-            ),
-            _ => Err(DeviceError::failed(
-                NAME,
-                format!("{what} answered {reply}"),
-            )),
-        }
+        client.call_returning(cmd, "the remote rangefinder does not implement this")
     }
 
     fn floats(&self, method: &str, n: usize) -> DevResult<Vec<f64>> {

@@ -10,7 +10,7 @@
 
 use super::{IRangefinder2D, LaserStatus};
 use crate::error::DeviceError;
-use crate::sensors::rpc::{protocol_version_reply, GET_PROTOCOL_VERSION};
+use crate::sensors::rpc::{is_protocol_version_request, protocol_version_reply};
 use crate::sensors::wire::WireWriter;
 use thiserror::Error;
 use yarp_proto::{Bottle, Value, Vocab32};
@@ -145,16 +145,6 @@ fn word(v: &Value) -> Option<String> {
         Value::Vocab32(v) => Some(v.as_string()),
         _ => None,
     }
-}
-
-/// `getRemoteProtocolVersion`, optionally behind `__direct__`, without arguments.
-fn is_protocol_version_request(cmd: &Bottle) -> bool {
-    let words: Vec<Option<String>> = cmd.iter().map(word).collect();
-    let words = match words.first() {
-        Some(Some(w)) if w == "__direct__" => &words[1..],
-        _ => &words[..],
-    };
-    matches!(words, [Some(w)] if w == GET_PROTOCOL_VERSION)
 }
 
 /// Splits a request into its method and arguments, joining words with `_` as C++'s

@@ -37,6 +37,16 @@ pub fn protocol_version_reply() -> Vec<u8> {
     w.into_bytes()
 }
 
+/// Whether `cmd` is `getRemoteProtocolVersion`, optionally behind `__direct__`, without
+/// arguments (with arguments C++ fails the request).
+pub fn is_protocol_version_request(cmd: &Bottle) -> bool {
+    let mut words = cmd.iter().map(Some).map(tag).peekable();
+    if words.peek() == Some(&Some("__direct__".to_string())) {
+        words.next();
+    }
+    words.next() == Some(Some(GET_PROTOCOL_VERSION.to_string())) && words.next().is_none()
+}
+
 /// The `[fail]` reply (a plain Bottle, compact vocab list, as C++ writes it).
 pub fn fail_reply() -> Vec<u8> {
     Bottle::new().with(Vocab32::new("fail")).encode()
@@ -85,6 +95,9 @@ fn help_reply(function: &str) -> Vec<u8> {
 
 /// Serves one request against the server's metadata; returns the reply bytes.
 pub fn handle_rpc(cmd: &Bottle, metadata: &SensorRpcData) -> Vec<u8> {
+    if is_protocol_version_request(cmd) {
+        return protocol_version_reply();
+    }
     let mut args = cmd.iter().peekable();
     let mut word = tag(args.next());
     if word.as_deref() == Some("__direct__") {
@@ -92,7 +105,6 @@ pub fn handle_rpc(cmd: &Bottle, metadata: &SensorRpcData) -> Vec<u8> {
     }
     match word.as_deref() {
         Some(GET_METADATA) if args.peek().is_none() => metadata.encode_reply(),
-        Some(GET_PROTOCOL_VERSION) if args.peek().is_none() => protocol_version_reply(),
         Some(HELP) => {
             let function = match args.next() {
                 Some(Value::String(s)) => String::from_utf8_lossy(s).into_owned(),

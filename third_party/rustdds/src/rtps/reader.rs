@@ -784,10 +784,9 @@ impl Reader {
         }
       }
       if let Some(last) = gap_nack {
-        if let Some(mut writer_proxy) = self.matched_writers.remove(&writer_guid) {
-          self.request_missing_from(&mut writer_proxy, SequenceNumber::new(1), last);
-          self.matched_writers.insert(writer_guid, writer_proxy);
-        }
+        self.with_mutable_writer_proxy(writer_guid, |this, writer_proxy| {
+          this.request_missing_from(writer_proxy, SequenceNumber::new(1), last)
+        });
       }
     } else {
       // stateless reader: nothing to do before making cache change

@@ -199,13 +199,13 @@ impl RtpsWriterProxy {
     missing_seqnums
   }
 
-  // Check if we have already received this sequence number
-  // or it has been marked as not_available
-  /// The highest sequence number received as DATA so far (0 before any).
+  /// yarp-rs: the highest sequence number received as DATA so far (0 before any).
   pub fn last_received_sequence_number(&self) -> SequenceNumber {
     self.last_received_sequence_number
   }
 
+  // Check if we have already received this sequence number
+  // or it has been marked as not_available
   pub fn should_ignore_change(&self, seqnum: SequenceNumber) -> bool {
     seqnum < self.ack_base || self.changes.contains_key(&seqnum)
   }
