@@ -247,7 +247,7 @@ fn remote_calibrator_rpc_through_the_remapper() {
             "cals",
             "hom 1",
             "homs",
-            "par 3 false",
+            "par 3 true",
             "pars",
             "qupa"
         ]
@@ -340,7 +340,7 @@ fn remote_round_trip_remote_calibrator_and_remapper() {
             "cals",
             "hom 2",
             "homs",
-            "par 3 false",
+            "par 3 true",
             "pars",
             "qupa"
         ]

@@ -4,7 +4,8 @@
 //! (run under netns-run; the boards are reached through the address map
 //! 10.0.1.0/24 -> 127.0.3.0/24). Every device opens. Then our `yarp rpc`, and C++'s,
 //! send `set pos` to `/icub/left_arm/rpc:i` and the joint is seen moving on
-//! `/icub/left_arm/state:o`; our `yarp read` receives the left arm's F/T stream; the
+//! `/icub/left_arm/state:o`; remote homing and parking (`[set] [reca] …`) reach the
+//! part's calibrator; our `yarp read` receives the left arm's F/T stream; the
 //! Ctrl-C phases park the arms and close everything.
 
 mod eth_common;
@@ -55,7 +56,7 @@ fn icub_genova02_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
             .unwrap();
         let reply = rpc.line(T).expect("a reply from yarp rpc");
         assert!(reply.contains("[ok]"), "{reply}");
-        let at = until_at("joint 0", &joint0, q0, -20.0);
+        let mut at = until_at("joint 0", &joint0, q0, -20.0);
         eprintln!("set pos 0 -20 seen on state:o after {:?}", sent.elapsed());
         // parametricCalibratorEth lowered joint 0's PWM limit to its startupMaxPwm (2000)
         // while calibrating, and gave the board's motorPwmLimit (10000) back once the
@@ -75,12 +76,40 @@ fn icub_genova02_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
             let sent = Instant::now();
             let out = cpp_rpc_output(&cpp, "/icub/left_arm/rpc:i", "set pos 0 -25\n");
             assert!(out.contains("[ok]"), "C++ yarp rpc: {out}");
-            until_at("joint 0", &joint0, at, -25.0);
+            at = until_at("joint 0", &joint0, at, -25.0);
             eprintln!(
                 "C++ yarp rpc: set pos 0 -25 seen on state:o after {:?}",
                 sent.elapsed()
             );
         }
+
+        // Remote calibration (yarpmotorgui's buttons): `[set] [reca] …` reaches the
+        // part's parametricCalibratorEth. Homing sends the arm to its startup position;
+        // a single-joint park moves joint 0 there too (as C++), waits, and idles it.
+        let mut cmd = Command::new(&yarp);
+        cmd.args(["rpc", "/icub/left_arm/rpc:i"]);
+        let mut rpc = Peer::spawn(cmd);
+        let mut ask = |line: &str| -> String {
+            let stdin = rpc.child.stdin.as_mut().unwrap();
+            stdin.write_all(format!("{line}\n").as_bytes()).unwrap();
+            rpc.line(T)
+                .unwrap_or_else(|| panic!("no reply to `{line}`"))
+        };
+        let reply = ask("set reca homs");
+        assert!(reply.contains("[ok]"), "{reply}");
+        let at = until_at("joint 0 homing", &joint0, at, -35.97);
+        let reply = ask("set pos 0 -15");
+        assert!(reply.contains("[ok]"), "{reply}");
+        let at = until_at("joint 0", &joint0, at, -15.0);
+        let reply = ask("set reca par 0");
+        assert!(reply.contains("[ok]"), "{reply}");
+        until_at("joint 0 parking", &joint0, at, -35.97);
+        let reply = ask("get icmd cmod 0");
+        assert!(
+            reply.contains("idl"),
+            "joint 0 idle after its park: {reply}"
+        );
+        drop(rpc);
 
         let mut cmd = Command::new(&yarp);
         cmd.args(["read", "/test/ft:i", "/icub/left_arm/FT/measures:o"]);

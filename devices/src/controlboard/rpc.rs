@@ -882,8 +882,8 @@ fn remote_calibrator(
                 CALIBRATE_WHOLE_PART => rc.calibrate_whole_part(),
                 HOMING_SINGLE_JOINT => rc.homing_single_joint(joint(cmd, 3)?),
                 HOMING_WHOLE_PART => rc.homing_whole_part(),
-                // C++ parks without waiting here
-                PARK_SINGLE_JOINT => rc.park_single_joint(joint(cmd, 3)?, false),
+                // C++ calls `parkSingleJoint(j)`: IRemoteCalibrator's default waits
+                PARK_SINGLE_JOINT => rc.park_single_joint(joint(cmd, 3)?, true),
                 PARK_WHOLE_PART => rc.park_whole_part(),
                 QUIT_CALIBRATE => rc.quit_calibrate(),
                 QUIT_PARK => rc.quit_park(),
