@@ -1,5 +1,6 @@
-//! Bytes from the head IMU's serial port (Xsens MT protocol): every message found in
-//! them, and every `MTData` payload read as a sample. Must never panic.
+//! Bytes from an Xsens IMU's serial port (MT protocol: the iCub head's MTx, the ergoCub
+//! waist's MTi): every message found in them, every payload read as an `MTData` sample,
+//! an `MTData2` and an output configuration. Must never panic.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

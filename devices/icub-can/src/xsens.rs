@@ -10,8 +10,13 @@
 //! angles in float (settings `0x00000004`); each `MTData` then carries 12 big-endian
 //! `f32`: acceleration (m/s²), rate of turn (rad/s), magnetic field (a.u.), then roll,
 //! pitch, yaw (degrees).
+//!
+//! [`mti`] adds what the MTi sensors speak (`xsensmt`): device kind, output
+//! configuration and `MTData2`.
 
 use thiserror::Error;
+
+pub mod mti;
 
 pub const PREAMBLE: u8 = 0xFA;
 /// Bus id of the master (the only device on a direct serial link answers it too).
@@ -327,6 +332,8 @@ pub fn decode_any(bytes: &[u8]) -> usize {
     while let Some(r) = d.next_message() {
         if let Ok(m) = r {
             let _ = Sample::parse(&m.data);
+            let _ = mti::Mtdata2::parse(&m.data);
+            let _ = mti::OutputConfig::decode_all(&m.data);
         }
         n += 1;
     }

@@ -3,7 +3,8 @@
 //! map 10.0.1.0/24 -> 127.0.4.0/24), with an in-process name server, under netns-run.
 //! Every embObj device opens (device types this build lacks are named). Our `yarp rpc`,
 //! and C++'s, `set pos` on `/ergocub/left_arm/rpc:i` moves the shoulder roll on `state:o`; our `yarp read`
-//! receives the left arm's F/T and IMU streams.
+//! receives the left arm's F/T and IMU streams, and the waist IMU's (`xsensmt` against an
+//! emulated Xsens MTi on a pseudo-terminal).
 
 mod eth_common;
 
@@ -19,6 +20,11 @@ use yarp_net::blocking::{BufferedPort, Network};
 #[test]
 fn ergocub_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
     let dir = robot_dir("ergoCubSN001");
+    // The waist IMU (`serial /dev/ttyS0` in waist-inertial.xml): an emulated MTi.
+    let (pty, path) = icub_can::emulator::mtx::pty().unwrap();
+    let mti = icub_can::xsens::mti::EmulatedMti::default();
+    let _mti = icub_can::emulator::mtx::serve(pty, mti, icub_can::xsens::emulated_motion).unwrap();
+    std::env::set_var(icubmod::xsens::SERIAL_ENV, &path);
     let (mut runner, _conf) = bring_up(&dir, &dir.join("ergocub.xml"), "10.0.1.0/24=127.0.4.0/24");
     let missing = runner.unavailable_devices();
     assert!(
@@ -27,9 +33,16 @@ fn ergocub_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
             .all(|(_, kind)| !kind.starts_with("embObj") && *kind != "parametricCalibratorEth"),
         "{missing:?}"
     );
+    assert!(
+        missing.iter().all(|(_, kind)| *kind != "xsensmt"),
+        "{missing:?}"
+    );
     for f in runner.failures() {
         assert!(
-            !f.contains("-mc") && !f.contains("calib") && !f.contains("FT_wrapper"),
+            !f.contains("-mc")
+                && !f.contains("calib")
+                && !f.contains("FT_wrapper")
+                && !f.contains("waist-inertial"),
             "{f}"
         );
     }
@@ -77,9 +90,12 @@ fn ergocub_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
             );
         }
 
-        for port in [
-            "/ergocub/left_arm/FT/measures:o",
-            "/ergocub/left_arm/imu/measures:o",
+        // The boards' sensors read 9.81 somewhere; the waist's emulated motion has the
+        // gravity on a tilted body (-9.6..-9.81 on its z axis).
+        for (port, want) in [
+            ("/ergocub/left_arm/FT/measures:o", "9.81"),
+            ("/ergocub/left_arm/imu/measures:o", "9.81"),
+            ("/ergocub/waist/inertials/measures:o", " -9."),
         ] {
             let mut cmd = Command::new(&yarp);
             cmd.args(["read", "/test/sensor:i", port]);
@@ -87,11 +103,11 @@ fn ergocub_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
             // The first samples after the boards start streaming may still be zeros.
             let end = Instant::now() + T;
             let mut line = reader.line(T).expect("a line from yarp read");
-            while !line.contains("9.81") && Instant::now() < end {
+            while !line.contains(want) && Instant::now() < end {
                 line = reader.line(T).expect("a line from yarp read");
             }
             eprintln!("yarp read {port}: {line}");
-            assert!(line.contains("9.81"), "{port}: {line}");
+            assert!(line.contains(want), "{port}: {line}");
         }
     }
 

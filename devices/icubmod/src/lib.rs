@@ -9,7 +9,7 @@
 //! | `canBusSkin` | [`skin`] | `IAnalogSensor`, `ISkinPatches` |
 //! | `canBusInertialMTB` | [`inertial`] | `IAnalogSensor`, accelerometers, gyroscopes |
 //! | `canBusVirtualAnalogSensor` | [`virtual_analog`] | `IVirtualAnalogSensor` (joint torques sent as strain messages) |
-//! | `xsensmtx` | [`xsensmtx`] | the head's Xsens MTx on a serial port: gyroscope, accelerometer, magnetometer, orientation, `IAnalogSensor` (C++ `IGenericSensor`, 12 channels) |
+//! | `xsensmtx`, `xsensmt` | [`xsens`] | Xsens IMUs on a serial port (the iCub head's MTx; an MTi such as the ergoCub waist's): gyroscope, accelerometer, magnetometer, orientation, `IAnalogSensor` (C++ `IGenericSensor`, 12 channels) |
 //! | `imuFilter` | [`imu_filter`] | an IMU with its gyro bias removed (`IMultipleWrapper` + the IMU interfaces) |
 //! | `skinWrapper` | [`skin_wrapper`] | an `analogServer` per skin part |
 //! | `parametricCalibrator` | [`calibrator`] | `ICalibrator`, `IRemoteCalibrator` |
@@ -37,7 +37,7 @@ pub mod presence;
 pub mod skin;
 pub mod skin_wrapper;
 pub mod virtual_analog;
-pub mod xsensmtx;
+pub mod xsens;
 
 pub use analog::CanBusAnalogSensor;
 pub use calibrator::ParametricCalibrator;
@@ -48,7 +48,7 @@ pub use motion_control::CanMotionControl;
 pub use skin::CanBusSkin;
 pub use skin_wrapper::SkinWrapper;
 pub use virtual_analog::CanBusVirtualAnalogSensor;
-pub use xsensmtx::XsensMtx;
+pub use xsens::XsensImu;
 
 use yarp_devices::{Factory, Registry};
 
@@ -70,7 +70,8 @@ pub const DRIVERS: &[(&str, Factory)] = &[
         Box::new(CanBusVirtualAnalogSensor::new())
     }),
     (calibrator::NAME, || Box::new(ParametricCalibrator::new())),
-    (xsensmtx::NAME, || Box::new(XsensMtx::new())),
+    (xsens::MTX_NAME, || Box::new(XsensImu::mtx())),
+    (xsens::MT_NAME, || Box::new(XsensImu::mt())),
     ("imuFilter", || Box::new(ImuFilter::new())),
     ("skinWrapper", || Box::new(SkinWrapper::new())),
     (cartesian::NAME, || {

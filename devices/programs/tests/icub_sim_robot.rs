@@ -60,7 +60,7 @@ fn emulate_head_imu() -> icub_can::emulator::mtx::MtxHandle {
         icub_can::xsens::emulated_motion,
     )
     .unwrap();
-    std::env::set_var(icubmod::xsensmtx::SERIAL_ENV, &path);
+    std::env::set_var(icubmod::xsens::SERIAL_ENV, &path);
     mtx
 }
 
@@ -679,7 +679,7 @@ fn keep_going_runs_the_real_genova01_config_as_processes() {
         Command::new(env!("CARGO_BIN_EXE_yarprobotinterface"))
             .args(["--config", "icub_all.xml", "--keep-going"])
             .env(icubmod::common::BACKEND_ENV, "udp://127.0.0.1:21000+n")
-            .env(icubmod::xsensmtx::SERIAL_ENV, &xsens)
+            .env(icubmod::xsens::SERIAL_ENV, &xsens)
             .current_dir(genova_dir())
             .stdout(Stdio::null())
             .stderr(log.reopen().unwrap())

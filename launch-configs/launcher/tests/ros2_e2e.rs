@@ -442,12 +442,14 @@ fn icub_genova02_to_rclpy_and_back() {
 }
 
 /// ergoCubSN001 of robots-configuration, unmodified, against the emulated boards (served on
-/// 127.0.8.0/24). The left shoulder roll (joint 1, calibrated to 50 degrees); the left
-/// arm's IMU as sensor_msgs/Imu.
+/// 127.0.8.0/24) and the emulated waist MTi (on a pseudo-terminal of this test). The left
+/// shoulder roll (joint 1, calibrated to 50 degrees); the left arm's IMU as
+/// sensor_msgs/Imu; every topic of the mapping, the waist IMU's included.
 #[test]
 fn ergocub_to_rclpy_and_back() {
     program("icub-eth-emulator", "icub-emulators");
     program("yarprobotinterface", "yarp-device-programs");
+    let xsens = format!("xsens_serial=/tmp/ergocub-ttyXSENS-{}", std::process::id());
     e2e(Scenario {
         config: "ergocub.toml",
         mapping: "ergocub.toml",
@@ -455,7 +457,12 @@ fn ergocub_to_rclpy_and_back() {
         targets: [60.0, 55.0],
         calibrated: Some("calibration done device=Left_Arm_Calibrator"),
         prefix: "/ergocub",
-        extra: &["--set", "address_map=10.0.1.0/24=127.0.8.0/24"],
+        extra: &[
+            "--set",
+            "address_map=10.0.1.0/24=127.0.8.0/24",
+            "--set",
+            &xsens,
+        ],
         domain_offset: 3,
         imu_topic: Some("/ergocub/left_arm/imu"),
         whole_robot: None,

@@ -1,11 +1,14 @@
-//! The emulated Xsens MTx ([`crate::xsens::EmulatedMtx`]) served on a serial port: it
-//! answers the host's configuration messages and, while measuring, streams `MTData` at
-//! its period with [`crate::xsens::emulated_motion`].
+//! An emulated Xsens sensor served on a serial port: the MTx of the iCub head
+//! ([`crate::xsens::EmulatedMtx`], `MTData`) or an MTi such as the ergoCub waist's
+//! ([`crate::xsens::mti::EmulatedMti`], `MTData2`). It answers the host's configuration
+//! messages and, while measuring, streams at its period with
+//! [`crate::xsens::emulated_motion`].
 //!
 //! [`pty_link`] makes a pseudo-terminal whose device path a configuration can name (as
 //! `serial` of `xsensmtx`), so no hardware or kernel serial driver is needed.
 
-use crate::xsens::{emulated_motion, Decoder, EmulatedMtx, Sample};
+use crate::xsens::mti::EmulatedMti;
+use crate::xsens::{emulated_motion, Decoder, EmulatedMtx, Message, Sample};
 use serialport::{SerialPort, TTYPort};
 use std::io::{ErrorKind, Read, Write};
 use std::path::{Path, PathBuf};
@@ -56,12 +59,46 @@ pub trait MtxPort: Read + Write + Send + 'static {
 /// The longest read of the emulator thread (bounds how long stopping takes).
 const MAX_READ_WAIT: Duration = Duration::from_millis(50);
 
+/// An emulated Xsens sensor as a state machine.
+pub trait EmulatedMt: Send + 'static {
+    /// The replies to one host message.
+    fn handle(&mut self, m: &Message) -> Vec<Message>;
+    /// How often [`Self::sample_at`] is asked (s).
+    fn period_s(&self) -> f64;
+    /// The data message due at `t` (s since start) of motion `s`, when measuring.
+    fn sample_at(&mut self, t: f64, s: &Sample) -> Option<Message>;
+}
+
+impl EmulatedMt for EmulatedMtx {
+    fn handle(&mut self, m: &Message) -> Vec<Message> {
+        EmulatedMtx::handle(self, m)
+    }
+    fn period_s(&self) -> f64 {
+        EmulatedMtx::period_s(self)
+    }
+    fn sample_at(&mut self, _t: f64, s: &Sample) -> Option<Message> {
+        self.sample(s)
+    }
+}
+
+impl EmulatedMt for EmulatedMti {
+    fn handle(&mut self, m: &Message) -> Vec<Message> {
+        EmulatedMti::handle(self, m)
+    }
+    fn period_s(&self) -> f64 {
+        EmulatedMti::period_s(self)
+    }
+    fn sample_at(&mut self, t: f64, s: &Sample) -> Option<Message> {
+        self.sample(t, s)
+    }
+}
+
 /// Serves `mtx` on `port` in a thread until the handle is dropped, streaming
 /// `motion(seconds since start)`. The thread waits in its reads until the next sample
 /// is due.
 pub fn serve(
     mut port: impl MtxPort,
-    mut mtx: EmulatedMtx,
+    mut mtx: impl EmulatedMt,
     motion: fn(f64) -> Sample,
 ) -> std::io::Result<MtxHandle> {
     let stop = Arc::new(AtomicBool::new(false));
@@ -102,7 +139,7 @@ pub fn serve(
                 if Instant::now() >= next {
                     let t = start.elapsed().as_secs_f64();
                     if !si.load(Ordering::SeqCst) {
-                        if let Some(m) = mtx.sample(&motion(t)) {
+                        if let Some(m) = mtx.sample_at(t, &motion(t)) {
                             let _ = port.write_all(&m.encode());
                         }
                     }
@@ -145,12 +182,17 @@ pub fn pty() -> std::io::Result<(impl MtxPort, PathBuf)> {
 /// replacing any earlier one, removed when the handle is dropped), e.g. the `serial` path
 /// a robot file names.
 pub fn pty_link(link: &Path) -> std::io::Result<(MtxHandle, PathBuf)> {
+    pty_link_with(link, EmulatedMtx::default())
+}
+
+/// [`pty_link`] for any emulated sensor, e.g. an [`EmulatedMti`].
+pub fn pty_link_with(link: &Path, mt: impl EmulatedMt) -> std::io::Result<(MtxHandle, PathBuf)> {
     let (port, path) = pty()?;
     if link.symlink_metadata().is_ok() {
         std::fs::remove_file(link)?;
     }
     std::os::unix::fs::symlink(&path, link)?;
-    let mut handle = serve(port, EmulatedMtx::default(), emulated_motion)?;
+    let mut handle = serve(port, mt, emulated_motion)?;
     handle.link = Some((link.to_path_buf(), path.clone()));
     Ok((handle, path))
 }

@@ -1,8 +1,11 @@
-//! `icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN]`:
-//! emulates every Ethernet board of a robots-configuration robot directory, each on its
-//! own `IpAddress:12345` UDP socket. The address map (also `YARP_ICUB_ETH_ADDRESS_MAP`)
-//! serves the robot's addresses elsewhere, e.g. `10.0.1.0/24=127.0.1.0/24` on a laptop
-//! without the robot's addresses; the devices must use the same map.
+//! `icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN]
+//! [--xsens PATH]`: emulates every Ethernet board of a robots-configuration robot
+//! directory, each on its own `IpAddress:12345` UDP socket. The address map (also
+//! `YARP_ICUB_ETH_ADDRESS_MAP`) serves the robot's addresses elsewhere, e.g.
+//! `10.0.1.0/24=127.0.1.0/24` on a laptop without the robot's addresses; the devices must
+//! use the same map. `--xsens PATH` also emulates an Xsens MTi (the ergoCub waist IMU,
+//! `xsensmt`) on a pseudo-terminal linked at PATH (name it in `YARP_ICUB_XSENS_SERIAL`).
+//! SIGINT or SIGTERM stops it (exit 0; the `--xsens` link is removed).
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -13,7 +16,7 @@ use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
 
 fn usage() -> ! {
     eprintln!(
-        "usage: icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN]"
+        "usage: icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN] [--xsens PATH]"
     );
     std::process::exit(2)
 }
@@ -29,8 +32,10 @@ fn main() {
     let mut dir: Option<PathBuf> = None;
     let mut top: Option<PathBuf> = None;
     let mut map_text = std::env::var(ADDRESS_MAP_ENV).unwrap_or_default();
+    let mut xsens: Option<PathBuf> = None;
     while let Some(a) = args.next() {
         match a.as_str() {
+            "--xsens" => xsens = Some(args.next().unwrap_or_else(|| usage()).into()),
             "--config" => top = Some(args.next().unwrap_or_else(|| usage()).into()),
             "--address-map" => map_text = args.next().unwrap_or_else(|| usage()),
             "-h" | "--help" => usage(),
@@ -49,6 +54,25 @@ fn main() {
         std::process::exit(1)
     });
     let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        if let Err(e) = signal_hook::flag::register(sig, stop.clone()) {
+            eprintln!("icub-eth-emulator: {e}");
+            std::process::exit(1)
+        }
+    }
+    let _mti = xsens.map(|link| {
+        let mti = icub_can::xsens::mti::EmulatedMti::default();
+        match icub_can::emulator::mtx::pty_link_with(&link, mti) {
+            Ok((handle, pts)) => {
+                println!("xsens {} {}", link.display(), pts.display());
+                handle
+            }
+            Err(e) => {
+                eprintln!("icub-eth-emulator: --xsens {}: {e}", link.display());
+                std::process::exit(1)
+            }
+        }
+    });
     let (served, threads) = serve(specs, &map, stop).unwrap_or_else(|e| {
         eprintln!("icub-eth-emulator: {e}");
         std::process::exit(1)

@@ -1,0 +1,147 @@
+//! `xsensmt` (the ergoCub waist IMU's driver) against an emulated Xsens MTi on a
+//! pseudo-terminal: identification, the output configuration it asks (each measure at its
+//! own period), values and units, an MTx on the port refused, a silent sensor.
+
+use icub_can::emulator::mtx;
+use icub_can::xsens::mti::{xdi, EmulatedMti, OutputConfig};
+use icub_can::xsens::{EmulatedMtx, Sample};
+use std::time::{Duration, Instant};
+use yarp_devices::sensors::{AnalogStatus, MasStatus};
+use yarp_devices::PolyDriver;
+use yarp_proto::Property;
+
+fn still(_t: f64) -> Sample {
+    Sample {
+        acc: [0.5, -0.25, -9.75],
+        gyr: [0.1, -0.2, 0.3],
+        mag: [0.5, 0.0, 0.4],
+        euler: [1.5, -2.5, 30.0],
+    }
+}
+
+/// ergoCubSN001's `hardware/inertials/waist-inertial.xml`, on `path`.
+fn open(path: &std::path::Path) -> Result<PolyDriver, String> {
+    let cfg = format!(
+        "device xsensmt\nserial \"  {}  \"\nxsensmt_period 0.01\nxsensmt_euler_period 0.005\n\
+         xsensmt_gyro_period 0.005\nxsensmt_acc_period 0.005\nxsensmt_mag_period 0.01\n\
+         sensor_name waist_imu_0\n",
+        path.display()
+    );
+    PolyDriver::open(&Property::from_config_text(&cfg).unwrap()).map_err(|e| e.to_string())
+}
+
+fn eventually(timeout: Duration, mut ok: impl FnMut() -> bool) -> bool {
+    let end = Instant::now() + timeout;
+    while Instant::now() < end {
+        if ok() {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    ok()
+}
+
+fn close(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-4)
+}
+
+#[test]
+fn reads_an_emulated_mti_as_the_ergocub_waist_configures_it() {
+    yarp_devices::Registry::install(icubmod::register);
+    let (port, path) = mtx::pty().unwrap();
+    let _mti = mtx::serve(port, EmulatedMti::default(), still).unwrap();
+    let mut pd = open(&path).unwrap_or_else(|e| panic!("{e}"));
+    let dev = pd.device();
+    assert!(eventually(Duration::from_secs(2), || dev
+        .as_orientation_sensors()
+        .unwrap()
+        .get_orientation_sensor_status(0)
+        == MasStatus::Ok));
+    let rpy = dev.as_orientation_sensors().unwrap();
+    assert_eq!(rpy.get_orientation_sensor_name(0).unwrap(), "waist_imu_0");
+    assert_eq!(
+        rpy.get_orientation_sensor_frame_name(0).unwrap(),
+        "waist_imu_0",
+        "the frame defaults to the sensor name"
+    );
+    let m = rpy
+        .get_orientation_sensor_measure_as_roll_pitch_yaw(0)
+        .unwrap();
+    assert!(close(&m.values, &[1.5, -2.5, 30.0]), "{:?}", m.values);
+    let deg = 180.0 / std::f64::consts::PI;
+    let gyro = dev
+        .as_three_axis_gyroscopes()
+        .unwrap()
+        .get_three_axis_gyroscope_measure(0)
+        .unwrap();
+    assert!(
+        close(&gyro.values, &[0.1 * deg, -0.2 * deg, 0.3 * deg]),
+        "deg/s: {:?}",
+        gyro.values
+    );
+    let acc = dev
+        .as_three_axis_linear_accelerometers()
+        .unwrap()
+        .get_three_axis_linear_accelerometer_measure(0)
+        .unwrap();
+    assert!(close(&acc.values, &[0.5, -0.25, -9.75]), "{:?}", acc.values);
+    let mag = dev
+        .as_three_axis_magnetometers()
+        .unwrap()
+        .get_three_axis_magnetometer_measure(0)
+        .unwrap();
+    assert!(close(&mag.values, &[0.5, 0.0, 0.4]), "{:?}", mag.values);
+    assert!(mag.timestamp > 1e9, "a wall-clock stamp");
+    let mut v = Vec::new();
+    assert_eq!(
+        dev.as_analog_sensor().unwrap().read(&mut v),
+        AnalogStatus::Ok
+    );
+    assert_eq!(v.len(), 12);
+    assert!(close(&v[..3], &[1.5, -2.5, 30.0]) && close(&v[9..], &[0.5, 0.0, 0.4]));
+    // A second MAS sensor index does not exist.
+    let rpy = dev.as_orientation_sensors().unwrap();
+    assert!(rpy
+        .get_orientation_sensor_measure_as_roll_pitch_yaw(1)
+        .is_err());
+    pd.close().unwrap();
+}
+
+#[test]
+fn the_output_configuration_is_the_one_xsensmt_asks() {
+    // What the emulated sensor applied is what the driver asked: 200 Hz Euler angles,
+    // acceleration and rate of turn, 100 Hz magnetic field, float32 in ENU.
+    let cfg =
+        icub_can::xsens::mti::MtiKind::Ahrs.output_configuration([200, 200, 200, 100, 100, 100]);
+    assert_eq!(
+        cfg,
+        [
+            OutputConfig::new(xdi::EULER_ANGLES, 200),
+            OutputConfig::new(xdi::ACCELERATION, 200),
+            OutputConfig::new(xdi::RATE_OF_TURN, 200),
+            OutputConfig::new(xdi::MAGNETIC_FIELD, 100),
+        ]
+    );
+}
+
+#[test]
+fn an_mtx_is_no_mti_and_a_silent_port_fails_in_time() {
+    yarp_devices::Registry::install(icubmod::register);
+    let (port, path) = mtx::pty().unwrap();
+    let _mtx = mtx::serve(port, EmulatedMtx::default(), still).unwrap();
+    let e = open(&path).err().expect("an MTx refused");
+    assert!(
+        e.contains("no MTi device found") && e.contains("00500322"),
+        "{e}"
+    );
+
+    // A pseudo-terminal nobody answers on.
+    let (_quiet, path) = mtx::pty().unwrap();
+    let t = Instant::now();
+    let e = open(&path).err().expect("a silent port refused");
+    assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
+    assert!(
+        e.contains(&path.display().to_string()) && e.contains("no MTi answers"),
+        "{e}"
+    );
+}
