@@ -183,3 +183,62 @@ impl Drop for Reaped {
         let _ = self.0.wait();
     }
 }
+
+fn client(server: &str, local: &str, carriers: &str) -> Result<PolyDriver, String> {
+    name_client();
+    let cfg = format!(
+        "device RGBDSensorClient\nlocalImagePort {local}/rgbImage:i\nlocalDepthPort {local}/depthImage:i\n\
+         localRpcPort {local}/rpc:o\nremoteImagePort {server}/rgbImage:o\n\
+         remoteDepthPort {server}/depthImage:o\nremoteRpcPort {server}/rpc:i\n{carriers}"
+    );
+    PolyDriver::open(&Property::from_config_text(&cfg).unwrap()).map_err(|e| e.to_string())
+}
+
+/// RGBDSensorClient (C++ 3.12's parameters) on our server: the images stream in (over
+/// udp, its default carrier, and over tcp), the visual parameters, extrinsics and status
+/// come over RPC; a client without a server fails naming the port.
+#[test]
+fn rgbd_sensor_client_reads_our_wrapper() {
+    let mut server = camera("/rgbdServer");
+    for (local, carriers) in [
+        ("/rgbdClientUdp", ""),
+        (
+            "/rgbdClientTcp",
+            "ImageCarrier tcp\nDepthCarrier fast_tcp\n",
+        ),
+    ] {
+        let mut pd = client("/rgbdServer", local, carriers).unwrap_or_else(|e| panic!("{e}"));
+        let d = pd.device().as_rgbd_sensor().expect("IRGBDSensor");
+        assert_eq!((d.rgb_width(), d.rgb_height()), (32, 24));
+        assert_eq!((d.depth_width(), d.depth_height()), (32, 24));
+        assert_eq!(d.rgb_fov().unwrap(), (36.0, 50.0));
+        assert_eq!(d.depth_clip_planes().unwrap(), (0.2, 6.0));
+        assert_eq!(d.depth_accuracy().unwrap(), 0.001);
+        let intp = d.depth_intrinsic_param().unwrap();
+        assert!(intp.find("focalLengthX").is_some(), "{intp:?}");
+        let ext = d.extrinsic_param().unwrap();
+        assert_eq!((ext[0], ext[5], ext[15], ext[1]), (1.0, 1.0, 1.0, 0.0));
+        assert_eq!(d.sensor_status(), yarp_devices::rgbd::RgbdStatus::OkInUse);
+        let end = Instant::now() + T;
+        let images = loop {
+            if let Ok(both) = d.get_images() {
+                break both;
+            }
+            assert!(Instant::now() < end, "{local}: no images in {T:?}");
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        let ((rgb, t1), (depth, t2)) = images;
+        assert_eq!(rgb.pixel_code(), PixelCode::RGB);
+        assert_eq!(
+            (depth.pixel_code(), depth.width()),
+            (PixelCode::MONO_FLOAT, 32)
+        );
+        assert!(t1.time > 1.6e9 && t2.time > 1.6e9, "{local}: envelopes");
+        pd.close().unwrap();
+    }
+    server.close().unwrap();
+    let e = client("/rgbdServer", "/rgbdOrphan", "")
+        .err()
+        .expect("no server");
+    assert!(e.contains("/rgbdServer"), "{e}");
+}

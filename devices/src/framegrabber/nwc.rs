@@ -107,9 +107,9 @@ pub fn parse_configurations(reply: &Bottle) -> DevResult<Vec<CameraConfig>> {
 
 /// The latest streamed image and its envelope.
 #[derive(Default)]
-struct Latest {
-    image: Option<Image>,
-    stamp: Option<Stamp>,
+pub(crate) struct Latest {
+    pub image: Option<Image>,
+    pub stamp: Option<Stamp>,
 }
 
 /// Reads one streamed message as an image.
@@ -121,11 +121,79 @@ fn image_of(msg: &Incoming) -> Result<Image, String> {
     Image::from_bottle(&b).map_err(|e| e.to_string())
 }
 
-struct Client {
-    stream: Option<(Arc<Port>, tokio::task::JoinHandle<()>)>,
-    rpc: Arc<Port>,
+/// A port fed by a server's image stream, keeping the latest image (frameGrabber and
+/// RGB-D clients).
+pub(crate) struct ImageStream {
+    port: Arc<Port>,
+    task: tokio::task::JoinHandle<()>,
     latest: Arc<Mutex<Latest>>,
     rejected: Arc<AtomicU64>,
+}
+
+impl ImageStream {
+    /// Opens `local` and has `remote` connect to it with `carrier`.
+    pub(crate) async fn open(
+        device: &'static str,
+        ns: &NameClient,
+        local: &str,
+        remote: &str,
+        carrier: &str,
+    ) -> Result<ImageStream, String> {
+        let port = Arc::new(
+            Port::open(local, ns.clone())
+                .await
+                .map_err(|e| format!("{local}: {e}"))?,
+        );
+        let connected = yarp_net::network::connect(ns, remote, local, Some(carrier))
+            .await
+            .map_err(|e| e.to_string())
+            .and_then(|(ok, msg)| if ok { Ok(()) } else { Err(msg) });
+        if let Err(e) = connected {
+            if let Ok(p) = Arc::try_unwrap(port) {
+                p.close().await;
+            }
+            return Err(format!(
+                "connecting {remote} to {local} with {carrier}: {e}"
+            ));
+        }
+        let latest = Arc::new(Mutex::new(Latest::default()));
+        let rejected = Arc::new(AtomicU64::new(0));
+        let task = tokio::spawn(receive(
+            device,
+            port.clone(),
+            latest.clone(),
+            rejected.clone(),
+        ));
+        Ok(ImageStream {
+            port,
+            task,
+            latest,
+            rejected,
+        })
+    }
+
+    /// `f` of the latest image and stamp.
+    pub(crate) fn latest<R>(&self, f: impl FnOnce(&Latest) -> R) -> R {
+        f(&self.latest.lock().unwrap_or_else(|e| e.into_inner()))
+    }
+
+    /// Streamed messages dropped because they were not valid images.
+    pub(crate) fn rejected(&self) -> u64 {
+        self.rejected.load(Ordering::Relaxed)
+    }
+
+    pub(crate) async fn close(self) {
+        self.task.abort();
+        let _ = self.task.await;
+        if let Ok(p) = Arc::try_unwrap(self.port) {
+            p.close().await;
+        }
+    }
+}
+
+struct Client {
+    stream: Option<ImageStream>,
+    rpc: Arc<Port>,
 }
 
 impl Client {
@@ -136,24 +204,11 @@ impl Client {
         carrier: String,
         no_stream: bool,
     ) -> Result<Client, String> {
-        let latest = Arc::new(Mutex::new(Latest::default()));
-        let rejected = Arc::new(AtomicU64::new(0));
-        let mut stream = None;
-        if !no_stream {
-            let port = Arc::new(
-                Port::open(&local, ns.clone())
-                    .await
-                    .map_err(|e| format!("{local}: {e}"))?,
-            );
-            let (ok, msg) = yarp_net::network::connect(&ns, &remote, &local, Some(&carrier))
-                .await
-                .map_err(|e| format!("connecting {remote} to {local}: {e}"))?;
-            if !ok {
-                return Err(format!("connecting {remote} to {local}: {msg}"));
-            }
-            let task = tokio::spawn(receive(port.clone(), latest.clone(), rejected.clone()));
-            stream = Some((port, task));
-        }
+        let stream = if no_stream {
+            None
+        } else {
+            Some(ImageStream::open(NAME, &ns, &local, &remote, &carrier).await?)
+        };
         let rpc_name = format!("{local}/rpc_client");
         let rpc = Port::open(&rpc_name, ns)
             .await
@@ -164,18 +219,12 @@ impl Client {
         Ok(Client {
             stream,
             rpc: Arc::new(rpc),
-            latest,
-            rejected,
         })
     }
 
     async fn close(self) {
-        if let Some((port, task)) = self.stream {
-            task.abort();
-            let _ = task.await;
-            if let Ok(p) = Arc::try_unwrap(port) {
-                p.close().await;
-            }
+        if let Some(stream) = self.stream {
+            stream.close().await;
         }
         if let Ok(p) = Arc::try_unwrap(self.rpc) {
             p.close().await;
@@ -183,7 +232,12 @@ impl Client {
     }
 }
 
-async fn receive(port: Arc<Port>, latest: Arc<Mutex<Latest>>, rejected: Arc<AtomicU64>) {
+async fn receive(
+    device: &'static str,
+    port: Arc<Port>,
+    latest: Arc<Mutex<Latest>>,
+    rejected: Arc<AtomicU64>,
+) {
     while let Some(msg) = port.read().await {
         match image_of(&msg) {
             Ok(img) => {
@@ -193,7 +247,7 @@ async fn receive(port: Arc<Port>, latest: Arc<Mutex<Latest>>, rejected: Arc<Atom
             }
             Err(e) => {
                 rejected.fetch_add(1, Ordering::Relaxed);
-                tracing::warn!("{NAME}: ignoring a message that is not an image: {e}");
+                tracing::warn!("{device}: ignoring a message that is not an image: {e}");
             }
         }
     }
@@ -214,7 +268,8 @@ impl FrameGrabberNwc {
     pub fn rejected_messages(&self) -> u64 {
         self.client
             .as_ref()
-            .map_or(0, |c| c.rejected.load(Ordering::Relaxed))
+            .and_then(|c| c.stream.as_ref())
+            .map_or(0, ImageStream::rejected)
     }
 
     fn rpc(&self, cmd: Bottle) -> DevResult<Bottle> {
@@ -249,9 +304,7 @@ impl FrameGrabberNwc {
     }
 
     fn latest<R>(&self, f: impl FnOnce(&Latest) -> R) -> Option<R> {
-        let c = self.client.as_ref()?;
-        let l = c.latest.lock().unwrap_or_else(|e| e.into_inner());
-        Some(f(&l))
+        Some(self.client.as_ref()?.stream.as_ref()?.latest(f))
     }
 
     fn visr(&self, verb: i32, what: i32, args: &[Value]) -> DevResult<Bottle> {

@@ -1,8 +1,9 @@
 //! RGB-D cameras: the `IRGBDSensor` interface (C++ `yarp::dev::IRGBDSensor`, with its
-//! `IRgbVisualParams` and `IDepthVisualParams` parts), `fakeDepthCamera` and the YARP
-//! network wrapper `rgbdSensor_nws_yarp`.
+//! `IRgbVisualParams` and `IDepthVisualParams` parts), `fakeDepthCamera`, the YARP
+//! network wrapper `rgbdSensor_nws_yarp` and its client `RGBDSensorClient`.
 
 pub mod fake;
+pub mod nwc;
 pub mod nws;
 pub mod protocol;
 
@@ -58,4 +59,5 @@ pub(crate) const DRIVERS: &[(&str, Factory)] = &[
     ("rgbdSensor_nws_yarp", || {
         Box::new(nws::RgbdSensorNwsYarp::new())
     }),
+    (nwc::NAME, || Box::new(nwc::RgbdSensorClient::new())),
 ];

@@ -1,0 +1,298 @@
+//! `RGBDSensorClient` (C++ 3.12): an RGB-D camera served by `rgbdSensor_nws_yarp`, seen
+//! as a local `IRGBDSensor`.
+//!
+//! Parameters, all as C++ (every port name is given in full): `localImagePort`,
+//! `localDepthPort`, `localRpcPort`, `remoteImagePort`, `remoteDepthPort`,
+//! `remoteRpcPort`; `ImageCarrier` and `DepthCarrier` (the streams' carriers, default
+//! `udp`). At open the two streams are connected with their carriers, the RPC port to the
+//! server, and the server's protocol version is asked (`[rgdb] [get] [prot]`): another
+//! major version is refused, another minor one is logged, as C++ does.
+//!
+//! Images are the latest streamed ones (with their envelopes); sizes, fields of view,
+//! intrinsics, depth accuracy and clip planes, extrinsics, status and the last error are
+//! asked over RPC (`[visr]`, `[visd]`, `[rgdb]`, see [`super::protocol`]).
+
+use super::protocol::{
+    ACCURACY, CLIP_PLANES, DEPTH_VISUAL_PARAMS, ERROR_MSG, EXTRINSIC_PARAM, PROTOCOL_VERSION,
+    RGBD_PROTOCOL_VERSION, RGBD_SENSOR, STATUS,
+};
+use super::{IRGBDSensor, RgbdStatus};
+use crate::driver::{DeviceDriver, Params};
+use crate::error::{DevResult, DeviceError};
+use crate::framegrabber::nwc::{reply_float, reply_int, request, ImageStream};
+use crate::framegrabber::protocol::{FOV, GET, HEIGHT, INTRINSIC_PARAM, RGB_VISUAL_PARAMS, WIDTH};
+use crate::runtime;
+use std::sync::Arc;
+use std::time::Duration;
+use yarp_net::port::Port;
+use yarp_proto::image::Image;
+use yarp_proto::{Bottle, Property, Stamp, Value};
+
+pub(crate) const NAME: &str = "RGBDSensorClient";
+/// How long an RPC to the server may take.
+const RPC_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// The ports of an open client.
+struct Client {
+    rgb: ImageStream,
+    depth: ImageStream,
+    rpc: Arc<Port>,
+}
+
+impl Client {
+    async fn close(self) {
+        self.rgb.close().await;
+        self.depth.close().await;
+        if let Ok(p) = Arc::try_unwrap(self.rpc) {
+            p.close().await;
+        }
+    }
+}
+
+/// The port names and carriers of the parameters.
+struct Names {
+    local_image: String,
+    local_depth: String,
+    local_rpc: String,
+    remote_image: String,
+    remote_depth: String,
+    remote_rpc: String,
+    image_carrier: String,
+    depth_carrier: String,
+}
+
+impl Names {
+    fn of(p: &Params) -> DevResult<Names> {
+        let need = |k: &str| p.string(k)?.ok_or_else(|| p.missing(k));
+        Ok(Names {
+            local_image: need("localImagePort")?,
+            local_depth: need("localDepthPort")?,
+            local_rpc: need("localRpcPort")?,
+            remote_image: need("remoteImagePort")?,
+            remote_depth: need("remoteDepthPort")?,
+            remote_rpc: need("remoteRpcPort")?,
+            image_carrier: p.string("ImageCarrier")?.unwrap_or_else(|| "udp".into()),
+            depth_carrier: p.string("DepthCarrier")?.unwrap_or_else(|| "udp".into()),
+        })
+    }
+}
+
+async fn open_client(n: Names) -> Result<Client, String> {
+    let ns = yarp_net::network::name_client().map_err(|e| e.to_string())?;
+    let rgb =
+        ImageStream::open(NAME, &ns, &n.local_image, &n.remote_image, &n.image_carrier).await?;
+    let depth =
+        match ImageStream::open(NAME, &ns, &n.local_depth, &n.remote_depth, &n.depth_carrier).await
+        {
+            Ok(d) => d,
+            Err(e) => {
+                rgb.close().await;
+                return Err(e);
+            }
+        };
+    let rpc = match Port::open(&n.local_rpc, ns).await {
+        Ok(p) => p,
+        Err(e) => {
+            rgb.close().await;
+            depth.close().await;
+            return Err(format!("{}: {e}", n.local_rpc));
+        }
+    };
+    if let Err(e) = rpc.connect(&n.remote_rpc, None).await {
+        rpc.close().await;
+        rgb.close().await;
+        depth.close().await;
+        return Err(format!(
+            "connecting {} to {}: {e}",
+            n.local_rpc, n.remote_rpc
+        ));
+    }
+    Ok(Client {
+        rgb,
+        depth,
+        rpc: Arc::new(rpc),
+    })
+}
+
+/// The `RGBDSensorClient` device.
+#[derive(Default)]
+pub struct RgbdSensorClient {
+    client: Option<Client>,
+}
+
+impl RgbdSensorClient {
+    pub fn new() -> RgbdSensorClient {
+        RgbdSensorClient::default()
+    }
+
+    fn client(&self) -> DevResult<&Client> {
+        self.client.as_ref().ok_or(DeviceError::NotOpen)
+    }
+
+    fn call(&self, iface: i32, what: i32) -> DevResult<Bottle> {
+        let port = self.client()?.rpc.clone();
+        let cmd = request(iface, GET, what, &[]);
+        let text = cmd.to_string();
+        runtime::block_on(async move { tokio::time::timeout(RPC_TIMEOUT, port.rpc(&cmd)).await })
+            .map_err(|_| {
+                DeviceError::failed(NAME, format!("no reply to {text} in {RPC_TIMEOUT:?}"))
+            })?
+            .map_err(|e| DeviceError::failed(NAME, format!("{text}: {e}")))
+    }
+
+    fn int(&self, iface: i32, what: i32) -> DevResult<i32> {
+        reply_int(&self.call(iface, what)?, 3)
+    }
+
+    fn pair(&self, iface: i32, what: i32) -> DevResult<(f64, f64)> {
+        let r = self.call(iface, what)?;
+        Ok((reply_float(&r, 3)?, reply_float(&r, 4)?))
+    }
+
+    fn intrinsics(&self, iface: i32) -> DevResult<Property> {
+        let r = self.call(iface, INTRINSIC_PARAM)?;
+        reply_int(&r, 0).ok(); // a refusal is reported by the line below
+        r.get(3)
+            .and_then(Value::as_list)
+            .map(Property::from_bottle)
+            .ok_or_else(|| malformed(&r))
+    }
+
+    fn image(&self, depth: bool) -> DevResult<(Image, Stamp)> {
+        let c = self.client()?;
+        let stream = if depth { &c.depth } else { &c.rgb };
+        stream
+            .latest(|l| Some((l.image.clone()?, l.stamp.unwrap_or(Stamp::new(0, 0.0)))))
+            .ok_or(DeviceError::Unsupported("no image received yet"))
+    }
+}
+
+fn malformed(reply: &Bottle) -> DeviceError {
+    DeviceError::failed(NAME, format!("unexpected reply {reply}"))
+}
+
+impl DeviceDriver for RgbdSensorClient {
+    fn open(&mut self, config: &Property) -> DevResult<()> {
+        let p = Params::new(NAME, config);
+        let names = Names::of(&p)?;
+        let remote = names.remote_rpc.clone();
+        let client =
+            runtime::block_on(open_client(names)).map_err(|got| DeviceError::BadParam {
+                device: NAME.into(),
+                param: "remoteRpcPort".into(),
+                expected:
+                    "the ports of a running rgbdSensor_nws_yarp (is the name server running?)",
+                got,
+            })?;
+        self.close()?;
+        self.client = Some(client);
+        let version = self.call(RGBD_SENSOR, RGBD_PROTOCOL_VERSION);
+        let (major, minor) = match &version {
+            Ok(r) => (reply_int(r, 3).unwrap_or(-1), reply_int(r, 4).unwrap_or(-1)),
+            Err(_) => (-1, -1),
+        };
+        if major != PROTOCOL_VERSION.0 {
+            self.close()?;
+            return Err(DeviceError::failed(
+                NAME,
+                format!(
+                    "major protocol number of {remote} does not match: expected {} received {major}{}",
+                    PROTOCOL_VERSION.0,
+                    version.err().map(|e| format!(" ({e})")).unwrap_or_default()
+                ),
+            ));
+        }
+        if minor != PROTOCOL_VERSION.1 {
+            tracing::warn!("{NAME}: minor protocol number of {remote} does not match: expected {} received {minor}", PROTOCOL_VERSION.1);
+        }
+        Ok(())
+    }
+
+    fn close(&mut self) -> DevResult<()> {
+        if let Some(c) = self.client.take() {
+            runtime::block_on(c.close());
+        }
+        Ok(())
+    }
+
+    fn as_rgbd_sensor(&mut self) -> Option<&mut dyn IRGBDSensor> {
+        Some(self)
+    }
+}
+
+impl Drop for RgbdSensorClient {
+    fn drop(&mut self) {
+        let _ = self.close();
+    }
+}
+
+impl IRGBDSensor for RgbdSensorClient {
+    fn rgb_height(&mut self) -> i32 {
+        self.int(RGB_VISUAL_PARAMS, HEIGHT).unwrap_or(0)
+    }
+    fn rgb_width(&mut self) -> i32 {
+        self.int(RGB_VISUAL_PARAMS, WIDTH).unwrap_or(0)
+    }
+    fn depth_height(&mut self) -> i32 {
+        self.int(DEPTH_VISUAL_PARAMS, HEIGHT).unwrap_or(0)
+    }
+    fn depth_width(&mut self) -> i32 {
+        self.int(DEPTH_VISUAL_PARAMS, WIDTH).unwrap_or(0)
+    }
+    fn rgb_fov(&mut self) -> DevResult<(f64, f64)> {
+        self.pair(RGB_VISUAL_PARAMS, FOV)
+    }
+    fn depth_fov(&mut self) -> DevResult<(f64, f64)> {
+        self.pair(DEPTH_VISUAL_PARAMS, FOV)
+    }
+    fn rgb_intrinsic_param(&mut self) -> DevResult<Property> {
+        self.intrinsics(RGB_VISUAL_PARAMS)
+    }
+    fn depth_intrinsic_param(&mut self) -> DevResult<Property> {
+        self.intrinsics(DEPTH_VISUAL_PARAMS)
+    }
+    fn depth_accuracy(&mut self) -> DevResult<f64> {
+        reply_float(&self.call(DEPTH_VISUAL_PARAMS, ACCURACY)?, 3)
+    }
+    fn depth_clip_planes(&mut self) -> DevResult<(f64, f64)> {
+        self.pair(DEPTH_VISUAL_PARAMS, CLIP_PLANES)
+    }
+    /// The server appends the matrix as rows, columns and the data list.
+    fn extrinsic_param(&mut self) -> DevResult<[f64; 16]> {
+        let r = self.call(RGBD_SENSOR, EXTRINSIC_PARAM)?;
+        let (rows, cols) = (reply_int(&r, 3)?, reply_int(&r, 4)?);
+        let data = r
+            .get(5)
+            .and_then(Value::as_list)
+            .ok_or_else(|| malformed(&r))?;
+        if (rows, cols) != (4, 4) || data.len() != 16 {
+            return Err(malformed(&r));
+        }
+        let mut m = [0.0; 16];
+        for (slot, v) in m.iter_mut().zip(data) {
+            *slot = v.as_f64().ok_or_else(|| malformed(&r))?;
+        }
+        Ok(m)
+    }
+    fn get_rgb_image(&mut self) -> DevResult<(Image, Stamp)> {
+        self.image(false)
+    }
+    fn get_depth_image(&mut self) -> DevResult<(Image, Stamp)> {
+        self.image(true)
+    }
+    fn sensor_status(&mut self) -> RgbdStatus {
+        match self.int(RGBD_SENSOR, STATUS) {
+            Ok(0) => RgbdStatus::NotReady,
+            Ok(1) => RgbdStatus::OkStandby,
+            Ok(2) => RgbdStatus::OkInUse,
+            Ok(4) => RgbdStatus::Timeout,
+            _ => RgbdStatus::GeneralError,
+        }
+    }
+    fn last_error_msg(&mut self) -> String {
+        self.call(RGBD_SENSOR, ERROR_MSG)
+            .ok()
+            .and_then(|r| r.get(3).and_then(Value::as_str).map(str::to_string))
+            .unwrap_or_default()
+    }
+}
