@@ -26,7 +26,7 @@ use crate::entities::mn::{
     CommStatus, EndpointDescriptor, QueryArray, ReplyArray, ServiceCommand, ServiceCommandResult,
     ServiceOperation, ServiceState, ServiceStatus, TransceiverProperties, Version,
 };
-use crate::entities::service::entities_for_service;
+use crate::entities::service::{entities_for_service, McServiceConfig};
 use crate::frame::{Frame, FrameBuilder, FrameError, EMPTY_FRAME_SIZE};
 use crate::id::{endpoint as ep, entity as en, ids, tag, Id32};
 use crate::nvstore::NvStore;
@@ -551,10 +551,15 @@ impl BoardEngine {
         match ServiceOperation::from_u8(cmd.operation) {
             Some(ServiceOperation::VerifyActivate) => {
                 stype = cmd.service_type();
-                if self.cfg.auto_entities {
+                let mc_refused = cat == category::MC && !self.mc_config_fits(cmd);
+                if self.cfg.auto_entities && !mc_refused {
                     self.add_service_entities(cmd);
                 }
                 match service_index(cat) {
+                    Some(i) if mc_refused => {
+                        self.services[i] = ServiceState::FailureOfVerify;
+                        ok = false;
+                    }
                     Some(i) if self.supports(cat) => {
                         self.services[i] = ServiceState::Activated;
                         if cat == category::MC {
@@ -645,6 +650,22 @@ impl BoardEngine {
             category: cat,
             ok,
         });
+    }
+
+    /// Whether a motion-control configuration describes the joints this board drives,
+    /// as a board checks its joint-motor descriptors: none (an empty configuration) or
+    /// another number than the motors behind it fails the verification. A generic service (or none) asks the board to use what it has on board.
+    fn mc_config_fits(&self, cmd: &ServiceCommand) -> bool {
+        let have = self.joints.len();
+        if matches!(
+            cmd.service_type(),
+            service_type::MC_GENERIC | service_type::NONE
+        ) {
+            return have > 0;
+        }
+        let named = McServiceConfig::parse(cmd.service_type(), cmd.config_data())
+            .map_or(0, |c| usize::from(c.joints()));
+        named > 0 && (have == 0 || named == have)
     }
 
     fn activate_mc(&mut self) {

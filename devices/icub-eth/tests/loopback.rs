@@ -264,6 +264,44 @@ fn a_board_with_fixed_entities_needs_no_configuration() {
     assert_eq!(l.board.regulars().len(), 6);
 }
 
+/// As a board checks its joint-motor descriptors: a motion-control configuration that
+/// names no joint (an empty one), or another number of joints than the board drives,
+/// fails the verification, and the host's start-up names the step.
+#[test]
+fn a_motion_control_configuration_that_does_not_fit_fails_verification() {
+    for (named, why) in [(0usize, "empty"), (3, "three joints on a four-joint board")] {
+        let mut b = arm_board();
+        b.auto_entities = false;
+        b.joints = 4;
+        let mut l = Loop::new(b);
+        let mut mc = mc_service(4);
+        let data = if named == 0 {
+            Vec::new()
+        } else {
+            McServiceConfig::Foc {
+                version: [0; 5],
+                board_type: 8,
+                jomos: JomoDescriptors(vec![JomoDescriptor::default(); named]),
+                coupling: Coupling::default(),
+            }
+            .to_bytes()
+        };
+        mc.activate = Some(ServiceCommand::verify_activate(
+            category::MC,
+            service_type::MC_FOC,
+            0,
+            0,
+            &data,
+        ));
+        let e = l.start(&[mc]).expect_err(why);
+        let text = format!("{e:?}");
+        assert!(
+            text.contains("serviceVerifyActivate") && text.contains("latestcommandisok = false"),
+            "{why}: {text}"
+        );
+    }
+}
+
 #[test]
 fn a_silent_board_is_reported_within_its_timeout() {
     let mut l = Loop::new(arm_board());

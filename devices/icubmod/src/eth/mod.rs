@@ -24,6 +24,7 @@ pub mod motion_control;
 pub mod params;
 pub mod sensors;
 pub mod service;
+pub mod service_config;
 
 pub use calibrator::ParametricCalibratorEth;
 pub use motion_control::EmbObjMotionControl;

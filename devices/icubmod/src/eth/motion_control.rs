@@ -17,6 +17,7 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use super::service_config::mc_config;
 use icub_eth::entities::mc::{
     control_mode as cm, Calibrator, CurrentLimits, Impedance, JointConfig, JointStatusCore,
     MotorConfig, MotorParams, MotorStatus, PositionLimits, Pwm, Setpoint,
@@ -361,13 +362,19 @@ impl EmbObjMotionControl {
         (jc, mc)
     }
 
-    /// C++ `open()` after the parameters: verify, activate, `init()`, start.
-    fn bring_up(&mut self, board: &Arc<Board>, p: &McParams) -> Result<(), EthError> {
+    /// C++ `open()` after the parameters: verify, activate (with the service's
+    /// configuration, `service`), `init()`, start.
+    fn bring_up(
+        &mut self,
+        board: &Arc<Board>,
+        p: &McParams,
+        service: &[u8],
+    ) -> Result<(), EthError> {
         board.bring_up()?;
         service::verify_endpoint(board, service::endpoint_of(category::MC))?;
         service::verify_activate(
             board,
-            &ServiceCommand::verify_activate(category::MC, p.service.service_type, 0, 0, &[]),
+            &ServiceCommand::verify_activate(category::MC, p.service.service_type, 0, 0, service),
         )?;
         for j in 0..p.joints {
             let f = p.axis_map[j] as u8;
@@ -429,6 +436,8 @@ impl DeviceDriver for EmbObjMotionControl {
         let pc104 = read_pc104(config).map_err(|e| e.for_device(&id))?;
         let eth = read_eth_board(config).map_err(|e| e.for_device(&id))?;
         let p = McParams::read(config).map_err(|e| e.for_device(&id))?;
+        let service =
+            mc_config(config, p.service.service_type, p.joints).map_err(|e| e.for_device(&id))?;
         let n = p.joints;
         let (jc, mc): (Vec<_>, Vec<_>) = (0..n).map(|j| Self::configs(&p, j)).unzip();
         self.jconfig = jc;
@@ -445,7 +454,7 @@ impl DeviceDriver for EmbObjMotionControl {
         self.mode_set_at = vec![None; n];
         let mgr = EthManager::instance(&pc104).map_err(|e| DeviceError::failed(&id, e))?;
         let board = mgr.board(&eth);
-        if let Err(e) = self.bring_up(&board, &p) {
+        if let Err(e) = self.bring_up(&board, &p, &service) {
             tracing::error!(device = %id, "embObjMotionControl::open() fails for BOARD {}: {e}", board.who());
             return Err(DeviceError::failed(&id, e));
         }

@@ -1,0 +1,179 @@
+//! The motion-control `verifyactivate` configuration built from the robots' unmodified
+//! files, byte for byte as icub-main builds it (`ServiceParser::parseService`,
+//! `embObjMotionControl::saveCouplingsData`; offsets within `eOmn_serv_config_data_t`,
+//! bytes C++ leaves uninitialised expected zero).
+
+use icub_eth::entities::mn::service_type;
+use icubmod::eth::service_config::{can_location, mc_config, q17_14};
+use std::path::PathBuf;
+use yarp_devices::robotinterface::read_robot_file;
+use yarp_proto::Property;
+
+fn device(robot: &str, top: &str, name: &str) -> Property {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/robots-configuration")
+        .join(robot);
+    let r = read_robot_file(&dir.join(top), &Property::new())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .robot;
+    let d = r
+        .devices
+        .iter()
+        .find(|d| d.name == name)
+        .unwrap_or_else(|| panic!("no device {name}"));
+    d.to_property().unwrap()
+}
+
+/// 340 zero bytes with `(offset, bytes)` written in.
+fn expected(parts: &[(usize, &[u8])]) -> Vec<u8> {
+    let mut v = vec![0u8; 340];
+    for (at, b) in parts {
+        v[*at..*at + b.len()].copy_from_slice(b);
+    }
+    v
+}
+
+const ONE: &[u8] = &[0x00, 0x40, 0x00, 0x00]; // 1.0 in q17.14
+
+#[test]
+fn q17_14_truncates_through_f32_as_the_firmware_library() {
+    assert_eq!(q17_14(1.0), 0x4000);
+    assert_eq!(q17_14(0.615), 0x275C);
+    assert_eq!(q17_14(-0.615), -0x275C);
+    assert_eq!(q17_14(-1.625), -26624);
+    assert_eq!(q17_14(1e9), i32::MAX);
+}
+
+#[test]
+fn can_locations_as_cpp_reads_them() {
+    let l = can_location("CAN1:1:0").unwrap();
+    assert_eq!(
+        (l.port, l.addr, l.inside_index, l.to_byte()),
+        (0, 1, 0, 0x02)
+    );
+    let l = can_location("CAN2:13").unwrap();
+    assert_eq!((l.port, l.addr), (1, 13));
+    for bad in ["CAN3:1", "CAN1:15", "CAN1:0", "CAN1:1:2", "CONN:P6", "CAN1"] {
+        assert!(can_location(bad).is_none(), "{bad}");
+    }
+}
+
+/// iCubGenova02 `left_arm-eb1-j0_3`: 2FOC boards behind an EMS4, the coupled shoulder.
+#[test]
+fn icub_genova02_left_arm_foc_service() {
+    let p = device("iCubGenova02", "icub_all.xml", "left_arm-eb1-j0_3-mc");
+    let data = mc_config(&p, service_type::MC_FOC, 4).unwrap_or_else(|e| panic!("{e}"));
+    let jsetcfg: &[u8] = &[0x02, 0x55, 0xD5];
+    let want = expected(&[
+        // version (firmware 3.3.3, protocol 1.6), CAN board type foc (8)
+        (0, &[3, 3, 3, 1, 6]),
+        (5, &[8]),
+        // EOarray head: capacity 4, item size 5, 4 items; then actuator (CAN1:n:0),
+        // encoder1 aea at P6/P7/P8/P9 at joint, encoder2 roie (not local) at motor
+        (8, &[4, 5, 4, 0]),
+        (12, &[0x02, 0x01, 0x20, 0x02, 0x5D]),
+        (17, &[0x04, 0x01, 0x23, 0x02, 0x5D]),
+        (22, &[0x06, 0x01, 0x21, 0x02, 0x5D]),
+        (27, &[0x08, 0x01, 0x24, 0x02, 0x5D]),
+        // joint2set: {0 1 2} {3}; both sets: motor speed feedback, pwm outputs, current PID
+        (32, &[0, 0, 0, 1]),
+        (36, jsetcfg),
+        (52, jsetcfg),
+        // joint2motor (from 100), motor2joint (from 164), encoder2joint (from 228)
+        (100, ONE),
+        (116, &[0x00, 0x98, 0xFF, 0xFF]),
+        (120, &[0x00, 0x68, 0x00, 0x00]),
+        (140, &[0x00, 0x68, 0x00, 0x00]),
+        (160, ONE),
+        (164, ONE),
+        (180, ONE),
+        (184, &[0x5C, 0x27, 0x00, 0x00]),
+        (200, &[0xA4, 0xD8, 0xFF, 0xFF]),
+        (204, &[0x5C, 0x27, 0x00, 0x00]),
+        (224, ONE),
+        (228, ONE),
+        (256, ONE),
+        (284, ONE),
+        (312, ONE),
+    ]);
+    assert_eq!(data, want);
+}
+
+/// ergoCubSN001 `left_arm-eb31-j4_6`: the AMC wrist (advfoc, ergoCub wrist constraint).
+#[test]
+fn ergocub_left_wrist_advfoc_service() {
+    let p = device("ergoCubSN001", "ergocub.xml", "left_arm-eb31-j4_6-mc");
+    let data = mc_config(&p, service_type::MC_ADVFOC, 3).unwrap_or_else(|e| panic!("{e}"));
+    let want = expected(&[
+        // head: capacity 4, item size 16, 3 items
+        (0, &[4, 16, 3, 0]),
+        // advfoc on CAN1:1..3, amcbldc (18) / amc2c (21) firmware 0.0.0 protocol 2.0;
+        // encoder1 aea3 on J5_X1..3 at joint; encoder2 none at motor
+        (
+            4,
+            &[4, 0x10, 18, 0, 0, 0, 2, 0, 0x0C, 0x20, 0, 0, 0, 0x5F, 0, 0],
+        ),
+        (
+            20,
+            &[4, 0x20, 18, 0, 0, 0, 2, 0, 0x0C, 0x21, 0, 0, 0, 0x5F, 0, 0],
+        ),
+        (
+            36,
+            &[4, 0x30, 21, 0, 0, 0, 2, 0, 0x0C, 0x22, 0, 0, 0, 0x5F, 0, 0],
+        ),
+        // coupling: traditional 4x4; one set of three joints, current outputs, the
+        // ergoCub wrist constraint (4) with param1 21.0
+        (72, &[0, 0, 0, 0xFF]),
+        (
+            76,
+            &[0x00, 0xFC, 0xDF, 0, 4, 0, 0, 0, 0x00, 0x00, 0xA8, 0x41],
+        ),
+        (140, ONE),
+        (160, ONE),
+        (180, ONE),
+        (200, ONE),
+        (204, ONE),
+        (224, ONE),
+        (244, ONE),
+        (264, ONE),
+        (268, ONE),
+        (288, ONE),
+        (308, ONE),
+        (328, ONE),
+    ]);
+    assert_eq!(data, want);
+}
+
+/// Every motion-control device of both robots gets a configuration, and one with a
+/// wrong string is refused naming the parameter.
+#[test]
+fn every_mc_service_of_both_robots_builds() {
+    for (robot, top) in [
+        ("iCubGenova02", "icub_all.xml"),
+        ("ergoCubSN001", "ergocub.xml"),
+    ] {
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../../shared/robots-configuration")
+            .join(robot);
+        let r = read_robot_file(&dir.join(top), &Property::new())
+            .unwrap()
+            .robot;
+        let mut n = 0;
+        for d in r.devices.iter().filter(|d| d.kind == "embObjMotionControl") {
+            let p = d.to_property().unwrap();
+            let mc = icubmod::eth::mc_params::McParams::read(&p).unwrap();
+            let data = mc_config(&p, mc.service.service_type, mc.joints)
+                .unwrap_or_else(|e| panic!("{robot} {}: {e}", d.name));
+            assert_eq!(data.len(), 340);
+            n += 1;
+        }
+        assert!(n >= 8, "{robot}: {n} motion-control devices");
+    }
+    let p = device("iCubGenova02", "icub_all.xml", "left_arm-eb1-j0_3-mc");
+    let text = p.to_string().replace("eomc_enc_aea", "eomc_enc_zzz");
+    let e = mc_config(&Property::from_text(&text), service_type::MC_FOC, 4).unwrap_err();
+    assert!(
+        e.to_string().contains("ENCODER1/type") && e.to_string().contains("zzz"),
+        "{e}"
+    );
+}
