@@ -9,7 +9,9 @@
 //!   `appl cmmnds go2state`, `comm cmmnds queryarray` (→ `sig<replyarray>` with the
 //!   endpoint descriptors), `service cmmnds command` (→ `sig<service status
 //!   commandresult>`), joint config and commands (→ the [`JointModel`]s).
-//! - Services: `verifyactivate` succeeds for a category the board has entities for;
+//! - Services: `verifyactivate` succeeds for a category the board has entities for and
+//!   a configuration that fits it (motion control: as many joints as it drives; sensors:
+//!   not all zero);
 //!   `start` makes the application run (regulars flow); `stop` of the last started
 //!   service (or of `all`) returns it to config and clears the regulars of the stopped
 //!   services; `regsig_load`/`regsig_clear` edit the regulars.
@@ -551,12 +553,18 @@ impl BoardEngine {
         match ServiceOperation::from_u8(cmd.operation) {
             Some(ServiceOperation::VerifyActivate) => {
                 stype = cmd.service_type();
-                let mc_refused = cat == category::MC && !self.mc_config_fits(cmd);
-                if self.cfg.auto_entities && !mc_refused {
+                // A sensor service needs its boards described: an all-zero configuration
+                // (no board type, no location) finds nothing on the CAN buses.
+                let refused = if cat == category::MC {
+                    !self.mc_config_fits(cmd)
+                } else {
+                    cmd.config_data().iter().all(|b| *b == 0)
+                };
+                if self.cfg.auto_entities && !refused {
                     self.add_service_entities(cmd);
                 }
                 match service_index(cat) {
-                    Some(i) if mc_refused => {
+                    Some(i) if refused => {
                         self.services[i] = ServiceState::FailureOfVerify;
                         ok = false;
                     }

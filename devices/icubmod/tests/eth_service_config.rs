@@ -1,13 +1,127 @@
-//! The motion-control `verifyactivate` configuration built from the robots' unmodified
-//! files, byte for byte as icub-main builds it (`ServiceParser::parseService`,
-//! `embObjMotionControl::saveCouplingsData`; offsets within `eOmn_serv_config_data_t`,
-//! bytes C++ leaves uninitialised expected zero).
+//! The `verifyactivate` configurations built from the robots' unmodified files, byte for
+//! byte as icub-main builds them (`ServiceParser::parseService`,
+//! `embObjMotionControl::saveCouplingsData`, `EmbObjSkin::fromConfig`; offsets within
+//! `eOmn_serv_config_data_t`, bytes C++ leaves uninitialised expected zero).
 
 use icub_eth::entities::mn::service_type;
-use icubmod::eth::service_config::{can_location, mc_config, q17_14};
+use icubmod::eth::config::Node;
+use icubmod::eth::service_config::{can_location, mc_config, q17_14, sensor_config};
 use std::path::PathBuf;
-use yarp_devices::robotinterface::read_robot_file;
+use yarp_devices::robotinterface::{read_robot_file, read_robot_str};
 use yarp_proto::Property;
+
+/// The configuration of the device a robot's file `file` describes (on its own).
+fn device_file(robot: &str, file: &str) -> Property {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/robots-configuration")
+        .join(robot);
+    let text = format!(
+        "<robot name=\"t\" xmlns:xi=\"http://www.w3.org/2001/XInclude\"><devices><xi:include href=\"{file}\" /></devices></robot>"
+    );
+    let r = read_robot_str(&text, &dir, &Property::new())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .robot;
+    r.devices[0].to_property().unwrap()
+}
+
+/// The sensor service data of `file` (type `stype`).
+fn sensor(robot: &str, file: &str, stype: u8) -> Vec<u8> {
+    let p = device_file(robot, file);
+    sensor_config(&Node::root(&p), stype).unwrap_or_else(|e| panic!("{file}: {e}"))
+}
+
+#[test]
+fn strain_of_the_icub_genova02_left_arm() {
+    // eobrd_strain (6), firmware 0.0.0, protocol 1.0, CAN2:13 with inside index none
+    let d = sensor(
+        "iCubGenova02",
+        "hardware/FT/left_arm-eb1-j0_3-strain.xml",
+        service_type::AS_STRAIN,
+    );
+    assert_eq!(d, [0x06, 0, 0, 0, 1, 0, 0x5B]);
+}
+
+#[test]
+fn inertials_of_the_ergocub_left_arm() {
+    // Board infos by slot (strain2 in slot 2, the others none 0xFE), then five sensors
+    // on the strain2 at CAN2:13 (place can: 0x6D): acc, gyr, eul, mag, status.
+    let d = sensor(
+        "ergoCubSN001",
+        "hardware/inertials/left_arm-eb2-j0_1-inertial.xml",
+        service_type::AS_INERTIALS3,
+    );
+    let mut want = Vec::new();
+    for slot in 0..6 {
+        want.extend([if slot == 2 { 0x0C } else { 0xFE }, 0, 0, 0, 0, 0]);
+    }
+    want.extend([32, 4, 5, 0]);
+    for kind in [7, 9, 10, 8, 14] {
+        want.extend([0x0C, 0x6D, kind, 0]);
+    }
+    assert_eq!(d, want);
+}
+
+#[test]
+fn ft_of_ergocub_in_the_order_of_their_ids() {
+    // CAN monitor: check every 100 ms, report ALL, every 20000 ms; one strain2 at CAN2:13
+    // (versions zero: CANBOARDS names strain2c, and C++ leaves them so)
+    let d = sensor(
+        "ergoCubSN001",
+        "hardware/FT/left_arm-eb2-j0_1-strain.xml",
+        service_type::AS_FT,
+    );
+    let mut want = vec![
+        0x64, 0x03, 0x20, 0x4E, 4, 8, 1, 0, 0x0C, 0, 0, 0, 0, 0, 0x5B, 0,
+    ];
+    want.resize(40, 0);
+    assert_eq!(d, want);
+    // two sensors: l_foot_front_ft (strain2c 2.3.0 / 2.0 at CAN2:14) before l_foot_rear_ft
+    let d = sensor(
+        "ergoCubSN001",
+        "hardware/FT/left_leg-eb9-j4_5-strain.xml",
+        service_type::AS_FT,
+    );
+    let mut want = vec![
+        0x64, 0x03, 0x20, 0x4E, 4, 8, 2, 0, 0x16, 2, 3, 0, 2, 0, 0x5D, 0, 0x0C, 0, 0, 0, 0, 0,
+        0x5B, 0,
+    ];
+    want.resize(40, 0);
+    assert_eq!(d, want);
+}
+
+#[test]
+fn skin_patches_and_pos_sensors() {
+    // iCubGenova02 right leg: MTB, patch 1 (1..7) on CAN1, patch 2 (8..13) on CAN2
+    let d = sensor(
+        "iCubGenova02",
+        "hardware/skin/right_leg-eb11-skin.xml",
+        service_type::SK_SKIN,
+    );
+    let mut want = vec![5, 0, 0, 0, 0, 0, 2, 0, 0xFE, 0, 0, 0, 0, 0, 0, 0x3F];
+    want.resize(24, 0);
+    assert_eq!(d, want);
+    // ergoCubSN001 left arm: no SERVICE group (an MTB with no version), one patch on CAN2
+    let d = sensor(
+        "ergoCubSN001",
+        "hardware/skin/left_arm-eb4-j2_3-skin.xml",
+        service_type::SK_SKIN,
+    );
+    let mut want = vec![5, 0, 0, 0, 0, 0, 1, 0, 0, 0, 4, 0];
+    want.resize(24, 0);
+    assert_eq!(d, want);
+    // ergoCubSN001 left hand pos2: mtb4c 0.0.0 / 2.0 at CAN1:2; thumb adduction on
+    // J3_SDA2 (port 4), index adduction on J3_SDA3 (port 6), both enabled
+    let d = sensor(
+        "ergoCubSN001",
+        "hardware/POS/left_hand-pos2.xml",
+        service_type::AS_POS,
+    );
+    let mut want = vec![
+        0x14, 0, 0, 0, 2, 0, 0x04, 0, 0x20, 0x14, 0, 0, 0x30, 0x16, 0, 0,
+    ];
+    want.resize(24, 0);
+    assert_eq!(d, want);
+}
 
 fn device(robot: &str, top: &str, name: &str) -> Property {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))

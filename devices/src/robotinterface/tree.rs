@@ -147,6 +147,31 @@ fn late_declaration_blanked(text: &str) -> std::borrow::Cow<'_, str> {
     std::borrow::Cow::Owned(format!("{}{blank}{}", &text[..start], &text[end..]))
 }
 
+/// Comments blanked (newlines kept, so lines stay right), each ending at the first `-->`
+/// as TinyXML (C++ yarprobotinterface's parser) ends them: robots' files comment out
+/// blocks that hold comments of their own (`<!--group ...> <!-- ... --> </group-->`),
+/// which a strict XML parser refuses for their `--`.
+fn comments_blanked(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.contains("<!--") {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find("<!--") {
+        out.push_str(&rest[..start]);
+        let body = &rest[start..];
+        let end = body[4..].find("-->").map_or(body.len(), |e| e + 7);
+        out.extend(
+            body[..end]
+                .chars()
+                .map(|c| if c == '\n' { '\n' } else { ' ' }),
+        );
+        rest = &body[end..];
+    }
+    out.push_str(rest);
+    std::borrow::Cow::Owned(out)
+}
+
 fn canonical(path: &Path) -> PathBuf {
     std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
 }
@@ -162,6 +187,7 @@ fn load_text(
         ..Default::default()
     };
     let text = &late_declaration_blanked(text);
+    let text = &comments_blanked(text);
     let doc =
         roxmltree::Document::parse_with_options(text, opts).map_err(|e| XmlError::Malformed {
             file: name.to_string(),
@@ -302,6 +328,29 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains(":4"), "{e}");
+    }
+
+    #[test]
+    fn a_commented_block_with_comments_inside_ends_at_the_first_close_as_tinyxml() {
+        // ergoCubSN001's hardware/skin/*-skinSpec.xml comment out a group that holds
+        // comments of its own.
+        let doc = load_str(
+            "<robot name=\"r\">\n<!--group name=\"g\">\n <!-- inner, -- unclosed\n >\n <p/>\n</group-->\n<x/>\n</robot>\n",
+            "t.xml",
+            Path::new("."),
+            &IncludeTags::default(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let names: Vec<&str> = doc.root.children.iter().map(|c| c.name.as_str()).collect();
+        assert!(names.contains(&"x") && !names.contains(&"p"), "{names:?}");
+        let e = load_str(
+            "<robot>\n<!-- a\n b -->\n<a></b>\n</robot>",
+            "t.xml",
+            Path::new("."),
+            &IncludeTags::default(),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains(":4"), "lines kept: {e}");
     }
 
     #[test]

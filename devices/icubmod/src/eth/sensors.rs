@@ -26,7 +26,7 @@ use icub_eth::entities::analog::{
     FtConfig, FtStatus, Inertial3Config, Inertial3Status, MaisConfig, MaisStatus, StrainConfig,
     StrainStatus,
 };
-use icub_eth::entities::mn::{category, ServiceCommand};
+use icub_eth::entities::mn::{category, service_type, ServiceCommand};
 use icub_eth::id::{entity as en, ids, tag};
 use icub_eth::{Entity, Id32};
 use yarp_devices::sensors::interfaces::*;
@@ -35,7 +35,7 @@ use yarp_proto::Property;
 
 use super::config::{text, Node, ParamError};
 use super::manager::{Board, EthManager};
-use super::params::{read_eth_board, read_pc104, read_service};
+use super::params::{read_eth_board, read_pc104, read_service, ServiceKind};
 use super::service::{open_sensor, SensorService};
 
 fn now() -> f64 {
@@ -66,7 +66,14 @@ impl Common {
         let id = self.id.clone();
         let pc104 = read_pc104(config).map_err(|e| e.for_device(&id))?;
         let eth = read_eth_board(config).map_err(|e| e.for_device(&id))?;
-        let kind = read_service(config).map_err(|e| e.for_device(&id))?;
+        // As C++ EmbObjSkin, a skin without a SERVICE group is a skin service all the same.
+        let kind = match Node::root(config).group("SERVICE") {
+            None if expected_category == category::SKIN => ServiceKind {
+                service_type: service_type::SK_SKIN,
+                category: category::SKIN,
+            },
+            _ => read_service(config).map_err(|e| e.for_device(&id))?,
+        };
         if kind.category != expected_category {
             return Err(ParamError::bad(
                 "SERVICE/type",
@@ -119,8 +126,16 @@ fn settings<'a>(root: &Node<'a>) -> Result<(Node<'a>, Node<'a>), ParamError> {
     Ok((settings, sensors))
 }
 
-fn verify(cat: u8, service_type: u8) -> ServiceCommand {
-    ServiceCommand::verify_activate(cat, service_type, 0, 0, &[])
+/// `verifyactivate` with the service's configuration, built from the device's files.
+fn verify(root: &Node, cat: u8, service_type: u8) -> Result<ServiceCommand, ParamError> {
+    let data = super::service_config::sensor_config(root, service_type)?;
+    Ok(ServiceCommand::verify_activate(
+        cat,
+        service_type,
+        0,
+        0,
+        &data,
+    ))
 }
 
 // ---- embObjFTsensor ----
@@ -180,7 +195,7 @@ impl DeviceDriver for EmbObjFtSensor {
                     signal_once_fullscale: true,
                 };
                 Ok(SensorService {
-                    activate: verify(category::STRAIN, st),
+                    activate: verify(root, category::STRAIN, st)?,
                     configs: vec![(
                         ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_CONFIG),
                         cfg.to_bytes(),
@@ -337,7 +352,7 @@ impl DeviceDriver for EmbObjMultipleFtSensors {
                 after.push((ids::analog(en::AS_FT, i, tag::AS_FT_CMMNDS_ENABLE), vec![1]));
             }
             Ok(SensorService {
-                activate: verify(category::FT, st),
+                activate: verify(root, category::FT, st)?,
                 configs,
                 regulars,
                 after_start: after,
@@ -602,7 +617,7 @@ impl DeviceDriver for EmbObjImu {
                     enabled: if n >= 32 { u32::MAX } else { (1u32 << n) - 1 },
                 };
                 Ok(SensorService {
-                    activate: verify(category::INERTIALS3, st),
+                    activate: verify(root, category::INERTIALS3, st)?,
                     configs: vec![(
                         ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_CONFIG),
                         cfg.to_bytes(),
@@ -742,7 +757,7 @@ impl DeviceDriver for EmbObjMais {
                 resolution: 0,
             };
             Ok(SensorService {
-                activate: verify(category::MAIS, st),
+                activate: verify(root, category::MAIS, st)?,
                 configs: vec![(
                     ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_CONFIG),
                     cfg.to_bytes(),
@@ -906,7 +921,7 @@ impl DeviceDriver for EmbObjSkin {
         let patches = skin_patches(config)
             .map_err(|e| e.for_device(&config.find("id").map_or_else(|| SKIN.to_string(), text)))?;
         let n = patches.len();
-        self.c.open(SKIN, config, category::SKIN, |_, st| {
+        self.c.open(SKIN, config, category::SKIN, |root, st| {
             let mut configs = Vec::new();
             let mut regulars = Vec::new();
             for p in 0..n as u8 {
@@ -917,7 +932,7 @@ impl DeviceDriver for EmbObjSkin {
                 regulars.push(ids::skin(p, tag::SK_SKIN_STATUS_ARRAYOFCANDATA));
             }
             Ok(SensorService {
-                activate: verify(category::SKIN, st),
+                activate: verify(root, category::SKIN, st)?,
                 configs,
                 regulars,
                 after_start: Vec::new(),
@@ -1050,7 +1065,7 @@ impl DeviceDriver for EmbObjPos {
                 datarate: rate.clamp(1.0, 255.0) as u8,
             };
             Ok(SensorService {
-                activate: verify(category::POS, st),
+                activate: verify(root, category::POS, st)?,
                 configs: vec![(
                     ids::analog(en::AS_POS, 0, tag::AS_XX_CONFIG),
                     cfg.to_bytes(),
@@ -1107,7 +1122,7 @@ impl DeviceDriver for EmbObjBattery {
                 period: (rate.max(0.0) as u32 & 0xff) as u8,
             };
             Ok(SensorService {
-                activate: verify(category::BATTERY, st),
+                activate: verify(root, category::BATTERY, st)?,
                 configs: vec![(
                     ids::analog(en::AS_BATTERY, 0, tag::AS_BATTERY_CONFIG),
                     cfg.to_bytes(),

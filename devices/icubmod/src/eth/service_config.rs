@@ -23,18 +23,30 @@ pub fn can_board_type(name: &str) -> Option<u8> {
     let s = name.trim().trim_matches('"').to_ascii_lowercase();
     let s = s.strip_prefix("eobrd_").unwrap_or(&s);
     Some(match s {
+        "dsp" => 0,
+        "pic" => 1,
+        "2dc" => 2,
         "mc4" => 3,
+        "bll" => 4,
         "mtb" => 5,
         "strain" => 6,
         "mais" => 7,
         "foc" => 8,
+        "6sg" => 9,
+        "jog" => 10,
         "mtb4" => 11,
         "strain2" => 12,
+        "rfe" => 13,
+        "sg3" => 14,
         "psc" => 15,
+        "mtb4w" => 16,
         "pmc" => 17,
         "amcbldc" => 18,
+        "bms" => 19,
         "mtb4c" => 20,
         "amc2c" => 21,
+        "strain2c" => 22,
+        "bat" => 23,
         "amcfoc2c" => 24,
         "amcmj1_mot" => 25,
         _ => return None,
@@ -839,4 +851,470 @@ pub fn mc_config(config: &Property, stype: u8, joints: usize) -> Result<Vec<u8>,
         }
     };
     Ok(cfg.to_bytes())
+}
+
+// ---- analog sensors and skin (`ServiceParser::check_analog`, `parseService`) ----
+
+/// `eOas_sensor_t` by its long name (`eoas_string2sensor`).
+fn sensor_type(s: &str) -> Option<u8> {
+    let s = s.trim().trim_matches('"');
+    let s = s.strip_prefix("eoas_").unwrap_or(s);
+    Some(match s {
+        "strain" => 0,
+        "mais" => 1,
+        "accel_mtb_int" => 2,
+        "accel_mtb_ext" => 3,
+        "gyros_mtb_ext" => 4,
+        "accel_st_lis3x" => 5,
+        "gyros_st_l3g4200d" => 6,
+        "imu_acc" => 7,
+        "imu_mag" => 8,
+        "imu_gyr" => 9,
+        "imu_eul" => 10,
+        "imu_qua" => 11,
+        "imu_lia" => 12,
+        "imu_grv" => 13,
+        "imu_status" => 14,
+        "temperature" => 15,
+        "psc_angle" => 16,
+        "pos_angle" => 17,
+        "ft" => 18,
+        "battery" => 19,
+        _ => return None,
+    })
+}
+
+/// `eObrd_location_t` (1 byte, `ServiceParser::convert`): `CANb:a` (place can 1: port
+/// bit 2, address bits 3-6), `CANb:a:i` (place extcan 3: index bit 7, 3 stored as 1 and
+/// 4 as 0), `ETH:n` (place eth 2: id bits 2-7), `LOC:...` (nothing set).
+fn location(s: &str) -> Option<u8> {
+    let s = s.trim().trim_matches('"');
+    if let Some(n) = s.strip_prefix("ETH:") {
+        let id: u8 = n.parse().ok()?;
+        return (id < 64).then_some(2 | id << 2);
+    }
+    if s.starts_with("LOC:") {
+        return Some(0);
+    }
+    let l = can_location(s)?;
+    let extended = s.matches(':').count() == 2;
+    let base = l.port << 2 | l.addr << 3;
+    Some(if extended {
+        3 | base | (l.inside_index & 1) << 7
+    } else {
+        1 | base
+    })
+}
+
+/// A `SENSORS` column per sensor, and which of them are enabled.
+struct Sensors<'a> {
+    group: Node<'a>,
+    ids: Vec<String>,
+    on: Vec<usize>,
+}
+
+impl<'a> Sensors<'a> {
+    fn of(service: &Node<'a>) -> Result<Sensors<'a>, ParamError> {
+        let group = service.need_group("PROPERTIES")?.need_group("SENSORS")?;
+        let ids = group
+            .strings("id")
+            .ok_or_else(|| ParamError::missing("SENSORS/id", "the sensors' ids"))?;
+        let wanted = service
+            .need_group("SETTINGS")?
+            .strings("enabledSensors")
+            .ok_or_else(|| {
+                ParamError::missing("SETTINGS/enabledSensors", "the enabled sensors' ids")
+            })?;
+        if wanted.len() > ids.len() {
+            return Err(ParamError::bad(
+                "SETTINGS/enabledSensors",
+                "no more sensors than SENSORS lists",
+                wanted.join(" "),
+            ));
+        }
+        let on: Vec<usize> = wanted
+            .iter()
+            .filter_map(|w| ids.iter().position(|i| i == w))
+            .collect();
+        if on.is_empty() {
+            return Err(ParamError::bad(
+                "SETTINGS/enabledSensors",
+                "ids of SENSORS/id",
+                wanted.join(" "),
+            ));
+        }
+        Ok(Sensors { group, ids, on })
+    }
+
+    /// Column `key` (one value per sensor).
+    fn column(&self, key: &str) -> Result<Vec<String>, ParamError> {
+        let v = self
+            .group
+            .strings(key)
+            .ok_or_else(|| ParamError::missing(format!("SENSORS/{key}"), "one value per sensor"))?;
+        if v.len() != self.ids.len() {
+            return Err(ParamError::bad(
+                format!("SENSORS/{key}"),
+                "as many values as SENSORS/id",
+                v.join(" "),
+            ));
+        }
+        Ok(v)
+    }
+}
+
+fn can_board_named(s: &str, path: &'static str) -> Result<u8, ParamError> {
+    can_board_type(s).ok_or_else(|| ParamError::bad(path, "a CAN board type", s))
+}
+
+/// The CAN location of a sensor's `location` with inside index "none" (2).
+fn sensor_canloc_of(s: &str) -> Result<CanLocation, ParamError> {
+    can_location(s)
+        .map(|l| CanLocation {
+            inside_index: 2,
+            ..l
+        })
+        .ok_or_else(|| ParamError::bad("SENSORS/location", "CANx:a", s))
+}
+
+fn strain_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamError> {
+    let b = boards
+        .first()
+        .copied()
+        .filter(|b| matches!(b.board_type, 6 | 12 | 22))
+        .ok_or_else(|| ParamError::missing("CANBOARDS/type", "strain, strain2 or strain2c"))?;
+    let s = Sensors::of(service)?;
+    let loc = sensor_canloc_of(&s.column("location")?[s.on[0]])?;
+    let mut w = Writer::with_capacity(7);
+    w.entity(&b);
+    w.u8(loc.to_byte());
+    Ok(w.into_inner())
+}
+
+fn mais_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamError> {
+    let b = boards
+        .iter()
+        .find(|b| b.board_type == 7)
+        .copied()
+        .ok_or_else(|| ParamError::missing("CANBOARDS/type", "mais"))?;
+    let s = Sensors::of(service)?;
+    let loc = sensor_canloc_of(&s.column("location")?[s.on[0]])?;
+    let mut w = Writer::with_capacity(6);
+    w.bytes(&version(&b));
+    w.u8(loc.to_byte());
+    Ok(w.into_inner())
+}
+
+/// `eOmn_serv_config_data_as_inertial3_t`: the board infos by slot (mtb, mtb4, strain2,
+/// rfe, mtb4c, strain2c), then the enabled sensors' descriptors.
+fn inertials3_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamError> {
+    let s = Sensors::of(service)?;
+    let (types, locs, board_types) = (
+        s.column("type")?,
+        s.column("location")?,
+        s.column("boardType")?,
+    );
+    let mut infos = [BoardInfo {
+        board_type: 0xFE,
+        ..Default::default()
+    }; 6];
+    let mut descriptors = Vec::new();
+    for &k in &s.on {
+        let Some(kind) = sensor_type(&types[k]).filter(|t| matches!(t, 2..=4 | 6..=14)) else {
+            tracing::warn!("SENSORS/type {}: not an inertial sensor, dropped", types[k]);
+            continue;
+        };
+        let board = match EthBoardType::from_name(board_types[k].trim()) {
+            Some(eth) => eth as u8,
+            None => can_board_named(&board_types[k], "SENSORS/boardType")?,
+        };
+        let slot = match board {
+            5 => Some(0),
+            11 => Some(1),
+            12 => Some(2),
+            13 => Some(3),
+            20 => Some(4),
+            22 => Some(5),
+            _ => None,
+        };
+        if let Some(slot) = slot {
+            if infos[slot].board_type == 0xFE {
+                infos[slot] = boards
+                    .iter()
+                    .find(|b| b.board_type == board)
+                    .copied()
+                    .ok_or_else(|| {
+                        ParamError::bad(
+                            "SENSORS/boardType",
+                            "a board CANBOARDS/type lists",
+                            board_types[k].clone(),
+                        )
+                    })?;
+            }
+        }
+        let on = location(&locs[k]).ok_or_else(|| {
+            ParamError::bad(
+                "SENSORS/location",
+                "CANx:a, CANx:a:i or ETH:n",
+                locs[k].clone(),
+            )
+        })?;
+        descriptors.push([board, on, kind, 0]);
+    }
+    let mut w = Writer::with_capacity(168);
+    for i in &infos {
+        w.entity(i);
+    }
+    w.bytes(&[32, 4, descriptors.len().min(32) as u8, 0]);
+    for d in descriptors.iter().take(32) {
+        w.bytes(d);
+    }
+    Ok(w.into_inner())
+}
+
+/// A connector of a CAN board to its port (`eoboards_connector2port`).
+fn can_connector_port(board: u8, conn: &str) -> Option<u8> {
+    let c = conn.trim().trim_matches('"');
+    let c = c.strip_prefix("CONN:").unwrap_or(c);
+    let c = c.strip_prefix("eobrd_conn_").unwrap_or(c);
+    let n = |prefix: &str| -> Option<u8> { c.strip_prefix(prefix)?.parse::<u8>().ok() };
+    match board {
+        11 | 20 => n("J3_SDA")
+            .filter(|p| *p < 4)
+            .or_else(|| n("J2").filter(|p| *p < 4))
+            .or_else(|| n("J3").filter(|p| *p < 4)),
+        17 => n("J").and_then(|j| (4..=7).contains(&j).then(|| j - 4)),
+        _ => None,
+    }
+}
+
+/// `eOmn_serv_config_data_as_pos_t` (one board, up to four sensors).
+fn pos_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamError> {
+    let s = Sensors::of(service)?;
+    let (locs, board_types, ports, conns) = (
+        s.column("location")?,
+        s.column("boardType")?,
+        s.column("port")?,
+        s.column("connector")?,
+    );
+    let first = s.on[0];
+    let kind = can_board_named(&board_types[first], "SENSORS/boardType")?;
+    if !matches!(kind, 11 | 17 | 20) {
+        return Err(ParamError::bad(
+            "SENSORS/boardType",
+            "mtb4, mtb4c or pmc",
+            board_types[first].clone(),
+        ));
+    }
+    let b = boards.first().copied().unwrap_or_default();
+    let loc = can_location(&locs[first])
+        .ok_or_else(|| ParamError::bad("SENSORS/location", "CANx:a", locs[first].clone()))?;
+    let mut w = Writer::with_capacity(24);
+    w.entity(&BoardInfo {
+        board_type: kind,
+        ..b
+    });
+    w.u8(CanLocation {
+        inside_index: 0,
+        ..loc
+    }
+    .to_byte());
+    w.u8(0);
+    let calib = service
+        .group("PROPERTIES")
+        .and_then(|p| p.group("SENSORS"))
+        .and_then(|g| g.group("CALIBRATION"));
+    for (n, &k) in s.on.iter().take(4).enumerate() {
+        let port = lookup(POS_PORTS, "POS:", &ports[k])
+            .ok_or_else(|| ParamError::bad("SENSORS/port", "POS:hand_...", ports[k].clone()))?;
+        let conn = can_connector_port(kind, &conns[k]).ok_or_else(|| {
+            ParamError::bad(
+                "SENSORS/connector",
+                "a connector of the board",
+                conns[k].clone(),
+            )
+        })?;
+        let (rotation, invert, offset) = match &calib {
+            Some(c) => {
+                let at = |key: &str| c.strings(key).and_then(|v| v.get(n).cloned());
+                let rot = match at("rotation")
+                    .as_deref()
+                    .map(|r| r.trim_start_matches("ROT:"))
+                {
+                    None | Some("zero") => 0,
+                    Some("plus180") => 1,
+                    Some("plus090") => 2,
+                    Some("minus090") => 3,
+                    Some(other) => {
+                        return Err(ParamError::bad(
+                            "CALIBRATION/rotation",
+                            "ROT:zero, plus180, plus090, minus090",
+                            other,
+                        ))
+                    }
+                };
+                let inv = at("invertDirection").is_some_and(|v| v == "true" || v == "1");
+                let off = at("offset")
+                    .and_then(|v| v.parse::<f64>().ok())
+                    .unwrap_or(0.0);
+                (rot, inv, off)
+            }
+            None => (0, false, 0.0),
+        };
+        let word = u16::from(conn & 0xF) << 4
+            | u16::from(port & 0xF) << 8
+            | 1 << 12
+            | u16::from(invert) << 13
+            | (rotation & 3) << 14;
+        w.u16(word);
+        w.i16((10.0 * offset) as i16);
+    }
+    w.zeros(24 - w.len());
+    Ok(w.into_inner())
+}
+
+/// The FT and battery parsers' location (`CANb:a`, no range checks).
+fn ft_canloc(s: &str) -> Result<CanLocation, ParamError> {
+    let t = s.trim().trim_matches('"');
+    let bus = t.get(3..4).and_then(|b| b.parse::<u8>().ok());
+    let addr = t.get(5..).and_then(|a| a.parse::<u8>().ok());
+    match (bus, addr) {
+        (Some(b @ 1..=2), Some(a)) if t.starts_with("CAN") => Ok(CanLocation {
+            port: b - 1,
+            addr: a,
+            inside_index: 2,
+        }),
+        _ => Err(ParamError::bad("SENSORS/location", "CAN1:a or CAN2:a", s)),
+    }
+}
+
+/// The CAN sensors of an FT or battery service, each with the version of the
+/// `CANBOARDS` entry of its board type (zero when none is of that type, as C++).
+fn can_sensor(board: &str, loc: &str, boards: &[BoardInfo]) -> Result<[u8; 8], ParamError> {
+    let kind = can_board_named(board, "SENSORS/board")?;
+    let b = boards
+        .iter()
+        .find(|b| b.board_type == kind)
+        .copied()
+        .unwrap_or(BoardInfo {
+            board_type: kind,
+            ..Default::default()
+        });
+    let mut w = Writer::with_capacity(8);
+    w.entity(&b);
+    w.u8(ft_canloc(loc)?.to_byte());
+    w.u8(0);
+    Ok(w.into_inner().try_into().unwrap_or([0; 8]))
+}
+
+/// `eOmn_serv_config_data_as_ft_t`: the CAN monitor, then the enabled sensors in the
+/// order of their ids (C++ keeps them in a `std::map`).
+fn ft_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamError> {
+    let s = Sensors::of(service)?;
+    let (board, locs) = (s.column("board")?, s.column("location")?);
+    let mut on = s.on.clone();
+    on.sort_by(|a, b| s.ids[*a].cmp(&s.ids[*b]));
+    let mon = service.group("CANMONITOR");
+    let num = |k: &str| mon.and_then(|m| m.number(k).ok().flatten()).unwrap_or(0.0);
+    let mode = match mon.and_then(|m| m.string("reportMode")).as_deref() {
+        None | Some("NEVER") => 0,
+        Some("justLOSTjustFOUND") => 1,
+        Some("justLOSTjustFOUNDstillLOST") => 2,
+        Some("ALL") => 3,
+        Some(other) => {
+            return Err(ParamError::bad(
+                "CANMONITOR/reportMode",
+                "NEVER, justLOSTjustFOUND, justLOSTjustFOUNDstillLOST or ALL",
+                other,
+            ))
+        }
+    };
+    let mut w = Writer::with_capacity(40);
+    w.u8(num("checkPeriod").clamp(0.0, 254.0) as u8);
+    w.u8(mode);
+    w.u16(num("ratePeriod").clamp(0.0, 65535.0) as u16);
+    w.bytes(&[4, 8, on.len().min(4) as u8, 0]);
+    for &k in on.iter().take(4) {
+        w.bytes(&can_sensor(&board[k], &locs[k], boards)?);
+    }
+    w.zeros(40 - w.len());
+    Ok(w.into_inner())
+}
+
+/// `eOmn_serv_config_data_as_battery_t`: one sensor (the CAN monitor is not set by C++).
+fn battery_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamError> {
+    let s = Sensors::of(service)?;
+    let (board, locs) = (s.column("board")?, s.column("location")?);
+    let k = s.on[0];
+    let mut w = Writer::with_capacity(16);
+    w.zeros(4);
+    w.bytes(&[1, 8, 1, 0]);
+    w.bytes(&can_sensor(&board[k], &locs[k], boards)?);
+    Ok(w.into_inner())
+}
+
+/// `eOmn_serv_config_data_sk_skin_t` (`EmbObjSkin::fromConfig`): the board from
+/// `SERVICE/PROPERTIES/CANBOARDS` (an MTB with no version without it), the patches of
+/// `patches/skinCanAddrsPatch1` (on CAN1) and `skinCanAddrsPatch2` (on CAN2).
+pub fn skin_config(root: &Node) -> Result<Vec<u8>, ParamError> {
+    let props = root.group("SERVICE").and_then(|s| s.group("PROPERTIES"));
+    let board = match props {
+        Some(p) => can_boards(&p)?
+            .first()
+            .copied()
+            .filter(|b| matches!(b.board_type, 5 | 11 | 15 | 20))
+            .unwrap_or(BoardInfo {
+                board_type: 5,
+                ..Default::default()
+            }),
+        None => BoardInfo {
+            board_type: 5,
+            ..Default::default()
+        },
+    };
+    let patches = root.group("patches");
+    let mut map = [[0u16; 2]; 4];
+    let mut n = 0usize;
+    for (bus, key) in ["skinCanAddrsPatch1", "skinCanAddrsPatch2"]
+        .iter()
+        .enumerate()
+    {
+        let Some(addrs) = patches.and_then(|p| p.strings(key)) else {
+            continue;
+        };
+        for a in addrs.iter().filter_map(|a| a.parse::<u16>().ok()) {
+            if (1..=14).contains(&a) {
+                map[n][bus] |= 1 << a;
+            }
+        }
+        n += 1;
+    }
+    let mut w = Writer::with_capacity(24);
+    w.entity(&board);
+    w.u8(n as u8);
+    w.u8(0);
+    for p in &map {
+        w.u16(p[0]);
+        w.u16(p[1]);
+    }
+    Ok(w.into_inner())
+}
+
+/// The `verifyactivate` data of an analog-sensor service of type `stype`.
+pub fn sensor_config(root: &Node, stype: u8) -> Result<Vec<u8>, ParamError> {
+    if stype == st::SK_SKIN {
+        return skin_config(root);
+    }
+    let service = root.need_group("SERVICE")?;
+    let boards = can_boards(&service.need_group("PROPERTIES")?)?;
+    match stype {
+        st::AS_STRAIN => strain_config(&service, &boards),
+        st::AS_MAIS => mais_config(&service, &boards),
+        st::AS_INERTIALS3 => inertials3_config(&service, &boards),
+        st::AS_POS => pos_config(&service, &boards),
+        st::AS_FT => ft_config(&service, &boards),
+        st::AS_BATTERY => battery_config(&service, &boards),
+        st::SK_SKIN => skin_config(root),
+        _ => Ok(Vec::new()),
+    }
 }
