@@ -23,6 +23,8 @@ use icub_eth::{Entity, Id32};
 use super::params::{AddressMap, EthBoardParams, Pc104};
 
 /// How long the reader waits for a datagram before servicing timers.
+/// Datagrams kept for a board held by a device thread before the reader waits for it.
+const INBOX_LIMIT: usize = 256;
 const TICK: Duration = Duration::from_millis(2);
 
 /// A failed exchange with a board, naming it.
@@ -79,6 +81,11 @@ pub struct Board {
     socket: Arc<UdpSocket>,
     epoch: Instant,
     inner: Mutex<Inner>,
+    /// Datagrams the reader received while a device thread held `inner`, processed in
+    /// order as soon as it is free: the real-time reader never waits for a device thread
+    /// (which, preempted at normal priority while holding the board, would stall every
+    /// board's reception). Only the reader thread locks it.
+    inbox: Mutex<std::collections::VecDeque<(Instant, Vec<u8>)>>,
     changed: Condvar,
     /// Serialises the bring-up.
     bring_up_lock: Mutex<()>,
@@ -335,36 +342,74 @@ impl Board {
         self.lock().host.board_lost()
     }
 
-    /// Receive and timer work of the reader thread.
+    /// The board for the reader thread: taken only when free, unless the inbox is full
+    /// (a device thread holding the board that long is waited for).
+    fn lock_for_reader(
+        &self,
+        inbox: &std::collections::VecDeque<(Instant, Vec<u8>)>,
+    ) -> Option<MutexGuard<'_, Inner>> {
+        if inbox.len() >= INBOX_LIMIT {
+            return Some(self.lock());
+        }
+        match self.inner.try_lock() {
+            Ok(g) => Some(g),
+            Err(std::sync::TryLockError::Poisoned(e)) => Some(e.into_inner()),
+            Err(std::sync::TryLockError::WouldBlock) => None,
+        }
+    }
+
+    /// Receive work of the reader thread: the datagram is handled now if the board is
+    /// free, else when it next is (with its arrival time).
     fn on_datagram(&self, d: &[u8]) {
-        // Arrival time before the lock, which a device thread may hold for a while:
-        // the gap statistics are the board's, not this host's lock contention.
+        // Arrival time first: the gap statistics are the board's, not the host's.
         let at = Instant::now();
-        let mut inner = self.lock();
+        let mut inbox = self.inbox.lock().unwrap_or_else(|e| e.into_inner());
+        let Some(mut inner) = self.lock_for_reader(&inbox) else {
+            inbox.push_back((at, d.to_vec()));
+            return;
+        };
+        for (t, earlier) in inbox.drain(..) {
+            self.receive(&mut inner, t, &earlier);
+        }
+        self.receive(&mut inner, at, d);
+        drop(inner);
+        drop(inbox);
+        self.changed.notify_all();
+    }
+
+    /// One datagram that arrived at `at`.
+    fn receive(&self, inner: &mut Inner, at: Instant, d: &[u8]) {
         let now = self.now();
         if let Some(prev) = inner.last_rx {
-            inner.max_gap = inner.max_gap.max(at - prev);
-            if at - prev > 3 * self.params.regulars_period() {
+            inner.max_gap = inner.max_gap.max(at.saturating_duration_since(prev));
+            if at.saturating_duration_since(prev) > 3 * self.params.regulars_period() {
                 inner.late_gaps += 1;
             }
             if inner.last_missing_report.take().is_some() {
                 tracing::warn!(
                     "eth::EthMonitorPresence: BOARD {} has shown after being lost for {:.3} sec",
                     self.who(),
-                    (at - prev).as_secs_f64()
+                    at.saturating_duration_since(prev).as_secs_f64()
                 );
             }
         }
         inner.last_rx = Some(at);
         inner.rx_count += 1;
         let _ = inner.host.handle_datagram(d, now);
-        self.events(&mut inner);
-        drop(inner);
-        self.changed.notify_all();
+        self.events(inner);
     }
 
+    /// Timer work of the reader thread (skipped while a device thread holds the board:
+    /// the next tick comes within [`TICK`]).
     fn on_tick(&self) {
-        let mut inner = self.lock();
+        let mut inbox = self.inbox.lock().unwrap_or_else(|e| e.into_inner());
+        let Some(mut inner) = self.lock_for_reader(&inbox) else {
+            return;
+        };
+        for (t, earlier) in inbox.drain(..) {
+            self.receive(&mut inner, t, &earlier);
+        }
+        drop(inbox);
         let now = self.now();
         inner.host.handle_timeout(now);
         self.events(&mut inner);
@@ -514,6 +559,7 @@ impl EthManager {
                         last_missing_report: None,
                         last_lost_report: None,
                     }),
+                    inbox: Mutex::default(),
                     changed: Condvar::new(),
                     bring_up_lock: Mutex::new(()),
                 })
