@@ -2,22 +2,16 @@
 //! pseudo-terminal: identification, the output configuration it asks (each measure at its
 //! own period), values and units, an MTx on the port refused, a silent sensor.
 
+mod xsens_common;
+
 use icub_can::emulator::mtx;
 use icub_can::xsens::mti::{xdi, EmulatedMti, OutputConfig};
-use icub_can::xsens::{EmulatedMtx, Sample};
+use icub_can::xsens::EmulatedMtx;
 use std::time::{Duration, Instant};
+use xsens_common::{close, eventually, still};
 use yarp_devices::sensors::{AnalogStatus, MasStatus};
 use yarp_devices::PolyDriver;
 use yarp_proto::Property;
-
-fn still(_t: f64) -> Sample {
-    Sample {
-        acc: [0.5, -0.25, -9.75],
-        gyr: [0.1, -0.2, 0.3],
-        mag: [0.5, 0.0, 0.4],
-        euler: [1.5, -2.5, 30.0],
-    }
-}
 
 /// ergoCubSN001's `hardware/inertials/waist-inertial.xml`, on `path`.
 fn open(path: &std::path::Path) -> Result<PolyDriver, String> {
@@ -28,21 +22,6 @@ fn open(path: &std::path::Path) -> Result<PolyDriver, String> {
         path.display()
     );
     PolyDriver::open(&Property::from_config_text(&cfg).unwrap()).map_err(|e| e.to_string())
-}
-
-fn eventually(timeout: Duration, mut ok: impl FnMut() -> bool) -> bool {
-    let end = Instant::now() + timeout;
-    while Instant::now() < end {
-        if ok() {
-            return true;
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    ok()
-}
-
-fn close(a: &[f64], b: &[f64]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-4)
 }
 
 #[test]

@@ -657,6 +657,21 @@ impl ParametricCalibratorEth {
         Ok(late)
     }
 
+    /// The start of every park, as C++: the quit flag is cleared; an uncalibrated part,
+    /// or one whose calibration was skipped, is not moved (only logged).
+    fn may_park(&self) -> bool {
+        self.quit.store(false, Ordering::SeqCst);
+        if !self.calibrated {
+            tracing::warn!(device = %self.name, "park without calibration: skipping");
+            return false;
+        }
+        if self.skip {
+            tracing::warn!(device = %self.name, "skipCalibration is on: faking park");
+            return false;
+        }
+        true
+    }
+
     /// C++ `parkSingleJoint`.
     fn park_joint(&mut self, j: usize, wait: bool) -> DevResult<()> {
         self.own_joint(j, "park")?;
@@ -664,13 +679,7 @@ impl ParametricCalibratorEth {
             tracing::warn!(device = %self.name, joint = j, "park disabled on user request (disableHomeAndPark)");
             return Ok(());
         }
-        self.quit.store(false, Ordering::SeqCst);
-        if !self.calibrated {
-            tracing::warn!(device = %self.name, "park without calibration: skipping");
-            return Ok(());
-        }
-        if self.skip {
-            tracing::warn!(device = %self.name, "skipCalibration is on: faking park");
+        if !self.may_park() {
             return Ok(());
         }
         let target = self.target()?;
@@ -771,13 +780,7 @@ impl ICalibrator for ParametricCalibratorEth {
             }
             return Ok(());
         }
-        self.quit.store(false, Ordering::SeqCst);
-        if !self.calibrated {
-            tracing::warn!(device = %self.name, "park without calibration: skipping");
-            return Ok(());
-        }
-        if self.skip {
-            tracing::warn!(device = %self.name, "skipCalibration is on: faking park");
+        if !self.may_park() {
             return Ok(());
         }
         tracing::info!(device = %self.name, "parking");

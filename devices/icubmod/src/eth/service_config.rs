@@ -344,50 +344,61 @@ fn encoder_port(kind: u8, s: &str, board: EthBoardType) -> Option<u8> {
 }
 
 /// The joint-motor descriptors of `JOINTMAPPING` (not for mc4 and advfoc).
-fn jomos(map: &Node, board: EthBoardType, stype: u8) -> Result<Vec<JomoDescriptor>, ParamError> {
-    let act = map.need_group("ACTUATOR")?;
-    let types = act.strings("type").ok_or_else(|| {
-        ParamError::missing("JOINTMAPPING/ACTUATOR/type", "one actuator per joint")
-    })?;
-    let n = types.len();
-    let m = |group: &'static str, path: &'static str| -> Result<Mapping, ParamError> {
+/// The `ACTUATOR`, `ENCODER1` and `ENCODER2` rows of `JOINTMAPPING`, as many columns as
+/// `ACTUATOR/type` has.
+fn joint_mapping<'a>(map: &Node<'a>) -> Result<[Mapping<'a>; 3], ParamError> {
+    let n = map
+        .need_group("ACTUATOR")?
+        .strings("type")
+        .ok_or_else(|| ParamError::missing("JOINTMAPPING/ACTUATOR/type", "one actuator per joint"))?
+        .len();
+    let m = |group: &'static str, path: &'static str| -> Result<Mapping<'a>, ParamError> {
         Ok(Mapping {
             group: map.need_group(group)?,
             path,
             n,
         })
     };
-    let act = m("ACTUATOR", "JOINTMAPPING/ACTUATOR")?;
-    let e1 = m("ENCODER1", "JOINTMAPPING/ENCODER1")?;
-    let e2 = m("ENCODER2", "JOINTMAPPING/ENCODER2")?;
+    Ok([
+        m("ACTUATOR", "JOINTMAPPING/ACTUATOR")?,
+        m("ENCODER1", "JOINTMAPPING/ENCODER1")?,
+        m("ENCODER2", "JOINTMAPPING/ENCODER2")?,
+    ])
+}
+
+/// Each joint's encoder of one `ENCODER` row: (type, port, position).
+fn encoders(e: &Mapping, board: EthBoardType) -> Result<Vec<(u8, u8, u8)>, ParamError> {
+    let kinds = e.table("type", ENCODERS, "eomc_enc_", "an encoder type")?;
+    let pos = e.table(
+        "position",
+        POSITIONS,
+        "eomc_pos_",
+        "a position (atjoint, atmotor, none)",
+    )?;
+    let ports = e.row("port")?;
+    kinds
+        .iter()
+        .zip(&pos)
+        .zip(&ports)
+        .map(|((k, p), s)| {
+            let port = encoder_port(*k, s, board).ok_or_else(|| {
+                ParamError::bad(
+                    format!("{}/port", e.path),
+                    "a port of this encoder type and board",
+                    s.clone(),
+                )
+            })?;
+            Ok((*k, port, *p))
+        })
+        .collect()
+}
+
+fn jomos(map: &Node, board: EthBoardType, stype: u8) -> Result<Vec<JomoDescriptor>, ParamError> {
+    let [act, e1, e2] = joint_mapping(map)?;
+    let n = act.n;
     let act_types = act.table("type", ACTUATORS, "eomc_act_", "an actuator type")?;
     let act_ports = act.row("port")?;
-    let encoder = |e: &Mapping| -> Result<Vec<(u8, u8, u8)>, ParamError> {
-        let kinds = e.table("type", ENCODERS, "eomc_enc_", "an encoder type")?;
-        let pos = e.table(
-            "position",
-            POSITIONS,
-            "eomc_pos_",
-            "a position (atjoint, atmotor, none)",
-        )?;
-        let ports = e.row("port")?;
-        kinds
-            .iter()
-            .zip(&pos)
-            .zip(&ports)
-            .map(|((k, p), s)| {
-                let port = encoder_port(*k, s, board).ok_or_else(|| {
-                    ParamError::bad(
-                        format!("{}/port", e.path),
-                        "a port of this encoder type and board",
-                        s.clone(),
-                    )
-                })?;
-                Ok((*k, port, *p))
-            })
-            .collect()
-    };
-    let (enc1, enc2) = (encoder(&e1)?, encoder(&e2)?);
+    let (enc1, enc2) = (encoders(&e1, board)?, encoders(&e2, board)?);
     (0..n)
         .map(|j| {
             let port = &act_ports[j];
@@ -573,62 +584,26 @@ fn advfoc(
     eth: EthBoardType,
     c: &Coupling,
 ) -> Result<Vec<u8>, ParamError> {
-    let act = map.need_group("ACTUATOR")?;
-    let types = act.strings("type").ok_or_else(|| {
-        ParamError::missing("JOINTMAPPING/ACTUATOR/type", "one actuator per joint")
-    })?;
-    let n = types.len();
-    let m = |group: &'static str, path: &'static str| -> Result<Mapping, ParamError> {
-        Ok(Mapping {
-            group: map.need_group(group)?,
-            path,
-            n,
-        })
-    };
-    let act = m("ACTUATOR", "JOINTMAPPING/ACTUATOR")?;
-    if act
-        .table("type", ACTUATORS, "eomc_act_", "an actuator type")?
-        .iter()
-        .any(|t| *t != 4)
-    {
+    let [act, e1, e2] = joint_mapping(map)?;
+    let n = act.n;
+    let types = act.table("type", ACTUATORS, "eomc_act_", "an actuator type")?;
+    if types.iter().any(|t| *t != 4) {
         return Err(ParamError::bad(
             "JOINTMAPPING/ACTUATOR/type",
             "advfoc for every joint",
-            types.join(" "),
+            act.row("type")?.join(" "),
         ));
     }
     let ports = act.row("port")?;
     let onboard = act.row("onboard")?;
-    let (e1, e2) = (
-        m("ENCODER1", "JOINTMAPPING/ENCODER1")?,
-        m("ENCODER2", "JOINTMAPPING/ENCODER2")?,
-    );
     let mut w = Writer::with_capacity(332);
     w.bytes(&[4, 16, n.min(4) as u8, 0]);
+    // eOmc_encoder_descriptor_t of an advanced joint: type, port | pos << 5, 2 free bytes
     let enc = |e: &Mapping| -> Result<Vec<[u8; 4]>, ParamError> {
-        let kinds = e.table("type", ENCODERS, "eomc_enc_", "an encoder type")?;
-        let pos = e.table(
-            "position",
-            POSITIONS,
-            "eomc_pos_",
-            "a position (atjoint, atmotor, none)",
-        )?;
-        let ports = e.row("port")?;
-        kinds
-            .iter()
-            .zip(&pos)
-            .zip(&ports)
-            .map(|((k, p), s)| {
-                let port = encoder_port(*k, s, eth).ok_or_else(|| {
-                    ParamError::bad(
-                        format!("{}/port", e.path),
-                        "a port of this encoder type and board",
-                        s.clone(),
-                    )
-                })?;
-                Ok([*k, (port & 0x1f) | (p & 7) << 5, 0, 0])
-            })
-            .collect()
+        Ok(encoders(e, eth)?
+            .into_iter()
+            .map(|(k, port, p)| [k, (port & 0x1f) | (p & 7) << 5, 0, 0])
+            .collect())
     };
     let (enc1, enc2) = (enc(&e1)?, enc(&e2)?);
     for j in 0..4 {
