@@ -76,9 +76,11 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         b.reset_rx_stats();
     }
     let c0 = cpu_seconds();
+    let wake0 = icub_emulators::eth::wake_stats();
     let w0 = Instant::now();
     std::thread::sleep(Duration::from_secs(seconds));
     let cpu = (cpu_seconds() - c0) / w0.elapsed().as_secs_f64();
+    let wake1 = icub_emulators::eth::wake_stats();
     let mut worst = (Duration::ZERO, String::new());
     let (mut frames, mut seq_gaps, mut late) = (0u64, 0u64, 0u64);
     let mut per_board = Vec::new();
@@ -157,6 +159,12 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         worst.1,
         runner.failures().len(),
         load.trim()
+    );
+    println!(
+        "  the boards' thread: {} wake-ups for due work, {} of them more than 2 ms late (latest since start {:.1} ms)",
+        wake1.0 - wake0.0,
+        wake1.1 - wake0.1,
+        wake1.2 as f64 / 1e3
     );
     for line in per_board {
         println!("{line}");

@@ -471,6 +471,41 @@ impl ServedState {
 /// The longest the serving thread sleeps.
 const MAX_WAIT: Duration = Duration::from_millis(5);
 
+/// How late the boards' thread woke for due work, since the process started.
+#[derive(Debug, Default)]
+pub struct WakeStats {
+    wakes: std::sync::atomic::AtomicU64,
+    over_2ms: std::sync::atomic::AtomicU64,
+    worst_us: std::sync::atomic::AtomicU64,
+}
+
+static WAKE: WakeStats = WakeStats {
+    wakes: std::sync::atomic::AtomicU64::new(0),
+    over_2ms: std::sync::atomic::AtomicU64::new(0),
+    worst_us: std::sync::atomic::AtomicU64::new(0),
+};
+
+impl WakeStats {
+    fn note(&self, late: Duration) {
+        self.wakes.fetch_add(1, Ordering::Relaxed);
+        if late > Duration::from_millis(2) {
+            self.over_2ms.fetch_add(1, Ordering::Relaxed);
+        }
+        self.worst_us
+            .fetch_max(late.as_micros() as u64, Ordering::Relaxed);
+    }
+}
+
+/// The boards' thread's wake-ups for due work: how many, how many more than 2 ms late
+/// (a 1 ms board then shows a silence of 3 periods), the latest (µs).
+pub fn wake_stats() -> (u64, u64, u64) {
+    (
+        WAKE.wakes.load(Ordering::Relaxed),
+        WAKE.over_2ms.load(Ordering::Relaxed),
+        WAKE.worst_us.load(Ordering::Relaxed),
+    )
+}
+
 fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
     // A board keeps its period in firmware; here the thread asks for real-time
     // scheduling like the host's receiver (best effort: refused without the capability).
@@ -490,6 +525,12 @@ fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
             .map_or(MAX_WAIT, |t| t.saturating_sub(now))
             .clamp(Duration::from_micros(100), MAX_WAIT);
         poller.wait(wait);
+        // How late this thread woke for its next due work (the boards' streams can be no
+        // more regular than this): counted for the benches.
+        let late = epoch.elapsed().saturating_sub(now + wait);
+        if wait < MAX_WAIT {
+            WAKE.note(late);
+        }
         for (i, b) in boards.iter_mut().enumerate() {
             if poller.readable(i) {
                 b.receive(&mut buf);
