@@ -4,17 +4,18 @@
 //! | device | module | interfaces |
 //! |--------|--------|------------|
 //! | `embObjMotionControl` | [`motion_control`] | encoders, position, velocity, position direct, torque, current, PWM, impedance, calibration, PIDs, control/interaction modes, limits, axis info, motor encoders, amplifiers, motors (temperature) |
-//! | `parametricCalibratorEth` | [`calibrator`] | `ICalibrator` |
+//! | `parametricCalibratorEth` | [`calibrator`] | `ICalibrator`, `IRemoteCalibrator` |
 //! | `embObjFTsensor` | [`sensors`] | `ISixAxisForceTorqueSensors`, `IAnalogSensor` (strain) |
 //! | `embObjMultipleFTsensors` | [`sensors`] | `ISixAxisForceTorqueSensors`, `ITemperatureSensors` |
 //! | `embObjIMU`, `embObjInertials` | [`sensors`] | gyroscopes, accelerometers, magnetometers, orientation |
 //! | `embObjMais` | [`sensors`] | `IAnalogSensor` (15 channels) |
 //! | `embObjSkin` | [`sensors`] | `IAnalogSensor` (192 taxels per MTB) |
-//! | `embObjPOS` | [`sensors`] | none yet (C++ `IEncoderArrays`); the service runs |
+//! | `embObjPOS` | [`sensors`] | `IEncoderArrays` (C++'s hand port mapping) |
 //! | `embObjBattery` | [`sensors`] | `IBattery` |
 //!
 //! Parameters: [`params`] (`PC104`, `ETH_BOARD`, `SERVICE`), [`mc_params`]; the host's
-//! socket and the boards: [`manager`]; a device's service on its board: [`service`].
+//! socket and the boards: [`manager`]; a device's service on its board: [`service`]; the
+//! configuration its `verifyactivate` carries: [`service_config`].
 
 pub mod calibrator;
 pub mod config;
