@@ -161,10 +161,12 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         load.trim()
     );
     println!(
-        "  the boards' thread: {} wake-ups for due work, {} of them more than 2 ms late (latest since start {:.1} ms)",
+        "  the boards' thread: {} wake-ups for due work, {} of them more than 2 ms late (latest since start {:.1} ms); {} rounds of work over 1 ms (longest since start {:.1} ms)",
         wake1.0 - wake0.0,
         wake1.1 - wake0.1,
-        wake1.2 as f64 / 1e3
+        wake1.2 as f64 / 1e3,
+        wake1.3 - wake0.3,
+        wake1.4 as f64 / 1e3
     );
     for line in per_board {
         println!("{line}");

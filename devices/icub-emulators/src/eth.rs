@@ -477,12 +477,17 @@ pub struct WakeStats {
     wakes: std::sync::atomic::AtomicU64,
     over_2ms: std::sync::atomic::AtomicU64,
     worst_us: std::sync::atomic::AtomicU64,
+    /// Rounds of work (receiving, stepping and sending every board) longer than 1 ms.
+    long_work: std::sync::atomic::AtomicU64,
+    worst_work_us: std::sync::atomic::AtomicU64,
 }
 
 static WAKE: WakeStats = WakeStats {
     wakes: std::sync::atomic::AtomicU64::new(0),
     over_2ms: std::sync::atomic::AtomicU64::new(0),
     worst_us: std::sync::atomic::AtomicU64::new(0),
+    long_work: std::sync::atomic::AtomicU64::new(0),
+    worst_work_us: std::sync::atomic::AtomicU64::new(0),
 };
 
 impl WakeStats {
@@ -494,15 +499,26 @@ impl WakeStats {
         self.worst_us
             .fetch_max(late.as_micros() as u64, Ordering::Relaxed);
     }
+
+    fn note_work(&self, took: Duration) {
+        if took > Duration::from_millis(1) {
+            self.long_work.fetch_add(1, Ordering::Relaxed);
+        }
+        self.worst_work_us
+            .fetch_max(took.as_micros() as u64, Ordering::Relaxed);
+    }
 }
 
 /// The boards' thread's wake-ups for due work: how many, how many more than 2 ms late
-/// (a 1 ms board then shows a silence of 3 periods), the latest (µs).
-pub fn wake_stats() -> (u64, u64, u64) {
+/// (a 1 ms board then shows a silence of 3 periods), the latest (µs); its rounds of work
+/// longer than 1 ms, and the longest (µs).
+pub fn wake_stats() -> (u64, u64, u64, u64, u64) {
     (
         WAKE.wakes.load(Ordering::Relaxed),
         WAKE.over_2ms.load(Ordering::Relaxed),
         WAKE.worst_us.load(Ordering::Relaxed),
+        WAKE.long_work.load(Ordering::Relaxed),
+        WAKE.worst_work_us.load(Ordering::Relaxed),
     )
 }
 
@@ -531,6 +547,7 @@ fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
         if wait < MAX_WAIT {
             WAKE.note(late);
         }
+        let woke = Instant::now();
         for (i, b) in boards.iter_mut().enumerate() {
             if poller.readable(i) {
                 b.receive(&mut buf);
@@ -539,6 +556,7 @@ fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
         for b in &mut boards {
             b.work(epoch);
         }
+        WAKE.note_work(woke.elapsed());
     }
 }
 
