@@ -4,8 +4,8 @@
 //! (run under netns-run; the boards are reached through the address map
 //! 10.0.1.0/24 -> 127.0.3.0/24). Every device opens. Then our `yarp rpc`, and C++'s,
 //! send `set pos` to `/icub/left_arm/rpc:i` and the joint is seen moving on
-//! `/icub/left_arm/state:o`; remote homing and parking (`[set] [reca] …`) reach the
-//! part's calibrator; our `yarp read` receives the left arm's F/T stream; the
+//! `/icub/left_arm/state:o`; remote homing, parking and calibration (`[set] [reca] …`)
+//! reach the part's calibrator; our `yarp read` receives the left arm's F/T stream; the
 //! Ctrl-C phases park the arms and close everything.
 
 mod eth_common;
@@ -108,6 +108,23 @@ fn icub_genova02_comes_up_and_moves_its_left_arm_by_yarp_rpc() {
         assert!(
             reply.contains("idl"),
             "joint 0 idle after its park: {reply}"
+        );
+        // The whole part calibrated again (the parked joint with it), then parked: every
+        // joint at HOME::positionHome (joint 0: -30) and idle.
+        let reply = ask("set reca cals");
+        assert!(reply.contains("[ok]"), "{reply}");
+        let reply = ask("get icmd cmod 0");
+        assert!(
+            reply.contains("pos"),
+            "joint 0 in position control again: {reply}"
+        );
+        let reply = ask("set reca pars");
+        assert!(reply.contains("[ok]"), "{reply}");
+        until_at("joint 0 parking the part", &joint0, -35.97, -30.0);
+        let reply = ask("get icmd cmod 0");
+        assert!(
+            reply.contains("idl"),
+            "joint 0 idle after the part's park: {reply}"
         );
         drop(rpc);
 
