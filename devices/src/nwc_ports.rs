@@ -58,6 +58,16 @@ async fn receive<T>(
     }
 }
 
+/// Calls the server at the other end of `rpc` (blocking the caller, at most
+/// [`RPC_TIMEOUT`]); a failure names `device` and the request.
+pub(crate) fn call(device: &'static str, rpc: &Arc<Port>, cmd: Bottle) -> DevResult<Bottle> {
+    let port = rpc.clone();
+    let what = cmd.to_string();
+    runtime::block_on(async move { tokio::time::timeout(RPC_TIMEOUT, port.rpc(&cmd)).await })
+        .map_err(|_| DeviceError::failed(device, format!("no reply to {what} in {RPC_TIMEOUT:?}")))?
+        .map_err(|e| DeviceError::failed(device, format!("{what}: {e}")))
+}
+
 async fn close_port(port: Arc<Port>) {
     if let Ok(p) = Arc::try_unwrap(port) {
         p.close().await;
@@ -124,16 +134,7 @@ impl<T: Send + 'static> NwcPorts<T> {
 
     /// Calls the server (blocking the caller, at most [`RPC_TIMEOUT`]).
     pub fn call(&self, cmd: Bottle) -> DevResult<Bottle> {
-        let port = self.rpc.clone();
-        let what = cmd.to_string();
-        runtime::block_on(async move { tokio::time::timeout(RPC_TIMEOUT, port.rpc(&cmd)).await })
-            .map_err(|_| {
-                DeviceError::failed(
-                    self.device,
-                    format!("no reply to {what} in {RPC_TIMEOUT:?}"),
-                )
-            })?
-            .map_err(|e| DeviceError::failed(self.device, format!("{what}: {e}")))
+        call(self.device, &self.rpc, cmd)
     }
 
     /// Calls a thrift method of the server whose reply is a `yarp::dev::ReturnValue`

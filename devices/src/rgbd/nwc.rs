@@ -23,14 +23,11 @@ use crate::framegrabber::nwc::{reply_float, reply_int, request, ImageStream};
 use crate::framegrabber::protocol::{FOV, GET, HEIGHT, INTRINSIC_PARAM, RGB_VISUAL_PARAMS, WIDTH};
 use crate::runtime;
 use std::sync::Arc;
-use std::time::Duration;
 use yarp_net::port::Port;
 use yarp_proto::image::Image;
 use yarp_proto::{Bottle, Property, Stamp, Value};
 
 pub(crate) const NAME: &str = "RGBDSensorClient";
-/// How long an RPC to the server may take.
-const RPC_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// The ports of an open client.
 struct Client {
@@ -130,14 +127,7 @@ impl RgbdSensorClient {
     }
 
     fn call(&self, iface: i32, what: i32) -> DevResult<Bottle> {
-        let port = self.client()?.rpc.clone();
-        let cmd = request(iface, GET, what, &[]);
-        let text = cmd.to_string();
-        runtime::block_on(async move { tokio::time::timeout(RPC_TIMEOUT, port.rpc(&cmd)).await })
-            .map_err(|_| {
-                DeviceError::failed(NAME, format!("no reply to {text} in {RPC_TIMEOUT:?}"))
-            })?
-            .map_err(|e| DeviceError::failed(NAME, format!("{text}: {e}")))
+        crate::nwc_ports::call(NAME, &self.client()?.rpc, request(iface, GET, what, &[]))
     }
 
     fn int(&self, iface: i32, what: i32) -> DevResult<i32> {

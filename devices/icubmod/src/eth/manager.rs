@@ -342,20 +342,26 @@ impl Board {
         self.lock().host.board_lost()
     }
 
-    /// The board for the reader thread: taken only when free, unless the inbox is full
-    /// (a device thread holding the board that long is waited for).
+    /// The board for the reader thread, with the datagrams kept meanwhile handled: taken
+    /// only when free, unless the inbox is full (a device thread holding the board that
+    /// long is waited for).
     fn lock_for_reader(
         &self,
-        inbox: &std::collections::VecDeque<(Instant, Vec<u8>)>,
+        inbox: &mut std::collections::VecDeque<(Instant, Vec<u8>)>,
     ) -> Option<MutexGuard<'_, Inner>> {
-        if inbox.len() >= INBOX_LIMIT {
-            return Some(self.lock());
+        let mut inner = if inbox.len() >= INBOX_LIMIT {
+            self.lock()
+        } else {
+            match self.inner.try_lock() {
+                Ok(g) => g,
+                Err(std::sync::TryLockError::Poisoned(e)) => e.into_inner(),
+                Err(std::sync::TryLockError::WouldBlock) => return None,
+            }
+        };
+        for (t, earlier) in inbox.drain(..) {
+            self.receive(&mut inner, t, &earlier);
         }
-        match self.inner.try_lock() {
-            Ok(g) => Some(g),
-            Err(std::sync::TryLockError::Poisoned(e)) => Some(e.into_inner()),
-            Err(std::sync::TryLockError::WouldBlock) => None,
-        }
+        Some(inner)
     }
 
     /// Receive work of the reader thread: the datagram is handled now if the board is
@@ -364,13 +370,10 @@ impl Board {
         // Arrival time first: the gap statistics are the board's, not the host's.
         let at = Instant::now();
         let mut inbox = self.inbox.lock().unwrap_or_else(|e| e.into_inner());
-        let Some(mut inner) = self.lock_for_reader(&inbox) else {
+        let Some(mut inner) = self.lock_for_reader(&mut inbox) else {
             inbox.push_back((at, d.to_vec()));
             return;
         };
-        for (t, earlier) in inbox.drain(..) {
-            self.receive(&mut inner, t, &earlier);
-        }
         self.receive(&mut inner, at, d);
         drop(inner);
         drop(inbox);
@@ -403,12 +406,9 @@ impl Board {
     /// the next tick comes within [`TICK`]).
     fn on_tick(&self) {
         let mut inbox = self.inbox.lock().unwrap_or_else(|e| e.into_inner());
-        let Some(mut inner) = self.lock_for_reader(&inbox) else {
+        let Some(mut inner) = self.lock_for_reader(&mut inbox) else {
             return;
         };
-        for (t, earlier) in inbox.drain(..) {
-            self.receive(&mut inner, t, &earlier);
-        }
         drop(inbox);
         let now = self.now();
         inner.host.handle_timeout(now);

@@ -309,17 +309,7 @@ fn sensor_canloc(props: &Node, group: &'static str, count: usize) -> Result<Vec<
         ));
     }
     v.iter()
-        .map(|s| {
-            can_location(s)
-                .map(|l| {
-                    CanLocation {
-                        inside_index: 2,
-                        ..l
-                    }
-                    .to_byte()
-                })
-                .ok_or_else(|| ParamError::bad(format!("{group}/location"), "CANx:a", s.clone()))
-        })
+        .map(|s| sensor_canloc_of(s, group).map(CanLocation::to_byte))
         .collect()
 }
 
@@ -430,7 +420,7 @@ fn jomos(map: &Node, board: EthBoardType, stype: u8) -> Result<Vec<JomoDescripto
                     return Err(ParamError::bad(
                         "JOINTMAPPING/ACTUATOR/type",
                         "an actuator this service drives",
-                        format!("{} for {}", act_ports[j], st_name(stype)),
+                        format!("{} for {}", act.row("type")?[j], st_name(stype)),
                     ))
                 }
             };
@@ -763,9 +753,14 @@ pub fn mc_config(config: &Property, stype: u8, joints: usize) -> Result<Vec<u8>,
         st::MC_ADVFOC => {
             let c = coupling(&root, joints)?;
             let bytes = advfoc(&map, &boards, eth, &c)?;
-            let mut out = vec![0u8; icub_eth::entities::mn::SERVICE_CONFIG_DATA_SIZE];
-            out[..bytes.len()].copy_from_slice(&bytes);
-            return Ok(out);
+            let mut descriptors = [0u8; 68];
+            let mut coupling = [0u8; 264];
+            descriptors.copy_from_slice(&bytes[..68]);
+            coupling.copy_from_slice(&bytes[68..332]);
+            McServiceConfig::AdvFoc {
+                descriptors,
+                coupling,
+            }
         }
         _ => {
             let jomos = JomoDescriptors(jomos(&map, eth, stype)?);
@@ -943,13 +938,13 @@ fn can_board_named(s: &str, path: &'static str) -> Result<u8, ParamError> {
 }
 
 /// The CAN location of a sensor's `location` with inside index "none" (2).
-fn sensor_canloc_of(s: &str) -> Result<CanLocation, ParamError> {
+fn sensor_canloc_of(s: &str, group: &str) -> Result<CanLocation, ParamError> {
     can_location(s)
         .map(|l| CanLocation {
             inside_index: 2,
             ..l
         })
-        .ok_or_else(|| ParamError::bad("SENSORS/location", "CANx:a", s))
+        .ok_or_else(|| ParamError::bad(format!("{group}/location"), "CANx:a", s))
 }
 
 fn strain_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamError> {
@@ -959,7 +954,7 @@ fn strain_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamE
         .filter(|b| matches!(b.board_type, 6 | 12 | 22))
         .ok_or_else(|| ParamError::missing("CANBOARDS/type", "strain, strain2 or strain2c"))?;
     let s = Sensors::of(service)?;
-    let loc = sensor_canloc_of(&s.column("location")?[s.on[0]])?;
+    let loc = sensor_canloc_of(&s.column("location")?[s.on[0]], "SENSORS")?;
     let mut w = Writer::with_capacity(7);
     w.entity(&b);
     w.u8(loc.to_byte());
@@ -973,7 +968,7 @@ fn mais_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamErr
         .copied()
         .ok_or_else(|| ParamError::missing("CANBOARDS/type", "mais"))?;
     let s = Sensors::of(service)?;
-    let loc = sensor_canloc_of(&s.column("location")?[s.on[0]])?;
+    let loc = sensor_canloc_of(&s.column("location")?[s.on[0]], "SENSORS")?;
     let mut w = Writer::with_capacity(6);
     w.bytes(&version(&b));
     w.u8(loc.to_byte());
