@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use icub_eth::board::{BoardConfig, BoardEngine};
+use icub_eth::board::{next_multiple, BoardConfig, BoardEngine};
 use icub_eth::entities::analog::{
     ByteArray, FtStatus, FtTimedValue, Inertial3Data, Inertial3Status, MaisStatus, StrainStatus,
 };
@@ -393,7 +393,7 @@ pub fn serve(
             engine,
             spec: spec.clone(),
             peer: None,
-            last_step: Instant::now(),
+            last_step: None,
             tick: 0,
         });
         served.push(ServedBoard { spec, local });
@@ -412,16 +412,28 @@ struct ServedState {
     spec: BoardSpec,
     /// Where the host is (the sender of the last datagram).
     peer: Option<SocketAddr>,
-    last_step: Instant,
+    /// When the control loop last ran (the serving thread's time).
+    last_step: Option<Duration>,
     tick: u64,
 }
 
 impl ServedState {
     /// When this board next has something to do: a transmission, or its control step.
-    fn next_work(&self, now: Duration, epoch: Instant) -> Duration {
-        let step_at = (self.last_step + self.step_period()).saturating_duration_since(epoch);
+    fn next_work(&self, now: Duration) -> Duration {
         let tx_at = self.engine.next_transmit().unwrap_or(now + MAX_WAIT);
-        step_at.min(tx_at)
+        self.next_step(now).min(tx_at)
+    }
+
+    /// The control loop's next run: at multiples of its period in the serving thread's
+    /// time, as the regulars' schedule ([`icub_eth::board::next_multiple`]), so that the
+    /// boards of commensurate periods wake the thread together (one wake-up a
+    /// millisecond for a whole ergoCub, not one per board) and keep their phase after a
+    /// late wake-up.
+    fn next_step(&self, now: Duration) -> Duration {
+        match self.last_step {
+            Some(t) => next_multiple(t, self.step_period()),
+            None => now,
+        }
     }
 
     /// The control loop runs once per regulars period (what the host sees of it), at
@@ -445,11 +457,13 @@ impl ServedState {
 
     /// Steps the board when due and sends what it has.
     fn work(&mut self, epoch: Instant) {
-        let dt = self.last_step.elapsed();
-        if dt >= self.step_period() {
-            self.last_step = Instant::now();
+        let now = epoch.elapsed();
+        if now >= self.next_step(now) {
+            let dt = self
+                .last_step
+                .map_or(Duration::ZERO, |t| now.saturating_sub(t));
+            self.last_step = Some(now);
             self.engine.step(dt.as_secs_f64());
-            let now = epoch.elapsed();
             self.tick += 1;
             update_sensors(
                 &mut self.engine,
@@ -536,7 +550,7 @@ fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
         let now = epoch.elapsed();
         let wait = boards
             .iter()
-            .map(|b| b.next_work(now, epoch))
+            .map(|b| b.next_work(now))
             .min()
             .map_or(MAX_WAIT, |t| t.saturating_sub(now))
             .clamp(Duration::from_micros(100), MAX_WAIT);

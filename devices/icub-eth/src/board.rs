@@ -863,11 +863,15 @@ impl BoardEngine {
             && (self.regulars_resume.is_some() || self.next_regulars.is_none_or(|t| now >= t))
     }
 
+    /// The next regulars are due one period after the last ones; after a late start,
+    /// at the next multiple of the period in the board's time (not `now + period`): the
+    /// cycle keeps its phase, as a board's firmware cycle does, and boards of commensurate
+    /// periods served by one thread fall due together.
     fn schedule_regulars(&mut self, now: Duration) {
         let p = self.regular_period();
         let next = match self.next_regulars {
             Some(t) if t + p > now => t + p,
-            _ => now + p,
+            _ => next_multiple(now, p),
         };
         self.next_regulars = Some(next);
     }
@@ -893,4 +897,11 @@ impl BoardEngine {
         debug_assert!(v.len() >= EMPTY_FRAME_SIZE);
         v
     }
+}
+
+/// The first multiple of `period` after `now` (both in the board's time).
+pub fn next_multiple(now: Duration, period: Duration) -> Duration {
+    let p = period.as_nanos().max(1);
+    let k = now.as_nanos() / p + 1;
+    Duration::from_nanos(u64::try_from(k * p).unwrap_or(u64::MAX))
 }

@@ -526,3 +526,32 @@ fn regulars_larger_than_a_datagram_go_out_in_several_once_per_period() {
     assert_eq!(c.sequence_gaps, 0);
     assert_eq!(c.invalid_frames + c.bad_rops + c.unknown_rops, 0);
 }
+
+#[test]
+fn regulars_keep_the_phase_of_their_period_after_a_late_poll() {
+    let mut l = Loop::new(arm_board());
+    l.start(&[mc_service(4), ft_service()]).expect("start-up");
+    let period = l.board.regular_period();
+    assert_eq!(period, MS, "the default cycle of 1 ms, every cycle");
+    // Drain whatever is due now; from here the schedule is on the period's multiples
+    // (of the board's time), as the firmware's cycle.
+    while l.board.poll_transmit(l.now).is_some() {}
+    let next = l
+        .board
+        .next_transmit()
+        .expect("running: regulars are scheduled");
+    assert_eq!(next.as_nanos() % period.as_nanos(), 0, "{next:?}");
+
+    // Polled 0.3 ms late: one frame, and the next stays on the multiple after it.
+    let late = next + Duration::from_micros(300);
+    assert!(l.board.poll_transmit(late).is_some());
+    assert!(l.board.poll_transmit(late).is_none());
+    assert_eq!(l.board.next_transmit(), Some(next + period));
+
+    // Polled 2.5 ms late (a host thread descheduled): one frame, not the missed ones in
+    // a burst, and the cycle goes on at the next multiple.
+    let very_late = next + period + Duration::from_micros(2500);
+    assert!(l.board.poll_transmit(very_late).is_some());
+    assert!(l.board.poll_transmit(very_late).is_none());
+    assert_eq!(l.board.next_transmit(), Some(next + 4 * period));
+}
