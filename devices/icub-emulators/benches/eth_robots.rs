@@ -9,8 +9,10 @@
 //! start-up time (open, attach, calibrate every part), the CPU over SECONDS (default 20)
 //! of running, as a share of one core, the command-to-encoder latency (position command
 //! on the left arm's remapper until its encoder moves, median of 20), and the boards'
-//! status streams: datagrams, the longest gap between two, the gaps longer than three
-//! periods, sequence gaps (in all and per board).
+//! status streams as they reach the host's socket (kernel receive timestamps):
+//! datagrams, the longest gap between two, the gaps longer than three periods, sequence
+//! gaps (in all and per board); how long datagrams waited there for the host's reader;
+//! how late the emulator's board thread woke.
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -83,6 +85,7 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
     let wake1 = icub_emulators::eth::wake_stats();
     let mut worst = (Duration::ZERO, String::new());
     let (mut frames, mut seq_gaps, mut late) = (0u64, 0u64, 0u64);
+    let mut reader = icubmod::eth::manager::ReaderDelays::default();
     let mut per_board = Vec::new();
     for b in mgr.all_boards() {
         let st = b.rx_stats();
@@ -90,6 +93,8 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         frames += st.datagrams;
         seq_gaps += st.counters.sequence_gaps;
         late += st.late_gaps;
+        reader.longest = reader.longest.max(st.reader_delays.longest);
+        reader.over_1ms += st.reader_delays.over_1ms;
         per_board.push(format!(
             "  {}: period {:?}, {} datagrams ({:.0}/s), longest gap {:.1} ms, {} gaps over 3 periods",
             b.who(),
@@ -159,6 +164,11 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         worst.1,
         runner.failures().len(),
         load.trim()
+    );
+    println!(
+        "  the host's reader: datagrams waited in its socket (kernel timestamp to the reader) more than 1 ms {} times, longest {:.1} ms",
+        reader.over_1ms,
+        reader.longest.as_secs_f64() * 1e3
     );
     println!(
         "  the boards' thread: {} wake-ups for due work, {} of them more than 2 ms late (latest since start {:.1} ms); {} rounds of work over 1 ms (longest since start {:.1} ms)",

@@ -11,7 +11,7 @@
 //! ([`super::service`]).
 
 use std::collections::HashMap;
-use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4, UdpSocket};
+use std::net::{Ipv4Addr, SocketAddrV4, UdpSocket};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
 use std::time::{Duration, Instant};
 
@@ -55,6 +55,8 @@ struct Inner {
     rx_count: u64,
     max_gap: Duration,
     late_gaps: u64,
+    /// How long datagrams waited in the host's socket before the reader took them.
+    reader_delays: ReaderDelays,
     bring_up: BringUp,
     last_missing_report: Option<Instant>,
     last_lost_report: Option<Instant>,
@@ -69,8 +71,29 @@ pub struct RxStats {
     /// Silences longer than three regulars periods (the board streams one ropframe of
     /// regulars per period while running).
     pub late_gaps: u64,
+    /// How long the board's datagrams waited in the host's socket for the reader.
+    pub reader_delays: ReaderDelays,
     /// The host's counters (sequence gaps, bad frames, timeouts).
     pub counters: icub_eth::host::HostCounters,
+}
+
+/// How long datagrams waited in the host's socket between their arrival (the kernel's
+/// receive timestamp) and the reader taking them: the host's part of a silence, apart
+/// from the board's.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ReaderDelays {
+    pub longest: Duration,
+    /// Delays longer than 1 ms.
+    pub over_1ms: u64,
+}
+
+impl ReaderDelays {
+    fn note(&mut self, d: Duration) {
+        self.longest = self.longest.max(d);
+        if d > Duration::from_millis(1) {
+            self.over_1ms += 1;
+        }
+    }
 }
 
 /// One Ethernet board of the robot.
@@ -326,6 +349,7 @@ impl Board {
             datagrams: inner.rx_count,
             longest_gap: inner.max_gap,
             late_gaps: inner.late_gaps,
+            reader_delays: inner.reader_delays,
             counters: inner.host.counters(),
         }
     }
@@ -335,6 +359,7 @@ impl Board {
         inner.rx_count = 0;
         inner.max_gap = Duration::ZERO;
         inner.late_gaps = 0;
+        inner.reader_delays = ReaderDelays::default();
     }
 
     /// Whether the board is currently reported silent.
@@ -364,16 +389,16 @@ impl Board {
         Some(inner)
     }
 
-    /// Receive work of the reader thread: the datagram is handled now if the board is
-    /// free, else when it next is (with its arrival time).
-    fn on_datagram(&self, d: &[u8]) {
-        // Arrival time first: the gap statistics are the board's, not the host's.
-        let at = Instant::now();
+    /// Receive work of the reader thread: the datagram that arrived at the host's socket
+    /// at `at` is handled now if the board is free, else when it next is (with its
+    /// arrival time).
+    fn on_datagram(&self, d: &[u8], at: Instant) {
         let mut inbox = self.inbox.lock().unwrap_or_else(|e| e.into_inner());
         let Some(mut inner) = self.lock_for_reader(&mut inbox) else {
             inbox.push_back((at, d.to_vec()));
             return;
         };
+        inner.reader_delays.note(at.elapsed());
         self.receive(&mut inner, at, d);
         drop(inner);
         drop(inbox);
@@ -506,6 +531,14 @@ impl EthManager {
             ),
         })?;
         enlarge_receive_buffer(&socket);
+        if let Err(e) = nix::sys::socket::setsockopt(
+            &socket,
+            nix::sys::socket::sockopt::ReceiveTimestampns,
+            &true,
+        ) {
+            // Arrival is then taken when the reader gets the datagram.
+            tracing::debug!("SO_TIMESTAMPNS refused: {e}");
+        }
         socket
             .set_read_timeout(Some(TICK))
             .map_err(|e| EthError::Board {
@@ -556,6 +589,7 @@ impl EthManager {
                         rx_count: 0,
                         max_gap: Duration::ZERO,
                         late_gaps: 0,
+                        reader_delays: ReaderDelays::default(),
                         last_missing_report: None,
                         last_lost_report: None,
                     }),
@@ -628,17 +662,17 @@ fn reader(m: std::sync::Weak<EthManager>) {
         yarp_net::realtime::ETH_RECEIVER_PRIORITY,
     );
     let mut buf = vec![0u8; 65536];
+    let mut rx = StampedReceiver::new();
     let mut last_tick = Instant::now();
     loop {
         let Some(mgr) = m.upgrade() else {
             return;
         };
-        match mgr.socket.recv_from(&mut buf) {
-            Ok((n, SocketAddr::V4(from))) => match mgr.board_at(*from.ip()) {
-                Some(b) => b.on_datagram(&buf[..n]),
+        match rx.recv(&mgr.socket, &mut buf) {
+            Ok((n, from, at)) => match mgr.board_at(*from.ip()) {
+                Some(b) => b.on_datagram(&buf[..n], at),
                 None => tracing::debug!("datagram from unknown board {from} dropped"),
             },
-            Ok(_) => {}
             Err(e)
                 if matches!(
                     e.kind(),
@@ -658,5 +692,60 @@ fn reader(m: std::sync::Weak<EthManager>) {
                 b.on_tick();
             }
         }
+    }
+}
+
+/// `recvmsg` with the kernel's receive timestamp (`SO_TIMESTAMPNS`, set on the host
+/// socket): a datagram's arrival is when it reached the host's socket, so the gap
+/// statistics are the boards' streams, and a late reader shows as its own delay
+/// ([`ReaderDelays`]), not as a silence of every board.
+struct StampedReceiver {
+    cmsg: Vec<u8>,
+}
+
+impl StampedReceiver {
+    fn new() -> Self {
+        Self {
+            cmsg: nix::cmsg_space!(nix::sys::time::TimeSpec),
+        }
+    }
+
+    /// The datagram's size, sender and arrival time (now, when the kernel gave no
+    /// timestamp or one that the wall clock's steps make implausible).
+    fn recv(
+        &mut self,
+        socket: &UdpSocket,
+        buf: &mut [u8],
+    ) -> std::io::Result<(usize, SocketAddrV4, Instant)> {
+        use nix::sys::socket::{recvmsg, ControlMessageOwned, MsgFlags, SockaddrIn};
+        use std::os::fd::AsRawFd;
+        let mut iov = [std::io::IoSliceMut::new(buf)];
+        let msg = recvmsg::<SockaddrIn>(
+            socket.as_raw_fd(),
+            &mut iov,
+            Some(&mut self.cmsg),
+            MsgFlags::empty(),
+        )
+        .map_err(std::io::Error::from)?;
+        let (now, wall) = (Instant::now(), std::time::SystemTime::now());
+        let mut at = now;
+        if let Ok(cmsgs) = msg.cmsgs() {
+            for c in cmsgs {
+                if let ControlMessageOwned::ScmTimestampns(ts) = c {
+                    let stamp = std::time::UNIX_EPOCH
+                        + Duration::new(ts.tv_sec().max(0) as u64, ts.tv_nsec() as u32);
+                    if let Ok(waited) = wall.duration_since(stamp) {
+                        if waited < Duration::from_secs(1) {
+                            at = now.checked_sub(waited).unwrap_or(now);
+                        }
+                    }
+                }
+            }
+        }
+        let from = msg
+            .address
+            .map(|a| SocketAddrV4::new(a.ip(), a.port()))
+            .ok_or_else(|| std::io::Error::other("a datagram without its sender"))?;
+        Ok((msg.bytes, from, at))
     }
 }
