@@ -12,7 +12,11 @@
 //! status streams as they reach the host's socket (kernel receive timestamps):
 //! datagrams, the longest gap between two, the gaps longer than three periods, sequence
 //! gaps (in all and per board); how long datagrams waited there for the host's reader;
-//! how late the emulator's board thread woke.
+//! how late the emulator's board thread woke; and, over the same window, the machine's
+//! own stalls (`common/machine_stalls.rs`, in a child process) to compare them with.
+
+#[path = "common/machine_stalls.rs"]
+mod machine_stalls;
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -77,12 +81,23 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
     for b in mgr.all_boards() {
         b.reset_rx_stats();
     }
+    // The machine's own stalls over the same window, measured apart (its CPU is not
+    // ours) one priority above our real-time threads, so that it sees the machine only.
+    let probe = std::process::Command::new(std::env::current_exe().unwrap())
+        .args(["--machine-probe", &seconds.to_string()])
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("start the machine probe");
     let c0 = cpu_seconds();
     let wake0 = icub_emulators::eth::wake_stats();
     let w0 = Instant::now();
     std::thread::sleep(Duration::from_secs(seconds));
     let cpu = (cpu_seconds() - c0) / w0.elapsed().as_secs_f64();
     let wake1 = icub_emulators::eth::wake_stats();
+    let machine = probe
+        .wait_with_output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_else(|e| format!("the probe failed: {e}"));
     let mut worst = (Duration::ZERO, String::new());
     let (mut frames, mut seq_gaps, mut late) = (0u64, 0u64, 0u64);
     let mut reader = icubmod::eth::manager::ReaderDelays::default();
@@ -178,6 +193,7 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         wake1.3 - wake0.3,
         wake1.4 as f64 / 1e3
     );
+    println!("  the machine over the same window (a probe thread per CPU at SCHED_FIFO 50, another process): {machine}");
     for line in per_board {
         println!("{line}");
     }
@@ -187,6 +203,12 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
+    if let Some(i) = args.iter().position(|a| a == "--machine-probe") {
+        let seconds = args.get(i + 1).and_then(|s| s.parse().ok()).unwrap_or(20);
+        let prio = yarp_net::realtime::ETH_RECEIVER_PRIORITY + 1;
+        println!("{}", machine_stalls::probe(seconds, prio).summary());
+        return;
+    }
     if let Some(i) = args.iter().position(|a| a == "--robot") {
         let seconds = args.get(i + 2).and_then(|s| s.parse().ok()).unwrap_or(20);
         match args[i + 1].as_str() {
