@@ -242,3 +242,200 @@ fn rgbd_sensor_client_reads_our_wrapper() {
         .expect("no server");
     assert!(e.contains("/rgbdServer"), "{e}");
 }
+
+const ERGOCUB_DEPTH_CARRIER: &str = "fast_tcp+send.portmonitor+file.depthimage_compression_zlib+recv.portmonitor+file.depthimage_compression_zlib+type.dll";
+
+/// ergoCub's depth repeater carriers (`sensors/ros2_repeaters/depth_compressed_ros2.xml`:
+/// `ImageCarrier mjpeg`, the depth through `depthimage_compression_zlib`) with our
+/// RGBDSensorClient on our server: both images arrive, as images.
+#[test]
+fn rgbd_sensor_client_with_ergocub_repeater_carriers() {
+    let mut server = camera("/rgbdServerErgo");
+    let carriers = format!("ImageCarrier mjpeg\nDepthCarrier {ERGOCUB_DEPTH_CARRIER}\n");
+    let mut pd =
+        client("/rgbdServerErgo", "/rgbdClientErgo", &carriers).unwrap_or_else(|e| panic!("{e}"));
+    let d = pd.device().as_rgbd_sensor().expect("IRGBDSensor");
+    let end = Instant::now() + T;
+    let ((rgb, t1), (depth, t2)) = loop {
+        if let Ok(both) = d.get_images() {
+            break both;
+        }
+        assert!(Instant::now() < end, "no images in {T:?}");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(
+        (rgb.pixel_code(), rgb.width(), rgb.height()),
+        (PixelCode::RGB, 32, 24)
+    );
+    assert_eq!(
+        (depth.pixel_code(), depth.width(), depth.height()),
+        (PixelCode::MONO_FLOAT, 32, 24)
+    );
+    // metres of the fake camera, decompressed whole
+    for y in [0, 12, 23] {
+        let d = f32::from_le_bytes(depth.pixel(16, y).try_into().unwrap());
+        assert!(
+            d.is_finite() && (0.0..=1.0).contains(&d),
+            "depth {d} at row {y}"
+        );
+    }
+    // the envelopes: the colour one rode in the JPEG's comment marker
+    assert!(
+        t1.time > 1.6e9 && t2.time > 1.6e9,
+        "envelopes {t1:?} {t2:?}"
+    );
+    pd.close().unwrap();
+    server.close().unwrap();
+}
+
+/// The same carriers against C++ YARP (3.5, with its mjpeg carrier and its
+/// depthimage_compression_zlib port monitor): a C++ rgbdSensor_nws_yarp over
+/// fakeDepthCamera streams to our ports (C++ compresses, we decompress; we pull the JPEGs),
+/// and our server streams to C++ `yarp read` (we compress, C++ decompresses; C++ pulls).
+#[test]
+fn ergocub_repeater_carriers_interoperate_with_cpp() {
+    let test = "ergocub_repeater_carriers_interoperate_with_cpp";
+    let Some(bin) =
+        yarp_interop_tests::cpp_devices(test, &["rgbdSensor_nws_yarp", "fakeDepthCamera"])
+    else {
+        return;
+    };
+    if !bin
+        .join("../share/yarp/plugins/depthimage_compression_zlib.ini")
+        .exists()
+    {
+        yarp_interop_tests::peer_missing(
+            test,
+            "C++ YARP's depthimage_compression_zlib port monitor",
+            "not built in this C++ YARP",
+            "tests/peers/install-cpp-yarp.sh",
+        );
+        return;
+    }
+    // C++ server -> our readers
+    let _cpp = yarp_interop_tests::cpp_yarpdev(
+        &bin,
+        &[
+            "--device",
+            "rgbdSensor_nws_yarp",
+            "--subdevice",
+            "fakeDepthCamera",
+            "--name",
+            "/cppCamera",
+            "--period",
+            "0.03",
+        ],
+        "/cppCamera/depthImage:o",
+    );
+    let (rgb, depth) = run(async {
+        let ns = name_client();
+        let rgb = BufferedPort::open("/ours/rgb:i", ns.clone()).await.unwrap();
+        let depth = BufferedPort::open("/ours/depth:i", ns.clone())
+            .await
+            .unwrap();
+        for (from, to, carrier) in [
+            ("/cppCamera/rgbImage:o", "/ours/rgb:i", "mjpeg"),
+            (
+                "/cppCamera/depthImage:o",
+                "/ours/depth:i",
+                ERGOCUB_DEPTH_CARRIER,
+            ),
+        ] {
+            let (ok, msg) = yarp_net::network::connect(&ns, from, to, Some(carrier))
+                .await
+                .unwrap();
+            assert!(ok, "{from} -> {to} with {carrier}: {msg}");
+        }
+        let a = rgb.read().await.expect("a JPEG from C++");
+        let b = depth
+            .read()
+            .await
+            .expect("a compressed depth image from C++");
+        (
+            Image::from_bottle(&a.bottle).unwrap(),
+            Image::from_bottle(&b.bottle).unwrap(),
+        )
+    });
+    assert_eq!(rgb.pixel_code(), PixelCode::RGB);
+    assert!(rgb.width() > 0 && rgb.height() > 0);
+    assert_eq!(depth.pixel_code(), PixelCode::MONO_FLOAT);
+    assert!(depth.width() > 0 && depth.height() > 0);
+    eprintln!(
+        "interop: C++ rgbdSensor_nws_yarp -> ours: mjpeg {}x{}, depth (zlib monitor) {}x{}",
+        rgb.width(),
+        rgb.height(),
+        depth.width(),
+        depth.height()
+    );
+
+    // our server -> C++ yarp read, on each carrier
+    let mut server = camera("/oursCamera");
+    let yarp = bin.join("yarp");
+    for (from, reader, carrier, code) in [
+        ("/oursCamera/rgbImage:o", "/cpp_rgb_rd", "mjpeg", "[rgb]"),
+        (
+            "/oursCamera/depthImage:o",
+            "/cpp_depth_rd",
+            ERGOCUB_DEPTH_CARRIER,
+            "[dec]",
+        ),
+    ] {
+        let mut child = Reaped(
+            yarp_interop_tests::cpp_command(&yarp)
+                .args(["read", reader])
+                .stdout(Stdio::piped())
+                .stderr(Stdio::null())
+                .spawn()
+                .expect("C++ yarp read"),
+        );
+        let stdout = child.0.stdout.take().unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        let start = Instant::now();
+        while !yarp_interop_tests::registered(reader) {
+            assert!(
+                start.elapsed() < T,
+                "C++ yarp read did not register {reader}"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let (ok, msg) = run({
+            let (from, reader, carrier) =
+                (from.to_string(), reader.to_string(), carrier.to_string());
+            async move {
+                yarp_net::network::connect(&name_client(), &from, &reader, Some(&carrier))
+                    .await
+                    .unwrap()
+            }
+        });
+        assert!(ok, "{from} -> {reader} with {carrier}: {msg}");
+        let line = loop {
+            let left = (3 * T).saturating_sub(start.elapsed());
+            assert!(
+                !left.is_zero(),
+                "C++ yarp read printed no image over {carrier}"
+            );
+            if let Ok(l) = rx.recv_timeout(left.min(Duration::from_millis(200))) {
+                if l.starts_with("[mat]") {
+                    break l;
+                }
+            }
+        };
+        let img = Image::from_bottle(&Bottle::from_text(&line)).expect("an image");
+        assert_eq!((img.width(), img.height()), (32, 24), "{carrier}");
+        assert!(
+            line.starts_with(&format!("[mat] {code}")),
+            "{carrier}: {}",
+            &line[..40]
+        );
+        eprintln!("interop: ours -> C++ yarp read over {carrier}: {code} 32x24");
+        drop(child);
+    }
+    server.close().unwrap();
+}

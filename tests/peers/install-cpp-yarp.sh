@@ -9,8 +9,9 @@
 # Built: the libraries and programs (yarp, yarpserver, yarpdev, yarprobotinterface, yarprun,
 # ...), every carrier whose dependencies are met (shmem, mjpeg, bayer, human, xmlrpc, tcpros,
 # portmonitor, unix_stream, websocket; tcp, fast_tcp, text, udp and mcast are built into
-# YARP_os), and the device plugins listed in $devices below. Off: GUIs, bindings, tests,
-# examples and every other device.
+# YARP_os), the depthimage_compression_zlib port monitor (ergoCub's depth repeater names it),
+# and the device plugins listed in $devices below. Off: GUIs, bindings, tests, examples and
+# every other device.
 #
 # Prints the bin directory (YARP_CPP_BIN) on stdout. With --env it prints shell assignments
 # instead: YARP_CPP_BIN and YARP_DATA_DIRS (where `yarpdev` finds the plugin manifests;
@@ -29,6 +30,7 @@ devices=(
     remote_grabber
     multipleanalogsensorsserver multipleanalogsensorsclient multipleanalogsensorsremapper
     fakeIMU inertial fakeAnalogSensor analogServer analogsensorclient virtualAnalogServer
+    fakeDepthCamera rgbdSensor_nws_yarp
     group pipe
 )
 cmake_options=(
@@ -47,6 +49,9 @@ cmake_options=(
     -DENABLE_yarpcar_mjpeg=ON
     -DENABLE_yarpcar_websocket=ON
     -DENABLE_yarpcar_shmem=ON
+    -DENABLE_yarpcar_portmonitor=ON
+    -DYARP_COMPILE_PORTMONITOR_PLUGINS=ON
+    -DENABLE_yarppm_depthimage_compression_zlib=ON
 )
 # The 2021 sources need these on a current toolchain (see ../shared/cpp-yarp-peer.md).
 export CMAKE_POLICY_VERSION_MINIMUM=3.5
@@ -54,7 +59,7 @@ export CXXFLAGS="-include utility -include cstdint -include limits -include iter
  -include algorithm -include memory -include string -include cstring -include mutex \
  -include functional -include stdexcept -include array"
 apt_packages=(cmake ninja-build ycm-cmake-modules libace-dev libeigen3-dev libsqlite3-dev
-    libjpeg-dev g++ curl)
+    libjpeg-dev zlib1g-dev g++ curl)
 
 stamp=$(printf '%s\n' "$version" "${devices[*]}" "${cmake_options[*]}" "$CXXFLAGS" \
     "${apt_packages[*]}" | sha256sum | cut -c1-12)
@@ -127,6 +132,8 @@ listed=$(YARP_DATA_DIRS=$prefix/share/yarp "$prefix/bin/yarpdev" --list 2>&1)
 for d in "${devices[@]}"; do
     grep -q "\"$d\"" <<<"$listed" || { log "yarpdev --list lacks $d:"; echo "$listed" >&2; exit 1; }
 done
+[[ -e $prefix/share/yarp/plugins/depthimage_compression_zlib.ini ]] ||
+    { log "the depthimage_compression_zlib port monitor was not built (see $build/CMakeCache.txt)"; exit 1; }
 touch "$prefix/.installed"
 ln -sfn "$prefix" "$cache/cpp-yarp"
 log "built and installed in $((SECONDS - start)) s: $prefix"

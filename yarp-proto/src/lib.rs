@@ -21,6 +21,7 @@ pub mod image;
 pub mod nameserver;
 pub mod number;
 pub mod port_admin;
+pub mod portmonitor;
 pub mod property;
 pub mod stamp;
 pub mod tags;

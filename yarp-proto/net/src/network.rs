@@ -177,10 +177,31 @@ pub async fn connect(
     to: &str,
     carrier: Option<&str>,
 ) -> Result<(bool, String), NetworkError> {
-    let src = lookup(ns, &PortRef::parse(from).name).await?;
+    let source = PortRef::parse(from).name;
+    let src = lookup(ns, &source).await?;
     let dest = PortRef::parse(to);
-    lookup(ns, &dest.name).await?;
-    let target = match carrier.map(str::to_string).or(dest.carrier.clone()) {
+    let dst = lookup(ns, &dest.name).await?;
+    let carrier = carrier.map(str::to_string).or(dest.carrier.clone());
+    // a pull carrier (mjpeg): the destination connects to the source (C++ metaConnect
+    // asks the destination to `add` the source)
+    if let Some(c) = &carrier {
+        let base = yarp_proto::wire::modifiers::CarrierName::parse(c).base;
+        if yarp_proto::wire::Carrier::from_name(&base).is_some_and(|k| !k.is_push()) {
+            let mut cmd = Bottle::new();
+            cmd.add_vocab("add");
+            cmd.push(
+                PortRef {
+                    carrier: Some(c.clone()),
+                    name: source,
+                }
+                .to_string()
+                .as_str(),
+            );
+            let reply = admin_command(&dst, &cmd).await?;
+            return Ok(reply_outcome(&reply));
+        }
+    }
+    let target = match carrier {
         Some(c) => PortRef {
             carrier: Some(c),
             name: dest.name.clone(),
@@ -201,13 +222,41 @@ pub async fn disconnect(
     from: &str,
     to: &str,
 ) -> Result<(bool, String), NetworkError> {
-    let src = lookup(ns, &PortRef::parse(from).name).await?;
+    let source = PortRef::parse(from).name;
+    let src = lookup(ns, &source).await?;
     let dest = PortRef::parse(to).name;
-    lookup(ns, &dest).await?;
+    let dst = lookup(ns, &dest).await?;
     let mut cmd = Bottle::new();
     cmd.add_vocab("del");
     cmd.push(dest.as_str());
     let reply = admin_command(&src, &cmd).await?;
+    let outcome = reply_outcome(&reply);
+    if outcome.0 {
+        return Ok(outcome);
+    }
+    // not an output of the source: a pulled connection (mjpeg) belongs to the
+    // destination, which opened it
+    let mut cmd = Bottle::new();
+    cmd.add_vocab("list");
+    cmd.add_vocab("in");
+    cmd.push(source.as_str());
+    let pulled = admin_command(&dst, &cmd)
+        .await
+        .ok()
+        .and_then(|listed| {
+            let c = listed.find("carrier")?.as_str()?.to_string();
+            yarp_proto::wire::Carrier::from_name(
+                &yarp_proto::wire::modifiers::CarrierName::parse(&c).base,
+            )
+        })
+        .is_some_and(|c| !c.is_push());
+    if !pulled {
+        return Ok(outcome);
+    }
+    let mut cmd = Bottle::new();
+    cmd.add_vocab("del");
+    cmd.push(source.as_str());
+    let reply = admin_command(&dst, &cmd).await?;
     Ok(reply_outcome(&reply))
 }
 

@@ -68,6 +68,9 @@ pub enum Carrier {
     NameSer,
     /// `http`: `GET /...` or `POST /form`.
     Http,
+    /// `mjpeg` (plugin): a pull connection; the reader sends `GET /?action=stream` and
+    /// the writer answers with a multipart stream of JPEG images ([`super::mjpeg`]).
+    Mjpeg,
     /// A carrier added to a [`CarrierRegistry`] by name.
     Custom(&'static str),
 }
@@ -88,6 +91,7 @@ impl Carrier {
             Carrier::TextAck => "text_ack",
             Carrier::NameSer => "name_ser",
             Carrier::Http => "http",
+            Carrier::Mjpeg => "mjpeg",
             Carrier::Custom(name) => name,
         }
     }
@@ -117,6 +121,12 @@ impl Carrier {
     /// The 8 header bytes this carrier sends when it opens a connection.
     pub fn header(&self) -> [u8; 8] {
         self.spec().header
+    }
+
+    /// Whether the writer opens the connection (C++ `Carrier::isPush`). `mjpeg` is pulled:
+    /// the reading port connects to the writing one, as a web browser to a camera.
+    pub fn is_push(&self) -> bool {
+        !matches!(self, Carrier::Mjpeg)
     }
 }
 
@@ -205,8 +215,8 @@ fn http_header(h: &[u8; 8]) -> bool {
 }
 
 /// The built-in carriers in C++ `Carriers` order (http, name_ser, local, tcp, fast_tcp,
-/// mcast, udp, text, text_ack), then the `shmem` and `unix_stream` plugins.
-pub static BUILTIN: [CarrierSpec; 12] = [
+/// mcast, udp, text, text_ack), then the `shmem`, `unix_stream` and `mjpeg` plugins.
+pub static BUILTIN: [CarrierSpec; 13] = [
     CarrierSpec {
         carrier: Carrier::Http,
         header: *b"GET / HT",
@@ -316,6 +326,14 @@ pub static BUILTIN: [CarrierSpec; 12] = [
         pattern: HeaderPattern::Exact(*b"UNIX_ACK"),
         framing: Framing::Local,
         requires_ack: true,
+        supports_reply: false,
+    },
+    CarrierSpec {
+        carrier: Carrier::Mjpeg,
+        header: super::mjpeg::HEADER,
+        pattern: HeaderPattern::Exact(super::mjpeg::HEADER),
+        framing: Framing::Raw,
+        requires_ack: false,
         supports_reply: false,
     },
 ];
@@ -506,7 +524,8 @@ mod tests {
         assert_eq!(c(*b"UNIX_ACK"), Ok(Carrier::UnixStreamAck));
         assert_eq!(c(*b"GET /foo"), Ok(Carrier::Http));
         assert_eq!(c(*b"POST /fo"), Ok(Carrier::Http));
-        assert!(c(*b"GET /?ac").is_err());
+        // the mjpeg plug-in's request (http leaves it alone)
+        assert_eq!(c(*b"GET /?ac"), Ok(Carrier::Mjpeg));
         assert!(c(*b"GET /?ws").is_err());
         assert_eq!(
             c(*b"ping\n\0\0\0"),

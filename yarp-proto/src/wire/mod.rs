@@ -46,6 +46,8 @@ pub mod error;
 pub mod indexless;
 pub mod line;
 pub mod message;
+pub mod mjpeg;
+pub mod modifiers;
 pub mod number;
 pub mod scan;
 pub mod shmem;

@@ -13,7 +13,9 @@ use yarp_proto::port_admin::{
     self, add_output_text, format_add_result, format_del_result, handle_admin, remove_input_text,
     remove_output_text, AddOutcome, AdminAction, Pending, Route,
 };
+use yarp_proto::portmonitor::{Monitor, Side};
 use yarp_proto::wire::datagram::McastGroup;
+use yarp_proto::wire::modifiers::CarrierName;
 use yarp_proto::wire::{
     self, text_carrier, Carrier, CarrierSpec, CommandKind, Decoder, DecoderConfig, Event, Framing,
     Message,
@@ -36,6 +38,11 @@ pub(crate) struct InputEntry {
 impl InputEntry {
     pub(crate) fn new(route: Route, kill: Arc<Notify>) -> InputEntry {
         InputEntry { route, kill }
+    }
+
+    /// Ends the connection.
+    pub(crate) fn kill(&self) {
+        self.kill.notify_one();
     }
 }
 
@@ -68,6 +75,8 @@ enum End {
     Mcast(std::net::SocketAddrV4),
     /// An http request (its first bytes).
     Http(Vec<u8>),
+    /// An mjpeg reader's request (its first bytes): the connection becomes an output.
+    Mjpeg(Vec<u8>),
     /// A unix_stream handshake: continue on a Unix socket.
     Unix(Carrier),
     /// A shmem handshake: continue on shared memory.
@@ -86,6 +95,7 @@ async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
         spec: None,
         dgram: None,
         from: String::new(),
+        monitor: None,
     };
     let end = tokio::select! {
         _ = shutdown.changed() => Ok(End::Closed),
@@ -105,6 +115,7 @@ async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
             let _ = stream.shutdown().await;
         }
         Ok(End::Http(head)) => super::http::serve(&shared, &mut stream, head).await,
+        Ok(End::Mjpeg(head)) => super::mjpeg::serve_output(&shared, stream, head).await,
         Ok(End::Unix(carrier)) => {
             let ports = (
                 stream.local_addr().map_or(0, |a| a.port()),
@@ -160,6 +171,8 @@ struct Conn<'a> {
     /// The connection is the TCP handshake of a datagram carrier.
     dgram: Option<Carrier>,
     from: String,
+    /// The monitor the sender's qualifiers ask of this side (`+recv.portmonitor`).
+    monitor: Option<Monitor>,
 }
 
 impl Conn<'_> {
@@ -183,13 +196,17 @@ impl Conn<'_> {
                             self.spec = Some(spec);
                             continue;
                         }
-                        Carrier::Http => {
+                        Carrier::Http | Carrier::Mjpeg => {
                             // the rest of the request may already sit in the decoder
                             let mut head = h.raw.to_vec();
                             while let Ok(Some(Event::Raw(more))) = self.decoder.poll() {
                                 head.extend_from_slice(&more);
                             }
-                            return Ok(End::Http(head));
+                            return Ok(if h.carrier() == Carrier::Mjpeg {
+                                End::Mjpeg(head)
+                            } else {
+                                End::Http(head)
+                            });
                         }
                         _ => {}
                     }
@@ -206,7 +223,33 @@ impl Conn<'_> {
                     self.spec = Some(spec);
                 }
                 Event::SenderName(name) => {
-                    self.from = String::from_utf8_lossy(&name).into_owned();
+                    // `/port (recv portmonitor) (file ...)`: the port, and the carrier's
+                    // qualifiers (C++ Protocol::setRoute)
+                    let sender = String::from_utf8_lossy(&name).into_owned();
+                    let base = self.spec.map_or("tcp", |s| s.carrier.name());
+                    let (port, carrier) = CarrierName::from_sender_specifier(base, &sender);
+                    self.from = port;
+                    if carrier.has_qualifiers() {
+                        match Monitor::for_side(&carrier, Side::Receiver) {
+                            Ok(m) => self.monitor = m,
+                            Err(e) => {
+                                tracing::warn!(
+                                    "{}: connection from {} refused: {e}",
+                                    self.shared.name,
+                                    self.from
+                                );
+                                return Ok(End::Closed);
+                            }
+                        }
+                    }
+                    if self.dgram.is_some() && carrier.has_qualifiers() {
+                        tracing::warn!(
+                            "{}: connection from {} refused: carrier {carrier}: qualifiers are supported on tcp, fast_tcp and text connections",
+                            self.shared.name,
+                            self.from
+                        );
+                        return Ok(End::Closed);
+                    }
                     match self.dgram {
                         Some(Carrier::Udp) => return Ok(End::Udp),
                         Some(c @ (Carrier::UnixStream | Carrier::UnixStreamAck)) => {
@@ -227,7 +270,7 @@ impl Conn<'_> {
                     self.shared.lock().inputs.insert(
                         self.id,
                         InputEntry {
-                            route: Route::new(&self.from, &self.shared.name, spec.carrier.name()),
+                            route: Route::new(&self.from, &self.shared.name, &carrier.to_string()),
                             kill: self.kill.clone(),
                         },
                     );
@@ -350,10 +393,34 @@ impl Conn<'_> {
                 } else {
                     (None, None)
                 };
+                let stamp = m.stamp();
+                let (payload, is_text) = match &self.monitor {
+                    Some(monitor) => {
+                        let b = if text {
+                            Ok(Bottle::from_text(&m.payload))
+                        } else {
+                            Bottle::decode(&m.payload).map_err(|e| e.to_string())
+                        };
+                        match b.and_then(|b| monitor.update(&b).map_err(|e| e.to_string())) {
+                            Ok(b) => (b.encode(), false),
+                            Err(e) => {
+                                // C++ drops what its monitor does not accept
+                                tracing::warn!(
+                                    "{}: message from {} dropped: {e}",
+                                    self.shared.name,
+                                    self.from
+                                );
+                                self.ack(stream).await?;
+                                return Ok(None);
+                            }
+                        }
+                    }
+                    None => (m.payload, text),
+                };
                 let incoming = Incoming {
-                    stamp: m.stamp(),
-                    payload: m.payload,
-                    is_text: text,
+                    stamp,
+                    payload,
+                    is_text,
                     from: self.from.clone(),
                     reply: tx,
                     decoded: None,
@@ -523,7 +590,12 @@ impl Conn<'_> {
                     {
                         Ok(()) => AddOutcome::Added { note: None },
                         Err(super::PortError::UnknownPort(_)) => AddOutcome::UnknownTarget,
-                        Err(_) => AddOutcome::CannotConnect,
+                        Err(e) => {
+                            // the reply says only "Cannot connect"; C++ tells why on the
+                            // port's own stderr
+                            tracing::warn!("{}: {e}", self.shared.name);
+                            AddOutcome::CannotConnect
+                        }
                     };
                     add_outcome = Some((dest, outcome));
                 }

@@ -20,6 +20,7 @@ mod dgram_out;
 mod http;
 mod input;
 mod local;
+mod mjpeg;
 pub(crate) mod output;
 pub mod shmem;
 pub mod unix;
@@ -277,6 +278,19 @@ impl Shared {
                 .ok_or_else(|| PortError::UnknownPort(r.name.clone()))?,
             None => return Err(PortError::UnknownPort(r.name.clone())),
         };
+        // a pull carrier (mjpeg): this port connects, and receives
+        let name = yarp_proto::wire::modifiers::CarrierName::parse(&carrier_name);
+        if Carrier::from_name(&name.base).is_some_and(|c| !c.is_push()) {
+            let already = self
+                .lock()
+                .inputs
+                .values()
+                .any(|i| i.route.from == r.name && i.route.carrier == carrier_name);
+            if !already {
+                mjpeg::pull(self, &r.name, &contact, &name).await?;
+            }
+            return Ok(());
+        }
         let already = self
             .lock()
             .outputs
@@ -291,8 +305,19 @@ impl Shared {
         Ok(())
     }
 
-    /// Removes outputs to `to`; true if there was one.
+    /// Removes outputs to `to`, and what this port pulls from `to` (C++ matches every
+    /// connection whose route goes to `to`); true if there was one.
     pub(crate) fn remove_output(&self, to: &str) -> bool {
+        let pulled = {
+            let st = self.lock();
+            let pulled: Vec<_> = st
+                .inputs
+                .values()
+                .filter(|i| i.route.from == to && is_pull(&i.route.carrier))
+                .collect();
+            pulled.iter().for_each(|i| i.kill());
+            !pulled.is_empty()
+        };
         let removed: Vec<_> = {
             let mut st = self.lock();
             let ids: Vec<u64> = st
@@ -305,7 +330,7 @@ impl Shared {
                 .filter_map(|id| st.outputs.remove(&id))
                 .collect()
         };
-        let any = !removed.is_empty();
+        let any = !removed.is_empty() || pulled;
         for o in removed {
             o.close();
         }
@@ -608,6 +633,12 @@ fn advertised_ip(ns: &NameClient) -> String {
         })
         .map(|a| a.ip().to_string())
         .unwrap_or_else(|_| "127.0.0.1".to_string())
+}
+
+/// Whether a connection's carrier (qualifiers and all) is pulled by its reader.
+fn is_pull(carrier: &str) -> bool {
+    let base = carrier.split('+').next().unwrap_or_default();
+    Carrier::from_name(base).is_some_and(|c| !c.is_push())
 }
 
 /// Carrier lookup by name, for the carriers ports can use today.

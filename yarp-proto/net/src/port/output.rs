@@ -11,6 +11,8 @@ use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 use tokio::time::timeout;
 use yarp_proto::port_admin::Route;
+use yarp_proto::portmonitor::{Monitor, Side};
+use yarp_proto::wire::modifiers::CarrierName;
 use yarp_proto::wire::{
     self, encode_connection_start, text_carrier, Carrier, CarrierSpec, Decoder, DecoderConfig,
     Event, Framing, Index, PortCommand, WireError,
@@ -47,6 +49,12 @@ pub enum OutputError {
     AckTimeout(String, Duration),
     #[error("peer {0:?} stopped before the end of its header or message (nothing for {1:?})")]
     Stalled(String, Duration),
+    #[error("connection to {target} with carrier {carrier}: {source}")]
+    Monitor {
+        target: String,
+        carrier: String,
+        source: yarp_proto::portmonitor::MonitorError,
+    },
 }
 
 /// How long a closing connection may take to send its `q` before it is ended without.
@@ -268,7 +276,23 @@ pub(crate) async fn connect(
     if carrier == "local" {
         return super::local::connect(shared, target);
     }
+    // `base+send.portmonitor+file.X+...`: the carrier proper, and a monitor of what we
+    // send when the qualifiers ask for one (the receiver learns the rest from our name)
+    let name = CarrierName::parse(carrier);
+    let monitor =
+        Monitor::for_side(&name, Side::Sender).map_err(|source| OutputError::Monitor {
+            target: target.to_string(),
+            carrier: carrier.to_string(),
+            source,
+        })?;
+    let qualified = name.has_qualifiers();
+    let carrier = name.base.as_str();
     match super::carrier_by_name(carrier) {
+        Some(_) if qualified && !stream_framed(carrier) => {
+            return Err(OutputError::UnsupportedCarrier(format!(
+                "{name} (qualifiers are supported on tcp, fast_tcp and text connections)"
+            )));
+        }
         Some(c @ (Carrier::Udp | Carrier::Mcast)) => {
             return super::dgram_out::connect(shared, target, contact, c).await;
         }
@@ -303,8 +327,9 @@ pub(crate) async fn connect(
         target: target.to_string(),
         source,
     };
+    let sender = name.sender_specifier(&shared.name);
     stream
-        .write_all(&encode_connection_start(&spec, shared.name.as_bytes()))
+        .write_all(&encode_connection_start(&spec, sender.as_bytes()))
         .await
         .map_err(io_err)?;
     let mut decoder = Decoder::connecting(spec, DecoderConfig::default());
@@ -323,8 +348,14 @@ pub(crate) async fn connect(
             what: format!("{ev:?}"),
         });
     }
-    let route = Route::new(&shared.name, target, spec.carrier.name());
-    Ok(spawn(shared, route, stream, decoder, spec))
+    let route = Route::new(&shared.name, target, &name.to_string());
+    Ok(spawn(shared, route, stream, decoder, spec, monitor))
+}
+
+/// Whether the carrier frames messages on its TCP stream (where qualifiers apply).
+fn stream_framed(carrier: &str) -> bool {
+    super::carrier_by_name(carrier)
+        .is_some_and(|c| matches!(c.spec().framing, Framing::Stream | Framing::Text))
 }
 
 /// Turns an accepted connection into an output (the peer sent `r`).
@@ -337,7 +368,7 @@ pub(crate) fn from_reversed(
     // what the peer sends from now on are acks and replies to our messages
     let decoder = Decoder::responses(spec, DecoderConfig::default());
     let route = Route::new(&shared.name, peer, spec.carrier.name());
-    spawn(shared, route, stream, decoder, spec)
+    spawn(shared, route, stream, decoder, spec, None)
 }
 
 fn spawn(
@@ -346,6 +377,7 @@ fn spawn(
     stream: TcpStream,
     decoder: Decoder,
     spec: CarrierSpec,
+    monitor: Option<Monitor>,
 ) -> OutputHandle {
     let (tx, rx) = mpsc::channel(OUTPUT_QUEUE);
     let task = tokio::spawn(run(
@@ -353,7 +385,7 @@ fn spawn(
         route.to.clone(),
         stream,
         decoder,
-        spec,
+        (spec, monitor),
         rx,
     ));
     OutputHandle { route, tx, task }
@@ -364,10 +396,10 @@ async fn run(
     target: String,
     mut stream: TcpStream,
     mut decoder: Decoder,
-    spec: CarrierSpec,
+    (spec, monitor): (CarrierSpec, Option<Monitor>),
     mut rx: mpsc::Receiver<Job>,
 ) {
-    let result = serve(&target, &mut stream, &mut decoder, spec, &mut rx).await;
+    let result = serve(&target, &mut stream, &mut decoder, spec, monitor, &mut rx).await;
     if let Err(e) = &result {
         tracing::debug!("output to {target} ended: {e}");
     }
@@ -385,6 +417,7 @@ async fn serve(
     stream: &mut TcpStream,
     decoder: &mut Decoder,
     spec: CarrierSpec,
+    monitor: Option<Monitor>,
     rx: &mut mpsc::Receiver<Job>,
 ) -> Result<(), OutputError> {
     let io_err = |source| OutputError::Io {
@@ -408,6 +441,20 @@ async fn serve(
         };
         let Some(job) = job else {
             return Ok(());
+        };
+        let job = match (&monitor, job) {
+            (Some(m), Job::Data(msg)) => match monitored(m, &msg, target) {
+                Some(msg) => Job::Data(msg),
+                None => continue,
+            },
+            (Some(m), Job::Rpc(msg, reply_tx)) => match monitored(m, &msg, target) {
+                Some(msg) => Job::Rpc(msg, reply_tx),
+                None => {
+                    let _ = reply_tx.send(Ok(Bottle::new()));
+                    continue;
+                }
+            },
+            (_, job) => job,
         };
         match job {
             Job::Data(msg) => {
@@ -454,6 +501,18 @@ async fn serve(
                 }
                 return Ok(());
             }
+        }
+    }
+}
+
+/// The message as the connection's sender-side monitor passes it on; `None` (the message
+/// is dropped, as C++ drops it) when the monitor refuses it.
+fn monitored(m: &Monitor, msg: &Outgoing, target: &str) -> Option<Arc<Outgoing>> {
+    match m.update(msg.bottle()) {
+        Ok(b) => Some(Arc::new(Outgoing::new(Arc::new(b), msg.stamp()))),
+        Err(e) => {
+            tracing::warn!("to {target}: message dropped: {e}");
+            None
         }
     }
 }
