@@ -9,7 +9,12 @@
 //! `RGBDSensorClient`) attached to the camera. Everything else is the robot's own text,
 //! the YARP wrappers it also starts (`rangefinder2D_nws_yarp`, `rgbdSensor_nws_yarp`)
 //! included: their ports answer too.
-//! Domain index 34 of the gateway's harness.
+//!
+//! Then the robot's ROS 2 repeaters (`sensors/ros2_repeaters/depth_compressed_ros2.xml`,
+//! `lidar_compressed_ros2.xml`), unmodified, in further `yarprobotinterface`s: they read
+//! the robot's YARP streams over mjpeg and the zlib port monitors, as on a laptop beside
+//! the robot, and republish them to ROS 2.
+//! Domain indices 34 and 31 of the gateway's harness.
 
 #[path = "../../tests/fixtures/robotinterface/live_support.rs"]
 mod support;
@@ -49,8 +54,9 @@ fn element<'a>(text: &'a str, marker: &str) -> &'a str {
     &text[start..end]
 }
 
-/// The test's copy of the robot's files in `dir`.
-fn robot_copy(dir: &Path) {
+/// The test's copy of the robot's files in `dir`; with `pc`, the repeater's point cloud
+/// wrapper attached to the camera itself.
+fn robot_copy(dir: &Path, pc: bool) {
     let src = ergocub();
     std::fs::create_dir_all(dir.join("sensors")).unwrap();
     std::fs::copy(src.join("sensors_ros2.xml"), dir.join("sensors_ros2.xml")).unwrap();
@@ -59,11 +65,15 @@ fn robot_copy(dir: &Path) {
     std::fs::write(dir.join("sensors/rplidar_ros2.xml"), lidar).unwrap();
     let camera = read(&src.join("sensors/realsense_ros2.xml"));
     let camera = swap(&camera, r#"type="realsense2""#, r#"type="fakeDepthCamera""#);
-    let repeater = read(&src.join("sensors/ros2_repeaters/depth_compressed_ros2.xml"));
-    let pc = element(&repeater, r#"name="pc_nws_ros""#);
-    let pc = swap(pc, "depth_nwc_yarp", "realsenseD450");
-    let at = camera.rfind("</devices>").expect("</devices>");
-    let camera = format!("{}    {pc}\n\n{}", &camera[..at], &camera[at..]);
+    let camera = if pc {
+        let repeater = read(&src.join("sensors/ros2_repeaters/depth_compressed_ros2.xml"));
+        let pc = element(&repeater, r#"name="pc_nws_ros""#);
+        let pc = swap(pc, "depth_nwc_yarp", "realsenseD450");
+        let at = camera.rfind("</devices>").expect("</devices>");
+        format!("{}    {pc}\n\n{}", &camera[..at], &camera[at..])
+    } else {
+        camera
+    };
     std::fs::write(dir.join("sensors/realsense_ros2.xml"), camera).unwrap();
 }
 
@@ -109,7 +119,7 @@ async fn ergocub_lidar_and_realsense_files_publish_to_rclpy() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    robot_copy(dir.path());
+    robot_copy(dir.path(), true);
     let net = start_network().await;
     let domain = distro.domain(34).to_string();
     let mut child = Child::spawn_env(
@@ -277,4 +287,175 @@ async fn ergocub_lidar_and_realsense_files_publish_to_rclpy() {
     let out = child.output();
     assert!(status.is_some(), "yarprobotinterface did not quit:\n{out}");
     assert!(!out.contains("unknown device"), "{out}");
+}
+
+/// The robot's ROS 2 repeaters, unmodified, read the (fake) robot's camera and lidar over
+/// the carriers their files name (`ImageCarrier mjpeg`, the depth and the laser scan
+/// through the zlib port monitors) and republish them: rclpy receives the colour and depth
+/// images, the point cloud and the scan.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ergocub_ros2_repeaters_run_unmodified() {
+    let distros = common::first_distro("ergocub_ros2_repeaters_run_unmodified");
+    let Some(distro) = distros.first() else {
+        return;
+    };
+    if !ergocub().exists() {
+        let why = format!("no robots-configuration at {}", ergocub().display());
+        assert!(std::env::var("CI").as_deref() != Ok("true"), "{why}");
+        eprintln!("\n*** SKIPPED: {why} ***\n");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    robot_copy(dir.path(), false);
+    let net = start_network().await;
+    let domain = distro.domain(31).to_string();
+    let env = [
+        ("ROS_DOMAIN_ID", Path::new(&domain)),
+        ("ROS_AUTOMATIC_DISCOVERY_RANGE", Path::new("LOCALHOST")),
+    ];
+    // the robot: its camera and lidar served on YARP (and on ROS 2, unused here)
+    let mut robot = Child::spawn_env(
+        BIN,
+        &["--config", "sensors_ros2.xml"],
+        dir.path(),
+        Some(net.conf_home.path()),
+        &env,
+    );
+    wait_reply(
+        &net.client,
+        "/ergocub/yarprobotinterface",
+        "is_ready",
+        "[ok]",
+        &mut robot,
+    )
+    .await;
+    // the repeaters, from robots-configuration as published
+    let repeaters = ergocub().join("sensors/ros2_repeaters");
+    let mut depth = Child::spawn_env(
+        BIN,
+        &[
+            "--config",
+            &repeaters
+                .join("depth_compressed_ros2.xml")
+                .to_string_lossy(),
+            "--portprefix",
+            "/depthRepeater",
+        ],
+        dir.path(),
+        Some(net.conf_home.path()),
+        &env,
+    );
+    let mut lidar = Child::spawn_env(
+        BIN,
+        &[
+            "--config",
+            &repeaters
+                .join("lidar_compressed_ros2.xml")
+                .to_string_lossy(),
+            "--portprefix",
+            "/lidarRepeater",
+        ],
+        dir.path(),
+        Some(net.conf_home.path()),
+        &env,
+    );
+    wait_reply(
+        &net.client,
+        "/depthRepeater/yarprobotinterface",
+        "is_ready",
+        "[ok]",
+        &mut depth,
+    )
+    .await;
+    wait_reply(
+        &net.client,
+        "/lidarRepeater/yarprobotinterface",
+        "is_ready",
+        "[ok]",
+        &mut lidar,
+    )
+    .await;
+
+    let d: u16 = domain.parse().unwrap();
+    let topics = [
+        ("/camera/rgbd/img", "sensor_msgs/msg/Image", &depth),
+        ("/camera/rgbd/depth", "sensor_msgs/msg/Image", &depth),
+        (
+            "/camera/depth/color/points",
+            "sensor_msgs/msg/PointCloud2",
+            &depth,
+        ),
+        ("/scan_local", "sensor_msgs/msg/LaserScan", &lidar),
+    ];
+    let peers: Vec<common::Peer> = topics
+        .iter()
+        .map(|(topic, ty, _)| {
+            let mut args = vec!["sub", ty, topic, "--timeout", "60"];
+            if !ty.ends_with("LaserScan") {
+                args.push("--summary");
+            }
+            common::Peer::start(distro, d, &args)
+        })
+        .collect();
+    let mut got = Vec::new();
+    for (p, (_, _, child)) in peers.iter().zip(&topics) {
+        got.push(json(&line(p, "MSG", child).await));
+    }
+    let (color, depth_img, cloud, scan) = (&got[0], &got[1], &got[2], &got[3]);
+    // the colour image came through JPEG: rgb8, the camera's size
+    assert_eq!(color["encoding"], "rgb8", "{color}");
+    assert_eq!(
+        (color["width"].as_u64(), color["height"].as_u64()),
+        (Some(320), Some(240))
+    );
+    assert_eq!(color["frame_id"], "realsense_rgb_frame");
+    assert!(color["sec"].as_u64().unwrap() > 1_600_000_000, "{color}");
+    assert_eq!(depth_img["encoding"], "32FC1", "{depth_img}");
+    assert_eq!(depth_img["len"].as_u64(), Some(320 * 4 * 240));
+    assert_eq!(
+        (cloud["width"].as_u64(), cloud["height"].as_u64()),
+        (Some(76800), Some(1)),
+        "{cloud}"
+    );
+    assert_eq!(scan["header"]["frame_id"], "head_laser_frame", "{scan}");
+    assert_eq!(scan["ranges"].as_array().unwrap().len(), 3000);
+    assert!(close(scan["range_max"].as_f64().unwrap(), 30.0, 1e-6));
+
+    // the repeaters' own YARP side: the connections they made, with the files' carriers
+    let carrier = |from: &'static str, to: &'static str| {
+        let ns = net.client.clone();
+        async move {
+            yarp_net::network::connection_carrier(&ns, from, to)
+                .await
+                .ok()
+                .flatten()
+        }
+    };
+    assert_eq!(
+        carrier("/ergocub/laser:o", "/laser_client_repeater:i").await.as_deref(),
+        Some("fast_tcp+send.portmonitor+file.bottle_compression_zlib+recv.portmonitor+file.bottle_compression_zlib+type.dll")
+    );
+    assert_eq!(
+        carrier("/depthCamera/depthImage:o", "/camera/depth/image_depth:i").await.as_deref(),
+        Some("fast_tcp+send.portmonitor+file.depthimage_compression_zlib+recv.portmonitor+file.depthimage_compression_zlib+type.dll")
+    );
+    assert!(net
+        .client
+        .query("/ergoCubSN000/realsense_repeater/rgbImage:o")
+        .await
+        .unwrap()
+        .is_some());
+
+    for (port, child) in [
+        ("/lidarRepeater/yarprobotinterface", &mut lidar),
+        ("/depthRepeater/yarprobotinterface", &mut depth),
+        ("/ergocub/yarprobotinterface", &mut robot),
+    ] {
+        assert_eq!(ask(&net.client, port, "quit", child).await, "bye");
+        let status = child.wait_exit(common::T).await;
+        let out = child.output();
+        assert!(status.is_some(), "{port} did not quit:\n{out}");
+        assert!(!out.contains("unknown device"), "{out}");
+        assert!(!out.contains("Cannot connect"), "{out}");
+    }
 }
