@@ -270,7 +270,10 @@ def run(node, args, deadline):
                 es = node.get_publishers_info_by_topic(topic, no_mangle=raw) + \
                     node.get_subscriptions_info_by_topic(topic, no_mangle=raw)
                 found[topic] = [endpoint_json(e) for e in es]
-            return all(found[t] and all(e["node"] != "_CREATED_BY_BARE_DDS_APP_"
+            # a node's name arrives apart from its endpoints (ros_discovery_info):
+            # until then rclpy says unknown
+            unnamed = ("_CREATED_BY_BARE_DDS_APP_", "_NODE_NAME_UNKNOWN_")
+            return all(found[t] and all(e["node"] not in unnamed
                                         for e in found[t]) for t in a)
 
         spin_until(node, ready_all, deadline)
