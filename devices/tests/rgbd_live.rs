@@ -4,8 +4,6 @@
 //! required) the visual parameters and the status, C++ `yarp read` the depth image.
 //! Every wait is bounded.
 
-use std::io::{BufRead, BufReader};
-use std::process::Stdio;
 use std::time::{Duration, Instant};
 use yarp_devices::rgbd::fake::depth_of;
 use yarp_devices::{runtime, PolyDriver};
@@ -140,48 +138,15 @@ fn cpp_yarp_rpc_asks_our_wrapper() {
     );
 
     // C++ yarp read gets the float depth image (it prints the image Bottle, `[mat] ...`)
-    let mut reader = Reaped(
-        yarp_interop_tests::cpp_command(&yarp)
-            .args(["read", "/cpp_depth_rd", "/cppdepth/depthImage:o"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("C++ yarp read"),
-    );
-    let stdout = reader.0.stdout.take().unwrap();
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
-    });
-    let start = Instant::now();
-    let line = loop {
-        let left = (3 * T).saturating_sub(start.elapsed());
-        assert!(!left.is_zero(), "C++ yarp read printed no image");
-        if let Ok(l) = rx.recv_timeout(left.min(Duration::from_millis(200))) {
-            if l.starts_with("[mat]") {
-                break l;
-            }
-        }
-    };
+    let line =
+        yarp_interop_tests::cpp_read_until(&yarp, "/cpp_depth_rd", "/cppdepth/depthImage:o", |l| {
+            l.starts_with("[mat]").then(|| l.to_string())
+        });
     let img = Image::from_bottle(&Bottle::from_text(&line)).expect("an image");
     assert_eq!(img.pixel_code(), PixelCode::MONO_FLOAT);
     assert_eq!((img.width(), img.height()), (32, 24));
     eprintln!("interop: C++ yarp rpc and yarp read -> rgbdSensor_nws_yarp OK");
-    drop(reader);
     server.close().unwrap();
-}
-
-/// Kills and reaps the child when dropped.
-struct Reaped(std::process::Child);
-impl Drop for Reaped {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
 }
 
 fn client(server: &str, local: &str, carriers: &str) -> Result<PolyDriver, String> {
@@ -380,53 +345,9 @@ fn ergocub_repeater_carriers_interoperate_with_cpp() {
             "[dec]",
         ),
     ] {
-        let mut child = Reaped(
-            yarp_interop_tests::cpp_command(&yarp)
-                .args(["read", reader])
-                .stdout(Stdio::piped())
-                .stderr(Stdio::null())
-                .spawn()
-                .expect("C++ yarp read"),
-        );
-        let stdout = child.0.stdout.take().unwrap();
-        let (tx, rx) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
+        let line = yarp_interop_tests::cpp_read_over(&yarp, reader, from, carrier, |l| {
+            l.starts_with("[mat]").then(|| l.to_string())
         });
-        let start = Instant::now();
-        while !yarp_interop_tests::registered(reader) {
-            assert!(
-                start.elapsed() < T,
-                "C++ yarp read did not register {reader}"
-            );
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let (ok, msg) = run({
-            let (from, reader, carrier) =
-                (from.to_string(), reader.to_string(), carrier.to_string());
-            async move {
-                yarp_net::network::connect(&name_client(), &from, &reader, Some(&carrier))
-                    .await
-                    .unwrap()
-            }
-        });
-        assert!(ok, "{from} -> {reader} with {carrier}: {msg}");
-        let line = loop {
-            let left = (3 * T).saturating_sub(start.elapsed());
-            assert!(
-                !left.is_zero(),
-                "C++ yarp read printed no image over {carrier}"
-            );
-            if let Ok(l) = rx.recv_timeout(left.min(Duration::from_millis(200))) {
-                if l.starts_with("[mat]") {
-                    break l;
-                }
-            }
-        };
         let img = Image::from_bottle(&Bottle::from_text(&line)).expect("an image");
         assert_eq!((img.width(), img.height()), (32, 24), "{carrier}");
         assert!(
@@ -435,7 +356,6 @@ fn ergocub_repeater_carriers_interoperate_with_cpp() {
             &line[..40]
         );
         eprintln!("interop: ours -> C++ yarp read over {carrier}: {code} 32x24");
-        drop(child);
     }
     server.close().unwrap();
 }

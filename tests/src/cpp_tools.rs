@@ -42,13 +42,38 @@ pub fn cpp_read_until<R>(
     yarp: &Path,
     reader: &str,
     port: &str,
+    parse: impl FnMut(&str) -> Option<R>,
+) -> R {
+    cpp_read(yarp, reader, port, None, parse)
+}
+
+/// As [`cpp_read_until`], the connection `port` -> `reader` made with `carrier` (as `yarp
+/// connect port reader carrier` does) once the C++ reader is registered.
+pub fn cpp_read_over<R>(
+    yarp: &Path,
+    reader: &str,
+    port: &str,
+    carrier: &str,
+    parse: impl FnMut(&str) -> Option<R>,
+) -> R {
+    cpp_read(yarp, reader, port, Some(carrier), parse)
+}
+
+fn cpp_read<R>(
+    yarp: &Path,
+    reader: &str,
+    port: &str,
+    carrier: Option<&str>,
     mut parse: impl FnMut(&str) -> Option<R>,
 ) -> R {
     use std::io::BufRead;
+    let mut cmd = cpp_command(yarp);
+    cmd.args(["read", reader]);
+    if carrier.is_none() {
+        cmd.arg(port);
+    }
     let mut child = Reaped(
-        cpp_command(yarp)
-            .args(["read", reader, port])
-            .stdout(Stdio::piped())
+        cmd.stdout(Stdio::piped())
             .stderr(Stdio::null())
             .spawn()
             .expect("spawn C++ yarp read"),
@@ -66,6 +91,27 @@ pub fn cpp_read_until<R>(
         }
     });
     let start = Instant::now();
+    if let Some(carrier) = carrier {
+        while !registered(reader) {
+            assert!(
+                start.elapsed() < T,
+                "C++ yarp read did not register {reader}"
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let ns = name_client();
+        let (from, to, carrier) = (port.to_string(), reader.to_string(), carrier.to_string());
+        let (ok, msg) = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .expect("runtime")
+            .block_on(async move {
+                yarp_net::network::connect(&ns, &from, &to, Some(&carrier))
+                    .await
+                    .expect("connect")
+            });
+        assert!(ok, "{port} -> {reader}: {msg}");
+    }
     loop {
         let left = (3 * T).saturating_sub(start.elapsed());
         assert!(

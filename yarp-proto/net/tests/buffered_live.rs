@@ -1,24 +1,14 @@
 //! BufferedPort, RpcServer and the blocking facade over real loopback sockets with an
 //! in-process name server. Run under ../shared/netns-run.
 
+mod common;
+use common::{name_server, T};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use tokio::time::timeout;
 use yarp_net::buffered::{BufferedPort, RpcServer};
-use yarp_net::nameserver::{NameClient, NameServer, ShutdownHandle};
+use yarp_net::nameserver::NameServer;
 use yarp_net::port::Port;
 use yarp_proto::{bottle, Bottle, Stamp, Vocab32};
-
-const T: Duration = Duration::from_secs(10);
-
-async fn name_server() -> (NameClient, ShutdownHandle) {
-    let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
-        .await
-        .expect("bind ns");
-    let addr = ns.local_addr();
-    let stop = ns.shutdown_handle();
-    tokio::spawn(ns.serve());
-    (NameClient::new(addr).with_timeout(T), stop)
-}
 
 async fn read(p: &BufferedPort) -> yarp_net::buffered::Message {
     timeout(T, p.read())

@@ -6,39 +6,18 @@
 //! a web client reading the mjpeg stream, and what cannot be had refused by name.
 //! Run under ../shared/netns-run.
 
+mod common;
+use common::{eventually, name_server, T};
 use std::io::{Read, Write};
 use std::time::Duration;
 use tokio::time::timeout;
-use yarp_net::nameserver::{NameClient, NameServer};
 use yarp_net::network;
 use yarp_net::port::Port;
 use yarp_proto::image::{Image, PixelCode};
 use yarp_proto::{bottle, Bottle, Stamp};
 
-const T: Duration = Duration::from_secs(20);
-
 const DEPTH: &str = "fast_tcp+send.portmonitor+file.depthimage_compression_zlib+recv.portmonitor+file.depthimage_compression_zlib+type.dll";
 const LASER: &str = "fast_tcp+send.portmonitor+file.bottle_compression_zlib+recv.portmonitor+file.bottle_compression_zlib+type.dll";
-
-async fn name_server() -> (NameClient, yarp_net::nameserver::ShutdownHandle) {
-    let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
-        .await
-        .expect("bind ns");
-    let addr = ns.local_addr();
-    let stop = ns.shutdown_handle();
-    tokio::spawn(ns.serve());
-    (NameClient::new(addr).with_timeout(T), stop)
-}
-
-async fn eventually(what: &str, f: impl Fn() -> bool) {
-    timeout(T, async {
-        while !f() {
-            tokio::time::sleep(Duration::from_millis(10)).await;
-        }
-    })
-    .await
-    .unwrap_or_else(|_| panic!("{what}"));
-}
 
 fn rgb(w: usize, h: usize, shift: usize) -> Image {
     let mut img = Image::new(PixelCode::RGB, w, h).unwrap();

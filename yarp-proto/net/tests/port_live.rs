@@ -2,6 +2,8 @@
 //! envelopes, text-mode telnet sessions, admin commands, reverse connections, dead peers.
 //! Run under ../shared/netns-run.
 
+mod common;
+use common::{name_server, T};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
@@ -9,18 +11,6 @@ use tokio::time::timeout;
 use yarp_net::nameserver::{NameClient, NameServer};
 use yarp_net::port::Port;
 use yarp_proto::{bottle, Bottle, Stamp, Vocab32};
-
-const T: Duration = Duration::from_secs(10);
-
-async fn name_server() -> (NameClient, yarp_net::nameserver::ShutdownHandle) {
-    let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
-        .await
-        .expect("bind ns");
-    let addr = ns.local_addr();
-    let stop = ns.shutdown_handle();
-    tokio::spawn(ns.serve());
-    (NameClient::new(addr).with_timeout(T), stop)
-}
 
 async fn read_bottle(p: &Port) -> Bottle {
     let m = timeout(T, p.read())

@@ -3,18 +3,18 @@
 //! C++ layout: System V segment keyed by its port, pthread mutexes in files). Nothing may
 //! be left behind: no segment, no mutex file. Run under ../shared/netns-run.
 
+mod common;
+use common::{eventually, T};
 use std::io::{Read, Write};
 use std::path::PathBuf;
 use std::sync::OnceLock;
 use std::time::Duration;
 use tokio::time::timeout;
-use yarp_net::nameserver::{NameClient, NameServer};
+use yarp_net::nameserver::NameClient;
 use yarp_net::port::Port;
 use yarp_proto::wire::shmem::{self, Packet, RingHeader, HEADER_LEN};
 use yarp_proto::wire::{self, Carrier, YarpNumber};
 use yarp_proto::{bottle, Bottle, Stamp, Value};
-
-const T: Duration = Duration::from_secs(20);
 
 /// A private temp dir for the mutex files of this test binary (set before any port runs).
 fn temp() -> &'static PathBuf {
@@ -29,13 +29,7 @@ fn temp() -> &'static PathBuf {
 
 async fn name_server() -> (NameClient, yarp_net::nameserver::ShutdownHandle) {
     temp();
-    let ns = NameServer::bind("127.0.0.1:0", "127.0.0.1")
-        .await
-        .expect("bind ns");
-    let addr = ns.local_addr();
-    let stop = ns.shutdown_handle();
-    tokio::spawn(ns.serve());
-    (NameClient::new(addr).with_timeout(T), stop)
+    common::name_server().await
 }
 
 /// System V segments created by this process that still exist.
@@ -59,16 +53,6 @@ fn mutex_files() -> Vec<String> {
                 .collect()
         })
         .unwrap_or_default()
-}
-
-async fn eventually(what: &str, f: impl Fn() -> bool) {
-    timeout(T, async {
-        while !f() {
-            tokio::time::sleep(Duration::from_millis(10)).await;
-        }
-    })
-    .await
-    .unwrap_or_else(|_| panic!("{what}"));
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

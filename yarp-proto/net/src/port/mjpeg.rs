@@ -129,22 +129,7 @@ pub(crate) async fn pull(
     contact: &Contact,
     carrier: &CarrierName,
 ) -> Result<(), OutputError> {
-    let addr = format!("{}:{}", contact.host, contact.port);
-    let mut stream = match timeout(CONNECT_TIMEOUT, TcpStream::connect(&addr)).await {
-        Ok(Ok(s)) => s,
-        Ok(Err(source)) => {
-            return Err(OutputError::Connect {
-                target: target.to_string(),
-                addr,
-                source,
-            })
-        }
-        Err(_) => {
-            return Err(OutputError::HandshakeTimeout {
-                target: target.to_string(),
-            })
-        }
-    };
+    let mut stream = super::output::dial(target, contact).await?;
     let _ = stream.set_nodelay(true);
     let request = mjpeg::request(carrier.find("path"), &contact.host);
     stream

@@ -306,22 +306,7 @@ pub(crate) async fn connect(
         .map(|c| c.spec())
         .filter(|s| matches!(s.framing, Framing::Stream | Framing::Text))
         .ok_or_else(|| OutputError::UnsupportedCarrier(carrier.to_string()))?;
-    let addr = format!("{}:{}", contact.host, contact.port);
-    let mut stream = match timeout(CONNECT_TIMEOUT, TcpStream::connect(&addr)).await {
-        Ok(Ok(s)) => s,
-        Ok(Err(source)) => {
-            return Err(OutputError::Connect {
-                target: target.to_string(),
-                addr,
-                source,
-            })
-        }
-        Err(_) => {
-            return Err(OutputError::HandshakeTimeout {
-                target: target.to_string(),
-            })
-        }
-    };
+    let mut stream = dial(target, contact).await?;
     let _ = stream.set_nodelay(true);
     let io_err = |source| OutputError::Io {
         target: target.to_string(),
@@ -350,6 +335,22 @@ pub(crate) async fn connect(
     }
     let route = Route::new(&shared.name, target, &name.to_string());
     Ok(spawn(shared, route, stream, decoder, spec, monitor))
+}
+
+/// A TCP connection to `target` at `contact`, within [`CONNECT_TIMEOUT`].
+pub(crate) async fn dial(target: &str, contact: &Contact) -> Result<TcpStream, OutputError> {
+    let addr = format!("{}:{}", contact.host, contact.port);
+    match timeout(CONNECT_TIMEOUT, TcpStream::connect(&addr)).await {
+        Ok(Ok(s)) => Ok(s),
+        Ok(Err(source)) => Err(OutputError::Connect {
+            target: target.to_string(),
+            addr,
+            source,
+        }),
+        Err(_) => Err(OutputError::HandshakeTimeout {
+            target: target.to_string(),
+        }),
+    }
 }
 
 /// Whether the carrier frames messages on its TCP stream (where qualifiers apply).

@@ -16,7 +16,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::{TcpStream, UnixListener, UnixStream};
+use tokio::net::{UnixListener, UnixStream};
 use tokio::sync::{mpsc, Notify};
 use tokio::time::timeout;
 use yarp_proto::port_admin::Route;
@@ -57,22 +57,7 @@ pub(crate) async fn connect(
     contact: &Contact,
     carrier: Carrier,
 ) -> Result<OutputHandle, OutputError> {
-    let addr = format!("{}:{}", contact.host, contact.port);
-    let mut tcp = match timeout(CONNECT_TIMEOUT, TcpStream::connect(&addr)).await {
-        Ok(Ok(s)) => s,
-        Ok(Err(source)) => {
-            return Err(OutputError::Connect {
-                target: target.to_string(),
-                addr,
-                source,
-            })
-        }
-        Err(_) => {
-            return Err(OutputError::HandshakeTimeout {
-                target: target.to_string(),
-            })
-        }
-    };
+    let mut tcp = super::output::dial(target, contact).await?;
     let (local, remote) = (
         tcp.local_addr().map_err(io_err(target))?,
         tcp.peer_addr().map_err(io_err(target))?,

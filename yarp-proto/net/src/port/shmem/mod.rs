@@ -138,22 +138,7 @@ pub(crate) async fn connect(
         target: target.to_string(),
         source,
     };
-    let addr = format!("{}:{}", contact.host, contact.port);
-    let mut tcp = match timeout(CONNECT_TIMEOUT, TcpStream::connect(&addr)).await {
-        Ok(Ok(s)) => s,
-        Ok(Err(source)) => {
-            return Err(OutputError::Connect {
-                target: target.to_string(),
-                addr,
-                source,
-            })
-        }
-        Err(_) => {
-            return Err(OutputError::HandshakeTimeout {
-                target: target.to_string(),
-            })
-        }
-    };
+    let mut tcp = super::output::dial(target, contact).await?;
     let (local, remote) = (
         tcp.local_addr().map_err(io_err)?,
         tcp.peer_addr().map_err(io_err)?,
