@@ -21,6 +21,7 @@ use std::time::{Duration, Instant};
 use icub_eth::board::{next_multiple, BoardConfig, BoardEngine};
 use icub_eth::entities::analog::{
     ByteArray, FtStatus, FtTimedValue, Inertial3Data, Inertial3Status, MaisStatus, StrainStatus,
+    TemperatureData, TemperatureStatus,
 };
 use icub_eth::id::{entity as en, ids, tag};
 use icub_eth::plant::{JointModel, SimpleJoint};
@@ -233,18 +234,33 @@ fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u6
     let s = (t * 0.5).sin();
     let store = engine.store_mut();
     if spec.strains > 0 {
-        // Full scale 2000 N / 50 N·m (strain2 defaults); values as fractions of it.
+        // Full scale 2000 N / 50 N·m (strain2 defaults); values as fractions of it, in
+        // the boards' encodings (offset binary values, big-endian full scales).
         let full = [2000u16, 2000, 2000, 50, 50, 50];
         let frac = [0.01 * s, 0.02 * s, 0.1, 0.01 * s, 0.02, 0.03 * s];
-        let raw: Vec<u16> = frac.iter().map(|f| ((f * 32768.0) as i16) as u16).collect();
+        let readings: Vec<i16> = frac.iter().map(|f| (f * 32768.0) as i16).collect();
         let status = StrainStatus {
-            fullscale: ByteArray::from_u16(&full),
-            calibrated: ByteArray::from_u16(&raw),
-            uncalibrated: ByteArray::from_u16(&raw),
+            fullscale: StrainStatus::full_scales_of(&full),
+            calibrated: StrainStatus::values_of(&readings),
+            uncalibrated: StrainStatus::values_of(&readings),
         };
         let _ = store.write(
             ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_STATUS),
             &status,
+        );
+    }
+    if spec.temperatures > 0 {
+        // the strain2's temperature, 0.1 °C
+        let _ = store.write(
+            ids::analog(en::AS_TEMPERATURE, 0, tag::AS_XX_STATUS),
+            &TemperatureStatus {
+                data: vec![TemperatureData {
+                    id: 0,
+                    type_of_sensor: 15, // eoas_temperature_t1
+                    value: (253.0 + 5.0 * s) as i16,
+                    timestamp: (age_us / 1000) as u32,
+                }],
+            },
         );
     }
     if spec.maises > 0 {

@@ -2,7 +2,8 @@
 //! Ethernet boards on loopback (through the address map 10.0.1.0/24 -> 127.0.1.0/24):
 //! `embObjMotionControl` opens both boards (bring-up, service activation, joint and
 //! motor configuration, regulars), a position move reaches the encoders, a calibration
-//! ends, the PWM limit is asked and set, and a board that stops answering is reported
+//! ends, the PWM limit is asked and set, the arm's strain, the hand's MAIS and a foot's
+//! strain2 with its temperature stream, and a board that stops answering is reported
 //! naming its IP and name.
 //!
 //! The host's socket is a process singleton (as C++'s `TheEthManager`), so everything
@@ -156,6 +157,37 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
             && v.len() == 15
             && v.iter().any(|x| *x != 0.0)
     });
+
+    // The left foot's strain2 (its file asks for the temperature every 1000 ms): the
+    // temperature service comes up beside the strain, and its reading is in °C.
+    let mut foot = EmbObjFtSensor::new();
+    foot.open(&cfg("left_leg-eb7-j4_5-strain"))
+        .expect("the foot's strain2 opens with its temperature");
+    let mut celsius = 0.0;
+    wait_for(
+        "a temperature reading",
+        Duration::from_secs(3),
+        || match foot
+            .as_temperature_sensors()
+            .unwrap()
+            .get_temperature_sensor_measure(0)
+        {
+            Ok(m) => {
+                celsius = m.values[0];
+                true
+            }
+            Err(_) => false,
+        },
+    );
+    assert!((20.0..31.0).contains(&celsius), "{celsius} °C");
+    assert_eq!(
+        foot.as_six_axis_force_torque_sensors()
+            .unwrap()
+            .get_six_axis_force_torque_sensor_name(0)
+            .unwrap(),
+        "l_foot_ft"
+    );
+    foot.close().unwrap();
 
     // The board falls silent: reported after its 20 ms presence timeout; readings fail
     // after ten times that (at least 0.5 s), naming IP and board.

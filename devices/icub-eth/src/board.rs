@@ -515,6 +515,21 @@ impl BoardEngine {
                 }
             }
             (ep::MOTION_CONTROL, en::MC_JOINT, t) => self.joint_set(id.index(), t, data),
+            // a strain asked to signal its full scales once does so (what icub-main's
+            // fillScaleFactor waits for)
+            (ep::ANALOG_SENSORS, en::AS_STRAIN, tag::AS_STRAIN_CONFIG) => {
+                let signal_once = crate::entities::analog::StrainConfig::from_bytes(data)
+                    .is_ok_and(|c| c.signal_once_fullscale);
+                let fullscale = Id32::new(
+                    ep::ANALOG_SENSORS,
+                    en::AS_STRAIN,
+                    id.index(),
+                    tag::AS_STRAIN_STATUS_FULLSCALE,
+                );
+                if let (true, Ok(bytes)) = (signal_once, self.store.get(fullscale)) {
+                    self.replies.push(Rop::sig(fullscale, bytes.to_vec()));
+                }
+            }
             _ => {}
         }
     }

@@ -243,6 +243,11 @@ impl HostTransceiver {
     pub fn store(&self) -> &NvStore {
         &self.store
     }
+    /// Overwrites a variable's local copy (C++ `setLocalValue`), e.g. to empty an array
+    /// before waiting for the board to fill it.
+    pub fn set_local(&mut self, id: Id32, data: &[u8]) -> Result<(), NvError> {
+        self.store.set(id, data)
+    }
     /// A variable as last received.
     pub fn read<T: Entity>(&self, id: Id32) -> Result<T, NvError> {
         self.store.read(id)

@@ -5,7 +5,9 @@
 
 use icub_eth::entities::mn::service_type;
 use icubmod::eth::config::Node;
-use icubmod::eth::service_config::{can_location, mc_config, q17_14, sensor_config};
+use icubmod::eth::service_config::{
+    can_location, mc_config, q17_14, sensor_config, strain_temperature_config,
+};
 use std::path::PathBuf;
 use yarp_devices::robotinterface::{read_robot_file, read_robot_str};
 use yarp_proto::Property;
@@ -39,6 +41,35 @@ fn strain_of_the_icub_genova02_left_arm() {
         service_type::AS_STRAIN,
     );
     assert_eq!(d, [0x06, 0, 0, 0, 1, 0, 0x5B]);
+}
+
+#[test]
+fn temperature_of_the_icub_genova02_left_foot_strain2() {
+    // embObjFTsensor's second service (temperature-acquisitionRate 1000), as icub-main's
+    // fillTemperatureEthServiceInfo builds it from the strain service
+    let p = device_file("iCubGenova02", "hardware/FT/left_leg-eb7-j4_5-strain.xml");
+    let d = strain_temperature_config(&Node::root(&p)).unwrap();
+    let none = [0xFE, 0, 0, 0, 0, 0];
+    let mut want = Vec::new();
+    // eOas_temperature_setof_boardinfos_t: slots mtb4, strain2, mtb4c, strain2c; the
+    // strain2 (12), firmware 2.0.9, protocol 2.0, in its slot
+    want.extend(none);
+    want.extend([12, 2, 0, 9, 2, 0]);
+    want.extend(none);
+    want.extend(none);
+    // eOas_temperature_arrayof_descriptors_t: capacity 7, items of 4 bytes, one item:
+    // strain2, CAN2:13 with place can (0x6D), eoas_temperature_t1 (15)
+    want.extend([7, 4, 1, 0]);
+    want.extend([12, 0x6D, 15, 0]);
+    want.extend([0; 24]);
+    assert_eq!(d.len(), 56);
+    assert_eq!(d, want);
+    // a plain strain has no temperature sensor: named, as C++ refuses it
+    let arm = device_file("iCubGenova02", "hardware/FT/left_arm-eb1-j0_3-strain.xml");
+    let e = strain_temperature_config(&Node::root(&arm))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("temperature"), "{e}");
 }
 
 #[test]

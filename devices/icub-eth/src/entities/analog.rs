@@ -145,6 +145,44 @@ impl Entity for StrainStatus {
     }
 }
 
+impl StrainStatus {
+    /// The six values of a strain array as signed readings: the boards send them in
+    /// offset binary (`0x8000` is zero), little endian (icub-main
+    /// `embObjFTsensor::updateStrainValues`).
+    pub fn readings(values: &ByteArray<12>) -> Vec<i16> {
+        values
+            .u16_values()
+            .iter()
+            .map(|v| v.wrapping_sub(0x8000) as i16)
+            .collect()
+    }
+
+    /// A strain array of the given signed readings, as a board sends it.
+    pub fn values_of(readings: &[i16]) -> ByteArray<12> {
+        let raw: Vec<u16> = readings
+            .iter()
+            .map(|r| (*r as u16).wrapping_add(0x8000))
+            .collect();
+        ByteArray::from_u16(&raw)
+    }
+
+    /// The full scales: six `u16` sent big endian, unlike the values (icub-main
+    /// `eo_ftsens_privData::fillScaleFactor`: "order of bytes seems inverted").
+    pub fn full_scales(&self) -> Vec<u16> {
+        self.fullscale
+            .u16_values()
+            .iter()
+            .map(|v| v.swap_bytes())
+            .collect()
+    }
+
+    /// A full-scale array as a board sends it.
+    pub fn full_scales_of(values: &[u16]) -> ByteArray<12> {
+        let swapped: Vec<u16> = values.iter().map(|v| v.swap_bytes()).collect();
+        ByteArray::from_u16(&swapped)
+    }
+}
+
 /// `eOas_mais_config_t` (4 bytes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct MaisConfig {

@@ -342,6 +342,17 @@ impl Board {
         })
     }
 
+    /// Overwrites the local copy of a variable (C++ `setLocalValue`).
+    pub fn set_local(&self, id: Id32, data: &[u8]) -> Result<(), EthError> {
+        self.lock()
+            .host
+            .set_local(id, data)
+            .map_err(|e| EthError::Board {
+                who: self.who(),
+                reason: e.to_string(),
+            })
+    }
+
     /// What arrived from the board since the last [`Board::reset_rx_stats`].
     pub fn rx_stats(&self) -> RxStats {
         let inner = self.lock();

@@ -24,7 +24,7 @@ use std::sync::{Arc, Mutex};
 
 use icub_eth::entities::analog::{
     FtConfig, FtStatus, Inertial3Config, Inertial3Status, MaisConfig, MaisStatus, StrainConfig,
-    StrainStatus,
+    StrainStatus, TemperatureConfig,
 };
 use icub_eth::entities::mn::{category, service_type, ServiceCommand};
 use icub_eth::id::{entity as en, ids, tag};
@@ -140,38 +140,83 @@ fn verify(root: &Node, cat: u8, service_type: u8) -> Result<ServiceCommand, Para
 
 // ---- embObjFTsensor ----
 
-/// `embObjFTsensor`: one strain sensor (iCub).
+/// `embObjFTsensor`: one strain sensor (iCub), and the temperature of a strain2 board.
 #[derive(Default)]
 pub struct EmbObjFtSensor {
     c: Common,
     name: String,
+    calibrated: bool,
 }
 
 pub const FT_SENSOR: &str = "embObjFTsensor";
+
+/// How many times, and how long each, embObjFTsensor waits for the full scales.
+const FULL_SCALE_TRIES: u32 = 5;
+const FULL_SCALE_WAIT: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// icub-main's `fillScaleFactor`: empties the local full scales, then asks the strain to
+/// signal them once (acquiring without transmitting) until they arrive, at most
+/// [`FULL_SCALE_TRIES`] times [`FULL_SCALE_WAIT`].
+fn fill_full_scales(board: &Board, datarate: u8) -> Result<(), super::manager::EthError> {
+    let fullscale = ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_STATUS_FULLSCALE);
+    let empty = icub_eth::entities::analog::ByteArray::<12>::from_u16(&[]);
+    board.set_local(fullscale, &empty.to_bytes())?;
+    let ask = StrainConfig {
+        mode: 1, // eoas_strainmode_acquirebutdonttx
+        datarate,
+        signal_once_fullscale: true,
+    };
+    let config = ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_CONFIG);
+    for _ in 0..FULL_SCALE_TRIES {
+        board.set(config, &ask.to_bytes())?;
+        let until = std::time::Instant::now() + FULL_SCALE_WAIT;
+        while std::time::Instant::now() < until {
+            let got: icub_eth::entities::analog::ByteArray<12> = board.read(fullscale)?;
+            match got.size {
+                0 => std::thread::sleep(std::time::Duration::from_millis(10)),
+                6 => return Ok(()),
+                n => {
+                    return Err(super::manager::EthError::Board {
+                        who: board.who(),
+                        reason: format!(
+                            "the strain's calibration data has {n} values, not its 6 channels"
+                        ),
+                    })
+                }
+            }
+        }
+    }
+    Err(super::manager::EthError::Board {
+        who: board.who(),
+        reason:
+            "fillScaleFactor(): ETH Analog sensor: request for calibration parameters timed out"
+                .into(),
+    })
+}
 
 impl EmbObjFtSensor {
     pub fn new() -> Self {
         Self::default()
     }
 
+    /// The six readings: with calibration, the calibrated values scaled by the full
+    /// scales (N, N·m); without, the raw readings (as C++).
     fn values(&self) -> DevResult<Vec<f64>> {
         let st: StrainStatus = self
             .c
             .read(ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_STATUS))?;
-        let full = st.fullscale.u16_values();
-        Ok(st
-            .calibrated
-            .u16_values()
+        if !self.calibrated {
+            return Ok(StrainStatus::readings(&st.uncalibrated)
+                .into_iter()
+                .map(f64::from)
+                .collect());
+        }
+        let full = st.full_scales();
+        Ok(StrainStatus::readings(&st.calibrated)
             .iter()
             .take(6)
             .enumerate()
-            .map(|(k, raw)| {
-                let v = f64::from(*raw as i16);
-                match full.get(k) {
-                    Some(f) if *f != 0 => v * f64::from(*f) / 32768.0,
-                    _ => v,
-                }
-            })
+            .map(|(k, v)| f64::from(*v) * f64::from(full.get(k).copied().unwrap_or(0)) / 32768.0)
             .collect())
     }
 }
@@ -179,32 +224,75 @@ impl EmbObjFtSensor {
 impl DeviceDriver for EmbObjFtSensor {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let mut name = String::new();
+        let mut calibrated = true;
         self.c
             .open(FT_SENSOR, config, category::STRAIN, |root, st| {
                 let (set, sensors) = settings(root)?;
                 name = sensors.need_string("id", "the sensor's name")?;
                 let rate = set.number("acquisitionRate")?.unwrap_or(10.0);
-                let calibrated = root
+                // ms; C++ keeps whole seconds of it (an int divided by 1000)
+                let t_rate = set.number("temperature-acquisitionRate")?.unwrap_or(0.0) as i64;
+                calibrated = root
                     .group("SERVICE")
                     .and_then(|s| s.group("STRAIN_SETTINGS"))
                     .and_then(|s| s.boolean("useCalibration"))
                     .unwrap_or(true);
-                let cfg = StrainConfig {
+                let datarate = rate.clamp(1.0, 255.0) as u8;
+                // eo_ftsens_privData::sendConfig2Strain: the strain, then the temperature
+                let strain_cfg = StrainConfig {
                     mode: if calibrated { 0 } else { 3 },
-                    datarate: rate.clamp(1.0, 255.0) as u8,
-                    signal_once_fullscale: true,
+                    datarate,
+                    signal_once_fullscale: false,
                 };
-                Ok(SensorService {
-                    activate: verify(root, category::STRAIN, st)?,
-                    configs: vec![(
+                let temperature_cfg = TemperatureConfig {
+                    datarate: if t_rate > 0 {
+                        (t_rate / 1000) as u16
+                    } else {
+                        0
+                    },
+                    enabled: u16::from(t_rate > 0),
+                };
+                let values = if calibrated {
+                    tag::AS_STRAIN_STATUS_CALIBRATEDVALUES
+                } else {
+                    tag::AS_STRAIN_STATUS_UNCALIBRATEDVALUES
+                };
+                let mut strain = SensorService::new(verify(root, category::STRAIN, st)?);
+                strain.configs = vec![
+                    (
                         ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_CONFIG),
-                        cfg.to_bytes(),
-                    )],
-                    regulars: vec![ids::analog(en::AS_STRAIN, 0, tag::AS_STRAIN_STATUS)],
-                    after_start: Vec::new(),
-                })
+                        strain_cfg.to_bytes(),
+                    ),
+                    (
+                        ids::analog(en::AS_TEMPERATURE, 0, tag::AS_XX_CONFIG),
+                        temperature_cfg.to_bytes(),
+                    ),
+                ];
+                strain.regulars = vec![ids::analog(en::AS_STRAIN, 0, values)];
+                if calibrated {
+                    strain.prepare = Some(Box::new(move |b: &Board| fill_full_scales(b, datarate)));
+                }
+                // the strain2's temperature, when the file asks for it (icub-main 2.11)
+                if t_rate > 0 {
+                    let data = super::service_config::strain_temperature_config(root)?;
+                    let mut t = SensorService::new(ServiceCommand::verify_activate(
+                        category::TEMPERATURES,
+                        service_type::AS_TEMPERATURES,
+                        0,
+                        0,
+                        &data,
+                    ));
+                    t.regulars = vec![ids::analog(en::AS_TEMPERATURE, 0, tag::AS_XX_STATUS)];
+                    t.after_start = vec![(
+                        ids::analog(en::AS_TEMPERATURE, 0, tag::AS_XX_CMMNDS_ENABLE),
+                        vec![1],
+                    )];
+                    strain.companion = Some(Box::new(t));
+                }
+                Ok(strain)
             })?;
         self.name = name;
+        self.calibrated = calibrated;
         Ok(())
     }
     fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
@@ -355,6 +443,8 @@ impl DeviceDriver for EmbObjMultipleFtSensors {
                 activate: verify(root, category::FT, st)?,
                 configs,
                 regulars,
+                prepare: None,
+                companion: None,
                 after_start: after,
             })
         })?;
@@ -623,6 +713,8 @@ impl DeviceDriver for EmbObjImu {
                         cfg.to_bytes(),
                     )],
                     regulars: vec![ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_STATUS)],
+                    prepare: None,
+                    companion: None,
                     after_start: vec![(
                         ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_CMMNDS_ENABLE),
                         vec![1],
@@ -763,6 +855,8 @@ impl DeviceDriver for EmbObjMais {
                     cfg.to_bytes(),
                 )],
                 regulars: vec![ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS)],
+                prepare: None,
+                companion: None,
                 after_start: Vec::new(),
             })
         })
@@ -935,6 +1029,8 @@ impl DeviceDriver for EmbObjSkin {
                 activate: verify(root, category::SKIN, st)?,
                 configs,
                 regulars,
+                prepare: None,
+                companion: None,
                 after_start: Vec::new(),
             })
         })?;
@@ -1071,6 +1167,8 @@ impl DeviceDriver for EmbObjPos {
                     cfg.to_bytes(),
                 )],
                 regulars: vec![ids::analog(en::AS_POS, 0, tag::AS_XX_STATUS)],
+                prepare: None,
+                companion: None,
                 after_start: vec![(
                     ids::analog(en::AS_POS, 0, tag::AS_XX_CMMNDS_ENABLE),
                     vec![1],
@@ -1132,6 +1230,8 @@ impl DeviceDriver for EmbObjBattery {
                     0,
                     tag::AS_BATTERY_STATUS_TIMEDVALUE,
                 )],
+                prepare: None,
+                companion: None,
                 after_start: vec![(
                     ids::analog(en::AS_BATTERY, 0, tag::AS_BATTERY_CMMNDS_ENABLE),
                     vec![1],

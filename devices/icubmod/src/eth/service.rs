@@ -187,30 +187,68 @@ pub fn setcheck(board: &Board, id: Id32, data: &[u8]) -> Result<(), EthError> {
     )
 }
 
+/// Work of a sensor device between the verification of its services and their
+/// configuration (embObjFTsensor asks its full scales there).
+pub type Prepare = Box<dyn Fn(&Board) -> Result<(), EthError> + Send>;
+
 /// What a sensor device needs to bring its service up in one go.
 pub struct SensorService {
     pub activate: ServiceCommand,
+    pub prepare: Option<Prepare>,
     pub configs: Vec<(Id32, Vec<u8>)>,
     pub regulars: Vec<Id32>,
     /// Sets after the start (e.g. `cmmnds enable`).
     pub after_start: Vec<(Id32, Vec<u8>)>,
+    /// A second service of the same device on the same board (embObjFTsensor's
+    /// temperatures), brought up alongside, step by step, as C++ does.
+    pub companion: Option<Box<SensorService>>,
 }
 
-/// The open sequence of the `embObj*` sensor devices: board up, endpoint version,
-/// verify-activate, configs, regulars, start.
+impl SensorService {
+    pub fn new(activate: ServiceCommand) -> Self {
+        Self {
+            activate,
+            prepare: None,
+            configs: Vec::new(),
+            regulars: Vec::new(),
+            after_start: Vec::new(),
+            companion: None,
+        }
+    }
+
+    /// This service and its companion, in order.
+    fn all(&self) -> impl Iterator<Item = &SensorService> {
+        std::iter::once(self).chain(self.companion.as_deref())
+    }
+}
+
+/// The open sequence of the `embObj*` sensor devices: board up, endpoint version, then
+/// for each service (the device's, then its companion) verify-activate; the device's
+/// preparation; configs; regulars; start and the sets that follow it.
 pub fn open_sensor(board: &Arc<Board>, s: &SensorService) -> Result<(), EthError> {
     board.bring_up()?;
     verify_endpoint(board, endpoint_of(s.activate.category))?;
-    verify_activate(board, &s.activate)?;
-    for (id, data) in &s.configs {
-        setcheck(board, *id, data)?;
+    for x in s.all() {
+        verify_activate(board, &x.activate)?;
     }
-    if !s.regulars.is_empty() {
-        set_regulars(board, s.activate.category, &s.regulars)?;
+    if let Some(prepare) = &s.prepare {
+        prepare(board)?;
     }
-    start(board, s.activate.category)?;
-    for (id, data) in &s.after_start {
-        board.set(*id, data)?;
+    for x in s.all() {
+        for (id, data) in &x.configs {
+            setcheck(board, *id, data)?;
+        }
+    }
+    for x in s.all() {
+        if !x.regulars.is_empty() {
+            set_regulars(board, x.activate.category, &x.regulars)?;
+        }
+    }
+    for x in s.all() {
+        start(board, x.activate.category)?;
+        for (id, data) in &x.after_start {
+            board.set(*id, data)?;
+        }
     }
     Ok(())
 }

@@ -961,6 +961,50 @@ fn strain_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamE
     Ok(w.into_inner())
 }
 
+/// `eOmn_serv_config_data_as_temperature_t` of a strain board's temperature sensor, as
+/// icub-main's `eo_ftsens_privData::fillTemperatureEthServiceInfo` builds it from the
+/// strain service: the board's info in its slot of the set (mtb4, strain2, mtb4c,
+/// strain2c; the others `none`), then one descriptor (board type, CAN place, port and
+/// address, `eoas_temperature_t1`) in an array of capacity 7. A plain `strain` has no
+/// temperature sensor: C++ then fails to open, and so does this.
+pub fn strain_temperature_config(root: &Node) -> Result<Vec<u8>, ParamError> {
+    let service = root.need_group("SERVICE")?;
+    let boards = can_boards(&service.need_group("PROPERTIES")?)?;
+    let b = boards
+        .first()
+        .copied()
+        .ok_or_else(|| ParamError::missing("CANBOARDS/type", "the strain's board"))?;
+    let slot =
+        match b.board_type {
+            11 => 0,
+            12 => 1,
+            20 => 2,
+            22 => 3,
+            other => return Err(ParamError::bad(
+                "SETTINGS/temperature-acquisitionRate",
+                "a board with a temperature sensor (strain2, strain2c, mtb4, mtb4c) when above 0",
+                format!("CANBOARDS/type of eObrd_cantype_t {other}"),
+            )),
+        };
+    let s = Sensors::of(&service)?;
+    let loc = sensor_canloc_of(&s.column("location")?[s.on[0]], "SENSORS")?;
+    let mut infos = [BoardInfo {
+        board_type: 0xFE,
+        ..Default::default()
+    }; 4];
+    infos[slot] = b;
+    let mut w = Writer::with_capacity(56);
+    for i in &infos {
+        w.entity(i);
+    }
+    // eOas_temperature_arrayof_descriptors_t: head (capacity 7, item 4 bytes, 1 item)
+    w.bytes(&[7, 4, 1, 0]);
+    let on = 1 | loc.port << 2 | loc.addr << 3; // eObrd_location_t, place can
+    w.bytes(&[b.board_type, on, 15, 0]);
+    w.bytes(&[0; 6 * 4]);
+    Ok(w.into_inner())
+}
+
 fn mais_config(service: &Node, boards: &[BoardInfo]) -> Result<Vec<u8>, ParamError> {
     let b = boards
         .iter()
