@@ -6,7 +6,9 @@
 //! - `embObjFTsensor` (`eomn_serv_AS_strain`, iCub): one strain sensor, named by
 //!   `SERVICE/PROPERTIES/SENSORS/id`; `SETTINGS/acquisitionRate` (ms) and
 //!   `STRAIN_SETTINGS/useCalibration` (calibrated or raw values) configure it. Values are
-//!   the board's 16-bit readings scaled by the sensor's full scale (N, N·m).
+//!   the board's 16-bit readings scaled by the sensor's full scale (N, N·m). With
+//!   `SETTINGS/temperature-acquisitionRate` (ms) above 0, a strain2's temperature service
+//!   comes up too (°C, `ITemperatureSensors`).
 //! - `embObjMultipleFTsensors` (`eomn_serv_AS_ft`, ergoCub): the FT sensors of
 //!   `SETTINGS/enabledSensors` with `ftPeriod`, `temperaturePeriod` (ms) and
 //!   `useCalibration`; the board streams N and N·m as floats, temperature in 0.1 °C.
