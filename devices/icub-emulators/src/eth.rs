@@ -45,8 +45,9 @@ pub struct BoardSpec {
     pub fts: u8,
     pub batteries: u8,
     pub skins: u8,
-    /// The `eOas_sensor_t` of each enabled inertial sensor (in the board's order).
-    pub inertials: Vec<u8>,
+    /// The `eOas_sensor_t` of each enabled inertial sensor (in the board's order) and the
+    /// id its readings carry (`port << 4 | address` of its CAN board).
+    pub inertials: Vec<(u8, u8)>,
     /// The MTB addresses of each skin patch.
     pub skin_patches: Vec<Vec<u8>>,
     /// The protocol versions the board announces (management, motion control, analog
@@ -208,7 +209,12 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
             "embObjIMU" | "embObjInertials" => {
                 b.inertials3 = 1;
                 match icubmod::eth::sensors::inertial_sensors(&cfg) {
-                    Ok(list) => b.inertials = list.iter().map(|s| s.kind).collect(),
+                    Ok(list) => {
+                        b.inertials = list
+                            .iter()
+                            .map(|s| (s.kind, s.can_id.unwrap_or(0)))
+                            .collect()
+                    }
                     Err(e) => tracing::warn!("device {}: {e}", dev.name),
                 }
             }
@@ -326,8 +332,9 @@ fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u6
         let n = spec.inertials.len();
         let data = (0..n.min(4))
             .map(|k| {
-                let id = ((tick as usize * 4 + k) % n) as u8;
-                let (x, y, z) = match spec.inertials[id as usize] {
+                let (kind, id) = spec.inertials[(tick as usize * 4 + k) % n];
+                // the IMU's in its units (BNO055), the MTBs' and the board's raw
+                let (x, y, z) = match kind {
                     st::IMU_ACC | st::ACCEL_MTB_INT | st::ACCEL_MTB_EXT | st::ACCEL_ST_LIS3X => {
                         (0.0, 0.0, 981.0)
                     }
@@ -337,8 +344,9 @@ fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u6
                     _ => (0.0, 0.0, 0.0),
                 };
                 Inertial3Data {
+                    // `port << 4 | address` of the sensor's CAN board, as boards send it
                     id,
-                    type_of_sensor: spec.inertials[id as usize],
+                    type_of_sensor: kind,
                     status: 0,
                     seq: tick as u8,
                     timestamp: (age_us / 1000) as u32,

@@ -95,6 +95,28 @@ fn ergocub_left_arm_boards_ft_and_imu() {
             .is_ok_and(|m| (m.values[2] - 9.81).abs() < 0.01)
     });
 
+    // A foot's two sensors: the board's order is C++'s map by id (front before rear,
+    // although the file enables rear first), each with its own settings.
+    let mut foot = EmbObjMultipleFtSensors::new();
+    foot.open(&cfg("left_leg-eb9-j4_5-strain"))
+        .expect("the foot's FT opens");
+    let f = foot.as_six_axis_force_torque_sensors().unwrap();
+    assert_eq!(f.get_nr_of_six_axis_force_torque_sensors(), 2);
+    assert_eq!(
+        f.get_six_axis_force_torque_sensor_name(0).unwrap(),
+        "l_foot_front_ft"
+    );
+    assert_eq!(
+        f.get_six_axis_force_torque_sensor_name(1).unwrap(),
+        "l_foot_rear_ft"
+    );
+    // no SENSORS/framename in the file: empty, as C++
+    assert_eq!(
+        f.get_six_axis_force_torque_sensor_frame_name(1).unwrap(),
+        ""
+    );
+    foot.close().unwrap();
+
     let mut imu = EmbObjImu::new("embObjIMU");
     imu.open(&cfg("left_arm-eb2-j0_1-inertial"))
         .expect("IMU opens");

@@ -157,6 +157,13 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
             && v.len() == 15
             && v.iter().any(|x| *x != 0.0)
     });
+    // as icub-main 2.11, one encoder array (what the robot's multipleanalogsensorsserver
+    // publishes) named by SENSORS/id
+    let arrays = mais.as_encoder_arrays().expect("IEncoderArrays");
+    assert_eq!(arrays.get_nr_of_encoder_arrays(), 1);
+    assert_eq!(arrays.get_encoder_array_name(0).unwrap(), "l_hand_mais");
+    assert_eq!(arrays.get_encoder_array_size(0), 15);
+    assert_eq!(arrays.get_encoder_array_measure(0).unwrap().values, v);
 
     // The left foot's strain2 (its file asks for the temperature every 1000 ms): the
     // temperature service comes up beside the strain, and its reading is in °C.

@@ -199,7 +199,15 @@ pub struct HostTransceiver {
     lost_since: Option<Duration>,
     monitor_presence: bool,
     counters: HostCounters,
+    /// Variables whose every received value is kept, in order, for a device that must
+    /// see each one (several ROPs of one variable may arrive between two of its reads:
+    /// the inertials of more than four sensors, the skin's CAN frames).
+    kept: HashMap<Id32, VecDeque<Vec<u8>>>,
 }
+
+/// How many received values of a kept variable wait for their device at most (the
+/// oldest go first).
+pub const KEPT_VALUES_LIMIT: usize = 256;
 
 impl HostTransceiver {
     pub fn new(cfg: HostConfig) -> Self {
@@ -230,7 +238,22 @@ impl HostTransceiver {
             lost_since: None,
             monitor_presence: false,
             counters: HostCounters::default(),
+            kept: HashMap::new(),
         }
+    }
+
+    /// Keeps every value of `id` that arrives from now on, for [`Self::take_kept`] (as
+    /// icub-main's devices get each ROP in their `update()`).
+    pub fn keep_values(&mut self, id: Id32) {
+        self.kept.entry(id).or_default();
+    }
+
+    /// The values of `id` received since the last call, oldest first.
+    pub fn take_kept(&mut self, id: Id32) -> Vec<Vec<u8>> {
+        self.kept
+            .get_mut(&id)
+            .map(|q| q.drain(..).collect())
+            .unwrap_or_default()
     }
 
     pub fn config(&self) -> &HostConfig {
@@ -443,6 +466,12 @@ impl HostTransceiver {
                 if self.store.set(id, rop.data).is_err() {
                     self.counters.unknown_rops += 1;
                     return;
+                }
+                if let Some(q) = self.kept.get_mut(&id) {
+                    if q.len() >= KEPT_VALUES_LIMIT {
+                        q.pop_front();
+                    }
+                    q.push_back(rop.data.to_vec());
                 }
                 let done: Vec<RequestId> = self
                     .pending

@@ -342,6 +342,24 @@ impl Board {
         })
     }
 
+    /// Keeps every value of `id` received from now on, for [`Board::take_kept`].
+    pub fn keep_values(&self, id: Id32) {
+        self.lock().host.keep_values(id);
+    }
+
+    /// The values of `id` received since the last call (see [`Board::keep_values`]),
+    /// oldest first; those the reader holds for a busy board are handled first.
+    pub fn take_kept(&self, id: Id32) -> Vec<Vec<u8>> {
+        let mut inner = self.lock();
+        let mut inbox = self.inbox.try_lock().ok();
+        if let Some(inbox) = inbox.as_deref_mut() {
+            for (t, d) in inbox.drain(..) {
+                self.receive(&mut inner, t, &d);
+            }
+        }
+        inner.host.take_kept(id)
+    }
+
     /// Overwrites the local copy of a variable (C++ `setLocalValue`).
     pub fn set_local(&self, id: Id32, data: &[u8]) -> Result<(), EthError> {
         self.lock()

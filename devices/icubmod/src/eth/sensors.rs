@@ -25,8 +25,8 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use icub_eth::entities::analog::{
-    FtConfig, FtStatus, Inertial3Config, Inertial3Status, MaisConfig, MaisStatus, StrainConfig,
-    StrainStatus, TemperatureConfig,
+    FtConfig, FtStatus, Inertial3Config, Inertial3Status, MaisStatus, StrainConfig, StrainStatus,
+    TemperatureConfig,
 };
 use icub_eth::entities::mn::{category, service_type, ServiceCommand};
 use icub_eth::id::{entity as en, ids, tag};
@@ -394,13 +394,80 @@ impl IAnalogSensor for EmbObjFtSensor {
 // ---- embObjMultipleFTsensors ----
 
 /// `embObjMultipleFTsensors`: the FT sensors of a board (ergoCub), with temperatures.
+/// As icub-main's `ServiceParserMultipleFt` keeps them in a map by id, the board's
+/// sensor `i` is the `i`-th enabled id in sorted order, with that sensor's own
+/// `ftPeriod`, `temperaturePeriod` and `useCalibration` (one value per enabled sensor).
 #[derive(Default)]
 pub struct EmbObjMultipleFtSensors {
     c: Common,
     names: Vec<String>,
+    /// `PROPERTIES/SENSORS/framename` of each, empty when the file has none (as C++).
+    frames: Vec<String>,
 }
 
 pub const MULTIPLE_FT: &str = "embObjMultipleFTsensors";
+
+/// One enabled sensor's settings (`ServiceParserMultipleFt::FtInfo`).
+struct FtSettings {
+    id: String,
+    frame: String,
+    config: FtConfig,
+}
+
+/// The enabled sensors in the board's order, with their settings.
+fn multiple_ft_settings(root: &Node) -> Result<Vec<FtSettings>, ParamError> {
+    let (set, sensors) = settings(root)?;
+    let enabled = set
+        .strings("enabledSensors")
+        .filter(|v| !v.is_empty())
+        .ok_or_else(|| ParamError::missing("SETTINGS/enabledSensors", "sensor names"))?;
+    if enabled.len() > 4 {
+        return Err(ParamError::bad(
+            "SETTINGS/enabledSensors",
+            "at most 4 sensors",
+            enabled.join(" "),
+        ));
+    }
+    let n = enabled.len();
+    let ft = set.need_numbers("ftPeriod", n)?;
+    let temperature = set.need_numbers("temperaturePeriod", n)?;
+    let calibration = set.need_strings("useCalibration", n)?;
+    let ids = sensors.strings("id").unwrap_or_default();
+    let frames = sensors.strings("framename");
+    let mut all: Vec<FtSettings> = Vec::with_capacity(n);
+    for (k, id) in enabled.iter().enumerate() {
+        if all.iter().any(|s| &s.id == id) {
+            return Err(ParamError::bad(
+                "SETTINGS/enabledSensors",
+                "distinct ids",
+                id.clone(),
+            ));
+        }
+        let frame = ids
+            .iter()
+            .position(|i| i == id)
+            .and_then(|p| frames.as_ref()?.get(p).cloned())
+            .unwrap_or_default();
+        let calibrated = matches!(
+            calibration[k].trim_matches('"'),
+            "true" | "1" | "TRUE" | "True"
+        );
+        all.push(FtSettings {
+            id: id.clone(),
+            frame,
+            config: FtConfig {
+                // eOas_ft_mode_t: raw 0, calibrated 1
+                mode: u8::from(calibrated),
+                // C++ takes `asInt8()` of each as the board's uint8_t fields
+                ftperiod: ft[k] as i64 as u8,
+                calibration_set: 0,
+                temperature_period: ((temperature[k] as i64 as u32) / 1000) as u8,
+            },
+        });
+    }
+    all.sort_by(|a, b| a.id.cmp(&b.id));
+    Ok(all)
+}
 
 impl EmbObjMultipleFtSensors {
     pub fn new() -> Self {
@@ -417,40 +484,27 @@ impl EmbObjMultipleFtSensors {
 
 impl DeviceDriver for EmbObjMultipleFtSensors {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let mut names = Vec::new();
+        let mut sensors = Vec::new();
         self.c.open(MULTIPLE_FT, config, category::FT, |root, st| {
-            let (set, _sensors) = settings(root)?;
-            names = set
-                .strings("enabledSensors")
-                .filter(|v| !v.is_empty())
-                .ok_or_else(|| ParamError::missing("SETTINGS/enabledSensors", "sensor names"))?;
-            let ft_period = set.number("ftPeriod")?.unwrap_or(10.0);
-            let t_period = set.number("temperaturePeriod")?.unwrap_or(1000.0);
-            let calibrated = set.boolean("useCalibration").unwrap_or(true);
-            let mut configs = Vec::new();
-            let mut regulars = Vec::new();
-            let mut after = Vec::new();
-            for i in 0..names.len().min(4) as u8 {
-                let cfg = FtConfig {
-                    mode: if calibrated { 0 } else { 3 },
-                    ftperiod: ft_period.clamp(1.0, 255.0) as u8,
-                    calibration_set: 0,
-                    temperature_period: (t_period / 1000.0).clamp(1.0, 255.0) as u8,
-                };
-                configs.push((ids::analog(en::AS_FT, i, tag::AS_FT_CONFIG), cfg.to_bytes()));
-                regulars.push(ids::analog(en::AS_FT, i, tag::AS_FT_STATUS));
-                after.push((ids::analog(en::AS_FT, i, tag::AS_FT_CMMNDS_ENABLE), vec![1]));
+            sensors = multiple_ft_settings(root)?;
+            let mut service = SensorService::new(verify(root, category::FT, st)?);
+            for (i, s) in sensors.iter().enumerate() {
+                let i = i as u8;
+                service.configs.push((
+                    ids::analog(en::AS_FT, i, tag::AS_FT_CONFIG),
+                    s.config.to_bytes(),
+                ));
+                service
+                    .regulars
+                    .push(ids::analog(en::AS_FT, i, tag::AS_FT_STATUS_TIMEDVALUE));
+                service
+                    .after_start
+                    .push((ids::analog(en::AS_FT, i, tag::AS_FT_CMMNDS_ENABLE), vec![1]));
             }
-            Ok(SensorService {
-                activate: verify(root, category::FT, st)?,
-                configs,
-                regulars,
-                prepare: None,
-                companion: None,
-                after_start: after,
-            })
+            Ok(service)
         })?;
-        self.names = names;
+        self.names = sensors.iter().map(|s| s.id.clone()).collect();
+        self.frames = sensors.into_iter().map(|s| s.frame).collect();
         Ok(())
     }
     fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
@@ -479,7 +533,10 @@ impl ISixAxisForceTorqueSensors for EmbObjMultipleFtSensors {
             .ok_or_else(|| no_sensor(&self.c.id, i, self.names.len()))
     }
     fn get_six_axis_force_torque_sensor_frame_name(&self, i: usize) -> DevResult<String> {
-        self.get_six_axis_force_torque_sensor_name(i)
+        self.frames
+            .get(i)
+            .cloned()
+            .ok_or_else(|| no_sensor(&self.c.id, i, self.names.len()))
     }
     fn get_six_axis_force_torque_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
         let s = self.status_of(i)?;
@@ -501,7 +558,7 @@ impl ITemperatureSensors for EmbObjMultipleFtSensors {
         self.get_six_axis_force_torque_sensor_name(i)
     }
     fn get_temperature_sensor_frame_name(&self, i: usize) -> DevResult<String> {
-        self.get_six_axis_force_torque_sensor_name(i)
+        self.get_six_axis_force_torque_sensor_frame_name(i)
     }
     /// °C (the board's 0.1 °C units).
     fn get_temperature_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
@@ -559,6 +616,10 @@ pub struct InertialSensor {
     /// `sensorName` (the IMU the reading belongs to), else the id.
     pub name: String,
     pub kind: u8,
+    /// The id its readings carry: `port << 4 | address` of its CAN board (icub-main's
+    /// `PositionMaps::getCanAddress`); `None` for the Ethernet board's own gyroscope,
+    /// whose readings are known by their type alone.
+    pub can_id: Option<u8>,
 }
 
 /// The enabled sensors of an inertials3 service (`SETTINGS/enabledSensors` looked up in
@@ -570,6 +631,7 @@ pub fn inertial_sensors(config: &Property) -> Result<Vec<InertialSensor>, ParamE
         .strings("id")
         .ok_or_else(|| ParamError::missing("SENSORS/id", "sensor ids"))?;
     let types = sensors.need_strings("type", ids.len())?;
+    let locations = sensors.need_strings("location", ids.len())?;
     let names = sensors
         .strings("sensorName")
         .filter(|v| v.len() == ids.len())
@@ -584,23 +646,28 @@ pub fn inertial_sensors(config: &Property) -> Result<Vec<InertialSensor>, ParamE
             let kind = sensor_type::from_name(&types[k]).ok_or_else(|| {
                 ParamError::bad("SENSORS/type", "an eoas_* inertial type", &types[k])
             })?;
+            let can_id = if kind == sensor_type::GYROS_ST_L3G4200D {
+                None
+            } else {
+                super::service_config::can_location(&locations[k])
+                    .map(|l| l.port << 4 | (l.addr & 0x0F))
+            };
             Ok(InertialSensor {
                 id: e.clone(),
                 name: names[k].clone(),
                 kind,
+                can_id,
             })
         })
         .collect()
 }
 
-/// The latest reading of every sensor of an inertials3 service (the board sends at
-/// most four per status ROP, so readings are accumulated by sensor index).
+/// The latest reading of every sensor of an inertials3 service, by type and id (the
+/// board sends at most four readings per status ROP, so every ROP is folded in).
 #[derive(Default)]
 struct InertialCache {
-    by_id: HashMap<u8, [i16; 4]>,
-    last_seq: Option<Vec<u8>>,
+    by_key: HashMap<(u8, Option<u8>), [i16; 4]>,
 }
-
 /// `embObjIMU` / `embObjInertials`: the IMUs (or MTB accelerometers / gyroscopes) of a
 /// board.
 #[derive(Default)]
@@ -622,28 +689,48 @@ impl EmbObjImu {
         }
     }
 
-    /// Folds the latest status into the cache and returns the reading of sensor `k`.
+    /// Folds every status received since the last call into the cache (as C++ does in
+    /// `update()`, ROP by ROP) and returns the reading of sensor `k`.
     fn reading(&self, k: usize) -> DevResult<[i16; 4]> {
-        let st: Inertial3Status =
-            self.c
-                .read(ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_STATUS))?;
+        let board = self.c.board.as_ref().ok_or(DeviceError::NotOpen)?;
+        // a silent board makes the read fail, naming it
+        let _: Inertial3Status = self.c.read(STATUS)?;
         let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
-        let seq: Vec<u8> = st.data.iter().map(|d| d.seq).collect();
-        if cache.last_seq.as_ref() != Some(&seq) {
+        for bytes in board.take_kept(STATUS) {
+            let Ok(st) = Inertial3Status::from_bytes(&bytes) else {
+                continue;
+            };
             for d in &st.data {
-                cache.by_id.insert(d.id, [d.x, d.y, d.z, d.w]);
+                // C++ PositionMaps: the Ethernet board's gyroscope by its type, the
+                // others by type, CAN port and address
+                let key = if d.type_of_sensor == sensor_type::GYROS_ST_L3G4200D {
+                    (d.type_of_sensor, None)
+                } else {
+                    (d.type_of_sensor, Some(d.id))
+                };
+                cache.by_key.insert(key, [d.x, d.y, d.z, d.w]);
             }
-            cache.last_seq = Some(seq);
         }
-        Ok(cache.by_id.get(&(k as u8)).copied().unwrap_or_default())
+        let s = &self.sensors[k];
+        Ok(cache
+            .by_key
+            .get(&(s.kind, s.can_id))
+            .copied()
+            .unwrap_or_default())
     }
 
+    /// The sensors of an interface, in C++'s order: by type as `kinds` lists them, then
+    /// in the configuration's order.
     fn of_kind(&self, kinds: &[u8]) -> Vec<usize> {
-        self.sensors
+        kinds
             .iter()
-            .enumerate()
-            .filter(|(_, s)| kinds.contains(&s.kind))
-            .map(|(k, _)| k)
+            .flat_map(|kind| {
+                self.sensors
+                    .iter()
+                    .enumerate()
+                    .filter(move |(_, s)| s.kind == *kind)
+                    .map(|(k, _)| k)
+            })
             .collect()
     }
 
@@ -654,11 +741,20 @@ impl EmbObjImu {
             .ok_or_else(|| no_sensor(&self.c.id, i, v.len()))
     }
 
-    fn measure(&self, kinds: &[u8], i: usize, scale: f64) -> DevResult<SensorMeasurement> {
+    /// Sensor `i` of the interface, its values divided by its type's factor (icub-main's
+    /// `SensorsData::init`: only the IMU's sensors have one; the MTBs' and the Ethernet
+    /// board's readings pass as they are).
+    fn measure(&self, kinds: &[u8], i: usize) -> DevResult<SensorMeasurement> {
         let k = self.nth(kinds, i)?;
         let r = self.reading(k)?;
+        let factor = match self.sensors[k].kind {
+            sensor_type::IMU_ACC => 100.0,
+            sensor_type::IMU_MAG => 16.0e6,
+            sensor_type::IMU_GYR | sensor_type::IMU_EUL => 16.0,
+            _ => 1.0,
+        };
         Ok(SensorMeasurement::new(
-            r[..3].iter().map(|v| f64::from(*v) / scale).collect(),
+            r[..3].iter().map(|v| f64::from(*v) / factor).collect(),
             now(),
         ))
     }
@@ -676,16 +772,19 @@ impl EmbObjImu {
     }
 }
 
+const STATUS: Id32 = ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_STATUS);
+
+/// The accelerometers and gyroscopes in icub-main's order (`getAccSubIndex`,
+/// `getGyroSubIndex`).
 const ACC: &[u8] = &[
     sensor_type::IMU_ACC,
     sensor_type::ACCEL_MTB_INT,
     sensor_type::ACCEL_MTB_EXT,
-    sensor_type::ACCEL_ST_LIS3X,
 ];
 const GYR: &[u8] = &[
     sensor_type::IMU_GYR,
-    sensor_type::GYROS_MTB_EXT,
     sensor_type::GYROS_ST_L3G4200D,
+    sensor_type::GYROS_MTB_EXT,
 ];
 const MAG: &[u8] = &[sensor_type::IMU_MAG];
 const EUL: &[u8] = &[sensor_type::IMU_EUL];
@@ -724,6 +823,9 @@ impl DeviceDriver for EmbObjImu {
                 })
             })?;
         self.sensors = sensors;
+        if let Some(b) = &self.c.board {
+            b.keep_values(STATUS);
+        }
         Ok(())
     }
     fn as_three_axis_gyroscopes(&mut self) -> Option<&mut dyn IThreeAxisGyroscopes> {
@@ -756,7 +858,7 @@ impl IThreeAxisGyroscopes for EmbObjImu {
         self.name(GYR, i)
     }
     fn get_three_axis_gyroscope_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        self.measure(GYR, i, 16.0)
+        self.measure(GYR, i)
     }
 }
 
@@ -777,7 +879,7 @@ impl IThreeAxisLinearAccelerometers for EmbObjImu {
         &self,
         i: usize,
     ) -> DevResult<SensorMeasurement> {
-        self.measure(ACC, i, 100.0)
+        self.measure(ACC, i)
     }
 }
 
@@ -796,7 +898,7 @@ impl IThreeAxisMagnetometers for EmbObjImu {
     }
     /// Tesla (16 LSB per µT).
     fn get_three_axis_magnetometer_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        self.measure(MAG, i, 16.0e6)
+        self.measure(MAG, i)
     }
 }
 
@@ -817,16 +919,19 @@ impl IOrientationSensors for EmbObjImu {
         &self,
         i: usize,
     ) -> DevResult<SensorMeasurement> {
-        self.measure(EUL, i, 16.0)
+        self.measure(EUL, i)
     }
 }
 
 // ---- embObjMais ----
 
-/// `embObjMais`: the 15 channels of a hand's MAIS board.
+/// `embObjMais`: the 15 channels of a hand's MAIS board, as icub-main 2.11 serves them:
+/// one encoder array (`IEncoderArrays`, what the robots' `multipleanalogsensorsserver`
+/// publishes) named by `SENSORS/id`, and as an `IAnalogSensor` (older wrappers).
 #[derive(Default)]
 pub struct EmbObjMais {
     c: Common,
+    name: String,
 }
 
 pub const MAIS: &str = "embObjMais";
@@ -835,54 +940,102 @@ impl EmbObjMais {
     pub fn new() -> Self {
         Self::default()
     }
+
+    /// The 15 values and when they were read.
+    fn values(&self) -> DevResult<Vec<f64>> {
+        let s: MaisStatus = self
+            .c
+            .read(ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS))?;
+        let mut v: Vec<f64> = s
+            .the15values
+            .u8_values()
+            .iter()
+            .take(15)
+            .map(|v| f64::from(*v))
+            .collect();
+        if v.is_empty() {
+            // C++ keeps its values when the items are not bytes: none yet here
+            return Err(DeviceError::failed(
+                &self.c.id,
+                "no MAIS values from the board yet",
+            ));
+        }
+        v.resize(15, 0.0);
+        Ok(v)
+    }
 }
 
 impl DeviceDriver for EmbObjMais {
     fn open(&mut self, config: &Property) -> DevResult<()> {
+        let mut name = String::new();
         self.c.open(MAIS, config, category::MAIS, |root, st| {
-            let rate = root
-                .group("SERVICE")
-                .and_then(|s| s.group("SETTINGS"))
-                .and_then(|s| s.number("acquisitionRate").ok().flatten())
-                .unwrap_or(10.0);
-            let cfg = MaisConfig {
-                mode: 0,
-                datarate: rate.clamp(1.0, 255.0) as u8,
-                resolution: 0,
-            };
-            Ok(SensorService {
-                activate: verify(root, category::MAIS, st)?,
-                configs: vec![(
-                    ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_CONFIG),
-                    cfg.to_bytes(),
-                )],
-                regulars: vec![ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS)],
-                prepare: None,
-                companion: None,
-                after_start: Vec::new(),
-            })
-        })
+            let (set, sensors) = settings(root)?;
+            name = sensors.string("id").unwrap_or_default();
+            let rate = set.number("acquisitionRate")?.unwrap_or(10.0);
+            let mut service = SensorService::new(verify(root, category::MAIS, st)?);
+            // embObjMais::sendConfig2Mais: the datarate, then the mode (tx continuously);
+            // the resolution is left as the board has it
+            service.configs = vec![
+                (
+                    ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_CONFIG_DATARATE),
+                    vec![rate.clamp(0.0, 255.0) as u8],
+                ),
+                (
+                    ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_CONFIG_MODE),
+                    vec![0],
+                ),
+            ];
+            service.regulars = vec![ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS_THE15VALUES)];
+            Ok(service)
+        })?;
+        self.name = name;
+        Ok(())
     }
     fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
         Some(self)
+    }
+    fn as_encoder_arrays(&mut self) -> Option<&mut dyn IEncoderArrays> {
+        Some(self)
+    }
+}
+
+impl IEncoderArrays for EmbObjMais {
+    fn get_nr_of_encoder_arrays(&self) -> usize {
+        1
+    }
+    fn get_encoder_array_status(&self, sens_index: usize) -> MasStatus {
+        if sens_index == 0 {
+            MasStatus::Ok
+        } else {
+            MasStatus::Unknown
+        }
+    }
+    fn get_encoder_array_name(&self, sens_index: usize) -> DevResult<String> {
+        if sens_index != 0 {
+            return Err(no_sensor(&self.c.id, sens_index, 1));
+        }
+        Ok(self.name.clone())
+    }
+    fn get_encoder_array_size(&self, sens_index: usize) -> usize {
+        if sens_index == 0 {
+            15
+        } else {
+            0
+        }
+    }
+    fn get_encoder_array_measure(&self, sens_index: usize) -> DevResult<SensorMeasurement> {
+        if sens_index != 0 {
+            return Err(no_sensor(&self.c.id, sens_index, 1));
+        }
+        Ok(SensorMeasurement::new(self.values()?, now()))
     }
 }
 
 impl IAnalogSensor for EmbObjMais {
     fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
-        match self
-            .c
-            .read::<MaisStatus>(ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS))
-        {
-            Ok(s) => {
-                *out = s
-                    .the15values
-                    .u8_values()
-                    .iter()
-                    .take(15)
-                    .map(|v| f64::from(*v))
-                    .collect();
-                out.resize(15, 0.0);
+        match self.values() {
+            Ok(v) => {
+                *out = v;
                 AnalogStatus::Ok
             }
             Err(_) => AnalogStatus::Timeout,
@@ -942,7 +1095,6 @@ pub struct EmbObjSkin {
     c: Common,
     patches: Vec<Vec<u8>>,
     taxels: Mutex<Vec<f64>>,
-    last: Mutex<Vec<Option<Vec<u8>>>>,
 }
 
 pub const SKIN: &str = "embObjSkin";
@@ -963,52 +1115,49 @@ impl EmbObjSkin {
         })
     }
 
+    /// Applies every status the board sent since the last call, in order (C++ does it in
+    /// `update()`, ROP by ROP: a taxel's frame in one status is not overwritten by the
+    /// next status, which carries other triangles).
     fn update(&self) -> DevResult<()> {
+        let board = self.c.board.as_ref().ok_or(DeviceError::NotOpen)?;
         let mut taxels = self.taxels.lock().unwrap_or_else(|e| e.into_inner());
-        let mut last = self.last.lock().unwrap_or_else(|e| e.into_inner());
         for p in 0..self.patches.len() {
-            let st: icub_eth::entities::skin::SkinStatus = self
-                .c
-                .read(ids::skin(p as u8, tag::SK_SKIN_STATUS_ARRAYOFCANDATA))?;
-            let raw = st.to_bytes();
-            if last.get(p).and_then(|l| l.as_ref()) == Some(&raw) {
-                continue;
-            }
-            for f in &st.frames {
-                let id = f.can_id();
-                if !matches!((id >> 8) & 0xf, 3 | 4) {
-                    continue;
-                }
-                let Some(b) = self.board_index(p, ((id >> 4) & 0xf) as u8) else {
+            let id = ids::skin(p as u8, tag::SK_SKIN_STATUS_ARRAYOFCANDATA);
+            // a silent board makes the read fail, naming it
+            let _: icub_eth::entities::skin::SkinStatus = self.c.read(id)?;
+            for bytes in board.take_kept(id) {
+                let Ok(st) = icub_eth::entities::skin::SkinStatus::from_bytes(&bytes) else {
                     continue;
                 };
-                let base = b * 192 + usize::from(id & 0xf) * 12;
-                let d = f.payload();
-                match d.first() {
-                    Some(0x40) => {
-                        for k in 0..7 {
-                            if let (Some(v), Some(t)) = (d.get(k + 1), taxels.get_mut(base + k)) {
-                                *t = f64::from(*v);
-                            }
-                        }
-                    }
-                    Some(0xC0) => {
-                        for k in 0..5 {
-                            if let (Some(v), Some(t)) = (d.get(k + 1), taxels.get_mut(base + 7 + k))
-                            {
-                                *t = f64::from(*v);
-                            }
-                        }
-                    }
-                    _ => {}
+                for f in &st.frames {
+                    self.apply(&mut taxels, p, f);
                 }
             }
-            if last.len() <= p {
-                last.resize(p + 1, None);
-            }
-            last[p] = Some(raw);
         }
         Ok(())
+    }
+
+    /// One CAN frame of an MTB: taxels 0-6 (`0x40`) or 7-11 (`0xC0`) of a triangle.
+    fn apply(&self, taxels: &mut [f64], p: usize, f: &icub_eth::entities::skin::SkinCanData) {
+        let id = f.can_id();
+        if !matches!((id >> 8) & 0xf, 3 | 4) {
+            return;
+        }
+        let Some(b) = self.board_index(p, ((id >> 4) & 0xf) as u8) else {
+            return;
+        };
+        let base = b * 192 + usize::from(id & 0xf) * 12;
+        let d = f.payload();
+        let (first, count) = match d.first() {
+            Some(0x40) => (0, 7),
+            Some(0xC0) => (7, 5),
+            _ => return,
+        };
+        for k in 0..count {
+            if let (Some(v), Some(t)) = (d.get(k + 1), taxels.get_mut(base + first + k)) {
+                *t = f64::from(*v);
+            }
+        }
     }
 }
 
@@ -1037,8 +1186,14 @@ impl DeviceDriver for EmbObjSkin {
             })
         })?;
         let boards: usize = patches.iter().map(Vec::len).sum();
+        // C++ starts every taxel at 240 (no touch) until its board talks
+        *self.taxels.lock().unwrap_or_else(|e| e.into_inner()) = vec![240.0; boards * 192];
+        if let Some(b) = &self.c.board {
+            for p in 0..patches.len() {
+                b.keep_values(ids::skin(p as u8, tag::SK_SKIN_STATUS_ARRAYOFCANDATA));
+            }
+        }
         self.patches = patches;
-        *self.taxels.lock().unwrap_or_else(|e| e.into_inner()) = vec![0.0; boards * 192];
         Ok(())
     }
     fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
