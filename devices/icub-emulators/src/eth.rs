@@ -235,7 +235,51 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
 
 /// Writes the sensors' values of a board (slowly varying, so that streams visibly
 /// change).
-fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u64, tick: u64) {
+/// Which triangles of each skin patch's MTBs transmit, by address (16 bits, one per
+/// triangle), as the host's triangle configurations set them; a patch never configured
+/// transmits all (the old-style skins).
+#[derive(Debug, Default, Clone)]
+struct SkinTriangles {
+    per_patch: Vec<Option<std::collections::HashMap<u8, u16>>>,
+}
+
+impl SkinTriangles {
+    /// A `cmmnds_trianglescfg` of patch `p`: the triangles `id_start..=id_end` of the
+    /// addressed boards enabled or disabled.
+    fn apply(&mut self, p: usize, addrs: &[u8], c: &icub_eth::entities::skin::SkinTrianglesConfig) {
+        if self.per_patch.len() <= p {
+            self.per_patch.resize(p + 1, None);
+        }
+        let masks = self.per_patch[p].get_or_insert_with(Default::default);
+        let dest = c.can_destination[0] | c.can_destination[1];
+        let mut bits = 0u16;
+        for t in c.id_start..=c.id_end.min(15) {
+            bits |= 1 << t;
+        }
+        for &a in addrs {
+            if a < 16 && dest & (1 << a) != 0 {
+                let m = masks.entry(a).or_insert(0);
+                *m = if c.enable != 0 { *m | bits } else { *m & !bits };
+            }
+        }
+    }
+
+    fn enabled(&self, p: usize, addr: u8, triangle: u8) -> bool {
+        match self.per_patch.get(p).and_then(Option::as_ref) {
+            None => true,
+            Some(m) => m.get(&addr).is_some_and(|bits| bits & (1 << triangle) != 0),
+        }
+    }
+}
+
+fn update_sensors(
+    engine: &mut BoardEngine,
+    spec: &BoardSpec,
+    skin: &SkinTriangles,
+    t: f64,
+    age_us: u64,
+    tick: u64,
+) {
     use icubmod::eth::sensors::sensor_type as st;
     let s = (t * 0.5).sin();
     let store = engine.store_mut();
@@ -306,6 +350,7 @@ fn update_sensors(engine: &mut BoardEngine, spec: &BoardSpec, t: f64, age_us: u6
         let all: Vec<(u8, u8, bool)> = addrs
             .iter()
             .flat_map(|a| (0..16u8).flat_map(move |t| [(*a, t, false), (*a, t, true)]))
+            .filter(|(a, t, _)| skin.enabled(p, *a, *t))
             .collect();
         if all.is_empty() {
             continue;
@@ -419,6 +464,7 @@ pub fn serve(
             peer: None,
             last_step: None,
             tick: 0,
+            skin: SkinTriangles::default(),
         });
         served.push(ServedBoard { spec, local });
     }
@@ -439,6 +485,7 @@ struct ServedState {
     /// When the control loop last ran (the serving thread's time).
     last_step: Option<Duration>,
     tick: u64,
+    skin: SkinTriangles,
 }
 
 impl ServedState {
@@ -476,6 +523,34 @@ impl ServedState {
             if let Err(e) = self.engine.handle_datagram(&buf[..n]) {
                 tracing::debug!(board = %self.spec.params.who(), "dropped a datagram: {e}");
             }
+            self.configured();
+        }
+    }
+
+    /// Takes in what the host configured that the emulation follows (the skin's
+    /// triangles).
+    fn configured(&mut self) {
+        while let Some(ev) = self.engine.poll_event() {
+            let icub_eth::board::BoardEvent::Set(id) = ev else {
+                continue;
+            };
+            if (id.endpoint(), id.entity(), id.tag())
+                != (
+                    icub_eth::id::endpoint::SKIN,
+                    en::SK_SKIN,
+                    tag::SK_SKIN_CMMNDS_TRIANGLESCFG,
+                )
+            {
+                continue;
+            }
+            let p = usize::from(id.index());
+            let cfg = self
+                .engine
+                .store()
+                .read::<icub_eth::entities::skin::SkinTrianglesConfig>(id);
+            if let (Ok(cfg), Some(addrs)) = (cfg, self.spec.skin_patches.get(p)) {
+                self.skin.apply(p, addrs, &cfg);
+            }
         }
     }
 
@@ -492,6 +567,7 @@ impl ServedState {
             update_sensors(
                 &mut self.engine,
                 &self.spec,
+                &self.skin,
                 now.as_secs_f64(),
                 now.as_micros() as u64,
                 self.tick,

@@ -165,6 +165,33 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
     assert_eq!(arrays.get_encoder_array_size(0), 15);
     assert_eq!(arrays.get_encoder_array_measure(0).unwrap().values, v);
 
+    // The hand's skin with its skinSpec (new style): every triangle disabled by
+    // default, then 20 special sets enable some (board 14: triangles 0-6 and 8-11).
+    // Enabled triangles stream; the others keep the boards' noLoad (0xf0).
+    let mut skin = icubmod::eth::EmbObjSkin::new();
+    skin.open(&cfg("left_arm-eb2-j4_15-skin"))
+        .expect("the skin opens and configures its MTBs");
+    let mut taxels = Vec::new();
+    wait_for(
+        "the enabled triangles stream",
+        Duration::from_secs(3),
+        || {
+            skin.as_analog_sensor().unwrap().read(&mut taxels)
+                == yarp_devices::sensors::interfaces::AnalogStatus::Ok
+                && taxels.len() == 7 * 192
+                && taxels[0] != 240.0
+                && taxels[8 * 12] != 240.0
+        },
+    );
+    // board 14 (the first of the patch): triangle 7 and 12-15 stay disabled
+    assert!(
+        taxels[7 * 12..8 * 12].iter().all(|t| *t == 240.0),
+        "{:?}",
+        &taxels[84..96]
+    );
+    assert!(taxels[12 * 12..16 * 12].iter().all(|t| *t == 240.0));
+    skin.close().unwrap();
+
     // The left foot's strain2 (its file asks for the temperature every 1000 ms): the
     // temperature service comes up beside the strain, and its reading is in °C.
     let mut foot = EmbObjFtSensor::new();

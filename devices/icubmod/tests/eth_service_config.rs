@@ -322,3 +322,42 @@ fn every_mc_service_of_both_robots_builds() {
         "{e}"
     );
 }
+
+#[test]
+fn skin_spec_of_the_icub_genova02_left_hand_and_its_commands() {
+    use icub_eth::Entity;
+    use icubmod::eth::skin_spec::{self, SkinSpec};
+    let p = device_file("iCubGenova02", "hardware/skin/left_arm-eb2-j4_15-skin.xml");
+    let spec = SkinSpec::read(&Node::root(&p))
+        .unwrap()
+        .expect("new-style skinSpec");
+    // defaultCfgBoard: period 50, skinType 0, noLoad 0xf0; defaultCfgTriangle: disabled,
+    // shift 2, cdcOffset 0x2200
+    let boards = skin_spec::default_boards(&spec.board).to_bytes();
+    assert_eq!(boards, [0xFF, 0xFF, 0xFF, 0xFF, 0, 50, 0xF0, 0]);
+    let triangles = skin_spec::default_triangles(&spec.triangle).to_bytes();
+    assert_eq!(
+        triangles,
+        [0xFF, 0xFF, 0xFF, 0xFF, 0, 15, 0, 0, 0, 0, 0, 0, 0, 2, 0x00, 0x22]
+    );
+    assert_eq!(spec.special_boards.len(), 1);
+    assert_eq!(spec.special_triangles.len(), 20);
+    // the patch on CAN2 (patch 2): MTB addresses 14 13 12 11 10 9 8
+    let addrs = [14, 13, 12, 11, 10, 9, 8];
+    // boardSetCfg1: 2 14 14 50 1 0xf0 -> CAN2 bit 14, palm skin type 1
+    let b = skin_spec::special_boards(&spec.special_boards[0], 2, &addrs).unwrap();
+    assert_eq!(b.to_bytes(), [0, 0, 0x00, 0x40, 1, 50, 0xF0, 0]);
+    // triangleSetCfg1: 2 14 0 6 1 0 0x2000
+    let t = skin_spec::special_triangles(&spec.special_triangles[0], 2, &addrs).unwrap();
+    assert_eq!(
+        t.to_bytes(),
+        [0, 0, 0x00, 0x40, 0, 6, 0, 0, 0, 0, 0, 0, 1, 0, 0x00, 0x20]
+    );
+    // a board that is not on the patch is refused, naming it
+    let mut wrong = spec.special_triangles[0];
+    wrong.addr = 3;
+    let e = skin_spec::special_triangles(&wrong, 2, &addrs)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("address 3"), "{e}");
+}

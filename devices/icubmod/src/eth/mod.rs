@@ -26,6 +26,7 @@ pub mod params;
 pub mod sensors;
 pub mod service;
 pub mod service_config;
+pub mod skin_spec;
 
 pub use calibrator::ParametricCalibratorEth;
 pub use motion_control::EmbObjMotionControl;

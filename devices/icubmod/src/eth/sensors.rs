@@ -39,6 +39,7 @@ use super::config::{text, Node, ParamError};
 use super::manager::{Board, EthManager};
 use super::params::{read_eth_board, read_pc104, read_service, ServiceKind};
 use super::service::{open_sensor, SensorService};
+use super::skin_spec::SkinSpec;
 
 fn now() -> f64 {
     std::time::SystemTime::now()
@@ -1057,21 +1058,54 @@ impl IAnalogSensor for EmbObjMais {
 
 // ---- embObjSkin ----
 
-/// The skin patches of a board: `patches/skinCanAddrsPatchN` (N = the CAN port) list the
-/// MTB addresses of each patch; every MTB has 16 triangles of 12 taxels.
+/// One configuration command of a skin, sent after `pause`.
+struct SkinCommand {
+    pause: std::time::Duration,
+    id: Id32,
+    data: Vec<u8>,
+}
+
+/// Sends a skin's board and triangle configurations (between its service's verification
+/// and its regulars, as C++), then waits the 10 ms C++ waits after them.
+fn send_skin_commands(
+    board: &Board,
+    commands: &[SkinCommand],
+) -> Result<(), super::manager::EthError> {
+    for c in commands {
+        std::thread::sleep(c.pause);
+        board.set(c.id, &c.data)?;
+    }
+    std::thread::sleep(std::time::Duration::from_millis(10));
+    Ok(())
+}
+
+/// The skin patches of a board: `patches/skinCanAddrsPatchN` (N = the CAN port, 1 or 2,
+/// as C++ reads them) list the MTB addresses of each patch; every MTB has 16 triangles
+/// of 12 taxels.
 pub fn skin_patches(config: &Property) -> Result<Vec<Vec<u8>>, ParamError> {
+    Ok(skin_patches_on_ports(config)?
+        .into_iter()
+        .map(|(_, addrs)| addrs)
+        .collect())
+}
+
+/// [`skin_patches`] with the CAN port (1 or 2) of each.
+pub fn skin_patches_on_ports(config: &Property) -> Result<Vec<(u8, Vec<u8>)>, ParamError> {
     let g = Node::root(config).need_group("patches")?;
     let mut patches = Vec::new();
-    for port in 1..=4 {
+    for port in 1..=2u8 {
         let key = format!("skinCanAddrsPatch{port}");
         if let Some(v) = g.strings(&key) {
             let addrs: Option<Vec<u8>> = v
                 .iter()
                 .map(|s| super::config::parse_number(s).map(|n| n as u8))
                 .collect();
-            patches.push(addrs.ok_or_else(|| {
-                ParamError::bad(format!("patches/{key}"), "MTB CAN addresses", v.join(" "))
-            })?);
+            patches.push((
+                port,
+                addrs.ok_or_else(|| {
+                    ParamError::bad(format!("patches/{key}"), "MTB CAN addresses", v.join(" "))
+                })?,
+            ));
         }
     }
     if patches.is_empty() {
@@ -1113,6 +1147,77 @@ impl EmbObjSkin {
         } else {
             i
         })
+    }
+
+    /// The commands of `EmbObjSkin::init` and `initWithSpecialConfig`, in order, each
+    /// with the pause C++ makes before it; the special boards' noLoad set in `taxels`.
+    fn skin_commands(
+        &self,
+        spec: &SkinSpec,
+        on_ports: &[(u8, Vec<u8>)],
+        taxels: &mut [f64],
+    ) -> Result<Vec<SkinCommand>, ParamError> {
+        use super::skin_spec as ss;
+        let ms = std::time::Duration::from_millis;
+        let mut out = Vec::new();
+        for p in 0..on_ports.len() {
+            out.push(SkinCommand {
+                pause: ms(0),
+                id: ids::skin(p as u8, tag::SK_SKIN_CMMNDS_BOARDSCFG),
+                data: ss::default_boards(&spec.board).to_bytes(),
+            });
+        }
+        for p in 0..on_ports.len() {
+            out.push(SkinCommand {
+                pause: ms(if p == 0 { 10 } else { 0 }),
+                id: ids::skin(p as u8, tag::SK_SKIN_CMMNDS_TRIANGLESCFG),
+                data: ss::default_triangles(&spec.triangle).to_bytes(),
+            });
+        }
+        // "enough time to skin boards to configure all its triangles"
+        let mut pause = ms(500);
+        let patch_of = |id: u8, what: &str| {
+            on_ports
+                .iter()
+                .position(|(port, _)| *port == id)
+                .ok_or_else(|| {
+                    ParamError::bad(
+                        what.to_string(),
+                        "a patch of patches/",
+                        format!("patch {id}"),
+                    )
+                })
+        };
+        for s in &spec.special_boards {
+            let p = patch_of(s.patch, "specialCfgBoards")?;
+            let (port, addrs) = &on_ports[p];
+            out.push(SkinCommand {
+                pause,
+                id: ids::skin(p as u8, tag::SK_SKIN_CMMNDS_BOARDSCFG),
+                data: ss::special_boards(s, *port, addrs)?.to_bytes(),
+            });
+            pause = ms(0);
+            for a in s.first..=s.last {
+                if let Some(b) = self.board_index(p, a) {
+                    if let Some(t) = taxels.get_mut(b * 192..b * 192 + 192) {
+                        t.fill(f64::from(s.cfg.no_load));
+                    }
+                }
+            }
+        }
+        pause += ms(10);
+        for s in &spec.special_triangles {
+            let p = patch_of(s.patch, "specialCfgTriangles")?;
+            let (port, addrs) = &on_ports[p];
+            // one command at a time, or the board cannot send on its CAN bus
+            out.push(SkinCommand {
+                pause: pause + ms(10),
+                id: ids::skin(p as u8, tag::SK_SKIN_CMMNDS_TRIANGLESCFG),
+                data: ss::special_triangles(s, *port, addrs)?.to_bytes(),
+            });
+            pause = ms(0);
+        }
+        Ok(out)
     }
 
     /// Applies every status the board sent since the last call, in order (C++ does it in
@@ -1163,37 +1268,49 @@ impl EmbObjSkin {
 
 impl DeviceDriver for EmbObjSkin {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let patches = skin_patches(config)
-            .map_err(|e| e.for_device(&config.find("id").map_or_else(|| SKIN.to_string(), text)))?;
+        let id = config.find("id").map_or_else(|| SKIN.to_string(), text);
+        let on_ports = skin_patches_on_ports(config).map_err(|e| e.for_device(&id))?;
+        let spec = SkinSpec::read(&Node::root(config)).map_err(|e| e.for_device(&id))?;
+        let patches: Vec<Vec<u8>> = on_ports.iter().map(|(_, a)| a.clone()).collect();
+        self.patches = patches.clone();
+        // C++ starts every taxel at 240, then (new style) at the boards' noLoad
+        let boards: usize = patches.iter().map(Vec::len).sum();
+        let mut taxels = vec![240.0; boards * 192];
+        let commands = match &spec {
+            Some(spec) => {
+                taxels.fill(f64::from(spec.board.no_load));
+                self.skin_commands(spec, &on_ports, &mut taxels)
+                    .map_err(|e| e.for_device(&id))?
+            }
+            None => Vec::new(),
+        };
+        *self.taxels.lock().unwrap_or_else(|e| e.into_inner()) = taxels;
         let n = patches.len();
         self.c.open(SKIN, config, category::SKIN, |root, st| {
-            let mut configs = Vec::new();
-            let mut regulars = Vec::new();
+            let mut service = SensorService::new(verify(root, category::SKIN, st)?);
+            let mode = if spec.is_some() {
+                icub_eth::entities::skin::sigmode::SIGNAL
+            } else {
+                icub_eth::entities::skin::sigmode::SIGNAL_OLDWAY
+            };
             for p in 0..n as u8 {
-                configs.push((
-                    ids::skin(p, tag::SK_SKIN_CONFIG_SIGMODE),
-                    vec![icub_eth::entities::skin::sigmode::SIGNAL],
-                ));
-                regulars.push(ids::skin(p, tag::SK_SKIN_STATUS_ARRAYOFCANDATA));
+                service
+                    .configs
+                    .push((ids::skin(p, tag::SK_SKIN_CONFIG_SIGMODE), vec![mode]));
+                service
+                    .regulars
+                    .push(ids::skin(p, tag::SK_SKIN_STATUS_ARRAYOFCANDATA));
             }
-            Ok(SensorService {
-                activate: verify(root, category::SKIN, st)?,
-                configs,
-                regulars,
-                prepare: None,
-                companion: None,
-                after_start: Vec::new(),
-            })
+            if !commands.is_empty() {
+                service.prepare = Some(Box::new(move |b: &Board| send_skin_commands(b, &commands)));
+            }
+            Ok(service)
         })?;
-        let boards: usize = patches.iter().map(Vec::len).sum();
-        // C++ starts every taxel at 240 (no touch) until its board talks
-        *self.taxels.lock().unwrap_or_else(|e| e.into_inner()) = vec![240.0; boards * 192];
         if let Some(b) = &self.c.board {
-            for p in 0..patches.len() {
+            for p in 0..n {
                 b.keep_values(ids::skin(p as u8, tag::SK_SKIN_STATUS_ARRAYOFCANDATA));
             }
         }
-        self.patches = patches;
         Ok(())
     }
     fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
