@@ -159,6 +159,15 @@ pub const CM_CURRENT: Vocab32 = Vocab32::new("icur");
 pub const CM_PWM: Vocab32 = Vocab32::new("ipwm");
 pub const CM_MIXED: Vocab32 = Vocab32::new("mix");
 pub const CM_HW_FAULT: Vocab32 = Vocab32::new("hwfa");
+pub const CM_FORCE_IDLE: Vocab32 = Vocab32::new("fidl");
+/// Deprecated in YARP, still reported by boards.
+pub const CM_IMPEDANCE_POS: Vocab32 = Vocab32::new("impo");
+/// Deprecated in YARP, still reported by boards.
+pub const CM_IMPEDANCE_VEL: Vocab32 = Vocab32::new("imve");
+pub const CM_CALIBRATING: Vocab32 = Vocab32::new("cal");
+pub const CM_CALIB_DONE: Vocab32 = Vocab32::new("cald");
+pub const CM_NOT_CONFIGURED: Vocab32 = Vocab32::new("cfgn");
+pub const CM_CONFIGURED: Vocab32 = Vocab32::new("cfgy");
 pub const CM_UNKNOWN: Vocab32 = Vocab32::new("unkw");
 
 // interaction mode values

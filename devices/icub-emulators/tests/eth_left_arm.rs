@@ -132,6 +132,47 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
             .unwrap()
     });
 
+    // A relative move starts from the last goal in this mode (-20 + 5)...
+    eb1.as_position_control()
+        .unwrap()
+        .relative_move(0, 5.0)
+        .unwrap();
+    wait_for("joint 0 at -15 deg", Duration::from_secs(5), || {
+        (eb1.as_encoders().unwrap().get_encoder(0).unwrap() + 15.0).abs() < 0.5
+    });
+    // ...and after a change of control mode, from where the joint is; a position move in
+    // velocity mode is skipped (as C++), not sent.
+    let cm = eb1.as_control_mode().unwrap();
+    cm.set_control_mode(0, yarp_devices::vocabs::CM_VELOCITY)
+        .unwrap();
+    eb1.as_position_control()
+        .unwrap()
+        .position_move(0, -60.0)
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    let here = eb1.as_encoders().unwrap().get_encoder(0).unwrap();
+    assert!(
+        (here + 15.0).abs() < 0.5,
+        "a skipped move moved the joint to {here}"
+    );
+    eb1.as_control_mode()
+        .unwrap()
+        .set_control_mode(0, CM_POSITION)
+        .unwrap();
+    eb1.as_position_control()
+        .unwrap()
+        .relative_move(0, -3.0)
+        .unwrap();
+    wait_for("joint 0 at -18 deg", Duration::from_secs(5), || {
+        (eb1.as_encoders().unwrap().get_encoder(0).unwrap() + 18.0).abs() < 0.5
+    });
+    // the deprecated disableAmp leaves the joint as it is (a no-op in C++)
+    eb1.as_amplifier_control().unwrap().disable_amp(0).unwrap();
+    assert_eq!(
+        eb1.as_control_mode().unwrap().get_control_mode(0).unwrap(),
+        CM_POSITION
+    );
+
     // The arm's F/T sensor (strain on eb1) and the hand's MAIS (eb2) stream.
     let mut ft = EmbObjFtSensor::new();
     ft.open(&cfg("left_arm-eb1-j0_3-strain"))

@@ -44,12 +44,6 @@ use yarp_devices::vocabs::*;
 pub(crate) const NAME: &str = "canmotioncontrol";
 
 // YARP control-mode and PID-type vocabs this device needs beyond `yarp_devices::vocabs`.
-const CM_FORCE_IDLE: Vocab32 = Vocab32::new("fidl");
-const CM_IMPEDANCE_POS: Vocab32 = Vocab32::new("impp");
-const CM_IMPEDANCE_VEL: Vocab32 = Vocab32::new("impv");
-const CM_CALIBRATING: Vocab32 = Vocab32::new("calb");
-const CM_NOT_CONFIGURED: Vocab32 = Vocab32::new("cfgn");
-const CM_CONFIGURED: Vocab32 = Vocab32::new("cfgd");
 const PIDTYPE_VELOCITY: Vocab32 = Vocab32::new("vel");
 const PIDTYPE_TORQUE: Vocab32 = Vocab32::new("trq");
 const PIDTYPE_CURRENT: Vocab32 = Vocab32::new("cur");

@@ -46,7 +46,9 @@ use std::sync::{Arc, TryLockError};
 use std::time::{Duration, Instant};
 
 use yarp_devices::interfaces::{CalibrationParameters, IRemoteCalibrator};
-use yarp_devices::vocabs::{CM_HW_FAULT, CM_IDLE, CM_POSITION, CM_UNKNOWN};
+use yarp_devices::vocabs::{
+    CM_FORCE_IDLE, CM_HW_FAULT, CM_IDLE, CM_NOT_CONFIGURED, CM_POSITION, CM_UNKNOWN,
+};
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, ICalibrator, SharedDevice};
 use yarp_proto::{Property, Vocab32};
 
@@ -61,9 +63,6 @@ const PARK_TIMEOUT: Duration = Duration::from_secs(30);
 const POLL: Duration = Duration::from_millis(20);
 /// How long a call waits for the target when another holder keeps it.
 pub const TARGET_WAIT: Duration = Duration::from_secs(10);
-
-const CM_FORCE_IDLE: Vocab32 = Vocab32::new("fidl");
-const CM_NOT_CONFIGURED: Vocab32 = Vocab32::new("cfgn");
 
 #[derive(Debug, Clone, Default)]
 struct JointCalib {

@@ -39,14 +39,6 @@ use super::service;
 
 pub const NAME: &str = "embObjMotionControl";
 
-const CM_FORCE_IDLE: Vocab32 = Vocab32::new("fidl");
-const CM_IMPEDANCE_POS: Vocab32 = Vocab32::new("impp");
-const CM_IMPEDANCE_VEL: Vocab32 = Vocab32::new("impv");
-const CM_CALIBRATING: Vocab32 = Vocab32::new("calb");
-const CM_NOT_CONFIGURED: Vocab32 = Vocab32::new("cfgn");
-const CM_CONFIGURED: Vocab32 = Vocab32::new("cfgd");
-const CM_VEL_DIRECT: Vocab32 = Vocab32::new("veld");
-
 /// How long an `ask` of a joint variable may take (`theNVmanager`'s default).
 const ASK_TIMEOUT: Duration = Duration::from_millis(500);
 /// How long `setControlMode` waits for the board to report the new mode.
@@ -62,15 +54,14 @@ pub fn mode_vocab(m: u8) -> Vocab32 {
         cm::IMPEDANCE_POS => CM_IMPEDANCE_POS,
         cm::IMPEDANCE_VEL => CM_IMPEDANCE_VEL,
         cm::CURRENT => CM_CURRENT,
-        cm::MIXED => CM_MIXED,
+        // icub-main's eomcUtils: "they are the same"
+        cm::MIXED | cm::VELOCITY_POS => CM_MIXED,
         cm::DIRECT => CM_POSITION_DIRECT,
-        cm::VEL_DIRECT => CM_VEL_DIRECT,
         cm::OPENLOOP => CM_PWM,
         cm::HW_FAULT => CM_HW_FAULT,
         cm::NOT_CONFIGURED => CM_NOT_CONFIGURED,
         cm::CONFIGURED => CM_CONFIGURED,
         cm::CALIB => CM_CALIBRATING,
-        cm::FORCE_IDLE => CM_FORCE_IDLE,
         _ => CM_UNKNOWN,
     }
 }
@@ -86,7 +77,6 @@ pub fn vocab_mode(v: Vocab32) -> Option<u8> {
         _ if v == CM_CURRENT => cm::CURRENT,
         _ if v == CM_MIXED => cm::MIXED,
         _ if v == CM_POSITION_DIRECT => cm::DIRECT,
-        _ if v == CM_VEL_DIRECT => cm::VEL_DIRECT,
         _ if v == CM_PWM => cm::OPENLOOP,
         _ if v == CM_IMPEDANCE_POS => cm::IMPEDANCE_POS,
         _ if v == CM_IMPEDANCE_VEL => cm::IMPEDANCE_VEL,
@@ -187,6 +177,9 @@ pub struct EmbObjMotionControl {
     ref_speed: Vec<f64>,
     ref_acc: Vec<f64>,
     targets: Vec<f64>,
+    /// Whether `targets[j]` is the goal of a position move made in the joint's current
+    /// control mode (a relative move starts from it; else from the encoder).
+    target_valid: Vec<bool>,
     ref_velocity: Vec<f64>,
     ref_position: Vec<f64>,
     ref_torque: Vec<f64>,
@@ -194,6 +187,11 @@ pub struct EmbObjMotionControl {
     ref_pwm: Vec<f64>,
     vel_limits: Vec<(f64, f64)>,
     mode_set_at: Vec<Option<Instant>>,
+    /// `MAINTENANCE/skipRecalibration`: an idle joint counts as calibrated.
+    skip_recalibration: bool,
+    /// When a command skipped for its control mode was last reported (at most once a
+    /// second, as C++'s event downsampler).
+    last_skip_report: Option<Instant>,
 }
 
 impl EmbObjMotionControl {
@@ -216,6 +214,36 @@ impl EmbObjMotionControl {
 
     fn fail(&self, e: EthError) -> DeviceError {
         DeviceError::failed(&self.id, e)
+    }
+
+    /// Whether joint `j` is in one of `modes` (as C++ checks before a setpoint); if not,
+    /// `what` is reported (downsampled) and the caller skips the command.
+    fn in_mode(&mut self, j: usize, modes: &[Vocab32], what: &str) -> DevResult<bool> {
+        let now = mode_vocab(self.core(j)?.control_mode);
+        if modes.contains(&now) {
+            return Ok(true);
+        }
+        if self
+            .last_skip_report
+            .is_none_or(|t| t.elapsed() >= Duration::from_secs(1))
+        {
+            self.last_skip_report = Some(Instant::now());
+            tracing::error!(device = %self.id, joint = j, "{what}: skipping command because the joint is in control mode {now}");
+        }
+        Ok(false)
+    }
+
+    /// An error when joint `j` has no torque control (`CONTROLS/torqueControl none`), as
+    /// C++ refuses torque mode and compliant interaction then.
+    fn need_torque_control(&self, j: usize, what: &str) -> DevResult<()> {
+        self.phys(j)?;
+        if self.p()?.trq_pids.get(j).is_some_and(Option::is_some) {
+            return Ok(());
+        }
+        Err(DeviceError::failed(
+            &self.id,
+            format!("joint {j}: {what} needs a torque PID (CONTROLS/torqueControl is none)"),
+        ))
     }
 
     fn axes(&self) -> DevResult<usize> {
@@ -445,6 +473,7 @@ impl DeviceDriver for EmbObjMotionControl {
         self.ref_speed = vec![10.0; n];
         self.ref_acc = vec![0.0; n];
         self.targets = vec![0.0; n];
+        self.target_valid = vec![false; n];
         self.ref_velocity = vec![0.0; n];
         self.ref_position = vec![0.0; n];
         self.ref_torque = vec![0.0; n];
@@ -452,6 +481,10 @@ impl DeviceDriver for EmbObjMotionControl {
         self.ref_pwm = vec![0.0; n];
         self.vel_limits = p.vel_max.iter().map(|v| (0.0, *v)).collect();
         self.mode_set_at = vec![None; n];
+        self.skip_recalibration = super::config::Node::root(config)
+            .group("MAINTENANCE")
+            .and_then(|m| m.boolean("skipRecalibration"))
+            .unwrap_or(false);
         let mgr = EthManager::instance(&pc104).map_err(|e| DeviceError::failed(&id, e))?;
         let board = mgr.board(&eth);
         if let Err(e) = self.bring_up(&board, &p, &service) {
@@ -590,7 +623,16 @@ impl IPositionControl for EmbObjMotionControl {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    /// As C++ `positionMoveRaw`: sent in position, mixed, impedance-position or idle
+    /// mode; in another mode the command is skipped (logged), not an error.
     fn position_move(&mut self, j: usize, target: f64) -> DevResult<()> {
+        if !self.in_mode(
+            j,
+            &[CM_POSITION, CM_MIXED, CM_IMPEDANCE_POS, CM_IDLE],
+            "positionMove",
+        )? {
+            return Ok(());
+        }
         let a2e = self.a2e(j);
         let sp = Setpoint::Position {
             value: (target * a2e).round() as i32,
@@ -598,12 +640,20 @@ impl IPositionControl for EmbObjMotionControl {
         };
         self.setpoint(j, sp)?;
         self.targets[j] = target;
+        self.target_valid[j] = true;
         Ok(())
     }
+    /// From the goal of the last position move in this control mode, else from where
+    /// the joint is (C++ leaves relativeMove unimplemented; a move relative to a stale
+    /// or never-set goal would be a large unintended motion).
     fn relative_move(&mut self, j: usize, delta: f64) -> DevResult<()> {
         self.phys(j)?;
-        let t = self.targets[j] + delta;
-        self.position_move(j, t)
+        let from = if self.target_valid[j] {
+            self.targets[j]
+        } else {
+            self.get_encoder(j)?
+        };
+        self.position_move(j, from + delta)
     }
     fn check_motion_done(&mut self, j: usize) -> DevResult<bool> {
         Ok(self.ask_u8(j, tag::MC_JOINT_STATUS_CORE_MODES_ISMOTIONDONE)? != 0)
@@ -640,7 +690,16 @@ impl IVelocityControl for EmbObjMotionControl {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    /// As C++ `velocityMoveRaw`: sent in velocity, mixed, impedance-velocity or idle mode,
+    /// skipped (logged) in another.
     fn velocity_move(&mut self, j: usize, speed: f64) -> DevResult<()> {
+        if !self.in_mode(
+            j,
+            &[CM_VELOCITY, CM_MIXED, CM_IMPEDANCE_VEL, CM_IDLE],
+            "velocityMove",
+        )? {
+            return Ok(());
+        }
         let a2e = self.a2e(j);
         let sp = Setpoint::Velocity {
             value: (speed * a2e).round() as i32,
@@ -670,9 +729,13 @@ impl IControlMode for EmbObjMotionControl {
         let m = vocab_mode(mode).ok_or(DeviceError::Unsupported(
             "control mode not available on embObj boards",
         ))?;
+        if m == cm::TORQUE {
+            self.need_torque_control(j, "torque control mode")?;
+        }
         let id = self.joint_id(j, tag::MC_JOINT_CMMNDS_CONTROLMODE)?;
         self.b()?.set(id, &[m]).map_err(|e| self.fail(e))?;
         self.mode_set_at[j] = Some(Instant::now());
+        self.target_valid[j] = false;
         let want = match m {
             cm::FORCE_IDLE => cm::IDLE,
             m => m,
@@ -680,10 +743,15 @@ impl IControlMode for EmbObjMotionControl {
         let start = Instant::now();
         loop {
             let now = self.core(j)?.control_mode;
-            if now == want {
+            // C++ checkRemoteControlModeStatus: a joint in hardware fault answers the
+            // call (the fault is for the calibrator or a person to clear)
+            if now == want || now == cm::HW_FAULT {
+                if now == cm::HW_FAULT {
+                    tracing::warn!(device = %self.id, joint = j, "asked control mode {mode}, the joint is in hardware fault");
+                }
                 return Ok(());
             }
-            if now == cm::HW_FAULT || start.elapsed() > MODE_TIMEOUT {
+            if start.elapsed() > MODE_TIMEOUT {
                 return Err(DeviceError::failed(
                     &self.id,
                     format!(
@@ -712,7 +780,10 @@ impl IInteractionMode for EmbObjMotionControl {
     fn set_interaction_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
         let m: u8 = match mode {
             _ if mode == IM_STIFF => 0,
-            _ if mode == IM_COMPLIANT => 1,
+            _ if mode == IM_COMPLIANT => {
+                self.need_torque_control(j, "compliant interaction")?;
+                1
+            }
             _ => return Err(DeviceError::Unsupported("unknown interaction mode")),
         };
         let id = self.joint_id(j, tag::MC_JOINT_CMMNDS_INTERACTIONMODE)?;
@@ -803,8 +874,9 @@ impl IAmplifierControl for EmbObjMotionControl {
     fn enable_amp(&mut self, j: usize) -> DevResult<()> {
         self.phys(j).map(|_| ())
     }
+    /// Deprecated, and a no-op in C++ (idle the joint with its control mode instead).
     fn disable_amp(&mut self, j: usize) -> DevResult<()> {
-        self.set_control_mode(j, CM_IDLE)
+        self.phys(j).map(|_| ())
     }
     fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>> {
         (0..self.axes()?)
@@ -918,8 +990,9 @@ impl IPidControl for EmbObjMotionControl {
     fn enable_pid(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<()> {
         self.phys(j).map(|_| ())
     }
+    /// A no-op in C++ (`disablePidRaw`), kept so.
     fn disable_pid(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<()> {
-        self.set_control_mode(j, CM_IDLE)
+        self.phys(j).map(|_| ())
     }
     fn is_pid_enabled(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<bool> {
         let m = self.core(j)?.control_mode;
@@ -1014,7 +1087,12 @@ impl IPositionDirect for EmbObjMotionControl {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    /// As C++ `setPositionRaw`: sent in position-direct or idle mode, skipped (logged) in
+    /// another.
     fn set_position(&mut self, j: usize, reference: f64) -> DevResult<()> {
+        if !self.in_mode(j, &[CM_POSITION_DIRECT, CM_IDLE], "setPosition")? {
+            return Ok(());
+        }
         let a2e = self.a2e(j);
         self.setpoint(
             j,
@@ -1111,13 +1189,19 @@ impl IControlCalibration for EmbObjMotionControl {
         self.mode_set_at[j] = Some(Instant::now());
         Ok(())
     }
-    /// C++ `calibrationDoneRaw`: the board's control mode is no longer calibration or
-    /// not-configured.
+    /// C++ `calibrationDoneRaw`: done once the joint left calibration for a working
+    /// mode; idle counts only with `MAINTENANCE/skipRecalibration`, and a joint in
+    /// hardware fault, not configured, configured or in error has not calibrated.
     fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
         let m = self.ask_u8(j, tag::MC_JOINT_STATUS_CORE_MODES_CONTROLMODESTATUS)?;
-        Ok(!matches!(
-            m,
-            cm::CALIB | cm::NOT_CONFIGURED | cm::CONFIGURED
-        ))
+        Ok(match m {
+            cm::IDLE => self.skip_recalibration,
+            cm::CALIB => false,
+            cm::HW_FAULT | cm::NOT_CONFIGURED | cm::CONFIGURED | cm::UNKNOWN_ERROR => {
+                tracing::error!(device = %self.id, joint = j, "unable to complete calibration: the joint is {}", mode_vocab(m));
+                false
+            }
+            _ => true,
+        })
     }
 }
