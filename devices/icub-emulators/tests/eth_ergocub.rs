@@ -1,7 +1,8 @@
 //! ergoCubSN001, unmodified from robots-configuration, against the emulated Ethernet
 //! boards on loopback (address map 10.0.1.0/24 -> 127.0.2.0/24, so that it may run beside
 //! the iCub test): the left arm's boards of three types (EMS4, AMC, MC4plus) open and
-//! move, its F/T sensor (FT service) and its IMU (inertials3) stream.
+//! move, a motor's PT100 temperature reads in °C, its F/T sensor (FT service) and its IMU
+//! (inertials3) stream.
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -60,6 +61,21 @@ fn ergocub_left_arm_boards_ft_and_imu() {
         .map(|b| b.as_encoders().unwrap().get_axes().unwrap())
         .sum();
     assert_eq!(axes, 2 + 2 + 3 + 4 + 2);
+
+    // eb2's shoulder roll has a PT100 (TemperatureSensorType NONE PT100): the board
+    // reports its sensor's raw reading (439 for the emulated motor at 35 °C), read in °C
+    // through C++'s PT100 formula (35.02 °C); the shoulder pitch has none: NaN (C++).
+    let eb2 = &mut boards[0];
+    wait_for("a motor temperature", Duration::from_secs(2), || {
+        let t = eb2.as_motor().unwrap().get_temperature(1).unwrap();
+        (t - 35.0).abs() < 0.1
+    });
+    assert!(eb2.as_motor().unwrap().get_temperature(0).unwrap().is_nan());
+    // the warning limit (warningTemperatureLimits 90)
+    assert_eq!(
+        eb2.as_motor().unwrap().get_temperature_limit(1).unwrap(),
+        90.0
+    );
 
     // An AMC joint (eb31) moves.
     let amc = &mut boards[2];

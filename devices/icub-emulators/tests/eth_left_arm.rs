@@ -2,7 +2,9 @@
 //! Ethernet boards on loopback (through the address map 10.0.1.0/24 -> 127.0.1.0/24):
 //! `embObjMotionControl` opens both boards (bring-up, service activation, joint and
 //! motor configuration, regulars), a position move reaches the encoders, a calibration
-//! ends, the PWM limit is asked and set, the arm's strain, the hand's MAIS and a foot's
+//! ends, the PWM limit is asked and set, torque references and measures, the external
+//! torque input and the impedance round-trip through the board's µN·m, the arm's strain,
+//! the hand's MAIS and a foot's
 //! strain2 with its temperature stream, and a board that stops answering is reported
 //! naming its IP and name.
 //!
@@ -173,6 +175,8 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
         CM_POSITION
     );
 
+    torque_impedance_and_temperature(&mut eb1);
+
     // The arm's F/T sensor (strain on eb1) and the hand's MAIS (eb2) stream.
     let mut ft = EmbObjFtSensor::new();
     ft.open(&cfg("left_arm-eb1-j0_3-strain"))
@@ -287,4 +291,81 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
     assert!(err.contains("10.0.1.1 (left_arm-eb1-j0_3)"), "{err}");
     eb1.close().unwrap();
     eb2.close().unwrap();
+}
+
+/// Torque, impedance and temperature through the board in its units (µN·m, µN·m per
+/// encoder unit, the motor sensor's raw reading), in N·m, N·m/deg and °C at the device.
+fn torque_impedance_and_temperature(eb1: &mut EmbObjMotionControl) {
+    use yarp_devices::vocabs::{CM_TORQUE, PIDTYPE_TORQUE};
+    // l_shoulder_pitch (TRQ_PID_DEFAULT) in torque control: the reference goes as
+    // 1.5e6 µN·m; the board reports it back (ofpid reftrq) and its measure follows it.
+    eb1.as_control_mode()
+        .unwrap()
+        .set_control_mode(0, CM_TORQUE)
+        .unwrap();
+    let trq = eb1.as_torque_control().unwrap();
+    trq.set_ref_torque(0, 1.5).unwrap();
+    wait_for("torque reference reported", Duration::from_secs(2), || {
+        let t = eb1.as_torque_control().unwrap();
+        (t.get_ref_torque(0).unwrap() - 1.5).abs() < 1e-6
+            && (t.get_torque(0).unwrap() - 1.5).abs() < 1e-3
+    });
+    // the torque PID error (µN·m on the board) in N·m
+    let err = eb1
+        .as_pid_control()
+        .unwrap()
+        .get_pid_error(PIDTYPE_TORQUE, 0)
+        .unwrap();
+    assert!(err.abs() < 1e-3, "torque error {err} N·m");
+    let trq = eb1.as_torque_control().unwrap();
+    trq.set_ref_torque(0, -0.25).unwrap();
+    wait_for("a negative torque", Duration::from_secs(2), || {
+        let t = eb1.as_torque_control().unwrap();
+        (t.get_ref_torque(0).unwrap() + 0.25).abs() < 1e-6
+            && (t.get_torque(0).unwrap() + 0.25).abs() < 1e-3
+    });
+    eb1.as_control_mode()
+        .unwrap()
+        .set_control_mode(0, CM_POSITION)
+        .unwrap();
+    // out of torque control C++ reads no torque reference
+    assert_eq!(
+        eb1.as_torque_control().unwrap().get_ref_torque(0).unwrap(),
+        0.0
+    );
+
+    // wholeBodyDynamics' estimate (virtual analog sensor) goes as µN·m and comes back
+    // as the joint's torque measure.
+    eb1.as_virtual_analog_sensor()
+        .unwrap()
+        .update_virtual_analog_sensor_channel(1, 0.75)
+        .unwrap();
+    wait_for(
+        "the external torque measured",
+        Duration::from_secs(2),
+        || (eb1.as_torque_control().unwrap().get_torque(1).unwrap() - 0.75).abs() < 1e-6,
+    );
+
+    // Impedance: N·m/deg on the device, µN·m per encoder unit on the board; the file's
+    // 0.1 and 0.05 first, then a new value and an offset (1e6 µN·m per N·m).
+    let imp = eb1.as_impedance_control().unwrap();
+    let (k, d) = imp.get_impedance(2).unwrap();
+    assert!((k - 0.1).abs() < 1e-6 && (d - 0.05).abs() < 1e-6, "{k} {d}");
+    imp.set_impedance(2, 0.3, 0.02).unwrap();
+    let (k, d) = imp.get_impedance(2).unwrap();
+    assert!((k - 0.3).abs() < 1e-6 && (d - 0.02).abs() < 1e-6, "{k} {d}");
+    imp.set_impedance_offset(2, -0.4).unwrap();
+    assert!((imp.get_impedance_offset(2).unwrap() + 0.4).abs() < 1e-9);
+
+    // The reference acceleration is kept in encoder units, saturated at 1e6 (C++).
+    let pc = eb1.as_position_control().unwrap();
+    pc.set_ref_acceleration(0, 1e9).unwrap();
+    let acc = pc.get_ref_acceleration(0).unwrap();
+    assert!((acc - 1e6 / 182.044).abs() < 1e-6, "{acc}");
+    pc.set_ref_acceleration(0, 100.0).unwrap();
+    assert!((pc.get_ref_acceleration(0).unwrap() - 100.0).abs() < 1e-9);
+
+    // iCubGenova02's arm motors have no temperature sensor (HasTempSensor 0): NaN, as C++.
+    let t = eb1.as_motor().unwrap().get_temperature(0).unwrap();
+    assert!(t.is_nan(), "{t}");
 }

@@ -8,7 +8,11 @@
 //!   as `EOagent` does); `rqstconf` gets `ack`/`nak`. Writes to command variables act:
 //!   `appl cmmnds go2state`, `comm cmmnds queryarray` (→ `sig<replyarray>` with the
 //!   endpoint descriptors), `service cmmnds command` (→ `sig<service status
-//!   commandresult>`), joint config and commands (→ the [`JointModel`]s).
+//!   commandresult>`), joint config, commands and inputs (→ the [`JointModel`]s).
+//! - Units at the boundary with the [`JointModel`]s: the wire's torques (set points, the
+//!   external torque input, the status) are µN·m, the plant's N·m; the motor status
+//!   reports a motor's temperature as its PT100 reads it ([`crate::plant::pt100_raw`])
+//!   when the host's motor config says it has a sensor (`hasTempSensor`), else 0.
 //! - Services: `verifyactivate` succeeds for a category the board has entities for and
 //!   a configuration that fits it (motion control: as many joints as it drives; sensors:
 //!   not all zero);
@@ -20,8 +24,8 @@
 
 use crate::entities::boards::EthBoardType;
 use crate::entities::mc::{
-    Calibrator, JointConfig, JointStatusCore, JointStatusTarget, MotorStatus, MotorStatusBasic,
-    MultiEncoders, Setpoint,
+    control_mode, interaction_mode, Calibrator, JointConfig, JointStatusCore, JointStatusTarget,
+    MotorConfig, MotorStatus, MotorStatusBasic, MultiEncoders, Setpoint,
 };
 use crate::entities::mn::{
     category, opc, service_type, versions, ApplConfig, ApplState, ApplStatus, BuildDate,
@@ -32,7 +36,7 @@ use crate::entities::service::{entities_for_service, McServiceConfig};
 use crate::frame::{Frame, FrameBuilder, FrameError, EMPTY_FRAME_SIZE};
 use crate::id::{endpoint as ep, entity as en, ids, tag, Id32};
 use crate::nvstore::NvStore;
-use crate::plant::{JointModel, SimpleJoint};
+use crate::plant::{pt100_raw, JointModel, SimpleJoint, TORQUE_TO_WIRE};
 use crate::rop::{ConfInfo, Rop, RopCode, RopRef};
 use crate::wire::Entity;
 use std::time::Duration;
@@ -735,7 +739,20 @@ impl BoardEngine {
         match t {
             tag::MC_JOINT_CMMNDS_SETPOINT => {
                 if let Ok(s) = Setpoint::from_bytes(data) {
+                    // the wire's torque references are µN·m, the plant's N·m
+                    let s = match s {
+                        Setpoint::Torque { value } => Setpoint::Torque {
+                            value: (f64::from(value) / TORQUE_TO_WIRE) as f32,
+                        },
+                        s => s,
+                    };
                     model.setpoint(&s);
+                }
+            }
+            tag::MC_JOINT_INPUTS_EXTERNALLYMEASUREDTORQUE => {
+                if let Some(b) = data.get(..4) {
+                    let raw = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                    model.set_external_torque(f64::from(raw) / TORQUE_TO_WIRE);
                 }
             }
             tag::MC_JOINT_CMMNDS_CONTROLMODE => model.set_control_mode(data[0]),
@@ -775,18 +792,48 @@ impl BoardEngine {
         let f = model.feedback();
         let ji = j as u8;
         let sat = |v: f64| v.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32;
-        let core = JointStatusCore {
-            position: sat(f.position),
-            velocity: sat(f.velocity),
-            acceleration: sat(f.acceleration),
-            torque: f.torque as f32,
-            ofpid: [
+        // torques on the wire in µN·m
+        let torque_ref = sat(f.torque_reference * TORQUE_TO_WIRE);
+        let torque_err = sat((f.torque_reference - f.torque) * TORQUE_TO_WIRE);
+        // eOmc_joint_status_ofpid_t: the torque view (dummyref1, reftrq, dummyerr1,
+        // errtrq, output) in torque control, the compliant-position view (refpos, reftrq,
+        // errpos, errtrq, output) with compliant interaction, else the stiff position one
+        let ofpid = if f.control_mode == control_mode::TORQUE {
+            [0, torque_ref, 0, torque_err, i32::from(f.pwm)]
+        } else if f.interaction_mode == interaction_mode::COMPLIANT {
+            [
+                sat(f.reference),
+                torque_ref,
+                sat(f.reference - f.position),
+                torque_err,
+                i32::from(f.pwm),
+            ]
+        } else {
+            [
                 sat(f.reference),
                 0,
                 sat(f.reference - f.position),
                 0,
                 i32::from(f.pwm),
-            ],
+            ]
+        };
+        // the motor's temperature as its sensor reads it, when the host's motor config
+        // says it has one (hasTempSensor)
+        let has_sensor = self
+            .store
+            .read::<MotorConfig>(ids::motor(ji, tag::MC_MOTOR_CONFIG))
+            .is_ok_and(|c| c.flags & 0x02 != 0);
+        let temperature = if has_sensor {
+            pt100_raw(f.temperature)
+        } else {
+            0
+        };
+        let core = JointStatusCore {
+            position: sat(f.position),
+            velocity: sat(f.velocity),
+            acceleration: sat(f.acceleration),
+            torque: (f.torque * TORQUE_TO_WIRE) as f32,
+            ofpid,
             control_mode: f.control_mode,
             interaction_mode: f.interaction_mode,
             motion_done: f.motion_done,
@@ -796,7 +843,11 @@ impl BoardEngine {
             position_raw: sat(f.reference),
             velocity: sat(f.target_velocity),
             acceleration: 0,
-            torque: 0.0,
+            torque: if f.control_mode == control_mode::TORQUE {
+                torque_ref as f32
+            } else {
+                0.0
+            },
             pwm: i32::from(f.pwm),
             current: i32::from(f.current),
         };
@@ -806,7 +857,7 @@ impl BoardEngine {
                 velocity: sat(f.velocity),
                 acceleration: sat(f.acceleration),
                 current: f.current,
-                temperature: f.temperature,
+                temperature,
                 pwm: f.pwm,
             },
             mc_fault_state: 0,

@@ -3,8 +3,11 @@
 //! model reports in the joint and motor status. Any plant can be plugged in (e.g. the CAN
 //! emulator's PID-and-motor plant, once shared); [`SimpleJoint`] is the built-in one.
 //!
-//! Units are the wire's: positions in the joint's raw units (`eOmeas_position_t`),
-//! velocities raw units/s, torques N·m, currents mA, PWM duty counts.
+//! Units are the wire's for positions (the joint's raw units, `eOmeas_position_t`),
+//! velocities (raw units/s), currents (mA) and PWM (duty counts); torques are in N·m and
+//! motor temperatures in °C: the board engine converts them at its boundary (the wire's
+//! torques are µN·m, [`TORQUE_TO_WIRE`]; its motor temperatures the raw reading of the
+//! motor's PT100 sensor, [`pt100_raw`]).
 
 use crate::entities::mc::{control_mode, Calibrator, JointConfig, Setpoint};
 
@@ -14,7 +17,10 @@ pub struct JointFeedback {
     pub position: f64,
     pub velocity: f64,
     pub acceleration: f64,
+    /// N·m.
     pub torque: f64,
+    /// The torque reference the controller tracks (torque control), N·m.
+    pub torque_reference: f64,
     /// The control mode status (`eOmc_controlmode_t`, see [`control_mode`]).
     pub control_mode: u8,
     pub interaction_mode: u8,
@@ -25,8 +31,25 @@ pub struct JointFeedback {
     pub target_velocity: f64,
     pub pwm: i16,
     pub current: i16,
-    /// Motor temperature, raw.
-    pub temperature: i16,
+    /// Motor temperature, °C.
+    pub temperature: f64,
+}
+
+/// µN·m per N·m: the wire's torques (`eOmeas_torque_t`, torque set points, joint inputs,
+/// status) are in µN·m.
+pub const TORQUE_TO_WIRE: f64 = 1_000_000.0;
+
+/// The motor temperature [`SimpleJoint`] reports, °C.
+pub const MOTOR_TEMPERATURE: f64 = 35.0;
+
+/// The raw reading a board reports for a PT100 motor sensor at `celsius`: the sensor in
+/// its voltage divider bridge (4.7 kΩ, 4.7 kΩ, 100 Ω; PT100: 100 Ω + 0.3851 Ω/°C, 5 V)
+/// through the temperature detection board (PGA gain 2, 2.048 V full scale, 15 bits), as
+/// icub-main's `TemperatureSensorPT100` models it; rounded.
+pub fn pt100_raw(celsius: f64) -> i16 {
+    let r = 100.0 + 0.3851 * celsius;
+    let v = (r / (4700.0 + r) - 100.0 / 4800.0) * 5.0;
+    (32768.0 * (2.0 * v / 2.048)).round() as i16
 }
 
 /// A joint plant with its controller, as the board's motion-control service sees it.
@@ -43,6 +66,9 @@ pub trait JointModel: Send {
     fn stop_trajectory(&mut self);
     /// `set<joint cmmnds calibration>`.
     fn calibrate(&mut self, calibrator: &Calibrator);
+    /// `set<joint inputs externallymeasuredtorque>`: the joint torque the host measured or
+    /// estimated, N·m (the board reports it as its torque measure).
+    fn set_external_torque(&mut self, _torque: f64) {}
     /// Advances the joint by `dt` seconds.
     fn step(&mut self, dt: f64);
     fn feedback(&self) -> JointFeedback;
@@ -59,7 +85,9 @@ pub const DEFAULT_TRAJECTORY_SPEED: f64 = 10.0 * 65536.0 / 360.0;
 
 /// A minimal joint: a trajectory generator (position, velocity, direct) and a first-order
 /// lag from reference to position; open-loop PWM and current move the joint at a speed
-/// proportional to the command. It starts `notConfigured` and goes idle when configured,
+/// proportional to the command. In torque control the joint holds its position and its
+/// torque follows the reference with the same lag; otherwise the torque it reports is the
+/// host's external measure (0 until one comes). The motor is at [`MOTOR_TEMPERATURE`]. It starts `notConfigured` and goes idle when configured,
 /// as the boards do; calibration lasts [`CALIBRATION_TIME`] and ends in position control
 /// holding the pose.
 #[derive(Debug, Clone)]
@@ -78,6 +106,9 @@ pub struct SimpleJoint {
     calibrating: f64,
     current: i16,
     pwm: i16,
+    torque: f64,
+    torque_reference: f64,
+    external_torque: f64,
 }
 
 impl SimpleJoint {
@@ -97,6 +128,9 @@ impl SimpleJoint {
             calibrating: 0.0,
             current: 0,
             pwm: 0,
+            torque: 0.0,
+            torque_reference: 0.0,
+            external_torque: 0.0,
         }
     }
 
@@ -112,6 +146,7 @@ impl SimpleJoint {
         self.target = self.q;
         self.velocity_cmd = 0.0;
         self.open_loop = 0.0;
+        self.torque_reference = self.torque;
     }
 }
 
@@ -177,6 +212,9 @@ impl JointModel for SimpleJoint {
                 self.open_loop = f64::from(value);
                 self.current = value;
             }
+            (Setpoint::Torque { value }, control_mode::TORQUE) => {
+                self.torque_reference = f64::from(value);
+            }
             _ => {}
         }
     }
@@ -195,10 +233,20 @@ impl JointModel for SimpleJoint {
         self.hold();
     }
 
+    fn set_external_torque(&mut self, torque: f64) {
+        self.external_torque = torque;
+    }
+
     fn step(&mut self, dt: f64) {
         if dt <= 0.0 {
             return;
         }
+        let k = dt / (TRACKING_TIME_CONSTANT + dt);
+        self.torque = if self.mode == control_mode::TORQUE {
+            self.torque + (self.torque_reference - self.torque) * k
+        } else {
+            self.external_torque
+        };
         let q0 = self.q;
         let qd0 = self.qd;
         match self.mode {
@@ -236,7 +284,6 @@ impl JointModel for SimpleJoint {
             control_mode::IDLE | control_mode::NOT_CONFIGURED | control_mode::HW_FAULT
         );
         if tracking {
-            let k = dt / (TRACKING_TIME_CONSTANT + dt);
             self.q = self.clamp(self.q + (self.reference - self.q) * k);
         }
         self.qd = (self.q - q0) / dt;
@@ -248,7 +295,8 @@ impl JointModel for SimpleJoint {
             position: self.q,
             velocity: self.qd,
             acceleration: self.qdd,
-            torque: 0.0,
+            torque: self.torque,
+            torque_reference: self.torque_reference,
             control_mode: self.mode,
             interaction_mode: self.interaction,
             motion_done: (self.reference - self.target).abs() < 0.5
@@ -258,7 +306,7 @@ impl JointModel for SimpleJoint {
             target_velocity: self.velocity_cmd,
             pwm: self.pwm,
             current: self.current,
-            temperature: 0,
+            temperature: MOTOR_TEMPERATURE,
         }
     }
 }

@@ -1,7 +1,8 @@
 //! Host state machine <-> board engine entirely in memory (no sockets), on a simulated
 //! clock advanced 1 ms per step: start-up (presence, versions, config, services, regsig,
 //! start), a position command reaching the plant, the encoder coming back in the joint
-//! status, the regulars' rate, and the faults (silent board, version mismatch, garbage).
+//! status, the regulars' rate, the board's torque (µN·m) and motor temperature units, and
+//! the faults (silent board, version mismatch, garbage).
 
 use icub_eth::board::{BoardConfig, BoardEngine};
 use icub_eth::entities::analog::{FtConfig, FtStatus, FtTimedValue};
@@ -486,6 +487,97 @@ fn calibration_ends_in_position_control() {
         done_after >= Duration::from_millis(100) && done_after < Duration::from_millis(110),
         "{done_after:?}"
     );
+}
+
+/// The board's torques are µN·m on the wire (`eOmeas_torque_t`) and its motor
+/// temperatures the raw reading of the motor's sensor: a torque reference of 2.5e6 µN·m
+/// in torque control is reported back (joint status core: measure, `ofpid` reftrq and
+/// errtrq) in µN·m while the plant works in N·m; the host's external torque input
+/// (µN·m) is the measure out of torque control; a motor whose config says it has a
+/// temperature sensor reports the PT100 reading of its 35 °C (439), the others 0.
+#[test]
+fn torques_in_micro_newton_metres_and_raw_motor_temperatures() {
+    use icub_eth::entities::mc::{MotorConfig, MotorStatus};
+    let mut l = Loop::new(arm_board());
+    l.start(&[mc_service(4)]).expect("start-up");
+    l.host
+        .set(
+            ids::joint(0, tag::MC_JOINT_CMMNDS_CONTROLMODE),
+            &[control_mode::TORQUE],
+            l.now,
+        )
+        .unwrap();
+    l.tick();
+    l.host
+        .set_value(
+            ids::joint(0, tag::MC_JOINT_CMMNDS_SETPOINT),
+            &Setpoint::Torque { value: 2.5e6 },
+            l.now,
+        )
+        .unwrap();
+    for _ in 0..300 {
+        l.tick();
+    }
+    let core: JointStatusCore = l
+        .host
+        .read(ids::joint(0, tag::MC_JOINT_STATUS_CORE))
+        .unwrap();
+    assert_eq!(core.control_mode, control_mode::TORQUE);
+    assert!((core.torque - 2.5e6).abs() < 10.0, "{}", core.torque);
+    assert_eq!(core.ofpid[1], 2_500_000, "reftrq");
+    assert!(core.ofpid[3].abs() < 10, "errtrq {}", core.ofpid[3]);
+    assert_eq!(l.board.joint(0).unwrap().feedback().torque_reference, 2.5);
+
+    // joint 1 (idle) measures what the host sends as its external torque
+    let mut bytes = (-1.25e6f32).to_le_bytes().to_vec();
+    bytes.resize(
+        ids::joint(1, tag::MC_JOINT_INPUTS_EXTERNALLYMEASUREDTORQUE)
+            .size()
+            .unwrap(),
+        0,
+    );
+    l.host
+        .set(
+            ids::joint(1, tag::MC_JOINT_INPUTS_EXTERNALLYMEASUREDTORQUE),
+            &bytes,
+            l.now,
+        )
+        .unwrap();
+    for _ in 0..5 {
+        l.tick();
+    }
+    let core1: JointStatusCore = l
+        .host
+        .read(ids::joint(1, tag::MC_JOINT_STATUS_CORE))
+        .unwrap();
+    assert_eq!(core1.torque, -1.25e6);
+    assert_eq!(
+        core1.ofpid[1], 0,
+        "no torque reference out of torque control"
+    );
+
+    // motor 2 with a temperature sensor (hasTempSensor, bit 1), motor 3 without
+    let with_sensor = MotorConfig {
+        flags: 0b10,
+        ..Default::default()
+    };
+    l.host
+        .set_value(ids::motor(2, tag::MC_MOTOR_CONFIG), &with_sensor, l.now)
+        .unwrap();
+    l.host
+        .set_value(
+            ids::motor(3, tag::MC_MOTOR_CONFIG),
+            &MotorConfig::default(),
+            l.now,
+        )
+        .unwrap();
+    for _ in 0..5 {
+        l.tick();
+    }
+    let m2: MotorStatus = l.host.read(ids::motor(2, tag::MC_MOTOR_STATUS)).unwrap();
+    let m3: MotorStatus = l.host.read(ids::motor(3, tag::MC_MOTOR_STATUS)).unwrap();
+    assert_eq!(m2.basic.temperature, 439);
+    assert_eq!(m3.basic.temperature, 0);
 }
 
 /// Regulars that do not fit one datagram go out in several, each once per period: the

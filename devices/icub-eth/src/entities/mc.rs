@@ -1,7 +1,8 @@
 //! Motion-control endpoint (`EoMotionControl.h`, `EoProtocolMC.h`): joints, motors and the
 //! controller. Positions are `eOmeas_position_t` (i32 in the joint's raw units, iCub
-//! degrees × 65536/360 for most joints), velocities raw units/s, torques N·m (f32),
-//! currents mA (i16), PWM in duty units (i16), temperatures raw (i16).
+//! degrees × 65536/360 for most joints), velocities raw units/s, torques µN·m (f32:
+//! icub-main sends N·m × 1e6), currents mA (i16), PWM in duty units (i16), temperatures
+//! raw (i16).
 
 use crate::wire::{Entity, Reader, Writer};
 
@@ -307,7 +308,7 @@ pub struct JointStatusCore {
     pub position: i32,
     pub velocity: i32,
     pub acceleration: i32,
-    /// N·m (`eOmeas_torque_t`, f32).
+    /// µN·m (`eOmeas_torque_t`, f32: icub-main converts N·m × 1e6).
     pub torque: f32,
     /// `eOmc_joint_status_ofpid_t` as its generic view: reference1, reference2, error1,
     /// error2, output.
@@ -469,7 +470,7 @@ pub enum Setpoint {
     Position { value: i32, velocity: i32 },
     /// `eomc_setpoint_velocity` (1).
     Velocity { value: i32, acceleration: i32 },
-    /// `eomc_setpoint_torque` (2), N·m.
+    /// `eomc_setpoint_torque` (2), µN·m.
     Torque { value: f32 },
     /// `eomc_setpoint_current` (3), mA.
     Current { value: i16 },

@@ -10,7 +10,10 @@
 //!
 //! Units, as icub-main's `measureConverter`: positions and velocities are sent in
 //! encoder units (`Encoder` per degree), currents in `ampsToSensor` units per A, PWM in
-//! `fullscalePWM` counts per 100 %. Readings come from the regulars the board streams;
+//! `fullscalePWM` counts per 100 %, torques in µN·m (`newtonsToSensor` 1e6), stiffness
+//! and damping in µN·m per encoder unit, PID gains as [`McParams::pid_factors`] gives
+//! them; motor temperatures through the motor's sensor ([`TemperatureSensor`], NaN
+//! without one). Readings come from the regulars the board streams;
 //! `checkMotionDone` and `calibrationDone` ask the board, as C++ does. A board silent for
 //! longer than its `MONITOR_ITS_PRESENCE` timeout makes every reading fail, naming it.
 
@@ -33,7 +36,7 @@ use yarp_proto::{Property, Vocab32};
 
 use super::config::text;
 use super::manager::{Board, EthError, EthManager};
-use super::mc_params::{McParams, PidParams};
+use super::mc_params::{s32, McParams, PidKind, PidParams, TemperatureSensor, NEWTONS_TO_SENSOR};
 use super::params::{read_eth_board, read_pc104};
 use super::service;
 
@@ -43,6 +46,14 @@ pub const NAME: &str = "embObjMotionControl";
 const ASK_TIMEOUT: Duration = Duration::from_millis(500);
 /// How long `setControlMode` waits for the board to report the new mode.
 const MODE_TIMEOUT: Duration = Duration::from_millis(650);
+
+/// Whether the board runs joint `c`'s torque PID: torque control, or position control
+/// with compliant interaction (C++ reads the `ofpid` torque fields only then).
+fn torque_pid_active(c: &JointStatusCore) -> bool {
+    c.control_mode == cm::TORQUE
+        || (c.control_mode == cm::POSITION
+            && c.interaction_mode == icub_eth::entities::mc::interaction_mode::COMPLIANT)
+}
 
 /// The YARP vocab of a board control-mode status.
 pub fn mode_vocab(m: u8) -> Vocab32 {
@@ -175,14 +186,14 @@ pub struct EmbObjMotionControl {
     jconfig: Vec<JointConfig>,
     mconfig: Vec<MotorConfig>,
     ref_speed: Vec<f64>,
-    ref_acc: Vec<f64>,
+    /// Encoder units/s² (C++ `_ref_accs`, saturated at ±1e6).
+    ref_acc_raw: Vec<f64>,
     targets: Vec<f64>,
     /// Whether `targets[j]` is the goal of a position move made in the joint's current
     /// control mode (a relative move starts from it; else from the encoder).
     target_valid: Vec<bool>,
     ref_velocity: Vec<f64>,
     ref_position: Vec<f64>,
-    ref_torque: Vec<f64>,
     ref_current: Vec<f64>,
     ref_pwm: Vec<f64>,
     vel_limits: Vec<(f64, f64)>,
@@ -263,11 +274,7 @@ impl EmbObjMotionControl {
     }
 
     fn a2e(&self, j: usize) -> f64 {
-        self.p
-            .as_ref()
-            .and_then(|p| p.angle_to_encoder.get(j).copied())
-            .filter(|f| *f != 0.0)
-            .unwrap_or(1.0)
+        self.p.as_ref().map_or(1.0, |p| p.a2e(j))
     }
 
     fn joint_id(&self, j: usize, t: u8) -> DevResult<Id32> {
@@ -311,20 +318,25 @@ impl EmbObjMotionControl {
         Err(self.fail(last.expect("three attempts")))
     }
 
-    /// The board's joint and motor configuration of joint `j` (C++ `init()`).
-    fn configs(p: &McParams, j: usize) -> (JointConfig, MotorConfig) {
-        let a2e = if p.angle_to_encoder[j] != 0.0 {
-            p.angle_to_encoder[j]
-        } else {
-            1.0
+    /// The board's joint and motor configuration of joint `j` (C++ `init()`): PIDs as
+    /// YARP's `convert_pid_to_machine` ([`McParams::pid_factors`]; `piddirect` left
+    /// zero, as C++), stiffness and damping in µN·m per encoder unit, `ktau` and `bemf`
+    /// in the firmware's units, the encoders at the joint and at the motor, the dead zone
+    /// in encoder units, the motor group's flags, poles, `Kbemf` and the hardware
+    /// temperature limit as the sensor's raw reading.
+    pub fn configs(p: &McParams, j: usize) -> (JointConfig, MotorConfig) {
+        let a2e = p.a2e(j);
+        let pos = |deg: f64| s32(deg * a2e);
+        let pid = |kind: PidKind, v: &Option<PidParams>| {
+            let (fbk, out) = p.pid_factors(kind, j);
+            v.unwrap_or_default().to_eo(fbk, out)
         };
-        let pos = |deg: f64| (deg * a2e).round() as i32;
-        let pid = |v: &Option<PidParams>| v.map(|p| p.to_eo(a2e)).unwrap_or_default();
         let trq = p.trq_pids[j].unwrap_or_default();
+        let (jenc, menc) = (p.joint_encoder[j], p.rotor_encoder[j]);
         let jc = JointConfig {
-            pid_trajectory: pid(&p.pos_pids[j]),
-            pid_direct: pid(&p.pos_pids[j]),
-            pid_torque: trq.to_eo(1.0),
+            pid_trajectory: pid(PidKind::Position, &p.pos_pids[j]),
+            pid_direct: Default::default(),
+            pid_torque: pid(PidKind::Torque, &p.trq_pids[j]),
             user_limits: PositionLimits {
                 min: pos(p.pos_min[j]),
                 max: pos(p.pos_max[j]),
@@ -334,14 +346,16 @@ impl EmbObjMotionControl {
                 max: pos(p.hw_pos_max[j]),
             },
             impedance: Impedance {
-                stiffness: p.stiffness[j] as f32,
-                damping: p.damping[j] as f32,
+                stiffness: p.imp_to_raw(j, p.stiffness[j]) as f32,
+                damping: p.imp_to_raw(j, p.damping[j]) as f32,
                 offset: 0.0,
             },
             max_velocity_of_joint: pos(p.vel_max[j]),
-            jnt_encoder_resolution: p.joint_encoder_resolution[j] as i32,
+            jnt_encoder_resolution: jenc.resolution,
             motor_params: MotorParams {
-                ktau_value: trq.ktau as f32,
+                bemf_value: (trq.kbemf * p.bemf_to_raw(j)) as f32,
+                ktau_value: (trq.ktau * p.ktau_to_raw(j)) as f32,
+                // YARP's friction conversion factors are 1 (C++ gives none)
                 friction: [
                     trq.viscous_pos as f32,
                     trq.viscous_neg as f32,
@@ -357,20 +371,23 @@ impl EmbObjMotionControl {
             torque_setpoint_timeout: p.torque_timeout[j] as u16,
             torque_feedback_timeout: p.torque_fbk_timeout[j] as u16,
             tc_filter_type: trq.filter_type as u8,
-            jnt_enc_tolerance: p.joint_encoder_tolerance[j] as f32,
+            jnt_encoder_type: jenc.kind,
+            jnt_enc_tolerance: jenc.tolerance as f32,
             gearbox_e2j: p.gearbox_e2j[j] as f32,
+            deadzone: (p.deadzone[j] * a2e) as f32,
             ..Default::default()
         };
         let flags = u8::from(p.has_hall_sensor[j])
             | u8::from(p.has_temp_sensor[j]) << 1
             | u8::from(p.has_rotor_encoder[j]) << 2
             | u8::from(p.has_rotor_encoder_index[j]) << 3
-            | u8::from(p.has_speed_encoder[j]) << 4;
+            | u8::from(p.has_speed_encoder[j]) << 4
+            | u8::from(p.motor_verbose[j]) << 6;
         let mc = MotorConfig {
-            pid_current: p.cur_pids[j].map(|c| c.to_eo(1.0)).unwrap_or_default(),
-            pid_speed: p.spd_pids[j].map(|c| c.to_eo(1.0)).unwrap_or_default(),
+            pid_current: pid(PidKind::Current, &p.cur_pids[j]),
+            pid_speed: pid(PidKind::Velocity, &p.spd_pids[j]),
             gearbox_m2j: p.gearbox_m2j[j] as f32,
-            rotor_encoder_resolution: p.rotor_encoder_resolution[j] as i32,
+            rotor_encoder_resolution: menc.resolution,
             current_limits: CurrentLimits {
                 nominal: p.nominal_current[j] as i16,
                 peak: p.peak_current[j] as i16,
@@ -379,8 +396,11 @@ impl EmbObjMotionControl {
             rotor_index_offset: p.rotor_index_offset[j] as i16,
             motor_poles: p.motor_poles[j] as u8,
             flags,
-            rot_enc_tolerance: p.rotor_encoder_tolerance[j] as f32,
+            rotor_encoder_type: menc.kind,
+            rot_enc_tolerance: menc.tolerance as f32,
+            kbemf: p.motor_kbemf[j] as f32,
             pwm_limit: p.pwm_limit[j] as i16,
+            temperature_limit: p.temperature_limit_raw(j),
             limits_of_rotor: PositionLimits {
                 min: pos(p.rotor_min[j]),
                 max: pos(p.rotor_max[j]),
@@ -436,23 +456,31 @@ impl EmbObjMotionControl {
         service::start(board, category::MC)
     }
 
-    /// Per-joint numbers of a PID kind: the configuration's gains, user units.
-    fn pid_cache(&self, t: Vocab32, j: usize) -> DevResult<(PidParams, f64)> {
+    /// The PID kind of a YARP PID type.
+    fn pid_kind(t: Vocab32) -> DevResult<PidKind> {
+        Ok(match t {
+            _ if t == PIDTYPE_POSITION => PidKind::Position,
+            _ if t == PIDTYPE_TORQUE => PidKind::Torque,
+            _ if t == PIDTYPE_CURRENT => PidKind::Current,
+            _ if t == PIDTYPE_VELOCITY => PidKind::Velocity,
+            _ => return Err(DeviceError::Unsupported("unknown PID type")),
+        })
+    }
+
+    /// Joint `j`'s PID of a type as the board has it, in user units (YARP's
+    /// `convert_pid_to_user`), with its (feedback, output) factors.
+    fn pid_cache(&self, t: Vocab32, j: usize) -> DevResult<(PidParams, f64, f64)> {
         let p = self.p()?;
         self.phys(j)?;
-        let a2e = self.a2e(j);
-        let (eo, metric, factor) = match t {
-            _ if t == PIDTYPE_POSITION => (
-                &self.jconfig[j].pid_trajectory,
-                p.pos_pids[j].is_some_and(|q| q.metric_feedback),
-                a2e,
-            ),
-            _ if t == PIDTYPE_TORQUE => (&self.jconfig[j].pid_torque, false, 1.0),
-            _ if t == PIDTYPE_CURRENT => (&self.mconfig[j].pid_current, false, 1.0),
-            _ if t == PIDTYPE_VELOCITY => (&self.mconfig[j].pid_speed, false, 1.0),
-            _ => return Err(DeviceError::Unsupported("unknown PID type")),
+        let kind = Self::pid_kind(t)?;
+        let eo = match kind {
+            PidKind::Position => &self.jconfig[j].pid_trajectory,
+            PidKind::Torque => &self.jconfig[j].pid_torque,
+            PidKind::Current => &self.mconfig[j].pid_current,
+            PidKind::Velocity => &self.mconfig[j].pid_speed,
         };
-        Ok((PidParams::from_eo(eo, metric, factor), factor))
+        let (fbk, out) = p.pid_factors(kind, j);
+        Ok((PidParams::from_eo(eo, fbk, out), fbk, out))
     }
 }
 
@@ -471,12 +499,11 @@ impl DeviceDriver for EmbObjMotionControl {
         self.jconfig = jc;
         self.mconfig = mc;
         self.ref_speed = vec![10.0; n];
-        self.ref_acc = vec![0.0; n];
+        self.ref_acc_raw = vec![0.0; n];
         self.targets = vec![0.0; n];
         self.target_valid = vec![false; n];
         self.ref_velocity = vec![0.0; n];
         self.ref_position = vec![0.0; n];
-        self.ref_torque = vec![0.0; n];
         self.ref_current = vec![0.0; n];
         self.ref_pwm = vec![0.0; n];
         self.vel_limits = p.vel_max.iter().map(|v| (0.0, *v)).collect();
@@ -564,7 +591,7 @@ impl DeviceDriver for EmbObjMotionControl {
 
 /// C++ `embObjMotionControl` as `IVirtualAnalogSensor`: the joint torques estimated by
 /// the host (wholeBodyDynamics through `virtualAnalogServer`) go to the boards as
-/// `joint inputs externallymeasuredtorque`.
+/// `joint inputs externallymeasuredtorque`, in µN·m rounded to an integer.
 impl IVirtualAnalogSensor for EmbObjMotionControl {
     fn get_virtual_analog_sensor_status(&mut self, ch: usize) -> VasStatus {
         match (self.phys(ch), self.b()) {
@@ -584,7 +611,9 @@ impl IVirtualAnalogSensor for EmbObjMotionControl {
     }
     fn update_virtual_analog_sensor_channel(&mut self, ch: usize, measure: f64) -> DevResult<()> {
         let id = self.joint_id(ch, tag::MC_JOINT_INPUTS_EXTERNALLYMEASUREDTORQUE)?;
-        let mut bytes = (measure as f32).to_le_bytes().to_vec();
+        // C++: (eOmeas_torque_t) S_32(trqN2S(fTorque)), µN·m
+        let raw = s32(measure * NEWTONS_TO_SENSOR) as f32;
+        let mut bytes = raw.to_le_bytes().to_vec();
         bytes.resize(id.size().unwrap_or(4), 0);
         self.b()?.set(id, &bytes).map_err(|e| self.fail(e))
     }
@@ -663,9 +692,11 @@ impl IPositionControl for EmbObjMotionControl {
         self.ref_speed[j] = speed.abs();
         Ok(())
     }
+    /// As C++ (`accA2E_abs` then `setRefAccelerationRaw`): kept in encoder units,
+    /// saturated at ±1e6; sent with the next velocity move.
     fn set_ref_acceleration(&mut self, j: usize, acc: f64) -> DevResult<()> {
         self.phys(j)?;
-        self.ref_acc[j] = acc;
+        self.ref_acc_raw[j] = (acc * self.a2e(j).abs()).clamp(-1e6, 1e6);
         Ok(())
     }
     fn get_ref_speed(&mut self, j: usize) -> DevResult<f64> {
@@ -674,7 +705,7 @@ impl IPositionControl for EmbObjMotionControl {
     }
     fn get_ref_acceleration(&mut self, j: usize) -> DevResult<f64> {
         self.phys(j)?;
-        Ok(self.ref_acc[j])
+        Ok(self.ref_acc_raw[j] / self.a2e(j).abs())
     }
     fn stop(&mut self, j: usize) -> DevResult<()> {
         let id = self.joint_id(j, tag::MC_JOINT_CMMNDS_STOPTRAJECTORY)?;
@@ -703,7 +734,7 @@ impl IVelocityControl for EmbObjMotionControl {
         let a2e = self.a2e(j);
         let sp = Setpoint::Velocity {
             value: (speed * a2e).round() as i32,
-            acceleration: (self.ref_acc.get(j).copied().unwrap_or(0.0) * a2e).round() as i32,
+            acceleration: s32(self.ref_acc_raw.get(j).copied().unwrap_or(0.0)),
         };
         self.setpoint(j, sp)?;
         self.ref_velocity[j] = speed;
@@ -838,17 +869,28 @@ impl ITorqueControl for EmbObjMotionControl {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    /// The board's measure (µN·m) in N·m (C++ `trqS2N`).
     fn get_torque(&mut self, j: usize) -> DevResult<f64> {
-        Ok(f64::from(self.core(j)?.torque))
+        Ok(f64::from(self.core(j)?.torque) / NEWTONS_TO_SENSOR)
     }
+    /// C++ `setRefTorqueRaw`: `S_32(trqN2S(t))` µN·m.
     fn set_ref_torque(&mut self, j: usize, t: f64) -> DevResult<()> {
-        self.setpoint(j, Setpoint::Torque { value: t as f32 })?;
-        self.ref_torque[j] = t;
-        Ok(())
+        self.setpoint(
+            j,
+            Setpoint::Torque {
+                value: s32(t * NEWTONS_TO_SENSOR) as f32,
+            },
+        )
     }
+    /// C++ `getRefTorqueRaw`: the torque reference the board reports (`ofpid` reftrq) in
+    /// torque control or compliant position control, 0 otherwise; in N·m.
     fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
-        self.phys(j)?;
-        Ok(self.ref_torque[j])
+        let c = self.core(j)?;
+        Ok(if torque_pid_active(&c) {
+            f64::from(c.ofpid[1]) / NEWTONS_TO_SENSOR
+        } else {
+            0.0
+        })
     }
 }
 
@@ -921,10 +963,21 @@ impl IAmplifierControl for EmbObjMotionControl {
 }
 
 impl IMotor for EmbObjMotionControl {
-    /// The motor temperature the board reports (raw, as the boards without a
-    /// temperature sensor report it).
+    /// °C through the motor's sensor (C++ `getTemperatureRaw`); NaN for a motor without
+    /// one (`TemperatureSensorType` NONE or not given).
     fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
-        Ok(f64::from(self.motor_status(m)?.basic.temperature))
+        self.phys(m)?;
+        let sensor = self.p()?.temperature_sensor[m];
+        if sensor == TemperatureSensor::None {
+            return Ok(f64::NAN);
+        }
+        let raw = self.motor_status(m)?.basic.temperature;
+        Ok(sensor.raw_to_celsius(f64::from(raw)))
+    }
+    /// The warning limit, °C (C++ `getTemperatureLimitRaw`).
+    fn get_temperature_limit(&mut self, m: usize) -> DevResult<f64> {
+        self.phys(m)?;
+        Ok(self.p()?.warning_temperature_limit[m])
     }
     fn get_number_of_motors(&mut self) -> DevResult<usize> {
         self.axes()
@@ -937,7 +990,7 @@ impl IMotor for EmbObjMotionControl {
 
 impl IPidControl for EmbObjMotionControl {
     fn get_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<Pid> {
-        let (p, _) = self.pid_cache(pid_type, j)?;
+        let (p, _, _) = self.pid_cache(pid_type, j)?;
         Ok(Pid {
             kp: p.kp,
             kd: p.kd,
@@ -951,8 +1004,9 @@ impl IPidControl for EmbObjMotionControl {
             kff: p.kff,
         })
     }
+    /// YARP's `convert_pid_to_machine`, then set on the board.
     fn set_pid(&mut self, pid_type: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
-        let (old, factor) = self.pid_cache(pid_type, j)?;
+        let (old, fbk, out) = self.pid_cache(pid_type, j)?;
         let new = PidParams {
             kp: pid.kp,
             kd: pid.kd,
@@ -966,7 +1020,7 @@ impl IPidControl for EmbObjMotionControl {
             kff: pid.kff,
             ..old
         };
-        let eo = new.to_eo(factor);
+        let eo = new.to_eo(fbk, out);
         match pid_type {
             _ if pid_type == PIDTYPE_POSITION => {
                 self.set(self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTRAJECTORY)?, &eo)?;
@@ -1011,25 +1065,51 @@ impl IPidControl for EmbObjMotionControl {
     }
     fn get_pid_reference(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
         match pid_type {
+            // C++ getPidReferenceRaw: none in torque, PWM or current control
             _ if pid_type == PIDTYPE_POSITION => {
                 let c = self.core(j)?;
-                Ok(f64::from(c.ofpid[0]) / self.a2e(j))
+                if matches!(c.control_mode, cm::TORQUE | cm::OPENLOOP | cm::CURRENT) {
+                    return Ok(0.0);
+                }
+                let (fbk, _) = self.p()?.pid_factors(PidKind::Position, j);
+                Ok(f64::from(c.ofpid[0]) / fbk)
             }
             _ if pid_type == PIDTYPE_TORQUE => self.get_ref_torque(j),
             _ if pid_type == PIDTYPE_CURRENT => self.get_ref_current(j),
             _ => Err(DeviceError::Unsupported("PID reference of this type")),
         }
     }
+    /// C++ `getPidErrorRaw` over the feedback factor: the position error (none in
+    /// torque, PWM or current control), the torque error in torque or compliant
+    /// position control; 0 for the others.
     fn get_pid_error(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        let kind = Self::pid_kind(pid_type)?;
         let c = self.core(j)?;
-        if pid_type == PIDTYPE_POSITION {
-            Ok(f64::from(c.ofpid[2]) / self.a2e(j))
-        } else {
-            Ok(f64::from(c.ofpid[2]))
-        }
+        let raw = match kind {
+            PidKind::Position
+                if !matches!(c.control_mode, cm::TORQUE | cm::OPENLOOP | cm::CURRENT) =>
+            {
+                c.ofpid[2]
+            }
+            PidKind::Torque if torque_pid_active(&c) => c.ofpid[3],
+            _ => 0,
+        };
+        let (fbk, _) = self.p()?.pid_factors(kind, j);
+        Ok(f64::from(raw) / fbk)
     }
-    fn get_pid_output(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<f64> {
-        Ok(f64::from(self.core(j)?.ofpid[4]))
+    /// C++ `getPidOutputRaw` over the output factor: the output of the position PID
+    /// (none in torque or current control) or of the torque PID (in torque or compliant
+    /// position control); 0 for the others.
+    fn get_pid_output(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        let kind = Self::pid_kind(pid_type)?;
+        let c = self.core(j)?;
+        let raw = match kind {
+            PidKind::Position if !matches!(c.control_mode, cm::TORQUE | cm::CURRENT) => c.ofpid[4],
+            PidKind::Torque if torque_pid_active(&c) => c.ofpid[4],
+            _ => 0,
+        };
+        let (_, out) = self.p()?.pid_factors(kind, j);
+        Ok(f64::from(raw) / out)
     }
 }
 
@@ -1121,28 +1201,38 @@ impl IImpedanceControl for EmbObjMotionControl {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    /// The board's stiffness and damping (µN·m per encoder unit) in N·m/deg and
+    /// N·m/(deg/s), as absolute values (YARP `impS2N`, `fabs`).
     fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
         self.phys(j)?;
         let i = self.jconfig[j].impedance;
-        Ok((f64::from(i.stiffness), f64::from(i.damping)))
+        let p = self.p()?;
+        Ok((
+            p.imp_from_raw(j, f64::from(i.stiffness)).abs(),
+            p.imp_from_raw(j, f64::from(i.damping)).abs(),
+        ))
     }
+    /// Sent in µN·m per encoder unit (YARP `impN2S`: × 1e6 / `Encoder`).
     fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
         self.phys(j)?;
         let mut i = self.jconfig[j].impedance;
-        i.stiffness = stiffness as f32;
-        i.damping = damping as f32;
+        let p = self.p()?;
+        i.stiffness = p.imp_to_raw(j, stiffness) as f32;
+        i.damping = p.imp_to_raw(j, damping) as f32;
         self.set(self.joint_id(j, tag::MC_JOINT_CONFIG_IMPEDANCE)?, &i)?;
         self.jconfig[j].impedance = i;
         Ok(())
     }
+    /// N·m (the board's µN·m over 1e6, YARP `trqS2N`).
     fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
         self.phys(j)?;
-        Ok(f64::from(self.jconfig[j].impedance.offset))
+        Ok(f64::from(self.jconfig[j].impedance.offset) / NEWTONS_TO_SENSOR)
     }
+    /// Sent as `S_32(trqN2S(offset))` µN·m (C++ `setImpedanceOffsetRaw`).
     fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
         self.phys(j)?;
         let mut i = self.jconfig[j].impedance;
-        i.offset = offset as f32;
+        i.offset = s32(offset * NEWTONS_TO_SENSOR) as f32;
         self.set(self.joint_id(j, tag::MC_JOINT_CONFIG_IMPEDANCE)?, &i)?;
         self.jconfig[j].impedance = i;
         Ok(())

@@ -1535,8 +1535,10 @@ impl yarp_devices::battery::IBattery for EmbObjBattery {
     fn get_battery_current(&mut self) -> DevResult<f64> {
         Ok(f64::from(tenths(self.status()?.current)))
     }
+    /// %; NaN while the BMS reports 0 (not measured yet), as C++.
     fn get_battery_charge(&mut self) -> DevResult<f64> {
-        Ok(f64::from(self.status()?.charge))
+        let charge = f64::from(self.status()?.charge);
+        Ok(if charge != 0.0 { charge } else { f64::NAN })
     }
     fn get_battery_status(&mut self) -> DevResult<yarp_devices::battery::BatteryStatus> {
         use yarp_devices::battery::BatteryStatus as S;
@@ -1551,8 +1553,11 @@ impl yarp_devices::battery::IBattery for EmbObjBattery {
             _ => S::GeneralError,
         })
     }
+    /// °C in whole degrees (the board's 0.1 °C divided as integers, as C++); NaN while
+    /// the board reports 0.
     fn get_battery_temperature(&mut self) -> DevResult<f64> {
-        Ok(f64::from(self.status()?.temperature / 10))
+        let t = self.status()?.temperature / 10;
+        Ok(if t != 0 { f64::from(t) } else { f64::NAN })
     }
     fn get_battery_info(&mut self) -> DevResult<String> {
         let s = self.status()?;

@@ -60,6 +60,16 @@ fn lookup(table: &[(&str, u8)], prefix: &str, s: &str) -> Option<u8> {
     table.iter().find(|(n, _)| *n == short).map(|(_, v)| *v)
 }
 
+/// `eOmc_encoder_t` of a JOINTMAPPING encoder `type` (`aea`, `eomc_enc_aea`, ...).
+pub fn encoder_type(name: &str) -> Option<u8> {
+    lookup(ENCODERS, "eomc_enc_", name)
+}
+
+/// `eOmc_position_t` of a JOINTMAPPING encoder `position` (`atjoint`, `eomc_pos_atjoint`, ...).
+pub fn encoder_position(name: &str) -> Option<u8> {
+    lookup(POSITIONS, "eomc_pos_", name)
+}
+
 const ACTUATORS: &[(&str, u8)] = &[
     ("none", 0),
     ("foc", 1),
