@@ -5,26 +5,14 @@
 //! units, `ktau2raw`, `impN2S`, the motor group of each service, the PT100 temperature
 //! limit, the encoders by position, dead zones.
 
+mod robot_files;
 use icub_eth::entities::mc::{JointConfig, MotorConfig};
 use icubmod::eth::mc_params::{McParams, PidKind, TemperatureSensor};
 use icubmod::eth::EmbObjMotionControl;
+use robot_files::device_file;
 use std::path::PathBuf;
 use yarp_devices::robotinterface::read_robot_str;
 use yarp_proto::Property;
-
-/// The configuration of the device a robot's file `file` describes (on its own).
-fn device_file(robot: &str, file: &str) -> Property {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/robots-configuration")
-        .join(robot);
-    let text = format!(
-        "<robot name=\"t\" xmlns:xi=\"http://www.w3.org/2001/XInclude\"><devices><xi:include href=\"{file}\" /></devices></robot>"
-    );
-    let r = read_robot_str(&text, &dir, &Property::new())
-        .unwrap_or_else(|e| panic!("{e}"))
-        .robot;
-    r.devices[0].to_property().unwrap()
-}
 
 fn mc(robot: &str, board: &str) -> McParams {
     let p = device_file(robot, &format!("hardware/motorControl/{board}-mc.xml"));

@@ -3,28 +3,16 @@
 //! `embObjMotionControl::saveCouplingsData`, `EmbObjSkin::fromConfig`; offsets within
 //! `eOmn_serv_config_data_t`, bytes C++ leaves uninitialised expected zero).
 
+mod robot_files;
 use icub_eth::entities::mn::service_type;
 use icubmod::eth::config::Node;
 use icubmod::eth::service_config::{
     can_location, mc_config, q17_14, sensor_config, strain_temperature_config,
 };
+use robot_files::device_file;
 use std::path::PathBuf;
-use yarp_devices::robotinterface::{read_robot_file, read_robot_str};
+use yarp_devices::robotinterface::read_robot_file;
 use yarp_proto::Property;
-
-/// The configuration of the device a robot's file `file` describes (on its own).
-fn device_file(robot: &str, file: &str) -> Property {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/robots-configuration")
-        .join(robot);
-    let text = format!(
-        "<robot name=\"t\" xmlns:xi=\"http://www.w3.org/2001/XInclude\"><devices><xi:include href=\"{file}\" /></devices></robot>"
-    );
-    let r = read_robot_str(&text, &dir, &Property::new())
-        .unwrap_or_else(|e| panic!("{e}"))
-        .robot;
-    r.devices[0].to_property().unwrap()
-}
 
 /// The sensor service data of `file` (type `stype`).
 fn sensor(robot: &str, file: &str, stype: u8) -> Vec<u8> {
