@@ -830,11 +830,25 @@ fn strip_comment(buf: &mut Vec<u8>) {
     }
 }
 
+/// How many bytes `$VAR` substitutions may add over one configuration load. Each line may
+/// name earlier values several times, so a few hundred bytes of text could otherwise grow
+/// to gigabytes (the billion-laughs shape); real robots' files substitute a few kilobytes.
+const EXPANSION_BUDGET: usize = 16 << 20;
+
+/// The text of a line grew past [`EXPANSION_BUDGET`] through variable substitution.
+struct ExpansionTooLarge;
+
 /// C++ `expand`: replaces `$VAR`, `${VAR}`, `$(VAR)`; a backslash protects the next byte
-/// (and stays in the text).
-fn expand(input: &[u8], env: &Property, owner: &Property, process_env: bool) -> Vec<u8> {
+/// (and stays in the text). Substituted bytes are taken from `budget`.
+fn expand(
+    input: &[u8],
+    env: &Property,
+    owner: &Property,
+    process_env: bool,
+    budget: &mut usize,
+) -> Result<Vec<u8>, ExpansionTooLarge> {
     if !input.contains(&b'$') {
-        return input.to_vec();
+        return Ok(input.to_vec());
     }
     let mut out = Vec::with_capacity(input.len());
     let mut var: Vec<u8> = Vec::new();
@@ -872,12 +886,9 @@ fn expand(input: &[u8], env: &Property, owner: &Property, process_env: bool) -> 
                 continue;
             }
             in_var = false;
-            out.extend(double_backslashes(&lookup_var(
-                &var,
-                env,
-                owner,
-                process_env,
-            )));
+            let value = double_backslashes(&lookup_var(&var, env, owner, process_env));
+            *budget = budget.checked_sub(value.len()).ok_or(ExpansionTooLarge)?;
+            out.extend(value);
             var.clear();
             if paren && (c == b'}' || c == b')') {
                 continue;
@@ -892,7 +903,7 @@ fn expand(input: &[u8], env: &Property, owner: &Property, process_env: bool) -> 
             out.push(c);
         }
     }
-    out
+    Ok(out)
 }
 
 fn lookup_var(var: &[u8], env: &Property, owner: &Property, process_env: bool) -> Vec<u8> {
@@ -979,11 +990,13 @@ impl LoadError {
     }
 }
 
-/// One configuration load: the include stack (for cycles and depth) and the file budget.
+/// One configuration load: the include stack (for cycles and depth), the file budget and
+/// what `$VAR` substitution may still add.
 struct Loader<'o> {
     options: &'o ConfigOptions,
     stack: Vec<PathBuf>,
     loads: usize,
+    expansion_budget: usize,
 }
 
 impl<'o> Loader<'o> {
@@ -992,6 +1005,7 @@ impl<'o> Loader<'o> {
             options,
             stack: Vec::new(),
             loads: 0,
+            expansion_budget: EXPANSION_BUDGET,
         }
     }
 
@@ -1111,7 +1125,20 @@ impl<'o> Loader<'o> {
             };
             if !done {
                 strip_comment(&mut buf);
-                buf = expand(&buf, env, prop, self.options.process_env);
+                buf = expand(
+                    &buf,
+                    env,
+                    prop,
+                    self.options.process_env,
+                    &mut self.expansion_budget,
+                )
+                .map_err(|ExpansionTooLarge| ParseError::Syntax {
+                    line,
+                    message: format!(
+                        "$variables expand to more than {} MiB over this configuration",
+                        EXPANSION_BUDGET >> 20
+                    ),
+                })?;
                 if buf.first() == Some(&b'[') {
                     if let Some(stop) = buf.iter().position(|&c| c == b']') {
                         buf = buf[1..stop].to_vec();
@@ -1648,10 +1675,24 @@ mod tests {
             p.find_group("check").map(|g| g.to_string()),
             Some("check 10 20 \"$x\"".into())
         );
-        assert_eq!(
-            expand(b"a$$b", &Property::new(), &Property::new(), false),
-            b"a"
-        );
+        let mut budget = 100;
+        let expanded = expand(b"a$$b", &Property::new(), &Property::new(), false, &mut budget);
+        assert_eq!(expanded.ok(), Some(b"a".to_vec()));
+    }
+
+    #[test]
+    fn config_expansion_is_bounded() {
+        // Each line names the one before twice: 40 lines would be 2^40 bytes.
+        let mut text = String::from("k0 (xxxxxxxxxxxxxxxx)\n");
+        for i in 1..40 {
+            text.push_str(&format!("k{i} ($k{} $k{})\n", i - 1, i - 1));
+        }
+        let err = Property::from_config_text(&text).err().map(|e| e.to_string());
+        let err = err.unwrap_or_default();
+        assert!(err.contains("expand to more than 16 MiB"), "{err}");
+        // Ordinary use stays well within it.
+        let p = cfg("a 1 2 3\nb $a $a $a\n");
+        assert_eq!(text_of(p.find("b")), "1");
     }
 
     #[test]
