@@ -1676,7 +1676,13 @@ mod tests {
             Some("check 10 20 \"$x\"".into())
         );
         let mut budget = 100;
-        let expanded = expand(b"a$$b", &Property::new(), &Property::new(), false, &mut budget);
+        let expanded = expand(
+            b"a$$b",
+            &Property::new(),
+            &Property::new(),
+            false,
+            &mut budget,
+        );
         assert_eq!(expanded.ok(), Some(b"a".to_vec()));
     }
 
@@ -1687,7 +1693,9 @@ mod tests {
         for i in 1..40 {
             text.push_str(&format!("k{i} ($k{} $k{})\n", i - 1, i - 1));
         }
-        let err = Property::from_config_text(&text).err().map(|e| e.to_string());
+        let err = Property::from_config_text(&text)
+            .err()
+            .map(|e| e.to_string());
         let err = err.unwrap_or_default();
         assert!(err.contains("expand to more than 16 MiB"), "{err}");
         // Ordinary use stays well within it.
