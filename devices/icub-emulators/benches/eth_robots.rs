@@ -65,6 +65,15 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         Arc::new(AtomicBool::new(false)),
     )
     .unwrap();
+    // ergoCub's waist IMU is an Xsens MTi on a serial line: emulated on a pseudo-terminal,
+    // as `icub-eth-emulator --xsens` does, so that the whole robot comes up.
+    let xsens_link = conf.path().join("ttyXSENS");
+    let (_mti, _pts) = icub_can::emulator::mtx::pty_link_with(
+        &xsens_link,
+        icub_can::xsens::mti::EmulatedMti::default(),
+    )
+    .expect("emulate the Xsens MTi on a pseudo-terminal");
+    std::env::set_var(icubmod::xsens::SERIAL_ENV, &xsens_link);
     let r = read_robot_file(&top, &Property::default()).unwrap().robot;
     yarp_devices::Registry::install(icubmod::register);
     let mut runner = RobotRunner::new(r);
