@@ -21,7 +21,7 @@ use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
 use icubmod::eth::{EmbObjFtSensor, EmbObjMais, EmbObjMotionControl};
 use yarp_devices::interfaces::CalibrationParameters;
 use yarp_devices::robotinterface::read_robot_file;
-use yarp_devices::vocabs::{CM_IDLE, CM_POSITION};
+use yarp_devices::vocabs::{CM_IDLE, CM_POSITION, PIDTYPE_CURRENT, PIDTYPE_POSITION};
 use yarp_devices::DeviceDriver;
 use yarp_proto::Property;
 
@@ -356,6 +356,23 @@ fn torque_impedance_and_temperature(eb1: &mut EmbObjMotionControl) {
     assert!((k - 0.3).abs() < 1e-6 && (d - 0.02).abs() < 1e-6, "{k} {d}");
     imp.set_impedance_offset(2, -0.4).unwrap();
     assert!((imp.get_impedance_offset(2).unwrap() + 0.4).abs() < 1e-9);
+
+    // PIDs are asked of the board (C++ `helper_get*PidRaw`): a new position gain set on
+    // the board reads back through its units (f32 on the wire).
+    let pids = eb1.as_pid_control().unwrap();
+    let mut pid = pids.get_pid(PIDTYPE_POSITION, 0).unwrap();
+    assert!(pid.kp != 0.0, "the file's position PID: {pid:?}");
+    pid.kp *= 2.0;
+    pid.max_output *= 0.5;
+    pids.set_pid(PIDTYPE_POSITION, 0, pid).unwrap();
+    let back = pids.get_pid(PIDTYPE_POSITION, 0).unwrap();
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * a.abs().max(1.0);
+    assert!(
+        close(back.kp, pid.kp) && close(back.max_output, pid.max_output),
+        "{back:?} {pid:?}"
+    );
+    let current = pids.get_pid(PIDTYPE_CURRENT, 0).unwrap();
+    assert!(current.kp.is_finite(), "{current:?}");
 
     // The reference acceleration is kept in encoder units, saturated at 1e6 (C++).
     let pc = eb1.as_position_control().unwrap();

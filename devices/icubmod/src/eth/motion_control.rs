@@ -23,7 +23,7 @@ use std::time::{Duration, Instant};
 use super::service_config::mc_config;
 use icub_eth::entities::mc::{
     control_mode as cm, Calibrator, CurrentLimits, Impedance, JointConfig, JointStatusCore,
-    MotorConfig, MotorParams, MotorStatus, PositionLimits, Pwm, Setpoint,
+    MotorConfig, MotorParams, MotorStatus, Pid as EoPid, PositionLimits, Pwm, Setpoint,
 };
 use icub_eth::entities::mn::{category, ServiceCommand};
 use icub_eth::id::{ids, tag};
@@ -304,8 +304,20 @@ impl EmbObjMotionControl {
         self.set(id, &sp)
     }
 
-    /// Asks a one-byte joint variable (as C++); a reply lost on a loaded host is asked
-    /// again, up to three times within [`ASK_TIMEOUT`].
+    /// Asks a board variable (C++ `askRemoteValue`); a reply lost on a loaded host is
+    /// asked again, up to three times within [`ASK_TIMEOUT`].
+    fn ask<T: Entity>(&self, id: Id32) -> DevResult<T> {
+        let mut last = None;
+        for _ in 0..3 {
+            match self.b()?.ask_value(id, ASK_TIMEOUT / 3) {
+                Ok(v) => return Ok(v),
+                Err(e) => last = Some(e),
+            }
+        }
+        Err(self.fail(last.expect("three attempts")))
+    }
+
+    /// Asks a one-byte joint variable (as C++).
     fn ask_u8(&self, j: usize, t: u8) -> DevResult<u8> {
         let id = self.joint_id(j, t)?;
         let mut last = None;
@@ -316,6 +328,15 @@ impl EmbObjMotionControl {
             }
         }
         Err(self.fail(last.expect("three attempts")))
+    }
+
+    /// Joint `j`'s impedance as the board has it (C++ `getWholeImpedanceRaw` asks it and
+    /// keeps it as the cache that later sets start from).
+    fn board_impedance(&mut self, j: usize) -> DevResult<Impedance> {
+        self.phys(j)?;
+        let i: Impedance = self.ask(self.joint_id(j, tag::MC_JOINT_CONFIG_IMPEDANCE)?)?;
+        self.jconfig[j].impedance = i;
+        Ok(i)
     }
 
     /// The board's joint and motor configuration of joint `j` (C++ `init()`): PIDs as
@@ -467,7 +488,30 @@ impl EmbObjMotionControl {
         })
     }
 
-    /// Joint `j`'s PID of a type as the board has it, in user units (YARP's
+    /// Joint `j`'s PID of a type asked of the board (C++ `helper_get*PidRaw` asks the
+    /// joint's `pidtrajectory`/`pidtorque` or the motor's `pidcurrent`/`pidspeed`), in
+    /// user units. What the board answers becomes the cache that later sets start from.
+    fn board_pid(&mut self, t: Vocab32, j: usize) -> DevResult<PidParams> {
+        self.phys(j)?;
+        let kind = Self::pid_kind(t)?;
+        let id = match kind {
+            PidKind::Position => self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTRAJECTORY)?,
+            PidKind::Torque => self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTORQUE)?,
+            PidKind::Current => self.motor_id(j, tag::MC_MOTOR_CONFIG_PIDCURRENT)?,
+            PidKind::Velocity => self.motor_id(j, tag::MC_MOTOR_CONFIG_PIDSPEED)?,
+        };
+        let eo: EoPid = self.ask(id)?;
+        match kind {
+            PidKind::Position => self.jconfig[j].pid_trajectory = eo,
+            PidKind::Torque => self.jconfig[j].pid_torque = eo,
+            PidKind::Current => self.mconfig[j].pid_current = eo,
+            PidKind::Velocity => self.mconfig[j].pid_speed = eo,
+        }
+        let (fbk, out) = self.p()?.pid_factors(kind, j);
+        Ok(PidParams::from_eo(&eo, fbk, out))
+    }
+
+    /// Joint `j`'s PID of a type as last sent or asked, in user units (YARP's
     /// `convert_pid_to_user`), with its (feedback, output) factors.
     fn pid_cache(&self, t: Vocab32, j: usize) -> DevResult<(PidParams, f64, f64)> {
         let p = self.p()?;
@@ -989,8 +1033,9 @@ impl IMotor for EmbObjMotionControl {
 }
 
 impl IPidControl for EmbObjMotionControl {
+    /// Asked of the board, as C++.
     fn get_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<Pid> {
-        let (p, _, _) = self.pid_cache(pid_type, j)?;
+        let p = self.board_pid(pid_type, j)?;
         Ok(Pid {
             kp: p.kp,
             kd: p.kd,
@@ -1204,8 +1249,7 @@ impl IImpedanceControl for EmbObjMotionControl {
     /// The board's stiffness and damping (µN·m per encoder unit) in N·m/deg and
     /// N·m/(deg/s), as absolute values (YARP `impS2N`, `fabs`).
     fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        self.phys(j)?;
-        let i = self.jconfig[j].impedance;
+        let i = self.board_impedance(j)?;
         let p = self.p()?;
         Ok((
             p.imp_from_raw(j, f64::from(i.stiffness)).abs(),
@@ -1225,8 +1269,8 @@ impl IImpedanceControl for EmbObjMotionControl {
     }
     /// N·m (the board's µN·m over 1e6, YARP `trqS2N`).
     fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
-        self.phys(j)?;
-        Ok(f64::from(self.jconfig[j].impedance.offset) / NEWTONS_TO_SENSOR)
+        let i = self.board_impedance(j)?;
+        Ok(f64::from(i.offset) / NEWTONS_TO_SENSOR)
     }
     /// Sent as `S_32(trqN2S(offset))` µN·m (C++ `setImpedanceOffsetRaw`).
     fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
