@@ -367,3 +367,70 @@ fn every_mc_device_of_both_robots_reads() {
         }
     }
 }
+
+/// ergoCubSN001 torso-eb5-j0_2's KALMAN_FILTER reaches each joint's config (C++
+/// `parseKalmanFilterParams`, `jconfig.kalman_params`); a board file without the group
+/// (iCubGenova02's left arm) sends it disabled and zero; a group missing one of its lines
+/// fails the open naming it.
+#[test]
+fn kalman_filter_as_sent() {
+    let p = mc("ergoCubSN001", "torso-eb5-j0_2");
+    let (jc0, _) = configs(&p, 0);
+    let (jc2, _) = configs(&p, 2);
+    assert!(jc0.kalman.enabled && jc2.kalman.enabled);
+    assert_eq!(jc0.kalman.x0, [0.0; 3]);
+    // the file's f64 text as f32, as C++ `asFloat32`
+    let f = |v: f64| v as f32;
+    assert_eq!(
+        jc0.kalman.q,
+        [
+            f(0.0002531597161334673),
+            f(0.022162080623563264),
+            f(23.988142473281066)
+        ]
+    );
+    assert_eq!(jc0.kalman.r, f(0.0007037200315177511));
+    assert_eq!(jc2.kalman.p0, f(0.31787791884813843));
+
+    let icub = mc("iCubGenova02", "left_arm-eb1-j0_3");
+    assert_eq!(configs(&icub, 0).0.kalman, Default::default());
+
+    let err = edited("ergoCubSN001", "torso-eb5-j0_2", &[("(P0 ", "(Pzero ")])
+        .err()
+        .unwrap_or_default();
+    assert!(err.contains("KALMAN_FILTER/P0"), "{err}");
+}
+
+/// LUGRE (C++ `parseLugreGroup`, `motor_cfg.LuGre_params`): neither robot has the group,
+/// so each motor is sent Km -1 ("no model") and zeros; a group gives its nine values per
+/// joint, and one missing line fails the open naming it.
+#[test]
+fn lugre_model_as_sent() {
+    let p = mc("ergoCubSN001", "torso-eb5-j0_2");
+    let (_, m0) = configs(&p, 0);
+    assert_eq!(m0.lugre, [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+
+    let group = "(LUGRE (Km 1 2 3) (Kw 4 5 6) (S0 7 8 9) (S1 10 11 12) (Vth 13 14 15) \
+                 (Fc_pos 16 17 18) (Fc_neg 19 20 21) (Fs_pos 22 23 24) (Fs_neg 25 26 27)) \
+                 (KALMAN_FILTER ";
+    let p = edited(
+        "ergoCubSN001",
+        "torso-eb5-j0_2",
+        &[("(KALMAN_FILTER ", group)],
+    );
+    let p = p.unwrap_or_else(|e| panic!("{e}"));
+    let (_, m2) = configs(&p, 2);
+    assert_eq!(
+        m2.lugre,
+        [3.0, 6.0, 9.0, 12.0, 15.0, 18.0, 21.0, 24.0, 27.0]
+    );
+    let without_vth = group.replace("(Vth 13 14 15) ", "");
+    let err = edited(
+        "ergoCubSN001",
+        "torso-eb5-j0_2",
+        &[("(KALMAN_FILTER ", &without_vth)],
+    )
+    .err()
+    .unwrap_or_default();
+    assert!(err.contains("LUGRE/Vth"), "{err}");
+}

@@ -22,6 +22,9 @@
 //!   `eomn_serv_MC_foc` with `foc` CAN boards), `AMCBLDC` (`eomn_serv_MC_foc` with other
 //!   boards) or `ADVFOC` (`eomn_serv_MC_advfoc`); other services have none (all zero);
 //! - `OTHER_CONTROL_PARAMETERS/deadZone` (else a default per joint encoder type);
+//! - `KALMAN_FILTER` (`kalmanFilterEnabled`, `x0`-`x2`, `Q0`-`Q2`, `R`, `P0`) and `LUGRE`
+//!   (`Km`, `Kw`, `S0`, `S1`, `Vth`, `Fc_pos`, `Fc_neg`, `Fs_pos`, `Fs_neg`), optional
+//!   groups whose lines are all needed once the group is there;
 //! - `SERVICE/PROPERTIES/JOINTMAPPING`: the encoders `ENCODER1`/`ENCODER2`, the one
 //!   `atjoint` being the joint encoder and the one `atmotor` the rotor encoder (C++
 //!   `ServiceParser::getEncoderAtJoint/AtMotor`; none: resolution 1, tolerance 0).
@@ -31,7 +34,7 @@
 //! PID gains by [`McParams::pid_factors`], `ktau` by [`McParams::ktau_to_raw`], motor
 //! temperatures through the sensor's bridge ([`TemperatureSensor`]).
 
-use icub_eth::entities::mc::Pid as EoPid;
+use icub_eth::entities::mc::{KalmanFilterConfig, Pid as EoPid};
 use icub_eth::entities::mn::service_type;
 use yarp_proto::Property;
 
@@ -285,6 +288,11 @@ pub struct McParams {
     pub rotor_encoder: Vec<EncoderInfo>,
     /// Degrees (`OTHER_CONTROL_PARAMETERS/deadZone`, else [`default_deadzone`]).
     pub deadzone: Vec<f64>,
+    /// Each joint's `KALMAN_FILTER` settings (disabled and zero without the group).
+    pub kalman: Vec<KalmanFilterConfig>,
+    /// Each motor's `LUGRE` friction model (Km, Kw, S0, S1, Vth, Fc_pos, Fc_neg, Fs_pos,
+    /// Fs_neg); without the group Km is -1, which the firmware reads as "no model".
+    pub lugre: Vec<[f32; 9]>,
     /// The motor group C++ read (`2FOC`, `AMCBLDC`, `ADVFOC`; `None` for other services).
     pub motor_group: Option<&'static str>,
     pub has_hall_sensor: Vec<bool>,
@@ -654,6 +662,53 @@ fn temperature_limits(limits: &Node, n: usize) -> Result<(Vec<f64>, Vec<f64>), P
     Ok((hw, warn))
 }
 
+/// `KALMAN_FILTER` (C++ `parseKalmanFilterParams`, sent in each joint's config): without
+/// the group every joint's filter is disabled and zero; with it, each of its nine lines is
+/// needed, one value per joint (C++ fails the device's open otherwise).
+fn kalman_filters(root: &Node, n: usize) -> Result<Vec<KalmanFilterConfig>, ParamError> {
+    let Some(g) = root.group("KALMAN_FILTER") else {
+        return Ok(vec![KalmanFilterConfig::default(); n]);
+    };
+    let enabled = g.need_strings("kalmanFilterEnabled", n)?;
+    let line = |k: &str| g.need_numbers(k, n);
+    let (x0, x1, x2) = (line("x0")?, line("x1")?, line("x2")?);
+    let (q0, q1, q2) = (line("Q0")?, line("Q1")?, line("Q2")?);
+    let (r, p0) = (line("R")?, line("P0")?);
+    Ok((0..n)
+        .map(|j| KalmanFilterConfig {
+            // YARP's asBool: a non-zero number or `true`
+            enabled: match enabled[j].trim_matches('"') {
+                "true" | "TRUE" | "True" => true,
+                other => parse_number(other).is_some_and(|v| v != 0.0),
+            },
+            x0: [x0[j] as f32, x1[j] as f32, x2[j] as f32],
+            q: [q0[j] as f32, q1[j] as f32, q2[j] as f32],
+            r: r[j] as f32,
+            p0: p0[j] as f32,
+        })
+        .collect())
+}
+
+/// `LUGRE` (C++ `parseLugreGroup`, sent in each motor's config): without the group Km is
+/// -1 and the rest 0; with it, each of its nine lines is needed, one value per joint.
+fn lugre_models(root: &Node, n: usize) -> Result<Vec<[f32; 9]>, ParamError> {
+    let Some(g) = root.group("LUGRE") else {
+        let mut none = [0.0; 9];
+        none[0] = -1.0;
+        return Ok(vec![none; n]);
+    };
+    let keys = [
+        "Km", "Kw", "S0", "S1", "Vth", "Fc_pos", "Fc_neg", "Fs_pos", "Fs_neg",
+    ];
+    let lines = keys
+        .iter()
+        .map(|k| g.need_numbers(k, n))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((0..n)
+        .map(|j| std::array::from_fn(|k| lines[k][j] as f32))
+        .collect())
+}
+
 impl McParams {
     /// Reads the parameters (C++ `fromConfig`); errors name the parameter.
     pub fn read(config: &Property) -> Result<Self, ParamError> {
@@ -720,6 +775,8 @@ impl McParams {
                     .map(|e| default_deadzone(e.kind))
                     .collect()
             });
+        let kalman = kalman_filters(&root, n)?;
+        let lugre = lugre_models(&root, n)?;
         let foc = Foc::read(&root, service, n)?;
         // C++: a joint with a temperature sensor needs both temperature limits
         if let Some(j) = (0..n).find(|j| {
@@ -785,6 +842,8 @@ impl McParams {
             joint_encoder,
             rotor_encoder,
             deadzone,
+            kalman,
+            lugre,
             motor_group: foc.group,
             has_hall_sensor: foc.hall,
             has_temp_sensor: foc.temp,

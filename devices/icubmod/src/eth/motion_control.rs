@@ -396,7 +396,7 @@ impl EmbObjMotionControl {
             jnt_enc_tolerance: jenc.tolerance as f32,
             gearbox_e2j: p.gearbox_e2j[j] as f32,
             deadzone: (p.deadzone[j] * a2e) as f32,
-            ..Default::default()
+            kalman: p.kalman[j],
         };
         let flags = u8::from(p.has_hall_sensor[j])
             | u8::from(p.has_temp_sensor[j]) << 1
@@ -426,6 +426,7 @@ impl EmbObjMotionControl {
                 min: pos(p.rotor_min[j]),
                 max: pos(p.rotor_max[j]),
             },
+            lugre: p.lugre[j],
             ..Default::default()
         };
         (jc, mc)
