@@ -374,6 +374,28 @@ fn torque_impedance_and_temperature(eb1: &mut EmbObjMotionControl) {
     let current = pids.get_pid(PIDTYPE_CURRENT, 0).unwrap();
     assert!(current.kp.is_finite(), "{current:?}");
 
+    // The amplifier's current limits are asked of the board and changed there (A over
+    // the board's mA, `ampsToSensor`); PWM and supply voltage are the board's raw values.
+    let amp = eb1.as_amplifier_control().unwrap();
+    let nominal = amp.get_nominal_current(1).unwrap();
+    let peak = amp.get_peak_current(1).unwrap();
+    let max = amp.get_max_current(1).unwrap();
+    assert!(
+        nominal > 0.0 && peak >= nominal && max > 0.0,
+        "{nominal} {peak} {max}"
+    );
+    amp.set_peak_current(1, peak - 0.25).unwrap();
+    amp.set_max_current(1, max + 0.5).unwrap();
+    assert!((amp.get_peak_current(1).unwrap() - (peak - 0.25)).abs() < 2e-3);
+    assert!((amp.get_max_current(1).unwrap() - (max + 0.5)).abs() < 2e-3);
+    assert_eq!(
+        amp.get_nominal_current(1).unwrap(),
+        nominal,
+        "the others kept"
+    );
+    assert_eq!(amp.get_power_supply_voltage(0).unwrap(), 4800.0);
+    assert!(amp.get_pwm(0).unwrap().is_finite());
+
     // The reference acceleration is kept in encoder units, saturated at 1e6 (C++).
     let pc = eb1.as_position_control().unwrap();
     pc.set_ref_acceleration(0, 1e9).unwrap();

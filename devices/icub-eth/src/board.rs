@@ -706,7 +706,8 @@ impl BoardEngine {
             all_jomo_initted: true,
             flags_initted_joints: mask,
             flags_initted_motors: mask,
-            supply_voltage: 0,
+            // an emulated 48 V supply, in the firmware's 0.01 V
+            supply_voltage: 4800,
         };
         let _ = self.store.write(
             Id32::new(

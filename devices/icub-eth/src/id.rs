@@ -435,6 +435,13 @@ pub mod ids {
     pub const APPL_GO2STATE: Id32 =
         Id32::new(ep::MANAGEMENT, en::MN_APPL, 0, t::MN_APPL_CMMNDS_GO2STATE);
     pub const INFO_STATUS: Id32 = Id32::new(ep::MANAGEMENT, en::MN_INFO, 0, t::MN_INFO_STATUS);
+    /// The motion-control controller's status (initted joints and motors, supply voltage).
+    pub const CONTROLLER_STATUS: Id32 = Id32::new(
+        ep::MOTION_CONTROL,
+        en::MC_CONTROLLER,
+        0,
+        t::MC_CONTROLLER_STATUS,
+    );
     pub const SERVICE_COMMAND: Id32 = Id32::new(
         ep::MANAGEMENT,
         en::MN_SERVICE,

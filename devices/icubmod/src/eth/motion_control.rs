@@ -22,8 +22,9 @@ use std::time::{Duration, Instant};
 
 use super::service_config::mc_config;
 use icub_eth::entities::mc::{
-    control_mode as cm, Calibrator, CurrentLimits, Impedance, JointConfig, JointStatusCore,
-    MotorConfig, MotorParams, MotorStatus, Pid as EoPid, PositionLimits, Pwm, Setpoint,
+    control_mode as cm, Calibrator, ControllerStatus, CurrentLimits, Impedance, JointConfig,
+    JointStatusCore, MotorConfig, MotorParams, MotorStatus, Pid as EoPid, PositionLimits, Pwm,
+    Setpoint,
 };
 use icub_eth::entities::mn::{category, ServiceCommand};
 use icub_eth::id::{ids, tag};
@@ -36,7 +37,9 @@ use yarp_proto::{Property, Vocab32};
 
 use super::config::text;
 use super::manager::{Board, EthError, EthManager};
-use super::mc_params::{s32, McParams, PidKind, PidParams, TemperatureSensor, NEWTONS_TO_SENSOR};
+use super::mc_params::{
+    s16, s32, McParams, PidKind, PidParams, TemperatureSensor, NEWTONS_TO_SENSOR,
+};
 use super::params::{read_eth_board, read_pc104};
 use super::service;
 
@@ -328,6 +331,31 @@ impl EmbObjMotionControl {
             }
         }
         Err(self.fail(last.expect("three attempts")))
+    }
+
+    /// Motor `m`'s current limits as the board has them (C++ asks them each time).
+    fn current_limits(&self, m: usize) -> DevResult<CurrentLimits> {
+        self.phys(m)?;
+        self.ask(self.motor_id(m, tag::MC_MOTOR_CONFIG_CURRENTLIMITS)?)
+    }
+
+    /// C++ `set{Max,Nominal,Peak}CurrentRaw`: asks the limits, changes one (A to the
+    /// board's mA through `ampsToSensor`, `S_16`) and sets them back.
+    fn change_current_limits(
+        &mut self,
+        m: usize,
+        change: fn(&mut CurrentLimits, i16),
+        amps: f64,
+    ) -> DevResult<()> {
+        let mut limits = self.current_limits(m)?;
+        let raw = s16(amps * self.p()?.amps_to_sensor[m]);
+        change(&mut limits, raw);
+        self.set(
+            self.motor_id(m, tag::MC_MOTOR_CONFIG_CURRENTLIMITS)?,
+            &limits,
+        )?;
+        self.mconfig[m].current_limits = limits;
+        Ok(())
     }
 
     /// Joint `j`'s impedance as the board has it (C++ `getWholeImpedanceRaw` asks it and
@@ -975,10 +1003,36 @@ impl IAmplifierControl for EmbObjMotionControl {
         let s = self.motor_status(j)?;
         Ok(f64::from(s.basic.current) / self.p()?.amps_to_sensor[j])
     }
+    /// A: the board's overload current (C++ asks the motor's current limits).
     fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
-        self.phys(j)?;
-        let p = self.p()?;
-        Ok(p.overload_current[j] / p.amps_to_sensor[j])
+        Ok(f64::from(self.current_limits(j)?.overload) / self.p()?.amps_to_sensor[j])
+    }
+    /// Asks the limits, changes the overload current and sets them back (C++).
+    fn set_max_current(&mut self, j: usize, amps: f64) -> DevResult<()> {
+        self.change_current_limits(j, |l, raw| l.overload = raw, amps)
+    }
+    fn get_nominal_current(&mut self, m: usize) -> DevResult<f64> {
+        Ok(f64::from(self.current_limits(m)?.nominal) / self.p()?.amps_to_sensor[m])
+    }
+    fn set_nominal_current(&mut self, m: usize, amps: f64) -> DevResult<()> {
+        self.change_current_limits(m, |l, raw| l.nominal = raw, amps)
+    }
+    fn get_peak_current(&mut self, m: usize) -> DevResult<f64> {
+        Ok(f64::from(self.current_limits(m)?.peak) / self.p()?.amps_to_sensor[m])
+    }
+    fn set_peak_current(&mut self, m: usize, amps: f64) -> DevResult<()> {
+        self.change_current_limits(m, |l, raw| l.peak = raw, amps)
+    }
+    /// The motor's PWM as the board reports it, unconverted (YARP's `getPWM` is raw).
+    fn get_pwm(&mut self, m: usize) -> DevResult<f64> {
+        Ok(f64::from(self.motor_status(m)?.basic.pwm))
+    }
+    /// The board's supply voltage in its unit, 0.01 V, as C++ answers it (asked of the
+    /// controller entity; YARP applies no factor).
+    fn get_power_supply_voltage(&mut self, m: usize) -> DevResult<f64> {
+        self.phys(m)?;
+        let status: ControllerStatus = self.ask(ids::CONTROLLER_STATUS)?;
+        Ok(f64::from(status.supply_voltage))
     }
     /// The motor config's `pwmLimit`, asked of the board (as C++).
     fn get_pwm_limit(&mut self, j: usize) -> DevResult<f64> {
