@@ -9,9 +9,7 @@ mod robot_files;
 use icub_eth::entities::mc::{JointConfig, MotorConfig};
 use icubmod::eth::mc_params::{McParams, PidKind, TemperatureSensor};
 use icubmod::eth::EmbObjMotionControl;
-use robot_files::device_file;
-use std::path::PathBuf;
-use yarp_devices::robotinterface::read_robot_str;
+use robot_files::{device_file, robot_devices};
 use yarp_proto::Property;
 
 fn mc(robot: &str, board: &str) -> McParams {
@@ -348,12 +346,10 @@ fn every_mc_device_of_both_robots_reads() {
         ("iCubGenova02", "icub_all.xml"),
         ("ergoCubSN001", "ergocub.xml"),
     ] {
-        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../../shared/robots-configuration")
-            .join(robot);
-        let text = std::fs::read_to_string(dir.join(top)).unwrap();
-        let r = read_robot_str(&text, &dir, &Property::new()).unwrap().robot;
-        for d in r.devices.iter().filter(|d| d.kind == "embObjMotionControl") {
+        for d in robot_devices(robot, top)
+            .iter()
+            .filter(|d| d.kind == "embObjMotionControl")
+        {
             let p = McParams::read(&d.to_property().unwrap())
                 .unwrap_or_else(|e| panic!("{robot} {}: {e}", d.name));
             let foc = matches!(p.service.service_type, 1 | 15);

@@ -9,9 +9,7 @@ use icubmod::eth::config::Node;
 use icubmod::eth::service_config::{
     can_location, mc_config, q17_14, sensor_config, strain_temperature_config,
 };
-use robot_files::device_file;
-use std::path::PathBuf;
-use yarp_devices::robotinterface::read_robot_file;
+use robot_files::{device_file, robot_devices};
 use yarp_proto::Property;
 
 /// The sensor service data of `file` (type `stype`).
@@ -143,14 +141,8 @@ fn skin_patches_and_pos_sensors() {
 }
 
 fn device(robot: &str, top: &str, name: &str) -> Property {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/robots-configuration")
-        .join(robot);
-    let r = read_robot_file(&dir.join(top), &Property::new())
-        .unwrap_or_else(|e| panic!("{e}"))
-        .robot;
-    let d = r
-        .devices
+    let devices = robot_devices(robot, top);
+    let d = devices
         .iter()
         .find(|d| d.name == name)
         .unwrap_or_else(|| panic!("no device {name}"));
@@ -285,14 +277,11 @@ fn every_mc_service_of_both_robots_builds() {
         ("iCubGenova02", "icub_all.xml"),
         ("ergoCubSN001", "ergocub.xml"),
     ] {
-        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../../shared/robots-configuration")
-            .join(robot);
-        let r = read_robot_file(&dir.join(top), &Property::new())
-            .unwrap()
-            .robot;
         let mut n = 0;
-        for d in r.devices.iter().filter(|d| d.kind == "embObjMotionControl") {
+        for d in robot_devices(robot, top)
+            .iter()
+            .filter(|d| d.kind == "embObjMotionControl")
+        {
             let p = d.to_property().unwrap();
             let mc = icubmod::eth::mc_params::McParams::read(&p).unwrap();
             let data = mc_config(&p, mc.service.service_type, mc.joints)
