@@ -307,12 +307,12 @@ impl EmbObjMotionControl {
         self.set(id, &sp)
     }
 
-    /// Asks a board variable (C++ `askRemoteValue`); a reply lost on a loaded host is
+    /// An ask of the board (C++ `askRemoteValue`); a reply lost on a loaded host is
     /// asked again, up to three times within [`ASK_TIMEOUT`].
-    fn ask<T: Entity>(&self, id: Id32) -> DevResult<T> {
+    fn retried<T>(&self, ask: impl Fn(&Board, Duration) -> Result<T, EthError>) -> DevResult<T> {
         let mut last = None;
         for _ in 0..3 {
-            match self.b()?.ask_value(id, ASK_TIMEOUT / 3) {
+            match ask(self.b()?, ASK_TIMEOUT / 3) {
                 Ok(v) => return Ok(v),
                 Err(e) => last = Some(e),
             }
@@ -320,17 +320,15 @@ impl EmbObjMotionControl {
         Err(self.fail(last.expect("three attempts")))
     }
 
+    /// Asks a board variable of a known type.
+    fn ask<T: Entity>(&self, id: Id32) -> DevResult<T> {
+        self.retried(|b, timeout| b.ask_value(id, timeout))
+    }
+
     /// Asks a one-byte joint variable (as C++).
     fn ask_u8(&self, j: usize, t: u8) -> DevResult<u8> {
         let id = self.joint_id(j, t)?;
-        let mut last = None;
-        for _ in 0..3 {
-            match self.b()?.ask(id, ASK_TIMEOUT / 3) {
-                Ok(v) => return Ok(v.first().copied().unwrap_or(0)),
-                Err(e) => last = Some(e),
-            }
-        }
-        Err(self.fail(last.expect("three attempts")))
+        self.retried(|b, timeout| b.ask(id, timeout).map(|v| v.first().copied().unwrap_or(0)))
     }
 
     /// Motor `m`'s current limits as the board has them (C++ asks them each time).
@@ -517,43 +515,36 @@ impl EmbObjMotionControl {
         })
     }
 
-    /// Joint `j`'s PID of a type asked of the board (C++ `helper_get*PidRaw` asks the
-    /// joint's `pidtrajectory`/`pidtorque` or the motor's `pidcurrent`/`pidspeed`), in
-    /// user units. What the board answers becomes the cache that later sets start from.
+    /// Where joint `j`'s PID of a kind lives on the board: the joint's `pidtrajectory` or
+    /// `pidtorque`, the motor's `pidcurrent` or `pidspeed`.
+    fn pid_id(&self, kind: PidKind, j: usize) -> DevResult<Id32> {
+        match kind {
+            PidKind::Position => self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTRAJECTORY),
+            PidKind::Torque => self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTORQUE),
+            PidKind::Current => self.motor_id(j, tag::MC_MOTOR_CONFIG_PIDCURRENT),
+            PidKind::Velocity => self.motor_id(j, tag::MC_MOTOR_CONFIG_PIDSPEED),
+        }
+    }
+
+    /// The host's copy of that PID (as last sent or asked); `j` checked by the caller.
+    fn pid_slot(&mut self, kind: PidKind, j: usize) -> &mut EoPid {
+        match kind {
+            PidKind::Position => &mut self.jconfig[j].pid_trajectory,
+            PidKind::Torque => &mut self.jconfig[j].pid_torque,
+            PidKind::Current => &mut self.mconfig[j].pid_current,
+            PidKind::Velocity => &mut self.mconfig[j].pid_speed,
+        }
+    }
+
+    /// Joint `j`'s PID of a type asked of the board (C++ `helper_get*PidRaw`), in user
+    /// units. What the board answers becomes the copy later sets start from.
     fn board_pid(&mut self, t: Vocab32, j: usize) -> DevResult<PidParams> {
         self.phys(j)?;
         let kind = Self::pid_kind(t)?;
-        let id = match kind {
-            PidKind::Position => self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTRAJECTORY)?,
-            PidKind::Torque => self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTORQUE)?,
-            PidKind::Current => self.motor_id(j, tag::MC_MOTOR_CONFIG_PIDCURRENT)?,
-            PidKind::Velocity => self.motor_id(j, tag::MC_MOTOR_CONFIG_PIDSPEED)?,
-        };
-        let eo: EoPid = self.ask(id)?;
-        match kind {
-            PidKind::Position => self.jconfig[j].pid_trajectory = eo,
-            PidKind::Torque => self.jconfig[j].pid_torque = eo,
-            PidKind::Current => self.mconfig[j].pid_current = eo,
-            PidKind::Velocity => self.mconfig[j].pid_speed = eo,
-        }
+        let eo: EoPid = self.ask(self.pid_id(kind, j)?)?;
+        *self.pid_slot(kind, j) = eo;
         let (fbk, out) = self.p()?.pid_factors(kind, j);
         Ok(PidParams::from_eo(&eo, fbk, out))
-    }
-
-    /// Joint `j`'s PID of a type as last sent or asked, in user units (YARP's
-    /// `convert_pid_to_user`), with its (feedback, output) factors.
-    fn pid_cache(&self, t: Vocab32, j: usize) -> DevResult<(PidParams, f64, f64)> {
-        let p = self.p()?;
-        self.phys(j)?;
-        let kind = Self::pid_kind(t)?;
-        let eo = match kind {
-            PidKind::Position => &self.jconfig[j].pid_trajectory,
-            PidKind::Torque => &self.jconfig[j].pid_torque,
-            PidKind::Current => &self.mconfig[j].pid_current,
-            PidKind::Velocity => &self.mconfig[j].pid_speed,
-        };
-        let (fbk, out) = p.pid_factors(kind, j);
-        Ok((PidParams::from_eo(eo, fbk, out), fbk, out))
     }
 }
 
@@ -1106,7 +1097,10 @@ impl IPidControl for EmbObjMotionControl {
     }
     /// YARP's `convert_pid_to_machine`, then set on the board.
     fn set_pid(&mut self, pid_type: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
-        let (old, fbk, out) = self.pid_cache(pid_type, j)?;
+        self.phys(j)?;
+        let kind = Self::pid_kind(pid_type)?;
+        let (fbk, out) = self.p()?.pid_factors(kind, j);
+        let old = PidParams::from_eo(self.pid_slot(kind, j), fbk, out);
         let new = PidParams {
             kp: pid.kp,
             kd: pid.kd,
@@ -1121,24 +1115,8 @@ impl IPidControl for EmbObjMotionControl {
             ..old
         };
         let eo = new.to_eo(fbk, out);
-        match pid_type {
-            _ if pid_type == PIDTYPE_POSITION => {
-                self.set(self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTRAJECTORY)?, &eo)?;
-                self.jconfig[j].pid_trajectory = eo;
-            }
-            _ if pid_type == PIDTYPE_TORQUE => {
-                self.set(self.joint_id(j, tag::MC_JOINT_CONFIG_PIDTORQUE)?, &eo)?;
-                self.jconfig[j].pid_torque = eo;
-            }
-            _ if pid_type == PIDTYPE_CURRENT => {
-                self.set(self.motor_id(j, tag::MC_MOTOR_CONFIG_PIDCURRENT)?, &eo)?;
-                self.mconfig[j].pid_current = eo;
-            }
-            _ => {
-                self.set(self.motor_id(j, tag::MC_MOTOR_CONFIG_PIDSPEED)?, &eo)?;
-                self.mconfig[j].pid_speed = eo;
-            }
-        }
+        self.set(self.pid_id(kind, j)?, &eo)?;
+        *self.pid_slot(kind, j) = eo;
         Ok(())
     }
     fn enable_pid(&mut self, _pid_type: Vocab32, j: usize) -> DevResult<()> {
