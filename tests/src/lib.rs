@@ -4,9 +4,11 @@
 //! YARP, rclpy, Chromium) with the rule for when one is missing ([`peer_missing`]).
 
 mod cpp_tools;
+mod netns;
 mod peer;
 mod procs;
 pub use cpp_tools::*;
+pub use netns::*;
 pub use peer::*;
 pub use procs::*;
 

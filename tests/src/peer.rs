@@ -10,9 +10,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 
-/// How to install the C++ YARP peer (3.5 with its device plugins).
-pub const CPP_YARP_INSTALL: &str = "tests/peers/install-cpp-yarp.sh (then set YARP_CPP_BIN to \
-     the directory it prints)";
+/// How to install the C++ YARP peer (3.12.3 with its device plugins and icub-main's host).
+pub const CPP_YARP_INSTALL: &str = "tests/peers/install-cpp-peers.sh icub (then set \
+     YARP_CPP_BIN to the directory it prints)";
 /// How to install the rclpy peer.
 pub const RCLPY_INSTALL: &str =
     "tests/peers/install-ros2.sh (then set ROS_VENV to the directory it prints)";
@@ -38,14 +38,15 @@ pub fn peer_missing(test: &str, peer: &str, why: &str, install: &str) {
     let _ = e.flush();
 }
 
-/// Where `install-cpp-yarp.sh` keeps a link to the current build (`<prefix>` of its bin).
+/// Where `install-cpp-peers.sh icub` keeps a link to the current build (`<prefix>` of its
+/// bin): C++ YARP 3.12.3 with icub-main 2.11.1.
 fn cached_cpp_yarp() -> Option<PathBuf> {
     let home = std::env::var_os("HOME")?;
-    Some(PathBuf::from(home).join(".cache/yarp-rs/cpp-yarp/bin"))
+    Some(PathBuf::from(home).join(".cache/yarp-rs/cpp-icub/bin"))
 }
 
 /// The directory holding the real C++ YARP programs: `$YARP_CPP_BIN`, else the build of
-/// `tests/peers/install-cpp-yarp.sh` in `~/.cache/yarp-rs/cpp-yarp`, else an older
+/// `tests/peers/install-cpp-peers.sh icub` in `~/.cache/yarp-rs/cpp-icub`, else an older
 /// pip-built peer in `<repo>/.venv-yarp` (pip puts Python wrappers in `bin/` that do not
 /// forward signals, so the real binaries in `site-packages/yarp/bin` come first).
 pub fn cpp_bin_dir() -> Option<PathBuf> {
@@ -82,13 +83,19 @@ pub fn cpp_program(test: &str, name: &str) -> Option<PathBuf> {
 }
 
 /// The `YARP_DATA_DIRS` under which the C++ programs of `bin` find their plugin manifests
-/// (`<prefix>/share/yarp/plugins`): that directory first, then `$YARP_DATA_DIRS`.
+/// (`<prefix>/share/yarp/plugins`, and icub-main's in `<prefix>/share/iCub/plugins` where
+/// the prefix has them): those directories first, then `$YARP_DATA_DIRS`.
 pub fn cpp_data_dirs(bin: &Path) -> Option<OsString> {
     let share = bin.parent()?.join("share/yarp");
     if !share.join("plugins").is_dir() {
         return std::env::var_os("YARP_DATA_DIRS");
     }
+    let icub = bin.parent()?.join("share/iCub");
     let mut dirs = share.into_os_string();
+    if icub.join("plugins").is_dir() {
+        dirs.push(":");
+        dirs.push(icub);
+    }
     if let Some(more) = std::env::var_os("YARP_DATA_DIRS").filter(|d| !d.is_empty()) {
         dirs.push(":");
         dirs.push(more);
