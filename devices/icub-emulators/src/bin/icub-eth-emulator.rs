@@ -1,6 +1,6 @@
 //! `icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN]
-//! [--xsens PATH]`: emulates every Ethernet board of a robots-configuration robot
-//! directory, each on its own `IpAddress:12345` UDP socket. The address map (also
+//! [--xsens PATH]`: emulates every Ethernet board of a robots-configuration
+//! robot directory, each on its own `IpAddress:12345` UDP socket. The address map (also
 //! `YARP_ICUB_ETH_ADDRESS_MAP`) serves the robot's addresses elsewhere, e.g.
 //! `10.0.1.0/24=127.0.1.0/24` on a laptop without the robot's addresses; the devices must
 //! use the same map. `--xsens PATH` also emulates an Xsens MTi (the ergoCub waist IMU,
@@ -11,13 +11,23 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use icub_emulators::eth::{robot_boards, serve};
-use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use icub_emulators::eth::{robot_boards, serve, AddressMap, ADDRESS_MAP_ENV};
+
+const HELP: &str = "usage: icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN] [--xsens PATH]
+
+Emulates every Ethernet board of a robots-configuration robot directory, each on its own
+IpAddress:IpPort UDP socket (hardware/electronics/*-eln.xml); a board learns its sensors
+and running cycle from the host's service configurations, as a real one.
+
+  --config FILE.xml     the robot's top-level file (default: yarprobotinterface.ini's config)
+  --address-map MAP     serve the robot's addresses elsewhere, e.g. 10.0.1.0/24=127.0.1.0/24
+                        (default: $YARP_ICUB_ETH_ADDRESS_MAP); the devices must use the same
+  --xsens PATH          also emulate an Xsens MTi on a pseudo-terminal linked at PATH
+
+SIGINT or SIGTERM stops it (exit 0).";
 
 fn usage() -> ! {
-    eprintln!(
-        "usage: icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN] [--xsens PATH]"
-    );
+    eprintln!("{HELP}");
     std::process::exit(2)
 }
 
@@ -38,7 +48,10 @@ fn main() {
             "--xsens" => xsens = Some(args.next().unwrap_or_else(|| usage()).into()),
             "--config" => top = Some(args.next().unwrap_or_else(|| usage()).into()),
             "--address-map" => map_text = args.next().unwrap_or_else(|| usage()),
-            "-h" | "--help" => usage(),
+            "-h" | "--help" => {
+                println!("{HELP}");
+                std::process::exit(0)
+            }
             _ if dir.is_none() => dir = Some(a.into()),
             _ => usage(),
         }
@@ -79,19 +92,14 @@ fn main() {
     });
     for b in &served {
         let s = &b.spec;
+        let users = if s.users.is_empty() {
+            String::new()
+        } else {
+            format!(", for {}", s.users.join(", "))
+        };
         println!(
-            "board {} {} at {} ({} joints{}{}{}{}{}{}{})",
-            s.params.name,
-            s.params.type_name,
-            b.local,
-            s.joints.len(),
-            if s.strains > 0 { ", strain" } else { "" },
-            if s.fts > 0 { ", ft" } else { "" },
-            if s.maises > 0 { ", mais" } else { "" },
-            if s.inertials3 > 0 { ", inertials" } else { "" },
-            if s.skins > 0 { ", skin" } else { "" },
-            if s.poses > 0 { ", pos" } else { "" },
-            if s.batteries > 0 { ", battery" } else { "" },
+            "board {} {} at {} ({} joints{users})",
+            s.params.name, s.params.type_name, b.local, s.joints,
         );
     }
     println!("icub-eth-emulator: serving {} boards", served.len());
