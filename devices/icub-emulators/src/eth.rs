@@ -26,6 +26,11 @@
 //! Joints are emulated by the board engine's joint model ([`SimpleJoint`]), starting at
 //! raw 0 and placed inside the hardware limits of the host's joint configuration (a joint
 //! sits inside its mechanical range); sensors stream slowly varying values.
+//!
+//! With [`ServeOptions::record`] (`icub-eth-emulator --record DIR`) every ROP a host sends
+//! to a board is written to `DIR/<board's robot IP>.jsonl` (see [`record`]).
+
+pub mod record;
 
 use std::collections::BTreeMap;
 use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4, UdpSocket};
@@ -507,6 +512,14 @@ pub struct ServedBoard {
     pub local: SocketAddrV4,
 }
 
+/// How the boards are served beyond their addresses.
+#[derive(Debug, Clone, Default)]
+pub struct ServeOptions {
+    /// Record every ROP a host sends to a board in `DIR/<board's robot IP>.jsonl`
+    /// ([`record`]).
+    pub record: Option<PathBuf>,
+}
+
 /// Binds every board's socket (failing, naming the board, when an address is missing)
 /// and serves them all on one thread until `stop` is set: each board answers its own
 /// socket and streams at its own period, and the boards due together go out together,
@@ -516,8 +529,29 @@ pub fn serve(
     map: &AddressMap,
     stop: Arc<AtomicBool>,
 ) -> Result<(Vec<ServedBoard>, Vec<std::thread::JoinHandle<()>>), String> {
-    // the boards' time: from now
+    serve_with(specs, map, stop, &ServeOptions::default())
+}
+
+/// [`serve`] with options (the recorder). The threads returned: the boards' one, and the
+/// recorder's writer (it ends after the boards' thread, having written all it got).
+pub fn serve_with(
+    specs: Vec<BoardSpec>,
+    map: &AddressMap,
+    stop: Arc<AtomicBool>,
+    options: &ServeOptions,
+) -> Result<(Vec<ServedBoard>, Vec<std::thread::JoinHandle<()>>), String> {
+    // the boards' time (and the recordings'): from now
     let epoch = Instant::now();
+    let mut threads = Vec::new();
+    let recorder = match &options.record {
+        Some(dir) => {
+            let ips: Vec<Ipv4Addr> = specs.iter().map(|s| s.params.ip).collect();
+            let (r, t) = record::Recorder::start(dir, &ips)?;
+            threads.push(t);
+            Some(r)
+        }
+        None => None,
+    };
     let mut served = Vec::new();
     let mut boards = Vec::new();
     for spec in specs {
@@ -543,6 +577,8 @@ pub fn serve(
             socket,
             engine,
             who: spec.params.who(),
+            index: boards.len(),
+            recorder: recorder.clone(),
             peer: None,
             last_step: None,
             tick: 0,
@@ -550,11 +586,14 @@ pub fn serve(
         });
         served.push(ServedBoard { spec, local });
     }
+    // the writer ends when the boards' thread drops the last recorder
+    drop(recorder);
     let t = std::thread::Builder::new()
         .name("eth-boards".into())
         .spawn(move || run_boards(boards, stop, epoch))
         .map_err(|e| e.to_string())?;
-    Ok((served, vec![t]))
+    threads.insert(0, t);
+    Ok((served, threads))
 }
 
 /// One board as the serving thread keeps it.
@@ -563,6 +602,9 @@ struct ServedState {
     engine: BoardEngine,
     /// `IP (name)`, for logs.
     who: String,
+    /// The board's place in the served list (its recording file).
+    index: usize,
+    recorder: Option<record::Recorder>,
     /// Where the host is (the sender of the last datagram).
     peer: Option<SocketAddr>,
     /// When the control loop last ran (the serving thread's time).
@@ -603,6 +645,9 @@ impl ServedState {
     fn receive(&mut self, buf: &mut [u8], epoch: Instant) {
         while let Ok((n, from)) = self.socket.recv_from(buf) {
             self.peer = Some(from);
+            if let Some(r) = &self.recorder {
+                r.record(self.index, epoch.elapsed(), from, &buf[..n]);
+            }
             if let Err(e) = self.engine.handle_datagram(&buf[..n]) {
                 tracing::debug!(board = %self.who, "dropped a datagram: {e}");
             }
