@@ -24,8 +24,8 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use icub_emulators::eth::{robot_boards, serve};
+use icub_emulators::eth::{AddressMap, ADDRESS_MAP_ENV};
 use icubmod::eth::manager::EthManager;
-use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
 use yarp_devices::robotinterface::{read_robot_file, ActionPhase, RobotRunner};
 use yarp_devices::vocabs::CM_POSITION;
 use yarp_proto::Property;

@@ -1,15 +1,36 @@
 //! The Ethernet board emulator behind `icub-eth-emulator`: every board a robot directory
 //! names, each an [`icub_eth::board::BoardEngine`] on its own UDP socket
-//! (`IpAddress:IpPort` of its `ETH_BOARD`, through the address map), answering the
-//! host as the board's firmware does and streaming its regulars at the configured rate.
+//! (`IpAddress:IpPort` of its `ETH_BOARD`, through the [`AddressMap`]), answering the
+//! host as the board's firmware does and streaming its regulars at the rate the host
+//! configures (`eOmn_appl_config_t`).
 //!
-//! What a board carries comes from the robot's files, read with the robot interface's
-//! XML reader: the boards of `hardware/electronics/*-eln.xml`, and for each `embObj*`
-//! device of the robot's top-level file (`yarprobotinterface.ini`'s `config`) the
-//! entities its service needs: joints (`embObjMotionControl`: `GENERAL/Joints`, starting
-//! inside `LIMITS` at 0° when allowed), strain/FT, MAIS, inertials, skin, POS, battery.
-//! Joints are emulated by the board engine's joint model; sensors stream slowly varying
-//! values.
+//! An emulated board knows what a real one knows, and shares no code with the host's
+//! drivers (crate `icubmod`), so that a misreading of the robot's files cannot hide on
+//! both sides:
+//!
+//! - from the electronics files (`hardware/electronics/*-eln.xml`, read with the robot
+//!   interface's XML reader): `ETH_BOARD_PROPERTIES` `IpAddress`, `IpPort`, `Type`,
+//!   `maxSizeRXpacket` and `ETH_BOARD_SETTINGS/Name`;
+//! - how many joints it drives (the motors wired to it): `GENERAL/Joints` of each
+//!   `embObjMotionControl` device of the robot's top-level file (`yarprobotinterface.ini`'s
+//!   `config`) whose `ETH_BOARD` is the board, and nothing else of those files;
+//! - everything else from the host's datagrams: the sensor entities (strain, MAIS,
+//!   temperatures, inertials, POS, FT, battery, skin) from the `verifyactivate` service
+//!   configurations (the board engine's `auto_entities`); which inertial sensors exist
+//!   (their `eOas_sensor_t` and the id their readings carry, `port << 4 | address` of
+//!   their CAN board) from the inertials3 configuration, and which of them stream from
+//!   the host's `eOas_inertial3_config_t`; the skin patches' MTBs from the skin
+//!   configuration, and their transmitting triangles from the host's triangle
+//!   configurations; the running cycle from the host's `eOmn_appl_config_t`.
+//!
+//! Joints are emulated by the board engine's joint model ([`SimpleJoint`]), starting at
+//! raw 0 and placed inside the hardware limits of the host's joint configuration (a joint
+//! sits inside its mechanical range); sensors stream slowly varying values.
+//!
+//! With [`ServeOptions::record`] (`icub-eth-emulator --record DIR`) every ROP a host sends
+//! to a board is written to `DIR/<board's robot IP>.jsonl` (see [`record`]).
+
+pub mod record;
 
 use std::collections::BTreeMap;
 use std::net::{Ipv4Addr, SocketAddr, SocketAddrV4, UdpSocket};
@@ -18,38 +39,101 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use icub_eth::board::{next_multiple, BoardConfig, BoardEngine};
+use icub_eth::board::{next_multiple, BoardConfig, BoardEngine, BoardEvent};
 use icub_eth::entities::analog::{
-    ByteArray, FtStatus, FtTimedValue, Inertial3Data, Inertial3Status, MaisStatus, StrainStatus,
-    TemperatureData, TemperatureStatus,
+    sensor_type as st, ByteArray, FtStatus, FtTimedValue, Inertial3Config, Inertial3Data,
+    Inertial3Status, MaisStatus, StrainStatus, TemperatureData, TemperatureStatus,
 };
-use icub_eth::id::{entity as en, ids, tag};
+use icub_eth::entities::boards::EthBoardType;
+use icub_eth::entities::mn::category;
+use icub_eth::entities::service::{SensorSetConfig, SkinServiceConfig};
+use icub_eth::id::{endpoint as ep, entity as en, ids, tag};
 use icub_eth::plant::{JointModel, SimpleJoint};
+use icub_eth::Entity;
+pub use icub_eth::{AddressMap, ADDRESS_MAP_ENV};
 use yarp_devices::robotinterface::read_robot_str;
-use yarp_proto::Property;
+use yarp_proto::{Bottle, Property, Value};
 
-use icubmod::eth::config::Node;
-use icubmod::eth::params::{read_eth_board, AddressMap, EthBoardParams};
+/// What a board knows of itself: its `ETH_BOARD` in the electronics files.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoardParams {
+    pub ip: Ipv4Addr,
+    pub port: u16,
+    pub board_type: EthBoardType,
+    /// `Type` as written.
+    pub type_name: String,
+    pub max_rx_packet: usize,
+    /// `ETH_BOARD_SETTINGS/Name` (`NOT-NAMED` when empty).
+    pub name: String,
+}
 
-/// What one emulated board carries.
+/// A value's text (a string's own, a number's digits), without quotes.
+fn text(v: &Value) -> String {
+    let s = match v.as_str() {
+        Some(s) => s.to_string(),
+        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
+    };
+    s.trim().trim_matches('"').to_string()
+}
+
+fn number(v: &Value) -> Option<f64> {
+    v.as_f64().or_else(|| text(v).parse().ok())
+}
+
+impl BoardParams {
+    /// How a board is named in messages: `IP (name)`.
+    pub fn who(&self) -> String {
+        format!("{} ({})", self.ip, self.name)
+    }
+
+    /// `ETH_BOARD` of a device's (or an electronics file's) configuration.
+    pub fn read(config: &Property) -> Result<Self, String> {
+        let board = config.find_group("ETH_BOARD").ok_or("no group ETH_BOARD")?;
+        let props = board
+            .find_group("ETH_BOARD_PROPERTIES")
+            .ok_or("no group ETH_BOARD/ETH_BOARD_PROPERTIES")?;
+        let ip_text = props
+            .find("IpAddress")
+            .map(text)
+            .ok_or("no ETH_BOARD_PROPERTIES/IpAddress")?;
+        let ip = ip_text.parse().map_err(|_| {
+            format!("ETH_BOARD_PROPERTIES/IpAddress `{ip_text}` is no IPv4 address")
+        })?;
+        let num = |b: &Bottle, k: &str| -> Result<Option<f64>, String> {
+            match b.find(k) {
+                None => Ok(None),
+                Some(v) => number(v)
+                    .map(Some)
+                    .ok_or_else(|| format!("{k} `{}` is no number", text(v))),
+            }
+        };
+        let port = num(props, "IpPort")?.map_or(12345, |p| p as u16);
+        let type_name = props.find("Type").map(text).unwrap_or_default();
+        let board_type = EthBoardType::from_name(&type_name).unwrap_or(EthBoardType::Unknown);
+        let max_rx_packet = num(props, "maxSizeRXpacket")?.map_or(768, |v| v as usize);
+        let name = board
+            .find_group("ETH_BOARD_SETTINGS")
+            .and_then(|s| s.find("Name"))
+            .map(text)
+            .filter(|n| !n.is_empty())
+            .unwrap_or_else(|| "NOT-NAMED".into());
+        Ok(Self {
+            ip,
+            port,
+            board_type,
+            type_name,
+            max_rx_packet,
+            name,
+        })
+    }
+}
+
+/// What one emulated board carries before a host talks to it.
 #[derive(Debug, Clone)]
 pub struct BoardSpec {
-    pub params: EthBoardParams,
-    /// Initial position of each joint, encoder units.
-    pub joints: Vec<f64>,
-    pub strains: u8,
-    pub maises: u8,
-    pub inertials3: u8,
-    pub temperatures: u8,
-    pub poses: u8,
-    pub fts: u8,
-    pub batteries: u8,
-    pub skins: u8,
-    /// The `eOas_sensor_t` of each enabled inertial sensor (in the board's order) and the
-    /// id its readings carry (`port << 4 | address` of its CAN board).
-    pub inertials: Vec<(u8, u8)>,
-    /// The MTB addresses of each skin patch.
-    pub skin_patches: Vec<Vec<u8>>,
+    pub params: BoardParams,
+    /// How many joints (and motors) are wired to it.
+    pub joints: usize,
     /// The protocol versions the board announces (management, motion control, analog
     /// sensors, skin); `None`: those of the host (a board with matching firmware).
     pub protocol: Option<[icub_eth::entities::mn::Version; 4]>,
@@ -58,20 +142,10 @@ pub struct BoardSpec {
 }
 
 impl BoardSpec {
-    fn new(params: EthBoardParams) -> Self {
+    fn new(params: BoardParams) -> Self {
         Self {
             params,
-            joints: Vec::new(),
-            strains: 0,
-            maises: 0,
-            inertials3: 0,
-            temperatures: 0,
-            poses: 0,
-            fts: 0,
-            batteries: 0,
-            skins: 0,
-            inertials: Vec::new(),
-            skin_patches: Vec::new(),
+            joints: 0,
             protocol: None,
             users: Vec::new(),
         }
@@ -80,19 +154,13 @@ impl BoardSpec {
     fn config(&self) -> BoardConfig {
         let p = &self.params;
         let mut c = BoardConfig::new(&p.name, p.ip, p.board_type);
-        c.joints = self.joints.len() as u8;
-        c.strains = self.strains;
-        c.maises = self.maises;
-        c.inertials3 = self.inertials3;
-        c.temperatures = self.temperatures;
-        c.poses = self.poses;
-        c.fts = self.fts;
-        c.batteries = self.batteries;
-        c.skins = self.skins;
+        c.joints = self.joints.min(255) as u8;
         c.max_rx_packet = p.max_rx_packet;
         // A real board's datagrams fit one Ethernet frame; the regulars of the largest
         // boards (12 joints, MAIS and skin) then take several datagrams per period.
         c.max_tx_packet = 1400;
+        // the sensors come with the host's service configurations
+        c.auto_entities = true;
         if let Some(v) = self.protocol {
             c.protocol = v;
         }
@@ -137,12 +205,12 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
             continue;
         };
         let cfg = dev.to_property().map_err(|e| e.to_string())?;
-        let params = read_eth_board(&cfg).map_err(|e| format!("{}: {e}", file.display()))?;
+        let params = BoardParams::read(&cfg).map_err(|e| format!("{}: {e}", file.display()))?;
         boards
             .entry(params.ip)
             .or_insert_with(|| BoardSpec::new(params));
     }
-    // What the robot's devices need of them.
+    // The joints wired to them (and who uses them, for the listing).
     let top = match top {
         Some(t) => t.to_path_buf(),
         None => robot_file(dir)?,
@@ -154,7 +222,7 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
             continue;
         }
         let cfg = dev.to_property().map_err(|e| e.to_string())?;
-        let params = match read_eth_board(&cfg) {
+        let params = match BoardParams::read(&cfg) {
             Ok(p) => p,
             Err(e) => {
                 tracing::warn!("device {}: {e}: not emulated", dev.name);
@@ -165,76 +233,79 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
             .entry(params.ip)
             .or_insert_with(|| BoardSpec::new(params));
         b.users.push(format!("{} ({})", dev.name, dev.kind));
-        let root = Node::root(&cfg);
-        match dev.kind.as_str() {
-            "embObjMotionControl" => {
-                let n = root
-                    .group("GENERAL")
-                    .and_then(|g| g.number("Joints").ok().flatten())
-                    .unwrap_or(0.0) as usize;
-                let num = |g: &'static str, k: &str, d: f64| -> Vec<f64> {
-                    root.group(g)
-                        .and_then(|g| g.numbers(k, n).ok().flatten())
-                        .unwrap_or_else(|| vec![d; n])
-                };
-                let enc = num("GENERAL", "Encoder", 1.0);
-                let (lo, hi) = (
-                    num("LIMITS", "jntPosMin", 0.0),
-                    num("LIMITS", "jntPosMax", 0.0),
-                );
-                b.joints = (0..n)
-                    .map(|j| {
-                        let deg = if lo[j] <= hi[j] {
-                            0.0f64.clamp(lo[j], hi[j])
-                        } else {
-                            0.0
-                        };
-                        deg * enc[j]
-                    })
-                    .collect();
-            }
-            "embObjFTsensor" => {
-                b.strains = b.strains.max(1);
-                b.temperatures = b.temperatures.max(1);
-            }
-            "embObjMultipleFTsensors" => {
-                let n = root
-                    .group("SERVICE")
-                    .and_then(|s| s.group("SETTINGS"))
-                    .and_then(|s| s.strings("enabledSensors"))
-                    .map_or(1, |v| v.len());
-                b.fts = b.fts.saturating_add(n as u8).min(4);
-            }
-            "embObjMais" => b.maises = 1,
-            "embObjIMU" | "embObjInertials" => {
-                b.inertials3 = 1;
-                match icubmod::eth::sensors::inertial_sensors(&cfg) {
-                    Ok(list) => {
-                        b.inertials = list
-                            .iter()
-                            .map(|s| (s.kind, s.can_id.unwrap_or(0)))
-                            .collect()
-                    }
-                    Err(e) => tracing::warn!("device {}: {e}", dev.name),
-                }
-            }
-            "embObjSkin" => match icubmod::eth::sensors::skin_patches(&cfg) {
-                Ok(p) => {
-                    b.skins = p.len() as u8;
-                    b.skin_patches = p;
-                }
-                Err(e) => tracing::warn!("device {}: {e}", dev.name),
-            },
-            "embObjPOS" => b.poses = 1,
-            "embObjBattery" => b.batteries = 1,
-            _ => {}
+        if dev.kind == "embObjMotionControl" {
+            b.joints = cfg
+                .find_group("GENERAL")
+                .and_then(|g| g.find("Joints"))
+                .and_then(number)
+                .map_or(0, |n| n.max(0.0) as usize);
         }
     }
     Ok(boards.into_values().collect())
 }
 
-/// Writes the sensors' values of a board (slowly varying, so that streams visibly
-/// change).
+/// The CAN id of an MTB's taxel message (iCub CAN protocol): the class
+/// `ICUBCANPROTO_CLASS_PERIODIC_SKIN` (4) in bits 8-10, the sending MTB's address in bits
+/// 4-7, the triangle (the "destination" of a periodic message) in bits 0-3.
+fn skin_frame_id(addr: u8, triangle: u8) -> u16 {
+    const CLASS_PERIODIC_SKIN: u16 = 4;
+    CLASS_PERIODIC_SKIN << 8 | u16::from(addr & 0xf) << 4 | u16::from(triangle & 0xf)
+}
+
+/// The id an inertial reading carries for a sensor at `location` (an `eObrd_location_t`:
+/// place in bits 0-1, for CAN (1) and extended CAN (3) the port in bit 2 and the address
+/// in bits 3-6): `port << 4 | address` of its CAN board; 0 for a sensor on the Ethernet
+/// board itself (its readings are known by their type).
+fn inertial_id(location: u8) -> u8 {
+    match location & 3 {
+        1 | 3 => ((location >> 2) & 1) << 4 | ((location >> 3) & 0xf),
+        _ => 0,
+    }
+}
+
+/// What a board learned of its sensors from the host.
+#[derive(Debug, Default, Clone)]
+struct Learned {
+    /// The inertials3 service's sensors, in the board's order: their `eOas_sensor_t` and
+    /// the id their readings carry.
+    inertials: Vec<(u8, u8)>,
+    /// The MTB addresses of each skin patch.
+    skin_patches: Vec<Vec<u8>>,
+    skin: SkinTriangles,
+}
+
+impl Learned {
+    /// A service the host configured and the board verified.
+    fn verified(&mut self, cat: u8, config: &[u8]) {
+        match cat {
+            category::INERTIALS3 => {
+                self.inertials = SensorSetConfig::from_inertial3_bytes(config)
+                    .sensors
+                    .iter()
+                    .map(|d| (d.type_of_sensor, inertial_id(d.location)))
+                    .collect();
+            }
+            category::SKIN => {
+                let Some(c) = config
+                    .get(..SkinServiceConfig::SIZE)
+                    .and_then(|b| SkinServiceConfig::from_bytes(b).ok())
+                else {
+                    return;
+                };
+                self.skin_patches = c.can_map[..usize::from(c.num_of_patches.min(4))]
+                    .iter()
+                    .map(|ports| {
+                        let mask = ports[0] | ports[1];
+                        (0..16u8).filter(|a| mask & (1 << a) != 0).collect()
+                    })
+                    .collect();
+                self.skin = SkinTriangles::default();
+            }
+            _ => {}
+        }
+    }
+}
+
 /// Which triangles of each skin patch's MTBs transmit, by address (16 bits, one per
 /// triangle), as the host's triangle configurations set them; a patch never configured
 /// transmits all (the old-style skins).
@@ -272,18 +343,21 @@ impl SkinTriangles {
     }
 }
 
-fn update_sensors(
-    engine: &mut BoardEngine,
-    spec: &BoardSpec,
-    skin: &SkinTriangles,
-    t: f64,
-    age_us: u64,
-    tick: u64,
-) {
-    use icubmod::eth::sensors::sensor_type as st;
+/// Writes the values of the sensors a board has (those the host's services gave it),
+/// slowly varying so that streams visibly change.
+fn update_sensors(engine: &mut BoardEngine, learned: &Learned, t: f64, age_us: u64, tick: u64) {
     let s = (t * 0.5).sin();
     let store = engine.store_mut();
-    if spec.strains > 0 {
+    let has = |e: u8| store.count(ep::ANALOG_SENSORS, e);
+    let (strains, temperatures, maises, poses, batteries, fts) = (
+        has(en::AS_STRAIN),
+        has(en::AS_TEMPERATURE),
+        has(en::AS_MAIS),
+        has(en::AS_POS),
+        has(en::AS_BATTERY),
+        has(en::AS_FT),
+    );
+    if strains > 0 {
         // Full scale 2000 N / 50 N·m (strain2 defaults); values as fractions of it, in
         // the boards' encodings (offset binary values, big-endian full scales).
         let full = [2000u16, 2000, 2000, 50, 50, 50];
@@ -299,21 +373,21 @@ fn update_sensors(
             &status,
         );
     }
-    if spec.temperatures > 0 {
+    if temperatures > 0 {
         // the strain2's temperature, 0.1 °C
         let _ = store.write(
             ids::analog(en::AS_TEMPERATURE, 0, tag::AS_XX_STATUS),
             &TemperatureStatus {
                 data: vec![TemperatureData {
                     id: 0,
-                    type_of_sensor: 15, // eoas_temperature_t1
+                    type_of_sensor: st::TEMPERATURE_T1,
                     value: (253.0 + 5.0 * s) as i16,
                     timestamp: (age_us / 1000) as u32,
                 }],
             },
         );
     }
-    if spec.maises > 0 {
+    if maises > 0 {
         let v: Vec<u8> = (0..15)
             .map(|k| (128.0 + 100.0 * (t + k as f64).sin()) as u8)
             .collect();
@@ -322,7 +396,7 @@ fn update_sensors(
         };
         let _ = store.write(ids::analog(en::AS_MAIS, 0, tag::AS_MAIS_STATUS), &status);
     }
-    if spec.poses > 0 {
+    if poses > 0 {
         // One value per hand port (eObrd_portpos_t 0-6: open/close 0-3, abductions 4
         // and 6), as the boards send them; embObjPOS picks its sensors' ports.
         let values: Vec<i16> = (0..7).map(|k| (100.0 * s) as i16 + 100 * k).collect();
@@ -331,7 +405,7 @@ fn update_sensors(
             &icub_eth::entities::analog::PosStatus { values },
         );
     }
-    if spec.batteries > 0 {
+    if batteries > 0 {
         // A 48 V pack at 85 % in use, drawing ~2 A, at 25 °C.
         let _ = store.write(
             ids::analog(en::AS_BATTERY, 0, tag::AS_BATTERY_STATUS_TIMEDVALUE),
@@ -345,12 +419,12 @@ fn update_sensors(
             },
         );
     }
-    for (p, addrs) in spec.skin_patches.iter().enumerate() {
+    for (p, addrs) in learned.skin_patches.iter().enumerate() {
         // Two CAN frames per triangle (7 + 5 taxels), 24 frames per status, in turn.
         let all: Vec<(u8, u8, bool)> = addrs
             .iter()
             .flat_map(|a| (0..16u8).flat_map(move |t| [(*a, t, false), (*a, t, true)]))
-            .filter(|(a, t, _)| skin.enabled(p, *a, *t))
+            .filter(|(a, t, _)| learned.skin.enabled(p, *a, *t))
             .collect();
         if all.is_empty() {
             continue;
@@ -362,7 +436,7 @@ fn update_sensors(
                 let (a, t, second) = all[(start + k) % all.len()];
                 let head = if second { 0xC0 } else { 0x40 };
                 icub_eth::entities::skin::SkinCanData::new(
-                    icubmod::eth::sensors::skin_can_id(a, t),
+                    skin_frame_id(a, t),
                     &[head, level, level, level, level, level, level, level],
                 )
             })
@@ -372,12 +446,23 @@ fn update_sensors(
             &icub_eth::entities::skin::SkinStatus { frames },
         );
     }
-    if !spec.inertials.is_empty() {
+    // the inertial sensors the host's config enables (bit k: sensor k of the service)
+    let enabled = store
+        .read::<Inertial3Config>(ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_CONFIG))
+        .map_or(0, |c| c.enabled);
+    let inertials: Vec<(u8, u8)> = learned
+        .inertials
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| *k < 32 && enabled & (1 << k) != 0)
+        .map(|(_, s)| *s)
+        .collect();
+    if !inertials.is_empty() {
         // Four readings per status, the sensors taken in turn (as the boards fill it).
-        let n = spec.inertials.len();
+        let n = inertials.len();
         let data = (0..n.min(4))
             .map(|k| {
-                let (kind, id) = spec.inertials[(tick as usize * 4 + k) % n];
+                let (kind, id) = inertials[(tick as usize * 4 + k) % n];
                 // the IMU's in its units (BNO055), the MTBs' and the board's raw
                 let (x, y, z) = match kind {
                     st::IMU_ACC | st::ACCEL_MTB_INT | st::ACCEL_MTB_EXT | st::ACCEL_ST_LIS3X => {
@@ -407,7 +492,7 @@ fn update_sensors(
             &Inertial3Status { data },
         );
     }
-    for i in 0..spec.fts {
+    for i in 0..fts {
         let s = s as f32;
         let ft = FtStatus {
             timed_value: FtTimedValue {
@@ -427,6 +512,14 @@ pub struct ServedBoard {
     pub local: SocketAddrV4,
 }
 
+/// How the boards are served beyond their addresses.
+#[derive(Debug, Clone, Default)]
+pub struct ServeOptions {
+    /// Record every ROP a host sends to a board in `DIR/<board's robot IP>.jsonl`
+    /// ([`record`]).
+    pub record: Option<PathBuf>,
+}
+
 /// Binds every board's socket (failing, naming the board, when an address is missing)
 /// and serves them all on one thread until `stop` is set: each board answers its own
 /// socket and streams at its own period, and the boards due together go out together,
@@ -436,6 +529,29 @@ pub fn serve(
     map: &AddressMap,
     stop: Arc<AtomicBool>,
 ) -> Result<(Vec<ServedBoard>, Vec<std::thread::JoinHandle<()>>), String> {
+    serve_with(specs, map, stop, &ServeOptions::default())
+}
+
+/// [`serve`] with options (the recorder). The threads returned: the boards' one, and the
+/// recorder's writer (it ends after the boards' thread, having written all it got).
+pub fn serve_with(
+    specs: Vec<BoardSpec>,
+    map: &AddressMap,
+    stop: Arc<AtomicBool>,
+    options: &ServeOptions,
+) -> Result<(Vec<ServedBoard>, Vec<std::thread::JoinHandle<()>>), String> {
+    // the boards' time (and the recordings'): from now
+    let epoch = Instant::now();
+    let mut threads = Vec::new();
+    let recorder = match &options.record {
+        Some(dir) => {
+            let ips: Vec<Ipv4Addr> = specs.iter().map(|s| s.params.ip).collect();
+            let (r, t) = record::Recorder::start(dir, &ips)?;
+            threads.push(t);
+            Some(r)
+        }
+        None => None,
+    };
     let mut served = Vec::new();
     let mut boards = Vec::new();
     for spec in specs {
@@ -451,41 +567,50 @@ pub fn serve(
         socket
             .set_nonblocking(true)
             .map_err(|e| format!("BOARD {}: {e}", spec.params.who()))?;
-        let joints: Vec<Box<dyn JointModel>> = spec
-            .joints
-            .iter()
-            .map(|q| Box::new(SimpleJoint::new(*q)) as Box<dyn JointModel>)
+        // joints start at raw 0; the host's joint configuration places them inside
+        // their hardware limits (SimpleJoint)
+        let joints: Vec<Box<dyn JointModel>> = (0..spec.joints)
+            .map(|_| Box::new(SimpleJoint::new(0.0)) as Box<dyn JointModel>)
             .collect();
         let engine = BoardEngine::with_joints(spec.config(), joints);
         boards.push(ServedState {
             socket,
             engine,
-            spec: spec.clone(),
+            who: spec.params.who(),
+            index: boards.len(),
+            recorder: recorder.clone(),
             peer: None,
             last_step: None,
             tick: 0,
-            skin: SkinTriangles::default(),
+            learned: Learned::default(),
         });
         served.push(ServedBoard { spec, local });
     }
+    // the writer ends when the boards' thread drops the last recorder
+    drop(recorder);
     let t = std::thread::Builder::new()
         .name("eth-boards".into())
-        .spawn(move || run_boards(boards, stop))
+        .spawn(move || run_boards(boards, stop, epoch))
         .map_err(|e| e.to_string())?;
-    Ok((served, vec![t]))
+    threads.insert(0, t);
+    Ok((served, threads))
 }
 
 /// One board as the serving thread keeps it.
 struct ServedState {
     socket: UdpSocket,
     engine: BoardEngine,
-    spec: BoardSpec,
+    /// `IP (name)`, for logs.
+    who: String,
+    /// The board's place in the served list (its recording file).
+    index: usize,
+    recorder: Option<record::Recorder>,
     /// Where the host is (the sender of the last datagram).
     peer: Option<SocketAddr>,
     /// When the control loop last ran (the serving thread's time).
     last_step: Option<Duration>,
     tick: u64,
-    skin: SkinTriangles,
+    learned: Learned,
 }
 
 impl ServedState {
@@ -517,22 +642,43 @@ impl ServedState {
     }
 
     /// Reads every pending datagram.
-    fn receive(&mut self, buf: &mut [u8]) {
+    fn receive(&mut self, buf: &mut [u8], epoch: Instant) {
         while let Ok((n, from)) = self.socket.recv_from(buf) {
             self.peer = Some(from);
-            if let Err(e) = self.engine.handle_datagram(&buf[..n]) {
-                tracing::debug!(board = %self.spec.params.who(), "dropped a datagram: {e}");
+            if let Some(r) = &self.recorder {
+                r.record(self.index, epoch.elapsed(), from, &buf[..n]);
             }
-            self.configured();
+            if let Err(e) = self.engine.handle_datagram(&buf[..n]) {
+                tracing::debug!(board = %self.who, "dropped a datagram: {e}");
+            }
+            self.configured(epoch);
         }
     }
 
-    /// Takes in what the host configured that the emulation follows (the skin's
-    /// triangles).
-    fn configured(&mut self) {
+    /// Takes in what the host configured that the emulation follows (the services'
+    /// sensors, the skin's triangles).
+    fn configured(&mut self, epoch: Instant) {
         while let Some(ev) = self.engine.poll_event() {
-            let icub_eth::board::BoardEvent::Set(id) = ev else {
-                continue;
+            let id = match ev {
+                BoardEvent::Verified {
+                    category, config, ..
+                } => {
+                    self.learned.verified(category, &config);
+                    // the new sensors have values at once (a strain's full scales, which
+                    // the host may ask to be signalled right after the verification),
+                    // as a board reads them from its CAN boards when it verifies
+                    let now = epoch.elapsed();
+                    update_sensors(
+                        &mut self.engine,
+                        &self.learned,
+                        now.as_secs_f64(),
+                        now.as_micros() as u64,
+                        self.tick,
+                    );
+                    continue;
+                }
+                BoardEvent::Set(id) => id,
+                _ => continue,
             };
             if (id.endpoint(), id.entity(), id.tag())
                 != (
@@ -548,8 +694,8 @@ impl ServedState {
                 .engine
                 .store()
                 .read::<icub_eth::entities::skin::SkinTrianglesConfig>(id);
-            if let (Ok(cfg), Some(addrs)) = (cfg, self.spec.skin_patches.get(p)) {
-                self.skin.apply(p, addrs, &cfg);
+            if let (Ok(cfg), Some(addrs)) = (cfg, self.learned.skin_patches.get(p)) {
+                self.learned.skin.apply(p, addrs, &cfg);
             }
         }
     }
@@ -566,8 +712,7 @@ impl ServedState {
             self.tick += 1;
             update_sensors(
                 &mut self.engine,
-                &self.spec,
-                &self.skin,
+                &self.learned,
                 now.as_secs_f64(),
                 now.as_micros() as u64,
                 self.tick,
@@ -636,14 +781,13 @@ pub fn wake_stats() -> (u64, u64, u64, u64, u64) {
     )
 }
 
-fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
+fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>, epoch: Instant) {
     // A board keeps its period in firmware; here the thread asks for real-time
     // scheduling like the host's receiver (best effort: refused without the capability).
     yarp_net::realtime::try_fifo_current_thread(
         "eth boards",
         yarp_net::realtime::ETH_RECEIVER_PRIORITY,
     );
-    let epoch = Instant::now();
     let mut buf = vec![0u8; 65536];
     let mut poller = Poller::new(boards.iter().map(|b| &b.socket));
     while !stop.load(Ordering::Relaxed) {
@@ -664,7 +808,7 @@ fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>) {
         let woke = Instant::now();
         for (i, b) in boards.iter_mut().enumerate() {
             if poller.readable(i) {
-                b.receive(&mut buf);
+                b.receive(&mut buf, epoch);
             }
         }
         for b in &mut boards {

@@ -10,7 +10,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use icub_emulators::eth::{robot_boards, serve};
-use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use icub_emulators::eth::{AddressMap, ADDRESS_MAP_ENV};
 use icubmod::eth::{EmbObjImu, EmbObjMotionControl, EmbObjMultipleFtSensors};
 use yarp_devices::robotinterface::read_robot_file;
 use yarp_devices::vocabs::CM_POSITION;

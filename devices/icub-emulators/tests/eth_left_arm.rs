@@ -17,7 +17,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use icub_emulators::eth::{robot_boards, serve};
-use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use icub_emulators::eth::{AddressMap, ADDRESS_MAP_ENV};
 use icubmod::eth::{EmbObjFtSensor, EmbObjMais, EmbObjMotionControl};
 use yarp_devices::interfaces::CalibrationParameters;
 use yarp_devices::robotinterface::read_robot_file;

@@ -11,9 +11,9 @@ use std::process::Command;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
+use icub_emulators::eth::AddressMap;
 use icub_emulators::eth::{robot_boards, serve};
 use icub_eth::entities::mn::{versions, Version};
-use icubmod::eth::params::AddressMap;
 use icubmod::eth::EmbObjMotionControl;
 use yarp_devices::robotinterface::read_robot_file;
 use yarp_devices::DeviceDriver;
@@ -40,7 +40,7 @@ fn left_arm_on_the_robots_own_addresses_and_a_protocol_mismatch() {
     for ip in ["10.0.1.104", "10.0.1.1", "10.0.1.2", "10.0.1.3"] {
         assert!(add_address(ip), "ip addr add {ip}/24 dev lo");
     }
-    std::env::remove_var(icubmod::eth::params::ADDRESS_MAP_ENV);
+    std::env::remove_var(icub_emulators::eth::ADDRESS_MAP_ENV);
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/robots-configuration/iCubGenova02");
     let top = dir.join("icub_all.xml");

@@ -157,6 +157,14 @@ pub enum BoardEvent {
     },
     /// A `set` of a variable the board owns (sensor configs and enables included).
     Set(Id32),
+    /// A `verifyactivate` that succeeded, with the service's configuration
+    /// (`eOmn_serv_config_data_t`): what the host says is behind the board (the inertial
+    /// sensors and their CAN boards, the skin patches' MTBs, ...), for the owner to model.
+    Verified {
+        category: u8,
+        service_type: u8,
+        config: Vec<u8>,
+    },
 }
 
 /// Makes the joint model of a joint created by a service configuration.
@@ -592,6 +600,11 @@ impl BoardEngine {
                         if cat == category::MC {
                             self.activate_mc();
                         }
+                        self.push_event(BoardEvent::Verified {
+                            category: cat,
+                            service_type: stype,
+                            config: cmd.config_data().to_vec(),
+                        });
                     }
                     Some(i) => {
                         self.services[i] = ServiceState::FailureOfVerify;

@@ -12,9 +12,11 @@
 //! | [`host`] | [`host::HostTransceiver`]: what `embObj*` devices use (asks with signatures and timeouts, sets, commands, regulars, presence, sequence checks) and [`host::Startup`], the board bring-up sequence of `EthResource` |
 //! | [`board`] | [`board::BoardEngine`]: a board as the emulator runs it (management, services, regulars at the configured rate, MC/AS/SK variables) |
 //! | [`plant`] | the pluggable joint model ([`plant::JointModel`]) the board engine drives |
+//! | [`addressmap`] | [`AddressMap`]: the robot's board addresses served elsewhere (`YARP_ICUB_ETH_ADDRESS_MAP`), as host and emulator both apply it |
 //!
 //! See the crate's README.md for the wire layouts, the start-up sequence and its timeouts.
 
+pub mod addressmap;
 pub mod board;
 pub mod entities;
 pub mod frame;
@@ -25,6 +27,7 @@ pub mod plant;
 pub mod rop;
 pub mod wire;
 
+pub use addressmap::{AddressMap, ADDRESS_MAP_ENV};
 pub use frame::{decode_datagram, Frame, FrameBuilder, FrameError, FrameHeader};
 pub use id::Id32;
 pub use nvstore::{NvError, NvStore};

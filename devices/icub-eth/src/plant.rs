@@ -90,6 +90,10 @@ pub const DEFAULT_TRAJECTORY_SPEED: f64 = 10.0 * 65536.0 / 360.0;
 /// host's external measure (0 until one comes). The motor is at [`MOTOR_TEMPERATURE`]. It starts `notConfigured` and goes idle when configured,
 /// as the boards do; calibration lasts [`CALIBRATION_TIME`] and ends in position control
 /// holding the pose.
+///
+/// A joint physically sits inside its mechanical range: while it has not moved, a joint
+/// configuration clamps its position into the hardware limits it carries (a joint made at
+/// raw 0 whose range excludes 0 starts at the nearest end of its range).
 #[derive(Debug, Clone)]
 pub struct SimpleJoint {
     q: f64,
@@ -109,6 +113,9 @@ pub struct SimpleJoint {
     torque: f64,
     torque_reference: f64,
     external_torque: f64,
+    /// Whether the joint has moved since it was made (then a configuration no longer
+    /// places it inside its hardware limits).
+    moved: bool,
 }
 
 impl SimpleJoint {
@@ -131,6 +138,7 @@ impl SimpleJoint {
             torque: 0.0,
             torque_reference: 0.0,
             external_torque: 0.0,
+            moved: false,
         }
     }
 
@@ -154,6 +162,20 @@ impl JointModel for SimpleJoint {
     fn configure(&mut self, config: &JointConfig) {
         let (a, b) = (config.user_limits.min, config.user_limits.max);
         self.limits = (a < b).then_some((f64::from(a), f64::from(b)));
+        // the hardware limits in raw units, whichever way the encoder counts (a negative
+        // encoder factor gives min > max); none when both are 0
+        let (h0, h1) = (
+            f64::from(config.hardware_limits.min),
+            f64::from(config.hardware_limits.max),
+        );
+        if !self.moved && (h0 != 0.0 || h1 != 0.0) {
+            let q = self.q.clamp(h0.min(h1), h0.max(h1));
+            if q != self.q {
+                self.q = q;
+                self.reference = q;
+                self.target = q;
+            }
+        }
         if self.mode == control_mode::NOT_CONFIGURED {
             self.mode = control_mode::IDLE;
         }
@@ -286,6 +308,7 @@ impl JointModel for SimpleJoint {
         if tracking {
             self.q = self.clamp(self.q + (self.reference - self.q) * k);
         }
+        self.moved |= self.q != q0;
         self.qd = (self.q - q0) / dt;
         self.qdd = (self.qd - qd0) / dt;
     }
@@ -308,5 +331,60 @@ impl JointModel for SimpleJoint {
             current: self.current,
             temperature: MOTOR_TEMPERATURE,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::entities::mc::PositionLimits;
+
+    fn config(hw: (i32, i32), user: (i32, i32)) -> JointConfig {
+        JointConfig {
+            hardware_limits: PositionLimits {
+                min: hw.0,
+                max: hw.1,
+            },
+            user_limits: PositionLimits {
+                min: user.0,
+                max: user.1,
+            },
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_joint_starts_inside_its_hardware_limits() {
+        // a range that excludes 0: the nearest end
+        let mut j = SimpleJoint::new(0.0);
+        j.configure(&config((1000, 5000), (2000, 4000)));
+        assert_eq!(j.feedback().position, 1000.0);
+        assert_eq!(j.feedback().reference, 1000.0);
+        // a negative encoder factor gives min > max: the same range
+        let mut j = SimpleJoint::new(0.0);
+        j.configure(&config((-1000, -5000), (-2000, -4000)));
+        assert_eq!(j.feedback().position, -1000.0);
+        // a range with 0 inside, or no hardware limits: it stays
+        let mut j = SimpleJoint::new(0.0);
+        j.configure(&config((-1000, 5000), (0, 0)));
+        assert_eq!(j.feedback().position, 0.0);
+        j.configure(&config((0, 0), (0, 0)));
+        assert_eq!(j.feedback().position, 0.0);
+    }
+
+    #[test]
+    fn a_moved_joint_is_not_placed_again() {
+        let mut j = SimpleJoint::new(0.0);
+        j.configure(&config((-10_000, 10_000), (-10_000, 10_000)));
+        j.set_control_mode(control_mode::POSITION);
+        j.setpoint(&Setpoint::PositionRaw { value: 5000 });
+        for _ in 0..100 {
+            j.step(0.01);
+        }
+        let at = j.feedback().position;
+        assert!(at > 4000.0, "{at}");
+        // new limits that exclude where it is: a configuration does not teleport it
+        j.configure(&config((6000, 9000), (-10_000, 10_000)));
+        assert_eq!(j.feedback().position, at);
     }
 }

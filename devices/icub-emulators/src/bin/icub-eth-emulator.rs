@@ -1,23 +1,43 @@
 //! `icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN]
-//! [--xsens PATH]`: emulates every Ethernet board of a robots-configuration robot
-//! directory, each on its own `IpAddress:12345` UDP socket. The address map (also
+//! [--xsens PATH] [--record DIR]`: emulates every Ethernet board of a robots-configuration
+//! robot directory, each on its own `IpAddress:12345` UDP socket. The address map (also
 //! `YARP_ICUB_ETH_ADDRESS_MAP`) serves the robot's addresses elsewhere, e.g.
 //! `10.0.1.0/24=127.0.1.0/24` on a laptop without the robot's addresses; the devices must
 //! use the same map. `--xsens PATH` also emulates an Xsens MTi (the ergoCub waist IMU,
 //! `xsensmt`) on a pseudo-terminal linked at PATH (name it in `YARP_ICUB_XSENS_SERIAL`).
-//! SIGINT or SIGTERM stops it (exit 0; the `--xsens` link is removed).
+//! `--record DIR` appends every ROP a host sends to a board, from its first datagram on,
+//! to `DIR/<board's robot IP>.jsonl`, one JSON object a line (`t` in seconds since the
+//! boards began serving, `ropcode`, `id32`, `data` in hex, the frame's `seq`/`age`, the
+//! ROP's `ctrl`, `signature`, `time`: see `icub_emulators::eth::record`), flushed after
+//! each datagram. SIGINT or SIGTERM stops it (exit 0; the `--xsens` link is removed).
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use icub_emulators::eth::{robot_boards, serve};
-use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use icub_emulators::eth::{robot_boards, serve_with, AddressMap, ServeOptions, ADDRESS_MAP_ENV};
+
+const HELP: &str = "usage: icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN] [--xsens PATH] [--record DIR]
+
+Emulates every Ethernet board of a robots-configuration robot directory, each on its own
+IpAddress:IpPort UDP socket (hardware/electronics/*-eln.xml); a board learns its sensors
+and running cycle from the host's service configurations, as a real one.
+
+  --config FILE.xml     the robot's top-level file (default: yarprobotinterface.ini's config)
+  --address-map MAP     serve the robot's addresses elsewhere, e.g. 10.0.1.0/24=127.0.1.0/24
+                        (default: $YARP_ICUB_ETH_ADDRESS_MAP); the devices must use the same
+  --xsens PATH          also emulate an Xsens MTi on a pseudo-terminal linked at PATH
+  --record DIR          append every ROP a host sends to a board (from its first datagram)
+                        to DIR/<board's robot IP>.jsonl, one JSON object a line:
+                        {\"t\": seconds since the boards began serving, \"from\", \"seq\", \"age\",
+                         \"ropcode\", \"rop\", \"id32\": \"0x........\", \"ep\", \"entity\", \"index\",
+                         \"tag\", \"ctrl\", \"rqstconf\", \"rqsttime\", [\"signature\"], [\"time\"],
+                         \"data\": \"hex\"}; flushed after each datagram
+
+SIGINT or SIGTERM stops it (exit 0).";
 
 fn usage() -> ! {
-    eprintln!(
-        "usage: icub-eth-emulator ROBOT_DIR [--config FILE.xml] [--address-map FROM/LEN=TO/LEN] [--xsens PATH]"
-    );
+    eprintln!("{HELP}");
     std::process::exit(2)
 }
 
@@ -33,12 +53,17 @@ fn main() {
     let mut top: Option<PathBuf> = None;
     let mut map_text = std::env::var(ADDRESS_MAP_ENV).unwrap_or_default();
     let mut xsens: Option<PathBuf> = None;
+    let mut options = ServeOptions::default();
     while let Some(a) = args.next() {
         match a.as_str() {
             "--xsens" => xsens = Some(args.next().unwrap_or_else(|| usage()).into()),
             "--config" => top = Some(args.next().unwrap_or_else(|| usage()).into()),
             "--address-map" => map_text = args.next().unwrap_or_else(|| usage()),
-            "-h" | "--help" => usage(),
+            "--record" => options.record = Some(args.next().unwrap_or_else(|| usage()).into()),
+            "-h" | "--help" => {
+                println!("{HELP}");
+                std::process::exit(0)
+            }
             _ if dir.is_none() => dir = Some(a.into()),
             _ => usage(),
         }
@@ -73,25 +98,26 @@ fn main() {
             }
         }
     });
-    let (served, threads) = serve(specs, &map, stop).unwrap_or_else(|e| {
+    let (served, threads) = serve_with(specs, &map, stop, &options).unwrap_or_else(|e| {
         eprintln!("icub-eth-emulator: {e}");
         std::process::exit(1)
     });
     for b in &served {
         let s = &b.spec;
+        let users = if s.users.is_empty() {
+            String::new()
+        } else {
+            format!(", for {}", s.users.join(", "))
+        };
         println!(
-            "board {} {} at {} ({} joints{}{}{}{}{}{}{})",
-            s.params.name,
-            s.params.type_name,
-            b.local,
-            s.joints.len(),
-            if s.strains > 0 { ", strain" } else { "" },
-            if s.fts > 0 { ", ft" } else { "" },
-            if s.maises > 0 { ", mais" } else { "" },
-            if s.inertials3 > 0 { ", inertials" } else { "" },
-            if s.skins > 0 { ", skin" } else { "" },
-            if s.poses > 0 { ", pos" } else { "" },
-            if s.batteries > 0 { ", battery" } else { "" },
+            "board {} {} at {} ({} joints{users})",
+            s.params.name, s.params.type_name, b.local, s.joints,
+        );
+    }
+    if let Some(d) = &options.record {
+        println!(
+            "icub-eth-emulator: recording the hosts' ROPs in {}",
+            d.display()
         );
     }
     println!("icub-eth-emulator: serving {} boards", served.len());

@@ -11,7 +11,7 @@ use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
 use icub_emulators::eth::{robot_boards, serve};
-use icubmod::eth::params::{AddressMap, ADDRESS_MAP_ENV};
+use icub_emulators::eth::{AddressMap, ADDRESS_MAP_ENV};
 use yarp_devices::robotinterface::{read_robot_file, ActionPhase, RobotRunner};
 use yarp_proto::Property;
 

@@ -3,6 +3,27 @@
 
 use crate::wire::{Entity, Reader, Writer};
 
+/// `eOas_sensor_t` (`EoAnalogSensors.h`): the kind of a reading (`type_of_sensor` of
+/// [`Inertial3Data`], [`TemperatureData`] and the sensor descriptors of the services).
+pub mod sensor_type {
+    pub const ACCEL_MTB_INT: u8 = 2;
+    pub const ACCEL_MTB_EXT: u8 = 3;
+    pub const GYROS_MTB_EXT: u8 = 4;
+    pub const ACCEL_ST_LIS3X: u8 = 5;
+    /// The Ethernet board's own gyroscope: its readings are known by their type alone.
+    pub const GYROS_ST_L3G4200D: u8 = 6;
+    pub const IMU_ACC: u8 = 7;
+    pub const IMU_MAG: u8 = 8;
+    pub const IMU_GYR: u8 = 9;
+    pub const IMU_EUL: u8 = 10;
+    pub const IMU_QUA: u8 = 11;
+    pub const IMU_LIA: u8 = 12;
+    pub const IMU_GRV: u8 = 13;
+    pub const IMU_STATUS: u8 = 14;
+    /// `eoas_temperature_t1`: a strain2's temperature.
+    pub const TEMPERATURE_T1: u8 = 15;
+}
+
 /// An `EOarray` of at most `N` bytes of items (`eOas_arrayofupto12bytes_t` and
 /// `eOas_arrayofupto36bytes_t`): head (capacity, itemsize, size, internalmem) + data.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

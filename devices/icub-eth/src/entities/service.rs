@@ -588,7 +588,14 @@ pub fn entities_for_service(cat: u8, service_type_: u8, data: &[u8]) -> Vec<(u8,
                 (ep::MOTION_CONTROL, en::MC_CONTROLLER, u8::from(n > 0)),
             ]
         }
-        category::STRAIN => one(en::AS_STRAIN, 1),
+        // A board with a strain has the temperature variables of the strain2's sensor
+        // too: the host sets the temperature config right after verifying the strain
+        // (icub-main's `embObjFTsensor::sendConfig2Strain`), with or without a
+        // temperatures service.
+        category::STRAIN => vec![
+            (ep::ANALOG_SENSORS, en::AS_STRAIN, 1),
+            (ep::ANALOG_SENSORS, en::AS_TEMPERATURE, 1),
+        ],
         category::MAIS => one(en::AS_MAIS, 1),
         category::TEMPERATURES => one(en::AS_TEMPERATURE, 1),
         category::INERTIALS3 => one(en::AS_INERTIAL3, 1),

@@ -575,19 +575,7 @@ impl ITemperatureSensors for EmbObjMultipleFtSensors {
 
 /// `eOas_sensor_t` of the inertial sensors.
 pub mod sensor_type {
-    pub const ACCEL_MTB_INT: u8 = 2;
-    pub const ACCEL_MTB_EXT: u8 = 3;
-    pub const GYROS_MTB_EXT: u8 = 4;
-    pub const ACCEL_ST_LIS3X: u8 = 5;
-    pub const GYROS_ST_L3G4200D: u8 = 6;
-    pub const IMU_ACC: u8 = 7;
-    pub const IMU_MAG: u8 = 8;
-    pub const IMU_GYR: u8 = 9;
-    pub const IMU_EUL: u8 = 10;
-    pub const IMU_QUA: u8 = 11;
-    pub const IMU_LIA: u8 = 12;
-    pub const IMU_GRV: u8 = 13;
-    pub const IMU_STATUS: u8 = 14;
+    pub use icub_eth::entities::analog::sensor_type::*;
 
     /// The `eoas_*` names of `SENSORS/type`.
     pub fn from_name(s: &str) -> Option<u8> {
