@@ -141,18 +141,27 @@ pub fn bring_up(b: BringUp<'_>) -> Option<Robot> {
         .expect("the robot's addresses");
     let conf = tempfile::tempdir().expect("temp dir");
     let net = RobotNet { ns, conf, bin };
-    let out = net
-        .cpp("yarp")
-        .args(["conf", "127.0.0.1", "10000"])
-        .output()
-        .expect("C++ yarp conf");
-    assert!(out.status.success(), "C++ yarp conf: {out:?}");
+    // a fresh namespace: every port is free; `--write` makes the network's yarp.conf
     let mut server = Proc::spawn("C++ yarpserver", {
         let mut c = net.cpp("yarpserver");
-        c.args(["--ip", "127.0.0.1", "--socket", "10000"]);
+        c.args(["--ip", "127.0.0.1", "--socket", "10000", "--write"]);
         c
     });
-    server.wait_line("Ok. Ready!", STEP);
+    // its "Ok. Ready!" may sit in stdio's buffer of a pipe: ask the network instead
+    let end = Instant::now() + STEP;
+    while !net
+        .cpp("yarp")
+        .args(["exists", "/root"])
+        .output()
+        .is_ok_and(|o| o.status.success())
+    {
+        assert!(
+            Instant::now() < end,
+            "C++ yarpserver not reachable within {STEP:?}: {}",
+            server.drain().join("\n")
+        );
+        std::thread::sleep(Duration::from_millis(200));
+    }
 
     let mut emulator = Proc::spawn("icub-eth-emulator", {
         let mut c = net.ours("icub-eth-emulator", "icub-emulators");
@@ -184,8 +193,14 @@ pub fn bring_up(b: BringUp<'_>) -> Option<Robot> {
             c
         }),
     };
-    host.wait_line("startup phase finished.", STARTUP);
+    wait_phase(&mut host, "startup");
     let startup = start.elapsed();
+    if let Some(dir) = std::env::var_os("HOSTS_TEST_LOG") {
+        let _ = std::fs::write(
+            std::path::Path::new(&dir).join(format!("{}-{:?}.log", b.test, b.host)),
+            host.seen.join("\n"),
+        );
+    }
     eprintln!("{}: {:?} host calibrated in {startup:?}", b.test, b.host);
     Some(Robot {
         host,
@@ -194,6 +209,36 @@ pub fn bring_up(b: BringUp<'_>) -> Option<Robot> {
         net,
         startup,
     })
+}
+
+/// Waits (at most [`STARTUP`]) until `host` says "PHASE phase finished." (C++ and ours say
+/// it alike); panics with what it printed if it says it failed or exits first.
+pub fn wait_phase(host: &mut Proc, phase: &str) {
+    let done = format!(" {phase} phase finished.");
+    let end = Instant::now() + STARTUP;
+    loop {
+        let left = end.saturating_duration_since(Instant::now());
+        let line = host.try_wait_line("phase", left.min(Duration::from_millis(500)));
+        match line {
+            Some(l) if l.ends_with(&done) && !l.contains("action level") => return,
+            Some(l) if l.contains(&format!("Error in {phase} phase")) => {
+                panic!("{l}; the host printed:\n{}", host.seen.join("\n"))
+            }
+            _ => {}
+        }
+        if let Ok(Some(status)) = host.child.try_wait() {
+            let _ = host.try_wait_line("\u{0}", Duration::from_millis(300));
+            panic!(
+                "the host exited ({status}) before its {phase} phase finished:\n{}",
+                host.seen.join("\n")
+            );
+        }
+        assert!(
+            Instant::now() < end,
+            "the host's {phase} phase did not finish within {STARTUP:?}:\n{}",
+            host.seen.join("\n")
+        );
+    }
 }
 
 impl Robot {
@@ -231,7 +276,7 @@ impl Robot {
         let _ = Command::new("kill")
             .args(["-INT", &pid.to_string()])
             .status();
-        self.host.wait_line("shutdown phase finished.", STARTUP);
+        wait_phase(&mut self.host, "shutdown");
         let end = Instant::now() + STEP;
         while self.host.child.try_wait().ok().flatten().is_none() {
             assert!(
@@ -245,7 +290,9 @@ impl Robot {
 
 /// A copy of ergoCubSN001 without the lines of `ergocub.xml` that include its waist Xsens
 /// MTi (`xsensmt`) and `wholebodydynamics`: both come from repositories `../shared/peers`
-/// does not build. Everything else is the robot's own.
+/// does not build. The devices that attach to the waist IMU go with it (its wrapper, and
+/// the all-joints inertials remapper with its wrapper, which name `waist-inertial`).
+/// Everything else is the robot's own.
 pub fn ergocub_without_xsens_and_wbd() -> (tempfile::TempDir, PathBuf) {
     let src = robots().join("ergoCubSN001");
     let copy = tempfile::tempdir().expect("temp dir");
@@ -262,6 +309,8 @@ pub fn ergocub_without_xsens_and_wbd() -> (tempfile::TempDir, PathBuf) {
     let dropped = [
         "hardware/inertials/waist-inertial.xml",
         "wrappers/inertials/waist-inertials_wrapper.xml",
+        "wrappers/inertials/alljoints-inertials_wrapper.xml",
+        "wrappers/inertials/alljoints-inertials_remapper.xml",
         "estimators/wholebodydynamics.xml",
     ];
     let kept: Vec<&str> = text
