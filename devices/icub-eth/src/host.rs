@@ -815,17 +815,20 @@ impl Startup {
             set_number: 0,
             set_size: 0,
         };
-        steps.push_back((
-            "verifyEPprotocol".to_string(),
-            Op::Command {
-                cmd: ids::COMM_QUERY_ARRAY,
-                data: q.to_bytes(),
-                reply: ids::COMM_REPLY_ARRAY,
-                timeout: ms(100),
-                times: 1,
-            },
-            Check::Endpoints(eps),
-        ));
+        // C++ asks the endpoints only when a service needs them (verifyEPprotocol)
+        if !eps.is_empty() {
+            steps.push_back((
+                "verifyEPprotocol".to_string(),
+                Op::Command {
+                    cmd: ids::COMM_QUERY_ARRAY,
+                    data: q.to_bytes(),
+                    reply: ids::COMM_REPLY_ARRAY,
+                    timeout: ms(100),
+                    times: 1,
+                },
+                Check::Endpoints(eps),
+            ));
+        }
         for sp in services {
             let name = service_name(sp.category);
             let act = sp.activate.clone().unwrap_or_else(|| {

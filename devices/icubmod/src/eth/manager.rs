@@ -112,6 +112,9 @@ pub struct Board {
     changed: Condvar,
     /// Serialises the bring-up.
     bring_up_lock: Mutex<()>,
+    /// The endpoints whose protocol version the board has confirmed, one bit each
+    /// (`EthResource::verifiedEPprotocol[]`: asked once per endpoint and board).
+    verified_endpoints: std::sync::atomic::AtomicU32,
 }
 
 impl Board {
@@ -126,6 +129,21 @@ impl Board {
 
     fn now(&self) -> Duration {
         self.epoch.elapsed()
+    }
+
+    /// Whether the board has confirmed the protocol version of `endpoint`.
+    pub fn endpoint_verified(&self, endpoint: u8) -> bool {
+        use std::sync::atomic::Ordering;
+        endpoint < 32 && self.verified_endpoints.load(Ordering::Acquire) & (1 << endpoint) != 0
+    }
+
+    /// Notes that the board confirmed the protocol version of `endpoint`.
+    pub fn set_endpoint_verified(&self, endpoint: u8) {
+        use std::sync::atomic::Ordering;
+        if endpoint < 32 {
+            self.verified_endpoints
+                .fetch_or(1 << endpoint, Ordering::AcqRel);
+        }
     }
 
     fn lock(&self) -> MutexGuard<'_, Inner> {
@@ -625,6 +643,7 @@ impl EthManager {
                     inbox: Mutex::default(),
                     changed: Condvar::new(),
                     bring_up_lock: Mutex::new(()),
+                    verified_endpoints: std::sync::atomic::AtomicU32::new(0),
                 })
             })
             .clone()

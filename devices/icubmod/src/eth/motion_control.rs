@@ -27,7 +27,7 @@ use icub_eth::entities::mc::{
     Setpoint,
 };
 use icub_eth::entities::mn::{category, ServiceCommand};
-use icub_eth::id::{ids, tag};
+use icub_eth::id::{endpoint as ep, entity as en, ids, tag};
 use icub_eth::{Entity, Id32};
 use yarp_devices::interfaces::*;
 use yarp_devices::sensors::virtual_analog::{IVirtualAnalogSensor, VasStatus};
@@ -501,6 +501,21 @@ impl EmbObjMotionControl {
                 &self.mconfig[j].to_bytes(),
             )?;
         }
+        // eOmc_controller_config_t: the control loop's duration (the board's cycle, µs)
+        // and whether the board may skip recalibration (MAINTENANCE/skipRecalibration)
+        let mut controller = board.params().appl.cycletime.to_le_bytes().to_vec();
+        controller.resize(4, 0);
+        controller.extend_from_slice(&[u8::from(self.skip_recalibration), 0, 0, 0]);
+        service::setcheck(
+            board,
+            Id32::new(
+                ep::MOTION_CONTROL,
+                en::MC_CONTROLLER,
+                0,
+                tag::MC_CONTROLLER_CONFIG,
+            ),
+            &controller,
+        )?;
         service::start(board, category::MC)
     }
 
@@ -912,11 +927,16 @@ impl IControlLimits for EmbObjMotionControl {
         self.jconfig[j].user_limits = lim;
         Ok(())
     }
+    /// C++ `getLimitsRaw`: the user limits asked of the board, 2 raw units inside them
+    /// (`SAFETY_THRESHOLD`).
     fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        self.phys(j)?;
+        const SAFETY_THRESHOLD: f64 = 2.0;
+        let l: PositionLimits = self.ask(self.joint_id(j, tag::MC_JOINT_CONFIG_USERLIMITS)?)?;
         let a2e = self.a2e(j);
-        let l = self.jconfig[j].user_limits;
-        Ok((f64::from(l.min) / a2e, f64::from(l.max) / a2e))
+        Ok((
+            (f64::from(l.min) + SAFETY_THRESHOLD) / a2e,
+            (f64::from(l.max) - SAFETY_THRESHOLD) / a2e,
+        ))
     }
     fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
         self.phys(j)?;
@@ -1359,8 +1379,9 @@ impl IControlCalibration for EmbObjMotionControl {
     /// C++ `calibrationDoneRaw`: done once the joint left calibration for a working
     /// mode; idle counts only with `MAINTENANCE/skipRecalibration`, and a joint in
     /// hardware fault, not configured, configured or in error has not calibrated.
+    /// The mode is the board's regular status (C++ `getLocalValue`), not asked.
     fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
-        let m = self.ask_u8(j, tag::MC_JOINT_STATUS_CORE_MODES_CONTROLMODESTATUS)?;
+        let m = self.core(j)?.control_mode;
         Ok(match m {
             cm::IDLE => self.skip_recalibration,
             cm::CALIB => false,

@@ -111,31 +111,14 @@ pub fn read_eth_board(config: &Property) -> Result<EthBoardParams, ParamError> {
         .string("Name")
         .filter(|n| !n.is_empty())
         .unwrap_or_else(|| "NOT-NAMED".into());
-    let mut appl = ApplConfig::default();
+    // icub-main's eth::parser: the defaults of boardSettings (synchronized, no logging)
+    // unless RUNNINGMODE is given, whose values are checked and mended as C++ does.
+    let mut appl = ApplConfig {
+        runnermode: RUNNERMODE_SYNCHRONIZED,
+        ..ApplConfig::default()
+    };
     if let Some(rm) = settings.group("RUNNINGMODE") {
-        let get = |k: &str, d: u16| -> Result<u16, ParamError> {
-            Ok(rm.number(k)?.map_or(d, |v| v as u16))
-        };
-        appl.cycletime = get("period", appl.cycletime)?;
-        appl.safetygap = get("safetygap", appl.safetygap)?;
-        appl.maxtime_rx = get("maxTimeOfRXactivity", appl.maxtime_rx)?;
-        appl.maxtime_do = get("maxTimeOfDOactivity", appl.maxtime_do)?;
-        appl.maxtime_tx = get("maxTimeOfTXactivity", appl.maxtime_tx)?;
-        if let Some(r) = rm.number("TXrateOfRegularROPs")? {
-            appl.txratedivider = (r as i64).clamp(1, 20) as u8;
-        }
-        let sum =
-            u32::from(appl.maxtime_rx) + u32::from(appl.maxtime_do) + u32::from(appl.maxtime_tx);
-        if sum != u32::from(appl.cycletime) {
-            tracing::warn!(
-                board = %ip,
-                "ETH_BOARD_SETTINGS::RUNNINGMODE sum(maxTimeOfRXactivity, maxTimeOfDOactivity, maxTimeOfTXactivity) != period: using default values"
-            );
-            appl.cycletime = 1000;
-            appl.maxtime_rx = 400;
-            appl.maxtime_do = 300;
-            appl.maxtime_tx = 300;
-        }
+        read_running_mode(&rm, &mut appl, ip)?;
     }
     let mut presence_timeout = Some(Duration::from_millis(20));
     let mut missing_report_period = Duration::from_secs(60);
@@ -162,6 +145,139 @@ pub fn read_eth_board(config: &Property) -> Result<EthBoardParams, ParamError> {
         presence_timeout,
         missing_report_period,
     })
+}
+
+/// `eomn_appl_runnermode_synchronized`.
+const RUNNERMODE_SYNCHRONIZED: u8 = 1;
+/// `eomn_appl_runnermode_besteffort`.
+const RUNNERMODE_BESTEFFORT: u8 = 0;
+
+/// `ETH_BOARD_SETTINGS/RUNNINGMODE` as icub-main's `eth::parser::read` takes it: the period
+/// is 1000 µs whatever is written, out-of-range activity times fall back to their
+/// defaults, the regulars' rate to 1 (<= 0) or 20 (> 200), a sum of activities other than
+/// the period to the defaults; `execution` picks the runner's mode; `LOGGING` the board's
+/// logs (by default only the RX-DO-TX overflow, as C++).
+fn read_running_mode(rm: &Node<'_>, appl: &mut ApplConfig, ip: Ipv4Addr) -> Result<(), ParamError> {
+    appl.runnermode = match rm.string("execution").as_deref() {
+        Some("besteffort") => RUNNERMODE_BESTEFFORT,
+        None | Some("synchronized") => RUNNERMODE_SYNCHRONIZED,
+        Some(other) => {
+            tracing::warn!(board = %ip, "ETH_BOARD_SETTINGS::RUNNINGMODE::execution has unknown value '{other}', defaulting to 'synchronized'");
+            RUNNERMODE_SYNCHRONIZED
+        }
+    };
+    if let Some(p) = rm.number("period")? {
+        if p as i64 != 1000 {
+            tracing::warn!(board = %ip, "ETH_BOARD_SETTINGS::RUNNINGMODE::period can be only 1000 (so far) and it was: {p}");
+        }
+        appl.cycletime = 1000;
+    }
+    if let Some(g) = rm.number("safetygap")? {
+        appl.safetygap = g as u16;
+    }
+    let activity = |key: &str, default: u16| -> Result<Option<u16>, ParamError> {
+        Ok(rm.number(key)?.map(|v| {
+            let v = v as i64;
+            if (5..=990).contains(&v) {
+                v as u16
+            } else {
+                tracing::warn!(board = %ip, "ETH_BOARD_SETTINGS::RUNNINGMODE::{key} must be in [5, 990] (so far) and it was: {v}; using the default");
+                default
+            }
+        }))
+    };
+    if let Some(v) = activity("maxTimeOfRXactivity", 400)? {
+        appl.maxtime_rx = v;
+    }
+    if let Some(v) = activity("maxTimeOfDOactivity", 300)? {
+        appl.maxtime_do = v;
+    }
+    if let Some(v) = activity("maxTimeOfTXactivity", 300)? {
+        appl.maxtime_tx = v;
+    }
+    if let Some(r) = rm.number("TXrateOfRegularROPs")? {
+        let r = r as i64;
+        appl.txratedivider = if r <= 0 {
+            1
+        } else if r > 200 {
+            20
+        } else {
+            r as u8
+        };
+    }
+    let sum = u32::from(appl.maxtime_rx) + u32::from(appl.maxtime_do) + u32::from(appl.maxtime_tx);
+    if sum != u32::from(appl.cycletime) {
+        tracing::warn!(
+            board = %ip,
+            "ETH_BOARD_SETTINGS::RUNNINGMODE sum(maxTimeOfRXactivity, maxTimeOfDOactivity, maxTimeOfTXactivity) != period: using default values"
+        );
+        appl.cycletime = 1000;
+        appl.maxtime_rx = 400;
+        appl.maxtime_do = 300;
+        appl.maxtime_tx = 300;
+    }
+    // eOmn_appl_log_flags_t bits
+    const RXDOTX_OVERFLOW: u16 = 1 << 0;
+    const RXDOTX_MINAVGMAX: u16 = 1 << 1;
+    const PERIOD_OVERFLOW: u16 = 1 << 2;
+    const PERIOD_MINAVGMAX: u16 = 1 << 3;
+    const PERIOD_HISTOGRAM: u16 = 1 << 4;
+    // C++ takes a flag only where the value is a boolean (`Value::isBool`)
+    let boolean = |n: &Node<'_>, k: &str| match n.string(k).as_deref().map(str::trim) {
+        Some("true") => Some(true),
+        Some("false") => Some(false),
+        _ => None,
+    };
+    let mut flags = RXDOTX_OVERFLOW;
+    let mut period = 0.0;
+    if let Some(log) = rm.group("LOGGING") {
+        let set = |flags: &mut u16, bit: u16, on: Option<bool>| match on {
+            Some(true) => *flags |= bit,
+            Some(false) => *flags &= !bit,
+            None => {}
+        };
+        if let Some(imm) = log.group("IMMEDIATE") {
+            set(
+                &mut flags,
+                RXDOTX_OVERFLOW,
+                boolean(&imm, "emitRXDOTXoverflow"),
+            );
+            set(
+                &mut flags,
+                PERIOD_OVERFLOW,
+                boolean(&imm, "emitPERIODoverflow"),
+            );
+        }
+        if let Some(per) = log.group("PERIODIC") {
+            if let Some(p) = per.number("period")? {
+                period = p.clamp(0.0, 600.0);
+            }
+            // emitRXDOTXminavgmax is the newer name of emitRXDOTXstatistics and wins
+            set(
+                &mut flags,
+                RXDOTX_MINAVGMAX,
+                boolean(&per, "emitRXDOTXstatistics"),
+            );
+            set(
+                &mut flags,
+                RXDOTX_MINAVGMAX,
+                boolean(&per, "emitRXDOTXminavgmax"),
+            );
+            set(
+                &mut flags,
+                PERIOD_MINAVGMAX,
+                boolean(&per, "emitPERIODminavgmax"),
+            );
+            set(
+                &mut flags,
+                PERIOD_HISTOGRAM,
+                boolean(&per, "emitPERIODhistogram"),
+            );
+        }
+    }
+    appl.logging_flags = flags;
+    appl.logging_period10ms = (100.0 * period) as u16;
+    Ok(())
 }
 
 /// A service as `SERVICE/type` names it.

@@ -38,7 +38,7 @@ use yarp_proto::Property;
 use super::config::{text, Node, ParamError};
 use super::manager::{Board, EthManager};
 use super::params::{read_eth_board, read_pc104, read_service, ServiceKind};
-use super::service::{open_sensor, SensorService};
+use super::service::{open_sensor, SensorService, Write};
 use super::skin_spec::SkinSpec;
 
 fn now() -> f64 {
@@ -289,6 +289,7 @@ impl DeviceDriver for EmbObjFtSensor {
                     t.after_start = vec![(
                         ids::analog(en::AS_TEMPERATURE, 0, tag::AS_XX_CMMNDS_ENABLE),
                         vec![1],
+                        Write::Set,
                     )];
                     strain.companion = Some(Box::new(t));
                 }
@@ -498,9 +499,11 @@ impl DeviceDriver for EmbObjMultipleFtSensors {
                 service
                     .regulars
                     .push(ids::analog(en::AS_FT, i, tag::AS_FT_STATUS_TIMEDVALUE));
-                service
-                    .after_start
-                    .push((ids::analog(en::AS_FT, i, tag::AS_FT_CMMNDS_ENABLE), vec![1]));
+                service.after_start.push((
+                    ids::analog(en::AS_FT, i, tag::AS_FT_CMMNDS_ENABLE),
+                    vec![1],
+                    Write::SetCheck,
+                ));
             }
             Ok(service)
         })?;
@@ -805,9 +808,11 @@ impl DeviceDriver for EmbObjImu {
                     regulars: vec![ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_STATUS)],
                     prepare: None,
                     companion: None,
+                    before_start: Vec::new(),
                     after_start: vec![(
                         ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_CMMNDS_ENABLE),
                         vec![1],
+                        Write::Set,
                     )],
                 })
             })?;
@@ -1282,9 +1287,12 @@ impl DeviceDriver for EmbObjSkin {
                 icub_eth::entities::skin::sigmode::SIGNAL_OLDWAY
             };
             for p in 0..n as u8 {
-                service
-                    .configs
-                    .push((ids::skin(p, tag::SK_SKIN_CONFIG_SIGMODE), vec![mode]));
+                // C++ start(): setRemoteValue, after the regulars, before the service starts
+                service.before_start.push((
+                    ids::skin(p, tag::SK_SKIN_CONFIG_SIGMODE),
+                    vec![mode],
+                    Write::Set,
+                ));
                 service
                     .regulars
                     .push(ids::skin(p, tag::SK_SKIN_STATUS_ARRAYOFCANDATA));
@@ -1431,9 +1439,11 @@ impl DeviceDriver for EmbObjPos {
                 regulars: vec![ids::analog(en::AS_POS, 0, tag::AS_XX_STATUS)],
                 prepare: None,
                 companion: None,
+                before_start: Vec::new(),
                 after_start: vec![(
                     ids::analog(en::AS_POS, 0, tag::AS_XX_CMMNDS_ENABLE),
                     vec![1],
+                    Write::SetCheck,
                 )],
             })
         })?;
@@ -1494,9 +1504,11 @@ impl DeviceDriver for EmbObjBattery {
                 )],
                 prepare: None,
                 companion: None,
+                before_start: Vec::new(),
                 after_start: vec![(
                     ids::analog(en::AS_BATTERY, 0, tag::AS_BATTERY_CMMNDS_ENABLE),
                     vec![1],
+                    Write::SetCheck,
                 )],
             })
         })

@@ -45,8 +45,12 @@ fn service_name(category: u8) -> &'static str {
     N.get(usize::from(category)).copied().unwrap_or("unknown")
 }
 
-/// `EthResource::verifyEPprotocol(ep)`: the board's version of the endpoint must be ours.
+/// `EthResource::verifyEPprotocol(ep)`: the board's version of the endpoint must be ours;
+/// asked once per endpoint and board, as C++ keeps `verifiedEPprotocol[ep]`.
 pub fn verify_endpoint(board: &Board, endpoint: u8) -> Result<(), EthError> {
+    if board.endpoint_verified(endpoint) {
+        return Ok(());
+    }
     let q = QueryArray {
         opc: opc::QUERY_ARRAY_EPDES,
         endpoint: ep::ALL,
@@ -88,7 +92,10 @@ pub fn verify_endpoint(board: &Board, endpoint: u8) -> Result<(), EthError> {
             local,
             remote: d.version,
         })),
-        Some(_) => Ok(()),
+        Some(_) => {
+            board.set_endpoint_verified(endpoint);
+            Ok(())
+        }
         None => Err(EthError::Board {
             who: board.who(),
             reason: format!(
@@ -191,14 +198,27 @@ pub fn setcheck(board: &Board, id: Id32, data: &[u8]) -> Result<(), EthError> {
 /// configuration (embObjFTsensor asks its full scales there).
 pub type Prepare = Box<dyn Fn(&Board) -> Result<(), EthError> + Send>;
 
+/// How a device sends a value at start-up, as its C++ original does: `setRemoteValue`
+/// (sent once) or `setcheckRemoteValue` (sent, then asked back until the board has it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Write {
+    Set,
+    SetCheck,
+}
+
+/// A value sent to the board at start-up, with how.
+pub type Sent = (Id32, Vec<u8>, Write);
+
 /// What a sensor device needs to bring its service up in one go.
 pub struct SensorService {
     pub activate: ServiceCommand,
     pub prepare: Option<Prepare>,
     pub configs: Vec<(Id32, Vec<u8>)>,
     pub regulars: Vec<Id32>,
-    /// Sets after the start (e.g. `cmmnds enable`).
-    pub after_start: Vec<(Id32, Vec<u8>)>,
+    /// Sent after the regulars, before the start (embObjSkin's signal mode).
+    pub before_start: Vec<Sent>,
+    /// Sent after the start (e.g. `cmmnds enable`).
+    pub after_start: Vec<Sent>,
     /// A second service of the same device on the same board (embObjFTsensor's
     /// temperatures), brought up alongside, step by step, as C++ does.
     pub companion: Option<Box<SensorService>>,
@@ -211,6 +231,7 @@ impl SensorService {
             prepare: None,
             configs: Vec::new(),
             regulars: Vec::new(),
+            before_start: Vec::new(),
             after_start: Vec::new(),
             companion: None,
         }
@@ -224,7 +245,8 @@ impl SensorService {
 
 /// The open sequence of the `embObj*` sensor devices: board up, endpoint version, then
 /// for each service (the device's, then its companion) verify-activate; the device's
-/// preparation; configs; regulars; start and the sets that follow it.
+/// preparation; configs; regulars; what goes before the start, the start, and what
+/// follows it.
 pub fn open_sensor(board: &Arc<Board>, s: &SensorService) -> Result<(), EthError> {
     board.bring_up()?;
     verify_endpoint(board, endpoint_of(s.activate.category))?;
@@ -245,9 +267,18 @@ pub fn open_sensor(board: &Arc<Board>, s: &SensorService) -> Result<(), EthError
         }
     }
     for x in s.all() {
+        send(board, &x.before_start)?;
         start(board, x.activate.category)?;
-        for (id, data) in &x.after_start {
-            board.set(*id, data)?;
+        send(board, &x.after_start)?;
+    }
+    Ok(())
+}
+
+fn send(board: &Board, values: &[Sent]) -> Result<(), EthError> {
+    for (id, data, how) in values {
+        match how {
+            Write::Set => board.set(*id, data)?,
+            Write::SetCheck => setcheck(board, *id, data)?,
         }
     }
     Ok(())
