@@ -35,7 +35,7 @@ pub enum XmlError {
         path: PathBuf,
         source: std::io::Error,
     },
-    /// Not well-formed XML (roxmltree's message, with file and position).
+    /// Not well-formed XML, as TinyXML would refuse it (file and line of the fault).
     #[error("{file}:{line}: malformed XML: {message}")]
     Malformed {
         file: String,
