@@ -83,6 +83,15 @@ fn record(
     r.emulator.kill();
     let startup = r.startup;
     drop(r);
+    if let Some(keep) = std::env::var_os("HOSTS_TEST_LOG") {
+        let to = Path::new(&keep).join(format!("{test}-{host:?}"));
+        let _ = std::fs::remove_dir_all(&to);
+        let _ = std::process::Command::new("cp")
+            .arg("-r")
+            .arg(dir.path())
+            .arg(&to)
+            .status();
+    }
     Some((read_recording(dir.path()), startup))
 }
 
@@ -312,7 +321,7 @@ fn summary(rops: &[Rop]) -> String {
             if r.data.is_empty() {
                 r.ropcode.clone()
             } else {
-                format!("{} {}", r.ropcode, &r.data[..r.data.len().min(48)])
+                format!("{} {}", r.ropcode, &r.data[..r.data.len().min(200)])
             }
         })
         .collect::<Vec<_>>()
