@@ -328,6 +328,7 @@ impl IMultipleWrapper for CartesianControllerServer {
             })
             .collect::<DevResult<Vec<usize>>>()?;
         state.check_axes(&axes)?;
+        align_joints_bounds(cfg, &boards, &axes, state.links())?;
         let task = publish(state, boards, port.clone(), cfg.period, cfg.robot_timeout);
         self.stop_publishing();
         self.publisher = Some(runtime::handle().spawn(task));
@@ -338,6 +339,43 @@ impl IMultipleWrapper for CartesianControllerServer {
         self.stop_publishing();
         Ok(())
     }
+}
+
+/// C++ `alignJointsBounds`: the limits of every chain joint, asked of its part in the
+/// chain's order (each part's first joints, reversed where its `JointsOrder` says so; a
+/// failure fails the attach). They bound the solver's chain in C++; this build has none,
+/// but the parts are asked as C++ asks them (the boards answer what they were given).
+fn align_joints_bounds(
+    cfg: &CartesianConfig,
+    boards: &Boards,
+    axes: &[usize],
+    links: usize,
+) -> DevResult<()> {
+    let mut remaining = links;
+    let mut cnt = 0;
+    for ((desc, board), &n) in cfg.drivers.iter().zip(boards).zip(axes) {
+        let joints = n.min(remaining);
+        remaining -= joints;
+        let mut pd = board.lock().unwrap_or_else(|e| e.into_inner());
+        let limits = pd
+            .device()
+            .as_control_limits()
+            .ok_or(DeviceError::Unsupported(
+                "cartesiancontrollerserver: an attached device has no IControlLimits",
+            ))?;
+        for k in 0..joints {
+            let j = if desc.reversed { joints - k - 1 } else { k };
+            let (min, max) = limits.get_limits(j).map_err(|e| {
+                DeviceError::failed(NAME, format!("joint #{cnt}: failed getting limits! ({e})"))
+            })?;
+            tracing::debug!(
+                "{NAME}: part {}: joint #{cnt}: [{min}, {max}] deg",
+                desc.key
+            );
+            cnt += 1;
+        }
+    }
+    Ok(())
 }
 
 fn read_encoders(boards: &Boards) -> DevResult<Vec<Vec<f64>>> {

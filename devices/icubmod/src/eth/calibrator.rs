@@ -425,8 +425,12 @@ impl ParametricCalibratorEth {
                     )
                 })?;
                 original.push((j, limit));
+                // C++: no startup limit sets the original again (its result ignored), a
+                // lower one is set for the calibration
                 let safe = self.joints[j].startup_max_pwm;
-                if safe != 0.0 && safe < limit {
+                if safe == 0.0 {
+                    let _ = amp.set_pwm_limit(j, limit);
+                } else if safe < limit {
                     amp.set_pwm_limit(j, safe)?;
                 }
             }

@@ -47,8 +47,6 @@ pub const NAME: &str = "embObjMotionControl";
 
 /// How long an `ask` of a joint variable may take (`theNVmanager`'s default).
 const ASK_TIMEOUT: Duration = Duration::from_millis(500);
-/// How long `setControlMode` waits for the board to report the new mode.
-const MODE_TIMEOUT: Duration = Duration::from_millis(650);
 
 /// Whether the board runs joint `c`'s torque PID: torque control, or position control
 /// with compliant interaction (C++ reads the `ofpid` torque fields only then).
@@ -832,10 +830,13 @@ impl IControlMode for EmbObjMotionControl {
     fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
         Ok(mode_vocab(self.core(j)?.control_mode))
     }
-    /// Sends the command, then waits (0.65 s at most) for the board's status to report
-    /// it, as C++ `checkRemoteControlModeStatus` (which asks; the regular status is used
-    /// here, so that one lost reply on a loaded host does not fail the call).
+    /// Sends the command, then asks the board's control mode until it is the one asked
+    /// (C++ `checkRemoteControlModeStatus`: up to 25 asks 10 ms apart within 250 ms;
+    /// idle answers a forced idle, and a joint in hardware fault answers the call).
     fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
+        const TIMEOUT: Duration = Duration::from_millis(250);
+        const ATTEMPTS: usize = 25;
+        const GAP: Duration = Duration::from_millis(10);
         let m = vocab_mode(mode).ok_or(DeviceError::Unsupported(
             "control mode not available on embObj boards",
         ))?;
@@ -851,28 +852,31 @@ impl IControlMode for EmbObjMotionControl {
             m => m,
         };
         let start = Instant::now();
-        loop {
-            let now = self.core(j)?.control_mode;
-            // C++ checkRemoteControlModeStatus: a joint in hardware fault answers the
-            // call (the fault is for the calibrator or a person to clear)
-            if now == want || now == cm::HW_FAULT {
-                if now == cm::HW_FAULT {
-                    tracing::warn!(device = %self.id, joint = j, "asked control mode {mode}, the joint is in hardware fault");
+        let mut now = cm::UNKNOWN_ERROR;
+        for _ in 0..ATTEMPTS {
+            now = self.ask_u8(j, tag::MC_JOINT_STATUS_CORE_MODES_CONTROLMODESTATUS)?;
+            if now == want {
+                return Ok(());
+            }
+            if now == cm::HW_FAULT {
+                if m != cm::FORCE_IDLE {
+                    tracing::error!(device = %self.id, joint = j, "asked control mode {mode}, the joint is in hardware fault");
                 }
                 return Ok(());
             }
-            if start.elapsed() > MODE_TIMEOUT {
-                return Err(DeviceError::failed(
-                    &self.id,
-                    format!(
-                        "joint {j}: asked control mode {mode}, the board reports {} after {:.2} s",
-                        mode_vocab(now),
-                        start.elapsed().as_secs_f64()
-                    ),
-                ));
+            if start.elapsed() > TIMEOUT {
+                break;
             }
-            std::thread::sleep(Duration::from_millis(5));
+            std::thread::sleep(GAP);
         }
+        Err(DeviceError::failed(
+            &self.id,
+            format!(
+                "joint {j}: asked control mode {mode}, the board reports {} after {:.2} s",
+                mode_vocab(now),
+                start.elapsed().as_secs_f64()
+            ),
+        ))
     }
 }
 

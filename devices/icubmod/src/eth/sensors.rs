@@ -275,7 +275,14 @@ impl DeviceDriver for EmbObjFtSensor {
                 if calibrated {
                     strain.prepare = Some(Box::new(move |b: &Board| fill_full_scales(b, datarate)));
                 }
-                // the strain2's temperature, when the file asks for it (icub-main 2.11)
+                // the strain2's temperature, when the file asks for it (icub-main 2.11);
+                // without it C++ still loads the temperature regulars (initRegulars)
+                if t_rate <= 0 {
+                    strain.other_regulars = vec![(
+                        category::TEMPERATURES,
+                        vec![ids::analog(en::AS_TEMPERATURE, 0, tag::AS_XX_STATUS)],
+                    )];
+                }
                 if t_rate > 0 {
                     let data = super::service_config::strain_temperature_config(root)?;
                     let mut t = SensorService::new(ServiceCommand::verify_activate(
@@ -808,6 +815,7 @@ impl DeviceDriver for EmbObjImu {
                     regulars: vec![ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_STATUS)],
                     prepare: None,
                     companion: None,
+                    other_regulars: Vec::new(),
                     before_start: Vec::new(),
                     after_start: vec![(
                         ids::analog(en::AS_INERTIAL3, 0, tag::AS_XX_CMMNDS_ENABLE),
@@ -1439,6 +1447,7 @@ impl DeviceDriver for EmbObjPos {
                 regulars: vec![ids::analog(en::AS_POS, 0, tag::AS_XX_STATUS)],
                 prepare: None,
                 companion: None,
+                other_regulars: Vec::new(),
                 before_start: Vec::new(),
                 after_start: vec![(
                     ids::analog(en::AS_POS, 0, tag::AS_XX_CMMNDS_ENABLE),
@@ -1504,6 +1513,7 @@ impl DeviceDriver for EmbObjBattery {
                 )],
                 prepare: None,
                 companion: None,
+                other_regulars: Vec::new(),
                 before_start: Vec::new(),
                 after_start: vec![(
                     ids::analog(en::AS_BATTERY, 0, tag::AS_BATTERY_CMMNDS_ENABLE),

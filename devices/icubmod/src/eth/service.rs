@@ -215,6 +215,9 @@ pub struct SensorService {
     pub prepare: Option<Prepare>,
     pub configs: Vec<(Id32, Vec<u8>)>,
     pub regulars: Vec<Id32>,
+    /// Regulars of another category loaded right after the service's own, without that
+    /// service (embObjFTsensor's temperature status, which `initRegulars` always loads).
+    pub other_regulars: Vec<(u8, Vec<Id32>)>,
     /// Sent after the regulars, before the start (embObjSkin's signal mode).
     pub before_start: Vec<Sent>,
     /// Sent after the start (e.g. `cmmnds enable`).
@@ -231,6 +234,7 @@ impl SensorService {
             prepare: None,
             configs: Vec::new(),
             regulars: Vec::new(),
+            other_regulars: Vec::new(),
             before_start: Vec::new(),
             after_start: Vec::new(),
             companion: None,
@@ -264,6 +268,9 @@ pub fn open_sensor(board: &Arc<Board>, s: &SensorService) -> Result<(), EthError
     for x in s.all() {
         if !x.regulars.is_empty() {
             set_regulars(board, x.activate.category, &x.regulars)?;
+        }
+        for (category, regulars) in &x.other_regulars {
+            set_regulars(board, *category, regulars)?;
         }
     }
     for x in s.all() {
