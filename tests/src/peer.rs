@@ -75,7 +75,7 @@ pub fn cpp_program(test: &str, name: &str) -> Option<PathBuf> {
         peer_missing(
             test,
             "C++ YARP",
-            &format!("no `{name}` program in $YARP_CPP_BIN or ~/.cache/yarp-rs/cpp-yarp"),
+            &format!("no `{name}` program in $YARP_CPP_BIN or ~/.cache/yarp-rs/cpp-icub/bin"),
             CPP_YARP_INSTALL,
         );
     }

@@ -105,10 +105,13 @@ pub fn read(args: &[String]) -> Result<()> {
                         Err(e) => { eprintln!("yarp: undecodable message from {}: {e}", m.from); continue }
                     };
                     let mut out = stdout.lock();
+                    // C++ 3.12.3 prints `<envelope>     <data>`, the five spaces even
+                    // when the message has no envelope
                     if envelope {
                         if let Some(s) = m.stamp {
-                            let _ = write!(out, "{} {:.4}     ", s.count, s.time);
+                            let _ = write!(out, "{} {:.4}", s.count, s.time);
                         }
+                        let _ = write!(out, "     ");
                     }
                     let _ = writeln!(out, "{text}");
                     let _ = out.flush();
