@@ -942,6 +942,21 @@ fn carrier_unix_stream_cpp_write_to_rust_read() {
     carrier_case("carrier_unix_stream_cpp_to_rust", Side::Cpp, "unix_stream");
 }
 
+/// ergoCub's laser repeaters' carrier: the Bottle compressed by the writer's
+/// `bottle_compression_zlib` monitor and expanded by the reader's.
+const ZLIB_BOTTLE: &str = "fast_tcp+send.portmonitor+file.bottle_compression_zlib\
+     +recv.portmonitor+file.bottle_compression_zlib+type.dll";
+
+#[test]
+fn carrier_bottle_compression_zlib_rust_write_to_cpp_read() {
+    carrier_case("carrier_zlib_rust_to_cpp", Side::Rust, ZLIB_BOTTLE);
+}
+
+#[test]
+fn carrier_bottle_compression_zlib_cpp_write_to_rust_read() {
+    carrier_case("carrier_zlib_cpp_to_rust", Side::Cpp, ZLIB_BOTTLE);
+}
+
 #[test]
 fn carrier_udp_rust_write_to_cpp_read() {
     carrier_case("carrier_udp_rust_to_cpp", Side::Rust, "udp");

@@ -443,7 +443,10 @@ pub fn connect(args: &[String]) -> Result<()> {
         }
     };
     if let Some(c) = carrier {
-        if Carrier::from_name(c).is_none() {
+        // C++ looks up the carrier proper: `fast_tcp+send.portmonitor+...` is fast_tcp with
+        // modifiers, which the ports resolve when they connect
+        let base = yarp_proto::wire::modifiers::CarrierName::parse(c).base;
+        if Carrier::from_name(&base).is_none() {
             unknown_carrier(from, to, c);
             return Err(anyhow::Error::new(Reported));
         }
