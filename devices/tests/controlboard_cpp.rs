@@ -484,7 +484,8 @@ fn method_table_session(bin: &Path, name: &str, remote: &str, rows: &[&Row]) -> 
         .spawn()
         .expect("spawn C++ yarp rpc");
     // paced: some getters read the state streamed every 10 ms, which must catch up with
-    // the set before them (on both boards alike)
+    // the set before them (on both boards alike). Waiting for each reply instead is not
+    // possible: C++ `yarp rpc` buffers its stdout when it is a pipe, until it exits.
     let mut stdin = child.stdin.take().unwrap();
     for r in rows {
         writeln!(stdin, "{}", r.line).unwrap();
