@@ -16,7 +16,11 @@
 //! half of it, a duty-cycle reference sets the duty cycle; PID errors are 0.1 / 0.2 /
 //! 0.3 / 0.4 and outputs `1.1 + 10 j` ... by loop type (position, velocity, current,
 //! torque); torque ranges and gearbox ratios read 0; a torque reference beyond +-1 puts
-//! the joint in `CM_HW_FAULT`.
+//! the joint in `CM_HW_FAULT`. What C++ 3.12.3's fake accepts without doing anything
+//! ("not yet implemented", which succeeds) succeeds here too and changes nothing: joint
+//! and velocity limits keep their configured values (`LIMITS::*`, velocity 0..50), the
+//! gearbox ratio and temperature limit stay 0. One deliberate difference: C++'s
+//! `checkMotionDone` is always false, ours true once the joint is at its target.
 //!
 //! Impedance, as the C++ fake: stiffness, damping and offset are stored (initially 0)
 //! and have no effect on the motion; every joint's limits are stiffness 1..10 and
@@ -392,15 +396,19 @@ impl IAxisInfo for FakeMotionControl {
 }
 
 impl IControlLimits for FakeMotionControl {
-    fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        self.joint(j)?.limits = (min, max);
+    // C++ 3.12.3's fake accepts new limits and keeps its configured ones (`LIMITS::Min`
+    // / `LIMITS::Max`, default 0..100): `setLimitsRaw` does nothing
+    fn set_limits(&mut self, j: usize, _min: f64, _max: f64) -> DevResult<()> {
+        self.joint(j)?;
         Ok(())
     }
     fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
         Ok(self.joint(j)?.limits)
     }
-    fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        self.joint(j)?.vel_limits = (min, max);
+    // C++ 3.12.3's fake: "not yet implemented", which succeeds doing nothing (its
+    // velocity limits stay 0..50)
+    fn set_vel_limits(&mut self, j: usize, _min: f64, _max: f64) -> DevResult<()> {
+        self.joint(j)?;
         Ok(())
     }
     fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
@@ -422,10 +430,10 @@ impl IInteractionMode for FakeMotionControl {
 }
 
 impl ITorqueControl for FakeMotionControl {
-    fn get_motor_torque_params(&mut self, j: usize) -> DevResult<[f64; 4]> {
+    fn get_motor_torque_params(&mut self, j: usize) -> DevResult<[f64; 9]> {
         // the C++ fake keeps none: zeros
         self.joint(j)?;
-        Ok([0.0; 4])
+        Ok([0.0; 9])
     }
     fn get_axes(&mut self) -> DevResult<usize> {
         Ok(self.joints.len())
@@ -546,6 +554,19 @@ impl IMotor for FakeMotionControl {
         // not implemented by the C++ fake, which answers 0
         self.joint(m)?;
         Ok(0.0)
+    }
+    // C++ 3.12.3's fake: "not yet implemented", which succeeds doing nothing
+    fn set_gearbox_ratio(&mut self, m: usize, _v: f64) -> DevResult<()> {
+        self.joint(m)?;
+        Ok(())
+    }
+    fn get_temperature_limit(&mut self, m: usize) -> DevResult<f64> {
+        self.joint(m)?;
+        Ok(0.0)
+    }
+    fn set_temperature_limit(&mut self, m: usize, _v: f64) -> DevResult<()> {
+        self.joint(m)?;
+        Ok(())
     }
 }
 

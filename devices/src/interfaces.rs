@@ -307,8 +307,9 @@ pub trait ITorqueControl {
     fn get_torque_range(&mut self, _j: usize) -> DevResult<(f64, f64)> {
         Err(DeviceError::Unsupported("getTorqueRange"))
     }
-    /// C++ `MotorTorqueParameters` of joint `j`: (bemf, bemf_scale, ktau, ktau_scale).
-    fn get_motor_torque_params(&mut self, _j: usize) -> DevResult<[f64; 4]> {
+    /// C++ 3.12 `MotorTorqueParameters` of joint `j`: (bemf, bemf_scale, ktau,
+    /// ktau_scale, viscousPos, viscousNeg, coulombPos, coulombNeg, velocityThres).
+    fn get_motor_torque_params(&mut self, _j: usize) -> DevResult<[f64; 9]> {
         Err(DeviceError::Unsupported("getMotorTorqueParams"))
     }
 }

@@ -1,6 +1,7 @@
 //! battery_nws_yarp over fakeBattery on real sockets, with an in-process name server (run
 //! under netns-run): our reader gets `BatteryData` with envelopes on `<name>/data:o`, our
-//! RPC client and C++ `yarp rpc` / `yarp read` (3.5, when installed; in CI required) get
+//! RPC client and C++ `yarp rpc` / `yarp read` (3.12.3 from tests/peers/install-cpp-peers.sh
+//! icub, when installed; in CI required) get
 //! the `IBatteryMsgs` answer and the stream; our `battery_nwc_yarp` reads it all back.
 //! Every wait is bounded.
 

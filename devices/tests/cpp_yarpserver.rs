@@ -1,6 +1,7 @@
-//! Our devices registered with C++ YARP's `yarpserver` (3.5, from
-//! `tests/peers/install-cpp-yarp.sh`): our `controlBoard_nws_yarp` answers C++ `yarp rpc`
-//! and a C++ `yarpdev`'s `fakeMotionControl` answers our `remote_controlboard`, every port
+//! Our devices registered with C++ YARP's `yarpserver` (3.12.3, from
+//! `tests/peers/install-cpp-peers.sh icub`): our `controlBoard_nws_yarp` answers C++ `yarp
+//! rpc` and a C++ `fakeMotionControl` (behind C++'s wrapper in C++ `yarprobotinterface`,
+//! see `cpp_device_command`) answers our `remote_controlboard`, every port
 //! found through the C++ name server. (C++ devices under our name server: the other
 //! `*_cpp` tests, whose name server is ours.) Without the C++ peer the tests say SKIPPED
 //! loudly; in CI they fail. Run under netns-run.
@@ -108,28 +109,41 @@ fn cpp_yarpdev_under_cpp_yarpserver_answers_our_remote() {
     ) else {
         return;
     };
-    let _dev = Reaped(
-        cpp_command(&bin.join("yarpdev"))
-            .args([
-                "--device",
-                "controlBoard_nws_yarp",
-                "--subdevice",
-                "fakeMotionControl",
-                "--name",
-                "/cpp_under_cpp",
-                "--GENERAL::Joints",
-                "3",
-            ])
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("spawn C++ yarpdev"),
+    let (mut cmd, xml) = yarp_interop_tests::cpp_device_command(
+        &bin,
+        &[
+            "--device",
+            "controlBoard_nws_yarp",
+            "--subdevice",
+            "fakeMotionControl",
+            "--name",
+            "/cpp_under_cpp",
+            "--GENERAL::Joints",
+            "3",
+        ],
     );
+    let log = tempfile::NamedTempFile::new().unwrap();
+    let _dev = Reaped(
+        cmd.stdin(Stdio::null())
+            .stdout(log.reopen().unwrap())
+            .stderr(log.reopen().unwrap())
+            .spawn()
+            .expect("spawn C++ yarprobotinterface"),
+    );
+    // registered, and attached (the wrapper's ports come before the end of the startup)
     let start = Instant::now();
-    while !known(&bin, "/cpp_under_cpp/stateExt:o") {
-        assert!(start.elapsed() < T, "C++ yarpdev did not register");
+    while !known(&bin, "/cpp_under_cpp/stateExt:o")
+        || !std::fs::read_to_string(log.path()).is_ok_and(|t| t.contains("startup phase finished"))
+    {
+        assert!(
+            start.elapsed() < T,
+            "C++ yarprobotinterface did not start: {}",
+            std::fs::read_to_string(log.path()).unwrap_or_default()
+        );
         std::thread::sleep(Duration::from_millis(50));
+    }
+    if let Some(xml) = xml {
+        let _ = std::fs::remove_file(xml);
     }
     let mut remote = PolyDriver::open(
         &Property::from_config_text(

@@ -1,4 +1,4 @@
-//! C++ YARP tools (3.5, from `tests/peers/install-cpp-yarp.sh` or `YARP_CPP_BIN`) against
+//! C++ YARP tools (3.12.3, from `tests/peers/install-cpp-peers.sh icub` or `YARP_CPP_BIN`) against
 //! our frameGrabber_nws_yarp + fakeFrameGrabber: `yarp rpc` must print what it printed
 //! against C++ 3.12 in framegrabber.jsonl, and `yarp read ... envelope` must read our
 //! image stream. Without a C++ YARP the tests say SKIPPED loudly (in CI: fail). Run under
@@ -176,10 +176,8 @@ fn cpp_yarp_read_reads_our_images() {
             }
         }
     });
-    // 3.12 prints `<envelope>     <data>` on one line, 3.5 the envelope on a line of
-    // its own: accept both
+    // C++ 3.12.3 prints `<count> <time, 4 decimals>     <data>` on one line
     let mut seen = 0;
-    let mut envelope: Option<String> = None;
     let mut other = Vec::new();
     let start = Instant::now();
     while seen < 2 {
@@ -188,30 +186,21 @@ fn cpp_yarp_read_reads_our_images() {
             "no image lines; yarp read printed {other:?}"
         );
         let line = rx.recv_timeout(WAIT).expect("yarp read printed nothing");
-        let (env, data) = match line.split_once("     ") {
-            Some((e, d)) => (e.to_string(), d.to_string()),
-            None if line.starts_with("[mat]") => match envelope.take() {
-                Some(e) => (e, line.clone()),
-                None => continue,
-            },
-            None => {
-                if line
-                    .split(' ')
-                    .next()
-                    .is_some_and(|w| w.parse::<i32>().is_ok())
-                {
-                    envelope = Some(line.trim().to_string());
-                } else {
-                    other.push(line);
-                }
-                continue;
-            }
+        let Some((env, data)) = line.split_once("     ") else {
+            other.push(line);
+            continue;
         };
         let mut e = env.split(' ');
         assert_eq!(e.next(), Some(seen.to_string().as_str()), "{env}");
-        let t: f64 = e.next().unwrap().parse().unwrap();
-        assert!(((t * 1000.0).fract() - 0.42).abs() < 1e-3, "{env}");
-        let img = Image::from_bottle(&Bottle::from_text(&data)).expect("an image");
+        let t = e.next().unwrap();
+        assert_eq!(t.split_once('.').map(|(_, f)| f.len()), Some(4), "{env}");
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_secs_f64();
+        let t: f64 = t.parse().unwrap();
+        assert!((now - t).abs() < 60.0, "{env}: not a stamp of now");
+        let img = Image::from_bottle(&Bottle::from_text(data)).expect("an image");
         assert_eq!((img.width(), img.height()), (8, 6));
         assert!(
             data.starts_with("[mat] [rgb] (3 144 65544 8 6) {"),
@@ -233,7 +222,7 @@ fn responses(out: &str) -> Vec<String> {
 
 /// C++ `frameGrabber_nwc_yarp` reads our `frameGrabber_nws_yarp`. C++ has no command-line
 /// frame grabber client, so C++'s own `frameGrabber_nws_yarp` wraps the C++ client
-/// (`yarpdev --device frameGrabber_nws_yarp --subdevice frameGrabber_nwc_yarp`): its
+/// (attached to it in C++ `yarprobotinterface`, see `cpp_yarpdev`): its
 /// images are the ones the C++ client read from ours, and each `yarp rpc` line at it is a
 /// call of the C++ client answered by ours. The same session over C++'s
 /// `frameGrabber_nws_yarp` + `fakeFrameGrabber` must print the same.
@@ -269,8 +258,7 @@ fn cpp_frame_grabber_client_reads_ours() {
                 "--period",
                 "0.1",
             ],
-            // yarpdev opens its quit port once the device (and the client in it) is open
-            &format!("{name}/quit"),
+            &format!("{name}/rpc"),
         )
     };
     let mut ours = grabber("/fg_ours");
@@ -297,8 +285,7 @@ fn cpp_frame_grabber_client_reads_ours() {
             "--period",
             "0.1",
         ],
-        // yarpdev opens its quit port once the device is open
-        "/fg_cpp/quit",
+        "/fg_cpp/rpc",
     );
     let _chain_cpp = chain("/fg_chain_cpp", "/fg_cpp");
     let over_cpp = responses(&yarp_interop_tests::cpp_rpc_output(
@@ -381,7 +368,7 @@ fn our_frame_grabber_client_reads_cpp() {
             "--period",
             "0.05",
         ],
-        "/fgr_cpp/quit",
+        "/fgr_cpp/rpc",
     );
     let mut client = PolyDriver::open(
         &Property::from_config_text(

@@ -1,6 +1,7 @@
 //! rangefinder2D_nws_yarp over fakeLaser on real sockets, with an in-process name server
 //! (run under netns-run): our reader gets `LaserScan2D` scans with envelopes on `<name>`,
-//! our RPC client and C++ `yarp rpc` / `yarp read` (3.5, when installed; in CI required)
+//! our RPC client and C++ `yarp rpc` / `yarp read` (3.12.3 from
+//! tests/peers/install-cpp-peers.sh icub, when installed; in CI required)
 //! get the `IRangefinder2DMsgs` answers and the stream. Every wait is bounded.
 
 use yarp_devices::rangefinder::protocol::{parse_reply, LaserScan2D};
@@ -119,7 +120,7 @@ fn cpp_yarp_read_and_rpc_talk_to_our_wrapper() {
         "/cpplaser:o/rpc:i",
         "getDistanceRange RPC\ngetScanRate RPC\n",
     );
-    // C++ 3.5 prints doubles with all their digits (0.100000000000000005551)
+    // C++ 3.12.3 prints doubles with all their digits (0.100000000000000005551)
     let responses: Vec<Vec<f64>> = out
         .lines()
         .filter_map(|l| l.strip_prefix("Response: "))

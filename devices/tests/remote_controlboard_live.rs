@@ -102,13 +102,14 @@ fn exercise(remote: &mut PolyDriver) {
         d.as_axis_info().unwrap().get_axis_name(0).unwrap(),
         "joint0"
     );
+    // the fake, as C++ 3.12.3's, accepts limits and keeps its configured ones
     d.as_control_limits()
         .unwrap()
         .set_limits(0, -90.0, 90.0)
         .unwrap();
     assert_eq!(
         d.as_control_limits().unwrap().get_limits(0).unwrap(),
-        (-90.0, 90.0)
+        (0.0, 100.0)
     );
     let pid = Pid::from_slice(&[1.5, 0.25, 0.125, 100.0, 100.0]);
     let pc = d.as_pid_control().unwrap();

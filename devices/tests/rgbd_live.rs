@@ -1,7 +1,8 @@
 //! rgbdSensor_nws_yarp over fakeDepthCamera on real sockets, with an in-process name
 //! server (run under netns-run): our readers get the colour and the float depth images
-//! with envelopes, our RPC client and C++ `yarp rpc` (3.5, when installed; in CI
-//! required) the visual parameters and the status, C++ `yarp read` the depth image.
+//! with envelopes, our RPC client and C++ `yarp rpc` (3.12.3 from
+//! tests/peers/install-cpp-peers.sh icub, when installed; in CI required) the visual
+//! parameters and the status, C++ `yarp read` the depth image.
 //! Every wait is bounded.
 
 use std::time::{Duration, Instant};
@@ -253,9 +254,9 @@ fn rgbd_sensor_client_with_ergocub_repeater_carriers() {
     server.close().unwrap();
 }
 
-/// The same carriers against C++ YARP (3.5, with its mjpeg carrier and its
-/// depthimage_compression_zlib port monitor): a C++ rgbdSensor_nws_yarp over
-/// fakeDepthCamera streams to our ports (C++ compresses, we decompress; we pull the JPEGs),
+/// The same carriers against C++ YARP (3.12.3, with its mjpeg carrier and its
+/// depthimage_compression_zlib port monitor): a C++ rgbdSensor_nws_yarp attached to
+/// fakeDepthCamera (in C++ yarprobotinterface, see `cpp_yarpdev`) streams to our ports (C++ compresses, we decompress; we pull the JPEGs),
 /// and our server streams to C++ `yarp read` (we compress, C++ decompresses; C++ pulls).
 #[test]
 fn ergocub_repeater_carriers_interoperate_with_cpp() {
@@ -273,7 +274,7 @@ fn ergocub_repeater_carriers_interoperate_with_cpp() {
             test,
             "C++ YARP's depthimage_compression_zlib port monitor",
             "not built in this C++ YARP",
-            "tests/peers/install-cpp-yarp.sh",
+            yarp_interop_tests::CPP_YARP_INSTALL,
         );
         return;
     }

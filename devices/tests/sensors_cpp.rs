@@ -1,14 +1,16 @@
-//! The C++ `yarp rpc` tool (YARP 3.5 from `tests/peers/install-cpp-yarp.sh`, or the
-//! directory in `YARP_CPP_BIN`) against our multipleanalogsensorsserver: it must print
-//! exactly what it printed against C++ 3.12 in imu.jsonl. Without a C++ YARP the test
-//! says SKIPPED loudly (in CI: fails). Run under netns-run.
+//! The C++ `yarp rpc` tool (YARP 3.12.3 from `tests/peers/install-cpp-peers.sh icub`, or
+//! the directory in `YARP_CPP_BIN`) against our multipleanalogsensorsserver: it must print
+//! exactly what it printed against C++ 3.12 in imu.jsonl. C++'s MAS client reads our server
+//! and ours reads C++'s. Without a C++ YARP the tests say SKIPPED loudly (in CI: fail).
+//! Run under netns-run.
 
 use std::io::{Read, Write};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
+use yarp_devices::sensors::MasStatus;
 use yarp_devices::PolyDriver;
 use yarp_interop_tests::{cpp_program, name_server, Reaped};
-use yarp_proto::Property;
+use yarp_proto::{Bottle, Property, Value};
 
 const WAIT: Duration = Duration::from_secs(10);
 
@@ -111,8 +113,7 @@ fn cpp_client_chain(bin: &std::path::Path, name: &str, remote: &str) -> Reaped {
             "--period",
             "20",
         ],
-        // yarpdev opens its quit port once the device is open
-        &format!("{name}/quit"),
+        &format!("{name}/measures:o"),
     )
 }
 
@@ -161,7 +162,7 @@ fn cpp_mas_client_reads_our_server() {
             "--period",
             "20",
         ],
-        "/mas_cpp/quit",
+        "/mas_cpp/measures:o",
     );
     let _chain_cpp = cpp_client_chain(&bin, "/mas_chain_cpp", "/mas_cpp");
     let over_cpp = printed(&yarp_interop_tests::cpp_rpc_output(
@@ -172,19 +173,40 @@ fn cpp_mas_client_reads_our_server() {
     assert!(!over_cpp.is_empty(), "the C++ reference printed nothing");
     assert_eq!(over_ours, over_cpp, "inputs:\n{input}");
 
-    // The measurements do not pass: 3.12's stream (ours) carries 12 sensor families, C++
-    // 3.5's client reads 10 and reports every sensor as not MAS_OK, so C++ 3.5's server
-    // over it publishes nothing. The 3.12 behaviour is kept; reading them back needs a 3.12
-    // C++ peer (ours reads ours: sensors_live).
+    // The measurements pass too: C++'s server over C++'s client republishes what the
+    // client read from ours, in the layout it gives C++'s own (the values move with time)
+    let shape = |port: &str, reader: &str| {
+        yarp_interop_tests::cpp_read_until(&yarp, reader, port, |l| {
+            let b = Bottle::from_text(l);
+            // a measurement: 12 families, the gyroscope's one sensor measured
+            (b.len() == 12 && b.get(0)?.as_list()?.len() == 1).then(|| layout(&b))
+        })
+    };
+    let over_ours = shape("/mas_chain_ours/measures:o", "/mas_rd_ours");
+    let over_cpp = shape("/mas_chain_cpp/measures:o", "/mas_rd_cpp");
+    assert_eq!(over_ours, over_cpp);
     server.close().unwrap();
 }
 
-/// Our `multipleanalogsensorsclient` against C++ 3.5's server over C++'s `fakeIMU`.
-/// C++ 3.5's metadata lists 10 sensor families, 3.12's (which ours speaks) 12: ours
-/// refuses the 3.5 server with an error that says so, as a 3.12 client cannot read it.
+/// The layout of a Bottle: for a list its elements' layouts, else the value's kind.
+fn layout(b: &Bottle) -> String {
+    let kinds: Vec<String> = b
+        .iter()
+        .map(|v| match v {
+            Value::List(l) => format!("({})", layout(l)),
+            Value::Float64(_) | Value::Float32(_) => "f".to_string(),
+            v if v.as_i64().is_some() => "i".to_string(),
+            _ => "s".to_string(),
+        })
+        .collect();
+    kinds.join(" ")
+}
+
+/// Our `multipleanalogsensorsclient` reads C++'s server over C++'s `fakeIMU`: the
+/// metadata (one sensor of each IMU family) and the measurements.
 #[test]
-fn our_mas_client_refuses_cpp35_server_metadata() {
-    let test = "our_mas_client_refuses_cpp35_server_metadata";
+fn our_mas_client_reads_cpp_server() {
+    let test = "our_mas_client_reads_cpp_server";
     let Some(bin) =
         yarp_interop_tests::cpp_devices(test, &["multipleanalogsensorsserver", "fakeIMU"])
     else {
@@ -203,19 +225,32 @@ fn our_mas_client_refuses_cpp35_server_metadata() {
             "--period",
             "20",
         ],
-        "/masr_cpp/quit",
+        "/masr_cpp/measures:o",
     );
-    let err = PolyDriver::open(
+    let mut client = PolyDriver::open(
         &Property::from_config_text(
-            "device multipleanalogsensorsclient\nremote /masr_cpp\nlocal /masr_ours\n",
+            "device multipleanalogsensorsclient\nremote /masr_cpp\nlocal /masr_ours\ntimeout 1.0\n",
         )
         .unwrap(),
     )
-    .err()
-    .expect("the 3.5 metadata is refused");
-    let text = format!("{err:?}");
-    assert!(
-        text.contains("expected a list of 12 sensor families, got 10"),
-        "{text}"
-    );
+    .expect("our client reads C++ 3.12.3's metadata");
+    let gyro = client.device().as_three_axis_gyroscopes().unwrap();
+    assert_eq!(gyro.get_nr_of_three_axis_gyroscopes(), 1);
+    let start = Instant::now();
+    let m = loop {
+        if gyro.get_three_axis_gyroscope_status(0) == MasStatus::Ok {
+            break gyro.get_three_axis_gyroscope_measure(0).unwrap();
+        }
+        assert!(start.elapsed() < WAIT, "no measurement from C++'s server");
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(m.values.len(), 3);
+    let acc = client
+        .device()
+        .as_three_axis_linear_accelerometers()
+        .unwrap()
+        .get_three_axis_linear_accelerometer_measure(0)
+        .unwrap();
+    assert_eq!(acc.values.len(), 3);
+    client.close().unwrap();
 }

@@ -3,8 +3,9 @@
 
 use crate::{cpp_command, name_client, Reaped, T};
 use std::io::{Read, Write};
-use std::path::Path;
-use std::process::Stdio;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 /// C++ `yarp rpc <port>` with `input` typed (then end of input): everything it printed
@@ -137,8 +138,114 @@ pub fn registered(port: &str) -> bool {
     rt.block_on(async move { ns.query(&port).await.ok().flatten().is_some() })
 }
 
-/// C++ `yarpdev` of the bin directory `bin` with `args`, returned once `port` is
-/// registered (killed and reaped on drop).
+/// The command that serves the device C++ `yarpdev` `args` name, with the C++ peer of
+/// `bin`. `yarpdev --device W --subdevice D` (a wrapper over a device it opens) is gone
+/// from C++ YARP 3.12 (it points to `deviceBundler`, which the peer of
+/// `tests/peers/install-cpp-peers.sh icub` does not build): such `args` become a C++
+/// `yarprobotinterface` configuration that opens D, then W attached to it, both with every
+/// parameter of `args` (as the old `--subdevice` passed its whole configuration to both).
+/// The configuration file (returned, to remove once the device is up) is read at start.
+pub fn cpp_device_command(bin: &Path, args: &[&str]) -> (Command, Option<PathBuf>) {
+    let Some(xml) = bundle_xml(args) else {
+        let mut cmd = cpp_command(&bin.join("yarpdev"));
+        cmd.args(args);
+        return (cmd, None);
+    };
+    static N: AtomicUsize = AtomicUsize::new(0);
+    let file = std::env::temp_dir().join(format!(
+        "cpp-bundle-{}-{}.xml",
+        std::process::id(),
+        N.fetch_add(1, Ordering::Relaxed)
+    ));
+    std::fs::write(&file, xml).expect("write the yarprobotinterface configuration");
+    let mut cmd = cpp_command(&bin.join("yarprobotinterface"));
+    cmd.arg("--config").arg(&file);
+    (cmd, Some(file))
+}
+
+/// The `yarprobotinterface` configuration for `yarpdev` `args` holding `--device W
+/// --subdevice D`, or `None` for a plain device. `--G::k v` is `k` in group `G`.
+fn bundle_xml(args: &[&str]) -> Option<String> {
+    let mut params: Vec<(String, String)> = Vec::new();
+    let (mut wrapper, mut attached) = (None, None);
+    let mut it = args.iter().peekable();
+    while let Some(a) = it.next() {
+        let Some(key) = a.strip_prefix("--") else {
+            continue;
+        };
+        let value = match it.peek() {
+            Some(v) if !v.starts_with("--") => it.next().unwrap().to_string(),
+            _ => "true".to_string(),
+        };
+        match key {
+            "device" => wrapper = Some(value),
+            "subdevice" => attached = Some(value),
+            _ => params.push((key.to_string(), value)),
+        }
+    }
+    let (wrapper, attached) = (wrapper?, attached?);
+    let esc = |t: &str| {
+        t.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    };
+    let mut body = String::new();
+    let mut groups: Vec<(String, Vec<(String, String)>)> = Vec::new();
+    for (k, v) in &params {
+        match k.split_once("::") {
+            Some((g, k)) => match groups.iter_mut().find(|(name, _)| name == g) {
+                Some((_, ps)) => ps.push((k.to_string(), v.clone())),
+                None => groups.push((g.to_string(), vec![(k.to_string(), v.clone())])),
+            },
+            None => body.push_str(&format!(
+                "      <param name=\"{}\">{}</param>\n",
+                esc(k),
+                esc(v)
+            )),
+        }
+    }
+    for (g, ps) in &groups {
+        body.push_str(&format!("      <group name=\"{}\">\n", esc(g)));
+        for (k, v) in ps {
+            body.push_str(&format!(
+                "        <param name=\"{}\">{}</param>\n",
+                esc(k),
+                esc(v)
+            ));
+        }
+        body.push_str("      </group>\n");
+    }
+    // a port prefix of its own: two of these in one test must not clash
+    static N: AtomicUsize = AtomicUsize::new(0);
+    let prefix = format!(
+        "/cppbundle{}_{}",
+        std::process::id(),
+        N.fetch_add(1, Ordering::Relaxed)
+    );
+    Some(format!(
+        r#"<?xml version="1.0" encoding="UTF-8" ?>
+<!DOCTYPE robot PUBLIC "-//YARP//DTD yarprobotinterface 3.0//EN" "http://www.yarp.it/DTD/yarprobotinterfaceV3.0.dtd">
+<robot name="bundle" build="1" portprefix="{prefix}">
+  <devices>
+    <device name="attached" type="{attached}">
+{body}    </device>
+    <device name="wrapper" type="{wrapper}">
+{body}      <action phase="startup" level="5" type="attach">
+        <param name="device">attached</param>
+      </action>
+      <action phase="interrupt1" level="1" type="detach"/>
+    </device>
+  </devices>
+</robot>
+"#,
+        attached = esc(&attached),
+        wrapper = esc(&wrapper),
+    ))
+}
+
+/// C++ `yarpdev` of the bin directory `bin` with `args` (through
+/// [`cpp_device_command`]: a wrapper over a `--subdevice` runs in C++
+/// `yarprobotinterface`), returned once `port` is registered (killed and reaped on drop).
 pub fn cpp_yarpdev(bin: &Path, args: &[&str], port: &str) -> Reaped {
     name_client();
     // its log goes to a file, shown if the port never comes
@@ -148,8 +255,8 @@ pub fn cpp_yarpdev(bin: &Path, args: &[&str], port: &str) -> Reaped {
         port.replace('/', "_")
     ));
     let file = std::fs::File::create(&log).expect("yarpdev log file");
-    let child = cpp_command(&bin.join("yarpdev"))
-        .args(args)
+    let (mut cmd, xml) = cpp_device_command(bin, args);
+    let child = cmd
         .stdin(Stdio::null())
         .stdout(file.try_clone().expect("log file"))
         .stderr(file)
@@ -157,7 +264,15 @@ pub fn cpp_yarpdev(bin: &Path, args: &[&str], port: &str) -> Reaped {
         .expect("spawn C++ yarpdev");
     let child = Reaped(child);
     let start = Instant::now();
-    while !registered(port) {
+    // a wrapper in yarprobotinterface registers its ports when it opens, before it is
+    // attached: wait for the end of the startup phase too
+    let ready = || {
+        registered(port)
+            && (xml.is_none()
+                || std::fs::read_to_string(&log)
+                    .is_ok_and(|t| t.contains("startup phase finished")))
+    };
+    while !ready() {
         if start.elapsed() > T {
             let text = std::fs::read_to_string(&log).unwrap_or_default();
             panic!(
@@ -168,5 +283,8 @@ pub fn cpp_yarpdev(bin: &Path, args: &[&str], port: &str) -> Reaped {
         std::thread::sleep(Duration::from_millis(20));
     }
     let _ = std::fs::remove_file(&log);
+    if let Some(xml) = xml {
+        let _ = std::fs::remove_file(xml);
+    }
     child
 }

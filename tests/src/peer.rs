@@ -46,22 +46,16 @@ fn cached_cpp_yarp() -> Option<PathBuf> {
 }
 
 /// The directory holding the real C++ YARP programs: `$YARP_CPP_BIN`, else the build of
-/// `tests/peers/install-cpp-peers.sh icub` in `~/.cache/yarp-rs/cpp-icub`, else an older
-/// pip-built peer in `<repo>/.venv-yarp` (pip puts Python wrappers in `bin/` that do not
-/// forward signals, so the real binaries in `site-packages/yarp/bin` come first).
+/// `tests/peers/install-cpp-peers.sh icub` in `~/.cache/yarp-rs/cpp-icub` (C++ YARP
+/// 3.12.3, the reference of the live tests). An older peer (the pip-built 3.5 of
+/// `<repo>/.venv-yarp`, or `tests/peers/install-cpp-yarp.sh`'s 3.5) is not looked for: its
+/// answers are not the reference any more; point `YARP_CPP_BIN` at it to try one.
 pub fn cpp_bin_dir() -> Option<PathBuf> {
     let mut dirs = Vec::new();
     if let Some(d) = std::env::var_os("YARP_CPP_BIN") {
         dirs.push(PathBuf::from(d));
     }
     dirs.extend(cached_cpp_yarp());
-    let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../.venv-yarp");
-    if let Ok(libs) = std::fs::read_dir(venv.join("lib")) {
-        for d in libs.flatten() {
-            dirs.push(d.path().join("site-packages/yarp/bin"));
-        }
-    }
-    dirs.push(venv.join("bin"));
     dirs.into_iter().find(|d| d.join("yarp").is_file())
 }
 
@@ -75,7 +69,7 @@ pub fn cpp_program(test: &str, name: &str) -> Option<PathBuf> {
         peer_missing(
             test,
             "C++ YARP",
-            &format!("no `{name}` program in $YARP_CPP_BIN or ~/.cache/yarp-rs/cpp-yarp"),
+            &format!("no `{name}` program in $YARP_CPP_BIN or ~/.cache/yarp-rs/cpp-icub/bin"),
             CPP_YARP_INSTALL,
         );
     }

@@ -1,4 +1,4 @@
-//! The C++ `yarp rpc` tool (YARP 3.5 from `tests/peers/install-cpp-yarp.sh`, or the
+//! The C++ `yarp rpc` tool (YARP 3.12.3 from `tests/peers/install-cpp-peers.sh icub`, or the
 //! directory in `YARP_CPP_BIN`) against our `yarprobotinterface`: its
 //! `/robot/yarprobotinterface` service and the control board it brought up. Without a C++
 //! YARP the test says SKIPPED loudly (in CI: fails). Run under netns-run.
@@ -15,7 +15,7 @@ use yarp_devices::Registry;
 
 const BIN: &str = env!("CARGO_BIN_EXE_yarprobotinterface");
 
-/// The real C++ `yarp` program (pip installs a Python wrapper beside it).
+/// The C++ `yarp` program.
 fn cpp_yarp() -> Option<PathBuf> {
     yarp_interop_tests::cpp_program("robotinterface_cpp", "yarp")
 }

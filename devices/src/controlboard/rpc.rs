@@ -635,6 +635,20 @@ fn torque(
     match action {
         SET => Some(match vocab(cmd.get(2)) {
             REF => t.set_ref_torque(joint(cmd, 3)?, float(cmd, 4)).is_ok(),
+            // every joint's reference (C++ wants exactly the controlled joints)
+            REFS => {
+                let refs: Vec<f64> = cmd
+                    .get(3)?
+                    .as_list()?
+                    .iter()
+                    .map(|v| v.as_f64().unwrap_or(0.0))
+                    .collect();
+                refs.len() == t.get_axes().ok()?
+                    && refs
+                        .iter()
+                        .enumerate()
+                        .all(|(j, r)| t.set_ref_torque(j, *r).is_ok())
+            }
             _ => false,
         }),
         GET => {
@@ -643,6 +657,7 @@ fn torque(
                 TRQ => resp.push(t.get_torque(joint(cmd, 3)?).ok()?),
                 TRQS => resp.push(float_list(&t.get_torques().ok()?)),
                 REF => resp.push(t.get_ref_torque(joint(cmd, 3)?).ok()?),
+                REFS => resp.push(float_list(&t.get_ref_torques().ok()?)),
                 RANGE => {
                     let (lo, hi) = t.get_torque_range(joint(cmd, 3)?).ok()?;
                     resp.push(lo).push(hi)

@@ -1,13 +1,12 @@
-//! The `yarp` command line's failure paths, live against the C++ `yarp` (3.5, from
-//! `tests/peers/install-cpp-yarp.sh`): one row per case (unknown ports, refused or
+//! The `yarp` command line's failure paths, live against the C++ `yarp` (3.12.3, from
+//! `tests/peers/install-cpp-peers.sh icub`): one row per case (unknown ports, refused or
 //! duplicate connections, an absent name server, bad arguments), each run by C++ `yarp`
 //! and by ours in the same situation; the exit code and the error lines must be the same,
 //! and both must be what the row says C++ does. Run under ../shared/netns-run.
 //!
 //! Compared: the exit status, and the `[ERROR]`/`[WARNING]` lines of stdout and stderr
-//! with the `|component|` tag C++ puts after the level removed (3.5 and 3.12 name their log
-//! components differently). Without the C++ peer the test says SKIPPED loudly; in CI it
-//! fails.
+//! with the `|component|` tag C++ puts after the level removed (ours names no
+//! components). Without the C++ peer the test says SKIPPED loudly; in CI it fails.
 
 use std::io::{Read, Write};
 use std::net::TcpListener;

@@ -13,8 +13,10 @@
 //!   [--logfile <prefix>] [--details]`): opens `/latencyTest/client`, connects it to the
 //!   server (and, without replies, the server back to it), sends `start`, times `n` frames
 //!   and sends `stop`. Latency of a frame = (arrival - send time - server copy time), in
-//!   ms. Statistics are printed as C++ prints them and each frame's `latency copytime` is
-//!   written to `<prefix><size>.txt`.
+//!   ms. Statistics are printed as C++ 3.12.3 prints them, each frame's
+//!   `latency copytime bandwidth` is written to `<prefix><size>.txt` and the test's
+//!   `size mean stdev bandwidth` to `<prefix>report.txt` (created by the first test of a
+//!   run, appended to by the next ones of a `--multitest`/`--customtest`).
 
 use anyhow::{anyhow, bail, Context, Result};
 use std::collections::BTreeMap;
@@ -172,8 +174,8 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     on_worker(async move {
         let ns = network::name_client()?;
-        for size in sizes {
-            client(&ns, &cfg, carrier, size).await?;
+        for (test_number, size) in sizes.into_iter().enumerate() {
+            client(&ns, &cfg, carrier, size, test_number).await?;
         }
         Ok(())
     })
@@ -381,10 +383,16 @@ impl Stats {
     }
 }
 
-/// The summary line C++ prints after a test.
+/// The bandwidth (Mb/s) C++ 3.12.3 estimates for `size` bytes in `latency_ms`.
+pub fn bandwidth(size: i32, latency_ms: f64) -> f64 {
+    f64::from(size) * 8.0 / 1_000_000.0 * 1000.0 / latency_ms
+}
+
+/// The summary line C++ 3.12.3 prints after a test.
 pub fn summary_line(frames: usize, size: i32, s: &Stats) -> String {
     format!(
-        "Processed {frames} frames of {size} bytes, average latency {}[ms], max {}[ms], min {}[ms], stdev {}[ms]",
+        "Processed {frames} frames of {size} bytes, estimated bandwidth {}[Mb/s], average latency {}[ms], max {}[ms], min {}[ms], stdev {}[ms]",
+        printf_3f(bandwidth(size, s.mean)),
         printf_3f(s.mean),
         printf_3f(s.max),
         printf_3f(s.min),
@@ -436,7 +444,13 @@ fn strip_zeros(s: &str) -> &str {
 }
 
 /// One test of `size` bytes, as C++ `client()`.
-async fn client(ns: &NameClient, cfg: &ClientConfig, carrier: Carrier, size: i32) -> Result<()> {
+async fn client(
+    ns: &NameClient,
+    cfg: &ClientConfig,
+    carrier: Carrier,
+    size: i32,
+    test_number: usize,
+) -> Result<()> {
     let p = open_port(CLIENT_PORT, ns).await?;
     let use_reply = carrier.spec().supports_reply && !cfg.no_reply;
     while let Err(e) = p.connect(SERVER_PORT, Some(&cfg.proto)).await {
@@ -478,7 +492,8 @@ async fn client(ns: &NameClient, cfg: &ClientConfig, carrier: Carrier, size: i32
         if reply.is_empty() && use_reply {
             bail!(
                 "the server answered frame {frame} with an empty reply: servers older than \
-                 C++ YARP 3.12 (e.g. 3.5) answer on their output only; use --no-reply"
+                 C++ YARP 3.12 (e.g. 3.5) answer on their output only (use --no-reply), and \
+                 a C++ 3.12 server sometimes answers the first frame so (run it again)"
             );
         }
         let sent = reply.get(1).and_then(Value::as_f64).unwrap_or(0.0);
@@ -511,17 +526,38 @@ async fn client(ns: &NameClient, cfg: &ClientConfig, carrier: Carrier, size: i32
     tokio::time::sleep(Duration::from_millis(500)).await;
     p.close().await;
 
-    println!(
-        "{}",
-        summary_line(cfg.nframes, size, &Stats::of(&latencies))
-    );
+    let stats = Stats::of(&latencies);
+    println!("{}", summary_line(cfg.nframes, size, &stats));
     let filename = format!("{}{size}.txt", cfg.logfile);
     let mut text = String::new();
     for (l, c) in latencies.iter().zip(&copytimes) {
-        text.push_str(&format!("{} {}\n", ostream_double(*l), ostream_double(*c)));
+        text.push_str(&format!(
+            "{} {} {}\n",
+            ostream_double(*l),
+            ostream_double(*c),
+            ostream_double(bandwidth(size, *l))
+        ));
     }
     std::fs::write(&filename, text).with_context(|| format!("writing {filename}"))?;
     println!("Test complete. Data saved to file: {filename}");
+    // the report of all tests of the run: C++ creates it for the first, appends after
+    let report = format!("{}report.txt", cfg.logfile);
+    let line = format!(
+        "{size} {} {} {}\n",
+        ostream_double(stats.mean),
+        ostream_double(stats.stdev),
+        ostream_double(bandwidth(size, stats.mean))
+    );
+    let mut f = std::fs::OpenOptions::new()
+        .create(true)
+        .write(true)
+        .append(test_number > 0)
+        .truncate(test_number == 0)
+        .open(&report)
+        .with_context(|| format!("writing {report}"))?;
+    std::io::Write::write_all(&mut f, line.as_bytes())
+        .with_context(|| format!("writing {report}"))?;
+    println!("Report written to file: {report}");
     Ok(())
 }
 
@@ -579,7 +615,7 @@ mod tests {
         let s = Stats::of(&[0.1, 0.2, 0.3]);
         assert_eq!(
             summary_line(3, 100, &s),
-            "Processed 3 frames of 100 bytes, average latency 0.200[ms], max 0.300[ms], min 0.100[ms], stdev 0.082[ms]"
+            "Processed 3 frames of 100 bytes, estimated bandwidth 4.000[Mb/s], average latency 0.200[ms], max 0.300[ms], min 0.100[ms], stdev 0.082[ms]"
         );
     }
 }

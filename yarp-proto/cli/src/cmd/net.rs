@@ -75,16 +75,41 @@ fn stdin_lines() -> tokio::sync::mpsc::Receiver<String> {
     rx
 }
 
-/// `yarp read <port> [envelope] [source...]`
+/// How `yarp read` shows a message's envelope.
+#[derive(Clone, Copy, PartialEq)]
+enum ShowEnvelope {
+    No,
+    /// `envelope`: `<envelope>     <data>` on one line.
+    Inline,
+    /// `envelope2`: the envelope on a line of its own, then the data.
+    TwoLines,
+}
+
+/// `yarp read <port> [remote port] [envelope|envelope2] [trim [length]] [once]`, as
+/// C++ 3.12.3 parses it: `trim` cuts every printed line to `length` (80 when no number
+/// follows), `once` exits after the first message, any other word is a port to read from.
 pub fn read(args: &[String]) -> Result<()> {
     let Some((port, rest)) = args.split_first() else {
         return Err(cpp_error(&[
             "Usage:",
-            "  yarp read <port> [remote port] [envelope] [trim [length]]",
+            "  yarp read <port> [remote port] [envelope] [trim [length]] [once]",
         ]));
     };
-    let envelope = rest.iter().any(|a| a == "envelope");
-    let sources: Vec<&String> = rest.iter().filter(|a| *a != "envelope").collect();
+    let mut envelope = ShowEnvelope::No;
+    let mut trim = usize::MAX;
+    let mut once = false;
+    let mut sources: Vec<&String> = Vec::new();
+    let mut words = rest.iter();
+    while let Some(w) = words.next() {
+        match w.as_str() {
+            "envelope" => envelope = ShowEnvelope::Inline,
+            "envelope2" => envelope = ShowEnvelope::TwoLines,
+            // C++ takes the next word as the length whatever it is (atoi: 0 if no number)
+            "trim" => trim = words.next().map_or(80, |n| atoi(n).max(0) as usize),
+            "once" => once = true,
+            _ => sources.push(w),
+        }
+    }
     runtime()?.block_on(async {
         let ns = network::name_client()?;
         let p = Port::open(port, ns.clone()).await?;
@@ -104,14 +129,20 @@ pub fn read(args: &[String]) -> Result<()> {
                         Ok(b) => String::from_utf8_lossy(&b.to_text()).into_owned(),
                         Err(e) => { eprintln!("yarp: undecodable message from {}: {e}", m.from); continue }
                     };
+                    let text = cut(&text, trim);
+                    let env = m.stamp.map(|s| format!("{} {:.4}", s.count, s.time)).unwrap_or_default();
                     let mut out = stdout.lock();
-                    if envelope {
-                        if let Some(s) = m.stamp {
-                            let _ = write!(out, "{} {:.4}     ", s.count, s.time);
-                        }
-                    }
-                    let _ = writeln!(out, "{text}");
+                    // C++ 3.12.3 prints `<envelope>     <data>`, the five spaces even
+                    // when the message has no envelope
+                    let _ = match envelope {
+                        ShowEnvelope::No => writeln!(out, "{text}"),
+                        ShowEnvelope::Inline => writeln!(out, "{env}     {text}"),
+                        ShowEnvelope::TwoLines => writeln!(out, "{env}\n{text}"),
+                    };
                     let _ = out.flush();
+                    if once {
+                        break;
+                    }
                 }
             }
         }
@@ -120,13 +151,55 @@ pub fn read(args: &[String]) -> Result<()> {
     })
 }
 
-/// `yarp write <port> [target...]`: one Bottle per stdin line.
+/// C's `atoi`: the leading integer of `s` (after spaces), 0 when there is none.
+fn atoi(s: &str) -> i64 {
+    let t = s.trim_start();
+    let (sign, digits) = match t.strip_prefix('-') {
+        Some(r) => (-1, r),
+        None => (1, t.strip_prefix('+').unwrap_or(t)),
+    };
+    let n: String = digits.chars().take_while(char::is_ascii_digit).collect();
+    sign * n.parse::<i64>().unwrap_or(0)
+}
+
+/// The first `n` bytes of `s` (C++'s `substr(0, n)`), kept on a character boundary.
+fn cut(s: &str, n: usize) -> &str {
+    if n >= s.len() {
+        return s;
+    }
+    let mut end = n;
+    while !s.is_char_boundary(end) {
+        end -= 1;
+    }
+    &s[..end]
+}
+
+/// `yarp write <port> [target...] [--period <s>]`: one Bottle per stdin line; with a
+/// period, the last line read is written every `<s>` seconds until end of input instead
+/// (C++ 3.12.3's writer thread).
 pub fn write(args: &[String]) -> Result<()> {
     let Some((port, targets)) = args.split_first() else {
         return Err(cpp_error(&[
-            "Please supply the port name, and optionally some targets",
+            "Usage:",
+            "Please supply the port name, and optionally some targets, e.g.",
+            "  yarp write <port> [remote port1] [remote port2] [...] [--period <s>]",
+            "If the period optional parameter is given, then the message is written periodically",
         ]));
     };
+    let mut targets = targets;
+    let mut period = 0.0;
+    if targets.last().is_some_and(|a| a == "--period") {
+        return Err(cpp_error(&["Invalid period value"]));
+    }
+    if targets.len() >= 2 && targets[targets.len() - 2] == "--period" {
+        let pp: f64 = targets[targets.len() - 1].trim().parse().unwrap_or(0.0);
+        if pp.is_nan() || pp < 0.0 {
+            return Err(cpp_error(&["Invalid period value"]));
+        }
+        period = pp;
+        println!("Message will be published with a period of {period:.6} s");
+        targets = &targets[..targets.len() - 2];
+    }
     runtime()?.block_on(async {
         let ns = network::name_client()?;
         let p = Port::open(port, ns.clone()).await?;
@@ -136,12 +209,29 @@ pub fn write(args: &[String]) -> Result<()> {
                 .with_context(|| format!("connecting {port} to {t}"))?;
         }
         let mut rx = stdin_lines();
+        let mut last: Option<Bottle> = None;
+        let mut tick = (period > 0.0).then(|| {
+            let mut t = tokio::time::interval(Duration::from_secs_f64(period));
+            t.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+            t
+        });
         loop {
             tokio::select! {
                 _ = stop_signal() => break,
                 line = rx.recv() => {
                     let Some(line) = line else { break };
-                    p.write(&Bottle::from_text(line.trim_end_matches('\r'))).await;
+                    let b = Bottle::from_text(line.trim_end_matches('\r'));
+                    // with a period only the periodic writer sends (as C++)
+                    if tick.is_some() {
+                        last = Some(b);
+                    } else {
+                        p.write(&b).await;
+                    }
+                }
+                _ = async { tick.as_mut().expect("period").tick().await }, if tick.is_some() => {
+                    if let Some(b) = last.as_ref().filter(|b| !b.is_empty()) {
+                        p.write(b).await;
+                    }
                 }
             }
         }
@@ -353,7 +443,10 @@ pub fn connect(args: &[String]) -> Result<()> {
         }
     };
     if let Some(c) = carrier {
-        if Carrier::from_name(c).is_none() {
+        // C++ looks up the carrier proper: `fast_tcp+send.portmonitor+...` is fast_tcp with
+        // modifiers, which the ports resolve when they connect
+        let base = yarp_proto::wire::modifiers::CarrierName::parse(c).base;
+        if Carrier::from_name(&base).is_none() {
             unknown_carrier(from, to, c);
             return Err(anyhow::Error::new(Reported));
         }
