@@ -48,7 +48,7 @@ fn cached_cpp_yarp() -> Option<PathBuf> {
 /// The directory holding the real C++ YARP programs: `$YARP_CPP_BIN`, else the build of
 /// `tests/peers/install-cpp-peers.sh icub` in `~/.cache/yarp-rs/cpp-icub` (C++ YARP
 /// 3.12.3, the reference of the live tests). An older peer (the pip-built 3.5 of
-/// `<repo>/.venv-yarp`, or `tests/peers/install-cpp-yarp.sh`'s 3.5) is not looked for: its
+/// `<repo>/.venv-yarp`, or the retired CMake build of 3.5) is not looked for: its
 /// answers are not the reference any more; point `YARP_CPP_BIN` at it to try one.
 pub fn cpp_bin_dir() -> Option<PathBuf> {
     let mut dirs = Vec::new();
