@@ -54,6 +54,21 @@ pub fn load_records(file: &str) -> Vec<serde_json::Value> {
         .collect()
 }
 
+/// `target` as the `href` of an `xi:include` in a file of directory `from`. C++
+/// yarprobotinterface (and ours, as C++) joins the including file's directory, "/" and the
+/// href, so an absolute path is no href: it is spelled from `from` (`../../work/...`).
+pub fn include_href(from: &std::path::Path, target: &std::path::Path) -> String {
+    if target.is_relative() {
+        return target.display().to_string();
+    }
+    let up = from
+        .components()
+        .filter(|c| matches!(c, std::path::Component::Normal(_)))
+        .count();
+    let rest = target.strip_prefix("/").unwrap_or(target);
+    format!("{}{}", "../".repeat(up), rest.display())
+}
+
 /// Decodes a lowercase hex field.
 pub fn hex_field(rec: &serde_json::Value, key: &str) -> Vec<u8> {
     let s = rec[key]

@@ -55,7 +55,10 @@ fn ergocub_hand_position_sensors_as_encoder_arrays() {
     let dir = robot_dir("ergoCubSN001");
     let work = tempfile::tempdir().unwrap();
     let top = work.path().join("pos.xml");
-    let include = |f: &str| format!("    <xi:include href=\"{}\" />\n", dir.join(f).display());
+    let include = |f: &str| {
+        let href = yarp_interop_tests::include_href(work.path(), &dir.join(f));
+        format!("    <xi:include href=\"{href}\" />\n")
+    };
     let files = [
         "hardware/POS/left_hand-pos2.xml",
         "hardware/POS/left_hand-pos4.xml",

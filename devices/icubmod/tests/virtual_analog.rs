@@ -206,7 +206,10 @@ fn genova01_vft_files_run_unmodified() {
     let torso_tap = VirtualBus::named(&format!("{tag}-0")).endpoint();
     let tmp = tempfile::tempdir().unwrap();
     let file = tmp.path().join("vft.xml");
-    let inc = |p: &str| format!("    <xi:include href=\"{}\" />\n", dir.join(p).display());
+    let inc = |p: &str| {
+        let href = yarp_interop_tests::include_href(tmp.path(), &dir.join(p));
+        format!("    <xi:include href=\"{href}\" />\n")
+    };
     let xml = format!(
         "<?xml version=\"1.0\" encoding=\"UTF-8\" ?>\n<!DOCTYPE robot PUBLIC \"-//YARP//DTD yarprobotinterface 3.0//EN\" \"http://www.yarp.it/DTD/yarprobotinterfaceV3.0.dtd\">\n<robot name=\"iCubGenova01\" portprefix=\"/icub\" build=\"0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n<devices>\n{}{}{}{}</devices>\n</robot>\n",
         inc("wrappers/VFT/left_arm_VFT_wrapper.xml"),

@@ -40,12 +40,13 @@ fn robot_xml(
     included: &[PathBuf],
     attach: &str,
 ) -> PathBuf {
+    let href = |p: &Path| yarp_interop_tests::include_href(dir, p);
     let params = params.map_or(String::new(), |p| {
-        format!("<params><xi:include href=\"{}\" /></params>", p.display())
+        format!("<params><xi:include href=\"{}\" /></params>", href(p))
     });
     let devices: String = included
         .iter()
-        .map(|f| format!("<xi:include href=\"{}\" />\n", f.display()))
+        .map(|f| format!("<xi:include href=\"{}\" />\n", href(f)))
         .collect();
     let xml = format!(
         r#"<?xml version="1.0" encoding="UTF-8" ?>

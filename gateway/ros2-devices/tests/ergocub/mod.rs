@@ -66,17 +66,14 @@ pub fn ros2_tags() -> yarp_proto::Property {
 /// Writes the test's top file (see the module comment) into `out` and returns its path.
 pub fn top_file(dir: &Path, out: &Path, control: bool) -> PathBuf {
     let text = std::fs::read_to_string(dir.join("ergocub.xml")).expect("ergocub.xml");
-    let abs = format!("href=\"{}/", dir.display());
-    let mut text = text.replace("href=\"", &abs);
-    let mut extra = format!(
-        "    <xi:include href=\"{}/hardware/FT/right_arm-eb1-j0_1-strain.xml\" />\n",
-        dir.display()
-    );
+    // the copy lives in `out`: the robot's files are named from there (C++ joins the
+    // including file's directory and the href)
+    let robot = yarp_interop_tests::include_href(out, dir);
+    let mut text = text.replace("href=\"", &format!("href=\"{robot}/"));
+    let mut extra =
+        format!("    <xi:include href=\"{robot}/hardware/FT/right_arm-eb1-j0_1-strain.xml\" />\n");
     for f in FT_FILES {
-        extra.push_str(&format!(
-            "    <xi:include href=\"{}/{f}\" />\n",
-            dir.display()
-        ));
+        extra.push_str(&format!("    <xi:include href=\"{robot}/{f}\" />\n"));
     }
     if control {
         extra.push_str(CONTROL_DEVICE);
