@@ -200,6 +200,11 @@ fn index_package(r: &mut Registry, pkg: &str, dir: &Path) -> usize {
 /// Gives a parsed definition the `'static` form of the built-in catalog (once per type
 /// and process).
 fn leak(d: MsgDef) -> &'static MsgType {
+    Box::leak(Box::new(to_static(d)))
+}
+
+/// A parsed definition as a [`MsgType`], its strings leaked (once per type and process).
+pub(crate) fn to_static(d: MsgDef) -> MsgType {
     let fields: Vec<Field> = d
         .fields
         .into_iter()
@@ -223,11 +228,11 @@ fn leak(d: MsgDef) -> &'static MsgType {
             value: c.value.leak(),
         })
         .collect();
-    Box::leak(Box::new(MsgType {
+    MsgType {
         name: d.name.leak(),
         fields: fields.leak(),
         constants: constants.leak(),
-    }))
+    }
 }
 
 #[cfg(test)]

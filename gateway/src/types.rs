@@ -2,9 +2,10 @@
 //!
 //! One description drives three things: the REP-2016 type hash ([`crate::hash`]), the
 //! dynamic CDR encoding of messages ([`crate::dynmsg`]) and the validation of mapping
-//! files ([`crate::mapping`]). The field lists are copied from the `.msg`/`.srv` files of
-//! ROS 2 Jazzy/Kilted (identical in both), including the `uint8
-//! structure_needs_at_least_one_member` that rosidl adds to empty structures.
+//! files ([`crate::mapping`]). The built-in types are the `.msg`/`.srv` files their
+//! packages publish (ROS 2 Jazzy/Kilted, yarp-devices-ros2), embedded in the binary
+//! ([`DEFINITIONS`]) and read by the parser of run-time types ([`crate::msgdef`]) the
+//! first time the catalog is used.
 
 /// A primitive (non-nested) field type, named as in REP-2016's `FieldType.msg`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -118,691 +119,146 @@ pub struct Constant {
 pub struct MsgType {
     pub name: &'static str,
     pub fields: &'static [Field],
-    /// Constants (types read from their definitions; the built-in catalog lists none).
+    /// Constants (`uint8 ARROW=0`).
     pub constants: &'static [Constant],
 }
 
-const fn f(name: &'static str, p: Prim) -> Field {
-    Field {
-        name,
-        base: Base::Prim(p),
-        shape: Shape::Single,
-        string_capacity: 0,
-        default: None,
-    }
-}
-const fn seq(name: &'static str, p: Prim) -> Field {
-    Field {
-        name,
-        base: Base::Prim(p),
-        shape: Shape::Seq,
-        string_capacity: 0,
-        default: None,
-    }
-}
-const fn arr(name: &'static str, p: Prim, n: u64) -> Field {
-    Field {
-        name,
-        base: Base::Prim(p),
-        shape: Shape::Array(n),
-        string_capacity: 0,
-        default: None,
-    }
-}
-const fn nested(name: &'static str, ty: &'static str) -> Field {
-    Field {
-        name,
-        base: Base::Nested(ty),
-        shape: Shape::Single,
-        string_capacity: 0,
-        default: None,
-    }
-}
-const fn nested_seq(name: &'static str, ty: &'static str) -> Field {
-    Field {
-        name,
-        base: Base::Nested(ty),
-        shape: Shape::Seq,
-        string_capacity: 0,
-        default: None,
-    }
-}
-const fn nested_opt(name: &'static str, ty: &'static str) -> Field {
-    Field {
-        name,
-        base: Base::Nested(ty),
-        shape: Shape::BoundedSeq(1),
-        string_capacity: 0,
-        default: None,
-    }
-}
-const fn msg(name: &'static str, fields: &'static [Field]) -> MsgType {
-    MsgType {
-        name,
-        fields,
-        constants: &[],
-    }
+/// The definitions of the built-in catalog, as their packages publish them
+/// (`gateway/msg/<pkg>/<msg|srv>/<Name>.<msg|srv>`, see `gateway/msg/README.md`).
+macro_rules! definitions {
+    ($($pkg:ident / $kind:ident / $name:ident),* $(,)?) => {
+        &[$((
+            stringify!($pkg),
+            stringify!($kind),
+            stringify!($name),
+            include_str!(concat!(
+                "../msg/", stringify!($pkg), "/", stringify!($kind), "/",
+                stringify!($name), ".", stringify!($kind)
+            )),
+        )),*]
+    };
 }
 
-const DUMMY: &[Field] = &[f("structure_needs_at_least_one_member", Prim::U8)];
-const XYZ: &[Field] = &[f("x", Prim::F64), f("y", Prim::F64), f("z", Prim::F64)];
-const HEADER: Field = nested("header", "std_msgs/msg/Header");
-const LAYOUT: Field = nested("layout", "std_msgs/msg/MultiArrayLayout");
-// Fields shared by the yarp_control_msgs types (`string response "NOT_SPECIFIED"`: default
-// values are not part of a type description, so not of its hash).
-const NAMES: Field = seq("names", Prim::String);
-const MODES: Field = seq("modes", Prim::String);
-const RESPONSE: Field = f("response", Prim::String);
-const OPT_DESCR: Field = f("opt_descr", Prim::String);
-const EVENT_INFO: Field = nested("info", "service_msgs/msg/ServiceEventInfo");
-
-/// Every message type the gateway knows.
-pub static MESSAGES: &[MsgType] = &[
-    msg(
-        "builtin_interfaces/msg/Time",
-        &[f("sec", Prim::I32), f("nanosec", Prim::U32)],
-    ),
-    msg(
-        "std_msgs/msg/Header",
-        &[
-            nested("stamp", "builtin_interfaces/msg/Time"),
-            f("frame_id", Prim::String),
-        ],
-    ),
-    msg("std_msgs/msg/String", &[f("data", Prim::String)]),
-    msg("std_msgs/msg/Bool", &[f("data", Prim::Bool)]),
-    msg("std_msgs/msg/Int32", &[f("data", Prim::I32)]),
-    msg("std_msgs/msg/Int64", &[f("data", Prim::I64)]),
-    msg("std_msgs/msg/UInt8", &[f("data", Prim::U8)]),
-    msg("std_msgs/msg/Float32", &[f("data", Prim::F32)]),
-    msg("std_msgs/msg/Float64", &[f("data", Prim::F64)]),
-    msg("std_msgs/msg/Empty", DUMMY),
-    msg(
-        "std_msgs/msg/MultiArrayDimension",
-        &[
-            f("label", Prim::String),
-            f("size", Prim::U32),
-            f("stride", Prim::U32),
-        ],
-    ),
-    msg(
-        "std_msgs/msg/MultiArrayLayout",
-        &[
-            nested_seq("dim", "std_msgs/msg/MultiArrayDimension"),
-            f("data_offset", Prim::U32),
-        ],
-    ),
-    msg(
-        "std_msgs/msg/Float64MultiArray",
-        &[LAYOUT, seq("data", Prim::F64)],
-    ),
-    msg(
-        "std_msgs/msg/Float32MultiArray",
-        &[LAYOUT, seq("data", Prim::F32)],
-    ),
-    msg(
-        "std_msgs/msg/Int32MultiArray",
-        &[LAYOUT, seq("data", Prim::I32)],
-    ),
-    msg(
-        "std_msgs/msg/Int64MultiArray",
-        &[LAYOUT, seq("data", Prim::I64)],
-    ),
-    msg("geometry_msgs/msg/Vector3", XYZ),
-    msg(
-        "geometry_msgs/msg/Quaternion",
-        &[
-            f("x", Prim::F64),
-            f("y", Prim::F64),
-            f("z", Prim::F64),
-            f("w", Prim::F64),
-        ],
-    ),
-    msg(
-        "geometry_msgs/msg/Twist",
-        &[
-            nested("linear", "geometry_msgs/msg/Vector3"),
-            nested("angular", "geometry_msgs/msg/Vector3"),
-        ],
-    ),
-    msg(
-        "geometry_msgs/msg/Wrench",
-        &[
-            nested("force", "geometry_msgs/msg/Vector3"),
-            nested("torque", "geometry_msgs/msg/Vector3"),
-        ],
-    ),
-    msg(
-        "geometry_msgs/msg/WrenchStamped",
-        &[HEADER, nested("wrench", "geometry_msgs/msg/Wrench")],
-    ),
-    msg(
-        "sensor_msgs/msg/JointState",
-        &[
-            HEADER,
-            seq("name", Prim::String),
-            seq("position", Prim::F64),
-            seq("velocity", Prim::F64),
-            seq("effort", Prim::F64),
-        ],
-    ),
+/// `(package, msg|srv, name, text)` of every built-in definition.
+#[rustfmt::skip]
+pub static DEFINITIONS: &[(&str, &str, &str, &str)] = definitions![
+    builtin_interfaces/msg/Time,
+    std_msgs/msg/Header,
+    std_msgs/msg/String,
+    std_msgs/msg/Bool,
+    std_msgs/msg/Int32,
+    std_msgs/msg/Int64,
+    std_msgs/msg/UInt8,
+    std_msgs/msg/Float32,
+    std_msgs/msg/Float64,
+    std_msgs/msg/Empty,
+    std_msgs/msg/MultiArrayDimension,
+    std_msgs/msg/MultiArrayLayout,
+    std_msgs/msg/Float64MultiArray,
+    std_msgs/msg/Float32MultiArray,
+    std_msgs/msg/Int32MultiArray,
+    std_msgs/msg/Int64MultiArray,
+    geometry_msgs/msg/Vector3,
+    geometry_msgs/msg/Quaternion,
+    geometry_msgs/msg/Twist,
+    geometry_msgs/msg/Wrench,
+    geometry_msgs/msg/WrenchStamped,
+    sensor_msgs/msg/JointState,
     // yarp-devices-ros2 (`controlBoard_nws_ros2`, the multiple-analog-sensors wrappers):
     // robotology/yarp-devices-ros2's `ros2_interfaces_ws/src/yarp_control_msgs` and the
     // standard types those devices publish.
-    msg(
-        "std_msgs/msg/Int8MultiArray",
-        &[LAYOUT, seq("data", Prim::I8)],
-    ),
-    msg(
-        "sensor_msgs/msg/MagneticField",
-        &[
-            HEADER,
-            nested("magnetic_field", "geometry_msgs/msg/Vector3"),
-            arr("magnetic_field_covariance", Prim::F64, 9),
-        ],
-    ),
-    msg(
-        "sensor_msgs/msg/Temperature",
-        &[
-            HEADER,
-            f("temperature", Prim::F64),
-            f("variance", Prim::F64),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/msg/Position",
-        &[
-            NAMES,
-            seq("positions", Prim::F64),
-            seq("ref_velocities", Prim::F64),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/msg/PositionDirect",
-        &[NAMES, seq("positions", Prim::F64)],
-    ),
-    msg(
-        "yarp_control_msgs/msg/Velocity",
-        &[
-            NAMES,
-            seq("velocities", Prim::F64),
-            seq("ref_accelerations", Prim::F64),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetJointsNames_Request",
-        &[seq("joint_indexes", Prim::I32)],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetJointsNames_Response",
-        &[NAMES, RESPONSE, OPT_DESCR],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetJointsNames_Event",
-        &[
-            EVENT_INFO,
-            nested_opt("request", "yarp_control_msgs/srv/GetJointsNames_Request"),
-            nested_opt("response", "yarp_control_msgs/srv/GetJointsNames_Response"),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetJointsNames",
-        &[
-            nested(
-                "request_message",
-                "yarp_control_msgs/srv/GetJointsNames_Request",
-            ),
-            nested(
-                "response_message",
-                "yarp_control_msgs/srv/GetJointsNames_Response",
-            ),
-            nested(
-                "event_message",
-                "yarp_control_msgs/srv/GetJointsNames_Event",
-            ),
-        ],
-    ),
-    msg("yarp_control_msgs/srv/GetControlModes_Request", &[NAMES]),
-    msg(
-        "yarp_control_msgs/srv/GetControlModes_Response",
-        &[MODES, RESPONSE, OPT_DESCR],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetControlModes_Event",
-        &[
-            EVENT_INFO,
-            nested_opt("request", "yarp_control_msgs/srv/GetControlModes_Request"),
-            nested_opt("response", "yarp_control_msgs/srv/GetControlModes_Response"),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetControlModes",
-        &[
-            nested(
-                "request_message",
-                "yarp_control_msgs/srv/GetControlModes_Request",
-            ),
-            nested(
-                "response_message",
-                "yarp_control_msgs/srv/GetControlModes_Response",
-            ),
-            nested(
-                "event_message",
-                "yarp_control_msgs/srv/GetControlModes_Event",
-            ),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/srv/SetControlModes_Request",
-        &[NAMES, MODES],
-    ),
-    msg(
-        "yarp_control_msgs/srv/SetControlModes_Response",
-        &[RESPONSE, OPT_DESCR],
-    ),
-    msg(
-        "yarp_control_msgs/srv/SetControlModes_Event",
-        &[
-            EVENT_INFO,
-            nested_opt("request", "yarp_control_msgs/srv/SetControlModes_Request"),
-            nested_opt("response", "yarp_control_msgs/srv/SetControlModes_Response"),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/srv/SetControlModes",
-        &[
-            nested(
-                "request_message",
-                "yarp_control_msgs/srv/SetControlModes_Request",
-            ),
-            nested(
-                "response_message",
-                "yarp_control_msgs/srv/SetControlModes_Response",
-            ),
-            nested(
-                "event_message",
-                "yarp_control_msgs/srv/SetControlModes_Event",
-            ),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetAvailableControlModes_Request",
-        &[f("only_implemented", Prim::Bool)],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetAvailableControlModes_Response",
-        &[MODES, RESPONSE, OPT_DESCR],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetAvailableControlModes_Event",
-        &[
-            EVENT_INFO,
-            nested_opt(
-                "request",
-                "yarp_control_msgs/srv/GetAvailableControlModes_Request",
-            ),
-            nested_opt(
-                "response",
-                "yarp_control_msgs/srv/GetAvailableControlModes_Response",
-            ),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetAvailableControlModes",
-        &[
-            nested(
-                "request_message",
-                "yarp_control_msgs/srv/GetAvailableControlModes_Request",
-            ),
-            nested(
-                "response_message",
-                "yarp_control_msgs/srv/GetAvailableControlModes_Response",
-            ),
-            nested(
-                "event_message",
-                "yarp_control_msgs/srv/GetAvailableControlModes_Event",
-            ),
-        ],
-    ),
-    msg("yarp_control_msgs/srv/GetPosition_Request", &[NAMES]),
-    msg(
-        "yarp_control_msgs/srv/GetPosition_Response",
-        &[seq("positions", Prim::F64), RESPONSE, OPT_DESCR],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetPosition_Event",
-        &[
-            EVENT_INFO,
-            nested_opt("request", "yarp_control_msgs/srv/GetPosition_Request"),
-            nested_opt("response", "yarp_control_msgs/srv/GetPosition_Response"),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetPosition",
-        &[
-            nested(
-                "request_message",
-                "yarp_control_msgs/srv/GetPosition_Request",
-            ),
-            nested(
-                "response_message",
-                "yarp_control_msgs/srv/GetPosition_Response",
-            ),
-            nested("event_message", "yarp_control_msgs/srv/GetPosition_Event"),
-        ],
-    ),
-    msg("yarp_control_msgs/srv/GetVelocity_Request", &[NAMES]),
-    msg(
-        "yarp_control_msgs/srv/GetVelocity_Response",
-        &[seq("velocities", Prim::F64), RESPONSE, OPT_DESCR],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetVelocity_Event",
-        &[
-            EVENT_INFO,
-            nested_opt("request", "yarp_control_msgs/srv/GetVelocity_Request"),
-            nested_opt("response", "yarp_control_msgs/srv/GetVelocity_Response"),
-        ],
-    ),
-    msg(
-        "yarp_control_msgs/srv/GetVelocity",
-        &[
-            nested(
-                "request_message",
-                "yarp_control_msgs/srv/GetVelocity_Request",
-            ),
-            nested(
-                "response_message",
-                "yarp_control_msgs/srv/GetVelocity_Response",
-            ),
-            nested("event_message", "yarp_control_msgs/srv/GetVelocity_Event"),
-        ],
-    ),
-    msg(
-        "builtin_interfaces/msg/Duration",
-        &[f("sec", Prim::I32), f("nanosec", Prim::U32)],
-    ),
-    msg(
-        "trajectory_msgs/msg/JointTrajectoryPoint",
-        &[
-            seq("positions", Prim::F64),
-            seq("velocities", Prim::F64),
-            seq("accelerations", Prim::F64),
-            seq("effort", Prim::F64),
-            nested("time_from_start", "builtin_interfaces/msg/Duration"),
-        ],
-    ),
-    msg(
-        "trajectory_msgs/msg/JointTrajectory",
-        &[
-            HEADER,
-            seq("joint_names", Prim::String),
-            nested_seq("points", "trajectory_msgs/msg/JointTrajectoryPoint"),
-        ],
-    ),
-    msg(
-        "sensor_msgs/msg/Image",
-        &[
-            HEADER,
-            f("height", Prim::U32),
-            f("width", Prim::U32),
-            f("encoding", Prim::String),
-            f("is_bigendian", Prim::U8),
-            f("step", Prim::U32),
-            seq("data", Prim::U8),
-        ],
-    ),
+    std_msgs/msg/Int8MultiArray,
+    sensor_msgs/msg/MagneticField,
+    sensor_msgs/msg/Temperature,
+    yarp_control_msgs/msg/Position,
+    yarp_control_msgs/msg/PositionDirect,
+    yarp_control_msgs/msg/Velocity,
+    yarp_control_msgs/srv/GetJointsNames,
+    yarp_control_msgs/srv/GetControlModes,
+    yarp_control_msgs/srv/SetControlModes,
+    yarp_control_msgs/srv/GetAvailableControlModes,
+    yarp_control_msgs/srv/GetPosition,
+    yarp_control_msgs/srv/GetVelocity,
+    builtin_interfaces/msg/Duration,
+    trajectory_msgs/msg/JointTrajectoryPoint,
+    trajectory_msgs/msg/JointTrajectory,
+    sensor_msgs/msg/Image,
     // Cameras, lasers, point clouds, batteries, odometry and transforms: the topics of
     // yarp-devices-ros2's wrappers (frameGrabber, rgbdSensor, rangefinder2D, battery,
     // odometry2D, mobileBaseVelocityControl, frameTransform).
-    msg(
-        "sensor_msgs/msg/RegionOfInterest",
-        &[
-            f("x_offset", Prim::U32),
-            f("y_offset", Prim::U32),
-            f("height", Prim::U32),
-            f("width", Prim::U32),
-            f("do_rectify", Prim::Bool),
-        ],
-    ),
-    msg(
-        "sensor_msgs/msg/CameraInfo",
-        &[
-            HEADER,
-            f("height", Prim::U32),
-            f("width", Prim::U32),
-            f("distortion_model", Prim::String),
-            seq("d", Prim::F64),
-            arr("k", Prim::F64, 9),
-            arr("r", Prim::F64, 9),
-            arr("p", Prim::F64, 12),
-            f("binning_x", Prim::U32),
-            f("binning_y", Prim::U32),
-            nested("roi", "sensor_msgs/msg/RegionOfInterest"),
-        ],
-    ),
-    msg(
-        "sensor_msgs/msg/LaserScan",
-        &[
-            HEADER,
-            f("angle_min", Prim::F32),
-            f("angle_max", Prim::F32),
-            f("angle_increment", Prim::F32),
-            f("time_increment", Prim::F32),
-            f("scan_time", Prim::F32),
-            f("range_min", Prim::F32),
-            f("range_max", Prim::F32),
-            seq("ranges", Prim::F32),
-            seq("intensities", Prim::F32),
-        ],
-    ),
-    msg(
-        "sensor_msgs/msg/PointField",
-        &[
-            f("name", Prim::String),
-            f("offset", Prim::U32),
-            f("datatype", Prim::U8),
-            f("count", Prim::U32),
-        ],
-    ),
-    msg(
-        "sensor_msgs/msg/PointCloud2",
-        &[
-            HEADER,
-            f("height", Prim::U32),
-            f("width", Prim::U32),
-            nested_seq("fields", "sensor_msgs/msg/PointField"),
-            f("is_bigendian", Prim::Bool),
-            f("point_step", Prim::U32),
-            f("row_step", Prim::U32),
-            seq("data", Prim::U8),
-            f("is_dense", Prim::Bool),
-        ],
-    ),
-    msg(
-        "sensor_msgs/msg/BatteryState",
-        &[
-            HEADER,
-            f("voltage", Prim::F32),
-            f("temperature", Prim::F32),
-            f("current", Prim::F32),
-            f("charge", Prim::F32),
-            f("capacity", Prim::F32),
-            f("design_capacity", Prim::F32),
-            f("percentage", Prim::F32),
-            f("power_supply_status", Prim::U8),
-            f("power_supply_health", Prim::U8),
-            f("power_supply_technology", Prim::U8),
-            f("present", Prim::Bool),
-            seq("cell_voltage", Prim::F32),
-            seq("cell_temperature", Prim::F32),
-            f("location", Prim::String),
-            f("serial_number", Prim::String),
-        ],
-    ),
-    msg("geometry_msgs/msg/Point", XYZ),
-    msg(
-        "geometry_msgs/msg/Pose",
-        &[
-            nested("position", "geometry_msgs/msg/Point"),
-            nested("orientation", "geometry_msgs/msg/Quaternion"),
-        ],
-    ),
-    msg(
-        "geometry_msgs/msg/PoseWithCovariance",
-        &[
-            nested("pose", "geometry_msgs/msg/Pose"),
-            arr("covariance", Prim::F64, 36),
-        ],
-    ),
-    msg(
-        "geometry_msgs/msg/TwistWithCovariance",
-        &[
-            nested("twist", "geometry_msgs/msg/Twist"),
-            arr("covariance", Prim::F64, 36),
-        ],
-    ),
-    msg(
-        "nav_msgs/msg/Odometry",
-        &[
-            HEADER,
-            f("child_frame_id", Prim::String),
-            nested("pose", "geometry_msgs/msg/PoseWithCovariance"),
-            nested("twist", "geometry_msgs/msg/TwistWithCovariance"),
-        ],
-    ),
-    msg(
-        "geometry_msgs/msg/TwistStamped",
-        &[HEADER, nested("twist", "geometry_msgs/msg/Twist")],
-    ),
-    msg(
-        "geometry_msgs/msg/Transform",
-        &[
-            nested("translation", "geometry_msgs/msg/Vector3"),
-            nested("rotation", "geometry_msgs/msg/Quaternion"),
-        ],
-    ),
-    msg(
-        "geometry_msgs/msg/TransformStamped",
-        &[
-            HEADER,
-            f("child_frame_id", Prim::String),
-            nested("transform", "geometry_msgs/msg/Transform"),
-        ],
-    ),
+    sensor_msgs/msg/RegionOfInterest,
+    sensor_msgs/msg/CameraInfo,
+    sensor_msgs/msg/LaserScan,
+    sensor_msgs/msg/PointField,
+    sensor_msgs/msg/PointCloud2,
+    sensor_msgs/msg/BatteryState,
+    geometry_msgs/msg/Point,
+    geometry_msgs/msg/Pose,
+    geometry_msgs/msg/PoseWithCovariance,
+    geometry_msgs/msg/TwistWithCovariance,
+    nav_msgs/msg/Odometry,
+    geometry_msgs/msg/TwistStamped,
+    geometry_msgs/msg/Transform,
+    geometry_msgs/msg/TransformStamped,
     // Not on PyPI: its type-description JSON is generated into the test venvs by
     // tests/peers/install-ros2.sh from tests/peers/interfaces/.
-    msg(
-        "tf2_msgs/msg/TFMessage",
-        &[nested_seq(
-            "transforms",
-            "geometry_msgs/msg/TransformStamped",
-        )],
-    ),
-    msg(
-        "sensor_msgs/msg/Imu",
-        &[
-            HEADER,
-            nested("orientation", "geometry_msgs/msg/Quaternion"),
-            arr("orientation_covariance", Prim::F64, 9),
-            nested("angular_velocity", "geometry_msgs/msg/Vector3"),
-            arr("angular_velocity_covariance", Prim::F64, 9),
-            nested("linear_acceleration", "geometry_msgs/msg/Vector3"),
-            arr("linear_acceleration_covariance", Prim::F64, 9),
-        ],
-    ),
-    msg(
-        "diagnostic_msgs/msg/KeyValue",
-        &[f("key", Prim::String), f("value", Prim::String)],
-    ),
-    msg(
-        "diagnostic_msgs/msg/DiagnosticStatus",
-        &[
-            f("level", Prim::Byte),
-            f("name", Prim::String),
-            f("message", Prim::String),
-            f("hardware_id", Prim::String),
-            nested_seq("values", "diagnostic_msgs/msg/KeyValue"),
-        ],
-    ),
-    msg(
-        "diagnostic_msgs/msg/DiagnosticArray",
-        &[
-            HEADER,
-            nested_seq("status", "diagnostic_msgs/msg/DiagnosticStatus"),
-        ],
-    ),
+    tf2_msgs/msg/TFMessage,
+    sensor_msgs/msg/Imu,
+    diagnostic_msgs/msg/KeyValue,
+    diagnostic_msgs/msg/DiagnosticStatus,
+    diagnostic_msgs/msg/DiagnosticArray,
     // Service plumbing (REP-2016 describes a service as request, response and event).
-    msg(
-        "service_msgs/msg/ServiceEventInfo",
-        &[
-            f("event_type", Prim::U8),
-            nested("stamp", "builtin_interfaces/msg/Time"),
-            arr("client_gid", Prim::U8, 16),
-            f("sequence_number", Prim::I64),
-        ],
-    ),
-    msg("std_srvs/srv/Trigger_Request", DUMMY),
-    msg(
-        "std_srvs/srv/Trigger_Response",
-        &[f("success", Prim::Bool), f("message", Prim::String)],
-    ),
-    msg("std_srvs/srv/SetBool_Request", &[f("data", Prim::Bool)]),
-    msg(
-        "std_srvs/srv/SetBool_Response",
-        &[f("success", Prim::Bool), f("message", Prim::String)],
-    ),
-    msg("std_srvs/srv/Empty_Request", DUMMY),
-    msg("std_srvs/srv/Empty_Response", DUMMY),
-    msg(
-        "std_srvs/srv/Trigger_Event",
-        &[
-            nested("info", "service_msgs/msg/ServiceEventInfo"),
-            nested_opt("request", "std_srvs/srv/Trigger_Request"),
-            nested_opt("response", "std_srvs/srv/Trigger_Response"),
-        ],
-    ),
-    msg(
-        "std_srvs/srv/SetBool_Event",
-        &[
-            nested("info", "service_msgs/msg/ServiceEventInfo"),
-            nested_opt("request", "std_srvs/srv/SetBool_Request"),
-            nested_opt("response", "std_srvs/srv/SetBool_Response"),
-        ],
-    ),
-    msg(
-        "std_srvs/srv/Empty_Event",
-        &[
-            nested("info", "service_msgs/msg/ServiceEventInfo"),
-            nested_opt("request", "std_srvs/srv/Empty_Request"),
-            nested_opt("response", "std_srvs/srv/Empty_Response"),
-        ],
-    ),
-    msg(
-        "std_srvs/srv/Trigger",
-        &[
-            nested("request_message", "std_srvs/srv/Trigger_Request"),
-            nested("response_message", "std_srvs/srv/Trigger_Response"),
-            nested("event_message", "std_srvs/srv/Trigger_Event"),
-        ],
-    ),
-    msg(
-        "std_srvs/srv/SetBool",
-        &[
-            nested("request_message", "std_srvs/srv/SetBool_Request"),
-            nested("response_message", "std_srvs/srv/SetBool_Response"),
-            nested("event_message", "std_srvs/srv/SetBool_Event"),
-        ],
-    ),
-    msg(
-        "std_srvs/srv/Empty",
-        &[
-            nested("request_message", "std_srvs/srv/Empty_Request"),
-            nested("response_message", "std_srvs/srv/Empty_Response"),
-            nested("event_message", "std_srvs/srv/Empty_Event"),
-        ],
-    ),
+    service_msgs/msg/ServiceEventInfo,
+    std_srvs/srv/Trigger,
+    std_srvs/srv/SetBool,
+    std_srvs/srv/Empty,
 ];
+
+/// Parses a built-in definition into its structures (a service gives four).
+pub fn parse_definition(
+    (pkg, kind, name, text): (&str, &str, &str, &str),
+) -> Result<Vec<crate::msgdef::MsgDef>, crate::msgdef::DefError> {
+    match kind {
+        "srv" => crate::msgdef::parse_srv(pkg, name, text),
+        _ => crate::msgdef::parse_msg(pkg, name, text).map(|d| vec![d]),
+    }
+}
+
+/// Every message type the gateway knows: [`DEFINITIONS`], parsed the first time it is
+/// used (a built-in definition that does not parse is a bug, caught by the tests).
+pub static MESSAGES: Catalog = Catalog;
+
+/// The built-in catalog, a slice of [`MsgType`] (`MESSAGES.iter()`, `for t in MESSAGES`).
+#[derive(Debug, Clone, Copy)]
+pub struct Catalog;
+
+impl Catalog {
+    fn get(self) -> &'static [MsgType] {
+        static PARSED: std::sync::OnceLock<Vec<MsgType>> = std::sync::OnceLock::new();
+        PARSED.get_or_init(|| {
+            DEFINITIONS
+                .iter()
+                .flat_map(|&d| parse_definition(d).expect("a built-in definition"))
+                .map(crate::interfaces::to_static)
+                .collect()
+        })
+    }
+}
+
+impl std::ops::Deref for Catalog {
+    type Target = [MsgType];
+    fn deref(&self) -> &[MsgType] {
+        self.get()
+    }
+}
+
+impl IntoIterator for Catalog {
+    type Item = &'static MsgType;
+    type IntoIter = std::slice::Iter<'static, MsgType>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.get().iter()
+    }
+}
 
 /// Looks a type up by its full name (`pkg/msg/Name` or `pkg/srv/Name`): from the
 /// interface definitions found at run time ([`crate::interfaces`]), else from the built-in
@@ -840,6 +296,31 @@ pub fn dds_type_name(name: &str) -> Option<String> {
 mod tests {
     use super::*;
 
+    fn field(name: &'static str, base: Base, shape: Shape) -> Field {
+        Field {
+            name,
+            base,
+            shape,
+            string_capacity: 0,
+            default: None,
+        }
+    }
+    fn f(name: &'static str, p: Prim) -> Field {
+        field(name, Base::Prim(p), Shape::Single)
+    }
+    fn seq(name: &'static str, p: Prim) -> Field {
+        field(name, Base::Prim(p), Shape::Seq)
+    }
+    fn arr(name: &'static str, p: Prim, n: u64) -> Field {
+        field(name, Base::Prim(p), Shape::Array(n))
+    }
+    fn nested_seq(name: &'static str, ty: &'static str) -> Field {
+        field(name, Base::Nested(ty), Shape::Seq)
+    }
+    fn nested_opt(name: &'static str, ty: &'static str) -> Field {
+        field(name, Base::Nested(ty), Shape::BoundedSeq(1))
+    }
+
     #[test]
     fn every_nested_reference_resolves() {
         for m in MESSAGES {
@@ -849,6 +330,30 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn every_definition_parses_into_the_catalog() {
+        let mut n = 0;
+        for &d in DEFINITIONS {
+            let defs =
+                parse_definition(d).unwrap_or_else(|e| panic!("{}/{}/{}: {e}", d.0, d.1, d.2));
+            assert_eq!(defs.len(), if d.1 == "srv" { 4 } else { 1 });
+            for def in defs {
+                assert_eq!(MESSAGES[n].name, def.name);
+                assert_eq!(MESSAGES[n].fields.len(), def.fields.len(), "{}", def.name);
+                assert!(std::ptr::eq(builtin(&def.name).unwrap(), &MESSAGES[n]));
+                n += 1;
+            }
+        }
+        assert_eq!(MESSAGES.len(), n);
+        let q = builtin("geometry_msgs/msg/Quaternion").unwrap();
+        assert_eq!(q.fields[3].default, Some("1"));
+        let p = builtin("sensor_msgs/msg/PointField").unwrap();
+        assert_eq!(
+            (p.constants[7].name, p.constants[7].value),
+            ("FLOAT64", "8")
+        );
     }
 
     #[test]

@@ -47,6 +47,60 @@ fn every_catalog_type_matches_the_installed_type_descriptions_on(venv: &common::
     assert!(checked > 40, "{checked}");
 }
 
+/// Every built-in definition (`gateway/msg/`) is the one the wheels install (same
+/// structures once parsed, defaults and constants included) and each of its structures
+/// hashes as rosidl's `.json` beside it says; yarp_control_msgs, which has no wheel, is
+/// checked against rosidl by gateway/ros2-devices/tests/type_hashes.rs.
+#[test]
+fn every_built_in_definition_is_the_installed_one() {
+    for d in common::distros("every_built_in_definition_is_the_installed_one") {
+        every_built_in_definition_is_the_installed_one_on(&d);
+    }
+}
+
+fn every_built_in_definition_is_the_installed_one_on(venv: &common::Distro) {
+    use yarp_ros2_gateway::types::{parse_definition, DEFINITIONS};
+    let (mut same, mut hashed, mut unchecked) = (0, 0, std::collections::BTreeSet::new());
+    for &def in DEFINITIONS {
+        let (pkg, kind, name, _) = def;
+        let structures = parse_definition(def).unwrap();
+        let file = venv.join(format!("share/{pkg}/{kind}/{name}.{kind}"));
+        if let Ok(text) = std::fs::read_to_string(&file) {
+            let installed = parse_definition((pkg, kind, name, &text)).unwrap();
+            assert_eq!(structures, installed, "{}", file.display());
+            same += 1;
+        }
+        let Ok(text) = std::fs::read_to_string(file.with_extension("json")) else {
+            unchecked.insert(pkg);
+            continue;
+        };
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        for s in &structures {
+            let want = json["type_hashes"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|h| h["type_name"] == s.name.as_str())
+                .unwrap_or_else(|| panic!("{} not in {}", s.name, file.display()))["hash_string"]
+                .as_str()
+                .unwrap();
+            assert_eq!(rihs01(&s.name).unwrap(), want, "{}", s.name);
+            hashed += 1;
+        }
+    }
+    eprintln!(
+        "[{}] {same} built-in definitions as installed, {hashed} structures hashed as rosidl",
+        venv.name
+    );
+    assert_eq!(
+        unchecked.into_iter().collect::<Vec<_>>(),
+        ["yarp_control_msgs"]
+    );
+    // all but tf2_msgs (no wheel; only its hashes are generated into the venv) and
+    // yarp_control_msgs
+    assert_eq!(same, DEFINITIONS.len() - 10);
+}
+
 /// Every message and service definition the wheels install (`share/<pkg>/msg/*.msg`,
 /// `srv/*.srv`; nav_msgs and visualization_msgs among them), read at run time, hashes as
 /// rosidl hashed it (the `type_hashes` of the `.json` beside each file).
