@@ -29,7 +29,7 @@ fn ergocub_battery_reports_through_embobjbattery() {
   </devices>
 </robot>
 "#,
-            dir.join("hardware/battery/battery_bms.xml").display()
+            yarp_interop_tests::include_href(work.path(), &dir.join("hardware/battery/battery_bms.xml"))
         ),
     )
     .unwrap();

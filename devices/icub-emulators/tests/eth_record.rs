@@ -46,7 +46,7 @@ fn the_rops_a_host_sends_are_recorded_per_board() {
     let rec = tempfile::tempdir().unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_icub-eth-emulator"))
         .arg(robot_dir())
-        .args(["--address-map", "10.0.1.0/24=127.0.1.0/24", "--record"])
+        .args(["--address-map", "10.0.1.0/24=127.0.21.0/24", "--record"])
         .arg(rec.path())
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
@@ -63,10 +63,10 @@ fn the_rops_a_host_sends_are_recorded_per_board() {
     }
 
     // a host at the robot's PC104 address (mapped), talking to left_arm-eb1 (10.0.1.1)
-    let host = UdpSocket::bind("127.0.1.104:0").unwrap();
+    let host = UdpSocket::bind("127.0.21.104:0").unwrap();
     host.set_read_timeout(Some(Duration::from_millis(200)))
         .unwrap();
-    let board = "127.0.1.1:12345";
+    let board = "127.0.21.1:12345";
     let mut ask = Rop::ask(ids::COMM_STATUS);
     ask.ctrl.plussign = true;
     ask.signature = Some(0x1234_5678);
@@ -110,7 +110,7 @@ fn the_rops_a_host_sends_are_recorded_per_board() {
     let got: Vec<&str> = text.lines().collect();
     assert_eq!(got.len(), 2, "{text}");
     assert!(got[0].starts_with("{\"t\":"), "{}", got[0]);
-    assert!(got[0].contains("\"from\":\"127.0.1.104:"), "{}", got[0]);
+    assert!(got[0].contains("\"from\":\"127.0.21.104:"), "{}", got[0]);
     assert!(got[0].contains("\"seq\":1,"), "{}", got[0]);
     assert!(
         got[0].contains(&format!(

@@ -8,8 +8,10 @@
 //!
 //! What is compared: for each board and each variable (id32), what the host set or asked,
 //! in order — ropcode and data — with sequence numbers, times and the interleaving of
-//! different variables (which C++ leaves to its threads) ignored, and repeated asks of a
-//! variable counted once (how often a host polls while it waits is timing, not protocol).
+//! different variables (which C++ leaves to its threads) ignored. Retries are timing, not
+//! protocol, and count once: repeated asks of a variable (a poll), a value set again
+//! unchanged (a command whose reply was late, a PWM limit restored that was never
+//! lowered), a `set X, ask` repeated (a setcheck that asked before the board had it).
 //! Bytes C++ sends without setting them (uninitialised fields) are zeroed on both sides,
 //! each listed in [`UNSET`] with its reason; no other difference is left, and a new one
 //! fails the test.
@@ -66,7 +68,23 @@ fn read_recording(dir: &Path) -> Recording {
             if rop.ropcode == "ask" && seq.last() == Some(&rop) {
                 continue;
             }
+            // a command repeated in a row is a retry of one whose reply was late; a value
+            // set again unchanged changes nothing (the calibrators' restore of a PWM limit
+            // that was never lowered comes or not as the joints reach zero in time)
+            if rop.ropcode == "set" && seq.last() == Some(&rop) {
+                continue;
+            }
             seq.push(rop);
+            // `set X, ask` again after `set X, ask`: a setcheck that asked before the
+            // board had the value and tried again (both hosts do, on a loaded machine)
+            let n = seq.len();
+            if n >= 4
+                && seq[n - 4..n - 2] == seq[n - 2..]
+                && seq[n - 2].ropcode == "set"
+                && seq[n - 1].ropcode == "ask"
+            {
+                seq.truncate(n - 2);
+            }
         }
     }
     rec
