@@ -123,20 +123,26 @@ impl YarpNet {
     pub fn rpc(&self, port: &str, input: &str) -> String {
         let mut c = self.yarp();
         c.args(["rpc", port]);
-        let mut p = Proc::spawn("yarp rpc", c);
-        {
-            use std::io::Write;
-            let mut stdin = p.child.stdin.take().expect("stdin");
-            let _ = stdin.write_all(input.as_bytes());
-        }
-        let start = Instant::now();
-        while p.child.try_wait().ok().flatten().is_none() && start.elapsed() < STEP {
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        // the reader threads deliver what is left once the pipes close
-        let _ = p.try_wait_line("\u{0}", Duration::from_millis(300));
-        p.seen.join("\n")
+        run_fed("yarp rpc", c, input, STEP)
     }
+}
+
+/// Runs `cmd` with `input` on its stdin (then closed) until it exits, at most `limit`
+/// (then it is killed): every line it printed.
+pub fn run_fed(name: &str, cmd: Command, input: &str, limit: Duration) -> String {
+    let mut p = Proc::spawn(name, cmd);
+    {
+        use std::io::Write;
+        let mut stdin = p.child.stdin.take().expect("stdin");
+        let _ = stdin.write_all(input.as_bytes());
+    }
+    let start = Instant::now();
+    while p.child.try_wait().ok().flatten().is_none() && start.elapsed() < limit {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // the reader threads deliver what is left once the pipes close
+    let _ = p.try_wait_line("\u{0}", Duration::from_millis(300));
+    p.seen.join("\n")
 }
 
 /// A child whose stdout and stderr lines arrive on one channel; killed and reaped when

@@ -15,6 +15,8 @@
 //! how late the emulator's board thread woke; and, over the same window, the machine's
 //! own stalls (`common/machine_stalls.rs`, in a child process) to compare them with.
 
+#[path = "common/cpu.rs"]
+mod cpu;
 #[path = "common/machine_stalls.rs"]
 mod machine_stalls;
 
@@ -29,17 +31,6 @@ use icubmod::eth::manager::EthManager;
 use yarp_devices::robotinterface::{read_robot_file, ActionPhase, RobotRunner};
 use yarp_devices::vocabs::CM_POSITION;
 use yarp_proto::Property;
-
-/// User + system CPU time of this process, s.
-fn cpu_seconds() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let after = stat.rsplit(')').next().unwrap_or("");
-    let f: Vec<&str> = after.split_whitespace().collect();
-    let tick = 100.0; // USER_HZ on Linux
-    let ut: f64 = f.get(11).and_then(|v| v.parse().ok()).unwrap_or(0.0);
-    let st: f64 = f.get(12).and_then(|v| v.parse().ok()).unwrap_or(0.0);
-    (ut + st) / tick
-}
 
 fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
     let map = "10.0.1.0/24=127.0.5.0/24";
@@ -97,11 +88,11 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         .stdout(std::process::Stdio::piped())
         .spawn()
         .expect("start the machine probe");
-    let c0 = cpu_seconds();
+    let c0 = cpu::cpu_seconds(None);
     let wake0 = icub_emulators::eth::wake_stats();
     let w0 = Instant::now();
     std::thread::sleep(Duration::from_secs(seconds));
-    let cpu = (cpu_seconds() - c0) / w0.elapsed().as_secs_f64();
+    let cpu = (cpu::cpu_seconds(None) - c0) / w0.elapsed().as_secs_f64();
     let wake1 = icub_emulators::eth::wake_stats();
     let machine = probe
         .wait_with_output()

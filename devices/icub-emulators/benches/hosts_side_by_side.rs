@@ -6,16 +6,18 @@
 //! namespace of its own (`tests/hosts_common`).
 //!
 //!   cargo build --release -p yarp-device-programs -p icub-emulators
-//!   ../shared/netns-run cargo bench -p icub-emulators --bench hosts_side_by_side [-- SECONDS]
+//!   ../shared/netns-run cargo bench -p icub-emulators --bench hosts_side_by_side [-- SECONDS [ROBOT]]
 //!
 //! For each robot and host: the time from the host's start to "startup phase finished."
 //! (every part calibrated), the host's CPU (user + system, share of one core) over SECONDS
 //! (default 300) at rest and over SECONDS while a client streams position commands to the
-//! left arm (`set pos` by RPC at 50 Hz), its threads and resident memory, and the
-//! command -> encoder latency (an RPC `set pos` until `state:o` shows the joint moving;
+//! left arm (`set pos` of one joint by RPC at 50 Hz), its threads and resident memory, and
+//! the command -> encoder latency (an RPC `set pos` until `state:o` shows the joint moving;
 //! min / median / max of 20). The client is this program again (`--client`), run inside
 //! the robot's namespace.
 
+#[path = "common/cpu.rs"]
+mod cpu;
 #[path = "../tests/hosts_common/mod.rs"]
 mod hosts_common;
 
@@ -24,23 +26,12 @@ use std::time::{Duration, Instant};
 use hosts_common::*;
 use yarp_interop_tests::{rss_kib, thread_count, Proc};
 
-/// User + system CPU time of process `pid`, s.
-fn cpu_seconds(pid: u32) -> f64 {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-    let after = stat.rsplit(')').next().unwrap_or("");
-    let f: Vec<&str> = after.split_whitespace().collect();
-    let tick = 100.0; // USER_HZ on Linux
-    let ut: f64 = f.get(11).and_then(|v| v.parse().ok()).unwrap_or(0.0);
-    let st: f64 = f.get(12).and_then(|v| v.parse().ok()).unwrap_or(0.0);
-    (ut + st) / tick
-}
-
 /// CPU share of one core of `pid` over `d`.
 fn cpu_over(pid: u32, d: Duration) -> f64 {
-    let c0 = cpu_seconds(pid);
+    let c0 = cpu::cpu_seconds(Some(pid));
     let t0 = Instant::now();
     std::thread::sleep(d);
-    100.0 * (cpu_seconds(pid) - c0) / t0.elapsed().as_secs_f64()
+    100.0 * (cpu::cpu_seconds(Some(pid)) - c0) / t0.elapsed().as_secs_f64()
 }
 
 struct Figures {
@@ -52,7 +43,19 @@ struct Figures {
     latency: String,
 }
 
-fn measure(robot: &std::path::Path, xml: &str, prefix: &str, host: Host, secs: u64) -> Figures {
+/// A robot of the bench: its name, directory, top file, port prefix, and the left arm's
+/// joint the clients move with the degrees they move it around.
+struct Case<'a> {
+    name: &'a str,
+    dir: &'a std::path::Path,
+    xml: &'a str,
+    prefix: &'a str,
+    joint: usize,
+    around: f64,
+}
+
+fn measure(case: &Case<'_>, host: Host, secs: u64) -> Figures {
+    let (robot, xml, prefix) = (case.dir, case.xml, case.prefix);
     let r = bring_up(BringUp {
         test: "hosts_side_by_side",
         host,
@@ -72,6 +75,7 @@ fn measure(robot: &std::path::Path, xml: &str, prefix: &str, host: Host, secs: u
         let mut c = r.net.ns.command(exe);
         c.env("YARP_CONFIG_HOME", r.net.conf.path())
             .args(["--client", mode, prefix, "left_arm"])
+            .args([case.joint.to_string(), case.around.to_string()])
             .args(extra);
         Proc::spawn("bench client", c)
     };
@@ -91,10 +95,13 @@ fn measure(robot: &std::path::Path, xml: &str, prefix: &str, host: Host, secs: u
     }
 }
 
-/// The client: `--client stream PREFIX PART SECONDS` or `--client latency PREFIX PART`.
+/// The client: `--client stream PREFIX PART JOINT AROUND SECONDS` or `--client latency
+/// PREFIX PART JOINT AROUND`.
 fn client(args: &[String]) {
     use yarp_net::blocking::{BufferedPort, Network, Port};
     let (mode, prefix, part) = (&args[0], &args[1], &args[2]);
+    let joint: usize = args[3].parse().expect("joint");
+    let around: f64 = args[4].parse().expect("degrees");
     let net = Network::from_conf().expect("the robot's name server");
     let rpc = Port::open(&net, &format!("/bench/{part}/rpc")).expect("rpc port");
     rpc.connect(&format!("{prefix}/{part}/rpc:i"), None)
@@ -105,12 +112,12 @@ fn client(args: &[String]) {
     };
     match mode.as_str() {
         "stream" => {
-            let secs: u64 = args[3].parse().expect("seconds");
+            let secs: u64 = args[5].parse().expect("seconds");
             println!("streaming");
             let t0 = Instant::now();
             while t0.elapsed() < Duration::from_secs(secs) {
                 let t = t0.elapsed().as_secs_f64();
-                let _ = set(0, -30.0 + 5.0 * (0.5 * t).sin());
+                let _ = set(joint as i32, around + 5.0 * (0.5 * t).sin());
                 std::thread::sleep(Duration::from_millis(20));
             }
             println!("streamed");
@@ -123,25 +130,29 @@ fn client(args: &[String]) {
                 None,
             )
             .expect("connect state:o");
-            let joint0 = |d| {
+            let angle = |d| {
                 state
                     .read_timeout(d)
-                    .and_then(|m| m.bottle.get(0).and_then(|v| v.as_f64()))
+                    .and_then(|m| m.bottle.get(joint).and_then(|v| v.as_f64()))
             };
             let mut samples = Vec::new();
-            let mut target = -30.0;
+            let mut target = around;
             for _ in 0..20 {
-                let Some(q0) = joint0(Duration::from_secs(5)) else {
+                let Some(q0) = angle(Duration::from_secs(5)) else {
                     break;
                 };
                 // settle where we are, then ask a 5 degree step and time the first move
-                target = if target < -30.0 { -25.0 } else { -35.0 };
+                target = if target < around {
+                    around + 5.0
+                } else {
+                    around - 5.0
+                };
                 while state.try_read().is_some() {}
                 let sent = Instant::now();
-                let _ = set(0, target);
+                let _ = set(joint as i32, target);
                 let end = sent + Duration::from_secs(5);
                 while Instant::now() < end {
-                    match joint0(Duration::from_millis(500)) {
+                    match angle(Duration::from_millis(500)) {
                         Some(q) if (q - q0).abs() > 0.01 => {
                             samples.push(sent.elapsed().as_secs_f64() * 1e3);
                             break;
@@ -177,18 +188,41 @@ fn main() {
         return client(&args[1..]);
     }
     let secs: u64 = args.first().and_then(|s| s.parse().ok()).unwrap_or(300);
+    let only = args.get(1).cloned();
     let (_copy, ergocub) = ergocub_without_xsens_and_wbd();
     let genova = robots().join("iCubGenova02");
+    let cases = [
+        // l_shoulder_pitch around -30 (limits -95.5..8)
+        Case {
+            name: "iCubGenova02",
+            dir: &genova,
+            xml: "icub_all.xml",
+            prefix: "/icub",
+            joint: 0,
+            around: -30.0,
+        },
+        // l_shoulder_roll around 55 (0..130): the arm's joint 0 ends idle, its file
+        // asking a startup position above its upper limit
+        Case {
+            name: "ergoCubSN001",
+            dir: &ergocub,
+            xml: "ergocub.xml",
+            prefix: "/ergocub",
+            joint: 1,
+            around: 55.0,
+        },
+    ];
     let mut rows = Vec::new();
-    for (name, dir, xml, prefix) in [
-        ("iCubGenova02", genova.as_path(), "icub_all.xml", "/icub"),
-        ("ergoCubSN001", ergocub.as_path(), "ergocub.xml", "/ergocub"),
-    ] {
+    for case in cases
+        .iter()
+        .filter(|c| only.as_deref().is_none_or(|o| o == c.name))
+    {
         for host in [Host::Cpp, Host::Ours] {
-            eprintln!("== {name}, {host:?} host, {secs} s per window");
-            let f = measure(dir, xml, prefix, host, secs);
+            eprintln!("== {}, {host:?} host, {secs} s per window", case.name);
+            let f = measure(case, host, secs);
             let row = format!(
-                "| {name} | {} | {:.1} s | {:.1} % | {:.1} % | {} | {:.0} MiB | {} |",
+                "| {} | {} | {:.1} s | {:.1} % | {:.1} % | {} | {:.0} MiB | {} |",
+                case.name,
                 match host {
                     Host::Cpp => "icub-main 2.11.1 (C++)",
                     Host::Ours => "ours",

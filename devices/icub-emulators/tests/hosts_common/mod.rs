@@ -6,13 +6,12 @@
 
 #![allow(dead_code)]
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
 use yarp_interop_tests::{
-    cpp_command, cpp_program, robot_addresses, workspace_program, NetNs, Proc,
+    cpp_command, cpp_program, robot_addresses, run_fed, workspace_program, NetNs, Proc,
 };
 
 /// A host's start-up on a loaded 2-core machine (the C++ host took 31 s for iCubGenova02
@@ -69,17 +68,7 @@ impl RobotNet {
     pub fn rpc(&self, port: &str, input: &str) -> String {
         let mut c = self.cpp("yarp");
         c.args(["rpc", port]);
-        let mut p = Proc::spawn("C++ yarp rpc", c);
-        {
-            let mut stdin = p.child.stdin.take().expect("stdin");
-            let _ = stdin.write_all(input.as_bytes());
-        }
-        let start = Instant::now();
-        while p.child.try_wait().ok().flatten().is_none() && start.elapsed() < STEP {
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        let _ = p.try_wait_line("\u{0}", Duration::from_millis(300));
-        p.seen.join("\n")
+        run_fed("C++ yarp rpc", c, input, STEP)
     }
 
     /// C++ `yarp read READER PORT`: its first data line for which `want` holds, within

@@ -231,48 +231,30 @@ fn read_running_mode(rm: &Node<'_>, appl: &mut ApplConfig, ip: Ipv4Addr) -> Resu
     let mut flags = RXDOTX_OVERFLOW;
     let mut period = 0.0;
     if let Some(log) = rm.group("LOGGING") {
-        let set = |flags: &mut u16, bit: u16, on: Option<bool>| match on {
-            Some(true) => *flags |= bit,
-            Some(false) => *flags &= !bit,
-            None => {}
-        };
-        if let Some(imm) = log.group("IMMEDIATE") {
-            set(
-                &mut flags,
-                RXDOTX_OVERFLOW,
-                boolean(&imm, "emitRXDOTXoverflow"),
-            );
-            set(
-                &mut flags,
-                PERIOD_OVERFLOW,
-                boolean(&imm, "emitPERIODoverflow"),
-            );
-        }
-        if let Some(per) = log.group("PERIODIC") {
-            if let Some(p) = per.number("period")? {
-                period = p.clamp(0.0, 600.0);
+        // (group, key, flag), in C++'s order: emitRXDOTXminavgmax is the newer name of
+        // emitRXDOTXstatistics and wins
+        const KEYS: [(&str, &str, u16); 6] = [
+            ("IMMEDIATE", "emitRXDOTXoverflow", RXDOTX_OVERFLOW),
+            ("IMMEDIATE", "emitPERIODoverflow", PERIOD_OVERFLOW),
+            ("PERIODIC", "emitRXDOTXstatistics", RXDOTX_MINAVGMAX),
+            ("PERIODIC", "emitRXDOTXminavgmax", RXDOTX_MINAVGMAX),
+            ("PERIODIC", "emitPERIODminavgmax", PERIOD_MINAVGMAX),
+            ("PERIODIC", "emitPERIODhistogram", PERIOD_HISTOGRAM),
+        ];
+        for (group, key, bit) in KEYS {
+            match log.group(group).and_then(|g| boolean(&g, key)) {
+                Some(true) => flags |= bit,
+                Some(false) => flags &= !bit,
+                None => {}
             }
-            // emitRXDOTXminavgmax is the newer name of emitRXDOTXstatistics and wins
-            set(
-                &mut flags,
-                RXDOTX_MINAVGMAX,
-                boolean(&per, "emitRXDOTXstatistics"),
-            );
-            set(
-                &mut flags,
-                RXDOTX_MINAVGMAX,
-                boolean(&per, "emitRXDOTXminavgmax"),
-            );
-            set(
-                &mut flags,
-                PERIOD_MINAVGMAX,
-                boolean(&per, "emitPERIODminavgmax"),
-            );
-            set(
-                &mut flags,
-                PERIOD_HISTOGRAM,
-                boolean(&per, "emitPERIODhistogram"),
-            );
+        }
+        if let Some(p) = log
+            .group("PERIODIC")
+            .map(|per| per.number("period"))
+            .transpose()?
+            .flatten()
+        {
+            period = p.clamp(0.0, 600.0);
         }
     }
     appl.logging_flags = flags;
