@@ -46,7 +46,7 @@ trees=(ycm "$yarp_src")
 [[ $which == icub ]] && trees+=(icub-firmware-shared icub-main)
 stamp=$( {
     (cd "$peers/src" && find "${trees[@]}" -type f -print0 | sort -z | xargs -0 sha256sum)
-    sha256sum "$peers/build.sh" "${BASH_SOURCE[0]}"
+    cat "$peers/build.sh" "${BASH_SOURCE[0]}"   # contents only: CI's copy lives elsewhere
     printf '%s\n' "${apt_packages[*]}"
 } | sha256sum | cut -c1-12)
 cache=${YARP_CPP_CACHE:-$HOME/.cache/yarp-rs}
@@ -80,6 +80,13 @@ if ((${#missing[@]})); then
 fi
 
 start=$SECONDS
+# CMake ties a build directory to its sources' path: one made from sources elsewhere (a CI
+# run's copy of ../shared) cannot be reused, so it is started anew (ccache still helps).
+if [[ -f $build_dir/ycm/CMakeCache.txt ]] &&
+    ! grep -qx "CMAKE_HOME_DIRECTORY:INTERNAL=$peers/src/ycm" "$build_dir/ycm/CMakeCache.txt"; then
+    log "the build directory was made from sources elsewhere: starting it anew"
+    rm -rf "$build_dir"
+fi
 export CMAKE_C_COMPILER_LAUNCHER=ccache CMAKE_CXX_COMPILER_LAUNCHER=ccache
 export CCACHE_DIR=${CCACHE_DIR:-$cache/ccache} CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-3G}
 export JOBS=${CPP_PEERS_JOBS:-2}
