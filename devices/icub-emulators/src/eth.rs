@@ -667,14 +667,7 @@ impl ServedState {
                     // the new sensors have values at once (a strain's full scales, which
                     // the host may ask to be signalled right after the verification),
                     // as a board reads them from its CAN boards when it verifies
-                    let now = epoch.elapsed();
-                    update_sensors(
-                        &mut self.engine,
-                        &self.learned,
-                        now.as_secs_f64(),
-                        now.as_micros() as u64,
-                        self.tick,
-                    );
+                    self.update_sensors(epoch.elapsed());
                     continue;
                 }
                 BoardEvent::Set(id) => id,
@@ -700,6 +693,17 @@ impl ServedState {
         }
     }
 
+    /// Writes the sensors' values as they are `now` (since the boards began serving).
+    fn update_sensors(&mut self, now: Duration) {
+        update_sensors(
+            &mut self.engine,
+            &self.learned,
+            now.as_secs_f64(),
+            now.as_micros() as u64,
+            self.tick,
+        );
+    }
+
     /// Steps the board when due and sends what it has.
     fn work(&mut self, epoch: Instant) {
         let now = epoch.elapsed();
@@ -710,13 +714,7 @@ impl ServedState {
             self.last_step = Some(now);
             self.engine.step(dt.as_secs_f64());
             self.tick += 1;
-            update_sensors(
-                &mut self.engine,
-                &self.learned,
-                now.as_secs_f64(),
-                now.as_micros() as u64,
-                self.tick,
-            );
+            self.update_sensors(now);
         }
         let now = epoch.elapsed();
         while let Some(d) = self.engine.poll_transmit(now) {

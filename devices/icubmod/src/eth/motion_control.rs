@@ -501,8 +501,9 @@ impl EmbObjMotionControl {
         }
         // eOmc_controller_config_t: the control loop's duration (the board's cycle, µs)
         // and whether the board may skip recalibration (MAINTENANCE/skipRecalibration)
-        let mut controller = board.params().appl.cycletime.to_le_bytes().to_vec();
-        controller.resize(4, 0);
+        let mut controller = u32::from(board.params().appl.cycletime)
+            .to_le_bytes()
+            .to_vec();
         controller.extend_from_slice(&[u8::from(self.skip_recalibration), 0, 0, 0]);
         service::setcheck(
             board,
