@@ -592,6 +592,12 @@ pub const REGISTRATION_CHECK: Duration = Duration::from_secs(2);
 
 /// Re-registers the port when the name server forgot it (restarted, or `yarp clean` by
 /// mistake), so that live ports stay reachable by name. Ends with the port.
+///
+/// A name server that knows one port of the process was not restarted: that check stands
+/// for every port of the process for a while ([`recently_confirmed`]), so a robot process
+/// with a hundred ports asks its name server about once per period, not a hundred times.
+/// A port found forgotten withdraws the confirmation, and every port then checks (and
+/// registers) itself again at its next turn.
 async fn keep_registered(port: std::sync::Weak<Shared>) {
     loop {
         let Some(shared) = port.upgrade() else { return };
@@ -599,11 +605,20 @@ async fn keep_registered(port: std::sync::Weak<Shared>) {
         if *shutdown.borrow() {
             return;
         }
-        if let Some(ns) = &shared.ns {
+        if let Some(ns) = shared
+            .ns
+            .as_ref()
+            .filter(|ns| !recently_confirmed(ns.server()))
+        {
             let c = &shared.contact;
             let known = ns.query(&shared.name).await;
             let lost = matches!(&known, Ok(None))
                 || matches!(&known, Ok(Some(k)) if k.port != c.port || k.host != c.host);
+            if lost {
+                confirmations().remove(&ns.server());
+            } else if known.is_ok() {
+                confirmations().insert(ns.server(), std::time::Instant::now());
+            }
             if lost && !*shutdown.borrow() {
                 tracing::info!(
                     "{}: name server lost the registration; registering again",
@@ -620,6 +635,27 @@ async fn keep_registered(port: std::sync::Weak<Shared>) {
             _ = tokio::time::sleep(REGISTRATION_CHECK) => {}
         }
     }
+}
+
+/// When a port of this process last found each name server knowing it.
+fn confirmations(
+) -> std::sync::MutexGuard<'static, std::collections::HashMap<SocketAddr, std::time::Instant>> {
+    static CONFIRMED: std::sync::OnceLock<
+        Mutex<std::collections::HashMap<SocketAddr, std::time::Instant>>,
+    > = std::sync::OnceLock::new();
+    CONFIRMED
+        .get_or_init(Mutex::default)
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+}
+
+/// Whether another port's check of `server` still stands: younger than three quarters of
+/// a period, so that a confirmation withdrawn by a forgotten port cannot be renewed
+/// before every port has had its turn to check itself.
+fn recently_confirmed(server: SocketAddr) -> bool {
+    confirmations()
+        .get(&server)
+        .is_some_and(|t| t.elapsed() < REGISTRATION_CHECK * 3 / 4)
 }
 
 /// The address to advertise: the one we reach the name server from (so that other hosts
