@@ -6,7 +6,7 @@
 //! namespace of its own (`tests/hosts_common`).
 //!
 //!   cargo build --release -p yarp-device-programs -p icub-emulators
-//!   ../shared/netns-run cargo bench -p icub-emulators --bench hosts_side_by_side [-- SECONDS [ROBOT]]
+//!   ../shared/netns-run cargo bench -p icub-emulators --bench hosts_side_by_side [-- SECONDS [ROBOT [cpp|ours]]]
 //!
 //! For each robot and host: the time from the host's start to "startup phase finished."
 //! (every part calibrated), the host's CPU (user + system, share of one core) over SECONDS
@@ -189,6 +189,11 @@ fn main() {
     }
     let secs: u64 = args.first().and_then(|s| s.parse().ok()).unwrap_or(300);
     let only = args.get(1).cloned();
+    let hosts: &[Host] = match args.get(2).map(String::as_str) {
+        Some("cpp") => &[Host::Cpp],
+        Some("ours") => &[Host::Ours],
+        _ => &[Host::Cpp, Host::Ours],
+    };
     let (_copy, ergocub) = ergocub_without_xsens_and_wbd();
     let genova = robots().join("iCubGenova02");
     let cases = [
@@ -217,7 +222,7 @@ fn main() {
         .iter()
         .filter(|c| only.as_deref().is_none_or(|o| o == c.name))
     {
-        for host in [Host::Cpp, Host::Ours] {
+        for &host in hosts {
             eprintln!("== {}, {host:?} host, {secs} s per window", case.name);
             let f = measure(case, host, secs);
             let row = format!(

@@ -22,10 +22,20 @@ use icub_eth::{Entity, Id32};
 
 use super::params::{AddressMap, EthBoardParams, Pc104};
 
-/// How long the reader waits for a datagram before servicing timers.
 /// Datagrams kept for a board held by a device thread before the reader waits for it.
 const INBOX_LIMIT: usize = 256;
-const TICK: Duration = Duration::from_millis(2);
+/// The longest the reader sleeps without looking at the boards' timers: a board added or a
+/// request made since it last looked is seen within it (the reader otherwise sleeps until
+/// the boards' next deadline, see [`Board::on_timers`]).
+const LONGEST_SLEEP: Duration = Duration::from_millis(50);
+/// How soon the reader looks again at a board a device thread held, or whose datagrams
+/// wait in its inbox.
+const RETRY_BUSY: Duration = Duration::from_millis(1);
+/// While datagrams flow, the reader takes them in batches at most this often: every board
+/// streams each millisecond at its own phase, and a wake-up per datagram (17 000 a second
+/// on an ergoCub) costs more than the datagrams. icub-main's `EthReceiver` drains the
+/// socket every millisecond (its `rxrate`); half of that keeps the values fresher.
+const BATCH: Duration = Duration::from_micros(500);
 
 /// A failed exchange with a board, naming it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -110,6 +120,15 @@ pub struct Board {
     /// board's reception). Only the reader thread locks it.
     inbox: Mutex<std::collections::VecDeque<(Instant, Vec<u8>)>>,
     changed: Condvar,
+    /// Threads waiting on `changed`: the reader signals only when someone waits (a wake-up
+    /// is a system call, and the reader handles a thousand datagrams a second per board).
+    waiters: std::sync::atomic::AtomicUsize,
+    /// Set when a device thread changed the board's timers (a request, the presence
+    /// monitor), so that the reader looks at them before its next sleep.
+    timers_changed: Arc<std::sync::atomic::AtomicBool>,
+    /// Threads waiting on any board of the manager: the reader does not pause between
+    /// batches while someone waits for a reply.
+    waiting: Arc<std::sync::atomic::AtomicUsize>,
     /// Serialises the bring-up.
     bring_up_lock: Mutex<()>,
     /// The endpoints whose protocol version the board has confirmed, one bit each
@@ -150,8 +169,35 @@ impl Board {
         self.inner.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// Sends what the transceiver has queued.
+    /// Waits on `changed` for at most `d`, counted in [`Board::waiters`].
+    fn wait_changed<'a>(&self, inner: MutexGuard<'a, Inner>, d: Duration) -> MutexGuard<'a, Inner> {
+        use std::sync::atomic::Ordering;
+        // counted while `inner` is held: a notifier that changes the board after this
+        // thread looked at it sees the count once it releases the board
+        self.waiters.fetch_add(1, Ordering::AcqRel);
+        self.waiting.fetch_add(1, Ordering::AcqRel);
+        let inner = self
+            .changed
+            .wait_timeout(inner, d)
+            .unwrap_or_else(|e| e.into_inner())
+            .0;
+        self.waiters.fetch_sub(1, Ordering::AcqRel);
+        self.waiting.fetch_sub(1, Ordering::AcqRel);
+        inner
+    }
+
+    /// Wakes the threads waiting for the board, if any.
+    fn notify(&self) {
+        if self.waiters.load(std::sync::atomic::Ordering::Acquire) > 0 {
+            self.changed.notify_all();
+        }
+    }
+
+    /// Sends what the transceiver has queued (a device thread's requests also change the
+    /// board's timers: the reader is told).
     fn flush(&self, inner: &mut Inner) {
+        self.timers_changed
+            .store(true, std::sync::atomic::Ordering::Release);
         let now = self.now();
         while let Some(d) = inner.host.poll_transmit(now) {
             if let Err(e) = self.socket.send_to(&d, self.addr) {
@@ -179,10 +225,7 @@ impl Board {
                 StartupStatus::Done => break Ok(()),
                 StartupStatus::Failed(e) => break Err(EthError::Startup(e)),
                 StartupStatus::Busy => {
-                    let _ = self
-                        .changed
-                        .wait_timeout(inner, Duration::from_millis(1))
-                        .unwrap_or_else(|e| e.into_inner());
+                    drop(self.wait_changed(inner, Duration::from_millis(1)));
                 }
             }
         };
@@ -190,6 +233,9 @@ impl Board {
             tracing::warn!(board = %self.who(), "{w}");
         }
         let mut inner = self.lock();
+        // the presence monitor is on now
+        self.timers_changed
+            .store(true, std::sync::atomic::Ordering::Release);
         inner.bring_up = match &result {
             Ok(()) => BringUp::Done,
             Err(e) => BringUp::Failed(e.clone()),
@@ -218,11 +264,7 @@ impl Board {
                     reason: "request lost".into(),
                 });
             }
-            inner = self
-                .changed
-                .wait_timeout(inner, Duration::from_millis(1))
-                .unwrap_or_else(|e| e.into_inner())
-                .0;
+            inner = self.wait_changed(inner, Duration::from_millis(1));
         }
     }
 
@@ -438,18 +480,19 @@ impl Board {
 
     /// Receive work of the reader thread: the datagram that arrived at the host's socket
     /// at `at` is handled now if the board is free, else when it next is (with its
-    /// arrival time).
-    fn on_datagram(&self, d: &[u8], at: Instant) {
+    /// arrival time): then `false`, and the reader comes back within [`RETRY_BUSY`].
+    fn on_datagram(&self, d: &[u8], at: Instant) -> bool {
         let mut inbox = self.inbox.lock().unwrap_or_else(|e| e.into_inner());
         let Some(mut inner) = self.lock_for_reader(&mut inbox) else {
             inbox.push_back((at, d.to_vec()));
-            return;
+            return false;
         };
         inner.reader_delays.note(at.elapsed());
         self.receive(&mut inner, at, d);
         drop(inner);
         drop(inbox);
-        self.changed.notify_all();
+        self.notify();
+        true
     }
 
     /// One datagram that arrived at `at`.
@@ -474,18 +517,19 @@ impl Board {
         self.events(inner);
     }
 
-    /// Timer work of the reader thread (skipped while a device thread holds the board:
-    /// the next tick comes within [`TICK`]).
-    fn on_tick(&self) {
+    /// Timer work of the reader thread: requests expired, presence checked, a long
+    /// silence reported. Returns when the board's timers next need the reader (soon, if a
+    /// device thread held the board).
+    fn on_timers(&self) -> Instant {
         let mut inbox = self.inbox.lock().unwrap_or_else(|e| e.into_inner());
         let Some(mut inner) = self.lock_for_reader(&mut inbox) else {
-            return;
+            return Instant::now() + RETRY_BUSY;
         };
         drop(inbox);
         let now = self.now();
         inner.host.handle_timeout(now);
         self.events(&mut inner);
-        self.flush(&mut inner);
+        let mut next = inner.host.next_deadline().map(|d| self.epoch + d);
         // A board silent past the point where its values are refused is an error, once
         // per `periodOfMissingReport` while it lasts.
         let silent = inner.last_rx.map(|t| t.elapsed());
@@ -503,33 +547,42 @@ impl Board {
                 );
                 inner.last_missing_report = Some(Instant::now());
             }
+            let report = inner
+                .last_missing_report
+                .map(|t| t + self.params.missing_report_period);
+            next = earliest(next, report);
         } else {
             inner.last_missing_report = None;
+            let stale = inner
+                .last_rx
+                .map(|t| t + self.stale_after() + Duration::from_micros(1));
+            next = earliest(next, stale);
         }
         drop(inner);
-        self.changed.notify_all();
+        self.notify();
+        next.unwrap_or_else(|| Instant::now() + LONGEST_SLEEP)
     }
 
     /// The presence monitor's reports (C++ prints them as debug messages): a board lost
     /// for its timeout is a warning at most once per `periodOfMissingReport`, so that a
     /// loaded host's short gaps do not flood the log; a long silence is an error (above).
     fn events(&self, inner: &mut Inner) {
-        let cfg = inner.host.config().clone();
         while let Some(ev) = inner.host.poll_event() {
+            let cfg = inner.host.config();
             match &ev {
                 HostEvent::BoardLost { .. } => {
                     let due = inner
                         .last_lost_report
                         .is_none_or(|t| t.elapsed() >= self.params.missing_report_period);
                     if due {
+                        tracing::warn!("{}", ev.describe(cfg));
                         inner.last_lost_report = Some(Instant::now());
-                        tracing::warn!("{}", ev.describe(&cfg));
                     } else {
-                        tracing::debug!("{}", ev.describe(&cfg));
+                        tracing::debug!("{}", ev.describe(cfg));
                     }
                 }
                 HostEvent::Signal(_) => {}
-                _ => tracing::debug!("{}", ev.describe(&cfg)),
+                _ => tracing::debug!("{}", ev.describe(cfg)),
             }
         }
     }
@@ -541,6 +594,10 @@ pub struct EthManager {
     map: AddressMap,
     socket: Arc<UdpSocket>,
     boards: Mutex<HashMap<Ipv4Addr, Arc<Board>>>,
+    /// Set by a board whose timers a device thread changed (see [`Board::flush`]).
+    timers_changed: Arc<std::sync::atomic::AtomicBool>,
+    /// Threads waiting for a board (see [`Board::wait_changed`]).
+    waiting: Arc<std::sync::atomic::AtomicUsize>,
 }
 
 fn manager_slot() -> &'static Mutex<Option<Arc<EthManager>>> {
@@ -587,7 +644,7 @@ impl EthManager {
             tracing::debug!("SO_TIMESTAMPNS refused: {e}");
         }
         socket
-            .set_read_timeout(Some(TICK))
+            .set_read_timeout(Some(LONGEST_SLEEP))
             .map_err(|e| EthError::Board {
                 who: local.to_string(),
                 reason: e.to_string(),
@@ -597,6 +654,8 @@ impl EthManager {
             map,
             socket: Arc::new(socket),
             boards: Mutex::new(HashMap::new()),
+            timers_changed: Arc::default(),
+            waiting: Arc::default(),
         });
         let weak = Arc::downgrade(&m);
         std::thread::Builder::new()
@@ -642,6 +701,9 @@ impl EthManager {
                     }),
                     inbox: Mutex::default(),
                     changed: Condvar::new(),
+                    waiters: Default::default(),
+                    timers_changed: self.timers_changed.clone(),
+                    waiting: self.waiting.clone(),
                     bring_up_lock: Mutex::new(()),
                     verified_endpoints: std::sync::atomic::AtomicU32::new(0),
                 })
@@ -701,9 +763,11 @@ fn enlarge_receive_buffer(socket: &UdpSocket) {
     }
 }
 
-/// The reader thread: datagrams to their board, timers every [`TICK`]; it ends with the
-/// manager.
+/// The reader thread: datagrams to their board, and the boards' timers when their next
+/// deadline comes (no periodic tick: it sleeps in the socket until a datagram or the
+/// deadline); it ends with the manager.
 fn reader(m: std::sync::Weak<EthManager>) {
+    use std::sync::atomic::Ordering;
     // The boards' 1 ms periods: icub-main's EthReceiver runs SCHED_FIFO (best effort).
     yarp_net::realtime::try_fifo_current_thread(
         "eth manager",
@@ -711,16 +775,47 @@ fn reader(m: std::sync::Weak<EthManager>) {
     );
     let mut buf = vec![0u8; 65536];
     let mut rx = StampedReceiver::new();
-    let mut last_tick = Instant::now();
+    let mut next_timers = Instant::now();
+    let mut socket_timeout = LONGEST_SLEEP;
     loop {
         let Some(mgr) = m.upgrade() else {
             return;
         };
-        match rx.recv(&mgr.socket, &mut buf) {
-            Ok((n, from, at)) => match mgr.board_at(*from.ip()) {
-                Some(b) => b.on_datagram(&buf[..n], at),
-                None => tracing::debug!("datagram from unknown board {from} dropped"),
-            },
+        let now = Instant::now();
+        if now >= next_timers || mgr.timers_changed.swap(false, Ordering::AcqRel) {
+            next_timers = mgr
+                .all_boards()
+                .iter()
+                .map(|b| b.on_timers())
+                .fold(now + LONGEST_SLEEP, Instant::min);
+        }
+        // The socket's timeout follows the deadline to within a millisecond (setting it
+        // is a system call: not on every datagram).
+        let sleep = next_timers
+            .saturating_duration_since(Instant::now())
+            .max(Duration::from_micros(100));
+        if sleep + Duration::from_millis(1) < socket_timeout || sleep > socket_timeout {
+            match mgr.socket.set_read_timeout(Some(sleep)) {
+                Ok(()) => socket_timeout = sleep,
+                Err(e) => tracing::debug!("eth manager: cannot set the receive timeout: {e}"),
+            }
+        }
+        match rx.recv(&mgr.socket, &mut buf, Wait::Block) {
+            Ok(got) => {
+                mgr.deliver(got, &buf, &mut next_timers);
+                // what arrived meanwhile, then a pause before the next batch
+                for _ in 0..INBOX_LIMIT {
+                    match rx.recv(&mgr.socket, &mut buf, Wait::No) {
+                        Ok(got) => mgr.deliver(got, &buf, &mut next_timers),
+                        Err(_) => break,
+                    }
+                }
+                let replies_awaited = mgr.waiting.load(Ordering::Acquire) > 0;
+                drop(mgr);
+                if !replies_awaited {
+                    std::thread::sleep(BATCH);
+                }
+            }
             Err(e)
                 if matches!(
                     e.kind(),
@@ -731,15 +826,36 @@ fn reader(m: std::sync::Weak<EthManager>) {
                 ) => {}
             Err(e) => {
                 tracing::warn!("eth manager: receive error: {e}");
-                std::thread::sleep(TICK);
+                std::thread::sleep(RETRY_BUSY);
             }
         }
-        if last_tick.elapsed() >= TICK {
-            last_tick = Instant::now();
-            for b in mgr.all_boards() {
-                b.on_tick();
+    }
+}
+
+impl EthManager {
+    /// A received datagram to its board (the reader comes back to a busy board soon).
+    fn deliver(
+        &self,
+        (n, from, at): (usize, SocketAddrV4, Instant),
+        buf: &[u8],
+        next_timers: &mut Instant,
+    ) {
+        match self.board_at(*from.ip()) {
+            Some(b) => {
+                if !b.on_datagram(&buf[..n], at) {
+                    *next_timers = (*next_timers).min(Instant::now() + RETRY_BUSY);
+                }
             }
+            None => tracing::debug!("datagram from unknown board {from} dropped"),
         }
+    }
+}
+
+/// The earlier of two optional instants.
+fn earliest(a: Option<Instant>, b: Option<Instant>) -> Option<Instant> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
     }
 }
 
@@ -749,6 +865,13 @@ fn reader(m: std::sync::Weak<EthManager>) {
 /// ([`ReaderDelays`]), not as a silence of every board.
 struct StampedReceiver {
     cmsg: Vec<u8>,
+}
+
+/// Whether a receive waits for a datagram (up to the socket's timeout).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Wait {
+    Block,
+    No,
 }
 
 impl StampedReceiver {
@@ -764,6 +887,7 @@ impl StampedReceiver {
         &mut self,
         socket: &UdpSocket,
         buf: &mut [u8],
+        wait: Wait,
     ) -> std::io::Result<(usize, SocketAddrV4, Instant)> {
         use nix::sys::socket::{recvmsg, ControlMessageOwned, MsgFlags, SockaddrIn};
         use std::os::fd::AsRawFd;
@@ -772,7 +896,10 @@ impl StampedReceiver {
             socket.as_raw_fd(),
             &mut iov,
             Some(&mut self.cmsg),
-            MsgFlags::empty(),
+            match wait {
+                Wait::Block => MsgFlags::empty(),
+                Wait::No => MsgFlags::MSG_DONTWAIT,
+            },
         )
         .map_err(std::io::Error::from)?;
         let (now, wall) = (Instant::now(), std::time::SystemTime::now());
