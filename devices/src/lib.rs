@@ -5,6 +5,7 @@
 //!
 //! It names no robot's drivers: those live in crates of their own (the iCub's in
 //! `icubmod`), which add themselves to the [`Registry`] with their `register` function.
+#![forbid(unsafe_code)]
 
 pub mod battery;
 pub mod bundler;

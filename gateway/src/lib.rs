@@ -7,6 +7,7 @@
 //! Bottle conversions ([`convert`], [`image`], [`mas`]), joint commands ([`joint_command`]), service mapping ([`service`],
 //! [`axis_info`]), counters ([`counters`]) and mapping files ([`mapping`]). The tokio/DDS
 //! runtime ([`gateway`], over one ros2-client node from [`ros`]) only moves messages.
+#![forbid(unsafe_code)]
 
 pub mod axis_info;
 pub mod camera_info;

@@ -1,5 +1,6 @@
 //! `yarp-ros2-gateway`: bridges YARP ports and RPC to ROS 2 topics and services as the
 //! mapping files say (format: `mappings/README.md`).
+#![forbid(unsafe_code)]
 
 use anyhow::{bail, Context as _};
 use clap::{Parser, Subcommand};

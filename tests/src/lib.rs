@@ -2,6 +2,7 @@
 //! `../shared/yarp-vectors/`, a name server per test process, the C++ YARP peer, bounded
 //! waits and child processes that are always reaped, and the peers of the live tests (C++
 //! YARP, rclpy, Chromium) with the rule for when one is missing ([`peer_missing`]).
+#![forbid(unsafe_code)]
 
 mod cpp_tools;
 mod netns;

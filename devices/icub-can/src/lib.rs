@@ -51,6 +51,7 @@
 //! Errors are [`client::ClientError`]: a silent board is `BoardTimeout` (polls) or
 //! `Stale` (broadcasts older than `McParams::broadcast_timeout`), a bus in bus-off is
 //! `Bus(BusError::BusOff)`; nothing blocks longer than its timeout.
+#![forbid(unsafe_code)]
 
 pub mod bus;
 pub mod client;

@@ -15,6 +15,7 @@
 //! | [`addressmap`] | [`AddressMap`]: the robot's board addresses served elsewhere (`YARP_ICUB_ETH_ADDRESS_MAP`), as host and emulator both apply it |
 //!
 //! See the crate's README.md for the wire layouts, the start-up sequence and its timeouts.
+#![forbid(unsafe_code)]
 
 pub mod addressmap;
 pub mod board;

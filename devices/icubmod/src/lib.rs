@@ -23,6 +23,7 @@
 //! `CanDeviceNum`), by the `YARP_ICUB_CAN_BACKEND` environment variable, or by
 //! `physDevice socketcan` (see [`common::open_bus`]). Board faults are errors or
 //! statuses: a silent board fails a call within its timeout, never hangs it.
+#![forbid(unsafe_code)]
 
 pub mod analog;
 pub mod boards;

@@ -52,6 +52,7 @@
 //! assert!(err.contains("left_v2.5"));
 //! # Ok::<(), icub_ikin::KinError>(())
 //! ```
+#![forbid(unsafe_code)]
 
 pub mod chain;
 pub mod error;

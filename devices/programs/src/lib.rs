@@ -2,6 +2,7 @@
 //! (`yarp-devices`, which registers its own drivers) and every device crate of the
 //! workspace (the iCub drivers of `icubmod`, yarp-devices-ros2's ROS 2 wrappers), each
 //! added here with its `register` function.
+#![forbid(unsafe_code)]
 
 use yarp_devices::Registry;
 

@@ -20,6 +20,7 @@
 //! | [`mobile_base`] | `battery_nws_ros2`, `odometry2D_nws_ros2`, `mobileBaseVelocityControl_nws_ros2` |
 //!
 //! [`msgs`] builds their messages (pure), [`periodic`] runs their publishing threads.
+#![forbid(unsafe_code)]
 
 pub mod camera;
 pub mod camera_client;

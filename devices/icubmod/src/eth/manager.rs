@@ -742,24 +742,10 @@ impl EthManager {
 /// Every board streams to this one socket (17 boards at 200 datagrams/s each on an
 /// ergoCub): a large receive buffer rides out moments when the reader is not scheduled.
 fn enlarge_receive_buffer(socket: &UdpSocket) {
-    use std::os::fd::AsRawFd;
-    let size: libc::c_int = 8 << 20;
-    // SAFETY: setsockopt on a socket we own, with a valid pointer to an int of the
-    // size given; failure only leaves the default size.
-    let rc = unsafe {
-        libc::setsockopt(
-            socket.as_raw_fd(),
-            libc::SOL_SOCKET,
-            libc::SO_RCVBUF,
-            (&size as *const libc::c_int).cast(),
-            std::mem::size_of::<libc::c_int>() as libc::socklen_t,
-        )
-    };
-    if rc != 0 {
-        tracing::debug!(
-            "SO_RCVBUF not enlarged: {}",
-            std::io::Error::last_os_error()
-        );
+    if let Err(e) =
+        nix::sys::socket::setsockopt(socket, nix::sys::socket::sockopt::RcvBuf, &(8 << 20))
+    {
+        tracing::debug!("SO_RCVBUF not enlarged: {e}");
     }
 }
 

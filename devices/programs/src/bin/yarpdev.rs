@@ -17,6 +17,7 @@
 //!
 //! Exit status: 0 after a clean close (and for `--list` / help, as C++), 1 when the
 //! device cannot be opened or the configuration cannot be read, 255 without a name server.
+#![forbid(unsafe_code)]
 
 use std::io::IsTerminal;
 use std::sync::mpsc;

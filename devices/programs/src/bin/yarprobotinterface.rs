@@ -22,6 +22,7 @@
 //! A second signal during the interrupt phase adds `interrupt2`, a third `interrupt3`;
 //! a fourth aborts at once.
 //! Exit status 0 after a clean shutdown, 1 when the robot fails to load or run.
+#![forbid(unsafe_code)]
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};

@@ -144,6 +144,7 @@ pub(crate) struct ProcessMutex {
 
 // SAFETY: a process-shared mutex may be used from any thread, also at once.
 unsafe impl Send for ProcessMutex {}
+// SAFETY: as above: pthread_mutex_lock/unlock are the only access, and they synchronise.
 unsafe impl Sync for ProcessMutex {}
 
 const MUTEX_LEN: usize = std::mem::size_of::<libc::pthread_mutex_t>();
