@@ -20,6 +20,7 @@ use crate::entities::mn::{
 use crate::frame::{Frame, FrameBuilder, FrameError, RopsError};
 use crate::id::{endpoint as ep, endpoint_name, entity as en, ids, Id32};
 use crate::nvstore::{NvError, NvStore};
+use crate::retry::Retry;
 use crate::rop::{ConfInfo, Rop, RopCode, RopRef};
 use crate::wire::Entity;
 use std::collections::{HashMap, VecDeque};
@@ -643,28 +644,33 @@ pub struct ServiceSpec {
 
 #[derive(Debug, Clone)]
 enum Op {
-    /// ask, retried `retries` more times.
     Ask {
         id: Id32,
-        timeout: Duration,
-        retries: u32,
+        retry: Retry,
     },
-    /// set + wait for sig, `times` attempts.
+    /// set + wait for sig.
     Command {
         cmd: Id32,
         data: Vec<u8>,
         reply: Id32,
-        timeout: Duration,
-        times: u32,
+        retry: Retry,
     },
     /// set, wait, ask and compare (`theNVmanager::setcheck`).
     SetCheck {
         id: Id32,
         data: Vec<u8>,
-        retries: u32,
-        wait: Duration,
-        timeout: Duration,
+        retry: Retry,
     },
+}
+
+impl Op {
+    fn retry(&self) -> Retry {
+        match self {
+            Op::Ask { retry, .. } | Op::Command { retry, .. } | Op::SetCheck { retry, .. } => {
+                *retry
+            }
+        }
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -750,8 +756,6 @@ fn service_endpoint(cat: u8) -> u8 {
 
 impl Startup {
     pub fn new(appl_config: ApplConfig, services: &[ServiceSpec]) -> Self {
-        let s = |d: Duration| d;
-        let ms = |m: u64| s(Duration::from_millis(m));
         let svc = |op: ServiceOperation, cat: u8, c: ServiceCommand| Op::Command {
             cmd: ids::SERVICE_COMMAND,
             data: {
@@ -761,16 +765,14 @@ impl Startup {
                 c.to_bytes()
             },
             reply: ids::SERVICE_COMMAND_RESULT,
-            timeout: ms(500),
-            times: 3,
+            retry: Retry::SERVICE_COMMAND,
         };
         let mut steps = VecDeque::new();
         steps.push_back((
             "verifyBoardPresence".to_string(),
             Op::Ask {
                 id: ids::COMM_MANAGEMENT_PROTOCOL_VERSION,
-                timeout: ms(1000),
-                retries: 20,
+                retry: Retry::BOARD_PRESENCE,
             },
             Check::ManagementVersion,
         ));
@@ -788,9 +790,7 @@ impl Startup {
             Op::SetCheck {
                 id: ids::APPL_CONFIG,
                 data: appl_config.to_bytes(),
-                retries: 5,
-                wait: ms(10),
-                timeout: ms(2000),
+                retry: Retry::APPL_CONFIG,
             },
             Check::None,
         ));
@@ -798,8 +798,7 @@ impl Startup {
             "askBoardVersion".to_string(),
             Op::Ask {
                 id: ids::APPL_STATUS,
-                timeout: ms(500),
-                retries: 0,
+                retry: Retry::BOARD_VERSION,
             },
             Check::ApplStatus,
         ));
@@ -823,8 +822,8 @@ impl Startup {
                     cmd: ids::COMM_QUERY_ARRAY,
                     data: q.to_bytes(),
                     reply: ids::COMM_REPLY_ARRAY,
-                    timeout: ms(100),
-                    times: 1,
+                    // C++ asks once (the devices' own check asks up to three times)
+                    retry: Retry::asks(1, Retry::ENDPOINTS.timeout),
                 },
                 Check::Endpoints(eps),
             ));
@@ -845,9 +844,7 @@ impl Startup {
                     Op::SetCheck {
                         id: *id,
                         data: data.clone(),
-                        retries: 10,
-                        wait: ms(10),
-                        timeout: ms(50),
+                        retry: Retry::DEVICE_SETCHECK,
                     },
                     Check::None,
                 ));
@@ -947,38 +944,32 @@ impl Startup {
         op: &Op,
         now: Duration,
     ) -> Result<Option<Vec<u8>>, String> {
-        let (attempts, wait_before) = match op {
-            Op::Ask { retries, .. } => (retries + 1, None),
-            Op::Command { times, .. } => (*times, None),
-            Op::SetCheck { retries, wait, .. } => (*retries, Some(*wait)),
-        };
+        let retry = op.retry();
         loop {
             match self.phase {
                 Phase::Idle => {
-                    if self.attempt >= attempts.max(1) {
+                    if self.attempt >= retry.attempts() {
                         return Err(format!("no valid reply after {} attempts", self.attempt));
                     }
                     self.attempt += 1;
                     match op {
-                        Op::Ask { id, timeout, .. } => {
-                            let r = host.ask(*id, *timeout, now).map_err(|e| e.to_string())?;
+                        Op::Ask { id, .. } => {
+                            let r = host
+                                .ask(*id, retry.timeout, now)
+                                .map_err(|e| e.to_string())?;
                             self.phase = Phase::Waiting(r);
                         }
                         Op::Command {
-                            cmd,
-                            data,
-                            reply,
-                            timeout,
-                            ..
+                            cmd, data, reply, ..
                         } => {
                             let r = host
-                                .command(*cmd, data, *reply, *timeout, now)
+                                .command(*cmd, data, *reply, retry.timeout, now)
                                 .map_err(|e| e.to_string())?;
                             self.phase = Phase::Waiting(r);
                         }
                         Op::SetCheck { id, data, .. } => {
                             host.set(*id, data, now).map_err(|e| e.to_string())?;
-                            self.phase = Phase::SetWait(now + wait_before.unwrap_or_default());
+                            self.phase = Phase::SetWait(now + retry.settle);
                         }
                     }
                 }
@@ -986,10 +977,12 @@ impl Startup {
                     if now < at {
                         return Ok(None);
                     }
-                    let Op::SetCheck { id, timeout, .. } = op else {
+                    let Op::SetCheck { id, .. } = op else {
                         unreachable!("SetWait only for SetCheck")
                     };
-                    let r = host.ask(*id, *timeout, now).map_err(|e| e.to_string())?;
+                    let r = host
+                        .ask(*id, retry.timeout, now)
+                        .map_err(|e| e.to_string())?;
                     self.phase = Phase::Waiting(r);
                 }
                 Phase::Waiting(r) => match host.take_result(r) {

@@ -12,6 +12,7 @@
 //! | [`host`] | [`host::HostTransceiver`]: what `embObj*` devices use (asks with signatures and timeouts, sets, commands, regulars, presence, sequence checks) and [`host::Startup`], the board bring-up sequence of `EthResource` |
 //! | [`board`] | [`board::BoardEngine`]: a board as the emulator runs it (management, services, regulars at the configured rate, MC/AS/SK variables) |
 //! | [`plant`] | the pluggable joint model ([`plant::JointModel`]) the board engine drives |
+//! | [`retry`] | [`Retry`]: icub-main's retry policies (attempts, timeout, settle), named where used |
 //! | [`addressmap`] | [`AddressMap`]: the robot's board addresses served elsewhere (`YARP_ICUB_ETH_ADDRESS_MAP`), as host and emulator both apply it |
 //!
 //! See the crate's README.md for the wire layouts, the start-up sequence and its timeouts.
@@ -25,6 +26,7 @@ pub mod host;
 pub mod id;
 pub mod nvstore;
 pub mod plant;
+pub mod retry;
 pub mod rop;
 pub mod wire;
 
@@ -32,5 +34,6 @@ pub use addressmap::{AddressMap, ADDRESS_MAP_ENV};
 pub use frame::{decode_datagram, Frame, FrameBuilder, FrameError, FrameHeader};
 pub use id::Id32;
 pub use nvstore::{NvError, NvStore};
+pub use retry::Retry;
 pub use rop::{ConfInfo, Rop, RopCode, RopCtrl, RopError};
 pub use wire::Entity;

@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use icub_eth::host::{
     HostConfig, HostEvent, HostTransceiver, RequestError, Startup, StartupError, StartupStatus,
 };
-use icub_eth::{Entity, Id32};
+use icub_eth::{Entity, Id32, Retry};
 
 use super::params::{AddressMap, EthBoardParams, Pc104};
 
@@ -336,33 +336,31 @@ impl Board {
         self.wait(r)
     }
 
-    /// `theNVmanager::setcheck`: set, wait, ask back and compare, `retries` times.
-    pub fn setcheck(
-        &self,
-        id: Id32,
-        data: &[u8],
-        retries: u32,
-        wait: Duration,
-        timeout: Duration,
-    ) -> Result<(), EthError> {
-        let mut last = None;
-        for _ in 0..retries.max(1) {
-            self.set(id, data)?;
-            std::thread::sleep(wait);
-            match self.ask(id, timeout) {
-                Ok(v) if v == data => return Ok(()),
-                Ok(_) => last = Some("the board holds a different value".to_string()),
-                Err(e) => last = Some(e.to_string()),
-            }
-        }
-        Err(EthError::Board {
-            who: self.who(),
-            reason: format!(
-                "setcheck of {id} failed after {} attempts: {}",
-                retries.max(1),
-                last.unwrap_or_default()
-            ),
-        })
+    /// `theNVmanager::setcheck`: set, wait, ask back and compare, as `retry` says.
+    pub fn setcheck(&self, id: Id32, data: &[u8], retry: Retry) -> Result<(), EthError> {
+        // a set the host refuses (a variable it does not know) is not retried
+        let mut refused = None;
+        let checked = retry
+            .run(|timeout| {
+                if let Err(e) = self.set(id, data) {
+                    refused = Some(e);
+                    return Ok(());
+                }
+                std::thread::sleep(retry.settle);
+                match self.ask(id, timeout) {
+                    Ok(v) if v == data => Ok(()),
+                    Ok(_) => Err("the board holds a different value".to_string()),
+                    Err(e) => Err(e.to_string()),
+                }
+            })
+            .map_err(|last| EthError::Board {
+                who: self.who(),
+                reason: format!(
+                    "setcheck of {id} failed after {} attempts: {last}",
+                    retry.attempts()
+                ),
+            });
+        refused.map_or(checked, Err)
     }
 
     /// How long a board may be silent before its values are refused: ten times its

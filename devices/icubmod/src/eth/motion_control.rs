@@ -28,7 +28,7 @@ use icub_eth::entities::mc::{
 };
 use icub_eth::entities::mn::{category, ServiceCommand};
 use icub_eth::id::{endpoint as ep, entity as en, ids, tag};
-use icub_eth::{Entity, Id32};
+use icub_eth::{Entity, Id32, Retry};
 use yarp_devices::interfaces::*;
 use yarp_devices::sensors::virtual_analog::{IVirtualAnalogSensor, VasStatus};
 use yarp_devices::vocabs::*;
@@ -305,17 +305,12 @@ impl EmbObjMotionControl {
         self.set(id, &sp)
     }
 
-    /// An ask of the board (C++ `askRemoteValue`); a reply lost on a loaded host is
-    /// asked again, up to three times within [`ASK_TIMEOUT`].
+    /// An ask of the board (C++ `askRemoteValue`), as [`Retry::DEVICE_ASK`].
     fn retried<T>(&self, ask: impl Fn(&Board, Duration) -> Result<T, EthError>) -> DevResult<T> {
-        let mut last = None;
-        for _ in 0..3 {
-            match ask(self.b()?, ASK_TIMEOUT / 3) {
-                Ok(v) => return Ok(v),
-                Err(e) => last = Some(e),
-            }
-        }
-        Err(self.fail(last.expect("three attempts")))
+        let b = self.b()?;
+        Retry::DEVICE_ASK
+            .run(|timeout| ask(b, timeout))
+            .map_err(|e| self.fail(e))
     }
 
     /// Asks a board variable of a known type.

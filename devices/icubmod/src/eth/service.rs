@@ -1,23 +1,19 @@
 //! A device's service on its board, in the order and with the timeouts of icub-main's
-//! `EthResource`: `verifyEPprotocol(ep)` (endpoint descriptors, 0.1 s; a different
-//! protocol version is refused naming both), `serviceVerifyActivate` (0.5 s × 3),
-//! configuration `setcheck`s (10 × 10 ms, 50 ms), `serviceSetRegulars` (0.5 s × 3),
-//! `serviceStart` (0.5 s × 3).
+//! `EthResource` ([`Retry`]'s policies): `verifyEPprotocol(ep)` (endpoint descriptors,
+//! 0.1 s; a different protocol version is refused naming both), `serviceVerifyActivate`
+//! (0.5 s × 3), configuration `setcheck`s (10 × 10 ms, 50 ms), `serviceSetRegulars`
+//! (0.5 s × 3), `serviceStart` (0.5 s × 3).
 
 use std::sync::Arc;
-use std::time::Duration;
 
 use icub_eth::entities::mn::{
     opc, versions, QueryArray, ReplyArray, ServiceCommand, ServiceCommandResult, ServiceOperation,
 };
 use icub_eth::host::StartupError;
 use icub_eth::id::{endpoint as ep, endpoint_name, ids};
-use icub_eth::{Entity, Id32};
+use icub_eth::{Entity, Id32, Retry};
 
 use super::manager::{Board, EthError};
-
-const SERVICE_TIMEOUT: Duration = Duration::from_millis(500);
-const SERVICE_TIMES: u32 = 3;
 
 /// The endpoint that carries a service category.
 pub fn endpoint_of(category: u8) -> u8 {
@@ -57,24 +53,14 @@ pub fn verify_endpoint(board: &Board, endpoint: u8) -> Result<(), EthError> {
         set_number: 0,
         set_size: 0,
     };
-    // C++ asks once with 0.1 s; a loaded host may miss that reply, so it is asked up to
-    // three times.
-    let mut reply = Err(EthError::Board {
-        who: board.who(),
-        reason: "no reply".into(),
-    });
-    for _ in 0..3 {
-        reply = board.command(
+    let reply = Retry::ENDPOINTS.run(|timeout| {
+        board.command(
             ids::COMM_QUERY_ARRAY,
             &q.to_bytes(),
             ids::COMM_REPLY_ARRAY,
-            Duration::from_millis(100),
-        );
-        if reply.is_ok() {
-            break;
-        }
-    }
-    let reply = reply?;
+            timeout,
+        )
+    })?;
     let reply = ReplyArray::from_bytes(&reply).map_err(|e| EthError::Board {
         who: board.who(),
         reason: e.to_string(),
@@ -106,34 +92,33 @@ pub fn verify_endpoint(board: &Board, endpoint: u8) -> Result<(), EthError> {
     }
 }
 
-/// One service command (`set<service cmmnds command>` → `sig<commandresult>`), tried
-/// three times; fails unless the board says `latestcommandisok`.
+/// One service command (`set<service cmmnds command>` → `sig<commandresult>`), as
+/// [`Retry::SERVICE_COMMAND`]; fails unless the board says `latestcommandisok`.
 fn service_command(board: &Board, what: &str, cmd: &ServiceCommand) -> Result<(), EthError> {
-    let mut last = String::new();
-    for _ in 0..SERVICE_TIMES {
-        match board.command(
-            ids::SERVICE_COMMAND,
-            &cmd.to_bytes(),
-            ids::SERVICE_COMMAND_RESULT,
-            SERVICE_TIMEOUT,
-        ) {
-            Ok(v) => match ServiceCommandResult::from_bytes(&v) {
-                Ok(r) if r.latest_command_is_ok => return Ok(()),
-                Ok(_) => {
-                    return Err(EthError::Board {
-                        who: board.who(),
-                        reason: format!("{what}: the board replied latestcommandisok = false"),
-                    })
-                }
-                Err(e) => last = e.to_string(),
-            },
-            Err(e) => last = e.to_string(),
-        }
+    let retry = Retry::SERVICE_COMMAND;
+    let result = retry
+        .run(|timeout| {
+            let v = board
+                .command(
+                    ids::SERVICE_COMMAND,
+                    &cmd.to_bytes(),
+                    ids::SERVICE_COMMAND_RESULT,
+                    timeout,
+                )
+                .map_err(|e| e.to_string())?;
+            ServiceCommandResult::from_bytes(&v).map_err(|e| e.to_string())
+        })
+        .map_err(|last| EthError::Board {
+            who: board.who(),
+            reason: format!("{what} failed after {} attempts: {last}", retry.attempts()),
+        })?;
+    if !result.latest_command_is_ok {
+        return Err(EthError::Board {
+            who: board.who(),
+            reason: format!("{what}: the board replied latestcommandisok = false"),
+        });
     }
-    Err(EthError::Board {
-        who: board.who(),
-        reason: format!("{what} failed after {SERVICE_TIMES} attempts: {last}"),
-    })
+    Ok(())
 }
 
 /// `serviceVerifyActivate(category, param)`.
@@ -185,13 +170,7 @@ pub fn stop(board: &Board, category: u8) -> Result<(), EthError> {
 
 /// `setcheckRemoteValue(id, value, 10, 0.010, 0.050)`, as the devices configure entities.
 pub fn setcheck(board: &Board, id: Id32, data: &[u8]) -> Result<(), EthError> {
-    board.setcheck(
-        id,
-        data,
-        10,
-        Duration::from_millis(10),
-        Duration::from_millis(50),
-    )
+    board.setcheck(id, data, Retry::DEVICE_SETCHECK)
 }
 
 /// Work of a sensor device between the verification of its services and their
