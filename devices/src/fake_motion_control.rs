@@ -32,7 +32,7 @@ use crate::error::{DevResult, DeviceError};
 use crate::interfaces::*;
 use crate::vocabs::*;
 use std::collections::HashMap;
-use std::time::{Instant, SystemTime, UNIX_EPOCH};
+use std::time::Instant;
 use yarp_proto::{Property, Vocab32};
 
 const NAME: &str = "fakeMotionControl";
@@ -102,12 +102,7 @@ impl Default for FakeMotionControl {
     }
 }
 
-fn now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_secs_f64())
-        .unwrap_or(0.0)
-}
+use yarp_proto::stamp::now;
 
 impl FakeMotionControl {
     /// An unopened device with no joints.

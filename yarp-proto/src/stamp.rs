@@ -6,6 +6,14 @@
 use crate::number;
 use crate::value::{Bottle, Value};
 
+/// Seconds since the Unix epoch on the system clock: C++ `yarp::os::Time::now()`, the time
+/// envelopes carry (0 on a clock set before 1970).
+pub fn now() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
 /// A YARP `Stamp`: sequence number and timestamp in seconds.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stamp {

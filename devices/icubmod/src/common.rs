@@ -3,7 +3,7 @@
 //! driver-core errors into [`DeviceError`]s.
 
 use std::sync::Arc;
-use std::time::{Instant, SystemTime, UNIX_EPOCH};
+use std::time::Instant;
 
 use icub_can::client::ClientError;
 use icub_can::CanBus;
@@ -16,11 +16,7 @@ use yarp_devices::error::DeviceError;
 pub const BACKEND_ENV: &str = "YARP_ICUB_CAN_BACKEND";
 
 /// Wall-clock time in seconds (the timestamps of YARP ports).
-pub fn now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0.0, |d| d.as_secs_f64())
-}
+pub use yarp_proto::stamp::now;
 
 /// The wall-clock time of an `Instant` in the past.
 pub fn wall_time(at: Instant) -> f64 {

@@ -16,7 +16,7 @@ use crate::runtime;
 use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 use yarp_net::nameserver::NameClient;
 use yarp_net::port::{Port, PortError};
 use yarp_proto::{Property, Stamp, Value};
@@ -105,12 +105,7 @@ struct Streamer {
     thread: JoinHandle<()>,
 }
 
-fn now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_secs_f64())
-        .unwrap_or(0.0)
-}
+use yarp_proto::stamp::now;
 
 fn stream(
     port: Arc<Port>,

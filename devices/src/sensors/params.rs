@@ -2,16 +2,10 @@
 
 use crate::driver::Params;
 use crate::error::{DevResult, DeviceError};
-use std::time::{SystemTime, UNIX_EPOCH};
 use yarp_proto::Value;
 
 /// Wall-clock time in seconds (C++ `yarp::os::Time::now`).
-pub fn now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_secs_f64())
-        .unwrap_or(0.0)
-}
+pub use yarp_proto::stamp::now;
 
 /// A boolean parameter as C++ `Value::asBool` reads it (`true`/`false`, 0/1); a key
 /// given without a value (`--constantValue`) counts as true.

@@ -30,7 +30,6 @@ use crate::port::{Incoming, Port, PortError, Replier};
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::time::{SystemTime, UNIX_EPOCH};
 use tokio::runtime::Handle;
 use tokio::sync::Notify;
 use tokio::task::JoinHandle;
@@ -85,13 +84,7 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// Seconds since the epoch, as C++ `Time::now()` with the system clock.
-fn now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_secs_f64())
-        .unwrap_or(0.0)
-}
+use yarp_proto::stamp::now;
 
 /// The next envelope after `prev`, as C++ `Stamp::update`: counts from 0, wraps to 0
 /// after `i32::MAX`.

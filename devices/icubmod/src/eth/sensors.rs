@@ -41,11 +41,7 @@ use super::params::{read_eth_board, read_pc104, read_service, ServiceKind};
 use super::service::{open_sensor, SensorService, Write};
 use super::skin_spec::SkinSpec;
 
-fn now() -> f64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0.0, |d| d.as_secs_f64())
-}
+use yarp_proto::stamp::now;
 
 /// What every sensor device shares: its name, its board, its service.
 #[derive(Default)]

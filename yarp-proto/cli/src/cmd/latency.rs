@@ -20,7 +20,7 @@
 
 use anyhow::{anyhow, bail, Context, Result};
 use std::collections::BTreeMap;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::Duration;
 use yarp_net::nameserver::NameClient;
 use yarp_net::network;
 use yarp_net::port::Port;
@@ -202,13 +202,7 @@ fn runtime() -> Result<tokio::runtime::Runtime> {
         .context("starting the async runtime")
 }
 
-/// C++ `yarp::os::Time::now()`.
-fn now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_secs_f64())
-        .unwrap_or(0.0)
-}
+use yarp_proto::stamp::now;
 
 /// The payload sizes of `--multitest`: 1 2 4 8 10 20 40 80 100 ... 800000000, kept
 /// within `[min, max]`.
