@@ -180,10 +180,30 @@ fn take(log: &Log) -> Vec<String> {
 }
 
 #[test]
+fn a_device_type_not_in_the_build_stops_the_startup_as_in_cpp() {
+    let loaded = read_robot_file(&fixture("mock/robot.xml"), &Property::new()).unwrap();
+    let (mut runner, log, _) = runner_for(loaded.robot);
+    let err = runner.enter_phase(ActionPhase::Startup).unwrap_err();
+    let problems = err.problems.join("; ");
+    assert!(
+        problems.contains("cannot open device ghost: could not find device <noSuchType>"),
+        "{problems}"
+    );
+    let log = take(&log);
+    // every device is tried (C++ opens them all, then gives up), the opened ones closed
+    assert!(log.contains(&"open ghost_wrapper".to_string()), "{log:?}");
+    assert!(log.contains(&"close board_a".to_string()), "{log:?}");
+    assert!(!log.iter().any(|l| l.starts_with("attach")), "{log:?}");
+    assert!(runner.failures().is_empty());
+}
+
+#[test]
 fn phases_run_actions_in_level_order() {
     let loaded = read_robot_file(&fixture("mock/robot.xml"), &Property::new()).unwrap();
     let (mut runner, log, configs) = runner_for(loaded.robot);
     assert_eq!(runner.unavailable_devices(), [("ghost", "noSuchType")]);
+    // `ghost`'s type is in no build: only keep-going skips it (C++ stops there)
+    runner.set_keep_going(true);
     let seen: Arc<Mutex<Vec<(ActionPhase, u32)>>> = Arc::default();
     let sink = seen.clone();
     runner.set_progress(Box::new(move |phase, level| {
@@ -352,7 +372,7 @@ fn reverse_shutdown_action_order_reverses_stopping_levels() {
 
 #[test]
 fn skipped_targets_propagate_through_wrapper_chains() {
-    // missing board -> remapper left unattached -> server aimed at it skipped, no error
+    // (keep-going) missing board -> remapper left unattached -> server aimed at it skipped, no error
     let (mut runner, log, _) = runner_for(robot(
         r#"<robot name="r"><device name="board" type="canmotioncontrol"/>
            <device name="remap" type="mockMulti"><action phase="startup" level="5" type="attach">
@@ -362,6 +382,7 @@ fn skipped_targets_propagate_through_wrapper_chains() {
            <device name="calib" type="mockCalibrator"><action phase="startup" level="15" type="calibrate">
               <param name="target">remap</param></action></device></robot>"#,
     ));
+    runner.set_keep_going(true);
     runner.enter_phase(ActionPhase::Startup).unwrap();
     assert_eq!(take(&log), ["open remap", "open server", "open calib"]);
     runner.enter_phase(ActionPhase::Shutdown).unwrap();

@@ -3,14 +3,14 @@
 //! level (calibrate and park actions of one level in parallel, joined before the next
 //! level), and the `shutdown` phase ends by closing the devices in reverse order.
 //!
-//! One deliberate difference, so that partial robots come up: a device whose type is not
-//! in the registry is reported by name and skipped, as are the actions on it or aimed at
-//! it. A device of a known type that fails to open still fails the startup, as in C++,
-//! unless the runner is told to keep going ([`RobotRunner::set_keep_going`],
-//! `yarprobotinterface --keep-going`): then a device that fails to open, or a wrapper
-//! whose attach fails, is reported by name and treated like an unavailable one (skipped,
-//! with everything aimed at it), and the startup succeeds with what is left
-//! ([`RobotRunner::failures`] lists what was given up).
+//! A device that cannot be opened (its type is not in the registry, or its driver fails)
+//! fails the startup, as in C++ (a dry run opens nothing, so there an unknown type is only
+//! reported). One deliberate addition, so that partial robots come up: told to keep going
+//! ([`RobotRunner::set_keep_going`], `yarprobotinterface --keep-going`), the runner skips a
+//! device whose type is not in the registry, and a device that fails to open or a wrapper
+//! whose attach fails, together with the actions on it or aimed at it, reports each by name,
+//! and the startup succeeds with what is left ([`RobotRunner::failures`] lists what was
+//! given up besides the unavailable types).
 
 use super::error::XmlError;
 use super::model::*;
@@ -258,12 +258,26 @@ impl RobotRunner {
     fn open_devices(&mut self, problems: &mut Vec<String>) {
         for (i, dev) in self.robot.devices.iter().enumerate() {
             if !self.factory.knows(&dev.kind) {
-                tracing::warn!(
-                    "device {} of type {} is not available in this build; skipping it",
-                    dev.name,
-                    dev.kind
-                );
-                self.slots[i] = Slot::Unavailable;
+                if self.dryrun || self.keep_going {
+                    tracing::warn!(
+                        "device {} of type {} is not available in this build; skipping it",
+                        dev.name,
+                        dev.kind
+                    );
+                    self.slots[i] = Slot::Unavailable;
+                } else {
+                    // C++: PolyDriver's "Could not find device", then "Cannot open device"
+                    tracing::warn!(
+                        "Cannot open device {}: could not find device <{}> (not available in this build; --keep-going skips it)",
+                        dev.name,
+                        dev.kind
+                    );
+                    problems.push(format!(
+                        "cannot open device {}: could not find device <{}> (not available in this build)",
+                        dev.name, dev.kind
+                    ));
+                    self.slots[i] = Slot::Failed;
+                }
                 continue;
             }
             tracing::info!("Opening device {}", dev.name);

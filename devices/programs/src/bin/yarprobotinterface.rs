@@ -13,11 +13,12 @@
 //! `--enable_tags` / `--disable_tags` decide which `xi:include`s with `enabled_by` /
 //! `disabled_by` attributes are read, as in C++ (`enable_all` enables every one).
 //!
-//! Devices whose type this build does not provide are named at startup and skipped, with
-//! the actions on them; the rest of the robot comes up. With `--keep-going` (not in C++),
-//! devices that fail to open and actions that fail at startup (say, a remapper naming a
-//! network no board provides) are reported by name too and skipped with whatever depends
-//! on them, instead of stopping the robot. `/<portprefix>/yarprobotinterface`
+//! A device that cannot be opened stops the startup, as in C++: its type is not in this
+//! build, or its driver fails. With `--keep-going` (not in C++), devices whose type this
+//! build does not provide are named and skipped with the actions on them, and devices that
+//! fail to open and actions that fail at startup (say, a remapper naming a network no board
+//! provides) are reported by name too and skipped with whatever depends on them; the rest
+//! of the robot comes up. `/<portprefix>/yarprobotinterface`
 //! answers `get_phase`, `get_level`, `get_robot`, `is_ready` and `quit`, as in C++.
 //! A second signal during the interrupt phase adds `interrupt2`, a third `interrupt3`;
 //! a fourth aborts at once.
@@ -284,7 +285,7 @@ fn run() -> i32 {
         .iter()
         .map(|(name, kind)| format!("{name} ({kind})"))
         .collect();
-    if !unavailable.is_empty() {
+    if !unavailable.is_empty() && (keep_going || dryrun) {
         tracing::info!(
             "{} of {} devices are not available in this build and are skipped with their actions: {}",
             unavailable.len(),
