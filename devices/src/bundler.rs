@@ -87,7 +87,7 @@ impl DeviceDriver for DeviceBundler {
         let attached = match PolyDriver::open(&config_for(config, &attached_name)) {
             Ok(pd) => shared(pd),
             Err(e) => {
-                let _ = wrapper.lock().unwrap_or_else(|e| e.into_inner()).close();
+                let _ = wrapper.lock().close();
                 return Err(e);
             }
         };
@@ -99,7 +99,7 @@ impl DeviceDriver for DeviceBundler {
         }
 
         let result = {
-            let mut w = wrapper.lock().unwrap_or_else(|e| e.into_inner());
+            let mut w = wrapper.lock();
             match w.device().as_wrapper() {
                 Some(iw) => iw.attach(attached),
                 None => Err(DeviceError::BadParam {
@@ -125,7 +125,7 @@ impl DeviceDriver for DeviceBundler {
 
     fn close(&mut self) -> DevResult<()> {
         if let Some(w) = self.wrapper.take() {
-            let mut w = w.lock().unwrap_or_else(|e| e.into_inner());
+            let mut w = w.lock();
             if std::mem::take(&mut self.is_attached) {
                 if let Some(iw) = w.device().as_wrapper() {
                     let _ = iw.detach();
@@ -134,7 +134,7 @@ impl DeviceDriver for DeviceBundler {
             let _ = w.close();
         }
         if let Some(a) = self.attached.take() {
-            let _ = a.lock().unwrap_or_else(|e| e.into_inner()).close();
+            let _ = a.lock().close();
         }
         Ok(())
     }
@@ -180,7 +180,7 @@ mod tests {
         );
         b.open(&cfg).unwrap();
         let a = b.attached().unwrap();
-        let mut a = a.lock().unwrap();
+        let mut a = a.lock();
         assert_eq!(a.name(), "fakeMotionControl");
         assert_eq!(a.device().as_encoders().unwrap().get_axes().unwrap(), 3);
         drop(a);

@@ -15,7 +15,8 @@ use crate::rangefinder::IRangefinder2D;
 use crate::rgbd::IRGBDSensor;
 use crate::sensors::interfaces::*;
 use crate::sensors::virtual_analog::IVirtualAnalogSensor;
-use std::sync::{Arc, LazyLock, Mutex, RwLock};
+use parking_lot::{Mutex, RwLock};
+use std::sync::{Arc, LazyLock};
 use yarp_proto::{Bottle, Property, Value};
 
 /// A device shared between its owner and the wrappers attached to it.
@@ -373,8 +374,8 @@ static TABLE: LazyLock<RwLock<Registry>> = LazyLock::new(|| {
     RwLock::new(table)
 });
 
-fn table() -> std::sync::RwLockReadGuard<'static, Registry> {
-    TABLE.read().unwrap_or_else(|e| e.into_inner())
+fn table() -> parking_lot::RwLockReadGuard<'static, Registry> {
+    TABLE.read()
 }
 
 impl Registry {
@@ -399,7 +400,7 @@ impl Registry {
 
     /// Runs a device crate's `register` on the process-wide table.
     pub fn install(register: impl FnOnce(&mut Registry)) {
-        register(&mut TABLE.write().unwrap_or_else(|e| e.into_inner()));
+        register(&mut TABLE.write());
     }
 
     /// Every known driver, sorted by name (case-insensitive).
@@ -508,7 +509,7 @@ impl PolyDriver {
             match pd.driver.as_wrapper() {
                 Some(w) => w.attach(sub.clone())?,
                 None => {
-                    let key = sub.lock().unwrap_or_else(|e| e.into_inner()).name.clone();
+                    let key = sub.lock().name.clone();
                     if let Some(w) = pd.driver.as_multiple_wrapper() {
                         w.attach_all(&[(key, sub.clone())])?;
                     }
@@ -557,7 +558,7 @@ impl PolyDriver {
         }
         let result = self.driver.close();
         if let Some(sub) = self.subdevice.take() {
-            let _ = sub.lock().unwrap_or_else(|e| e.into_inner()).close();
+            let _ = sub.lock().close();
         }
         result
     }

@@ -5,7 +5,8 @@
 use crate::error::{DevResult, DeviceError};
 use crate::rangefinder::protocol::{parse_reply, ReturnCode};
 use crate::runtime;
-use std::sync::{Arc, Mutex, MutexGuard};
+use parking_lot::{Mutex, MutexGuard};
+use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::nameserver::NameClient;
 use yarp_net::port::Port;
@@ -51,7 +52,7 @@ async fn receive<T>(
         {
             Ok(m) => {
                 let t = msg.stamp.map_or(0.0, |s| s.time);
-                *latest.lock().unwrap_or_else(|e| e.into_inner()) = Some((m, t));
+                *latest.lock() = Some((m, t));
             }
             Err(e) => tracing::warn!("{device}: ignoring a malformed stream message: {e}"),
         }
@@ -129,7 +130,7 @@ impl<T: Send + 'static> NwcPorts<T> {
 
     /// The latest stream message, if one came.
     pub fn latest(&self) -> MutexGuard<'_, Option<(T, f64)>> {
-        self.latest.lock().unwrap_or_else(|e| e.into_inner())
+        self.latest.lock()
     }
 
     /// Calls the server (blocking the caller, at most [`RPC_TIMEOUT`]).

@@ -15,9 +15,10 @@
 use crate::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::interfaces::*;
+use parking_lot::MutexGuard;
 use std::collections::HashMap;
 use std::sync::atomic::AtomicBool;
-use std::sync::{Arc, MutexGuard};
+use std::sync::Arc;
 use yarp_proto::{Bottle, Property, Value, Vocab32};
 
 /// The C++ device name.
@@ -249,7 +250,7 @@ pub struct ControlBoardRemapper {
 const NOT_ATTACHED: &str = "controlboardremapper: no boards attached yet";
 
 fn lock(d: &SharedDevice) -> MutexGuard<'_, crate::driver::PolyDriver> {
-    d.lock().unwrap_or_else(|e| e.into_inner())
+    d.lock()
 }
 
 impl ControlBoardRemapper {
@@ -290,9 +291,8 @@ impl ControlBoardRemapper {
     ) -> Option<DevResult<R>> {
         let c = self.calibrator.as_ref()?;
         let mut pd = match c.try_lock() {
-            Ok(pd) => pd,
-            Err(std::sync::TryLockError::Poisoned(e)) => e.into_inner(),
-            Err(std::sync::TryLockError::WouldBlock) => {
+            Some(pd) => pd,
+            None => {
                 return Some(Err(DeviceError::Unsupported(
                     "the calibrator device is busy calibrating or parking",
                 )))

@@ -23,7 +23,8 @@ use crate::error::{DevResult, DeviceError};
 use crate::interfaces::*;
 use crate::runtime;
 use crate::vocabs::*;
-use std::sync::{Arc, Mutex, MutexGuard};
+use parking_lot::{Mutex, MutexGuard};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use yarp_net::nameserver::NameClient;
 use yarp_net::port::Port;
@@ -78,7 +79,7 @@ pub struct RemoteControlBoard {
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
+    m.lock()
 }
 
 /// The settings read from the configuration.

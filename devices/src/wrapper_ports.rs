@@ -7,7 +7,8 @@
 use crate::driver::{DeviceDriver, Params, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
-use std::sync::{Arc, Mutex};
+use parking_lot::Mutex;
+use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::port::Port;
 use yarp_proto::Bottle;
@@ -111,10 +112,10 @@ async fn serve_rpc(wrapper: &'static str, port: Arc<Port>, slot: Slot, answer: A
             tracing::warn!("{wrapper}: undecodable request from {}: {e}", msg.from);
             Bottle::new()
         });
-        let device = slot.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let device = slot.lock().clone();
         let reply = match device {
             Some(d) => {
-                let mut pd = d.lock().unwrap_or_else(|e| e.into_inner());
+                let mut pd = d.lock();
                 answer(&cmd, Some(pd.device()))
             }
             None => answer(&cmd, None),

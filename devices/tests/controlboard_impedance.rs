@@ -385,7 +385,7 @@ fn remapper_takes_its_calibrator_from_the_attach_list_and_never_waits_for_a_busy
     assert!(rc.is_calibrator_device_present().unwrap());
     rc.homing_single_joint(2).unwrap();
     {
-        let _busy = spy.lock().unwrap();
+        let _busy = spy.lock();
         let err = rc.homing_whole_part().unwrap_err();
         assert!(err.to_string().contains("busy"), "{err}");
     }
@@ -488,7 +488,7 @@ fn a_quit_over_rpc_stops_a_procedure_that_holds_the_calibrator() {
     let mut client = open("device remote_controlboard\nremote /qcal\nlocal /qcal/cli\n");
     let (started_tx, started) = std::sync::mpsc::channel();
     let procedure = std::thread::spawn(move || {
-        let mut c = slow.lock().unwrap();
+        let mut c = slow.lock();
         started_tx.send(()).unwrap();
         let t = std::time::Instant::now();
         let r = c

@@ -1,6 +1,5 @@
 //! controlBoard_nws_yarp over real sockets with an in-process name server (netns-run).
 
-use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::TcpStream;
@@ -42,7 +41,7 @@ async fn text_session_get_axes() {
 
     let cfg =
         Property::from_config_text("device fakeMotionControl\n[GENERAL]\njoints 4\n").unwrap();
-    let pd = Arc::new(Mutex::new(PolyDriver::open(&cfg).expect("open fake")));
+    let pd = yarp_devices::driver::shared(PolyDriver::open(&cfg).expect("open fake"));
     let nws = ControlBoardNws::open("/fake", client.clone(), pd)
         .await
         .expect("nws");

@@ -364,7 +364,7 @@ fn recorded_streaming_commands_drive_the_device() {
     println!("command:i vectors: {n} messages acked as recorded: {calls:?}");
     // velocityMove(all) (1 2 3 4) came after velocityMove(0, 5.0)
     let speeds = wait_for("velocity commands applied", || {
-        let mut pd = dev.lock().unwrap();
+        let mut pd = dev.lock();
         let v = pd.device().as_velocity_control().unwrap();
         let s = v.get_ref_velocities().unwrap();
         (s == [1.0, 2.0, 3.0, 4.0]).then_some(s)
@@ -373,7 +373,7 @@ fn recorded_streaming_commands_drive_the_device() {
     // setPosition(0,1.5) then setPositions(1 2 3 4), then setRefCurrent(0,0.5) (acks
     // come on receipt: wait until the commands are applied)
     wait_for("position-direct and current references applied", || {
-        let mut pd = dev.lock().unwrap();
+        let mut pd = dev.lock();
         let d = pd.device();
         let refs = d.as_position_direct()?.get_ref_positions().ok()?;
         let current = d.as_current_control()?.get_ref_current(0).ok()?;

@@ -22,7 +22,7 @@ fn fake(names: &[&str]) -> SharedDevice {
 }
 
 fn target(d: &SharedDevice, j: usize) -> f64 {
-    let mut pd = d.lock().unwrap();
+    let mut pd = d.lock();
     pd.device()
         .as_position_control()
         .unwrap()
@@ -70,7 +70,7 @@ fn axes_names_join_two_boards() {
         .unwrap()
         .set_control_mode(0, CM_VELOCITY)
         .unwrap();
-    let mut h = hand.lock().unwrap();
+    let mut h = hand.lock();
     assert_eq!(
         h.device()
             .as_control_mode()
@@ -105,7 +105,7 @@ fn networks_joined_part_served_and_driven_remotely() {
          net_arm (0 1 1 2)\nnet_hand 2 3 0 1\n",
     ));
     {
-        let mut p = part.lock().unwrap();
+        let mut p = part.lock();
         let w = p.device().as_multiple_wrapper().unwrap();
         let missing = w
             .attach_all(&[("net_arm".into(), arm.clone())])
@@ -161,7 +161,7 @@ fn remapper_forwards_position_direct_pid_motor_and_pwm_calls() {
     pdir.set_positions(&[4.0, 5.0]).unwrap();
     assert_eq!(pdir.get_ref_positions().unwrap(), [4.0, 5.0]);
     let board_ref = |b: &SharedDevice, j: usize| {
-        let mut pd = b.lock().unwrap();
+        let mut pd = b.lock();
         pd.device()
             .as_position_direct()
             .unwrap()

@@ -21,7 +21,7 @@ fn push(log: &Log, s: String) {
 }
 
 fn id_of(d: &SharedDevice) -> String {
-    d.lock().unwrap().name().to_string()
+    d.lock().name().to_string()
 }
 
 /// One mock driver of any kind; `id` is the robot's device name.

@@ -378,7 +378,6 @@ fn remapper_joins_devices_in_the_configured_order() {
     ));
     remapper
         .lock()
-        .unwrap()
         .device()
         .as_multiple_wrapper()
         .unwrap()

@@ -1,8 +1,8 @@
 //! Per-mapping counters and their `diagnostic_msgs/DiagnosticArray` form (pure).
 
 use crate::dynmsg::Value as Ros;
+use parking_lot::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
-use std::sync::Mutex;
 use std::time::Duration;
 
 /// Live counters of one mapping, updated lock-free by its bridge task.
@@ -44,21 +44,18 @@ impl Counters {
     /// Counts a drop and keeps `why` for the diagnostics (e.g. why a command was refused).
     pub fn refused(&self, why: impl Into<String>) {
         self.dropped();
-        *self.problem.lock().unwrap_or_else(|e| e.into_inner()) = Some(why.into());
+        *self.problem.lock() = Some(why.into());
     }
 
     /// Counts a success that clears the last problem (the bridge works again).
     pub fn applied(&self, latency: Duration) {
         self.forwarded(latency);
-        *self.problem.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        *self.problem.lock() = None;
     }
 
     /// The reason kept by the last [`Counters::refused`], if nothing succeeded since.
     pub fn problem(&self) -> Option<String> {
-        self.problem
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .clone()
+        self.problem.lock().clone()
     }
 
     pub fn snapshot(&self) -> Snapshot {

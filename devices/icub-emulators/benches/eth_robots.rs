@@ -128,7 +128,7 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
     let mut lat = Vec::new();
     let mut missed = 0;
     for k in 0..20 {
-        let mut pd = dev.lock().unwrap();
+        let mut pd = dev.lock();
         let d = pd.device();
         let step = |d: &mut dyn yarp_devices::DeviceDriver| -> yarp_devices::DevResult<Duration> {
             d.as_control_mode()

@@ -42,7 +42,6 @@ fn ergocub_battery_reports_through_embobjbattery() {
     let voltage = loop {
         let v = dev
             .lock()
-            .unwrap()
             .device()
             .as_battery()
             .expect("IBattery")
@@ -53,7 +52,7 @@ fn ergocub_battery_reports_through_embobjbattery() {
         }
         std::thread::sleep(Duration::from_millis(50));
     };
-    let mut pd = dev.lock().unwrap();
+    let mut pd = dev.lock();
     let b = pd.device().as_battery().unwrap();
     // The emulated pack: 48.3 V, ~2 A, 85 %, 25.0 °C (250 in 0.1 °C), in use.
     assert!((voltage - 48.3).abs() < 1e-4, "{voltage}");

@@ -18,7 +18,7 @@ use yarp_devices::SharedDevice;
 
 /// The names and one reading (degrees) of every encoder array of `dev`.
 fn read(dev: &SharedDevice) -> (Vec<String>, Vec<f64>) {
-    let mut pd = dev.lock().unwrap();
+    let mut pd = dev.lock();
     let e = pd.device().as_encoder_arrays().expect("IEncoderArrays");
     let n = e.get_nr_of_encoder_arrays();
     let names = (0..n)

@@ -6,7 +6,8 @@
 //! target's `IAxisInfo` names), the board that drives it: its `IRemoteCalibrator` calls
 //! arrive while the target is locked by their caller, so they cannot go through it. Registrations end when their handle is dropped.
 
-use std::sync::{Arc, Mutex, Weak};
+use parking_lot::Mutex;
+use std::sync::{Arc, Weak};
 
 use icub_can::client::MotorControlClient;
 
@@ -29,7 +30,7 @@ pub struct Registration {
 /// Registers every joint of `client` under its `AxisName`.
 pub fn register(client: &Arc<MotorControlClient>) -> Registration {
     let owner = NEXT_OWNER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let mut t = TABLE.lock().unwrap_or_else(|e| e.into_inner());
+    let mut t = TABLE.lock();
     for (joint, axis) in client.params().axis_names.iter().enumerate() {
         t.push(Entry {
             axis: axis.clone(),
@@ -43,7 +44,7 @@ pub fn register(client: &Arc<MotorControlClient>) -> Registration {
 
 impl Drop for Registration {
     fn drop(&mut self) {
-        let mut t = TABLE.lock().unwrap_or_else(|e| e.into_inner());
+        let mut t = TABLE.lock();
         t.retain(|e| e.owner != self.owner);
     }
 }
@@ -51,7 +52,7 @@ impl Drop for Registration {
 /// The board and joint index driving axis `name` (the most recently opened one when
 /// several devices use the same name).
 pub fn find(name: &str) -> Option<(Arc<MotorControlClient>, usize)> {
-    let t = TABLE.lock().unwrap_or_else(|e| e.into_inner());
+    let t = TABLE.lock();
     t.iter()
         .rev()
         .filter(|e| e.axis == name)

@@ -427,7 +427,7 @@ fn with<T>(
     target: &SharedDevice,
     f: impl FnOnce(&mut dyn DeviceDriver) -> DevResult<T>,
 ) -> DevResult<T> {
-    let mut pd = target.lock().unwrap_or_else(|e| e.into_inner());
+    let mut pd = target.lock();
     f(pd.device())
 }
 

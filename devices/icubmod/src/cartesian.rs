@@ -306,7 +306,7 @@ impl IMultipleWrapper for CartesianControllerServer {
                     param: format!("attach network `{}` (DRIVER Key)", d.key),
                 });
             };
-            let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = dev.lock();
             if pd.device().as_encoders().is_none() {
                 return Err(DeviceError::Unsupported(
                     "cartesiancontrollerserver: an attached device has no encoders",
@@ -320,7 +320,7 @@ impl IMultipleWrapper for CartesianControllerServer {
         let axes = boards
             .iter()
             .map(|b| {
-                let mut pd = b.lock().unwrap_or_else(|e| e.into_inner());
+                let mut pd = b.lock();
                 pd.device()
                     .as_encoders()
                     .ok_or(DeviceError::NotOpen)?
@@ -356,7 +356,7 @@ fn align_joints_bounds(
     for ((desc, board), &n) in cfg.drivers.iter().zip(boards).zip(axes) {
         let joints = n.min(remaining);
         remaining -= joints;
-        let mut pd = board.lock().unwrap_or_else(|e| e.into_inner());
+        let mut pd = board.lock();
         let limits = pd
             .device()
             .as_control_limits()
@@ -382,7 +382,7 @@ fn read_encoders(boards: &Boards) -> DevResult<Vec<Vec<f64>>> {
     boards
         .iter()
         .map(|b| {
-            let mut pd = b.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = b.lock();
             pd.device()
                 .as_encoders()
                 .ok_or(DeviceError::NotOpen)?

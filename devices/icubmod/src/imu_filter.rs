@@ -24,8 +24,9 @@
 //! --local L`). Deviation: before its first filtered sample the gyroscope reports
 //! `WaitingForFirstRead` (C++ answers an empty vector).
 
+use parking_lot::Mutex;
 use std::collections::VecDeque;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 
 use yarp_devices::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
@@ -286,8 +287,8 @@ struct Shared {
 
 type Attached = Arc<Mutex<Option<SharedDevice>>>;
 
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
+fn lock<T>(m: &Mutex<T>) -> parking_lot::MutexGuard<'_, T> {
+    m.lock()
 }
 
 /// Runs `f` on the attached device, `None` when nothing is attached.

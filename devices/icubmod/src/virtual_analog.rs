@@ -28,8 +28,9 @@
 //! Not supported: the 8-bit (MAIS) frame layout — `format 8` sends the same 16-bit
 //! frames, as the C++ device does.
 
+use parking_lot::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -101,8 +102,8 @@ struct State {
 }
 
 impl Core {
-    fn lock(&self) -> std::sync::MutexGuard<'_, State> {
-        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    fn lock(&self) -> parking_lot::MutexGuard<'_, State> {
+        self.state.lock()
     }
 
     /// Clamps, scales and sends `values` (at most `channels` of them).

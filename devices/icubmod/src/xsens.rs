@@ -39,10 +39,11 @@ use icub_can::xsens::mti::{self, Mtdata2, MtiKind, OutputConfig};
 use icub_can::xsens::{
     mid, Decoder, Message, Sample, OUTPUT_MODE_CALIB, OUTPUT_MODE_ORIENT, OUTPUT_SETTINGS_EULER,
 };
+use parking_lot::Mutex;
 use serialport::SerialPort;
 use std::io::ErrorKind;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use yarp_devices::driver::{DeviceDriver, Params};
@@ -308,7 +309,7 @@ const REOPEN_EVERY: Duration = Duration::from_secs(1);
 /// The measures of one data message of `model`.
 fn measures(model: &Model, m: &Message, latest: &Mutex<Latest>) -> Result<(), String> {
     let f = |v: [f32; 3]| Some(v.map(f64::from));
-    let mut l = latest.lock().unwrap_or_else(|e| e.into_inner());
+    let mut l = latest.lock();
     match model {
         Model::Mtx => {
             let s = Sample::parse(&m.data).map_err(|e| e.to_string())?;
@@ -404,7 +405,7 @@ fn read_samples(
 impl XsensImu {
     /// The latest measures if the sensor sent something recently.
     fn fresh(&self) -> Option<Latest> {
-        let l = *self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let l = *self.latest.lock();
         l.at.filter(|at| at.elapsed() <= self.stale_after)
             .map(|_| l)
     }
@@ -545,7 +546,7 @@ impl DeviceDriver for XsensImu {
         if let Some(r) = self.reader.take() {
             let _ = r.join();
         }
-        *self.latest.lock().unwrap_or_else(|e| e.into_inner()) = Latest::default();
+        *self.latest.lock() = Latest::default();
         Ok(())
     }
 

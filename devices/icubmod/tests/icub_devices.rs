@@ -515,7 +515,7 @@ fn parametric_calibrator_calibrates_and_parks_the_left_arm() {
     c.calibrate(target.clone())
         .unwrap_or_else(|e| panic!("{e}"));
     let startup = [-30.0, 30.0, 0.0, 45.0, 0.0, 0.0, 0.0, 30.0];
-    let mut t = target.lock().unwrap();
+    let mut t = target.lock();
     let enc = t.device().as_encoders().unwrap().get_encoders().unwrap();
     for j in 0..8 {
         assert!((enc[j] - startup[j]).abs() < 2.0, "joint {j}: {enc:?}");
@@ -533,7 +533,7 @@ fn parametric_calibrator_calibrates_and_parks_the_left_arm() {
         .unwrap_or_else(|e| panic!("{e}"));
     // positionHome, with the wrist yaw's 40° clamped by the board to jntPosMax 25°
     let home = [-30.0, 30.0, 0.0, 45.0, 0.0, 0.0, 25.0, 30.0];
-    let mut t = target.lock().unwrap();
+    let mut t = target.lock();
     let enc = t.device().as_encoders().unwrap().get_encoders().unwrap();
     for j in 0..8 {
         assert!((enc[j] - home[j]).abs() < 2.0, "joint {j}: {enc:?}");
@@ -674,7 +674,7 @@ fn remote_calibrator_homes_parks_and_quits_without_locking_its_target() {
         .unwrap_or_else(|e| panic!("{e}"));
 
     // The remote calls come while the caller holds the target: hold it here too.
-    let mut t = target.lock().unwrap();
+    let mut t = target.lock();
     let dev = t.device();
     dev.as_position_control()
         .unwrap()
@@ -774,7 +774,7 @@ fn parametric_calibrator_calibrates_a_fake_board_through_icontrolcalibration() {
         .unwrap()
         .calibrate(fake.clone())
         .expect("calibrate the fake");
-    let mut pd = fake.lock().unwrap();
+    let mut pd = fake.lock();
     let enc = pd.device().as_encoders().unwrap();
     let (q0, q1) = (enc.get_encoder(0).unwrap(), enc.get_encoder(1).unwrap());
     assert!(

@@ -125,7 +125,7 @@ fn torques_written_to_the_port_reach_the_can_bus() {
     let (_, torques) = next_nonzero_torques(&tap, 8.0);
     assert_torques(torques, [0.1, 0.2, 0.3, 0.4, 0.5, -8.0], 8.0);
     {
-        let mut pd = sensor.lock().unwrap();
+        let mut pd = sensor.lock();
         let vas = pd.device().as_virtual_analog_sensor().unwrap();
         assert_eq!(vas.get_virtual_analog_sensor_channels(), 6);
         assert_eq!(
@@ -181,7 +181,7 @@ fn torques_written_to_the_port_reach_the_can_bus() {
     });
     assert!(gone.is_none());
     // closing the CAN device stops the "board" (SET_TXMODE 1 to 0x0C)
-    sensor.lock().unwrap().close().unwrap();
+    sensor.lock().close().unwrap();
     let stop = tap.recv(T).unwrap();
     assert_eq!((stop.std_id(), stop.data()), (Some(0x20C), &[7u8, 1][..]));
 }
@@ -267,7 +267,7 @@ fn imu_filter_removes_a_constant_gyro_bias() {
     .unwrap();
     let filter = shared(PolyDriver::open(&cfg).unwrap_or_else(|e| panic!("{e}")));
     {
-        let mut pd = filter.lock().unwrap();
+        let mut pd = filter.lock();
         let dev = pd.device();
         let gyro = dev.as_three_axis_gyroscopes().unwrap();
         assert_eq!(gyro.get_nr_of_three_axis_gyroscopes(), 1);
@@ -277,7 +277,7 @@ fn imu_filter_removes_a_constant_gyro_bias() {
     // the raw gyro reads 10 deg/s on every axis; the filtered one goes to zero
     let start = Instant::now();
     let m = wait_for("the bias to be removed", || {
-        let mut pd = filter.lock().unwrap();
+        let mut pd = filter.lock();
         let g = pd.device().as_three_axis_gyroscopes().unwrap();
         let m = g.get_three_axis_gyroscope_measure(0).ok()?;
         (g.get_three_axis_gyroscope_status(0) == MasStatus::Ok
@@ -287,7 +287,7 @@ fn imu_filter_removes_a_constant_gyro_bias() {
     assert_eq!(m.values.len(), 3);
     assert!(start.elapsed() < T);
     {
-        let mut pd = filter.lock().unwrap();
+        let mut pd = filter.lock();
         let dev = pd.device();
         // the other families pass through
         let acc = dev
@@ -351,7 +351,7 @@ fn imu_filter_removes_a_constant_gyro_bias() {
     assert!(m.values.iter().all(|v| v.abs() < 0.05), "{m:?}");
     client.close().unwrap();
     wrapper.close().unwrap();
-    filter.lock().unwrap().close().unwrap();
+    filter.lock().close().unwrap();
 }
 
 /// A bad `imuFilter` configuration or attachment is an error naming the problem.

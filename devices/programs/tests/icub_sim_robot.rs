@@ -108,7 +108,7 @@ fn cpp_yarp() -> Option<PathBuf> {
 /// The encoders (degrees) of the opened device `name` of `runner`.
 fn encoders_of(runner: &RobotRunner, name: &str) -> Vec<f64> {
     let dev = runner.device(name).unwrap_or_else(|| panic!("{name}"));
-    let mut pd = dev.lock().unwrap();
+    let mut pd = dev.lock();
     pd.device().as_encoders().unwrap().get_encoders().unwrap()
 }
 
@@ -446,7 +446,7 @@ fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
         .device("head-inertial")
         .expect("head-inertial opened");
     assert!(eventually(T, || {
-        let mut pd = head_imu.lock().unwrap();
+        let mut pd = head_imu.lock();
         let mut v = Vec::new();
         pd.device().as_analog_sensor().unwrap().read(&mut v)
             == yarp_devices::sensors::AnalogStatus::Ok
@@ -462,7 +462,7 @@ fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
         let dev = runner
             .device(&format!("{part}_mc_remapper"))
             .unwrap_or_else(|| panic!("{part} remapper"));
-        let mut pd = dev.lock().unwrap();
+        let mut pd = dev.lock();
         let enc = pd.device().as_encoders().unwrap();
         assert!(enc.get_encoders().is_ok(), "{part}");
     }

@@ -80,7 +80,7 @@ async fn stream_battery(port: Arc<Port>, period: Duration, device: SharedDevice,
     loop {
         ticker.tick().await;
         let read = {
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             match pd.device().as_battery() {
                 Some(b) => read_battery(b, &last),
                 None => Err(DeviceError::Unsupported(
@@ -168,12 +168,12 @@ impl IWrapper for BatteryNwsYarp {
             return Err(DeviceError::NotOpen);
         };
         {
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             pd.device().as_battery().ok_or(DeviceError::Unsupported(
                 "battery_nws_yarp attaches an IBattery",
             ))?;
         }
-        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
+        *self.slot.lock() = Some(device.clone());
         let (port, period, log) = (ports.streams[0].clone(), self.period, self.log);
         self.stream_task = Some(runtime::handle().spawn(stream_battery(port, period, device, log)));
         Ok(())
@@ -186,7 +186,7 @@ impl IWrapper for BatteryNwsYarp {
                 let _ = t.await;
             });
         }
-        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        *self.slot.lock() = None;
         Ok(())
     }
 }

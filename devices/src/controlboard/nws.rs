@@ -26,8 +26,9 @@ use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use crate::sensors::periodic::Ticker;
 use crate::vocabs::FAILED;
+use parking_lot::{Mutex, MutexGuard};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard, Weak};
+use std::sync::{Arc, Weak};
 use std::time::Duration;
 use tokio::runtime::Handle;
 use tokio::task::JoinHandle;
@@ -51,7 +52,7 @@ type Slot = Arc<Mutex<Option<Attached>>>;
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // the guarded data stays consistent even if a holder panicked
-    m.lock().unwrap_or_else(|e| e.into_inner())
+    m.lock()
 }
 
 /// The port prefix C++ derives from `name`: a leading `/` added if missing.
@@ -330,13 +331,13 @@ async fn serve_rpc(port: Arc<Port>, slot: Slot) {
             Ok(cmd) => match attached(&slot) {
                 Some(a) => device_call(|| match remote_calibrator_target(&cmd, &a.device) {
                     Some(calibrator) => match calibrator.try_lock() {
-                        Ok(mut c) => handle_rpc(&cmd, c.device(), &mut stamp),
+                        Some(mut c) => handle_rpc(&cmd, c.device(), &mut stamp),
                         // busy with a procedure: only a quit can reach it
-                        Err(_) if is_quit(&cmd) => match quit_signal(&a.device) {
+                        None if is_quit(&cmd) => match quit_signal(&a.device) {
                             Some(_) => ok(),
                             None => fail(),
                         },
-                        Err(_) => {
+                        None => {
                             tracing::warn!("{}: `{cmd}`: the calibrator is busy", port.name());
                             fail()
                         }

@@ -16,8 +16,9 @@ use super::{IRgbVisualParams, PixelCode};
 use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
+use parking_lot::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::nameserver::NameClient;
 use yarp_net::port::{Incoming, Port};
@@ -174,7 +175,7 @@ impl ImageStream {
 
     /// `f` of the latest image and stamp.
     pub(crate) fn latest<R>(&self, f: impl FnOnce(&Latest) -> R) -> R {
-        f(&self.latest.lock().unwrap_or_else(|e| e.into_inner()))
+        f(&self.latest.lock())
     }
 
     /// Streamed messages dropped because they were not valid images.
@@ -241,7 +242,7 @@ async fn receive(
     while let Some(msg) = port.read().await {
         match image_of(&msg) {
             Ok(img) => {
-                let mut l = latest.lock().unwrap_or_else(|e| e.into_inner());
+                let mut l = latest.lock();
                 l.image = Some(img);
                 l.stamp = msg.stamp;
             }

@@ -13,8 +13,9 @@ use super::protocol::handle_rpc;
 use crate::driver::{DeviceDriver, IWrapper, Params, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
+use parking_lot::Mutex;
 use std::sync::mpsc;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use yarp_net::nameserver::NameClient;
@@ -85,10 +86,10 @@ async fn serve_rpc(port: Arc<Port>, target: Target) {
                 continue;
             }
         };
-        let dev = target.lock().unwrap_or_else(|e| e.into_inner()).clone();
+        let dev = target.lock().clone();
         let reply = match dev {
             Some(dev) => {
-                let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+                let mut pd = dev.lock();
                 handle_rpc(&cmd, pd.device())
             }
             None => handle_rpc(&cmd, &mut Nothing),
@@ -131,7 +132,7 @@ fn stream(
             continue;
         }
         let got = {
-            let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = dev.lock();
             pd.device()
                 .as_frame_grabber_image()
                 .map(|fg| (fg.get_image(), fg.last_input_stamp()))
@@ -271,7 +272,7 @@ impl IWrapper for FrameGrabberNws {
             return Err(DeviceError::NotOpen);
         }
         {
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             if pd.device().as_frame_grabber_image().is_none() {
                 return Err(DeviceError::Unsupported(
                     "frameGrabber_nws_yarp: the attached device has no IFrameGrabberImage (capability COLOR)",
@@ -280,7 +281,7 @@ impl IWrapper for FrameGrabberNws {
         }
         self.stop_streaming();
         let server = self.server.as_ref().ok_or(DeviceError::NotOpen)?;
-        *server.target.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
+        *server.target.lock() = Some(device.clone());
         let (stop, rx) = mpsc::channel();
         let port = server.image_port.clone();
         let period = Duration::from_secs_f64(self.period);
@@ -296,7 +297,7 @@ impl IWrapper for FrameGrabberNws {
     fn detach(&mut self) -> DevResult<()> {
         self.stop_streaming();
         if let Some(s) = &self.server {
-            *s.target.lock().unwrap_or_else(|e| e.into_inner()) = None;
+            *s.target.lock() = None;
         }
         Ok(())
     }

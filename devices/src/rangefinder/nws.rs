@@ -49,7 +49,7 @@ impl Rangefinder2DNwsYarp {
 
 /// One scan of the attached device, or why not.
 fn read_scan(device: &SharedDevice) -> DevResult<(LaserScan2D, f64)> {
-    let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+    let mut pd = device.lock();
     let dev = pd
         .device()
         .as_rangefinder_2d()
@@ -144,7 +144,7 @@ impl IWrapper for Rangefinder2DNwsYarp {
         };
         {
             // C++ refuses a device that cannot tell its geometry
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             let dev = pd
                 .device()
                 .as_rangefinder_2d()
@@ -155,7 +155,7 @@ impl IWrapper for Rangefinder2DNwsYarp {
             dev.get_scan_limits()?;
             dev.get_horizontal_resolution()?;
         }
-        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
+        *self.slot.lock() = Some(device.clone());
         let (port, period) = (ports.streams[0].clone(), self.period);
         self.stream_task = Some(runtime::handle().spawn(stream_scans(port, period, device)));
         Ok(())
@@ -168,7 +168,7 @@ impl IWrapper for Rangefinder2DNwsYarp {
                 let _ = t.await;
             });
         }
-        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        *self.slot.lock() = None;
         Ok(())
     }
 }

@@ -57,7 +57,7 @@ impl RgbdSensorNwsYarp {
 /// images sent before.
 fn write_images(device: &SharedDevice, rgb: &Port, depth: &Port, last: &mut (f64, f64)) {
     let got = {
-        let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+        let mut pd = device.lock();
         let Some(dev) = pd.device().as_rgbd_sensor() else {
             return;
         };
@@ -159,14 +159,14 @@ impl IWrapper for RgbdSensorNwsYarp {
             return Err(DeviceError::NotOpen);
         };
         {
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             if pd.device().as_rgbd_sensor().is_none() {
                 return Err(DeviceError::Unsupported(
                     "rgbdSensor_nws_yarp attaches an IRGBDSensor",
                 ));
             }
         }
-        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = Some(device.clone());
+        *self.slot.lock() = Some(device.clone());
         let (rgb, depth, period) = (
             ports.streams[0].clone(),
             ports.streams[1].clone(),
@@ -191,7 +191,7 @@ impl IWrapper for RgbdSensorNwsYarp {
             let _ = s.stop.send(());
             let _ = s.thread.join();
         }
-        *self.slot.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        *self.slot.lock() = None;
         Ok(())
     }
 }

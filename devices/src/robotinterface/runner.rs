@@ -16,9 +16,10 @@ use super::error::XmlError;
 use super::model::*;
 use crate::driver::{shared, PolyDriver, Registry, SharedDevice};
 use crate::error::{DevResult, DeviceError};
+use parking_lot::{Mutex, MutexGuard};
 use std::fmt;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::Arc;
 use yarp_proto::{Bottle, Property};
 
 /// Makes devices for the runner; the registry in production, fakes in tests.
@@ -94,7 +95,7 @@ pub struct RobotRunner {
 pub type Progress = Box<dyn Fn(ActionPhase, u32) + Send>;
 
 fn lock(d: &SharedDevice) -> MutexGuard<'_, PolyDriver> {
-    d.lock().unwrap_or_else(|e| e.into_inner())
+    d.lock()
 }
 
 impl RobotRunner {
@@ -300,10 +301,7 @@ impl RobotRunner {
     }
 
     fn close_devices(&mut self) {
-        self.incomplete
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .fill(false);
+        self.incomplete.lock().fill(false);
         for (i, dev) in self.robot.devices.iter().enumerate().rev() {
             if let Slot::Open(d) = std::mem::replace(&mut self.slots[i], Slot::NotOpened) {
                 tracing::info!("Closing device {}", dev.name);
@@ -395,7 +393,7 @@ impl RobotRunner {
     }
 
     fn mark_incomplete(&self, i: usize) {
-        self.incomplete.lock().unwrap_or_else(|e| e.into_inner())[i] = true;
+        self.incomplete.lock()[i] = true;
     }
 
     /// The device a target name refers to: an error when no device has that name,
@@ -404,7 +402,7 @@ impl RobotRunner {
         let Some(i) = self.robot.devices.iter().position(|d| d.name == name) else {
             return Err(format!("target device {name} does not exist"));
         };
-        let incomplete = self.incomplete.lock().unwrap_or_else(|e| e.into_inner())[i];
+        let incomplete = self.incomplete.lock()[i];
         match &self.slots[i] {
             Slot::Open(_) if incomplete => {
                 tracing::debug!("target device {name} is incomplete; skipping the action");

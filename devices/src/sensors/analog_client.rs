@@ -13,7 +13,8 @@ use super::params::required_string;
 use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
-use std::sync::{Arc, Mutex};
+use parking_lot::Mutex;
+use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Stamp, Value};
@@ -90,10 +91,7 @@ async fn read_vectors(port: Arc<Port>, latest: Arc<Mutex<Latest>>) {
             .ok()
             .and_then(|b| b.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>());
         match values {
-            Some(v) => latest
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .update(v, msg.stamp),
+            Some(v) => latest.lock().update(v, msg.stamp),
             None => tracing::warn!("{NAME}: not a vector of numbers from {}", msg.from),
         }
     }
@@ -115,7 +113,7 @@ impl AnalogSensorClient {
 
     /// The envelope of the latest vector (C++ `getLastInputStamp`).
     pub fn last_input_stamp(&self) -> Option<Stamp> {
-        self.latest.lock().unwrap_or_else(|e| e.into_inner()).stamp
+        self.latest.lock().stamp
     }
 
     /// Sends `[iana] <args...>` and maps the server's int32 result.
@@ -206,7 +204,7 @@ impl DeviceDriver for AnalogSensorClient {
 
 impl IAnalogSensor for AnalogSensorClient {
     fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
-        let l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let l = self.latest.lock();
         if l.state != AnalogStatus::Error {
             out.clone_from(&l.values);
         }
@@ -217,7 +215,7 @@ impl IAnalogSensor for AnalogSensorClient {
         AnalogStatus::Ok
     }
     fn get_channels(&mut self) -> usize {
-        let l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let l = self.latest.lock();
         if l.state == AnalogStatus::Error {
             0
         } else {

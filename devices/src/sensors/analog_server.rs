@@ -13,7 +13,8 @@ use super::params::now;
 use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
-use std::sync::{Arc, Mutex};
+use parking_lot::Mutex;
+use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::nameserver::NameClient;
 use yarp_net::port::{Port, PortError};
@@ -158,10 +159,10 @@ async fn serve_rpc(port: Arc<Port>, attached: Attached) {
     while let Some(mut msg) = port.read().await {
         let reply = match msg.bottle() {
             Ok(cmd) => {
-                let dev = attached.lock().unwrap_or_else(|e| e.into_inner()).clone();
+                let dev = attached.lock().clone();
                 match dev {
                     Some(dev) => {
-                        let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+                        let mut pd = dev.lock();
                         handle_analog_rpc(&cmd, pd.device().as_analog_sensor())
                     }
                     None => handle_analog_rpc(&cmd, None),
@@ -190,7 +191,7 @@ async fn stream(
             _ = &mut stop => break,
             _ = ticker.tick() => {}
         }
-        let Some(dev) = attached.lock().unwrap_or_else(|e| e.into_inner()).clone() else {
+        let Some(dev) = attached.lock().clone() else {
             continue;
         };
         if !ports.iter().any(|(_, p)| p.has_outputs()) {
@@ -199,7 +200,7 @@ async fn stream(
             continue;
         }
         let status = {
-            let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = dev.lock();
             match pd.device().as_analog_sensor() {
                 Some(s) => s.read(&mut values),
                 None => AnalogStatus::Error,
@@ -343,7 +344,7 @@ impl DeviceDriver for AnalogServer {
 
     fn close(&mut self) -> DevResult<()> {
         self.stop_streaming();
-        *self.attached.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        *self.attached.lock() = None;
         let rpc = std::mem::take(&mut self.rpc);
         if !rpc.is_empty() {
             runtime::block_on(async move {
@@ -371,7 +372,7 @@ impl IWrapper for AnalogServer {
     fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
         let ns = self.ns.clone().ok_or(DeviceError::NotOpen)?;
         {
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             let sensor = pd
                 .device()
                 .as_analog_sensor()
@@ -395,7 +396,7 @@ impl IWrapper for AnalogServer {
             Ok::<_, PortError>(entries.into_iter().zip(ports).collect::<Vec<_>>())
         })
         .map_err(|e| network_error(&first, e))?;
-        *self.attached.lock().unwrap_or_else(|e| e.into_inner()) = Some(device);
+        *self.attached.lock() = Some(device);
         let (tx, rx) = tokio::sync::oneshot::channel();
         let task =
             runtime::handle().spawn(stream(data_ports, self.period, self.attached.clone(), rx));
@@ -405,7 +406,7 @@ impl IWrapper for AnalogServer {
 
     fn detach(&mut self) -> DevResult<()> {
         self.stop_streaming();
-        *self.attached.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        *self.attached.lock() = None;
         Ok(())
     }
 }

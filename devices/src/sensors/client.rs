@@ -19,7 +19,8 @@ use super::wire::{SensorRpcData, SensorStreamingData};
 use crate::driver::{DeviceDriver, Params};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
-use std::sync::{Arc, Mutex};
+use parking_lot::Mutex;
+use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::nameserver::NameClient;
 use yarp_net::port::Port;
@@ -168,7 +169,7 @@ async fn read_stream(port: Arc<Port>, received: Arc<Mutex<Received>>) {
             .and_then(|b| SensorStreamingData::from_bottle(&b).map_err(|e| e.to_string()));
         match data {
             Ok(data) => {
-                let mut r = received.lock().unwrap_or_else(|e| e.into_inner());
+                let mut r = received.lock();
                 r.data = data;
                 r.at = now();
                 r.status = MasStatus::Ok;
@@ -201,7 +202,7 @@ impl MultipleAnalogSensorsClient {
 
     /// The stream's status, after the timeout check (C++ `genericGetStatus`).
     pub fn status(&self) -> MasStatus {
-        let mut r = self.received.lock().unwrap_or_else(|e| e.into_inner());
+        let mut r = self.received.lock();
         if r.status == MasStatus::Ok && now() - r.at > self.timeout {
             tracing::error!(
                 "{NAME}: no data received in the last {:.6} seconds, timeout enabled.",
@@ -218,7 +219,7 @@ impl MultipleAnalogSensorsClient {
             return self.metadata.family(family).len();
         }
         let status = self.status();
-        let r = self.received.lock().unwrap_or_else(|e| e.into_inner());
+        let r = self.received.lock();
         if status == MasStatus::Ok {
             r.data.family(family).len()
         } else {
@@ -255,7 +256,7 @@ impl MultipleAnalogSensorsClient {
                 "measurement: the stream from the server is not OK (waiting or timed out)",
             ));
         }
-        let r = self.received.lock().unwrap_or_else(|e| e.into_inner());
+        let r = self.received.lock();
         let list = r.data.family(family);
         list.get(i)
             .cloned()

@@ -53,7 +53,7 @@ impl MultipleAnalogSensorsRemapper {
             .get(i)
             .ok_or_else(|| no_sensor(family.tag(), i, map.len()))?;
         let dev = self.devices.get(src.device).ok_or(DeviceError::NotOpen)?;
-        let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+        let mut pd = dev.lock();
         let view = access(pd.device(), family).ok_or(DeviceError::Unsupported(
             "multipleanalogsensorsremapper: an attached device lost a sensor interface",
         ))?;
@@ -69,7 +69,7 @@ fn locate(
 ) -> DevResult<Vec<Source>> {
     let mut found: Vec<(String, Source)> = Vec::new();
     for (d, (_, dev)) in devices.iter().enumerate() {
-        let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+        let mut pd = dev.lock();
         let view = access(pd.device(), family);
         if let Some(view) = view {
             for index in 0..view.count() {

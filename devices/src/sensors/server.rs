@@ -178,7 +178,7 @@ async fn stream_measurements(
             continue;
         }
         let data = {
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             collect_measurements(pd.device(), &metadata)
         };
         match data {
@@ -270,7 +270,7 @@ impl IWrapper for MultipleAnalogSensorsServer {
         }
         IWrapper::detach(self)?;
         let metadata = {
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             collect_metadata(pd.device())?
         };
         let ns = yarp_net::network::name_client().map_err(|e| self.network_error(e))?;

@@ -27,7 +27,8 @@
 //! values are not numbers, or whose channels are not all mapped, is logged (rate-limited)
 //! and ignored — C++ reads missing values as 0 and re-sends the previous torques.
 
-use std::sync::{Arc, Mutex};
+use parking_lot::Mutex;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
@@ -278,7 +279,7 @@ impl Core {
     /// Sends every network's torques to its device (C++ `flushTorques`).
     fn flush(&mut self) {
         for (net, dev) in self.map.networks.iter().zip(&self.devices) {
-            let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = dev.lock();
             if let Some(s) = pd.device().as_virtual_analog_sensor() {
                 if let Err(e) = s.update_virtual_analog_sensor_measure(&net.torques) {
                     tracing::debug!("{NAME} {}: {}: {e}", self.port_name, net.key);
@@ -323,8 +324,8 @@ impl Core {
 
 type SharedCore = Arc<Mutex<Core>>;
 
-fn lock(core: &SharedCore) -> std::sync::MutexGuard<'_, Core> {
-    core.lock().unwrap_or_else(|e| e.into_inner())
+fn lock(core: &SharedCore) -> parking_lot::MutexGuard<'_, Core> {
+    core.lock()
 }
 
 async fn serve(port: Arc<Port>, core: SharedCore) {
@@ -458,7 +459,7 @@ impl IMultipleWrapper for VirtualAnalogServer {
             let Some(k) = c.map.networks.iter().position(|n| &n.key == key) else {
                 continue;
             };
-            let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = dev.lock();
             let name = pd.name().to_string();
             let Some(s) = pd.device().as_virtual_analog_sensor() else {
                 tracing::error!("{NAME}: {key}: device {name} is not an IVirtualAnalogSensor");

@@ -228,7 +228,7 @@ impl IWrapper for CameraNwsRos2 {
         let name = kind.name();
         let c = self.camera.as_ref().ok_or(DeviceError::NotOpen)?;
         {
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             let ok = match kind {
                 Kind::FrameGrabber => pd.device().as_frame_grabber_image().is_some(),
                 Kind::Rgbd | Kind::PointCloud => pd.device().as_rgbd_sensor().is_some(),

@@ -8,7 +8,8 @@
 use crate::camera::info_topic;
 use crate::msgs::read_camera_info;
 use crate::node::{on_messages, DeviceNode, NodeBuilder};
-use std::sync::{Arc, Mutex};
+use parking_lot::Mutex;
+use std::sync::Arc;
 use yarp_devices::rgbd::{IRGBDSensor, RgbdStatus};
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, Params};
 use yarp_proto::image::{Image, PixelCode};
@@ -79,8 +80,8 @@ pub struct RgbdSensorNwcRos2 {
 }
 
 impl RgbdSensorNwcRos2 {
-    fn state(&self) -> std::sync::MutexGuard<'_, State> {
-        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    fn state(&self) -> parking_lot::MutexGuard<'_, State> {
+        self.state.lock()
     }
 }
 
@@ -150,7 +151,7 @@ impl DeviceDriver for RgbdSensorNwcRos2 {
 }
 
 fn update(state: &Mutex<State>, feed: Feed, m: &Ros) {
-    let mut s = state.lock().unwrap_or_else(|e| e.into_inner());
+    let mut s = state.lock();
     match feed {
         Feed::ColorImage => match to_image(m) {
             Ok(img) => {

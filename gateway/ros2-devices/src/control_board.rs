@@ -20,10 +20,11 @@
 use crate::control_msgs::{self as cm, JointIndexes, JointNames, OnlyImplemented, SetModes};
 use crate::node::{CommonParams, DeviceNode, NodeBuilder};
 use futures::StreamExt;
+use parking_lot::{Mutex, MutexGuard};
 use ros2_client::{Publisher, Server};
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::Arc;
 use std::time::Duration;
 use tokio::task::JoinHandle;
 use yarp_devices::sensors::periodic::Ticker;
@@ -53,7 +54,7 @@ pub struct Board {
 type Slot = Arc<Mutex<Option<Arc<Board>>>>;
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
+    m.lock()
 }
 
 impl Board {

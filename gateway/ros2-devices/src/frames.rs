@@ -10,8 +10,9 @@
 
 use crate::msgs::{header_frame, header_time, stamp_ns};
 use crate::node::{on_messages, DeviceNode, NodeBuilder};
+use parking_lot::Mutex;
 use ros2_client::Publisher;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 use yarp_devices::frames::{
     FrameTransform, FrameTransformContainer, IFrameTransformStorageGet, IFrameTransformStorageSet,
@@ -94,8 +95,8 @@ fn common(p: &Params, default_node: &str) -> DevResult<Common> {
     })
 }
 
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
+fn lock<T>(m: &Mutex<T>) -> parking_lot::MutexGuard<'_, T> {
+    m.lock()
 }
 
 /// `frameTransformGet_nwc_ros2`.

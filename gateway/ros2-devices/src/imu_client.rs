@@ -5,7 +5,8 @@
 //! `node_name`, `namespace`, `topic_name`, `sensor_name`.
 
 use crate::node::{on_messages, DeviceNode, NodeBuilder};
-use std::sync::{Arc, Mutex};
+use parking_lot::Mutex;
+use std::sync::Arc;
 use yarp_devices::sensors::interfaces::{
     IOrientationSensors, IThreeAxisGyroscopes, IThreeAxisLinearAccelerometers,
 };
@@ -68,18 +69,12 @@ impl ImuNwcRos2 {
     fn reading(&self) -> DevResult<ImuReading> {
         self.latest
             .lock()
-            .unwrap_or_else(|e| e.into_inner())
             .clone()
             .ok_or_else(|| DeviceError::failed(NAME, "no data received yet"))
     }
 
     fn status(&self) -> MasStatus {
-        match self
-            .latest
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .as_ref()
-        {
+        match self.latest.lock().as_ref() {
             Some(_) => MasStatus::Ok,
             None => MasStatus::WaitingForFirstRead,
         }
@@ -117,7 +112,7 @@ impl DeviceDriver for ImuNwcRos2 {
         let latest = self.latest.clone();
         self.task = Some(on_messages(sub, IMU, move |m| {
             if let Some(reading) = read_imu(m) {
-                *latest.lock().unwrap_or_else(|e| e.into_inner()) = Some(reading);
+                *latest.lock() = Some(reading);
             }
         }));
         self.node = Some(node);

@@ -14,8 +14,9 @@ use crate::msgs::{battery_state, odometry, read_twist, stamp_ns, BatteryReading}
 use crate::node::{CommonParams, DeviceNode, NodeBuilder};
 use crate::periodic::{Periodic, Throttle};
 use futures::StreamExt;
+use parking_lot::Mutex;
 use ros2_client::Publisher;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, Params, SharedDevice};
 use yarp_proto::Property;
 use yarp_ros2_gateway::dynmsg::{MsgSeed, Value as Ros};
@@ -125,7 +126,7 @@ impl IWrapper for StateNwsRos2 {
         let (kind, name) = (self.kind, self.name());
         let o = self.opened.as_ref().ok_or(DeviceError::NotOpen)?;
         {
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             let ok = match kind {
                 Kind::Battery => pd.device().as_battery().is_some(),
                 Kind::Odometry => pd.device().as_odometry_2d().is_some(),
@@ -214,11 +215,11 @@ impl DeviceDriver for MobileBaseVelocityControlNwsRos2 {
                 let Some((x, y, wz)) = r.ok().and_then(|(m, _)| read_twist(&m)) else {
                     continue;
                 };
-                let dev = target.lock().unwrap_or_else(|e| e.into_inner()).clone();
+                let dev = target.lock().clone();
                 let Some(dev) = dev else { continue };
                 // The device may block; keep it off the runtime's workers.
                 let _ = tokio::task::spawn_blocking(move || {
-                    let mut pd = dev.lock().unwrap_or_else(|e| e.into_inner());
+                    let mut pd = dev.lock();
                     if let Some(nav) = pd.device().as_navigation_2d_velocity() {
                         if let Err(e) = nav.apply_velocity_command(x, y, wz.to_degrees(), 0.1) {
                             tracing::warn!("{VELOCITY}: {e}");
@@ -237,7 +238,7 @@ impl DeviceDriver for MobileBaseVelocityControlNwsRos2 {
             t.abort();
         }
         self.node = None;
-        *self.target.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        *self.target.lock() = None;
         Ok(())
     }
 
@@ -248,23 +249,18 @@ impl DeviceDriver for MobileBaseVelocityControlNwsRos2 {
 
 impl IWrapper for MobileBaseVelocityControlNwsRos2 {
     fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
-        let ok = device
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .device()
-            .as_navigation_2d_velocity()
-            .is_some();
+        let ok = device.lock().device().as_navigation_2d_velocity().is_some();
         if !ok {
             return Err(DeviceError::Unsupported(
                 "mobileBaseVelocityControl_nws_ros2 needs an INavigation2DVelocityActions device",
             ));
         }
-        *self.target.lock().unwrap_or_else(|e| e.into_inner()) = Some(device);
+        *self.target.lock() = Some(device);
         Ok(())
     }
 
     fn detach(&mut self) -> DevResult<()> {
-        *self.target.lock().unwrap_or_else(|e| e.into_inner()) = None;
+        *self.target.lock() = None;
         Ok(())
     }
 }

@@ -29,7 +29,7 @@ impl Periodic {
                 let mut tick = Ticker::new(period);
                 while !s.load(Ordering::Relaxed) {
                     tick.tick_blocking();
-                    let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+                    let mut pd = device.lock();
                     step(pd.device());
                 }
             })

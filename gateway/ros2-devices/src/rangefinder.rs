@@ -10,8 +10,9 @@
 use crate::msgs::{laser_scan, read_laser_scan, stamp_ns, LaserInfo};
 use crate::node::{on_messages, CommonParams, DeviceNode, NodeBuilder};
 use crate::periodic::{Periodic, Throttle};
+use parking_lot::Mutex;
 use ros2_client::Publisher;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use yarp_devices::rangefinder::{IRangefinder2D, LaserStatus};
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, Params, SharedDevice};
 use yarp_proto::Property;
@@ -70,7 +71,7 @@ impl IWrapper for Rangefinder2DNwsRos2 {
     fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
         let o = self.opened.as_ref().ok_or(DeviceError::NotOpen)?;
         let info = {
-            let mut pd = device.lock().unwrap_or_else(|e| e.into_inner());
+            let mut pd = device.lock();
             let laser = pd
                 .device()
                 .as_rangefinder_2d()
@@ -147,7 +148,7 @@ pub struct Rangefinder2DNwcRos2 {
 
 impl Rangefinder2DNwcRos2 {
     fn with<R>(&self, f: impl FnOnce(&Latest, &LaserInfo) -> R) -> DevResult<R> {
-        let l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let l = self.latest.lock();
         let info = l.info.ok_or_else(|| DeviceError::Failed {
             device: NWC.into(),
             reason: "no LaserScan received yet".into(),
@@ -170,7 +171,7 @@ impl DeviceDriver for Rangefinder2DNwcRos2 {
             let Some((info, ranges, stamp)) = read_laser_scan(m) else {
                 return;
             };
-            let mut l = latest.lock().unwrap_or_else(|e| e.into_inner());
+            let mut l = latest.lock();
             if l.info.is_some() && l.ranges.len() != ranges.len() {
                 tracing::warn!("{NWC}: the scan changed its size");
             }

@@ -17,9 +17,10 @@
 //! end); here it is elements 3..5.
 
 use crate::node::{CommonParams, DeviceNode, NodeBuilder};
+use parking_lot::{Mutex, MutexGuard};
 use ros2_client::Publisher;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::Arc;
 use yarp_devices::sensors::periodic::Ticker;
 use yarp_devices::sensors::SensorMeasurement;
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, IMultipleWrapper, Params, SharedDevice};
@@ -197,7 +198,7 @@ fn stamp_ns(t: f64) -> u64 {
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
+    m.lock()
 }
 
 /// The periodic publisher (C++ `PeriodicThread::run`).

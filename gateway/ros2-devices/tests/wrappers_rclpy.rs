@@ -189,7 +189,6 @@ fn rclpy_twist_commands_the_mobile_base() {
     let last = loop {
         let last = nav
             .lock()
-            .unwrap()
             .device()
             .as_navigation_2d_velocity()
             .unwrap()

@@ -11,8 +11,9 @@
 //! Transient-local topics are always fed: a late subscriber expects the samples kept.
 
 use crate::dynmsg::Value as Ros;
+use parking_lot::Mutex;
 use ros2_client::{Node, Publisher};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// The publishers whose matched subscribers want a bridge's messages (shared by clones:
 /// a merged topic created later adds its publisher to the demand of each of its parts).
@@ -52,8 +53,8 @@ impl Demand {
                 .any(|p| p.get_subscription_count(node) > 0)
     }
 
-    fn lock(&self) -> std::sync::MutexGuard<'_, Wanters> {
-        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    fn lock(&self) -> parking_lot::MutexGuard<'_, Wanters> {
+        self.0.lock()
     }
 }
 

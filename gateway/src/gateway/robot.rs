@@ -10,9 +10,10 @@ use crate::mapping::{Direction, Durability, Qos, Reliability};
 use crate::robot::{RobotDescription, RobotEntry};
 use crate::robot_state::Merger;
 use crate::ros;
+use parking_lot::Mutex;
 use ros2_client::{Node, Publisher};
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tracing::{debug, info, warn};
 
@@ -27,11 +28,7 @@ impl Tap {
     pub(super) fn feed(&self, msg: &Ros) {
         let now = Instant::now();
         for (m, i) in &self.0 {
-            if !m
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .update(*i, msg, now)
-            {
+            if !m.lock().update(*i, msg, now) {
                 debug!("robot part {i}: not a JointState");
             }
         }
@@ -191,7 +188,7 @@ async fn publish_joint_states(
         tick.tick().await;
         let t0 = Instant::now();
         let (msg, missing, names) = {
-            let mut m = merger.lock().unwrap_or_else(|e| e.into_inner());
+            let mut m = merger.lock();
             (m.take(t0), m.missing(t0), m.names())
         };
         if missing_before.as_ref() != Some(&missing) {

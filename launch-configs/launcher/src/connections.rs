@@ -3,8 +3,9 @@
 
 use crate::config::ConnectionSpec;
 use crate::say;
+use parking_lot::Mutex;
 use serde::Serialize;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 use tokio::sync::watch;
 use yarp_net::nameserver::NameClient;
@@ -43,10 +44,10 @@ pub fn shared(specs: &[ConnectionSpec]) -> SharedConns {
 
 /// One pass: checks every connection and makes the missing ones.
 pub async fn check_once(ns: &NameClient, conns: &SharedConns) {
-    let todo: Vec<ConnState> = conns.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    let todo: Vec<ConnState> = conns.lock().clone();
     for (i, c) in todo.iter().enumerate() {
         let outcome = ensure(ns, c).await;
-        let mut all = conns.lock().unwrap_or_else(|e| e.into_inner());
+        let mut all = conns.lock();
         let Some(s) = all.get_mut(i) else { continue };
         match outcome {
             Ok(made) => {
@@ -91,7 +92,7 @@ pub async fn maintain(
     period: Duration,
     mut stop: watch::Receiver<bool>,
 ) {
-    if conns.lock().unwrap_or_else(|e| e.into_inner()).is_empty() {
+    if conns.lock().is_empty() {
         return;
     }
     loop {

@@ -3,10 +3,11 @@
 
 use nix::sys::signal::{killpg, Signal};
 use nix::unistd::Pid;
+use parking_lot::Mutex;
 use std::collections::VecDeque;
 use std::path::Path;
 use std::process::{ExitStatus, Stdio};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 use tokio::io::{AsyncBufReadExt, AsyncRead, BufReader};
 use tokio::process::{Child, Command};
@@ -33,7 +34,7 @@ impl Default for LogTail {
 
 impl LogTail {
     pub fn push(&self, line: String) {
-        let mut l = self.lines.lock().unwrap_or_else(|e| e.into_inner());
+        let mut l = self.lines.lock();
         if l.len() == LOG_TAIL {
             l.pop_front();
         }
@@ -43,7 +44,7 @@ impl LogTail {
 
     /// The kept lines, oldest first.
     pub fn lines(&self) -> Vec<String> {
-        let l = self.lines.lock().unwrap_or_else(|e| e.into_inner());
+        let l = self.lines.lock();
         l.iter().cloned().collect()
     }
 

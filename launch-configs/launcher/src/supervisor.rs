@@ -82,7 +82,7 @@ pub struct ModuleHandle {
     state: watch::Sender<ModState>,
     restarts: AtomicU32,
     stop: watch::Sender<bool>,
-    ready_after: std::sync::Mutex<Option<Duration>>,
+    ready_after: parking_lot::Mutex<Option<Duration>>,
 }
 
 impl ModuleHandle {
@@ -99,7 +99,7 @@ impl ModuleHandle {
             state: watch::channel(initial).0,
             restarts: AtomicU32::new(0),
             stop: watch::channel(false).0,
-            ready_after: std::sync::Mutex::new(None),
+            ready_after: parking_lot::Mutex::new(None),
         })
     }
 
@@ -113,7 +113,7 @@ impl ModuleHandle {
 
     /// Time from launch to this module's first readiness.
     pub fn ready_after(&self) -> Option<Duration> {
-        *self.ready_after.lock().unwrap_or_else(|e| e.into_inner())
+        *self.ready_after.lock()
     }
 
     fn set(&self, s: ModState) {
@@ -415,12 +415,7 @@ impl Launcher {
     pub async fn wait_connected(&self, limit: Duration) -> bool {
         let deadline = Instant::now() + limit;
         loop {
-            let done = self
-                .conns
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .iter()
-                .all(|c| c.connected);
+            let done = self.conns.lock().iter().all(|c| c.connected);
             if done {
                 return true;
             }
@@ -525,7 +520,7 @@ fn status_of(
                 }
             })
             .collect(),
-        connections: conns.lock().unwrap_or_else(|e| e.into_inner()).clone(),
+        connections: conns.lock().clone(),
     }
 }
 
@@ -692,7 +687,7 @@ async fn run_once(
             if !ok {
                 return RunEnd::NotReady;
             }
-            let mut first = h.ready_after.lock().unwrap_or_else(|e| e.into_inner());
+            let mut first = h.ready_after.lock();
             if first.is_none() {
                 *first = Some(launched.elapsed());
             }

@@ -18,9 +18,10 @@ use crate::buffered::{self, Message};
 use crate::nameserver::NameClient;
 use crate::network::{self, NetworkError};
 use crate::port::{self, Incoming, PortError};
+use parking_lot::Mutex;
 use std::future::Future;
 use std::net::SocketAddr;
-use std::sync::{Mutex, OnceLock};
+use std::sync::OnceLock;
 use std::time::Duration;
 use tokio::runtime::{Builder, Handle, Runtime};
 use tokio::time::timeout;
@@ -50,7 +51,7 @@ fn runtime() -> Result<&'static Runtime, Error> {
     if let Some(rt) = RUNTIME.get() {
         return Ok(rt);
     }
-    let _init = RUNTIME_INIT.lock().unwrap_or_else(|e| e.into_inner());
+    let _init = RUNTIME_INIT.lock();
     if let Some(rt) = RUNTIME.get() {
         return Ok(rt);
     }

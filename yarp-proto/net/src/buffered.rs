@@ -27,9 +27,10 @@
 
 use crate::nameserver::NameClient;
 use crate::port::{Incoming, Port, PortError, Replier};
+use parking_lot::{Mutex, MutexGuard};
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::Arc;
 use tokio::runtime::Handle;
 use tokio::sync::Notify;
 use tokio::task::JoinHandle;
@@ -81,7 +82,7 @@ impl Message {
 
 /// Locks a mutex whose plain data a panicking holder cannot leave inconsistent.
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(|e| e.into_inner())
+    m.lock()
 }
 
 use yarp_proto::stamp::now;

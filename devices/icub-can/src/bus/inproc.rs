@@ -1,8 +1,9 @@
 //! An in-process CAN bus: any number of endpoints, every frame delivered to all the others.
 
+use parking_lot::Mutex;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex, OnceLock, Weak};
+use std::sync::{Arc, OnceLock, Weak};
 use std::time::Duration;
 
 use super::{BusError, BusStats, CanBus, IdFilter, RxQueue, DEFAULT_RX_QUEUE};
@@ -35,10 +36,7 @@ impl VirtualBus {
     /// The process-wide bus with this name, created on first use (`inproc://NAME`).
     pub fn named(name: &str) -> Self {
         static REGISTRY: OnceLock<Mutex<HashMap<String, VirtualBus>>> = OnceLock::new();
-        let mut reg = REGISTRY
-            .get_or_init(Default::default)
-            .lock()
-            .unwrap_or_else(|e| e.into_inner());
+        let mut reg = REGISTRY.get_or_init(Default::default).lock();
         reg.entry(name.to_string())
             .or_insert_with(|| VirtualBus::new(name))
             .clone()
@@ -47,7 +45,7 @@ impl VirtualBus {
     /// A new endpoint on this bus.
     pub fn endpoint(&self) -> VirtualEndpoint {
         let queue = Arc::new(RxQueue::new(DEFAULT_RX_QUEUE));
-        let mut nodes = self.hub.nodes.lock().unwrap_or_else(|e| e.into_inner());
+        let mut nodes = self.hub.nodes.lock();
         nodes.retain(|w| w.strong_count() > 0);
         nodes.push(Arc::downgrade(&queue));
         VirtualEndpoint {
@@ -63,7 +61,7 @@ impl VirtualBus {
 
     /// Number of live endpoints.
     pub fn endpoints(&self) -> usize {
-        let nodes = self.hub.nodes.lock().unwrap_or_else(|e| e.into_inner());
+        let nodes = self.hub.nodes.lock();
         nodes.iter().filter(|w| w.strong_count() > 0).count()
     }
 }
@@ -89,7 +87,7 @@ impl CanBus for VirtualEndpoint {
         }
         // Collect receivers first so no queue lock is taken while holding the node list.
         let peers: Vec<Arc<RxQueue>> = {
-            let nodes = self.hub.nodes.lock().unwrap_or_else(|e| e.into_inner());
+            let nodes = self.hub.nodes.lock();
             nodes
                 .iter()
                 .filter_map(Weak::upgrade)

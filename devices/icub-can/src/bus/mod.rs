@@ -19,9 +19,9 @@ pub mod inproc;
 pub mod socketcan;
 pub mod udp;
 
+use parking_lot::{Condvar, Mutex, MutexGuard};
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
 use crate::frame::{CanFrame, CAN_SFF_MASK};
@@ -199,7 +199,7 @@ impl RxQueue {
 
     fn lock(&self) -> MutexGuard<'_, RxState> {
         // A panic elsewhere must not wedge the bus: the state stays consistent per operation.
-        self.state.lock().unwrap_or_else(|e| e.into_inner())
+        self.state.lock()
     }
 
     /// Queues a frame if the filter accepts it; drops the oldest frame when full.
@@ -250,11 +250,7 @@ impl RxQueue {
             if now >= deadline {
                 return Err(BusError::Timeout(timeout));
             }
-            st = self
-                .ready
-                .wait_timeout(st, deadline - now)
-                .unwrap_or_else(|e| e.into_inner())
-                .0;
+            self.ready.wait_for(&mut st, deadline - now);
         }
     }
 

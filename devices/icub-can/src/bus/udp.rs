@@ -14,9 +14,10 @@
 //! A reader thread per endpoint decodes datagrams; malformed ones are counted in
 //! [`BusStats::malformed`] and dropped.
 
+use parking_lot::Mutex;
 use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -125,13 +126,7 @@ impl UdpBus {
 
     /// Currently known peers (the remote of a peer; the live nodes of a hub).
     pub fn peers(&self) -> Vec<SocketAddr> {
-        self.shared
-            .peers
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .iter()
-            .map(|p| p.0)
-            .collect()
+        self.shared.peers.lock().iter().map(|p| p.0).collect()
     }
 
     fn send_raw(&self, frames: &[CanFrame], to: SocketAddr) -> Result<(), BusError> {
@@ -143,7 +138,7 @@ impl UdpBus {
 
     /// The datagrams carrying `frames` (one empty one for none), numbered in sequence.
     fn encode(&self, frames: &[CanFrame]) -> Vec<Vec<u8>> {
-        let mut seq = self.shared.seq.lock().unwrap_or_else(|e| e.into_inner());
+        let mut seq = self.shared.seq.lock();
         let packets = if frames.is_empty() {
             let mut p = Vec::new();
             cannelloni::encode(*seq, &[], &mut p);
@@ -174,13 +169,7 @@ fn reader_loop(shared: &Shared) {
     while !shared.stop.load(Ordering::Relaxed) {
         if !shared.hub && last_keepalive.elapsed() >= KEEPALIVE {
             last_keepalive = Instant::now();
-            let remotes: Vec<SocketAddr> = shared
-                .peers
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .iter()
-                .map(|p| p.0)
-                .collect();
+            let remotes: Vec<SocketAddr> = shared.peers.lock().iter().map(|p| p.0).collect();
             let mut hello = Vec::new();
             cannelloni::encode(0, &[], &mut hello);
             for r in remotes {
@@ -211,7 +200,7 @@ fn reader_loop(shared: &Shared) {
         if shared.hub {
             let now = Instant::now();
             let others: Vec<SocketAddr> = {
-                let mut peers = shared.peers.lock().unwrap_or_else(|e| e.into_inner());
+                let mut peers = shared.peers.lock();
                 peers.retain(|p| now.duration_since(p.1) < PEER_EXPIRY);
                 match peers.iter_mut().find(|p| p.0 == from) {
                     Some(p) => p.1 = now,
@@ -278,7 +267,7 @@ impl CanBus for UdpBus {
         }
         let targets: Vec<SocketAddr> = {
             let now = Instant::now();
-            let mut peers = self.shared.peers.lock().unwrap_or_else(|e| e.into_inner());
+            let mut peers = self.shared.peers.lock();
             if self.shared.hub {
                 peers.retain(|p| now.duration_since(p.1) < PEER_EXPIRY);
             }

@@ -1,7 +1,8 @@
 //! The reader thread and request/reply matching shared by all clients.
 
+use parking_lot::{Condvar, Mutex};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Condvar, Mutex};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -58,7 +59,7 @@ impl Link {
                         Ok(f) => f,
                         Err(BusError::Timeout(_)) => continue,
                         Err(e) => {
-                            *l.dead.lock().unwrap_or_else(|e| e.into_inner()) = Some(e.to_string());
+                            *l.dead.lock() = Some(e.to_string());
                             l.replied.notify_all();
                             return;
                         }
@@ -72,7 +73,7 @@ impl Link {
                         }
                     };
                     {
-                        let mut p = l.pending.lock().unwrap_or_else(|e| e.into_inner());
+                        let mut p = l.pending.lock();
                         if let Some(pending) = p.as_mut() {
                             if pending.reply.is_none() && (pending.matcher)(&msg) {
                                 pending.reply = Some(msg);
@@ -93,7 +94,7 @@ impl Link {
     }
 
     fn check_alive(&self) -> Result<(), ClientError> {
-        match self.dead.lock().unwrap_or_else(|e| e.into_inner()).as_ref() {
+        match self.dead.lock().as_ref() {
             Some(reason) => Err(ClientError::Bus(BusError::Closed(reason.clone()))),
             None => Ok(()),
         }
@@ -111,15 +112,15 @@ impl Link {
         matcher: impl Fn(&Message) -> bool + Send + 'static,
         timeout: Duration,
     ) -> Result<Option<Message>, ClientError> {
-        let _one_at_a_time = self.request_lock.lock().unwrap_or_else(|e| e.into_inner());
+        let _one_at_a_time = self.request_lock.lock();
         self.check_alive()?;
-        *self.pending.lock().unwrap_or_else(|e| e.into_inner()) = Some(Pending {
+        *self.pending.lock() = Some(Pending {
             matcher: Box::new(matcher),
             reply: None,
         });
         let sent = self.bus.send(&frame);
         let deadline = Instant::now() + timeout;
-        let mut p = self.pending.lock().unwrap_or_else(|e| e.into_inner());
+        let mut p = self.pending.lock();
         if let Err(e) = sent {
             *p = None;
             return Err(e.into());
@@ -130,23 +131,13 @@ impl Link {
                 return Ok(Some(reply));
             }
             let now = Instant::now();
-            if now >= deadline
-                || self
-                    .dead
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner())
-                    .is_some()
-            {
+            if now >= deadline || self.dead.lock().is_some() {
                 *p = None;
                 drop(p);
                 self.check_alive()?;
                 return Ok(None);
             }
-            p = self
-                .replied
-                .wait_timeout(p, deadline - now)
-                .unwrap_or_else(|e| e.into_inner())
-                .0;
+            self.replied.wait_for(&mut p, deadline - now);
         }
     }
 }

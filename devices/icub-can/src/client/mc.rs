@@ -25,8 +25,9 @@
 //! (sensor units per tick), as YARP's `ImplementImpedanceControl`. Debug parameters and
 //! motor-speed broadcasts are not exposed yet.
 
+use parking_lot::Mutex;
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -523,7 +524,7 @@ impl MotorControlClient {
             } = msg
             {
                 let now = Instant::now();
-                let mut s = st.lock().unwrap_or_else(|e| e.into_inner());
+                let mut s = st.lock();
                 let first = kind.first_channel();
                 for (i, v) in AsPeriodic::signed(*raw).into_iter().enumerate() {
                     for &j in torque_route
@@ -540,7 +541,7 @@ impl MotorControlClient {
                 return;
             };
             let now = Instant::now();
-            let mut s = st.lock().unwrap_or_else(|e| e.into_inner());
+            let mut s = st.lock();
             s.heard.insert(*board, now);
             let mut each = |ch: u8, f: &mut dyn FnMut(&mut JointState, usize)| {
                 if let Some(&j) = route.get(&(*board, ch)) {
@@ -770,13 +771,13 @@ impl MotorControlClient {
                 value: deg_s,
             });
         }
-        self.refs.lock().unwrap_or_else(|e| e.into_inner()).0[j] = deg_s.abs();
+        self.refs.lock().0[j] = deg_s.abs();
         Ok(())
     }
 
     pub fn ref_speed(&self, j: usize) -> Result<f64, ClientError> {
         self.check(j)?;
-        Ok(self.refs.lock().unwrap_or_else(|e| e.into_inner()).0[j])
+        Ok(self.refs.lock().0[j])
     }
 
     /// Sets the acceleration of velocity moves (deg/s²), as `setRefAcceleration`.
@@ -788,13 +789,13 @@ impl MotorControlClient {
                 value: deg_s2,
             });
         }
-        self.refs.lock().unwrap_or_else(|e| e.into_inner()).1[j] = deg_s2.abs();
+        self.refs.lock().1[j] = deg_s2.abs();
         Ok(())
     }
 
     pub fn ref_acceleration(&self, j: usize) -> Result<f64, ClientError> {
         self.check(j)?;
-        Ok(self.refs.lock().unwrap_or_else(|e| e.into_inner()).1[j])
+        Ok(self.refs.lock().1[j])
     }
 
     /// Moves joint `j` to `deg` at the reference speed (`positionMove`).
@@ -817,12 +818,7 @@ impl MotorControlClient {
                 self.joints()
             )));
         }
-        let refs = self
-            .refs
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .0
-            .clone();
+        let refs = self.refs.lock().0.clone();
         let frames = deg
             .iter()
             .enumerate()
@@ -894,7 +890,7 @@ impl MotorControlClient {
                 "joint {j} has no torque sensor (TorqueId 0)"
             )));
         };
-        let js = self.state.lock().unwrap_or_else(|e| e.into_inner()).joints[j];
+        let js = self.state.lock().joints[j];
         let timeout = self.params.broadcast_timeout;
         match js.torque_at.map(|t| t.elapsed()) {
             Some(age) if age <= timeout => {
@@ -963,11 +959,7 @@ impl MotorControlClient {
     /// Motor current from the broadcasts (board units).
     pub fn current(&self, j: usize) -> Result<f64, ClientError> {
         self.check(j)?;
-        Ok(
-            self.state.lock().unwrap_or_else(|e| e.into_inner()).joints[j]
-                .current
-                .into(),
-        )
+        Ok(self.state.lock().joints[j].current.into())
     }
 
     /// Sets the amplifier current limit (board units).
@@ -1083,11 +1075,7 @@ impl MotorControlClient {
     /// PID output (PWM counts) from the broadcasts.
     pub fn pid_output(&self, j: usize) -> Result<f64, ClientError> {
         self.check(j)?;
-        Ok(
-            self.state.lock().unwrap_or_else(|e| e.into_inner()).joints[j]
-                .pid_output
-                .into(),
-        )
+        Ok(self.state.lock().joints[j].pid_output.into())
     }
 
     // ---- limits ----
@@ -1120,7 +1108,7 @@ impl MotorControlClient {
 
     fn fresh(&self, j: usize) -> Result<JointState, ClientError> {
         self.check(j)?;
-        let js = self.state.lock().unwrap_or_else(|e| e.into_inner()).joints[j];
+        let js = self.state.lock().joints[j];
         let timeout = self.params.broadcast_timeout;
         let age = js.position_at.map(|t| t.elapsed());
         match age {
@@ -1186,7 +1174,7 @@ impl MotorControlClient {
     /// (`getMotorEncoder`; needs `broadcast_rotor_pos`).
     pub fn motor_encoder(&self, j: usize) -> Result<f64, ClientError> {
         self.check(j)?;
-        let js = self.state.lock().unwrap_or_else(|e| e.into_inner()).joints[j];
+        let js = self.state.lock().joints[j];
         let timeout = self.params.broadcast_timeout;
         match js.motor_at.map(|t| t.elapsed()) {
             Some(age) if age <= timeout => Ok(f64::from(js.motor_ticks) / self.params.rotor[j]),
@@ -1212,7 +1200,7 @@ impl MotorControlClient {
     /// What the broadcasts say about joint `j`.
     pub fn joint_status(&self, j: usize) -> Result<JointStatus, ClientError> {
         self.check(j)?;
-        let js = self.state.lock().unwrap_or_else(|e| e.into_inner()).joints[j];
+        let js = self.state.lock().joints[j];
         Ok(JointStatus {
             mode: js.mode,
             faults: js.faults,
@@ -1225,7 +1213,7 @@ impl MotorControlClient {
 
     /// Liveness of every board, judged against the broadcast timeout.
     pub fn board_health(&self) -> Vec<BoardHealth> {
-        let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let s = self.state.lock();
         self.params
             .can_addresses
             .iter()

@@ -1,6 +1,7 @@
 //! `SkinClient` (core of `canBusSkin`) and `InertialClient` (core of `canBusInertialMTB`).
 
-use std::sync::{Arc, Mutex};
+use parking_lot::Mutex;
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -53,7 +54,7 @@ impl SkinClient {
                 return;
             };
             let base = i * TAXELS_PER_BOARD + usize::from(msg.triangle) * 12 + msg.first_taxel();
-            let mut s = st.lock().unwrap_or_else(|e| e.into_inner());
+            let mut s = st.lock();
             for (k, v) in msg.taxels().iter().enumerate() {
                 s.0[base + k] = f64::from(*v);
             }
@@ -74,7 +75,7 @@ impl SkinClient {
 
     /// All taxels; the status is `Timeout` if any board was silent for `timeout`.
     pub fn read(&self, timeout: Duration) -> (Vec<f64>, SensorStatus) {
-        let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let s = self.state.lock();
         let ok =
             s.1.iter()
                 .all(|t| t.is_some_and(|t| t.elapsed() <= timeout));
@@ -90,7 +91,7 @@ impl SkinClient {
 
     /// Boards not heard from within `timeout`.
     pub fn silent_boards(&self, timeout: Duration) -> Vec<u8> {
-        let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let s = self.state.lock();
         self.boards
             .iter()
             .zip(&s.1)
@@ -169,7 +170,7 @@ impl InertialClient {
             let Some(i) = ids.iter().position(|b| b == board) else {
                 return;
             };
-            let mut s = st.lock().unwrap_or_else(|e| e.into_inner());
+            let mut s = st.lock();
             let (offset, v, slot) = match msg {
                 InertialMsg::Accelerometer(v) => (0, v, 0),
                 InertialMsg::Gyroscope(v) if with_gyro => (3, v, 1),
@@ -210,7 +211,7 @@ impl InertialClient {
 
     /// Raw readings and status (`Timeout` if a sensor was silent for 100 ms).
     pub fn read(&self) -> (Vec<f64>, SensorStatus) {
-        let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let s = self.state.lock();
         let fresh = |t: Option<Instant>| t.is_some_and(|t| t.elapsed() <= DATA_TIMEOUT);
         let ok =
             s.1.iter()

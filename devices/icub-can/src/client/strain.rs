@@ -1,7 +1,8 @@
 //! `StrainClient`: the core of `canBusAnalogSensor` / `canBusFtSensor` (strain 6-axis
 //! F/T, 16-bit) and of MAIS boards (8-bit hall-effect sensors).
 
-use std::sync::{Arc, Mutex};
+use parking_lot::Mutex;
+use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -157,7 +158,7 @@ impl StrainClient {
             if *board != p.address {
                 return;
             }
-            let mut s = st.lock().unwrap_or_else(|e| e.into_inner());
+            let mut s = st.lock();
             match (p.format, msg) {
                 (
                     AnalogFormat::Bits16,
@@ -167,7 +168,7 @@ impl StrainClient {
                         saturation,
                     },
                 ) => {
-                    let scales = *fs.lock().unwrap_or_else(|e| e.into_inner());
+                    let scales = *fs.lock();
                     let first = kind.first_channel();
                     for (k, v) in AsPeriodic::signed(*raw).into_iter().enumerate() {
                         let ch = first + k;
@@ -268,7 +269,7 @@ impl StrainClient {
                     r => return Err(ClientError::Config(format!("unexpected reply {r:?}"))),
                 }
             }
-            *self.full_scales.lock().unwrap_or_else(|e| e.into_inner()) = scales;
+            *self.full_scales.lock() = scales;
         }
         let mode = if self.params.format == AnalogFormat::Bits16 && !self.params.use_calibration {
             txmode::RAW
@@ -288,12 +289,12 @@ impl StrainClient {
 
     /// The full scales read at open (1.0 when uncalibrated).
     pub fn full_scales(&self) -> [f64; 6] {
-        *self.full_scales.lock().unwrap_or_else(|e| e.into_inner())
+        *self.full_scales.lock()
     }
 
     /// Latest values (N, N·m when calibrated) and their status (`IAnalogSensor::read`).
     pub fn read(&self) -> (Vec<f64>, SensorStatus) {
-        let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let s = self.state.lock();
         let status = match s.at {
             Some(t) if t.elapsed() <= DATA_TIMEOUT => s.status,
             _ => SensorStatus::Timeout,
@@ -306,12 +307,7 @@ impl StrainClient {
         let (data, status) = self.read();
         match status {
             SensorStatus::Timeout => {
-                let age = self
-                    .state
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner())
-                    .at
-                    .map(|t| t.elapsed());
+                let age = self.state.lock().at.map(|t| t.elapsed());
                 Err(ClientError::Stale {
                     joint: 0,
                     board: self.params.address,

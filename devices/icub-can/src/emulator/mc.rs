@@ -74,8 +74,9 @@
 //! broadcasts on a joint's sensor address) replace the board's own for
 //! [`HOST_TORQUE_TIMEOUT`] after each message (the MC4's strain watchdog, `STRAIN_SAFE`).
 
+use parking_lot::Mutex;
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 
 use super::Board;
@@ -219,7 +220,7 @@ impl TorqueHub {
     }
 
     fn publish(&self, link: TorqueLink, value: i16) {
-        let mut m = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let mut m = self.0.lock();
         if let Some(slot) = m
             .entry(link.address)
             .or_default()
@@ -231,7 +232,7 @@ impl TorqueHub {
 
     /// The latest values of a sensor's channels.
     pub fn channels(&self, address: u8) -> [Option<i16>; 6] {
-        let m = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        let m = self.0.lock();
         m.get(&address).copied().unwrap_or_default()
     }
 }

@@ -42,7 +42,7 @@
 //! for [`TARGET_WAIT`] is an error, never a hang.
 
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, TryLockError};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use yarp_devices::interfaces::{CalibrationParameters, IRemoteCalibrator};
@@ -266,12 +266,11 @@ impl ParametricCalibratorEth {
         let end = Instant::now() + TARGET_WAIT;
         loop {
             match target.try_lock() {
-                Ok(mut pd) => return f(pd.device()),
-                Err(TryLockError::Poisoned(e)) => return f(e.into_inner().device()),
-                Err(TryLockError::WouldBlock) if Instant::now() < end => {
+                Some(mut pd) => return f(pd.device()),
+                None if Instant::now() < end => {
                     std::thread::sleep(Duration::from_millis(1));
                 }
-                Err(TryLockError::WouldBlock) => {
+                None => {
                     return Err(DeviceError::failed(
                         &self.name,
                         format!("the part stayed busy for {TARGET_WAIT:?}"),

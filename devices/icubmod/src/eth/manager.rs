@@ -10,9 +10,10 @@
 //! `EthResource::open2`/`verifyEPprotocol`); each device then activates its own service
 //! ([`super::service`]).
 
+use parking_lot::{Condvar, Mutex, MutexGuard};
 use std::collections::HashMap;
 use std::net::{Ipv4Addr, SocketAddrV4, UdpSocket};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard, OnceLock};
+use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant};
 
 use icub_eth::host::{
@@ -166,21 +167,21 @@ impl Board {
     }
 
     fn lock(&self) -> MutexGuard<'_, Inner> {
-        self.inner.lock().unwrap_or_else(|e| e.into_inner())
+        self.inner.lock()
     }
 
     /// Waits on `changed` for at most `d`, counted in [`Board::waiters`].
-    fn wait_changed<'a>(&self, inner: MutexGuard<'a, Inner>, d: Duration) -> MutexGuard<'a, Inner> {
+    fn wait_changed<'a>(
+        &self,
+        mut inner: MutexGuard<'a, Inner>,
+        d: Duration,
+    ) -> MutexGuard<'a, Inner> {
         use std::sync::atomic::Ordering;
         // counted while `inner` is held: a notifier that changes the board after this
         // thread looked at it sees the count once it releases the board
         self.waiters.fetch_add(1, Ordering::AcqRel);
         self.waiting.fetch_add(1, Ordering::AcqRel);
-        let inner = self
-            .changed
-            .wait_timeout(inner, d)
-            .unwrap_or_else(|e| e.into_inner())
-            .0;
+        self.changed.wait_for(&mut inner, d);
         self.waiters.fetch_sub(1, Ordering::AcqRel);
         self.waiting.fetch_sub(1, Ordering::AcqRel);
         inner
@@ -208,7 +209,7 @@ impl Board {
 
     /// Brings the board up once (the first caller does it; later callers get its outcome).
     pub fn bring_up(&self) -> Result<(), EthError> {
-        let _serial = self.bring_up_lock.lock().unwrap_or_else(|e| e.into_inner());
+        let _serial = self.bring_up_lock.lock();
         match &self.lock().bring_up {
             BringUp::Done => return Ok(()),
             BringUp::Failed(e) => return Err(e.clone()),
@@ -409,7 +410,7 @@ impl Board {
     /// oldest first; those the reader holds for a busy board are handled first.
     pub fn take_kept(&self, id: Id32) -> Vec<Vec<u8>> {
         let mut inner = self.lock();
-        let mut inbox = self.inbox.try_lock().ok();
+        let mut inbox = self.inbox.try_lock();
         if let Some(inbox) = inbox.as_deref_mut() {
             for (t, d) in inbox.drain(..) {
                 self.receive(&mut inner, t, &d);
@@ -464,11 +465,7 @@ impl Board {
         let mut inner = if inbox.len() >= INBOX_LIMIT {
             self.lock()
         } else {
-            match self.inner.try_lock() {
-                Ok(g) => g,
-                Err(std::sync::TryLockError::Poisoned(e)) => e.into_inner(),
-                Err(std::sync::TryLockError::WouldBlock) => return None,
-            }
+            self.inner.try_lock()?
         };
         for (t, earlier) in inbox.drain(..) {
             self.receive(&mut inner, t, &earlier);
@@ -480,7 +477,7 @@ impl Board {
     /// at `at` is handled now if the board is free, else when it next is (with its
     /// arrival time): then `false`, and the reader comes back within [`RETRY_BUSY`].
     fn on_datagram(&self, d: &[u8], at: Instant) -> bool {
-        let mut inbox = self.inbox.lock().unwrap_or_else(|e| e.into_inner());
+        let mut inbox = self.inbox.lock();
         let Some(mut inner) = self.lock_for_reader(&mut inbox) else {
             inbox.push_back((at, d.to_vec()));
             return false;
@@ -519,7 +516,7 @@ impl Board {
     /// silence reported. Returns when the board's timers next need the reader (soon, if a
     /// device thread held the board).
     fn on_timers(&self) -> Instant {
-        let mut inbox = self.inbox.lock().unwrap_or_else(|e| e.into_inner());
+        let mut inbox = self.inbox.lock();
         let Some(mut inner) = self.lock_for_reader(&mut inbox) else {
             return Instant::now() + RETRY_BUSY;
         };
@@ -607,7 +604,7 @@ impl EthManager {
     /// The process's manager, bound to `pc104` on first use (C++ `TheEthManager::instance`
     /// + `initCommunication`); every device must name the same host address.
     pub fn instance(pc104: &Pc104) -> Result<Arc<EthManager>, EthError> {
-        let mut slot = manager_slot().lock().unwrap_or_else(|e| e.into_inner());
+        let mut slot = manager_slot().lock();
         if let Some(m) = slot.as_ref() {
             if m.local.ip != pc104.ip || m.local.port != pc104.port {
                 return Err(EthError::Board {
@@ -674,7 +671,7 @@ impl EthManager {
 
     /// The board at `params.ip` (created on first request, as `requestResource2`).
     pub fn board(&self, params: &EthBoardParams) -> Arc<Board> {
-        let mut boards = self.boards.lock().unwrap_or_else(|e| e.into_inner());
+        let mut boards = self.boards.lock();
         boards
             .entry(params.ip)
             .or_insert_with(|| {
@@ -711,29 +708,17 @@ impl EthManager {
 
     fn board_at(&self, served: Ipv4Addr) -> Option<Arc<Board>> {
         let robot_ip = self.map.unmap(served);
-        self.boards
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .get(&robot_ip)
-            .cloned()
+        self.boards.lock().get(&robot_ip).cloned()
     }
 
     /// The process's manager, if a device has created it.
     pub fn current() -> Option<Arc<EthManager>> {
-        manager_slot()
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .clone()
+        manager_slot().lock().clone()
     }
 
     /// Every board in use.
     pub fn all_boards(&self) -> Vec<Arc<Board>> {
-        self.boards
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .values()
-            .cloned()
-            .collect()
+        self.boards.lock().values().cloned().collect()
     }
 }
 

@@ -399,13 +399,11 @@ fn pid_group(
 /// Group names must live as long as the configuration for [`Node::group`]; the few PID
 /// group names of a robot are interned once.
 fn leak(name: &str) -> &'static str {
+    use parking_lot::Mutex;
     use std::collections::HashSet;
-    use std::sync::{Mutex, OnceLock};
+    use std::sync::OnceLock;
     static NAMES: OnceLock<Mutex<HashSet<&'static str>>> = OnceLock::new();
-    let mut set = NAMES
-        .get_or_init(|| Mutex::new(HashSet::new()))
-        .lock()
-        .unwrap_or_else(|e| e.into_inner());
+    let mut set = NAMES.get_or_init(|| Mutex::new(HashSet::new())).lock();
     if let Some(s) = set.get(name) {
         return s;
     }

@@ -21,8 +21,9 @@
 //! A board that falls silent makes every reading fail within its presence timeout,
 //! naming IP and board.
 
+use parking_lot::Mutex;
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use icub_eth::entities::analog::{
     FtConfig, FtStatus, Inertial3Config, Inertial3Status, MaisStatus, StrainConfig, StrainStatus,
@@ -690,7 +691,7 @@ impl EmbObjImu {
         let board = self.c.board.as_ref().ok_or(DeviceError::NotOpen)?;
         // a silent board makes the read fail, naming it
         let _: Inertial3Status = self.c.read(STATUS)?;
-        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        let mut cache = self.cache.lock();
         for bytes in board.take_kept(STATUS) {
             let Ok(st) = Inertial3Status::from_bytes(&bytes) else {
                 continue;
@@ -1222,7 +1223,7 @@ impl EmbObjSkin {
     /// next status, which carries other triangles).
     fn update(&self) -> DevResult<()> {
         let board = self.c.board.as_ref().ok_or(DeviceError::NotOpen)?;
-        let mut taxels = self.taxels.lock().unwrap_or_else(|e| e.into_inner());
+        let mut taxels = self.taxels.lock();
         for p in 0..self.patches.len() {
             let id = ids::skin(p as u8, tag::SK_SKIN_STATUS_ARRAYOFCANDATA);
             // a silent board makes the read fail, naming it
@@ -1281,7 +1282,7 @@ impl DeviceDriver for EmbObjSkin {
             }
             None => Vec::new(),
         };
-        *self.taxels.lock().unwrap_or_else(|e| e.into_inner()) = taxels;
+        *self.taxels.lock() = taxels;
         let n = patches.len();
         self.c.open(SKIN, config, category::SKIN, |root, st| {
             let mut service = SensorService::new(verify(root, category::SKIN, st)?);
@@ -1323,7 +1324,7 @@ impl IAnalogSensor for EmbObjSkin {
         if self.update().is_err() {
             return AnalogStatus::Timeout;
         }
-        out.clone_from(&self.taxels.lock().unwrap_or_else(|e| e.into_inner()));
+        out.clone_from(&self.taxels.lock());
         AnalogStatus::Ok
     }
     fn get_state(&mut self, _ch: usize) -> AnalogStatus {
@@ -1333,7 +1334,7 @@ impl IAnalogSensor for EmbObjSkin {
         }
     }
     fn get_channels(&mut self) -> usize {
-        self.taxels.lock().unwrap_or_else(|e| e.into_inner()).len()
+        self.taxels.lock().len()
     }
     fn calibrate_sensor(&mut self) -> DevResult<()> {
         Ok(())

@@ -25,10 +25,11 @@
 //! Exit status 0 after a clean shutdown, 1 when the robot fails to load or run.
 #![forbid(unsafe_code)]
 
+use parking_lot::Mutex;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::{mpsc, Arc, Mutex};
+use std::sync::{mpsc, Arc};
 use std::time::Duration;
 use yarp_devices::robotinterface::resource;
 use yarp_devices::robotinterface::rpc::{self, RpcStatus};
@@ -189,7 +190,7 @@ fn open_rpc_port(
                 },
             };
             let Ok(cmd) = msg.bottle() else { continue };
-            let answer = rpc::handle(&cmd, &status.lock().unwrap_or_else(|e| e.into_inner()));
+            let answer = rpc::handle(&cmd, &status.lock());
             msg.reply(answer.reply);
             if answer.quit {
                 interrupts.raise("quit requested on the RPC port");
@@ -305,7 +306,7 @@ fn run() -> i32 {
     });
     let progress_status = status.clone();
     runner.set_progress(Box::new(move |phase, level| {
-        let mut s = progress_status.lock().unwrap_or_else(|e| e.into_inner());
+        let mut s = progress_status.lock();
         s.phase = Some(phase);
         s.level = level;
     }));

@@ -1,10 +1,11 @@
 //! Live data for the dashboard: a reader port per watched YARP port, connected from the
 //! source by a third-party connect (and connected again if the source restarts).
 
+use parking_lot::Mutex;
 use serde::Serialize;
 use std::collections::{HashMap, VecDeque};
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::watch;
 use yarp_net::nameserver::NameClient;
@@ -92,7 +93,7 @@ impl Feed {
     fn record(&self, payload: Vec<u8>, is_text: bool, keep_numbers: bool) {
         let n = self.received.fetch_add(1, Ordering::Relaxed) + 1;
         let now = Instant::now();
-        let mut l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let mut l = self.latest.lock();
         match l.rate_mark {
             Some((t, c)) if now.duration_since(t) >= Duration::from_secs(1) => {
                 l.rate_hz = (n - c) as f64 / now.duration_since(t).as_secs_f64();
@@ -125,7 +126,7 @@ impl Feed {
 
     /// The last message as a Bottle, if one arrived.
     pub fn last_bottle(&self) -> Option<Bottle> {
-        let l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let l = self.latest.lock();
         let (p, text) = l.payload.as_ref()?;
         if *text {
             Some(Bottle::from_text(p))
@@ -139,10 +140,7 @@ impl Feed {
     }
 
     pub fn rate_hz(&self) -> f64 {
-        self.latest
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .rate_hz
+        self.latest.lock().rate_hz
     }
 
     pub fn is_connected(&self) -> bool {
@@ -160,11 +158,11 @@ impl Feed {
     }
 
     pub fn set_names(&self, names: Vec<String>) {
-        *self.names.lock().unwrap_or_else(|e| e.into_inner()) = names;
+        *self.names.lock() = names;
     }
 
     pub fn plot(&self) -> PlotData {
-        let l = self.latest.lock().unwrap_or_else(|e| e.into_inner());
+        let l = self.latest.lock();
         let width = l.history.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
         let mut series = vec![Vec::with_capacity(l.history.len()); width];
         for (_, v) in &l.history {
@@ -177,7 +175,7 @@ impl Feed {
             connected: self.is_connected(),
             received: self.received(),
             rate_hz: l.rate_hz,
-            names: self.names.lock().unwrap_or_else(|e| e.into_inner()).clone(),
+            names: self.names.lock().clone(),
             t: l.history.iter().map(|(t, _)| *t).collect(),
             series,
         }
@@ -212,15 +210,10 @@ impl Feeds {
         if !source.starts_with('/') || source.contains(char::is_whitespace) {
             return Err(FeedError::BadName(source.to_string()));
         }
-        if let Some(f) = self
-            .feeds
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .get(source)
-        {
+        if let Some(f) = self.feeds.lock().get(source) {
             return Ok(f.clone());
         }
-        if self.feeds.lock().unwrap_or_else(|e| e.into_inner()).len() >= MAX_FEEDS {
+        if self.feeds.lock().len() >= MAX_FEEDS {
             return Err(FeedError::TooMany);
         }
         let n = self.seq.fetch_add(1, Ordering::Relaxed);
@@ -238,7 +231,7 @@ impl Feeds {
             names_claimed: Default::default(),
         });
         let winner = {
-            let mut feeds = self.feeds.lock().unwrap_or_else(|e| e.into_inner());
+            let mut feeds = self.feeds.lock();
             match feeds.get(source) {
                 Some(f) => Some(f.clone()),
                 None => {
@@ -259,18 +252,14 @@ impl Feeds {
             keep_numbers,
             self.stop.subscribe(),
         ));
-        self.tasks
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .push(task);
+        self.tasks.lock().push(task);
         Ok(feed)
     }
 
     /// Closes every reader port (unregistering it), bounded in time.
     pub async fn close(&self) {
         self.stop.send_replace(true);
-        let tasks: Vec<_> =
-            std::mem::take(&mut *self.tasks.lock().unwrap_or_else(|e| e.into_inner()));
+        let tasks: Vec<_> = std::mem::take(&mut *self.tasks.lock());
         for t in tasks {
             let _ = tokio::time::timeout(Duration::from_secs(4), t).await;
         }

@@ -23,10 +23,11 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use axum::{Json, Router};
 use feeds::Feeds;
+use parking_lot::Mutex;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::net::SocketAddr;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::sync::watch;
 use yarp_net::nameserver::NameClient;
@@ -315,7 +316,7 @@ async fn bridge(State(s): State<Arc<AppState>>) -> Response {
         .map(|b| parse_bridge(&b))
         .unwrap_or_default();
     let now = Instant::now();
-    let mut prev = s.bridge_prev.lock().unwrap_or_else(|e| e.into_inner());
+    let mut prev = s.bridge_prev.lock();
     for r in &mut rows {
         if let Some((t, n)) = prev.get(&r.name) {
             let dt = now.duration_since(*t).as_secs_f64();

@@ -5,9 +5,10 @@
 //! `registration ...` line. Datagrams carry the usual 8-byte CRC/counter header.
 
 use crate::dgram::{McastReceiver, McastSender};
+use parking_lot::Mutex;
 use std::io;
 use std::net::{Ipv4Addr, SocketAddrV4};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 use tokio::sync::watch;
 use yarp_proto::nameserver::{parse_registration, reply_text, Registry};
@@ -60,7 +61,7 @@ pub(crate) async fn serve(
             continue;
         }
         let reply = {
-            let mut reg = registry.lock().unwrap_or_else(|e| e.into_inner());
+            let mut reg = registry.lock();
             reg.apply(&Bottle::from_text(&line), None)
         };
         let _ = tx

@@ -20,9 +20,10 @@
 //! Every read has the idle timeout, lines and messages have size limits, and the number
 //! of simultaneous connections is bounded (extra ones are closed at once).
 
+use parking_lot::Mutex;
 use std::io;
 use std::net::SocketAddr;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 
 use tokio::io::{AsyncBufReadExt, AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt, BufReader};
@@ -308,7 +309,7 @@ async fn write_t<W: AsyncWrite + Unpin>(
 }
 
 fn run_command(ctx: &Ctx, cmd: &Bottle, remote: &str) -> Bottle {
-    let mut reg = ctx.registry.lock().unwrap_or_else(|e| e.into_inner());
+    let mut reg = ctx.registry.lock();
     let line = reg.log_line(cmd);
     if ctx.config.echo_commands {
         println!("{line}");

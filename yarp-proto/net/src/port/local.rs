@@ -5,8 +5,9 @@
 
 use super::output::{Job, OutputError, OutputHandle};
 use super::{Incoming, Shared, OUTPUT_QUEUE};
+use parking_lot::Mutex;
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex, OnceLock, Weak};
+use std::sync::{Arc, OnceLock, Weak};
 use tokio::sync::{mpsc, oneshot, Notify};
 use yarp_proto::port_admin::Route;
 
@@ -18,14 +19,14 @@ fn registry() -> &'static Mutex<HashMap<String, Weak<Shared>>> {
 
 /// Makes a port reachable by `local` connections.
 pub(crate) fn register(shared: &Arc<Shared>) {
-    let mut r = registry().lock().unwrap_or_else(|e| e.into_inner());
+    let mut r = registry().lock();
     r.retain(|_, w| w.strong_count() > 0);
     r.insert(shared.name.clone(), Arc::downgrade(shared));
 }
 
 /// Forgets a port (only if the entry is this port, not a newer one of the same name).
 pub(crate) fn unregister(shared: &Shared) {
-    let mut r = registry().lock().unwrap_or_else(|e| e.into_inner());
+    let mut r = registry().lock();
     if let Some(w) = r.get(&shared.name) {
         if std::ptr::eq(w.as_ptr(), shared) || w.strong_count() == 0 {
             r.remove(&shared.name);
@@ -36,7 +37,6 @@ pub(crate) fn unregister(shared: &Shared) {
 pub(crate) fn connect(shared: &Arc<Shared>, target: &str) -> Result<OutputHandle, OutputError> {
     let dest = registry()
         .lock()
-        .unwrap_or_else(|e| e.into_inner())
         .get(target)
         .and_then(Weak::upgrade)
         .ok_or_else(|| {

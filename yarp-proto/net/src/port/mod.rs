@@ -26,10 +26,11 @@ pub mod shmem;
 pub mod unix;
 
 use crate::nameserver::{NameClient, NameClientError};
+use parking_lot::Mutex;
 use std::collections::BTreeMap;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 use tokio::net::TcpListener;
 use tokio::sync::{mpsc, oneshot, watch};
@@ -229,9 +230,9 @@ impl Shared {
         self.next_id.fetch_add(1, Ordering::Relaxed)
     }
 
-    pub(crate) fn lock(&self) -> std::sync::MutexGuard<'_, State> {
+    pub(crate) fn lock(&self) -> parking_lot::MutexGuard<'_, State> {
         // a panicking task cannot leave the plain data inconsistent; keep serving
-        self.state.lock().unwrap_or_else(|e| e.into_inner())
+        self.state.lock()
     }
 
     /// The admin protocol's view of this port.
@@ -639,14 +640,11 @@ async fn keep_registered(port: std::sync::Weak<Shared>) {
 
 /// When a port of this process last found each name server knowing it.
 fn confirmations(
-) -> std::sync::MutexGuard<'static, std::collections::HashMap<SocketAddr, std::time::Instant>> {
+) -> parking_lot::MutexGuard<'static, std::collections::HashMap<SocketAddr, std::time::Instant>> {
     static CONFIRMED: std::sync::OnceLock<
         Mutex<std::collections::HashMap<SocketAddr, std::time::Instant>>,
     > = std::sync::OnceLock::new();
-    CONFIRMED
-        .get_or_init(Mutex::default)
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
+    CONFIRMED.get_or_init(Mutex::default).lock()
 }
 
 /// Whether another port's check of `server` still stands: younger than three quarters of
