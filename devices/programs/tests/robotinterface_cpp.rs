@@ -68,9 +68,10 @@ async fn cpp_yarp_rpc_queries_the_robot() {
     let net = start_network().await;
     let fixtures =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/robotinterface");
+    // the fixture names a device type no build has: only --keep-going goes past it
     let mut child = Child::spawn(
         BIN,
-        &["--config", "robot_fake.xml"],
+        &["--config", "robot_fake.xml", "--keep-going"],
         &fixtures,
         Some(net.conf_home.path()),
     );
@@ -111,4 +112,54 @@ async fn cpp_yarp_rpc_queries_the_robot() {
     child.signal("INT");
     let status = child.wait_exit(T).await;
     assert_eq!(status.and_then(|s| s.code()), Some(0), "{}", child.output());
+}
+
+/// C++ `yarprobotinterface` 3.12.3 on the same fixture stops at the device type it lacks
+/// (PolyDriver's "Could not find device"), as ours does without `--keep-going`.
+#[tokio::test]
+async fn cpp_yarprobotinterface_stops_at_a_device_type_it_lacks_as_ours_does() {
+    let Some(cpp) = yarp_interop_tests::cpp_program("robotinterface_cpp", "yarprobotinterface")
+    else {
+        return;
+    };
+    let net = start_network().await;
+    let fixtures =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/robotinterface");
+    let home = net.conf_home.path().to_path_buf();
+    let (status, text) = tokio::task::spawn_blocking(move || {
+        let mut cmd = yarp_interop_tests::cpp_command(&cpp);
+        cmd.args(["--config", "robot_fake.xml"])
+            .current_dir(&fixtures)
+            .env("YARP_CONFIG_HOME", &home);
+        let mut p = yarp_interop_tests::Proc::spawn("C++ yarprobotinterface", cmd);
+        let start = Instant::now();
+        let status = loop {
+            if let Some(s) = p.child.try_wait().ok().flatten() {
+                break Some(s);
+            }
+            if start.elapsed() > T {
+                break None;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        // the reader threads deliver what is left once the pipes close
+        let _ = p.try_wait_line("\u{0}", Duration::from_millis(300));
+        (status, p.seen.join("\n"))
+    })
+    .await
+    .unwrap();
+    assert!(
+        status.is_some_and(|s| !s.success()),
+        "C++ went past the missing type ({status:?}):\n{text}"
+    );
+    assert!(
+        text.contains("Could not find device <notARealDeviceType>")
+            && text.contains("One or more devices failed opening"),
+        "{text}"
+    );
+    // only that one: C++ found its own plugins
+    assert!(
+        !text.contains("Could not find device <fakeMotionControl>"),
+        "{text}"
+    );
 }

@@ -1,7 +1,8 @@
 //! The real `yarprobotinterface` binary as a child process (under netns-run): brings up
 //! the fixture robot (fakeMotionControl served by controlBoard_nws_yarp), answers RPC on
-//! `/robot/part/rpc:i`, names the device type it lacks, reports readiness on
-//! `/robot/yarprobotinterface`, and shuts down cleanly on SIGINT, SIGTERM or RPC `quit`.
+//! `/robot/part/rpc:i`, names the device type it lacks (and stops there, as C++, unless
+//! told `--keep-going`), reports readiness on `/robot/yarprobotinterface`, and shuts down
+//! cleanly on SIGINT, SIGTERM or RPC `quit`.
 
 #[path = "../../tests/fixtures/robotinterface/live_support.rs"]
 mod support;
@@ -26,9 +27,10 @@ fn wrapper_registered() -> bool {
 
 async fn bring_up(signal: &str) {
     let net = start_network().await;
+    // the fixture names a device type no build has: only --keep-going goes past it
     let mut child = Child::spawn(
         BIN,
-        &["--config", "robot_fake.xml"],
+        &["--config", "robot_fake.xml", "--keep-going"],
         &fixtures(),
         Some(net.conf_home.path()),
     );
@@ -133,6 +135,26 @@ async fn missing_config_and_bad_xml_fail_with_a_message() {
 }
 
 #[tokio::test]
+async fn a_device_type_not_in_the_build_stops_the_robot_as_in_cpp() {
+    let net = start_network().await;
+    let mut child = Child::spawn(
+        BIN,
+        &["--config", "robot_fake.xml"],
+        &fixtures(),
+        Some(net.conf_home.path()),
+    );
+    let status = child.wait_exit(T).await;
+    let out = child.output();
+    assert_eq!(status.and_then(|s| s.code()), Some(1), "{out}");
+    assert!(
+        out.contains("cannot open device mystery: could not find device <notARealDeviceType>"),
+        "{out}"
+    );
+    // the devices it did open are closed again
+    assert!(out.contains("Closing device part_mc"), "{out}");
+}
+
+#[tokio::test]
 async fn dry_run_needs_no_network_and_reads_the_ini() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(
@@ -208,7 +230,13 @@ async fn command_line_portprefix_moves_every_port() {
     let net = start_network().await;
     let mut child = Child::spawn(
         BIN,
-        &["--config", "robot_fake.xml", "--portprefix", "/other"],
+        &[
+            "--config",
+            "robot_fake.xml",
+            "--portprefix",
+            "/other",
+            "--keep-going",
+        ],
         &fixtures(),
         Some(net.conf_home.path()),
     );
