@@ -37,9 +37,32 @@ pub enum DeviceError {
     /// a remote device that does not answer. `device` names the device or the remote port.
     #[error("device `{device}`: {reason}")]
     Failed { device: String, reason: String },
+    /// A remote peer understood the command and refused it (`[fail]`, or a reply without
+    /// what was asked): the peer is alive, the command is what failed.
+    #[error("`{device}` refused `{command}`")]
+    Refused { device: String, command: String },
+    /// A remote peer gave no reply within `after`: it may be stalled or gone.
+    #[error("`{device}` did not answer `{command}` within {after:?}")]
+    Timeout {
+        device: String,
+        command: String,
+        after: std::time::Duration,
+    },
+    /// The connection to a remote peer broke while a command waited for its reply.
+    #[error("`{device}`: connection lost ({reason})")]
+    PeerLost { device: String, reason: String },
 }
 
 impl DeviceError {
+    /// Whether the error says a remote peer is unreachable, as opposed to a command
+    /// refused or not offered: a caller may reconnect on these.
+    pub fn is_lost_peer(&self) -> bool {
+        matches!(
+            self,
+            DeviceError::Timeout { .. } | DeviceError::PeerLost { .. }
+        )
+    }
+
     /// A [`DeviceError::Failed`] of `device`.
     pub fn failed(device: impl Into<String>, reason: impl ToString) -> DeviceError {
         DeviceError::Failed {

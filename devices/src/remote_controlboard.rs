@@ -47,8 +47,14 @@ const fn v(s: &str) -> i32 {
 }
 const TORQUES_DIRECT: i32 = v("dtq");
 const STATE_ERR: &str = "no fresh state from the remote control board (stateExt:i)";
-const REFUSED: &str = "the remote control board refused the command";
-const UNREACHABLE: &str = "the remote control board did not answer";
+
+/// A reply that is `[ok]` but lacks the value asked: the peer speaks another protocol.
+fn bad_reply() -> DeviceError {
+    DeviceError::failed(
+        NAME,
+        "the remote control board's reply lacks the value asked",
+    )
+}
 
 /// The last state received on `<local>/stateExt:i`.
 #[derive(Debug, Clone)]
@@ -348,22 +354,34 @@ impl RemoteControlBoard {
             Ok(Ok(reply)) if reply_ok(&reply) => Ok(reply),
             Ok(Ok(reply)) => {
                 tracing::debug!("{NAME}: `{cmd}` answered `{reply}`");
-                Err(DeviceError::Unsupported(REFUSED))
+                Err(self.refused(cmd))
             }
             Ok(Err(e)) => {
                 tracing::warn!("{NAME}: `{cmd}`: {e}");
-                Err(DeviceError::failed(
-                    &link.remote,
-                    format!("{UNREACHABLE} ({e})"),
-                ))
+                Err(DeviceError::PeerLost {
+                    device: link.remote.clone(),
+                    reason: e.to_string(),
+                })
             }
             Err(_) => {
                 tracing::warn!("{NAME}: `{cmd}`: no reply within {RPC_TIMEOUT:?}");
-                Err(DeviceError::failed(
-                    &link.remote,
-                    format!("{UNREACHABLE} within {RPC_TIMEOUT:?}"),
-                ))
+                Err(DeviceError::Timeout {
+                    device: link.remote.clone(),
+                    command: cmd.to_string(),
+                    after: RPC_TIMEOUT,
+                })
             }
+        }
+    }
+
+    /// The remote control board refused `cmd` (or answered it without what was asked).
+    fn refused(&self, cmd: &Bottle) -> DeviceError {
+        DeviceError::Refused {
+            device: self
+                .link
+                .as_ref()
+                .map_or_else(|| NAME.to_string(), |l| l.remote.clone()),
+            command: cmd.to_string(),
         }
     }
 
@@ -372,7 +390,7 @@ impl RemoteControlBoard {
         let v = self.get_value(bottle![Vocab32(GET), Vocab32(AXES)])?;
         v.as_i64()
             .and_then(|n| usize::try_from(n).ok())
-            .ok_or(DeviceError::Unsupported(REFUSED))
+            .ok_or_else(bad_reply)
     }
 
     fn set(&self, cmd: Bottle) -> DevResult<()> {
@@ -382,20 +400,18 @@ impl RemoteControlBoard {
     /// A `get` whose value is the reply's third element (`[is] [xxx] value ...`).
     fn get_value(&self, cmd: Bottle) -> DevResult<Value> {
         let r = self.call(&cmd)?;
-        r.get(2).cloned().ok_or(DeviceError::Unsupported(REFUSED))
+        r.get(2).cloned().ok_or_else(bad_reply)
     }
 
     fn get_f64(&self, cmd: Bottle) -> DevResult<f64> {
-        self.get_value(cmd)?
-            .as_f64()
-            .ok_or(DeviceError::Unsupported(REFUSED))
+        self.get_value(cmd)?.as_f64().ok_or_else(bad_reply)
     }
 
     fn get_f64s(&self, cmd: Bottle) -> DevResult<Vec<f64>> {
         let v = self.get_value(cmd)?;
         v.as_list()
             .and_then(|l| l.iter().map(Value::as_f64).collect())
-            .ok_or(DeviceError::Unsupported(REFUSED))
+            .ok_or_else(bad_reply)
     }
 
     fn get_bool(&self, cmd: Bottle) -> DevResult<bool> {
@@ -856,16 +872,14 @@ impl IInteractionMode for RemoteControlBoard {
 impl IAxisInfo for RemoteControlBoard {
     fn get_axis_name(&mut self, j: usize) -> DevResult<String> {
         let v = self.get_value(bottle![Vocab32(GET), Vocab32(INFO_NAME), j32(j)])?;
-        v.as_str()
-            .map(str::to_string)
-            .ok_or(DeviceError::Unsupported(REFUSED))
+        v.as_str().map(str::to_string).ok_or_else(bad_reply)
     }
     fn get_joint_type(&mut self, j: usize) -> DevResult<Vocab32> {
         let v = self.get_value(bottle![Vocab32(GET), Vocab32(INFO_TYPE), j32(j)])?;
         v.as_i32()
             .or_else(|| v.as_vocab().map(|x| x.0))
             .map(Vocab32)
-            .ok_or(DeviceError::Unsupported(REFUSED))
+            .ok_or_else(bad_reply)
     }
 }
 
@@ -893,7 +907,7 @@ fn two_numbers(r: &Bottle) -> DevResult<(f64, f64)> {
         r.get(3).and_then(Value::as_f64),
     ) {
         (Some(a), Some(b)) => Ok((a, b)),
-        _ => Err(DeviceError::Unsupported(REFUSED)),
+        _ => Err(bad_reply()),
     }
 }
 
@@ -930,7 +944,7 @@ impl IMotorEncoders for RemoteControlBoard {
         let v = self.get_value(bottle![Vocab32(GET), Vocab32(MOTOR_ENCODER_NUMBER)])?;
         v.as_i64()
             .and_then(|n| usize::try_from(n).ok())
-            .ok_or(DeviceError::Unsupported(REFUSED))
+            .ok_or_else(bad_reply)
     }
     fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
         self.state_one(m, |d| &d.motor_position)
@@ -963,7 +977,7 @@ impl IAmplifierControl for RemoteControlBoard {
         let v = self.get_value(bottle![Vocab32(GET), Vocab32(AMP_STATUS)])?;
         v.as_list()
             .and_then(|l| l.iter().map(Value::as_i32).collect())
-            .ok_or(DeviceError::Unsupported(REFUSED))
+            .ok_or_else(bad_reply)
     }
     fn get_current(&mut self, j: usize) -> DevResult<f64> {
         self.state_one(j, |d| &d.current)
@@ -976,7 +990,7 @@ impl IAmplifierControl for RemoteControlBoard {
     }
     fn get_amp_status(&mut self, j: usize) -> DevResult<i32> {
         let v = self.get_value(bottle![Vocab32(GET), Vocab32(AMP_STATUS_SINGLE), j32(j)])?;
-        v.as_i32().ok_or(DeviceError::Unsupported(REFUSED))
+        v.as_i32().ok_or_else(bad_reply)
     }
     fn get_nominal_current(&mut self, m: usize) -> DevResult<f64> {
         self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_NOMINAL_CURRENT), j32(m)])
@@ -1017,7 +1031,7 @@ impl IMotor for RemoteControlBoard {
         let v = self.get_value(bottle![Vocab32(GET), Vocab32(MOTORS_NUMBER)])?;
         v.as_i64()
             .and_then(|n| usize::try_from(n).ok())
-            .ok_or(DeviceError::Unsupported(REFUSED))
+            .ok_or_else(bad_reply)
     }
     fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
         self.get_f64(bottle![Vocab32(GET), Vocab32(GEARBOX_RATIO), j32(m)])
@@ -1333,7 +1347,7 @@ impl IControlCalibration for RemoteControlBoard {
         // `[fail]` means "not done"; no answer stays an error
         match self.call(&bottle![Vocab32(CALIBRATE_DONE), j32(j)]) {
             Ok(_) => Ok(true),
-            Err(DeviceError::Unsupported(REFUSED)) => Ok(false),
+            Err(DeviceError::Refused { .. }) => Ok(false),
             Err(e) => Err(e),
         }
     }

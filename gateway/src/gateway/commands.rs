@@ -26,7 +26,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tracing::{debug, info, warn};
 use yarp_devices::vocabs::{CM_POSITION, CM_POSITION_DIRECT, CM_VELOCITY, JOINTTYPE_PRISMATIC};
-use yarp_devices::PolyDriver;
+use yarp_devices::{DeviceError, PolyDriver};
 use yarp_proto::Property;
 
 /// How often an absent board is looked for again.
@@ -108,14 +108,20 @@ struct Board {
 
 /// Why a command was not applied.
 enum Failure {
-    /// The message does not fit the board (the board is fine).
+    /// The board is fine: the message does not fit it, or it refused the command.
     Message(String),
-    /// The board refused or did not answer (it is reopened).
+    /// The board did not answer or its connection broke (it is reopened).
     Board(String),
 }
 
-fn board_err(e: impl std::fmt::Display) -> Failure {
-    Failure::Board(e.to_string())
+/// A board's error: only a board that is unreachable is reopened; a refusal (a joint in
+/// fault, a mode it does not take) is reported and counted.
+fn board_err(e: DeviceError) -> Failure {
+    if e.is_lost_peer() {
+        Failure::Board(e.to_string())
+    } else {
+        Failure::Message(e.to_string())
+    }
 }
 
 fn missing(what: &str) -> Failure {
