@@ -469,7 +469,8 @@ impl LaunchConfig {
 }
 
 /// Replaces `${name}` in `s`: a variable; `${env:NAME}`, from the environment (empty when
-/// unset); `${bin:PROGRAM}`, the path of a program found as modules' programs are. `$$` is
+/// unset); `${bin:PROGRAM}`, the path of a program found as modules' programs are;
+/// `${robot:NAME}`, a robot's directory of robots-configuration ([`find_robot`]). `$$` is
 /// a `$`.
 pub fn expand_str(
     s: &str,
@@ -494,6 +495,14 @@ pub fn expand_str(
             let name = &body[..end];
             let value = if let Some(env) = name.strip_prefix("env:") {
                 std::env::var(env).unwrap_or_default()
+            } else if let Some(robot) = name.strip_prefix("robot:") {
+                find_robot(robot, base, &|k| std::env::var(k).ok())
+                    .map_err(|message| ConfigError::Invalid {
+                        path: path.to_path_buf(),
+                        message: format!("{context}: {message}"),
+                    })?
+                    .display()
+                    .to_string()
             } else if let Some(prog) = name.strip_prefix("bin:") {
                 crate::programs::resolve(prog, base)
                     .map_err(|e| ConfigError::Invalid {
@@ -587,6 +596,49 @@ fn parse_value(raw: &str) -> toml::Value {
             .unwrap_or_else(|| toml::Value::String(raw.into())),
         Err(_) => toml::Value::String(raw.to_string()),
     }
+}
+
+/// The directory of robot `name` as C++'s `ResourceFinder` finds an installed
+/// robots-configuration: `robots/<name>` under `YARP_DATA_HOME`, each of `YARP_DATA_DIRS`,
+/// then the XDG defaults (`$XDG_DATA_HOME/yarp` or `~/.local/share/yarp`, each of
+/// `$XDG_DATA_DIRS` + `/yarp` or `/usr/local/share/yarp` and `/usr/share/yarp`); failing
+/// those, the copy beside this repository (`../shared/robots-configuration`, in service or
+/// under `robots-icebox/`), relative to the configs' directory `base`.
+pub fn find_robot(
+    name: &str,
+    base: &Path,
+    env: &dyn Fn(&str) -> Option<String>,
+) -> Result<PathBuf, String> {
+    let var = |k: &str| env(k).filter(|v| !v.is_empty());
+    let mut data: Vec<PathBuf> = Vec::new();
+    data.extend(var("YARP_DATA_HOME").map(PathBuf::from));
+    if let Some(dirs) = var("YARP_DATA_DIRS") {
+        data.extend(dirs.split(':').filter(|d| !d.is_empty()).map(PathBuf::from));
+    }
+    match var("XDG_DATA_HOME") {
+        Some(d) => data.push(Path::new(&d).join("yarp")),
+        None => data.extend(var("HOME").map(|h| Path::new(&h).join(".local/share/yarp"))),
+    }
+    let xdg = var("XDG_DATA_DIRS").unwrap_or_else(|| "/usr/local/share:/usr/share".into());
+    data.extend(
+        xdg.split(':')
+            .filter(|d| !d.is_empty())
+            .map(|d| Path::new(d).join("yarp")),
+    );
+    let shared = base.join("../../shared/robots-configuration");
+    let beside = [shared.clone(), shared.join("robots-icebox")];
+    data.iter()
+        .map(|d| d.join("robots").join(name))
+        .chain(beside.iter().map(|d| d.join(name)))
+        .find(|d| d.is_dir())
+        .ok_or_else(|| {
+            format!(
+                "robot {name} not found: no robots/{name} in the YARP data directories \
+                 (YARP_DATA_HOME, YARP_DATA_DIRS, ~/.local/share/yarp, /usr/local/share/yarp, \
+                 /usr/share/yarp) nor in ../shared/robots-configuration; give its directory \
+                 with --set robot_dir=DIR"
+            )
+        })
 }
 
 #[cfg(test)]
@@ -698,6 +750,29 @@ carrier = "udp"
         assert_eq!(c.modules[0].args, ["1", "--flag", "", "10000"]);
         let c = load("[[module]]\nname='a'\nprogram='x'\nargs=['${bin:sh}']", &[]).unwrap();
         assert!(c.modules[0].args[0].ends_with("/sh"));
+    }
+
+    #[test]
+    fn robots_are_found_as_cpp_finds_them_then_beside_the_repository() {
+        let data = tempfile::tempdir().unwrap();
+        let installed = data.path().join("robots/ergoCubSN001");
+        std::fs::create_dir_all(&installed).unwrap();
+        let configs = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let dirs = data.path().display().to_string();
+        let env = |k: &str| (k == "YARP_DATA_DIRS").then(|| dirs.clone());
+        assert_eq!(
+            find_robot("ergoCubSN001", &configs, &env).unwrap(),
+            installed
+        );
+        // not installed: the copy beside the repository, in service or retired (the
+        // system's data directories replaced by an empty one)
+        let empty = tempfile::tempdir().unwrap();
+        let empty = empty.path().display().to_string();
+        let none = |k: &str| (k == "XDG_DATA_DIRS").then(|| empty.clone());
+        let beside = find_robot("iCubGenova02", &configs, &none).unwrap();
+        assert!(beside.ends_with("shared/robots-configuration/iCubGenova02"));
+        let err = find_robot("noSuchRobot", &configs, &none).unwrap_err();
+        assert!(err.contains("--set robot_dir=DIR"), "{err}");
     }
 
     #[test]

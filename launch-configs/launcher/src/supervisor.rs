@@ -295,6 +295,8 @@ impl Launcher {
                 .after
                 .iter()
                 .filter_map(|a| self.modules.iter().find(|m| &m.spec.name == a).cloned())
+                // a disabled module is never ready: nothing waits for it
+                .filter(|d| d.spec.enabled)
                 .collect();
             let task = tokio::spawn(supervise(h.clone(), deps, self.ns.clone(), self.started));
             self.tasks.push((h, task));

@@ -102,6 +102,30 @@ fn demo_starts_connects_serves_and_stops_in_reverse_order() {
 }
 
 #[test]
+fn a_module_after_a_disabled_one_still_starts() {
+    // as a robot config run against real boards: `--set module.emulator.enabled=false`
+    let (_dir, cfg) = write_config(
+        "after-disabled.toml",
+        r#"
+name = "after-disabled"
+[[module]]
+name = "emulator"
+program = "/bin/sh"
+args = ["-c", "echo emulating; exec sleep 30"]
+[[module]]
+name = "robot"
+program = "/bin/sh"
+args = ["-c", "echo robot up; exec sleep 30"]
+after = ["emulator"]
+"#,
+    );
+    let mut l = Launch::start(&cfg, &["--set", "module.emulator.enabled=false"]);
+    l.wait_line("[robot] robot up", Duration::from_secs(20));
+    assert!(!l.drain().iter().any(|x| x.contains("emulating")));
+    assert_eq!(l.stop(Signal::SIGINT, STOP), Some(0));
+}
+
+#[test]
 fn restart_policy_and_readiness_timeout() {
     let (_dir, cfg) = write_config(
         "restart.toml",
