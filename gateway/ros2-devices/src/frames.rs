@@ -115,7 +115,11 @@ impl DeviceDriver for FrameTransformGetNwcRos2 {
         let mut b = NodeBuilder::new(GET, &c.namespace, &c.node)?;
         let subs = [
             (b.subscription(&c.topic, TF)?, false),
-            (b.subscription(&c.topic_static, TF)?, true),
+            // transient local: the static frames published before this client started
+            (
+                b.subscription_with(&c.topic_static, TF, &crate::node::latched_qos())?,
+                true,
+            ),
         ];
         let node = b.spin()?;
         for (sub, is_static) in subs {
@@ -200,7 +204,9 @@ impl DeviceDriver for FrameTransformSetNwcRos2 {
         let mut b = NodeBuilder::new(SET, &c.namespace, &c.node)?;
         let publishing = Arc::new(Publishing {
             timed: b.publisher(&c.topic, TF)?,
-            statics: b.publisher(&c.topic_static, TF)?,
+            // transient local, as C++ and tf2's static broadcaster: a late listener
+            // still gets the static frames
+            statics: b.publisher_with(&c.topic_static, TF, &crate::node::latched_qos())?,
         });
         self.node = Some(b.spin()?);
         let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));

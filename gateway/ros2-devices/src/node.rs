@@ -86,6 +86,15 @@ fn qos() -> Qos {
     Qos::default()
 }
 
+/// `/tf_static`'s QoS, as tf2's static broadcaster and listener use it: reliable and
+/// transient local, so that a listener that starts later still gets the static frames.
+pub fn latched_qos() -> Qos {
+    Qos {
+        durability: yarp_ros2_gateway::mapping::Durability::TransientLocal,
+        ..Qos::default()
+    }
+}
+
 impl NodeBuilder {
     pub fn new(device: &'static str, namespace: &str, node_name: &str) -> DevResult<NodeBuilder> {
         let ctx = context().map_err(|e| failed(device, e))?;
@@ -101,13 +110,32 @@ impl NodeBuilder {
 
     /// A publisher of catalog type `ros_type` (dynamic messages).
     pub fn publisher(&mut self, topic: &str, ros_type: &str) -> DevResult<Publisher<Ros>> {
-        ros::publisher(&mut self.node, topic, ros_type, &qos()).map_err(|e| failed(self.device, e))
+        self.publisher_with(topic, ros_type, &qos())
+    }
+
+    /// [`NodeBuilder::publisher`] with QoS `q`.
+    pub fn publisher_with(
+        &mut self,
+        topic: &str,
+        ros_type: &str,
+        q: &Qos,
+    ) -> DevResult<Publisher<Ros>> {
+        ros::publisher(&mut self.node, topic, ros_type, q).map_err(|e| failed(self.device, e))
     }
 
     /// A subscription of catalog type `ros_type` (decode with `dynmsg::MsgSeed`).
     pub fn subscription(&mut self, topic: &str, ros_type: &str) -> DevResult<Subscription<Ros>> {
-        ros::subscription(&mut self.node, topic, ros_type, &qos())
-            .map_err(|e| failed(self.device, e))
+        self.subscription_with(topic, ros_type, &qos())
+    }
+
+    /// [`NodeBuilder::subscription`] with QoS `q`.
+    pub fn subscription_with(
+        &mut self,
+        topic: &str,
+        ros_type: &str,
+        q: &Qos,
+    ) -> DevResult<Subscription<Ros>> {
+        ros::subscription(&mut self.node, topic, ros_type, q).map_err(|e| failed(self.device, e))
     }
 
     /// A service server of `pkg/srv/Name` with typed request and response.

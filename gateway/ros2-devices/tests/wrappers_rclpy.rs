@@ -371,8 +371,8 @@ fn rgbd_client_reads_the_rgbd_server() {
 }
 
 /// `frameTransformSet_nwc_ros2` publishes what it is given on its `/tf` and `/tf_static`
-/// topics (rclpy sees them with the TFMessage hash) and `frameTransformGet_nwc_ros2`
-/// reads them back.
+/// topics (rclpy sees them with the TFMessage hash, the static writer transient local as
+/// tf2's static listener needs) and `frameTransformGet_nwc_ros2` reads them back.
 #[test]
 fn frame_transforms_go_out_and_come_back() {
     let Some((distro, d)) = setup("frame_transforms_go_out_and_come_back", 27) else {
@@ -438,6 +438,11 @@ fn frame_transforms_go_out_and_come_back() {
             "the setter's writer, the getter's reader: {info}"
         );
         for e in endpoints {
+            // the static writer is transient local (C++'s, and what a tf2 static listener
+            // asks: a volatile writer never matches it)
+            if topic.ends_with("tf_static") && e["kind"] == "pub" {
+                assert_eq!(e["durability"], "TRANSIENT_LOCAL", "{info}");
+            }
             assert_eq!(e["type"], "tf2_msgs/msg/TFMessage", "{info}");
             assert!(
                 e["hash"].as_str().unwrap().contains(&hash[7..]),

@@ -111,6 +111,8 @@ def endpoint_json(info):
         "namespace": info.node_namespace,
         "type": info.topic_type,
         "hash": str(info.topic_type_hash),
+        "kind": "pub" if info.endpoint_type == rclpy.topic_endpoint_info.TopicEndpointTypeEnum.PUBLISHER else "sub",
+        "durability": info.qos_profile.durability.name,
     }
 
 
