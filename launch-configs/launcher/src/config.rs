@@ -493,22 +493,20 @@ pub fn expand_str(
                 message: format!("unclosed ${{ in {context}: {s:?}"),
             })?;
             let name = &body[..end];
+            let invalid = |message: String| ConfigError::Invalid {
+                path: path.to_path_buf(),
+                message: format!("{context}: {message}"),
+            };
             let value = if let Some(env) = name.strip_prefix("env:") {
                 std::env::var(env).unwrap_or_default()
             } else if let Some(robot) = name.strip_prefix("robot:") {
                 find_robot(robot, base, &|k| std::env::var(k).ok())
-                    .map_err(|message| ConfigError::Invalid {
-                        path: path.to_path_buf(),
-                        message: format!("{context}: {message}"),
-                    })?
+                    .map_err(invalid)?
                     .display()
                     .to_string()
             } else if let Some(prog) = name.strip_prefix("bin:") {
                 crate::programs::resolve(prog, base)
-                    .map_err(|e| ConfigError::Invalid {
-                        path: path.to_path_buf(),
-                        message: format!("{context}: {e}"),
-                    })?
+                    .map_err(|e| invalid(e.to_string()))?
                     .display()
                     .to_string()
             } else {
