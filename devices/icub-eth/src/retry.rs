@@ -37,7 +37,7 @@ impl Retry {
     pub const DEVICE_SETCHECK: Retry = Retry::setchecks(10, ms(10), ms(50));
     /// A device's `askRemoteValue` (`theNVmanager`'s 0.5 s): a reply lost on a loaded host
     /// is asked again, up to three times within the same 0.5 s.
-    pub const DEVICE_ASK: Retry = Retry::asks(3, ms(500 / 3));
+    pub const DEVICE_ASK: Retry = Retry::asks(3, Duration::from_nanos(500_000_000 / 3));
 
     /// `attempts` asks (or commands) of `timeout` each.
     pub const fn asks(attempts: u32, timeout: Duration) -> Retry {
