@@ -11,13 +11,15 @@ use crate::frames::{IFrameTransformStorageGet, IFrameTransformStorageSet};
 use crate::interfaces::*;
 use crate::kind::{interfaces_of, kind_of, suggest, Kind};
 use crate::navigation::{INavigation2DVelocityActions, IOdometry2D};
+use crate::params::as_string as value_text;
+pub use crate::params::Params;
 use crate::rangefinder::IRangefinder2D;
 use crate::rgbd::IRGBDSensor;
 use crate::sensors::interfaces::*;
 use crate::sensors::virtual_analog::IVirtualAnalogSensor;
 use parking_lot::{Mutex, RwLock};
 use std::sync::{Arc, LazyLock};
-use yarp_proto::{Bottle, Property, Value};
+use yarp_proto::{Property, Value};
 
 /// A device shared between its owner and the wrappers attached to it.
 pub type SharedDevice = Arc<Mutex<PolyDriver>>;
@@ -568,116 +570,4 @@ impl Drop for PolyDriver {
     fn drop(&mut self) {
         let _ = self.close();
     }
-}
-
-fn value_text(v: &Value) -> String {
-    match v.as_str() {
-        Some(s) => s.to_string(),
-        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
-    }
-}
-
-/// Typed access to a device's configuration, with errors naming parameter and device.
-/// Keys may be `name` (top level) or `GROUP::name` (inside a `[GROUP]` section).
-pub struct Params<'a> {
-    pub device: &'a str,
-    pub config: &'a Property,
-}
-
-impl<'a> Params<'a> {
-    pub fn new(device: &'a str, config: &'a Property) -> Self {
-        Params { device, config }
-    }
-
-    /// The raw value of `key` (`GROUP::name` looks inside the group).
-    pub fn find(&self, key: &str) -> Option<&'a Value> {
-        match key.split_once("::") {
-            Some((group, name)) => self.config.find_group(group)?.find(name),
-            None => self.config.find(key),
-        }
-    }
-
-    /// The error for parameter `key` holding `got` where `expected` was wanted.
-    pub fn invalid(&self, key: &str, expected: &'static str, got: impl ToString) -> DeviceError {
-        DeviceError::BadParam {
-            device: self.device.to_string(),
-            param: key.to_string(),
-            expected,
-            got: got.to_string(),
-        }
-    }
-
-    pub fn missing(&self, key: &str) -> DeviceError {
-        DeviceError::MissingParam {
-            device: self.device.to_string(),
-            param: key.to_string(),
-        }
-    }
-
-    /// An integer parameter; `None` when absent, an error when of another type.
-    pub fn int(&self, key: &str) -> DevResult<Option<i64>> {
-        match self.find(key) {
-            None => Ok(None),
-            Some(v) if v.is_int() => Ok(v.as_i64()),
-            Some(v) => Err(self.invalid(key, "an integer", v)),
-        }
-    }
-
-    /// A float parameter (integers accepted).
-    pub fn float(&self, key: &str) -> DevResult<Option<f64>> {
-        match self.find(key) {
-            None => Ok(None),
-            Some(v) if v.is_int() || v.is_float() => Ok(v.as_f64()),
-            Some(v) => Err(self.invalid(key, "a number", v)),
-        }
-    }
-
-    /// A string parameter (vocabs accepted).
-    pub fn string(&self, key: &str) -> DevResult<Option<String>> {
-        match self.find(key) {
-            None => Ok(None),
-            Some(v) if v.is_string() || v.is_vocab() => Ok(Some(value_text(v))),
-            Some(v) => Err(self.invalid(key, "a string", v)),
-        }
-    }
-
-    /// A vector parameter: either a list value or the rest of the group line
-    /// (`AxisName "a" "b"` in a section), each element checked with `f`.
-    pub fn vector<T>(
-        &self,
-        key: &str,
-        expected: &'static str,
-        f: impl Fn(&Value) -> Option<T>,
-    ) -> DevResult<Option<Vec<T>>> {
-        let items: Vec<Value> = match key.split_once("::") {
-            Some((group, name)) => match self
-                .config
-                .find_group(group)
-                .and_then(|g| g.find_group(name))
-            {
-                None => return Ok(None),
-                Some(line) => flatten_line(line),
-            },
-            None => match self.config.find_group(key) {
-                None => return Ok(None),
-                Some(line) => flatten_line(line),
-            },
-        };
-        items
-            .iter()
-            .map(|v| f(v).ok_or_else(|| self.invalid(key, expected, v)))
-            .collect::<DevResult<Vec<T>>>()
-            .map(Some)
-    }
-}
-
-/// `(key a b c)` or `(key (a b c))` -> `[a, b, c]`.
-fn flatten_line(line: &Bottle) -> Vec<Value> {
-    let rest: Vec<Value> = line.iter().skip(1).cloned().collect();
-    if rest.len() == 1 {
-        if let Some(l) = rest[0].as_list() {
-            return l.iter().cloned().collect();
-        }
-    }
-    rest
 }

@@ -19,6 +19,7 @@ pub mod interfaces;
 pub mod kind;
 pub mod navigation;
 mod nwc_ports;
+pub mod params;
 pub mod rangefinder;
 pub mod remapper;
 pub mod remote_controlboard;

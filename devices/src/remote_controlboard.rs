@@ -1,10 +1,8 @@
 //! `remote_controlboard`: the client side of `controlBoard_nws_yarp`, a device whose
 //! motor interfaces talk to a remote board as the C++ 3.12 client does.
 //!
-//! Parameters (C++ names): `remote` (the server's port prefix, required), `local` (this
-//! device's port prefix, required), `carrier` (for the streamed state and commands,
-//! default `udp` as C++), `timeout` (seconds after which the streamed state is stale,
-//! default 0.5), `writeStrict` (`on`/`off`), `ignoreProtocolCheck`.
+//! Parameters: [`RemoteControlBoardParams`] (C++'s names and defaults; `carrier` is for
+//! the streamed state and commands, `timeout` the seconds after which that state is stale).
 //!
 //! Opening follows the recorded C++ sequence: ports `<local>/rpc:o`, `<local>/command:o`
 //! and `<local>/stateExt:i`; rpc connected over tcp, command over `carrier`; the state
@@ -18,7 +16,7 @@
 //! `command:o` as `(head) (values)`; everything else is an RPC on `rpc:o`.
 
 use crate::controlboard::{CommandMessage, JointData, PROTOCOL_VERSION_NUMBER};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::interfaces::*;
 use crate::runtime;
@@ -88,6 +86,43 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock()
 }
 
+crate::device_params! {
+    /// What `remote_controlboard` reads (C++ `RemoteControlBoard_params.md`; the QoS
+    /// groups are declared but, as without root privileges, not applied).
+    pub struct RemoteControlBoardParams for "remote_controlboard" {
+        /// Prefix of the port to which to connect.
+        remote: String = required,
+        /// Port prefix of the port opened by this device.
+        local: String = required,
+        /// It can be 'on' or 'off'
+        "writeStrict" write_strict: String = optional,
+        /// carrier used for streaming robot state
+        carrier: String = "udp",
+        /// timeout for the input port which receives the streamed robot state
+        timeout: f64 = 0.5; "s",
+        /// Enable the usage of local Qos
+        "local_qos::enable" local_qos_enable: bool = false,
+        /// Local Qos. See https://yarp.it/latest/channelprioritization.html
+        "local_qos::thread_priority" local_qos_thread_priority: i64 = 0,
+        /// Local Qos. See https://yarp.it/latest/channelprioritization.html
+        "local_qos::thread_policy" local_qos_thread_policy: i64 = 0,
+        /// Local Qos. See https://yarp.it/latest/channelprioritization.html
+        "local_qos::packet_priority" local_qos_packet_priority: String = optional,
+        /// Enable the usage of remote Qos
+        "remote_qos::enable" remote_qos_enable: bool = false,
+        /// Remote Qos. See https://yarp.it/latest/channelprioritization.html
+        "remote_qos::thread_priority" remote_qos_thread_priority: i64 = 0,
+        /// Remote Qos. See https://yarp.it/latest/channelprioritization.html.
+        "remote_qos::thread_policy" remote_qos_thread_policy: i64 = 0,
+        /// Remote Qos. See https://yarp.it/latest/channelprioritization.html.
+        "remote_qos::packet_priority" remote_qos_packet_priority: String = optional,
+        /// For development purpose only
+        "ignoreProtocolCheck" ignore_protocol_check: bool = false,
+        /// For development purpose only
+        diagnostic: bool = false,
+    }
+}
+
 /// The settings read from the configuration.
 struct Settings {
     remote: String,
@@ -99,48 +134,35 @@ struct Settings {
 }
 
 fn settings(config: &Property) -> DevResult<Settings> {
-    let p = Params::new(NAME, config);
-    let prefix = |key: &str| -> DevResult<String> {
-        let s = p.string(key)?.ok_or_else(|| p.missing(key))?;
-        Ok(crate::controlboard::port_prefix(&s))
+    let p = RemoteControlBoardParams::read(config)?;
+    let bad = |param: &str, expected, got: String| DeviceError::BadParam {
+        device: NAME.into(),
+        param: param.into(),
+        expected,
+        got,
     };
-    let remote = prefix("remote")?;
-    let local = prefix("local")?;
-    let carrier = p.string("carrier")?.unwrap_or_else(|| "udp".to_string());
-    let timeout = match p.float("timeout")? {
-        None => DEFAULT_TIMEOUT,
-        Some(t) if t > 0.0 && t.is_finite() => Duration::from_secs_f64(t),
-        Some(t) => {
-            return Err(DeviceError::BadParam {
-                device: NAME.into(),
-                param: "timeout".into(),
-                expected: "a number of seconds greater than 0",
-                got: t.to_string(),
-            })
+    let timeout = match p.timeout {
+        t if t > 0.0 && t.is_finite() => Duration::from_secs_f64(t),
+        t => {
+            return Err(bad(
+                "timeout",
+                "a number of seconds greater than 0",
+                t.to_string(),
+            ))
         }
     };
-    let write_strict = match p.string("writeStrict")?.as_deref() {
+    let write_strict = match p.write_strict.as_deref() {
         None | Some("off") => false,
         Some("on") => true,
-        Some(other) => {
-            return Err(DeviceError::BadParam {
-                device: NAME.into(),
-                param: "writeStrict".into(),
-                expected: "on or off",
-                got: other.to_string(),
-            })
-        }
+        Some(other) => return Err(bad("writeStrict", "on or off", other.to_string())),
     };
-    let ignore_protocol = p
-        .find("ignoreProtocolCheck")
-        .is_some_and(|v| v.as_bool().unwrap_or(true));
     Ok(Settings {
-        remote,
-        local,
-        carrier,
+        remote: crate::controlboard::port_prefix(&p.remote),
+        local: crate::controlboard::port_prefix(&p.local),
+        carrier: p.carrier,
         timeout,
         write_strict,
-        ignore_protocol,
+        ignore_protocol: p.ignore_protocol_check,
     })
 }
 

@@ -167,6 +167,7 @@ fn print_help() {
         "   yarpdev --device DEVICENAME --OPTION VALUE ...",
         "   For example:",
         "   yarpdev --device fakeFrameGrabber --width 32 --height 16 --name /grabber",
+        "If the device supports it, you can check its configuration parameters using the --help option",
         "You can always move options to a configuration file:",
         "   yarpdev [--device DEVICENAME] --from CONFIG_FILENAME",
     ] {

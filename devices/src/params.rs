@@ -1,0 +1,611 @@
+//! A device's parameters, declared once: [`device_params!`] turns one declaration (name,
+//! type, unit, default, required, description per parameter) into a typed struct, its
+//! reader from the configuration and the table `--help` prints, as C++ YARP's
+//! `yarpDeviceParamParserGenerator` turns a device's `.md` table into its `_ParamsParser`.
+//!
+//! [`Params`] is the typed access underneath, for what a declaration cannot say (a value
+//! whose meaning depends on another, a list per joint).
+
+use crate::error::{DevResult, DeviceError};
+use std::fmt::Write as _;
+use std::time::Duration;
+use yarp_proto::{Bottle, Property, Value};
+
+/// A value as C++ `asString` gives it: a string or vocab without quotes, anything else
+/// in its text form.
+pub fn as_string(v: &Value) -> String {
+    match v.as_str() {
+        Some(s) => s.to_string(),
+        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
+    }
+}
+
+/// Typed access to a device's configuration, with errors naming parameter and device.
+/// Keys may be `name` (top level) or `GROUP::name` (inside a `[GROUP]` section).
+pub struct Params<'a> {
+    pub device: &'a str,
+    pub config: &'a Property,
+}
+
+impl<'a> Params<'a> {
+    pub fn new(device: &'a str, config: &'a Property) -> Self {
+        Params { device, config }
+    }
+
+    /// The raw value of `key` (`GROUP::name` looks inside the group).
+    pub fn find(&self, key: &str) -> Option<&'a Value> {
+        match key.split_once("::") {
+            Some((group, name)) => self.config.find_group(group)?.find(name),
+            None => self.config.find(key),
+        }
+    }
+
+    /// The error for parameter `key` holding `got` where `expected` was wanted.
+    pub fn invalid(&self, key: &str, expected: &'static str, got: impl ToString) -> DeviceError {
+        DeviceError::BadParam {
+            device: self.device.to_string(),
+            param: key.to_string(),
+            expected,
+            got: got.to_string(),
+        }
+    }
+
+    pub fn missing(&self, key: &str) -> DeviceError {
+        DeviceError::MissingParam {
+            device: self.device.to_string(),
+            param: key.to_string(),
+        }
+    }
+
+    /// An integer parameter; `None` when absent, an error when of another type.
+    pub fn int(&self, key: &str) -> DevResult<Option<i64>> {
+        match self.find(key) {
+            None => Ok(None),
+            Some(v) if v.is_int() => Ok(v.as_i64()),
+            Some(v) => Err(self.invalid(key, "an integer", v)),
+        }
+    }
+
+    /// A float parameter (integers accepted).
+    pub fn float(&self, key: &str) -> DevResult<Option<f64>> {
+        match self.find(key) {
+            None => Ok(None),
+            Some(v) if v.is_int() || v.is_float() => Ok(v.as_f64()),
+            Some(v) => Err(self.invalid(key, "a number", v)),
+        }
+    }
+
+    /// A string parameter (vocabs accepted).
+    pub fn string(&self, key: &str) -> DevResult<Option<String>> {
+        match self.find(key) {
+            None => Ok(None),
+            Some(v) if v.is_string() || v.is_vocab() => Ok(Some(as_string(v))),
+            Some(v) => Err(self.invalid(key, "a string", v)),
+        }
+    }
+
+    /// A boolean parameter: `true`/`false` or a number (non-zero is true), as C++ `asBool`.
+    pub fn boolean(&self, key: &str) -> DevResult<Option<bool>> {
+        match self.find(key) {
+            None => Ok(None),
+            Some(v) => v
+                .as_bool()
+                .map(Some)
+                .ok_or_else(|| self.invalid(key, "true or false", v)),
+        }
+    }
+
+    /// A vector parameter: either a list value or the rest of the group line
+    /// (`AxisName "a" "b"` in a section), each element checked with `f`.
+    pub fn vector<T>(
+        &self,
+        key: &str,
+        expected: &'static str,
+        f: impl Fn(&Value) -> Option<T>,
+    ) -> DevResult<Option<Vec<T>>> {
+        let line = match key.split_once("::") {
+            Some((group, name)) => self
+                .config
+                .find_group(group)
+                .and_then(|g| g.find_group(name)),
+            None => self.config.find_group(key),
+        };
+        let Some(line) = line else {
+            return Ok(None);
+        };
+        flatten_line(line)
+            .iter()
+            .map(|v| f(v).ok_or_else(|| self.invalid(key, expected, v)))
+            .collect::<DevResult<Vec<T>>>()
+            .map(Some)
+    }
+}
+
+/// `(key a b c)` or `(key (a b c))` -> `[a, b, c]`.
+fn flatten_line(line: &Bottle) -> Vec<Value> {
+    let rest: Vec<Value> = line.iter().skip(1).cloned().collect();
+    if rest.len() == 1 {
+        if let Some(l) = rest[0].as_list() {
+            return l.iter().cloned().collect();
+        }
+    }
+    rest
+}
+
+/// A type a declared parameter may have, with the name C++'s tables give it.
+pub trait ParamType: Sized {
+    /// The type as the C++ documentation names it (`string`, `double`, `int`, ...).
+    const TYPE: &'static str;
+    /// The value of `key`; `None` when absent, an error naming the parameter when it
+    /// does not read as this type.
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>>;
+}
+
+impl ParamType for String {
+    const TYPE: &'static str = "string";
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+        p.string(key)
+    }
+}
+
+impl ParamType for f64 {
+    const TYPE: &'static str = "double";
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+        p.float(key)
+    }
+}
+
+impl ParamType for bool {
+    const TYPE: &'static str = "bool";
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+        p.boolean(key)
+    }
+}
+
+/// Seconds, as C++ declares a period or timeout (`double`, unit `s`).
+impl ParamType for Duration {
+    const TYPE: &'static str = "double";
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+        match p.float(key)? {
+            None => Ok(None),
+            Some(s) => Duration::try_from_secs_f64(s)
+                .map(Some)
+                .map_err(|_| p.invalid(key, "a number of seconds, not negative", s)),
+        }
+    }
+}
+
+macro_rules! integer_params {
+    ($($t:ty),*) => {$(
+        impl ParamType for $t {
+            const TYPE: &'static str = "int";
+            fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+                match p.int(key)? {
+                    None => Ok(None),
+                    Some(i) => <$t>::try_from(i).map(Some).map_err(|_| {
+                        p.invalid(key, concat!("an integer that fits ", stringify!($t)), i)
+                    }),
+                }
+            }
+        }
+    )*};
+}
+integer_params!(i64, i32, u32, u16, u8, usize);
+
+impl ParamType for Vec<f64> {
+    const TYPE: &'static str = "vector<double>";
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+        p.vector(key, "numbers", |v| {
+            (v.is_int() || v.is_float()).then(|| v.as_f64()).flatten()
+        })
+    }
+}
+
+impl ParamType for Vec<i64> {
+    const TYPE: &'static str = "vector<int>";
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+        p.vector(key, "integers", |v| {
+            v.is_int().then(|| v.as_i64()).flatten()
+        })
+    }
+}
+
+impl ParamType for Vec<String> {
+    const TYPE: &'static str = "vector<string>";
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+        p.vector(key, "strings", |v| {
+            (v.is_string() || v.is_vocab()).then(|| as_string(v))
+        })
+    }
+}
+
+/// How a declared default becomes the parameter's value: the value itself, a `&str` for
+/// a `String`, seconds for a `Duration`.
+pub trait IntoDefault<T> {
+    fn into_default(self) -> T;
+}
+
+impl<T> IntoDefault<T> for T {
+    fn into_default(self) -> T {
+        self
+    }
+}
+
+impl IntoDefault<String> for &str {
+    fn into_default(self) -> String {
+        self.to_string()
+    }
+}
+
+impl IntoDefault<Duration> for f64 {
+    fn into_default(self) -> Duration {
+        Duration::from_secs_f64(self)
+    }
+}
+
+/// One declared parameter, as a row of C++'s parameter table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ParamSpec {
+    /// The key, `GROUP::name` inside a group.
+    pub name: &'static str,
+    pub ty: &'static str,
+    /// `-` when the value has no unit.
+    pub unit: &'static str,
+    /// The default as declared; `None` for a required or an optional parameter.
+    pub default: Option<&'static str>,
+    pub required: bool,
+    pub description: &'static str,
+    /// The values accepted, when not every value of the type is (`in 1..=1024`).
+    pub range: Option<&'static str>,
+}
+
+/// `found`, unless it lies outside `lo..=hi` (declared `; in lo..=hi`).
+pub fn check_range<T: PartialOrd + std::fmt::Debug, B: IntoDefault<T>>(
+    p: &Params<'_>,
+    key: &str,
+    found: Option<T>,
+    lo: B,
+    hi: B,
+    expected: &'static str,
+) -> DevResult<Option<T>> {
+    match found {
+        Some(v) if !(lo.into_default() <= v && v <= hi.into_default()) => {
+            Err(p.invalid(key, expected, format!("{v:?}")))
+        }
+        found => Ok(found),
+    }
+}
+
+/// `found`, unless it is below `min` (declared `; min m`).
+pub fn check_min<T: PartialOrd + std::fmt::Debug, B: IntoDefault<T>>(
+    p: &Params<'_>,
+    key: &str,
+    found: Option<T>,
+    min: B,
+    expected: &'static str,
+) -> DevResult<Option<T>> {
+    match found {
+        Some(v) if !(min.into_default() <= v) => Err(p.invalid(key, expected, format!("{v:?}"))),
+        found => Ok(found),
+    }
+}
+
+impl ParamSpec {
+    /// The group part of the key (`""` at the top level) and the name in it.
+    pub fn group_and_name(&self) -> (&'static str, &'static str) {
+        match self.name.rsplit_once("::") {
+            Some((g, n)) => (g, n),
+            None => ("", self.name),
+        }
+    }
+}
+
+/// A declared default as the user would type it: no parentheses, no quotes.
+fn default_text(declared: &'static str) -> &'static str {
+    let d = declared
+        .strip_prefix('(')
+        .and_then(|d| d.strip_suffix(')'))
+        .unwrap_or(declared);
+    d.trim_matches('"')
+}
+
+/// What `--help` prints for `device`: C++'s header, the parameters as the table of the
+/// device's C++ documentation, and the two example invocations C++ prints.
+pub fn documentation(device: &str, params: &[ParamSpec]) -> String {
+    let mut doc = String::new();
+    let rule = "=============================================";
+    let _ = writeln!(doc, "\n{rule}\nThis is the help for device: {device}\n");
+    if params.is_empty() {
+        let _ = writeln!(doc, "This device declares no parameters.\n{rule}");
+        return doc;
+    }
+    let _ = writeln!(
+        doc,
+        "This is the list of the parameters accepted by the device:"
+    );
+    let head = [
+        "Group",
+        "Parameter name",
+        "Type",
+        "Units",
+        "Default Value",
+        "Required",
+        "Description",
+        "Notes",
+    ];
+    let rows: Vec<[String; 8]> = params
+        .iter()
+        .map(|p| {
+            let (group, name) = p.group_and_name();
+            [
+                if group.is_empty() { "-" } else { group }.to_string(),
+                name.to_string(),
+                p.ty.to_string(),
+                p.unit.to_string(),
+                p.default.map(default_text).unwrap_or("-").to_string(),
+                if p.required { "Yes" } else { "No" }.to_string(),
+                p.description.to_string(),
+                p.range.unwrap_or("").to_string(),
+            ]
+        })
+        .collect();
+    let mut widths = head.map(str::len);
+    for row in &rows {
+        for (w, cell) in widths.iter_mut().zip(row) {
+            *w = (*w).max(cell.chars().count());
+        }
+    }
+    let line = |cells: &[&str]| {
+        let mut s = String::from("|");
+        for (cell, w) in cells.iter().zip(widths) {
+            let _ = write!(s, " {cell:<w$} |");
+        }
+        s
+    };
+    let _ = writeln!(doc, "{}", line(&head));
+    let dashes = widths.map(|w| "-".repeat(w));
+    let _ = writeln!(doc, "{}", line(&dashes.each_ref().map(String::as_str)));
+    for row in &rows {
+        let _ = writeln!(doc, "{}", line(&row.each_ref().map(String::as_str)));
+    }
+    let example = |all: bool| {
+        let mut s = format!(" yarpdev --device {device}");
+        for p in params.iter().filter(|p| all || p.required) {
+            let value = match (p.required, p.default) {
+                (true, _) => "<mandatory_value>",
+                (false, Some(d)) => default_text(d),
+                (false, None) => "<optional_value>",
+            };
+            let _ = write!(s, " --{} {value}", p.name);
+        }
+        s
+    };
+    let _ = writeln!(
+        doc,
+        "\nHere are some examples of invocation command with yarpdev, with all params:\n{}",
+        example(true)
+    );
+    let _ = writeln!(doc, "Using only mandatory params:\n{}", example(false));
+    let _ = writeln!(doc, "{rule}");
+    doc
+}
+
+/// Declares a device's parameters once; generates the struct, `read` (which, as C++'s
+/// generated parsers, first prints the table when the configuration has `help`) and the
+/// table itself (`PARAMS`, [`documentation`]).
+///
+/// Each parameter is `description`, then optionally its key when it is not the field's
+/// name (`"GROUP::name"` for one inside a group), the field and its type, and after `=`
+/// one of `required`, `optional` (the field is an `Option`) or a default (one token:
+/// parenthesize an expression), then optionally `; "unit"`:
+///
+/// ```
+/// yarp_devices::device_params! {
+///     /// What `fakeThing` reads.
+///     pub struct FakeThingParams for "fakeThing" {
+///         /// Prefix of the ports the device opens.
+///         name: String = required,
+///         /// How often the state is published.
+///         "period" period: std::time::Duration = 0.01; "s",
+///         /// Joints of the simulated part.
+///         "GENERAL::Joints" joints: usize = 4,
+///         /// A label shown in the logs.
+///         label: String = optional,
+///     }
+/// }
+/// let config = yarp_proto::Property::from_text("(name /thing) (GENERAL (Joints 6))");
+/// let p = FakeThingParams::read(&config).unwrap();
+/// assert_eq!((p.name.as_str(), p.joints, p.label), ("/thing", 6, None));
+/// assert_eq!(FakeThingParams::PARAMS[1].unit, "s");
+/// ```
+#[macro_export]
+macro_rules! device_params {
+    (
+        $(#[$meta:meta])*
+        $vis:vis struct $name:ident for $device:literal {
+            $(
+                $(#[doc = $doc:literal])+
+                $($key:literal)? $field:ident : $ty:ty = $default:tt $(; $unit:literal)?
+                    $(; in $lo:literal ..= $hi:literal)? $(; min $min:literal)?
+            ),* $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, PartialEq)]
+        $vis struct $name {
+            $(
+                $(#[doc = $doc])+
+                pub $field: $crate::device_params!(@type $default $ty),
+            )*
+        }
+
+        impl $name {
+            /// The device these parameters are of.
+            pub const DEVICE: &'static str = $device;
+
+            /// The declared parameters, in declaration order.
+            pub const PARAMS: &'static [$crate::params::ParamSpec] = &[$(
+                $crate::params::ParamSpec {
+                    name: $crate::device_params!(@key $field $($key)?),
+                    ty: <$ty as $crate::params::ParamType>::TYPE,
+                    unit: $crate::device_params!(@unit $($unit)?),
+                    default: $crate::device_params!(@default_text $default),
+                    required: $crate::device_params!(@required $default),
+                    description: $crate::device_params!(@join $($doc)+),
+                    range: $crate::device_params!(@range $($lo $hi)? $($min)?),
+                },
+            )*];
+
+            /// Reads the parameters from `config`; an error names the first one missing
+            /// or of the wrong type. With `help` in `config`, prints the table first.
+            pub fn read(config: &yarp_proto::Property) -> $crate::error::DevResult<Self> {
+                Self::read_as(Self::DEVICE, config)
+            }
+
+            /// As [`Self::read`], for a device that goes by another name too.
+            pub fn read_as(
+                device: &str,
+                config: &yarp_proto::Property,
+            ) -> $crate::error::DevResult<Self> {
+                if config.check("help") {
+                    println!("{}", $crate::params::documentation(device, Self::PARAMS));
+                }
+                let p = $crate::params::Params::new(device, config);
+                Ok(Self {$(
+                    $field: {
+                        let key = $crate::device_params!(@key $field $($key)?);
+                        let found = <$ty as $crate::params::ParamType>::read(&p, key)?;
+                        $(let found = $crate::params::check_range(
+                            &p, key, found, $lo, $hi, concat!("a value in ", stringify!($lo), "..=", stringify!($hi)),
+                        )?;)?
+                        $(let found = $crate::params::check_min(
+                            &p, key, found, $min, concat!("a value of at least ", stringify!($min)),
+                        )?;)?
+                        $crate::device_params!(@value p key found $default $ty)
+                    },
+                )*})
+            }
+        }
+    };
+    (@type optional $ty:ty) => { Option<$ty> };
+    (@type $default:tt $ty:ty) => { $ty };
+    (@key $field:ident) => { stringify!($field) };
+    (@key $field:ident $key:literal) => { $key };
+    (@unit) => { "-" };
+    (@unit $unit:literal) => { $unit };
+    (@default_text required) => { None };
+    (@default_text optional) => { None };
+    (@default_text $default:tt) => { Some(stringify!($default)) };
+    (@range) => { None };
+    (@range $lo:literal $hi:literal) => { Some(concat!("in ", stringify!($lo), "..=", stringify!($hi))) };
+    (@range $min:literal) => { Some(concat!("at least ", stringify!($min))) };
+    (@required required) => { true };
+    (@required $default:tt) => { false };
+    (@join $($doc:literal)+) => { concat!($($doc),+).trim_ascii() };
+    (@value $p:ident $key:ident $found:ident required $ty:ty) => {
+        $found.ok_or_else(|| $p.missing($key))?
+    };
+    (@value $p:ident $key:ident $found:ident optional $ty:ty) => { $found };
+    (@value $p:ident $key:ident $found:ident $default:tt $ty:ty) => {
+        match $found {
+            Some(v) => v,
+            None => $crate::params::IntoDefault::<$ty>::into_default($default),
+        }
+    };
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    crate::device_params! {
+        /// A device of the tests.
+        struct Example for "example" {
+            /// Where it is.
+            name: String = required,
+            /// How often
+            /// it runs.
+            "period" period: Duration = 0.01; "s",
+            /// Joints.
+            "GENERAL::Joints" joints: u16 = 4; in 1..=1024,
+            /// Names.
+            "GENERAL::AxisName" axis_names: Vec<String> = optional,
+            /// Offset.
+            offset: f64 = (-1.5),
+            /// Enabled.
+            enabled: bool = true,
+        }
+    }
+
+    #[test]
+    fn reads_declared_types_defaults_and_groups() {
+        let c =
+            Property::from_text("(name /e) (GENERAL (Joints 2) (AxisName a b)) (enabled false)");
+        let e = Example::read(&c).unwrap();
+        assert_eq!(e.name, "/e");
+        assert_eq!(e.period, Duration::from_millis(10));
+        assert_eq!(e.joints, 2);
+        assert_eq!(
+            e.axis_names.as_deref(),
+            Some(&["a".to_string(), "b".to_string()][..])
+        );
+        assert_eq!(e.offset, -1.5);
+        assert!(!e.enabled);
+        let err = |t: &str| {
+            Example::read(&Property::from_text(t))
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(
+            err("(period 1)").contains("`name`"),
+            "{}",
+            err("(period 1)")
+        );
+        assert!(err("(name /e) (GENERAL (Joints -1))").contains("`GENERAL::Joints`"));
+        assert!(err("(name /e) (period fast)").contains("`period`"));
+        assert!(err("(name /e) (enabled maybe)").contains("`enabled`"));
+        assert!(err("(name /e) (GENERAL (Joints 1025))").contains("1..=1024"));
+        assert!(err("(name /e) (period -1)").contains("`period`"));
+    }
+
+    #[test]
+    fn the_table_has_every_parameter_and_cpp_examples() {
+        let doc = documentation("example", Example::PARAMS);
+        assert!(
+            doc.contains("This is the help for device: example"),
+            "{doc}"
+        );
+        let row = doc.lines().find(|l| l.contains(" period ")).unwrap();
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        assert_eq!(
+            cells,
+            [
+                "",
+                "-",
+                "period",
+                "double",
+                "s",
+                "0.01",
+                "No",
+                "How often it runs.",
+                "",
+                ""
+            ]
+        );
+        let joints = doc.lines().find(|l| l.contains(" Joints ")).unwrap();
+        assert!(joints.starts_with("| GENERAL "), "{joints}");
+        assert!(
+            doc.contains(" yarpdev --device example --name <mandatory_value>\n"),
+            "{doc}"
+        );
+        assert!(doc.contains("--offset -1.5"), "{doc}");
+        assert!(joints.contains("| in 1..=1024 |"), "{joints}");
+        // every row is as wide as the header
+        let widths: Vec<usize> = doc
+            .lines()
+            .filter(|l| l.starts_with('|'))
+            .map(|l| l.chars().count())
+            .collect();
+        assert!(widths.windows(2).all(|w| w[0] == w[1]), "{doc}");
+    }
+}
