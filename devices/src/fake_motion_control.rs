@@ -27,7 +27,7 @@
 //! damping 2..20. Calibration, as the C++ fake: commands succeed at once and
 //! `calibrationDone` answers true (its "not yet implemented" helper returns true).
 
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::interfaces::*;
 use crate::vocabs::*;
@@ -36,6 +36,37 @@ use std::time::Instant;
 use yarp_proto::{Property, Vocab32};
 
 const NAME: &str = "fakeMotionControl";
+
+crate::device_params! {
+    /// What `fakeMotionControl` reads: C++'s table (`FakeMotionControl_params.md`) and
+    /// the older names of the number of joints.
+    pub struct FakeMotionControlParams for "fakeMotionControl" {
+        /// Number of degrees of freedom
+        "GENERAL::Joints" joints: i64 = optional,
+        /// a list of reordered indices for the axes (accepted; this fake does not reorder)
+        "GENERAL::AxisMap" axis_map: Vec<i64> = optional,
+        /// a list of strings representing the axes names
+        "GENERAL::AxisName" axis_name: Vec<String> = optional,
+        /// a list of strings representing the axes type (revolute/prismatic)
+        "GENERAL::AxisType" axis_type: Vec<String> = optional,
+        /// a list of scales for the ampsToSensor conversion factors (accepted, unused)
+        "GENERAL::ampsToSensor" amps_to_sensor: Vec<f64> = optional,
+        /// a list of scales for the fullscalePWM conversion factors (accepted, unused)
+        "GENERAL::fullscalePWM" fullscale_pwm: Vec<f64> = optional,
+        /// a list of scales for the encoders (accepted, unused)
+        "GENERAL::Encoder" encoder: Vec<i64> = optional,
+        /// max encoder position
+        "LIMITS::Max" max: Vec<f64> = optional; "deg",
+        /// min encoder position
+        "LIMITS::Min" min: Vec<f64> = optional; "deg",
+        /// Number of degrees of freedom (an older name of GENERAL::Joints)
+        "GENERAL::joints" general_joints_lowercase: i64 = optional,
+        /// Number of degrees of freedom (an older name of GENERAL::Joints)
+        axes: i64 = optional,
+        /// Number of degrees of freedom (an older name of GENERAL::Joints)
+        "joints" joints_top_level: i64 = optional,
+    }
+}
 
 pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] =
     &[(NAME, || Box::new(FakeMotionControl::new()))];
@@ -208,14 +239,16 @@ impl FakeMotionControl {
 
 impl DeviceDriver for FakeMotionControl {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let mut n = None;
-        for key in ["GENERAL::joints", "GENERAL::Joints", "axes", "joints"] {
-            if let Some(v) = p.int(key)? {
-                n = Some((key, v));
-                break;
-            }
-        }
+        let p = FakeMotionControlParams::read(config)?;
+        // C++ reads only GENERAL::Joints; the other names are older ones we still take
+        let n = [
+            ("GENERAL::joints", p.general_joints_lowercase),
+            ("GENERAL::Joints", p.joints),
+            ("axes", p.axes),
+            ("joints", p.joints_top_level),
+        ]
+        .into_iter()
+        .find_map(|(key, n)| Some((key, n?)));
         let n = match n {
             None => 1,
             Some((key, v)) if !(1..=1024).contains(&v) => {
@@ -241,40 +274,36 @@ impl DeviceDriver for FakeMotionControl {
                 })
             }
         };
-        if let Some(names) = p.vector("GENERAL::AxisName", "a list of strings", |v| {
-            v.as_str().map(str::to_string)
-        })? {
+        if let Some(names) = p.axis_name {
             size_check("GENERAL::AxisName", names.len())?;
             for (j, name) in self.joints.iter_mut().zip(names) {
                 j.name = name;
             }
         }
-        if let Some(types) = p.vector("GENERAL::AxisType", "revolute or prismatic", |v| match v
-            .as_str()?
-        {
-            "revolute" => Some(JOINTTYPE_REVOLUTE),
-            "prismatic" => Some(JOINTTYPE_PRISMATIC),
-            _ => None,
-        })? {
+        if let Some(types) = p.axis_type {
             size_check("GENERAL::AxisType", types.len())?;
             for (j, t) in self.joints.iter_mut().zip(types) {
-                j.jtype = t;
+                j.jtype = match t.as_str() {
+                    "revolute" => JOINTTYPE_REVOLUTE,
+                    "prismatic" => JOINTTYPE_PRISMATIC,
+                    _ => {
+                        return Err(DeviceError::BadParam {
+                            device: NAME.into(),
+                            param: "GENERAL::AxisType".into(),
+                            expected: "revolute or prismatic",
+                            got: t,
+                        })
+                    }
+                };
             }
         }
-        let num = |v: &yarp_proto::Value| {
-            if v.is_int() || v.is_float() {
-                v.as_f64()
-            } else {
-                None
-            }
-        };
-        if let Some(mins) = p.vector("LIMITS::Min", "a list of numbers", num)? {
+        if let Some(mins) = p.min {
             size_check("LIMITS::Min", mins.len())?;
             for (j, m) in self.joints.iter_mut().zip(mins) {
                 j.limits.0 = m;
             }
         }
-        if let Some(maxs) = p.vector("LIMITS::Max", "a list of numbers", num)? {
+        if let Some(maxs) = p.max {
             size_check("LIMITS::Max", maxs.len())?;
             for (j, m) in self.joints.iter_mut().zip(maxs) {
                 j.limits.1 = m;

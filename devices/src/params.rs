@@ -84,15 +84,21 @@ impl<'a> Params<'a> {
         }
     }
 
-    /// A boolean parameter: `true`/`false` or a number (non-zero is true), as C++ `asBool`.
+    /// A boolean parameter as C++ `Value::asBool` reads it (`true`/`false`, a number,
+    /// non-zero being true; the strings `"true"`, `"false"`, `"1"`, `"0"`); a key given
+    /// without a value (`--constantValue`) counts as true.
     pub fn boolean(&self, key: &str) -> DevResult<Option<bool>> {
-        match self.find(key) {
-            None => Ok(None),
-            Some(v) => v
-                .as_bool()
-                .map(Some)
-                .ok_or_else(|| self.invalid(key, "true or false", v)),
-        }
+        let Some(v) = self.find(key) else {
+            return Ok((!key.contains("::") && self.config.check(key)).then_some(true));
+        };
+        let b = match v.as_str() {
+            Some("true" | "1") => Some(true),
+            Some("false" | "0") => Some(false),
+            Some(_) => None,
+            None => v.as_bool(),
+        };
+        b.map(Some)
+            .ok_or_else(|| self.invalid(key, "true or false", v))
     }
 
     /// A vector parameter: either a list value or the rest of the group line
@@ -190,7 +196,7 @@ macro_rules! integer_params {
         }
     )*};
 }
-integer_params!(i64, i32, u32, u16, u8, usize);
+integer_params!(i64, u64, i32, u32, u16, u8, usize);
 
 impl ParamType for Vec<f64> {
     const TYPE: &'static str = "vector<double>";
@@ -273,6 +279,38 @@ pub fn check_range<T: PartialOrd + std::fmt::Debug, B: IntoDefault<T>>(
             Err(p.invalid(key, expected, format!("{v:?}")))
         }
         found => Ok(found),
+    }
+}
+
+/// `found`, unless `check` refuses it (declared `; check f`; `f` says what was expected).
+pub fn check_with<T: std::fmt::Debug>(
+    p: &Params<'_>,
+    key: &str,
+    found: Option<T>,
+    check: fn(&T) -> Result<(), &'static str>,
+) -> DevResult<Option<T>> {
+    match found {
+        Some(v) => match check(&v) {
+            Ok(()) => Ok(Some(v)),
+            Err(expected) => Err(p.invalid(key, expected, format!("{v:?}").trim_matches('"'))),
+        },
+        None => Ok(None),
+    }
+}
+
+/// A port name or prefix, as the wrappers need it: `/...`.
+pub fn port_name(name: &String) -> Result<(), &'static str> {
+    match name.starts_with('/') {
+        true => Ok(()),
+        false => Err("a port name starting with '/'"),
+    }
+}
+
+/// A duration in seconds greater than zero (a period, a timeout).
+pub fn positive(x: &f64) -> Result<(), &'static str> {
+    match *x > 0.0 && x.is_finite() {
+        true => Ok(()),
+        false => Err("a number of seconds greater than 0"),
     }
 }
 
@@ -427,6 +465,7 @@ macro_rules! device_params {
                 $(#[doc = $doc:literal])+
                 $($key:literal)? $field:ident : $ty:ty = $default:tt $(; $unit:literal)?
                     $(; in $lo:literal ..= $hi:literal)? $(; min $min:literal)?
+                    $(; check $check:path)?
             ),* $(,)?
         }
     ) => {
@@ -481,6 +520,7 @@ macro_rules! device_params {
                         $(let found = $crate::params::check_min(
                             &p, key, found, $min, concat!("a value of at least ", stringify!($min)),
                         )?;)?
+                        $(let found = $crate::params::check_with(&p, key, found, $check)?;)?
                         $crate::device_params!(@value p key found $default $ty)
                     },
                 )*})

@@ -99,7 +99,7 @@ crate::device_params! {
         /// carrier used for streaming robot state
         carrier: String = "udp",
         /// timeout for the input port which receives the streamed robot state
-        timeout: f64 = 0.5; "s",
+        timeout: f64 = 0.5; "s"; check crate::params::positive,
         /// Enable the usage of local Qos
         "local_qos::enable" local_qos_enable: bool = false,
         /// Local Qos. See https://yarp.it/latest/channelprioritization.html
@@ -141,16 +141,6 @@ fn settings(config: &Property) -> DevResult<Settings> {
         expected,
         got,
     };
-    let timeout = match p.timeout {
-        t if t > 0.0 && t.is_finite() => Duration::from_secs_f64(t),
-        t => {
-            return Err(bad(
-                "timeout",
-                "a number of seconds greater than 0",
-                t.to_string(),
-            ))
-        }
-    };
     let write_strict = match p.write_strict.as_deref() {
         None | Some("off") => false,
         Some("on") => true,
@@ -160,7 +150,7 @@ fn settings(config: &Property) -> DevResult<Settings> {
         remote: crate::controlboard::port_prefix(&p.remote),
         local: crate::controlboard::port_prefix(&p.local),
         carrier: p.carrier,
-        timeout,
+        timeout: Duration::from_secs_f64(p.timeout),
         write_strict,
         ignore_protocol: p.ignore_protocol_check,
     })

@@ -9,7 +9,7 @@
 //! `IEncodersTimed`, as the C++ class). Its network wrapper is `controlBoard_nws_yarp`
 //! (C++ 2 used `controlboard`, whose `--single_port` mode that wrapper also offers).
 //!
-//! Parameters, as C++: `axes` (number of axes, default 4), `delay` (milliseconds each
+//! Parameters ([`TestMotorParams`]), as C++: `axes` (default 4), `delay` (milliseconds each
 //! `checkMotionDone` takes, default 0). One of our own: `speed`, the reference speed of
 //! every axis in units per second (default [`DEFAULT_SPEED`]). C++'s TestMotor jumped to a
 //! position target at once; here an axis moves toward it at its reference speed (a
@@ -17,7 +17,7 @@
 //! In velocity mode an axis integrates its commanded velocity. The simulation advances
 //! lazily by the wall time elapsed since the last call.
 
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::interfaces::{IEncoders, IPositionControl, IVelocityControl};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -25,8 +25,18 @@ use yarp_proto::Property;
 
 /// The C++ device name.
 pub const NAME: &str = "test_motor";
-/// Axes when `axes` is not given (C++ default).
-pub const DEFAULT_AXES: usize = 4;
+crate::device_params! {
+    /// What `test_motor` reads: C++'s `axes` and `delay`, and our `speed`.
+    pub struct TestMotorParams for "test_motor" {
+        /// Number of axes
+        axes: usize = 4; in 1..=1024,
+        /// Time each checkMotionDone takes
+        delay: u64 = 0; "ms"; in 0..=10000,
+        /// Reference speed of every axis (0 jumps to the target, as C++)
+        speed: f64 = 50.0; "units/s"; min 0.0,
+    }
+}
+
 /// Reference speed of every axis when `speed` is not given, in units per second.
 pub const DEFAULT_SPEED: f64 = 50.0;
 
@@ -157,36 +167,10 @@ fn wall_clock() -> f64 {
 
 impl DeviceDriver for TestMotor {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let bad = |param: &str, expected, got: String| DeviceError::BadParam {
-            device: NAME.into(),
-            param: param.into(),
-            expected,
-            got,
-        };
-        let n = match p.int("axes")? {
-            None => DEFAULT_AXES,
-            Some(n @ 1..=1024) => n as usize,
-            Some(n) => return Err(bad("axes", "an integer in 1..=1024", n.to_string())),
-        };
-        let delay = match p.int("delay")? {
-            None => 0,
-            Some(ms @ 0..=10_000) => ms as u64,
-            Some(ms) => return Err(bad("delay", "milliseconds in 0..=10000", ms.to_string())),
-        };
-        let speed = match p.float("speed")? {
-            None => DEFAULT_SPEED,
-            Some(s) if s >= 0.0 && s.is_finite() => s,
-            Some(s) => {
-                return Err(bad(
-                    "speed",
-                    "a speed in units per second, 0 or more",
-                    s.to_string(),
-                ))
-            }
-        };
+        let p = TestMotorParams::read(config)?;
+        let (n, speed) = (p.axes, p.speed);
         self.setup(n, speed);
-        self.delay = Duration::from_millis(delay);
+        self.delay = Duration::from_millis(p.delay);
         Ok(())
     }
 

@@ -7,12 +7,31 @@
 //! (a thrift service to set the values) is not served here.
 
 use super::{BatteryStatus, IBattery};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use std::time::Instant;
 use yarp_proto::Property;
 
-const NAME: &str = "fakeBattery";
+crate::device_params! {
+    /// What `fakeBattery` reads (C++ `FakeBattery_params.md`; its rpc port is not opened
+    /// here, where a battery_nws_yarp serves the device).
+    pub struct FakeBatteryParams for "fakeBattery" {
+        /// thread period
+        period: f64 = 0.02; "s"; check crate::params::positive,
+        /// Initial charge
+        charge: f64 = 50.0; "%",
+        /// Initial voltage
+        voltage: f64 = 30.0; "V",
+        /// Initial current
+        current: f64 = 3.0; "A",
+        /// Initial temperature
+        temperature: f64 = 20.0; "C",
+        /// Initial battery information
+        info: String = "Fake battery system v2.0",
+        /// Full rpc port name (accepted, not opened)
+        rpc_port_name: String = "/fakeBattery/rpc",
+    }
+}
 
 pub struct FakeBattery {
     period: f64,
@@ -77,30 +96,13 @@ impl FakeBattery {
 
 impl DeviceDriver for FakeBattery {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let num = |k: &str, v: &mut f64| -> DevResult<()> {
-            if let Some(x) = p.float(k)? {
-                *v = x;
-            }
-            Ok(())
-        };
-        num("period", &mut self.period)?;
-        num("charge", &mut self.charge)?;
-        num("voltage", &mut self.voltage)?;
-        num("current", &mut self.current)?;
-        num("temperature", &mut self.temperature)?;
-        if let Some(info) = p.string("info")? {
-            self.info = info;
-        }
-        if self.period <= 0.0 {
-            return Err(DeviceError::BadParam {
-                device: NAME.into(),
-                param: "period".into(),
-                expected: "a period in seconds > 0",
-                got: self.period.to_string(),
-            });
-        }
-        self.charge = self.charge.clamp(0.0, 100.0);
+        let p = FakeBatteryParams::read(config)?;
+        self.period = p.period;
+        self.charge = p.charge.clamp(0.0, 100.0);
+        self.voltage = p.voltage;
+        self.current = p.current;
+        self.temperature = p.temperature;
+        self.info = p.info;
         self.opened = Some(Instant::now());
         Ok(())
     }

@@ -10,12 +10,24 @@
 
 use super::protocol::BatteryData;
 use super::{BatteryStatus, IBattery};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::nwc_ports::{NwcNames, NwcPorts};
 use yarp_proto::{Bottle, Property, Value};
 
 const NAME: &str = "battery_nwc_yarp";
+
+crate::device_params! {
+    /// What `battery_nwc_yarp` reads (C++ `Battery_nwc_yarp_params.md`).
+    pub struct BatteryNwcYarpParams for "battery_nwc_yarp" {
+        /// Full port name opened by the batteryClient device.
+        local: String = required,
+        /// Full port name of the port opened on the server side, to which the batteryClient connects to.
+        remote: String = required,
+        /// The carrier used for the connection with the server.
+        carrier: String = "tcp",
+    }
+}
 
 type Client = NwcPorts<BatteryData>;
 
@@ -66,10 +78,11 @@ impl BatteryNwcYarp {
 
 impl DeviceDriver for BatteryNwcYarp {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let local = p.string("local")?.ok_or_else(|| p.missing("local"))?;
-        let remote = p.string("remote")?.ok_or_else(|| p.missing("remote"))?;
-        let carrier = p.string("carrier")?.unwrap_or_else(|| "tcp".into());
+        let BatteryNwcYarpParams {
+            local,
+            remote,
+            carrier,
+        } = BatteryNwcYarpParams::read(config)?;
         let names = NwcNames {
             stream: format!("{local}/data:i"),
             remote_stream: format!("{remote}/data:o"),

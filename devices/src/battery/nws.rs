@@ -12,12 +12,12 @@
 
 use super::protocol::{handle_rpc, read_battery, BatteryData, ChargeWarnings};
 use super::BatteryStatus;
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
-use crate::sensors::params::{bool_param, now};
+use crate::sensors::params::now;
 use crate::sensors::periodic::Ticker;
-use crate::wrapper_ports::{name_and_period, Reply, Slot, WrapperPorts};
+use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Duration;
@@ -25,6 +25,30 @@ use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Stamp};
 
 const NAME: &str = "battery_nws_yarp";
+
+/// `enable_shutdown` must stay off: this wrapper never shuts the computer down.
+fn never(enable: &bool) -> Result<(), &'static str> {
+    match enable {
+        false => Ok(()),
+        true => Err("false (this battery_nws_yarp never shuts the computer down)"),
+    }
+}
+
+crate::device_params! {
+    /// What `battery_nws_yarp` reads (C++ `Battery_nws_yarp_params.md`).
+    pub struct BatteryNwsYarpParams for "battery_nws_yarp" {
+        /// prefix of the ports opened by the device
+        name: String = required; check crate::params::port_name,
+        /// refresh period of the broadcasted values in seconds
+        period: f64 = 1.0; "s"; check crate::params::positive,
+        /// if enabled, batteryWrapper will start a system shutdown when charge is below 5%
+        enable_shutdown: bool = false; check never,
+        /// if enabled, stores a log of battery usage on disk
+        enable_log: bool = false,
+        /// if present, this yarp port will be opened and used to send a shutdown command to other applications
+        "quitPortName" quit_port_name: String = optional,
+    }
+}
 
 /// The `battery_nws_yarp` device.
 #[derive(Default)]
@@ -120,19 +144,10 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 
 impl DeviceDriver for BatteryNwsYarp {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let (name, period) = name_and_period(&p, "a port name starting with '/'", 1.0)?;
-        if bool_param(&p, "enable_shutdown")?.unwrap_or(false) {
-            return Err(p.invalid(
-                "enable_shutdown",
-                "false (this battery_nws_yarp never shuts the computer down)",
-                true,
-            ));
-        }
-        let _quit = p.string("quitPortName")?;
-        self.log = bool_param(&p, "enable_log")?.unwrap_or(false);
-        self.name = name;
-        self.period = period;
+        let p = BatteryNwsYarpParams::read(config)?;
+        self.log = p.enable_log;
+        self.name = p.name;
+        self.period = Duration::from_secs_f64(p.period);
         let ports = WrapperPorts::open(
             NAME,
             vec![self.data_port_name()],

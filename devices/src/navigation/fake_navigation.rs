@@ -3,12 +3,21 @@
 //! `navigation_time` / `reached_time`, both accepted here) are not modelled.
 
 use super::INavigation2DVelocityActions;
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::DevResult;
 use std::time::Instant;
 use yarp_proto::Property;
 
-const NAME: &str = "fakeNavigation";
+crate::device_params! {
+    /// What `fakeNavigation` reads (C++ `FakeNavigation_params.md`; read and checked, as
+    /// this fake answers velocity commands only).
+    pub struct FakeNavigationParams for "fakeNavigation" {
+        /// navigation_time
+        navigation_time: i64 = 500,
+        /// reached_time
+        reached_time: i64 = 100,
+    }
+}
 
 /// The last velocity command and when it came (C++ `m_control_out`).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -39,9 +48,7 @@ impl FakeNavigation {
 
 impl DeviceDriver for FakeNavigation {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        p.int("navigation_time")?;
-        p.int("reached_time")?;
+        FakeNavigationParams::read(config)?;
         Ok(())
     }
 

@@ -3,12 +3,18 @@
 //! are played when the odometry is read (C++ plays them on its own thread).
 
 use super::{IOdometry2D, OdometryData};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
 use yarp_proto::Property;
 
-const NAME: &str = "fakeOdometry2D";
+crate::device_params! {
+    /// What `fakeOdometry2D` reads (C++ `FakeOdometry2D_params.md`).
+    pub struct FakeOdometry2DParams for "fakeOdometry2D" {
+        /// thread period
+        period: f64 = 0.02; "s"; check crate::params::positive,
+    }
+}
 
 pub struct FakeOdometry2D {
     period: f64,
@@ -60,18 +66,7 @@ impl FakeOdometry2D {
 
 impl DeviceDriver for FakeOdometry2D {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        if let Some(period) = p.float("period")? {
-            if period <= 0.0 {
-                return Err(DeviceError::BadParam {
-                    device: NAME.into(),
-                    param: "period".into(),
-                    expected: "a period in seconds > 0",
-                    got: period.to_string(),
-                });
-            }
-            self.period = period;
-        }
+        self.period = FakeOdometry2DParams::read(config)?.period;
         self.opened = Some(Instant::now());
         Ok(())
     }

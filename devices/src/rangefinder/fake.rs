@@ -12,12 +12,43 @@
 //! counted in periods since `open` (C++ makes one per period on its thread).
 
 use super::{IRangefinder2D, LaserStatus};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use std::time::{Instant, SystemTime, UNIX_EPOCH};
 use yarp_proto::Property;
 
 const NAME: &str = "fakeLaser";
+
+crate::device_params! {
+    /// What `fakeLaser` reads: C++'s table (`FakeLaser_params.md`) without the map and
+    /// localization modes, and the `SENSOR`/`SKIP` groups of C++'s `Lidar2DDeviceBase`.
+    pub struct FakeLaserParams for "fakeLaser" {
+        /// Choose the modality: no_obstacles, use_pattern or use_constant
+        test: String = "use_pattern",
+        /// Thread period
+        "GENERAL::period" period: f64 = optional; "s"; check crate::params::positive,
+        /// Thread period (an older name of GENERAL::period)
+        "period" period_top_level: f64 = optional; "s"; check crate::params::positive,
+        /// Default const distance for mode use_constant
+        "CONSTANT_MODE::const_distance" const_distance: f64 = 1.0; "m",
+        /// Start of the field of view
+        "SENSOR::min_angle" min_angle: f64 = optional; "deg",
+        /// End of the field of view
+        "SENSOR::max_angle" max_angle: f64 = optional; "deg",
+        /// Angle between two measurements
+        "SENSOR::resolution" resolution: f64 = optional; "deg",
+        /// Distances below are clipped
+        "SENSOR::min_distance" min_distance: f64 = optional; "m",
+        /// Distances above are clipped
+        "SENSOR::max_distance" max_distance: f64 = optional; "m",
+        /// 1: a clipped distance reads as infinity
+        "SENSOR::allow_infinity" allow_infinity: i64 = optional,
+        /// Starts of the angular ranges not measured
+        "SKIP::min" skip_min: Vec<f64> = optional; "deg",
+        /// Ends of the angular ranges not measured
+        "SKIP::max" skip_max: Vec<f64> = optional; "deg",
+    }
+}
 
 /// What the fake sees.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -151,10 +182,9 @@ fn now_s() -> f64 {
 
 impl DeviceDriver for FakeLaser {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let test = p.string("test")?.unwrap_or_else(|| "use_pattern".into());
-        let constant = p.float("CONSTANT_MODE::const_distance")?.unwrap_or(1.0);
-        self.mode = match test.as_str() {
+        let p = FakeLaserParams::read(config)?;
+        let constant = p.const_distance;
+        self.mode = match p.test.as_str() {
             "no_obstacles" => TestMode::NoObstacles,
             "use_pattern" => TestMode::Pattern,
             "use_constant" => TestMode::Constant(constant),
@@ -171,33 +201,23 @@ impl DeviceDriver for FakeLaser {
                 ))
             }
         };
-        if let Some(period) = p.float("GENERAL::period")?.or(p.float("period")?) {
-            if period <= 0.0 {
-                return Err(Self::bad("period", "a period in seconds > 0", period));
-            }
+        if let Some(period) = p.period.or(p.period_top_level) {
             self.period = period;
         }
         let g = &mut self.geometry;
-        if config.find_group("SENSOR").is_some() {
-            let num = |k: &str| p.float(&format!("SENSOR::{k}"));
-            g.min_angle = num("min_angle")?.unwrap_or(g.min_angle);
-            g.max_angle = num("max_angle")?.unwrap_or(g.max_angle);
-            g.resolution = num("resolution")?.unwrap_or(g.resolution);
-            if let Some(v) = num("min_distance")? {
-                (g.min_distance, g.clip_min) = (v, true);
-            }
-            if let Some(v) = num("max_distance")? {
-                (g.max_distance, g.clip_max) = (v, true);
-            }
-            g.allow_infinity = p.int("SENSOR::allow_infinity")? == Some(1);
+        g.min_angle = p.min_angle.unwrap_or(g.min_angle);
+        g.max_angle = p.max_angle.unwrap_or(g.max_angle);
+        g.resolution = p.resolution.unwrap_or(g.resolution);
+        if let Some(v) = p.min_distance {
+            (g.min_distance, g.clip_min) = (v, true);
         }
-        if let Some(skip) = config.find_group("SKIP") {
-            let list = |k: &str| -> Vec<f64> {
-                skip.find_group(k)
-                    .map(|b| b.iter().skip(1).filter_map(|v| v.as_f64()).collect())
-                    .unwrap_or_default()
-            };
-            for (lo, hi) in list("min").into_iter().zip(list("max")) {
+        if let Some(v) = p.max_distance {
+            (g.max_distance, g.clip_max) = (v, true);
+        }
+        g.allow_infinity = p.allow_infinity == Some(1);
+        {
+            let skips = p.skip_min.unwrap_or_default();
+            for (lo, hi) in skips.into_iter().zip(p.skip_max.unwrap_or_default()) {
                 if !(0.0..=360.0).contains(&lo) || !(0.0..=360.0).contains(&hi) || hi <= lo {
                     return Err(Self::bad(
                         "SKIP",

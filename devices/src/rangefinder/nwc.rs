@@ -10,12 +10,24 @@
 
 use super::protocol::{status_of, LaserScan2D};
 use super::{IRangefinder2D, LaserStatus};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::nwc_ports::{NwcNames, NwcPorts};
 use yarp_proto::{Bottle, Property, Value};
 
 const NAME: &str = "rangefinder2D_nwc_yarp";
+
+crate::device_params! {
+    /// What `rangefinder2D_nwc_yarp` reads (C++ `Rangefinder2D_nwc_yarp_params.md`).
+    pub struct Rangefinder2DNwcYarpParams for "rangefinder2D_nwc_yarp" {
+        /// Full port name opened by the Rangefinder2D_nwc_yarp device.
+        local: String = required,
+        /// Full port name of the port opened on the server side, to which the Rangefinder2D_nwc_yarp connects to.
+        remote: String = required,
+        /// The carrier used for the connection with the server.
+        carrier: String = "tcp",
+    }
+}
 
 type Client = NwcPorts<LaserScan2D>;
 
@@ -64,10 +76,11 @@ impl Rangefinder2DNwcYarp {
 
 impl DeviceDriver for Rangefinder2DNwcYarp {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let local = p.string("local")?.ok_or_else(|| p.missing("local"))?;
-        let remote = p.string("remote")?.ok_or_else(|| p.missing("remote"))?;
-        let carrier = p.string("carrier")?.unwrap_or_else(|| "tcp".into());
+        let Rangefinder2DNwcYarpParams {
+            local,
+            remote,
+            carrier,
+        } = Rangefinder2DNwcYarpParams::read(config)?;
         let names = NwcNames {
             rpc: format!("{local}/rpc:o"),
             remote_rpc: format!("{remote}/rpc:i"),

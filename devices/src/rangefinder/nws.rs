@@ -8,18 +8,30 @@
 //! attach answers `return_value_error_not_ready`.
 
 use super::protocol::{handle_rpc, LaserScan2D};
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use crate::sensors::params::now;
 use crate::sensors::periodic::Ticker;
-use crate::wrapper_ports::{name_and_period, Reply, Slot, WrapperPorts};
+use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
 use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Stamp};
 
 const NAME: &str = "rangefinder2D_nws_yarp";
+
+crate::device_params! {
+    /// What `rangefinder2D_nws_yarp` reads (C++ `Rangefinder2D_nws_yarp_params.md`).
+    pub struct Rangefinder2DNwsYarpParams for "rangefinder2D_nws_yarp" {
+        /// refresh period of the broadcasted values in s
+        period: f64 = 0.02; "s"; check crate::params::positive,
+        /// Prefix name of the ports opened by the wrapper, e.g. /robotName/Rangefinder2DSensor
+        name: String = required; check crate::params::port_name,
+        /// name of the attached frame
+        frame_id: String = optional,
+    }
+}
 
 /// The `rangefinder2D_nws_yarp` device.
 #[derive(Default)]
@@ -103,11 +115,9 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 
 impl DeviceDriver for Rangefinder2DNwsYarp {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let (name, period) = name_and_period(&p, "a port name starting with '/'", 0.02)?;
-        let _frame_id = p.string("frame_id")?;
-        self.name = name;
-        self.period = period;
+        let p = Rangefinder2DNwsYarpParams::read(config)?;
+        self.name = p.name;
+        self.period = Duration::from_secs_f64(p.period);
         let ports = WrapperPorts::open(
             NAME,
             vec![self.name.clone()],

@@ -2,7 +2,6 @@
 
 use crate::driver::Params;
 use crate::error::{DevResult, DeviceError};
-use yarp_proto::Value;
 
 /// Wall-clock time in seconds (C++ `yarp::os::Time::now`).
 pub use yarp_proto::stamp::now;
@@ -10,23 +9,7 @@ pub use yarp_proto::stamp::now;
 /// A boolean parameter as C++ `Value::asBool` reads it (`true`/`false`, 0/1); a key
 /// given without a value (`--constantValue`) counts as true.
 pub fn bool_param(p: &Params<'_>, key: &str) -> DevResult<Option<bool>> {
-    let Some(v) = p.find(key) else {
-        return Ok(p.config.check(key).then_some(true));
-    };
-    let b = match v {
-        Value::String(_) => match v.as_str() {
-            Some("true") | Some("1") => Some(true),
-            Some("false") | Some("0") => Some(false),
-            _ => None,
-        },
-        other => other.as_bool(),
-    };
-    b.map(Some).ok_or_else(|| DeviceError::BadParam {
-        device: p.device.to_string(),
-        param: key.to_string(),
-        expected: "true or false",
-        got: v.to_string(),
-    })
+    p.boolean(key)
 }
 
 /// A period given in milliseconds (C++ `int`, floats accepted), as seconds.
