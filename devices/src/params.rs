@@ -92,8 +92,8 @@ impl<'a> Params<'a> {
             return Ok((!key.contains("::") && self.config.check(key)).then_some(true));
         };
         let b = match v.as_str() {
-            Some("true" | "1") => Some(true),
-            Some("false" | "0") => Some(false),
+            Some("true" | "1" | "on") => Some(true),
+            Some("false" | "0" | "off") => Some(false),
             Some(_) => None,
             None => v.as_bool(),
         };
@@ -240,6 +240,12 @@ impl<T> IntoDefault<T> for T {
 impl IntoDefault<String> for &str {
     fn into_default(self) -> String {
         self.to_string()
+    }
+}
+
+impl<T: Clone, const N: usize> IntoDefault<Vec<T>> for [T; N] {
+    fn into_default(self) -> Vec<T> {
+        self.to_vec()
     }
 }
 

@@ -4,12 +4,11 @@
 //! together. Shared by `rangefinder2D_nws_yarp`, `rgbdSensor_nws_yarp` and
 //! `battery_nws_yarp`.
 
-use crate::driver::{DeviceDriver, Params, SharedDevice};
+use crate::driver::{DeviceDriver, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use parking_lot::Mutex;
 use std::sync::Arc;
-use std::time::Duration;
 use yarp_net::port::Port;
 use yarp_proto::Bottle;
 
@@ -26,24 +25,6 @@ pub(crate) enum Reply {
 /// Answers one request: the decoded command (empty when undecodable) and the attached
 /// device, if any.
 pub(crate) type Answer = fn(&Bottle, Option<&mut dyn DeviceDriver>) -> Reply;
-
-/// A wrapper's `name` (required, starting with `/`; `expected` says what it names) and
-/// `period` (s, > 0; `default_period` when absent), as every `*_nws_yarp` reads them.
-pub(crate) fn name_and_period(
-    p: &Params<'_>,
-    expected: &'static str,
-    default_period: f64,
-) -> DevResult<(String, Duration)> {
-    let name = p.string("name")?.ok_or_else(|| p.missing("name"))?;
-    if !name.starts_with('/') {
-        return Err(p.invalid("name", expected, name));
-    }
-    let period = p.float("period")?.unwrap_or(default_period);
-    if !(period > 0.0 && period.is_finite()) {
-        return Err(p.invalid("period", "a period in seconds > 0", period));
-    }
-    Ok((name, Duration::from_secs_f64(period)))
-}
 
 pub(crate) struct WrapperPorts {
     /// The stream ports, in the order given to [`WrapperPorts::open`].

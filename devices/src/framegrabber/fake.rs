@@ -14,12 +14,71 @@
 use super::image::{Image, PixelCode};
 use super::{CameraConfig, CameraDescriptor, IFrameGrabberControls, IFrameGrabberImage};
 use super::{IRgbVisualParams, MODE_UNKNOWN};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use yarp_proto::{Bottle, Property, Stamp, Value};
 
 const NAME: &str = "fakeFrameGrabber";
+
+crate::device_params! {
+    /// What `fakeFrameGrabber` reads (C++ `FakeFrameGrabber_params.md`, and C++'s
+    /// `topIsLow`; no background image, bayer or mono images here).
+    pub struct FakeFrameGrabberParams for "fakeFrameGrabber" {
+        /// desired width of test image
+        width: usize = 320; in 1..=32768,
+        /// desired height of test image
+        height: usize = 240; in 1..=32768,
+        /// desired horizontal fov of test image
+        "horizontalFov" horizontal_fov: f64 = 1.0,
+        /// desired vertical fov of test image
+        "verticalFov" vertical_fov: f64 = 2.0,
+        /// rpc port for the fakeFrameGrabber (accepted; a frameGrabber_nws_yarp serves it)
+        "fakeFrameGrabber_rpc_port" rpc_port: String = "/fakeFrameGrabber/rpc",
+        /// mirror height of test image
+        mirror: bool = false,
+        /// synchronize producer and consumer, so that all images are used once and only once
+        syncro: bool = false,
+        /// Physical focal length
+        "physFocalLength" phys_focal_length: f64 = 3.0,
+        /// Horizontal component of the focal length
+        "focalLengthX" focal_length_x: f64 = 4.0,
+        /// Vertical component of the focal length
+        "focalLengthY" focal_length_y: f64 = 5.0,
+        /// X coordinate of the principal point
+        "principalPointX" principal_point_x: f64 = 6.0,
+        /// Y coordinate of the principal point
+        "principalPointY" principal_point_y: f64 = 7.0,
+        /// Reference to group of parameters describing the distortion model of the camera
+        "distortionModel" distortion_model: String = "FishEye",
+        /// Radial distortion coefficient of the lens(fake)
+        k1: f64 = 8.0,
+        /// Radial distortion coefficient of the lens(fake)
+        k2: f64 = 9.0,
+        /// Radial distortion coefficient of the lens(fake)
+        k3: f64 = 10.0,
+        /// Tangential distortion of the lens(fake)
+        t1: f64 = 11.0,
+        /// Tangential distortion of the lens(fake)
+        t2: f64 = 12.0,
+        /// rate of test images in Hz
+        freq: f64 = 0.0; "Hz",
+        /// period of test images in seconds
+        period: f64 = 0.0; "s",
+        /// ball, line, grid, size, rand, none, time
+        mode: String = "line",
+        /// should write the timestamp in the first bytes of the image
+        add_timestamp: bool = false,
+        /// should add noise to the image (uses snr parameter)
+        add_noise: bool = false,
+        /// Signal noise ratio ([0.0-1.0]
+        snr: f64 = 0.5,
+        /// Matrix that describes the lens' distortion
+        "rectificationMatrix" rectification_matrix: Vec<f64> = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        /// the image's first row is its top
+        "topIsLow" top_is_low: bool = true,
+    }
+}
 
 /// The test patterns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -407,107 +466,51 @@ impl FakeFrameGrabber {
     }
 }
 
-fn bool_param(p: &Params, key: &str, default: bool) -> DevResult<bool> {
-    match p.find(key) {
-        None => Ok(default),
-        Some(v) => match v.as_bool() {
-            Some(b) => Ok(b),
-            None => match v.as_str() {
-                Some("true") | Some("on") => Ok(true),
-                Some("false") | Some("off") => Ok(false),
-                _ => Err(DeviceError::BadParam {
-                    device: NAME.into(),
-                    param: key.into(),
-                    expected: "a boolean",
-                    got: v.to_string(),
-                }),
-            },
-        },
-    }
-}
-
-fn size_param(p: &Params, key: &str, default: usize) -> DevResult<usize> {
-    match p.int(key)? {
-        None => Ok(default),
-        Some(v) if v > 0 && v <= 1 << 15 => Ok(v as usize),
-        Some(v) => Err(DeviceError::BadParam {
-            device: NAME.into(),
-            param: key.into(),
-            expected: "a positive size up to 32768",
-            got: v.to_string(),
-        }),
-    }
-}
-
 impl DeviceDriver for FakeFrameGrabber {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        self.width = size_param(&p, "width", 320)?;
-        self.height = size_param(&p, "height", 240)?;
-        let freq = p.float("freq")?.unwrap_or(0.0);
-        let period = p.float("period")?.unwrap_or(0.0);
-        self.period = if freq > 0.0 {
-            1.0 / freq
+        let p = FakeFrameGrabberParams::read(config)?;
+        self.width = p.width;
+        self.height = p.height;
+        self.period = if p.freq > 0.0 {
+            1.0 / p.freq
         } else {
-            period.max(0.0)
+            p.period.max(0.0)
         };
-        let mode = match p.find("mode") {
-            None => Mode::Line,
-            Some(v) => {
-                let text = match v {
-                    Value::Vocab32(x) => x.as_string(),
-                    _ => v.as_str().map(str::to_string).unwrap_or_default(),
-                };
-                Mode::parse(&text).ok_or_else(|| DeviceError::BadParam {
-                    device: NAME.into(),
-                    param: "mode".into(),
-                    expected: "one of line, ball, grid, size, rand, none, time",
-                    got: v.to_string(),
-                })?
-            }
-        };
-        self.syncro = bool_param(&p, "syncro", false)?;
+        let mode = Mode::parse(&p.mode).ok_or_else(|| DeviceError::BadParam {
+            device: NAME.into(),
+            param: "mode".into(),
+            expected: "one of line, ball, grid, size, rand, none, time",
+            got: p.mode.clone(),
+        })?;
+        self.syncro = p.syncro;
         // The recorded C++ 3.12.3 fake, with `topIsLow` at its default (true), streams
         // headers whose origin field is 1, i.e. "top is not low" in `ImageNetworkHeader`
         // terms; keep that observable behaviour.
-        self.top_is_low = !bool_param(&p, "topIsLow", true)?;
-        self.mirror = bool_param(&p, "mirror", false)?;
-        self.add_timestamp = bool_param(&p, "add_timestamp", false)?;
-        self.add_noise = bool_param(&p, "add_noise", false)?;
-        self.snr = p.float("snr")?.unwrap_or(0.5).clamp(0.0, 1.0);
-        self.fov = (
-            p.float("horizontalFov")?.unwrap_or(1.0),
-            p.float("verticalFov")?.unwrap_or(2.0),
-        );
+        self.top_is_low = !p.top_is_low;
+        self.mirror = p.mirror;
+        self.add_timestamp = p.add_timestamp;
+        self.add_noise = p.add_noise;
+        self.snr = p.snr.clamp(0.0, 1.0);
+        self.fov = (p.horizontal_fov, p.vertical_fov);
         let mut intr = Property::new();
-        for (key, default) in [
-            ("physFocalLength", 3.0),
-            ("focalLengthX", 4.0),
-            ("focalLengthY", 5.0),
-            ("principalPointX", 6.0),
-            ("principalPointY", 7.0),
-        ] {
-            intr.put(key, p.float(key)?.unwrap_or(default));
-        }
-        let rect = p
-            .vector("rectificationMatrix", "numbers", Value::as_f64)?
-            .unwrap_or_else(|| vec![1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+        intr.put("physFocalLength", p.phys_focal_length);
+        intr.put("focalLengthX", p.focal_length_x);
+        intr.put("focalLengthY", p.focal_length_y);
+        intr.put("principalPointX", p.principal_point_x);
+        intr.put("principalPointY", p.principal_point_y);
         intr.put(
             "rectificationMatrix",
-            Value::List(rect.into_iter().collect::<Bottle>()),
+            Value::List(p.rectification_matrix.into_iter().collect::<Bottle>()),
         );
-        let model = p
-            .string("distortionModel")?
-            .unwrap_or_else(|| "FishEye".into());
-        intr.put("distortionModel", model.as_str());
-        for (key, default) in [
-            ("k1", 8.0),
-            ("k2", 9.0),
-            ("k3", 10.0),
-            ("t1", 11.0),
-            ("t2", 12.0),
+        intr.put("distortionModel", p.distortion_model.as_str());
+        for (key, value) in [
+            ("k1", p.k1),
+            ("k2", p.k2),
+            ("k3", p.k3),
+            ("t1", p.t1),
+            ("t2", p.t2),
         ] {
-            intr.put(key, p.float(key)?.unwrap_or(default));
+            intr.put(key, value);
         }
         self.intrinsic = intr;
         self.patterns = Patterns::new(mode, self.width, self.height);

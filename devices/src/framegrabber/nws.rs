@@ -10,8 +10,9 @@
 //! frame-grabber RPC protocol ([`super::protocol::handle_rpc`]).
 
 use super::protocol::handle_rpc;
-use crate::driver::{DeviceDriver, IWrapper, Params, SharedDevice};
+use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
+use crate::params::{IntoDefault, ParamType, Params};
 use crate::runtime;
 use parking_lot::Mutex;
 use std::sync::mpsc;
@@ -25,6 +26,56 @@ use yarp_proto::{Property, Stamp, Value};
 const NAME: &str = "frameGrabber_nws_yarp";
 /// C++ `DEFAULT_THREAD_PERIOD` of this wrapper.
 pub const DEFAULT_PERIOD: f64 = 0.033;
+
+/// `period` as C++ takes it: only a float counts, anything else leaves the default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FloatPeriod(pub f64);
+
+impl ParamType for FloatPeriod {
+    const TYPE: &'static str = "double";
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+        match p.find(key) {
+            Some(Value::Float64(s)) if *s > 0.0 && s.is_finite() => Ok(Some(FloatPeriod(*s))),
+            Some(Value::Float64(s)) => Err(p.invalid(key, "a period in seconds greater than 0", s)),
+            Some(other) => {
+                tracing::info!(
+                    "{NAME}: `{key} {other}` is not a float: using {DEFAULT_PERIOD} s, as C++ does"
+                );
+                Ok(None)
+            }
+            None => Ok(None),
+        }
+    }
+}
+
+impl IntoDefault<FloatPeriod> for f64 {
+    fn into_default(self) -> FloatPeriod {
+        FloatPeriod(self)
+    }
+}
+
+/// Only COLOR streaming is offered.
+fn color_only(capabilities: &String) -> Result<(), &'static str> {
+    match capabilities.as_str() {
+        "COLOR" => Ok(()),
+        _ => Err("COLOR (RAW streaming is not available)"),
+    }
+}
+
+crate::device_params! {
+    /// What `frameGrabber_nws_yarp` reads (C++ `FrameGrabber_nws_yarp_params.md`; C++'s
+    /// `no_drop` defaults to true in the table but to false in the code, which we follow).
+    pub struct FrameGrabberNwsYarpParams for "frameGrabber_nws_yarp" {
+        /// refresh period (in s) of the broadcasted values through yarp ports
+        period: FloatPeriod = 0.033; "s",
+        /// Prefix name of the ports opened by the FrameGrabber_nws_yarp
+        name: String = "/grabber",
+        /// two capabilities supported, COLOR and RAW respectively for rgb and raw streaming
+        capabilities: String = "COLOR"; check color_only,
+        /// if present, use strict policy for sending data
+        no_drop: bool = false,
+    }
+}
 
 /// The device the RPC server talks to (none until attached).
 type Target = Arc<Mutex<Option<SharedDevice>>>;
@@ -200,40 +251,10 @@ impl FrameGrabberNws {
 
 impl DeviceDriver for FrameGrabberNws {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        self.name = p.string("name")?.unwrap_or_else(|| "/grabber".into());
-        // C++ takes `period` only when it is a float
-        self.period = match p.find("period") {
-            Some(Value::Float64(s)) if *s > 0.0 && s.is_finite() => *s,
-            Some(Value::Float64(s)) => {
-                return Err(DeviceError::BadParam {
-                    device: NAME.into(),
-                    param: "period".into(),
-                    expected: "a period in seconds greater than 0",
-                    got: s.to_string(),
-                })
-            }
-            Some(other) => {
-                tracing::info!("{NAME}: `period {other}` is not a float: using {DEFAULT_PERIOD} s, as C++ does");
-                DEFAULT_PERIOD
-            }
-            None => DEFAULT_PERIOD,
-        };
-        match p.string("capabilities")?.as_deref() {
-            None | Some("COLOR") => {}
-            Some(other) => {
-                return Err(DeviceError::BadParam {
-                    device: NAME.into(),
-                    param: "capabilities".into(),
-                    expected: "COLOR (RAW streaming is not available)",
-                    got: other.into(),
-                })
-            }
-        }
-        self.no_drop = match p.find("no_drop") {
-            None => false,
-            Some(v) => v.as_bool().unwrap_or(true),
-        };
+        let p = FrameGrabberNwsYarpParams::read(config)?;
+        self.name = p.name;
+        self.period = p.period.0;
+        self.no_drop = p.no_drop;
         let network = |e: String| DeviceError::BadParam {
             device: NAME.into(),
             param: "name".into(),

@@ -10,7 +10,7 @@
 //! distortion).
 
 use super::{IRGBDSensor, RgbdStatus};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::framegrabber::fake::FakeFrameGrabber;
 use crate::framegrabber::IFrameGrabberImage;
@@ -18,7 +18,35 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use yarp_proto::image::{Image, PixelCode};
 use yarp_proto::{Property, Stamp, Value};
 
-const NAME: &str = "fakeDepthCamera";
+crate::device_params! {
+    /// What `fakeDepthCamera` reads (C++ `FakeDepthCameraDriver_params.md`; the image
+    /// sizes are those of the fakeFrameGrabber inside, so `rgb_*`/`dep_*` sizes are only
+    /// checked).
+    pub struct FakeDepthCameraParams for "fakeDepthCamera" {
+        /// rgb_h
+        rgb_h: f64 = 480.0,
+        /// rgb_w
+        rgb_w: f64 = 640.0,
+        /// dep_h
+        dep_h: f64 = 480.0,
+        /// dep_w
+        dep_w: f64 = 640.0,
+        /// accuracy
+        accuracy: f64 = 0.001,
+        /// rgb_Vfov
+        "rgb_Vfov" rgb_vfov: f64 = 50.0,
+        /// rgb_Hfov
+        "rgb_Hfov" rgb_hfov: f64 = 36.0,
+        /// dep_Vfov
+        "dep_Vfov" dep_vfov: f64 = 50.0,
+        /// dep_Hfov
+        "dep_Hfov" dep_hfov: f64 = 36.0,
+        /// dep_near
+        dep_near: f64 = 0.2,
+        /// dep_far
+        dep_far: f64 = 6.0,
+    }
+}
 
 pub struct FakeDepthCamera {
     grabber: FakeFrameGrabber,
@@ -98,15 +126,11 @@ impl FakeDepthCamera {
 
 impl DeviceDriver for FakeDepthCamera {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        for k in ["rgb_h", "rgb_w", "dep_h", "dep_w"] {
-            p.float(k)?;
-        }
-        let num = |k: &str, d: f64| -> DevResult<f64> { Ok(p.float(k)?.unwrap_or(d)) };
-        self.accuracy = num("accuracy", 0.001)?;
-        self.rgb_fov = (num("rgb_Hfov", 36.0)?, num("rgb_Vfov", 50.0)?);
-        self.dep_fov = (num("dep_Hfov", 36.0)?, num("dep_Vfov", 50.0)?);
-        self.clip = (num("dep_near", 0.2)?, num("dep_far", 6.0)?);
+        let p = FakeDepthCameraParams::read(config)?;
+        self.accuracy = p.accuracy;
+        self.rgb_fov = (p.rgb_hfov, p.rgb_vfov);
+        self.dep_fov = (p.dep_hfov, p.dep_vfov);
+        self.clip = (p.dep_near, p.dep_far);
         let mut cfg = config.clone();
         cfg.put("device", Value::from("fakeFrameGrabber"));
         self.grabber.open(&cfg)?;

@@ -10,15 +10,25 @@
 
 use super::protocol::handle_rpc;
 use super::RgbdStatus;
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
-use crate::wrapper_ports::{name_and_period, Reply, Slot, WrapperPorts};
+use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property};
 
 const NAME: &str = "rgbdSensor_nws_yarp";
+
+crate::device_params! {
+    /// What `rgbdSensor_nws_yarp` reads (C++ `RgbdSensor_nws_yarp_params.md`).
+    pub struct RgbdSensorNwsYarpParams for "rgbdSensor_nws_yarp" {
+        /// refresh period of the broadcasted values in s
+        period: f64 = 0.02; "s"; check crate::params::positive,
+        /// Prefix name of the ports opened by the RGBD wrapper, e.g. /robotName/RGBD
+        name: String = required; check crate::params::port_name,
+    }
+}
 
 struct Streaming {
     stop: mpsc::Sender<()>,
@@ -120,10 +130,9 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 
 impl DeviceDriver for RgbdSensorNwsYarp {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let (name, period) = name_and_period(&p, "a port prefix starting with '/'", 0.02)?;
-        self.name = name.trim_end_matches('/').to_string();
-        self.period = period;
+        let p = RgbdSensorNwsYarpParams::read(config)?;
+        self.name = p.name.trim_end_matches('/').to_string();
+        self.period = Duration::from_secs_f64(p.period);
         let ports = WrapperPorts::open(
             NAME,
             vec![self.rgb_port_name(), self.depth_port_name()],
