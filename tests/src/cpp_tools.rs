@@ -102,14 +102,23 @@ fn cpp_read<R>(
         }
         let ns = name_client();
         let (from, to, carrier) = (port.to_string(), reader.to_string(), carrier.to_string());
+        // C++ registers a port's name before its socket listens: a refused connection
+        // right after registration is retried
         let (ok, msg) = tokio::runtime::Builder::new_current_thread()
             .enable_all()
             .build()
             .expect("runtime")
             .block_on(async move {
-                yarp_net::network::connect(&ns, &from, &to, Some(&carrier))
-                    .await
-                    .expect("connect")
+                loop {
+                    match yarp_net::network::connect(&ns, &from, &to, Some(&carrier)).await {
+                        Ok(done) => break done,
+                        Err(e) if start.elapsed() < T => {
+                            eprintln!("connect {from} -> {to}: {e}; retrying");
+                            tokio::time::sleep(Duration::from_millis(50)).await;
+                        }
+                        Err(e) => panic!("connect {from} -> {to}: {e}"),
+                    }
+                }
             });
         assert!(ok, "{port} -> {reader}: {msg}");
     }
