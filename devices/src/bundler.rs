@@ -10,11 +10,23 @@
 //! `doNotAttach` (optional bool, open both but leave them apart). Every other parameter is
 //! passed to both devices.
 
-use crate::driver::{shared, DeviceDriver, Params, PolyDriver, SharedDevice};
+use crate::driver::{shared, DeviceDriver, PolyDriver, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use yarp_proto::{Property, Value};
 
 const NAME: &str = "deviceBundler";
+
+crate::device_params! {
+    /// What `deviceBundler` reads (C++ `DeviceBundler_params.md`).
+    pub struct DeviceBundlerParams for "deviceBundler" {
+        /// Name of the wrapper device
+        wrapper_device: String = required,
+        /// Name of the subdevice that will be attached to the wrapper device
+        attached_device: String = required,
+        /// If set to true, the two devices are opened, but not attached
+        "doNotAttach" do_not_attach: bool = false,
+    }
+}
 
 pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] =
     &[(NAME, || Box::new(DeviceBundler::default()))];
@@ -57,29 +69,11 @@ impl DeviceBundler {
 impl DeviceDriver for DeviceBundler {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        let p = Params::new(NAME, config);
-        let wrapper_name = p
-            .string("wrapper_device")?
-            .ok_or_else(|| p.missing("wrapper_device"))?;
-        let attached_name = p
-            .string("attached_device")?
-            .ok_or_else(|| p.missing("attached_device"))?;
-        let do_not_attach = match p.find("doNotAttach") {
-            None => false,
-            Some(v) => match (v.as_bool(), v.as_str()) {
-                (Some(b), _) => b,
-                (None, Some("true")) => true,
-                (None, Some("false")) => false,
-                _ => {
-                    return Err(DeviceError::BadParam {
-                        device: NAME.into(),
-                        param: "doNotAttach".into(),
-                        expected: "a bool",
-                        got: v.to_string(),
-                    })
-                }
-            },
-        };
+        let DeviceBundlerParams {
+            wrapper_device: wrapper_name,
+            attached_device: attached_name,
+            do_not_attach,
+        } = DeviceBundlerParams::read(config)?;
 
         tracing::info!("{NAME}: opening device {wrapper_name}");
         let wrapper = shared(PolyDriver::open(&config_for(config, &wrapper_name))?);

@@ -168,6 +168,14 @@ impl ParamType for bool {
     }
 }
 
+/// Any value, for a parameter checked by hand.
+impl ParamType for Value {
+    const TYPE: &'static str = "value";
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+        Ok(p.find(key).cloned())
+    }
+}
+
 /// Seconds, as C++ declares a period or timeout (`double`, unit `s`).
 impl ParamType for Duration {
     const TYPE: &'static str = "double";
@@ -223,6 +231,33 @@ impl ParamType for Vec<String> {
             (v.is_string() || v.is_vocab()).then(|| as_string(v))
         })
     }
+}
+
+/// A number C++ takes only when written as a float (`0.02`, not `1`): its parsers use
+/// `isFloat64()` before reading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FloatOnly(pub f64);
+
+impl ParamType for FloatOnly {
+    const TYPE: &'static str = "double";
+    fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
+        match p.find(key) {
+            None => Ok(None),
+            Some(v) if v.is_float() => Ok(v.as_f64().map(FloatOnly)),
+            Some(v) => Err(p.invalid(key, "a float number such as 0.02 (C++ rejects integers)", v)),
+        }
+    }
+}
+
+impl IntoDefault<FloatOnly> for f64 {
+    fn into_default(self) -> FloatOnly {
+        FloatOnly(self)
+    }
+}
+
+/// A [`FloatOnly`] duration in seconds greater than zero.
+pub fn positive_float(x: &FloatOnly) -> Result<(), &'static str> {
+    positive(&x.0)
 }
 
 /// How a declared default becomes the parameter's value: the value itself, a `&str` for

@@ -12,7 +12,7 @@
 //! The mapping is computed by the pure [`Layout::resolve`]; the device then forwards every
 //! interface call to the owning board.
 
-use crate::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
+use crate::driver::{DeviceDriver, IMultipleWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::interfaces::*;
 use parking_lot::MutexGuard;
@@ -23,6 +23,20 @@ use yarp_proto::{Bottle, Property, Value, Vocab32};
 
 /// The C++ device name.
 pub const NAME: &str = "controlboardremapper";
+
+crate::device_params! {
+    /// What `controlboardremapper` reads (C++ `ControlBoardRemapper`'s documentation):
+    /// either `axesNames`, or `networks` with `joints` and, for each network named, a
+    /// line `NAME partFirst partLast boardFirst boardLast`.
+    pub struct ControlBoardRemapperParams for "controlboardremapper" {
+        /// the axes of the remapped board, by name, from the boards attached
+        "axesNames" axes_names: Vec<String> = optional,
+        /// the boards attached, by their key in attachAll (old-style layout)
+        networks: Vec<String> = optional,
+        /// number of joints of the remapped board (with networks)
+        joints: usize = optional,
+    }
+}
 
 /// Drivers of this family, by C++ name.
 pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] =
@@ -88,35 +102,29 @@ pub enum RemapError {
 impl Layout {
     /// Reads the layout from the device configuration (C++ parameter names).
     pub fn from_config(config: &Property) -> DevResult<Layout> {
-        let p = Params::new(NAME, config);
+        let p = ControlBoardRemapperParams::read(config)?;
         let bad = |param: &str, expected: &'static str, got: String| DeviceError::BadParam {
             device: NAME.into(),
             param: param.into(),
             expected,
             got,
         };
-        match (p.find("axesNames"), p.find("networks")) {
+        match (p.axes_names, p.networks) {
             (Some(_), Some(_)) => Err(bad(
                 "networks",
                 "absent when axesNames is given (use one of them)",
                 "both".into(),
             )),
-            (None, None) => Err(p.missing("axesNames")),
-            (Some(v), None) => {
-                let names = v
-                    .as_list()
-                    .and_then(|l| l.iter().map(|n| n.as_str().map(str::to_string)).collect())
-                    .ok_or_else(|| bad("axesNames", "a list of axis names", v.to_string()))?;
-                Ok(Layout::AxesNames(names))
-            }
-            (None, Some(v)) => {
-                let nets: Vec<String> = v
-                    .as_list()
-                    .and_then(|l| l.iter().map(|n| n.as_str().map(str::to_string)).collect())
-                    .ok_or_else(|| bad("networks", "a list of network names", v.to_string()))?;
-                let joints = p.int("joints")?.ok_or_else(|| p.missing("joints"))?;
-                let joints = usize::try_from(joints)
-                    .map_err(|_| bad("joints", "a non-negative integer", joints.to_string()))?;
+            (None, None) => Err(DeviceError::MissingParam {
+                device: NAME.into(),
+                param: "axesNames".into(),
+            }),
+            (Some(names), None) => Ok(Layout::AxesNames(names)),
+            (None, Some(nets)) => {
+                let joints = p.joints.ok_or_else(|| DeviceError::MissingParam {
+                    device: NAME.into(),
+                    param: "joints".into(),
+                })?;
                 let networks = nets
                     .iter()
                     .map(|name| network(config, name))

@@ -21,7 +21,7 @@ use super::rpc::{handle_rpc, RpcStamp};
 use super::single_port::handle_single_port;
 use super::state::{envelope_time, positions_bottle, JointData};
 use super::streaming::{handle_command, CommandMessage};
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use crate::sensors::periodic::Ticker;
@@ -40,6 +40,19 @@ use yarp_proto::{Bottle, Contact, Stamp, Vocab32};
 pub const NAME: &str = "controlBoard_nws_yarp";
 /// Publishing period when none is configured (C++ default 0.02 s).
 pub const DEFAULT_PERIOD: Duration = Duration::from_millis(20);
+
+crate::device_params! {
+    /// What `controlBoard_nws_yarp` reads (C++ `ControlBoard_nws_yarp_params.md`, and
+    /// YARP 2's `single_port`).
+    pub struct ControlBoardNwsYarpParams for "controlBoard_nws_yarp" {
+        /// period of the main thread
+        period: crate::params::FloatOnly = 0.02; "s"; check crate::params::positive_float,
+        /// Prefix name of the ports opened by the device
+        name: String = required,
+        /// one port, named `name`, serving every command (YARP 2's ServerControlBoard)
+        single_port: bool = false,
+    }
+}
 
 /// The attached device and its joint count.
 #[derive(Clone)]
@@ -532,32 +545,11 @@ impl ControlBoardNwsDevice {
 }
 
 /// Reads `period` as C++ does: a float number of seconds, greater than zero.
-fn period_param(p: &Params) -> DevResult<Duration> {
-    let Some(v) = p.find("period") else {
-        return Ok(DEFAULT_PERIOD);
-    };
-    let bad = |expected| DeviceError::BadParam {
-        device: NAME.into(),
-        param: "period".into(),
-        expected,
-        got: v.to_string(),
-    };
-    if !v.is_float() {
-        return Err(bad(
-            "a float number of seconds such as 0.02 (C++ rejects integers)",
-        ));
-    }
-    match v.as_f64() {
-        Some(s) if s > 0.0 && s.is_finite() => Ok(Duration::from_secs_f64(s)),
-        _ => Err(bad("a period in seconds greater than 0")),
-    }
-}
-
 impl DeviceDriver for ControlBoardNwsDevice {
     fn open(&mut self, config: &yarp_proto::Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let name = p.string("name")?.ok_or_else(|| p.missing("name"))?;
-        let period = period_param(&p)?;
+        let p = ControlBoardNwsYarpParams::read(config)?;
+        let name = p.name;
+        let period = Duration::from_secs_f64(p.period.0);
         let network = |e: String| DeviceError::BadParam {
             device: NAME.into(),
             param: "name".into(),
@@ -566,7 +558,7 @@ impl DeviceDriver for ControlBoardNwsDevice {
         };
         let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
         let prefix = name.clone();
-        let single = config.check("single_port");
+        let single = p.single_port;
         let server = runtime::block_on(async move {
             if single {
                 ControlBoardNws::open_single_port(&prefix, ns, period).await

@@ -13,7 +13,7 @@ use super::image::{decode_image, Image};
 use super::protocol::*;
 use super::{CameraConfig, CameraDescriptor, IFrameGrabberControls, IFrameGrabberImage};
 use super::{IRgbVisualParams, PixelCode};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use parking_lot::Mutex;
@@ -25,6 +25,20 @@ use yarp_net::port::{Incoming, Port};
 use yarp_proto::{Bottle, Property, Stamp, Value, Vocab32};
 
 const NAME: &str = "frameGrabber_nwc_yarp";
+
+crate::device_params! {
+    /// What `frameGrabber_nwc_yarp` reads (C++ `FrameGrabber_nwc_yarp_params.md`).
+    pub struct FrameGrabberNwcYarpParams for "frameGrabber_nwc_yarp" {
+        /// Prefix of the ports opened locally by the nwc for streaming and rpc operations
+        local: String = required,
+        /// Name of the remote rpc port opened by the nws
+        remote: String = required,
+        /// Protocol used for connection with the nws streaming port
+        carrier: String = "fast_tcp",
+        /// if true, no streaming connection is made: images come by rpc
+        no_stream: bool = false,
+    }
+}
 /// How long an RPC to the server may take.
 pub const RPC_TIMEOUT: Duration = Duration::from_secs(10);
 
@@ -341,13 +355,12 @@ impl FrameGrabberNwc {
 
 impl DeviceDriver for FrameGrabberNwc {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let local = p.string("local")?.ok_or_else(|| p.missing("local"))?;
-        let remote = p.string("remote")?.ok_or_else(|| p.missing("remote"))?;
-        let carrier = p.string("carrier")?.unwrap_or_else(|| "fast_tcp".into());
-        let no_stream = p
-            .find("no_stream")
-            .is_some_and(|v| v.as_bool().unwrap_or(true));
+        let FrameGrabberNwcYarpParams {
+            local,
+            remote,
+            carrier,
+            no_stream,
+        } = FrameGrabberNwcYarpParams::read(config)?;
         let network = |e: String| DeviceError::BadParam {
             device: NAME.into(),
             param: "remote".into(),

@@ -17,7 +17,7 @@ use super::protocol::{
     RGBD_PROTOCOL_VERSION, RGBD_SENSOR, STATUS,
 };
 use super::{IRGBDSensor, RgbdStatus};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::framegrabber::nwc::{reply_float, reply_int, request, ImageStream};
 use crate::framegrabber::protocol::{FOV, GET, HEIGHT, INTRINSIC_PARAM, RGB_VISUAL_PARAMS, WIDTH};
@@ -28,6 +28,30 @@ use yarp_proto::image::Image;
 use yarp_proto::{Bottle, Property, Stamp, Value};
 
 pub(crate) const NAME: &str = "RGBDSensorClient";
+
+crate::device_params! {
+    /// What `RGBDSensorClient` reads (C++ `RGBDSensorClient_params.md`).
+    pub struct RgbdSensorNwcYarpParams for "RGBDSensorClient" {
+        /// refresh period (in s) of the broadcasted values through yarp ports
+        period: f64 = 0.03; "s",
+        /// Full name of the local image streaming port to open
+        "localImagePort" local_image_port: String = required,
+        /// Full name of the local depth streaming port to open
+        "localDepthPort" local_depth_port: String = required,
+        /// Full name of the remote image port to connect to
+        "remoteImagePort" remote_image_port: String = required,
+        /// Full name of the remote depth port to connect to
+        "remoteDepthPort" remote_depth_port: String = required,
+        /// Full name of the local rpc port to open
+        "localRpcPort" local_rpc_port: String = required,
+        /// Full name of the remote rpc port to connect to
+        "remoteRpcPort" remote_rpc_port: String = required,
+        /// Carrier for the image stream
+        "ImageCarrier" image_carrier: String = "udp",
+        /// Carrier for the depth stream
+        "DepthCarrier" depth_carrier: String = "udp",
+    }
+}
 
 /// The ports of an open client.
 struct Client {
@@ -59,18 +83,17 @@ struct Names {
 }
 
 impl Names {
-    fn of(p: &Params) -> DevResult<Names> {
-        let need = |k: &str| p.string(k)?.ok_or_else(|| p.missing(k));
-        Ok(Names {
-            local_image: need("localImagePort")?,
-            local_depth: need("localDepthPort")?,
-            local_rpc: need("localRpcPort")?,
-            remote_image: need("remoteImagePort")?,
-            remote_depth: need("remoteDepthPort")?,
-            remote_rpc: need("remoteRpcPort")?,
-            image_carrier: p.string("ImageCarrier")?.unwrap_or_else(|| "udp".into()),
-            depth_carrier: p.string("DepthCarrier")?.unwrap_or_else(|| "udp".into()),
-        })
+    fn of(p: RgbdSensorNwcYarpParams) -> Names {
+        Names {
+            local_image: p.local_image_port,
+            local_depth: p.local_depth_port,
+            local_rpc: p.local_rpc_port,
+            remote_image: p.remote_image_port,
+            remote_depth: p.remote_depth_port,
+            remote_rpc: p.remote_rpc_port,
+            image_carrier: p.image_carrier,
+            depth_carrier: p.depth_carrier,
+        }
     }
 }
 
@@ -163,8 +186,7 @@ fn malformed(reply: &Bottle) -> DeviceError {
 
 impl DeviceDriver for RgbdSensorClient {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let names = Names::of(&p)?;
+        let names = Names::of(RgbdSensorNwcYarpParams::read(config)?);
         let remote = names.remote_rpc.clone();
         let client =
             runtime::block_on(open_client(names)).map_err(|got| DeviceError::BadParam {

@@ -9,8 +9,7 @@
 
 use super::analog_server::{CALIBRATE, CALIBRATE_CHANNEL, IANALOG};
 use super::interfaces::{AnalogStatus, IAnalogSensor};
-use super::params::required_string;
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use parking_lot::Mutex;
@@ -20,6 +19,18 @@ use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Stamp, Value};
 
 const NAME: &str = "analogsensorclient";
+
+crate::device_params! {
+    /// What `analogsensorclient` reads (C++ `AnalogSensorClient::open`).
+    pub struct AnalogSensorClientParams for "analogsensorclient" {
+        /// the port opened by this device, receiving the stream
+        local: String = required,
+        /// the analogServer's stream port
+        remote: String = required,
+        /// default carrier for streaming robot state
+        carrier: String = "udp",
+    }
+}
 /// C++ `ANALOG_TIMEOUT` (ms): older envelopes make the status `Timeout`.
 const ANALOG_TIMEOUT_MS: f64 = 100.0;
 const RPC_TIMEOUT: Duration = Duration::from_secs(10);
@@ -141,10 +152,11 @@ impl AnalogSensorClient {
 
 impl DeviceDriver for AnalogSensorClient {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let local = required_string(&p, "local")?;
-        let remote = required_string(&p, "remote")?;
-        let carrier = p.string("carrier")?.unwrap_or_else(|| "udp".into());
+        let AnalogSensorClientParams {
+            local,
+            remote,
+            carrier,
+        } = AnalogSensorClientParams::read(config)?;
         self.close()?;
         let ns = yarp_net::network::name_client()
             .map_err(|e| network_error("local", format!("name server: {e}")))?;

@@ -9,7 +9,7 @@
 //! sensor's int32 result, anything else `[fail]`. Messages carry an envelope.
 
 use super::interfaces::{AnalogStatus, IAnalogSensor};
-use super::params::now;
+use super::params::{now, positive_ms};
 use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
@@ -21,6 +21,28 @@ use yarp_net::port::{Port, PortError};
 use yarp_proto::{Bottle, Property, Stamp, Value, Vocab32};
 
 const NAME: &str = "analogServer";
+
+/// `deviceId` went with C++ YARP 3.
+fn removed(_: &yarp_proto::Value) -> Result<(), &'static str> {
+    Err("absent (removed in C++ YARP 3; give the full port as `name`, e.g. /icub/left_arm/analog:o)")
+}
+
+crate::device_params! {
+    /// What `analogServer` reads (C++ `AnalogWrapper::open`): one port `name`, or the
+    /// `ports` list with `channels` and, for each port, a line `PORT wBase wTop base top`.
+    pub struct AnalogServerParams for "analogServer" {
+        /// Refresh period of the broadcasted values
+        period: f64 = required; "ms"; check positive_ms,
+        /// Removed in C++ YARP 3
+        "deviceId" device_id: yarp_proto::Value = optional; check removed,
+        /// The port streaming the values (without `ports`)
+        name: String = required,
+        /// The ports the channels are split over
+        ports: Vec<String> = optional,
+        /// Number of channels of the device (with `ports`)
+        channels: i64 = optional,
+    }
+}
 /// C++ `VOCAB_IANALOG`, `VOCAB_CALIBRATE`, `VOCAB_CALIBRATE_CHANNEL`.
 pub(crate) const IANALOG: Vocab32 = Vocab32::new("iana");
 pub(crate) const CALIBRATE: Vocab32 = Vocab32::new("cal");
@@ -302,26 +324,8 @@ fn network_error(name: &str, e: impl std::fmt::Display) -> DeviceError {
 
 impl DeviceDriver for AnalogServer {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let period = p.float("period")?.ok_or_else(|| p.missing("period"))?;
-        if !(period > 0.0 && period.is_finite()) {
-            return Err(DeviceError::BadParam {
-                device: NAME.into(),
-                param: "period".into(),
-                expected: "a positive period in ms",
-                got: period.to_string(),
-            });
-        }
-        if let Some(id) = p.find("deviceId") {
-            return Err(DeviceError::BadParam {
-                device: NAME.into(),
-                param: "deviceId".into(),
-                expected: "absent (removed in C++ YARP 3; give the full port as `name`, e.g. /icub/left_arm/analog:o)",
-                got: id.to_string(),
-            });
-        }
-        let name = p.string("name")?.ok_or_else(|| p.missing("name"))?;
-        let entries = port_entries(&p, &name)?;
+        let AnalogServerParams { period, name, .. } = AnalogServerParams::read(config)?;
+        let entries = port_entries(&Params::new(NAME, config), &name)?;
         self.close()?;
         let ns = yarp_net::network::name_client().map_err(|e| network_error(&name, e))?;
         let (e2, ns2) = (entries.clone(), ns.clone());

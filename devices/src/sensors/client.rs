@@ -13,10 +13,10 @@
 use super::family::SensorFamily;
 use super::forward::{impl_mas_interfaces, mas_views, FamilySource};
 use super::interfaces::*;
-use super::params::{bool_param, now, required_string};
+use super::params::now;
 use super::rpc::GET_METADATA;
 use super::wire::{SensorRpcData, SensorStreamingData};
-use crate::driver::{DeviceDriver, Params};
+use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use parking_lot::Mutex;
@@ -27,6 +27,22 @@ use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property};
 
 const NAME: &str = "multipleanalogsensorsclient";
+
+crate::device_params! {
+    /// What `multipleanalogsensorsclient` reads (C++ `MultipleAnalogSensorsClient_params.md`).
+    pub struct MultipleAnalogSensorsClientParams for "multipleanalogsensorsclient" {
+        /// Prefix of the ports to which to connect, opened by MultipleAnalogSensorsServer device.
+        remote: String = required,
+        /// Port prefix of the ports opened by this device.
+        local: String = required,
+        /// Timeout after which the device reports an error if no measurement was received.
+        timeout: f64 = 0.02; "s",
+        /// If set to true, the connection to the rpc port of the MAS server is skipped and it is possible to connect to the data source externally after being opened
+        "externalConnection" external_connection: bool = false,
+        /// The carier used for the connection with the server.
+        carrier: String = "tcp",
+    }
+}
 /// How long open waits for the server's metadata.
 const RPC_TIMEOUT: Duration = Duration::from_secs(10);
 
@@ -266,14 +282,14 @@ impl MultipleAnalogSensorsClient {
 
 impl DeviceDriver for MultipleAnalogSensorsClient {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
+        let p = MultipleAnalogSensorsClientParams::read(config)?;
         let settings = Settings {
-            remote: required_string(&p, "remote")?,
-            local: required_string(&p, "local")?,
-            carrier: p.string("carrier")?.unwrap_or_else(|| "tcp".into()),
-            external: bool_param(&p, "externalConnection")?.unwrap_or(false),
+            remote: p.remote,
+            local: p.local,
+            carrier: p.carrier,
+            external: p.external_connection,
         };
-        self.timeout = p.float("timeout")?.unwrap_or(0.02);
+        self.timeout = p.timeout;
         self.close()?;
         let ns = yarp_net::network::name_client()
             .map_err(|e| network_error("local", format!("name server: {e}")))?;

@@ -6,11 +6,19 @@
 
 use super::interfaces::*;
 use super::params::now;
-use crate::driver::{DeviceDriver, Params};
-use crate::error::{DevResult, DeviceError};
+use crate::driver::DeviceDriver;
+use crate::error::DevResult;
 use yarp_proto::Property;
 
-const NAME: &str = "fakeAnalogSensor";
+crate::device_params! {
+    /// What `fakeAnalogSensor` reads (C++ `FakeAnalogSensor_params.md`).
+    pub struct FakeAnalogSensorParams for "fakeAnalogSensor" {
+        /// thread period
+        period: f64 = 1.0; "s",
+        /// Number of channels
+        "channelsNum" channels_num: usize = 1; min 1,
+    }
+}
 
 /// The simulated analog sensor.
 #[derive(Debug, Clone)]
@@ -41,19 +49,9 @@ impl FakeAnalogSensor {
 
 impl DeviceDriver for FakeAnalogSensor {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        self.period = p.float("period")?.unwrap_or(1.0);
-        let n = p.int("channelsNum")?.unwrap_or(1);
-        self.channels =
-            usize::try_from(n)
-                .ok()
-                .filter(|n| *n > 0)
-                .ok_or_else(|| DeviceError::BadParam {
-                    device: NAME.into(),
-                    param: "channelsNum".into(),
-                    expected: "a positive number of channels",
-                    got: n.to_string(),
-                })?;
+        let p = FakeAnalogSensorParams::read(config)?;
+        self.period = p.period;
+        self.channels = p.channels_num;
         Ok(())
     }
 

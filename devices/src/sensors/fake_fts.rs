@@ -7,12 +7,22 @@
 //! at 360); the timestamp is the time of the latest step.
 
 use super::interfaces::*;
-use super::params::{bool_param, now, period_ms};
-use crate::driver::{DeviceDriver, Params};
+use super::params::{now, positive_ms};
+use crate::driver::DeviceDriver;
 use crate::error::DevResult;
-use yarp_proto::{Property, Value};
+use yarp_proto::Property;
 
-const NAME: &str = "fakeFTs";
+crate::device_params! {
+    /// What `fakeFTs` reads (our fake of the force-torque sensors a robot's MAS serves).
+    pub struct FakeFtsParams for "fakeFTs" {
+        /// Period over which the measurement is updated.
+        period: f64 = 10.0; "ms"; check positive_ms,
+        /// If the parameter is present, the fake sensor values never change
+        "constantValue" constant_value: bool = false,
+        /// The names of the sensors, one six-axis force-torque sensor each
+        "sensorNames" sensor_names: Vec<String> = required,
+    }
+}
 
 /// The simulated F/T sensors.
 #[derive(Debug, Clone)]
@@ -55,7 +65,7 @@ impl FakeFts {
         if i < self.names.len() {
             Ok(())
         } else {
-            Err(no_sensor(NAME, i, self.names.len()))
+            Err(no_sensor(FakeFtsParams::DEVICE, i, self.names.len()))
         }
     }
 
@@ -80,17 +90,10 @@ impl FakeFts {
 
 impl DeviceDriver for FakeFts {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        self.period = period_ms(&p, "period")?.unwrap_or(0.01);
-        self.constant = bool_param(&p, "constantValue")?.unwrap_or(false);
-        self.names = p
-            .vector("sensorNames", "a list of sensor names", |v| match v {
-                Value::String(_) | Value::Vocab32(_) => {
-                    Some(String::from_utf8_lossy(&v.to_text_bare()).into_owned())
-                }
-                _ => None,
-            })?
-            .ok_or_else(|| p.missing("sensorNames"))?;
+        let p = FakeFtsParams::read(config)?;
+        self.period = p.period / 1000.0;
+        self.constant = p.constant_value;
+        self.names = p.sensor_names;
         self.start = now();
         Ok(())
     }

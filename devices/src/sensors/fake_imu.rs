@@ -11,12 +11,26 @@
 //! no thread is needed; the timestamp is the time of the latest step.
 
 use super::interfaces::*;
-use super::params::{bool_param, now, period_ms};
-use crate::driver::{DeviceDriver, Params};
+use super::params::{now, positive_ms};
+use crate::driver::DeviceDriver;
 use crate::error::DevResult;
 use yarp_proto::Property;
 
 const NAME: &str = "fakeIMU";
+
+crate::device_params! {
+    /// What `fakeIMU` reads (C++ `FakeIMU_params.md`; the period may have a fraction).
+    pub struct FakeImuParams for "fakeIMU" {
+        /// Period over which the measurement is updated.
+        period: f64 = 10.0; "ms"; check positive_ms,
+        /// If the parameter is present, the fake sensor values never changes (useful for testing server/client coherence).
+        "constantValue" constant_value: bool = false,
+        /// Name of the sensor
+        "sensorName" sensor_name: String = "sensorName",
+        /// Name of the frame
+        "frameName" frame_name: String = "frameName",
+    }
+}
 const GRAVITY: f64 = 9.81;
 /// The C++ device's truncated pi: the readings must match its bits.
 #[allow(clippy::approx_constant)]
@@ -104,15 +118,11 @@ impl FakeImu {
 
 impl DeviceDriver for FakeImu {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        self.period = period_ms(&p, "period")?.unwrap_or(0.01);
-        self.constant = bool_param(&p, "constantValue")?.unwrap_or(false);
-        if let Some(s) = p.string("sensorName")? {
-            self.sensor_name = s;
-        }
-        if let Some(s) = p.string("frameName")? {
-            self.frame_name = s;
-        }
+        let p = FakeImuParams::read(config)?;
+        self.period = p.period / 1000.0;
+        self.constant = p.constant_value;
+        self.sensor_name = p.sensor_name;
+        self.frame_name = p.frame_name;
         self.start = now();
         Ok(())
     }

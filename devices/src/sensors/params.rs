@@ -12,6 +12,14 @@ pub fn bool_param(p: &Params<'_>, key: &str) -> DevResult<Option<bool>> {
     p.boolean(key)
 }
 
+/// A period in milliseconds greater than zero (C++ `int`, floats accepted).
+pub fn positive_ms(ms: &f64) -> Result<(), &'static str> {
+    match *ms > 0.0 && ms.is_finite() {
+        true => Ok(()),
+        false => Err("a positive period in ms"),
+    }
+}
+
 /// A period given in milliseconds (C++ `int`, floats accepted), as seconds.
 pub fn period_ms(p: &Params<'_>, key: &str) -> DevResult<Option<f64>> {
     match p.float(key)? {
@@ -24,9 +32,4 @@ pub fn period_ms(p: &Params<'_>, key: &str) -> DevResult<Option<f64>> {
             got: ms.to_string(),
         }),
     }
-}
-
-/// A required string parameter.
-pub fn required_string(p: &Params<'_>, key: &str) -> DevResult<String> {
-    p.string(key)?.ok_or_else(|| p.missing(key))
 }

@@ -10,11 +10,42 @@
 use super::family::{access, SensorFamily, FAMILY_COUNT};
 use super::forward::{impl_mas_interfaces, mas_views, FamilySource};
 use super::interfaces::*;
-use crate::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
+use crate::driver::{DeviceDriver, IMultipleWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
-use yarp_proto::{Property, Value};
+use yarp_proto::Property;
 
 const NAME: &str = "multipleanalogsensorsremapper";
+
+crate::device_params! {
+    /// What `multipleanalogsensorsremapper` reads (C++ `MultipleAnalogSensorsRemapper`):
+    /// for each family, the sensors to expose; at least one family is required.
+    pub struct MultipleAnalogSensorsRemapperParams for "multipleanalogsensorsremapper" {
+        /// The ThreeAxisGyroscopes to expose, by name, in this order
+        "ThreeAxisGyroscopesNames" three_axis_gyroscopes: Vec<String> = optional,
+        /// The ThreeAxisLinearAccelerometers to expose, by name, in this order
+        "ThreeAxisLinearAccelerometersNames" three_axis_linear_accelerometers: Vec<String> = optional,
+        /// The ThreeAxisMagnetometers to expose, by name, in this order
+        "ThreeAxisMagnetometersNames" three_axis_magnetometers: Vec<String> = optional,
+        /// The OrientationSensors to expose, by name, in this order
+        "OrientationSensorsNames" orientation_sensors: Vec<String> = optional,
+        /// The TemperatureSensors to expose, by name, in this order
+        "TemperatureSensorsNames" temperature_sensors: Vec<String> = optional,
+        /// The SixAxisForceTorqueSensors to expose, by name, in this order
+        "SixAxisForceTorqueSensorsNames" six_axis_force_torque_sensors: Vec<String> = optional,
+        /// The ContactLoadCellArrays to expose, by name, in this order
+        "ContactLoadCellArraysNames" contact_load_cell_arrays: Vec<String> = optional,
+        /// The EncoderArrays to expose, by name, in this order
+        "EncoderArraysNames" encoder_arrays: Vec<String> = optional,
+        /// The SkinPatches to expose, by name, in this order
+        "SkinPatchesNames" skin_patches: Vec<String> = optional,
+        /// The PositionSensors to expose, by name, in this order
+        "PositionSensorsNames" position_sensors: Vec<String> = optional,
+        /// The LinearVelocitySensors to expose, by name, in this order
+        "LinearVelocitySensorsNames" linear_velocity_sensors: Vec<String> = optional,
+        /// The ThreeAxisAngularAccelerometers to expose, by name, in this order
+        "ThreeAxisAngularAccelerometersNames" three_axis_angular_accelerometers: Vec<String> = optional,
+    }
+}
 
 /// Where a remapped sensor lives: attached device and its index there.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -103,16 +134,32 @@ fn locate(
 
 impl DeviceDriver for MultipleAnalogSensorsRemapper {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
+        let p = MultipleAnalogSensorsRemapperParams::read(config)?;
         for family in SensorFamily::ALL {
-            let key = format!("{}Names", family.tag());
-            self.wanted[family.index()] = p.vector(&key, "a list of sensor names", |v| {
-                matches!(v, Value::String(_) | Value::Vocab32(_))
-                    .then(|| String::from_utf8_lossy(&v.to_text_bare()).into_owned())
-            })?;
+            self.wanted[family.index()] = match family {
+                SensorFamily::ThreeAxisGyroscopes => p.three_axis_gyroscopes.clone(),
+                SensorFamily::ThreeAxisLinearAccelerometers => {
+                    p.three_axis_linear_accelerometers.clone()
+                }
+                SensorFamily::ThreeAxisMagnetometers => p.three_axis_magnetometers.clone(),
+                SensorFamily::OrientationSensors => p.orientation_sensors.clone(),
+                SensorFamily::TemperatureSensors => p.temperature_sensors.clone(),
+                SensorFamily::SixAxisForceTorqueSensors => p.six_axis_force_torque_sensors.clone(),
+                SensorFamily::ContactLoadCellArrays => p.contact_load_cell_arrays.clone(),
+                SensorFamily::EncoderArrays => p.encoder_arrays.clone(),
+                SensorFamily::SkinPatches => p.skin_patches.clone(),
+                SensorFamily::PositionSensors => p.position_sensors.clone(),
+                SensorFamily::LinearVelocitySensors => p.linear_velocity_sensors.clone(),
+                SensorFamily::ThreeAxisAngularAccelerometers => {
+                    p.three_axis_angular_accelerometers.clone()
+                }
+            };
         }
         if self.wanted.iter().all(Option::is_none) {
-            return Err(p.missing("SixAxisForceTorqueSensorsNames (or another <family>Names)"));
+            return Err(DeviceError::MissingParam {
+                device: NAME.into(),
+                param: "SixAxisForceTorqueSensorsNames (or another <family>Names)".into(),
+            });
         }
         Ok(())
     }

@@ -7,10 +7,10 @@
 
 use super::family::{access, SensorFamily};
 use super::interfaces::{MasStatus, SensorMeasurement};
-use super::params::{now, period_ms, required_string};
+use super::params::{now, positive_ms};
 use super::rpc::{fail_reply, handle_rpc};
 use super::wire::{SensorMetadata, SensorRpcData, SensorStreamingData};
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use std::sync::Arc;
@@ -21,6 +21,17 @@ use yarp_net::port::{Port, PortError};
 use yarp_proto::{Property, Stamp};
 
 const NAME: &str = "multipleanalogsensorsserver";
+
+crate::device_params! {
+    /// What `multipleanalogsensorsserver` reads (C++ `MultipleAnalogSensorsServer_params.md`;
+    /// the period may have a fraction).
+    pub struct MultipleAnalogSensorsServerParams for "multipleanalogsensorsserver" {
+        /// Prefix of the port opened by this device
+        name: String = required; check crate::params::port_name,
+        /// Refresh period of the broadcasted values in ms
+        period: f64 = required; "ms"; check positive_ms,
+    }
+}
 
 /// Why a measurement message could not be made (C++ then sends nothing that period).
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -234,19 +245,9 @@ impl MultipleAnalogSensorsServer {
 
 impl DeviceDriver for MultipleAnalogSensorsServer {
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let name = required_string(&p, "name")?;
-        if !name.starts_with('/') {
-            return Err(DeviceError::BadParam {
-                device: NAME.into(),
-                param: "name".into(),
-                expected: "a port prefix starting with '/'",
-                got: name,
-            });
-        }
-        let period = period_ms(&p, "period")?.ok_or_else(|| p.missing("period"))?;
-        self.name = name.trim_end_matches('/').to_string();
-        self.period = Duration::from_secs_f64(period);
+        let p = MultipleAnalogSensorsServerParams::read(config)?;
+        self.name = p.name.trim_end_matches('/').to_string();
+        self.period = Duration::from_secs_f64(p.period / 1000.0);
         Ok(())
     }
 

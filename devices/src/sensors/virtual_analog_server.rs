@@ -38,6 +38,26 @@ use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Value};
 
 const NAME: &str = "virtualAnalogServer";
+
+/// `deviceId` is deprecated in C++.
+fn deprecated(_: &Value) -> Result<(), &'static str> {
+    Err("absent (deprecated in C++; give the full port as `name`, e.g. /icub/joint_vsens/left_arm:i)")
+}
+
+crate::device_params! {
+    /// What `virtualAnalogServer` reads (C++ `VirtualAnalogWrapper::open`), besides the
+    /// line `NETWORK base top wBase wTop` of each of the `networks`.
+    pub struct VirtualAnalogServerParams for "virtualAnalogServer" {
+        /// The boards attached, by their key in attachAll
+        networks: Vec<String> = required,
+        /// The robot's name (required by C++, unused)
+        "robotName" robot_name: Value = required,
+        /// The port receiving the torques (a leading '/' is added when missing)
+        name: String = "controlboard",
+        /// Deprecated in C++
+        "deviceId" device_id: Value = optional; check deprecated,
+    }
+}
 /// C++ `MAX_ENTRIES`: channel and board indices are below this.
 const MAX_ENTRIES: i64 = 255;
 /// C++ resets the torques when nothing arrived for 80 ms.
@@ -381,20 +401,8 @@ impl VirtualAnalogServer {
 impl DeviceDriver for VirtualAnalogServer {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        let p = Params::new(NAME, config);
-        let map = TorqueMap::from_config(&p)?;
-        if p.find("robotName").is_none() {
-            return Err(p.missing("robotName"));
-        }
-        if let Some(id) = p.find("deviceId") {
-            return Err(DeviceError::BadParam {
-                device: NAME.into(),
-                param: "deviceId".into(),
-                expected: "absent (deprecated in C++; give the full port as `name`, e.g. /icub/joint_vsens/left_arm:i)",
-                got: id.to_string(),
-            });
-        }
-        let mut name = p.string("name")?.unwrap_or_else(|| "controlboard".into());
+        let map = TorqueMap::from_config(&Params::new(NAME, config))?;
+        let mut name = VirtualAnalogServerParams::read(config)?.name;
         if !name.starts_with('/') {
             name.insert(0, '/');
         }
