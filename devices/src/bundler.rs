@@ -67,6 +67,10 @@ impl DeviceBundler {
 }
 
 impl DeviceDriver for DeviceBundler {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        DeviceBundlerParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
         let DeviceBundlerParams {

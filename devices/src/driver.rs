@@ -85,6 +85,11 @@ pub trait ICalibrator {
 pub trait DeviceDriver: Send {
     /// Configures and starts the device.
     fn open(&mut self, config: &Property) -> DevResult<()>;
+    /// The parameters the device reads, as declared with [`crate::device_params!`]
+    /// (what `--help` prints); empty for a device that declares none.
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        &[]
+    }
     /// Stops the device; it may be reopened.
     fn close(&mut self) -> DevResult<()> {
         Ok(())

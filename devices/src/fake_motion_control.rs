@@ -238,6 +238,10 @@ impl FakeMotionControl {
 }
 
 impl DeviceDriver for FakeMotionControl {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FakeMotionControlParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = FakeMotionControlParams::read(config)?;
         // C++ reads only GENERAL::Joints; the other names are older ones we still take

@@ -363,6 +363,10 @@ macro_rules! on {
 }
 
 impl DeviceDriver for ControlBoardRemapper {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        ControlBoardRemapperParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.layout = Some(Layout::from_config(config)?);
         Ok(())

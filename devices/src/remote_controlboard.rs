@@ -511,6 +511,10 @@ fn j32(j: usize) -> i32 {
 }
 
 impl DeviceDriver for RemoteControlBoard {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        RemoteControlBoardParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let s = settings(config)?;
         let remote = s.remote.clone();

@@ -166,6 +166,10 @@ fn wall_clock() -> f64 {
 }
 
 impl DeviceDriver for TestMotor {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        TestMotorParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = TestMotorParams::read(config)?;
         let (n, speed) = (p.axes, p.speed);

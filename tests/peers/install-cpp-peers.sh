@@ -27,8 +27,9 @@ peers=${CPP_PEERS_SRC:-$(cd "$here/../../.." && pwd)/shared/peers}
 
 apt_packages=(cmake g++ make ninja-build pkg-config libace-dev libsqlite3-dev libeigen3-dev
     libjpeg-dev zlib1g-dev libtinyxml-dev libedit-dev ccache)
-# Devices of YARP kept on top of build.sh's list: the fakes our live tests serve from C++.
-extra_yarp_3="fakeAnalogSensor"
+# Devices of YARP kept on top of build.sh's list: the fakes our live tests serve from C++,
+# and deviceBundler, through which a real yarpdev serves a device that has a wrapper.
+extra_yarp_3="fakeAnalogSensor deviceBundler"
 extra_yarp_4=""
 # icub-main devices robots' files name that build.sh leaves off. (fineCalibrationChecker is
 # not among them: it draws its report with OpenCV, which build.sh turns off, and no robot of

@@ -129,6 +129,11 @@ fn cpp_device_list(bin: &Path) -> BTreeSet<String> {
     .clone()
 }
 
+/// The device names the C++ `yarpdev --list` of `bin` reports.
+pub fn cpp_device_names(bin: &Path) -> BTreeSet<String> {
+    cpp_device_list(bin)
+}
+
 /// The C++ bin directory when its `yarpdev --list` has every device of `devices`, or
 /// `None` after [`peer_missing`] naming the absent ones.
 #[track_caller]

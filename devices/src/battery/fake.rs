@@ -95,6 +95,10 @@ impl FakeBattery {
 }
 
 impl DeviceDriver for FakeBattery {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FakeBatteryParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = FakeBatteryParams::read(config)?;
         self.period = p.period;

@@ -77,6 +77,10 @@ impl BatteryNwcYarp {
 }
 
 impl DeviceDriver for BatteryNwcYarp {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        BatteryNwcYarpParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let BatteryNwcYarpParams {
             local,

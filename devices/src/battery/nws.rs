@@ -143,6 +143,10 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 }
 
 impl DeviceDriver for BatteryNwsYarp {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        BatteryNwsYarpParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = BatteryNwsYarpParams::read(config)?;
         self.log = p.enable_log;

@@ -546,6 +546,10 @@ impl ControlBoardNwsDevice {
 
 /// Reads `period` as C++ does: a float number of seconds, greater than zero.
 impl DeviceDriver for ControlBoardNwsDevice {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        ControlBoardNwsYarpParams::PARAMS
+    }
+
     fn open(&mut self, config: &yarp_proto::Property) -> DevResult<()> {
         let p = ControlBoardNwsYarpParams::read(config)?;
         let name = p.name;

@@ -467,6 +467,10 @@ impl FakeFrameGrabber {
 }
 
 impl DeviceDriver for FakeFrameGrabber {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FakeFrameGrabberParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = FakeFrameGrabberParams::read(config)?;
         self.width = p.width;

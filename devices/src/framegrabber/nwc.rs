@@ -354,6 +354,10 @@ impl FrameGrabberNwc {
 }
 
 impl DeviceDriver for FrameGrabberNwc {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FrameGrabberNwcYarpParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let FrameGrabberNwcYarpParams {
             local,

@@ -250,6 +250,10 @@ impl FrameGrabberNws {
 }
 
 impl DeviceDriver for FrameGrabberNws {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FrameGrabberNwsYarpParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = FrameGrabberNwsYarpParams::read(config)?;
         self.name = p.name;

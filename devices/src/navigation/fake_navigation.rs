@@ -47,6 +47,10 @@ impl FakeNavigation {
 }
 
 impl DeviceDriver for FakeNavigation {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FakeNavigationParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         FakeNavigationParams::read(config)?;
         Ok(())

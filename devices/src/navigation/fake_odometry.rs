@@ -65,6 +65,10 @@ impl FakeOdometry2D {
 }
 
 impl DeviceDriver for FakeOdometry2D {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FakeOdometry2DParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.period = FakeOdometry2DParams::read(config)?.period;
         self.opened = Some(Instant::now());

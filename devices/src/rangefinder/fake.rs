@@ -181,6 +181,10 @@ fn now_s() -> f64 {
 }
 
 impl DeviceDriver for FakeLaser {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FakeLaserParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = FakeLaserParams::read(config)?;
         let constant = p.const_distance;

@@ -75,6 +75,10 @@ impl Rangefinder2DNwcYarp {
 }
 
 impl DeviceDriver for Rangefinder2DNwcYarp {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        Rangefinder2DNwcYarpParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let Rangefinder2DNwcYarpParams {
             local,

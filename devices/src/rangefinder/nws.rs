@@ -114,6 +114,10 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 }
 
 impl DeviceDriver for Rangefinder2DNwsYarp {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        Rangefinder2DNwsYarpParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = Rangefinder2DNwsYarpParams::read(config)?;
         self.name = p.name;

@@ -125,6 +125,10 @@ impl FakeDepthCamera {
 }
 
 impl DeviceDriver for FakeDepthCamera {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FakeDepthCameraParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = FakeDepthCameraParams::read(config)?;
         self.accuracy = p.accuracy;

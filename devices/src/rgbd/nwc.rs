@@ -185,6 +185,10 @@ fn malformed(reply: &Bottle) -> DeviceError {
 }
 
 impl DeviceDriver for RgbdSensorClient {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        RgbdSensorNwcYarpParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let names = Names::of(RgbdSensorNwcYarpParams::read(config)?);
         let remote = names.remote_rpc.clone();

@@ -129,6 +129,10 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 }
 
 impl DeviceDriver for RgbdSensorNwsYarp {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        RgbdSensorNwsYarpParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = RgbdSensorNwsYarpParams::read(config)?;
         self.name = p.name.trim_end_matches('/').to_string();

@@ -151,6 +151,10 @@ impl AnalogSensorClient {
 }
 
 impl DeviceDriver for AnalogSensorClient {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        AnalogSensorClientParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let AnalogSensorClientParams {
             local,

@@ -323,6 +323,10 @@ fn network_error(name: &str, e: impl std::fmt::Display) -> DeviceError {
 }
 
 impl DeviceDriver for AnalogServer {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        AnalogServerParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let AnalogServerParams { period, name, .. } = AnalogServerParams::read(config)?;
         let entries = port_entries(&Params::new(NAME, config), &name)?;

@@ -281,6 +281,10 @@ impl MultipleAnalogSensorsClient {
 }
 
 impl DeviceDriver for MultipleAnalogSensorsClient {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        MultipleAnalogSensorsClientParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = MultipleAnalogSensorsClientParams::read(config)?;
         let settings = Settings {

@@ -48,6 +48,10 @@ impl FakeAnalogSensor {
 }
 
 impl DeviceDriver for FakeAnalogSensor {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FakeAnalogSensorParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = FakeAnalogSensorParams::read(config)?;
         self.period = p.period;

@@ -89,6 +89,10 @@ impl FakeFts {
 }
 
 impl DeviceDriver for FakeFts {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FakeFtsParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = FakeFtsParams::read(config)?;
         self.period = p.period / 1000.0;

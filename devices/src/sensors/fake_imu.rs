@@ -117,6 +117,10 @@ impl FakeImu {
 }
 
 impl DeviceDriver for FakeImu {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        FakeImuParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = FakeImuParams::read(config)?;
         self.period = p.period / 1000.0;

@@ -133,6 +133,10 @@ fn locate(
 }
 
 impl DeviceDriver for MultipleAnalogSensorsRemapper {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        MultipleAnalogSensorsRemapperParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = MultipleAnalogSensorsRemapperParams::read(config)?;
         for family in SensorFamily::ALL {

@@ -244,6 +244,10 @@ impl MultipleAnalogSensorsServer {
 }
 
 impl DeviceDriver for MultipleAnalogSensorsServer {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        MultipleAnalogSensorsServerParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = MultipleAnalogSensorsServerParams::read(config)?;
         self.name = p.name.trim_end_matches('/').to_string();

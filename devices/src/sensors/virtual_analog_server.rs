@@ -399,6 +399,10 @@ impl VirtualAnalogServer {
 }
 
 impl DeviceDriver for VirtualAnalogServer {
+    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+        VirtualAnalogServerParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
         let map = TorqueMap::from_config(&Params::new(NAME, config))?;
