@@ -33,11 +33,24 @@ use yarp_proto::{Bottle, Property, Stamp};
 /// The C++ device name.
 pub const NAME: &str = "cartesiancontrollerserver";
 
-/// The C++ default control period, ms.
-const DEFAULT_PERIOD_MS: i64 = 10;
-
-/// The C++ default robot timeout, s.
-const DEFAULT_ROBOT_TIMEOUT: f64 = 1.0;
+yarp_devices::device_params! {
+    /// What `cartesiancontrollerserver` reads (icub-main's `ServerCartesianController`),
+    /// besides the groups `DRIVER_<i>` (`Key`, `JointsOrder direct|reversed`) of each driver.
+    pub struct CartesianControllerServerParams for "cartesiancontrollerserver" {
+        /// Name of the controller's ports (`/<name>/...`)
+        "GENERAL::ControllerName" controller_name: String = required,
+        /// Period of the controller
+        "GENERAL::ControllerPeriod" controller_period: i64 = 10; "ms"; in 1..=10000,
+        /// Time after which the robot's encoders count as lost
+        "GENERAL::RobotTimeout" robot_timeout: f64 = 1.0; "s"; check yarp_devices::params::positive,
+        /// The limb: arm or leg (custom chains are not supported)
+        "GENERAL::KinematicPart" kinematic_part: String = required,
+        /// The iKin limb type (e.g. right_v2)
+        "GENERAL::KinematicType" kinematic_type: String = required,
+        /// Number of the DRIVER_<i> groups
+        "GENERAL::NumberOfDrivers" number_of_drivers: i64 = required; in 1..=8,
+    }
+}
 
 /// One `DRIVER_<i>` group: which attached device feeds which links.
 #[derive(Debug, Clone, PartialEq)]
@@ -63,38 +76,19 @@ pub struct CartesianConfig {
 impl CartesianConfig {
     /// Reads the `GENERAL` and `DRIVER_<i>` groups of a device configuration.
     pub fn from_property(config: &Property) -> DevResult<Self> {
+        let declared = CartesianControllerServerParams::read(config)?;
         let p = Params::new(NAME, config);
         let req = |key: &str| -> DevResult<String> { p.string(key)?.ok_or_else(|| p.missing(key)) };
-        let name = req("GENERAL::ControllerName")?
-            .trim_start_matches('/')
-            .to_string();
+        let name = declared.controller_name.trim_start_matches('/').to_string();
         let bad = |param: &str, expected: &'static str, got: String| DeviceError::BadParam {
             device: NAME.into(),
             param: param.into(),
             expected,
             got,
         };
-        let period_ms = p
-            .int("GENERAL::ControllerPeriod")?
-            .unwrap_or(DEFAULT_PERIOD_MS);
-        if !(1..=10_000).contains(&period_ms) {
-            return Err(bad(
-                "GENERAL::ControllerPeriod",
-                "a period in ms between 1 and 10000",
-                period_ms.to_string(),
-            ));
-        }
-        let timeout = p
-            .float("GENERAL::RobotTimeout")?
-            .unwrap_or(DEFAULT_ROBOT_TIMEOUT);
-        if !(timeout > 0.0 && timeout.is_finite()) {
-            return Err(bad(
-                "GENERAL::RobotTimeout",
-                "a positive number of seconds",
-                timeout.to_string(),
-            ));
-        }
-        let part = req("GENERAL::KinematicPart")?;
+        let period_ms = declared.controller_period;
+        let timeout = declared.robot_timeout;
+        let part = declared.kinematic_part;
         let kind = match part.as_str() {
             "arm" => LimbKind::Arm,
             "leg" => LimbKind::Leg,
@@ -106,7 +100,7 @@ impl CartesianConfig {
                 ))
             }
         };
-        let kinematic_type = req("GENERAL::KinematicType")?;
+        let kinematic_type = declared.kinematic_type;
         // an unknown type is refused now, naming the known ones
         Limb::new(kind, &kinematic_type).map_err(|e| {
             bad(
@@ -115,16 +109,7 @@ impl CartesianConfig {
                 format!("{kinematic_type} ({e})"),
             )
         })?;
-        let n = p
-            .int("GENERAL::NumberOfDrivers")?
-            .ok_or_else(|| p.missing("GENERAL::NumberOfDrivers"))?;
-        if !(1..=8).contains(&n) {
-            return Err(bad(
-                "GENERAL::NumberOfDrivers",
-                "between 1 and 8",
-                n.to_string(),
-            ));
-        }
+        let n = declared.number_of_drivers;
         let mut drivers = Vec::new();
         for i in 0..n {
             let key = req(&format!("DRIVER_{i}::Key"))?;
@@ -253,6 +238,10 @@ impl Drop for CartesianControllerServer {
 }
 
 impl DeviceDriver for CartesianControllerServer {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        CartesianControllerServerParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let cfg = CartesianConfig::from_property(config)?;
         let port_name = format!("/{}/state:o", cfg.name);

@@ -29,13 +29,12 @@ use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::Duration;
 
-use yarp_devices::driver::{DeviceDriver, IMultipleWrapper, Params, SharedDevice};
+use yarp_devices::driver::{DeviceDriver, IMultipleWrapper, SharedDevice};
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::runtime;
 use yarp_devices::sensors::interfaces::*;
-use yarp_devices::sensors::params::{bool_param, period_ms};
 use yarp_net::port::Port;
-use yarp_proto::{Bottle, Property, Stamp};
+use yarp_proto::{Bottle, Property, Stamp, Value};
 
 const NAME: &str = "imuFilter";
 
@@ -415,61 +414,74 @@ impl ImuFilter {
     }
 }
 
-fn number<T>(
-    p: &Params<'_>,
-    key: &str,
-    ok: impl Fn(f64) -> Option<T>,
-    expected: &'static str,
-) -> DevResult<Option<T>> {
-    match p.float(key)? {
-        None => Ok(None),
-        Some(v) => ok(v).map(Some).ok_or_else(|| DeviceError::BadParam {
-            device: NAME.into(),
-            param: key.into(),
-            expected,
-            got: v.to_string(),
-        }),
+/// A filter order: a whole number, not negative (C++ reads it with `asInt32`).
+fn order(v: &f64) -> Result<(), &'static str> {
+    match *v >= 0.0 && v.fract() == 0.0 {
+        true => Ok(()),
+        false => Err("a non-negative integer"),
+    }
+}
+
+/// A threshold or gain: not negative.
+fn non_negative(v: &f64) -> Result<(), &'static str> {
+    match *v >= 0.0 && v.is_finite() {
+        true => Ok(()),
+        false => Err("a non-negative number"),
+    }
+}
+
+yarp_devices::device_params! {
+    /// What `imuFilter` reads (icub-main's `ImuFilter::open`).
+    pub struct ImuFilterParams for "imuFilter" {
+        /// Not supported: give the subdevice's own `remote` and `local`
+        proxy_remote: Value = optional,
+        /// The subdevice's remote port (with proxy_remote)
+        remote: Value = optional,
+        /// Order of the median filter of the gyroscope
+        "gyro-order" gyro_order: f64 = 5.0; check order,
+        /// Order of the median filter of the magnetometer
+        "mag-order" mag_order: f64 = 51.0; check order,
+        /// Magnetometer speed above which the robot is moving
+        "mag-vel-thres-up" mag_vel_thres_up: f64 = 0.04; check non_negative,
+        /// Magnetometer speed below which the robot stands still
+        "mag-vel-thres-down" mag_vel_thres_down: f64 = 0.02; check non_negative,
+        /// Gain of the gyroscope bias estimate
+        "bias-gain" bias_gain: f64 = 0.001; check non_negative,
+        /// Period of the filter
+        period: f64 = 10.0; "ms"; check yarp_devices::sensors::params::positive_ms,
+        /// Print the bias as it is estimated
+        verbose: bool = false,
+        /// Prefix of the port streaming the bias (`<name>/bias:o`)
+        name: String = "imuFilter",
     }
 }
 
 impl DeviceDriver for ImuFilter {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        ImuFilterParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        let p = Params::new(NAME, config);
-        if p.find("proxy_remote").is_some() && p.find("remote").is_none() {
+        let p = ImuFilterParams::read(config)?;
+        if let (Some(proxy), None) = (&p.proxy_remote, &p.remote) {
             return Err(DeviceError::BadParam {
                 device: NAME.into(),
                 param: "proxy_remote".into(),
                 expected: "absent: give the subdevice's own `remote` and `local`",
-                got: p
-                    .find("proxy_remote")
-                    .map(|v| v.to_string())
-                    .unwrap_or_default(),
+                got: proxy.to_string(),
             });
         }
-        let order = |v: f64| (v >= 0.0 && v.fract() == 0.0).then_some(v as usize);
-        let positive = |v: f64| (v >= 0.0 && v.is_finite()).then_some(v);
-        let d = FilterParams::default();
         let params = FilterParams {
-            gyro_order: number(&p, "gyro-order", order, "a non-negative integer")?
-                .unwrap_or(d.gyro_order),
-            mag_order: number(&p, "mag-order", order, "a non-negative integer")?
-                .unwrap_or(d.mag_order),
-            mag_vel_thres_up: number(&p, "mag-vel-thres-up", positive, "a non-negative number")?
-                .unwrap_or(d.mag_vel_thres_up),
-            mag_vel_thres_down: number(
-                &p,
-                "mag-vel-thres-down",
-                positive,
-                "a non-negative number",
-            )?
-            .unwrap_or(d.mag_vel_thres_down),
-            bias_gain: number(&p, "bias-gain", positive, "a non-negative number")?
-                .unwrap_or(d.bias_gain),
+            gyro_order: p.gyro_order as usize,
+            mag_order: p.mag_order as usize,
+            mag_vel_thres_up: p.mag_vel_thres_up,
+            mag_vel_thres_down: p.mag_vel_thres_down,
+            bias_gain: p.bias_gain,
         };
-        let period = period_ms(&p, "period")?.unwrap_or(0.01);
-        let verbose = bool_param(&p, "verbose")?.unwrap_or(false);
-        let mut name = p.string("name")?.unwrap_or_else(|| NAME.into());
+        let period = p.period / 1000.0;
+        let verbose = p.verbose;
+        let mut name = p.name;
         if !name.starts_with('/') {
             name.insert(0, '/');
         }

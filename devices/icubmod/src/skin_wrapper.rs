@@ -7,12 +7,25 @@
 //! `total_taxels`, so the ports are `/<robot>/skin/<port>` (e.g. `/icub/skin/left_hand`;
 //! a leading `/` in `robotName`, as a port prefix has, is not doubled).
 
-use yarp_devices::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use yarp_devices::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
 use yarp_devices::error::DevResult;
 use yarp_devices::sensors::analog_server::AnalogServer;
 use yarp_proto::{Property, Value};
 
-const NAME: &str = "skinWrapper";
+yarp_devices::device_params! {
+    /// What `skinWrapper` reads (icub-main's `skinWrapper`), which serves the skin as an
+    /// analogServer named `/<robotName>/skin` (the `ports` lines are read by that server).
+    pub struct SkinWrapperParams for "skinWrapper" {
+        /// The robot's name: the ports are `/<robotName>/skin/...`
+        "robotName" robot_name: String = required,
+        /// Period of the streamed values
+        period: f64 = 20.0; "ms",
+        /// Number of taxels of the patches together
+        total_taxels: i64 = optional,
+        /// The ports the taxels are split over (each with a line `PORT wBase wTop base top`)
+        ports: Vec<String> = optional,
+    }
+}
 
 /// The `skinWrapper` device.
 #[derive(Default)]
@@ -32,19 +45,20 @@ impl SkinWrapper {
 }
 
 impl DeviceDriver for SkinWrapper {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        SkinWrapperParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let p = Params::new(NAME, config);
-        let robot = p
-            .string("robotName")?
-            .ok_or_else(|| p.missing("robotName"))?;
-        let period = p.float("period")?.unwrap_or(20.0);
+        let p = SkinWrapperParams::read(config)?;
+        let (robot, period) = (p.robot_name, p.period);
         let mut option = config.clone();
         option.put(
             "name",
             Value::from(format!("/{}/skin", robot.trim_matches('/')).as_str()),
         );
         option.put("period", Value::Float64(period));
-        if let Some(total) = p.int("total_taxels")? {
+        if let Some(total) = p.total_taxels {
             option.put("channels", Value::Int64(total));
             option.unput("total_taxels");
         }

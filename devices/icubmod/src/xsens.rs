@@ -46,7 +46,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use yarp_devices::driver::{DeviceDriver, Params};
+use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::sensors::interfaces::*;
 use yarp_devices::sensors::params::now;
@@ -56,7 +56,44 @@ pub(crate) const MTX_NAME: &str = "xsensmtx";
 pub(crate) const MT_NAME: &str = "xsensmt";
 /// Replaces the `serial` parameter when set.
 pub const SERIAL_ENV: &str = "YARP_ICUB_XSENS_SERIAL";
-const DEFAULT_SERIAL: &str = "/dev/ttyUSB0";
+/// A period greater than zero.
+fn positive_period(s: &f64) -> Result<(), &'static str> {
+    match *s > 0.0 {
+        true => Ok(()),
+        false => Err("a period above 0 s"),
+    }
+}
+
+yarp_devices::device_params! {
+    /// What `xsensmt` and `xsensmtx` read (icub-main's XSensMTx and the MTi driver);
+    /// `$XSENS_SERIAL` overrides `serial`. The `xsensmt_*` periods and `baud` are the MTi's.
+    pub struct XsensParams for "xsensmt" {
+        /// The serial port of the sensor
+        serial: String = "/dev/ttyUSB0",
+        /// Name of the sensor (and of its frame, unless frame_name is given)
+        sensor_name: String = optional,
+        /// Name of the sensor's frame
+        frame_name: String = optional,
+        /// Period of every measure without a period of its own
+        xsensmt_period: f64 = 0.01; "s"; check positive_period,
+        /// Period of the euler angles
+        xsensmt_euler_period: f64 = optional; "s"; check positive_period,
+        /// Period of the accelerometer
+        xsensmt_acc_period: f64 = optional; "s"; check positive_period,
+        /// Period of the gyroscope
+        xsensmt_gyro_period: f64 = optional; "s"; check positive_period,
+        /// Period of the magnetometer
+        xsensmt_mag_period: f64 = optional; "s"; check positive_period,
+        /// Period of the position
+        xsensmt_position_period: f64 = optional; "s"; check positive_period,
+        /// Period of the linear velocity
+        xsensmt_linear_velocity_period: f64 = optional; "s"; check positive_period,
+        /// Baud rate of the serial line
+        baud: u32 = 115200; min 1,
+        /// Time after which a sample is stale (at least 1 ms)
+        timeout: f64 = optional; "s",
+    }
+}
 /// `GoToConfig` attempts and the wait for each: a silent port is reported in 2 s.
 const CONFIG_TRIES: usize = 4;
 const CONFIG_ACK_TIMEOUT: Duration = Duration::from_millis(500);
@@ -472,29 +509,23 @@ impl XsensImu {
     }
 
     /// `xsensmt`'s parameters (C++ defaults).
-    fn read_mt_params(&mut self, p: &Params) -> DevResult<()> {
-        let general = p.float("xsensmt_period")?.unwrap_or(0.01);
+    fn read_mt_params(&mut self, p: &XsensParams) -> DevResult<()> {
+        let general = p.xsensmt_period;
         let mut hz = [0u16; 6];
-        let keys = ["euler", "acc", "gyro", "mag", "position", "linear_velocity"];
-        for (slot, key) in hz.iter_mut().zip(keys) {
-            let period = p
-                .float(&format!("xsensmt_{key}_period"))?
-                .unwrap_or(general);
-            if period.is_nan() || period <= 0.0 {
-                return Err(p.invalid(
-                    &format!("xsensmt_{key}_period"),
-                    "a period above 0 s",
-                    period,
-                ));
-            }
+        let periods = [
+            p.xsensmt_euler_period,
+            p.xsensmt_acc_period,
+            p.xsensmt_gyro_period,
+            p.xsensmt_mag_period,
+            p.xsensmt_position_period,
+            p.xsensmt_linear_velocity_period,
+        ];
+        for (slot, period) in hz.iter_mut().zip(periods) {
+            let period = period.unwrap_or(general);
             *slot = (1.0 / period).round().clamp(1.0, f64::from(u16::MAX - 1)) as u16;
         }
-        let baud = p.int("baud")?.unwrap_or(115_200);
-        let baud = u32::try_from(baud)
-            .ok()
-            .filter(|b| *b > 0)
-            .ok_or_else(|| p.invalid("baud", "a baud rate", baud))?;
-        if let Some(t) = p.float("timeout")? {
+        let baud = p.baud;
+        if let Some(t) = p.timeout {
             self.stale_after = Duration::from_secs_f64(t.max(0.001));
         }
         self.model = Model::Mti { baud, hz };
@@ -507,21 +538,25 @@ impl XsensImu {
 const DEG_PER_RAD: f64 = 180.0 / std::f64::consts::PI;
 
 impl DeviceDriver for XsensImu {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        XsensParams::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let kind = self.model.name();
-        let p = Params::new(kind, config);
+        let p = XsensParams::read_as(kind, config)?;
         self.id = device_id(config, kind);
         let serial = match std::env::var(SERIAL_ENV) {
             Ok(s) if !s.is_empty() => s,
-            _ => p.string("serial")?.unwrap_or_else(|| DEFAULT_SERIAL.into()),
+            _ => p.serial.clone(),
         };
         let serial = serial.trim().to_string();
-        if let Some(s) = p.string("sensor_name")? {
-            self.frame_name.clone_from(&s);
-            self.sensor_name = s;
+        if let Some(s) = &p.sensor_name {
+            self.frame_name.clone_from(s);
+            self.sensor_name.clone_from(s);
         }
-        if let Some(s) = p.string("frame_name")? {
-            self.frame_name = s;
+        if let Some(s) = &p.frame_name {
+            self.frame_name.clone_from(s);
         }
         if matches!(self.model, Model::Mti { .. }) {
             self.read_mt_params(&p)?;
