@@ -9,7 +9,7 @@ use crate::error::{DevResult, DeviceError};
 use crate::framegrabber::interfaces::{IFrameGrabberControls, IFrameGrabberImage};
 use crate::frames::{IFrameTransformStorageGet, IFrameTransformStorageSet};
 use crate::interfaces::*;
-use crate::kind::{interfaces_of, kind_of, suggest, Kind};
+use crate::kind::{kind_of, suggest, Kind};
 use crate::navigation::{INavigation2DVelocityActions, IOdometry2D};
 use crate::params::as_string as value_text;
 pub use crate::params::Params;
@@ -81,149 +81,98 @@ pub trait ICalibrator {
     }
 }
 
-/// A device driver, as C++ `yarp::dev::DeviceDriver`.
-pub trait DeviceDriver: Send {
-    /// Configures and starts the device.
-    fn open(&mut self, config: &Property) -> DevResult<()>;
-    /// The parameters the device reads, as declared with [`crate::device_params!`]
-    /// (what `--help` prints); empty for a device that declares none.
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        &[]
-    }
-    /// Stops the device; it may be reopened.
-    fn close(&mut self) -> DevResult<()> {
-        Ok(())
-    }
-    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
-        None
-    }
-    fn as_position_control(&mut self) -> Option<&mut dyn IPositionControl> {
-        None
-    }
-    fn as_velocity_control(&mut self) -> Option<&mut dyn IVelocityControl> {
-        None
-    }
-    fn as_control_mode(&mut self) -> Option<&mut dyn IControlMode> {
-        None
-    }
-    fn as_axis_info(&mut self) -> Option<&mut dyn IAxisInfo> {
-        None
-    }
-    fn as_control_limits(&mut self) -> Option<&mut dyn IControlLimits> {
-        None
-    }
-    fn as_interaction_mode(&mut self) -> Option<&mut dyn IInteractionMode> {
-        None
-    }
-    fn as_torque_control(&mut self) -> Option<&mut dyn ITorqueControl> {
-        None
-    }
-    fn as_motor_encoders(&mut self) -> Option<&mut dyn IMotorEncoders> {
-        None
-    }
-    fn as_amplifier_control(&mut self) -> Option<&mut dyn IAmplifierControl> {
-        None
-    }
-    fn as_motor(&mut self) -> Option<&mut dyn IMotor> {
-        None
-    }
-    fn as_pid_control(&mut self) -> Option<&mut dyn IPidControl> {
-        None
-    }
-    fn as_current_control(&mut self) -> Option<&mut dyn ICurrentControl> {
-        None
-    }
-    fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
-        None
-    }
-    fn as_position_direct(&mut self) -> Option<&mut dyn IPositionDirect> {
-        None
-    }
-    fn as_impedance_control(&mut self) -> Option<&mut dyn IImpedanceControl> {
-        None
-    }
-    fn as_control_calibration(&mut self) -> Option<&mut dyn IControlCalibration> {
-        None
-    }
-    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
-        None
-    }
+/// Declares the interfaces a device may offer, once: each view's method, trait, C++ name
+/// and the [`Kind`] it makes a device. Generates [`DeviceDriver`] (a view returns `None`
+/// unless the driver overrides it: the Rust form of C++ `PolyDriver::view`),
+/// [`INTERFACES`] and [`interfaces_of`].
+#[macro_export]
+#[doc(hidden)]
+macro_rules! device_interfaces {
+    ($($(#[$doc:meta])* $view:ident: $trait:ident => $cpp:literal ($kind:ident),)*) => {
+        /// A device driver, as C++ `yarp::dev::DeviceDriver`.
+        pub trait DeviceDriver: Send {
+            /// Configures and starts the device.
+            fn open(&mut self, config: &Property) -> DevResult<()>;
+            /// The parameters the device reads, as declared with [`crate::device_params!`]
+            /// (what `--help` prints); empty for a device that declares none.
+            fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+                &[]
+            }
+            /// Stops the device; it may be reopened.
+            fn close(&mut self) -> DevResult<()> {
+                Ok(())
+            }
+            $(
+                #[doc = concat!("The device as `", $cpp, "`, if it offers it.")]
+                fn $view(&mut self) -> Option<&mut dyn $trait> {
+                    None
+                }
+            )*
+        }
 
+        /// Every interface a device may offer: its C++ name and the kind it makes a device,
+        /// in the order of [`DeviceDriver`]'s views.
+        pub const INTERFACES: &[(&str, Kind)] = &[$(($cpp, Kind::$kind)),*];
+
+        /// The C++ names of the interfaces `d` offers, in the order of [`INTERFACES`].
+        pub fn interfaces_of(d: &mut dyn DeviceDriver) -> Vec<&'static str> {
+            let mut names = Vec::new();
+            $(
+                if d.$view().is_some() {
+                    names.push($cpp);
+                }
+            )*
+            names
+        }
+    };
+}
+
+crate::device_interfaces! {
+    // Motor control.
+    as_encoders: IEncoders => "IEncodersTimed" (Motor),
+    as_position_control: IPositionControl => "IPositionControl" (Motor),
+    as_velocity_control: IVelocityControl => "IVelocityControl" (Motor),
+    as_control_mode: IControlMode => "IControlMode" (Motor),
+    as_axis_info: IAxisInfo => "IAxisInfo" (Other),
+    as_control_limits: IControlLimits => "IControlLimits" (Other),
+    as_interaction_mode: IInteractionMode => "IInteractionMode" (Other),
+    as_torque_control: ITorqueControl => "ITorqueControl" (Motor),
+    as_motor_encoders: IMotorEncoders => "IMotorEncoders" (Other),
+    as_amplifier_control: IAmplifierControl => "IAmplifierControl" (Other),
+    as_motor: IMotor => "IMotor" (Other),
+    as_pid_control: IPidControl => "IPidControl" (Other),
+    as_current_control: ICurrentControl => "ICurrentControl" (Motor),
+    as_pwm_control: IPwmControl => "IPWMControl" (Motor),
+    as_position_direct: IPositionDirect => "IPositionDirect" (Other),
+    as_impedance_control: IImpedanceControl => "IImpedanceControl" (Other),
+    as_control_calibration: IControlCalibration => "IControlCalibration" (Other),
+    as_remote_calibrator: IRemoteCalibrator => "IRemoteCalibrator" (Other),
     // Frame grabbers.
-    fn as_frame_grabber_image(&mut self) -> Option<&mut dyn IFrameGrabberImage> {
-        None
-    }
-    fn as_frame_grabber_controls(&mut self) -> Option<&mut dyn IFrameGrabberControls> {
-        None
-    }
-
+    as_frame_grabber_image: IFrameGrabberImage => "IFrameGrabberImage" (Camera),
+    as_frame_grabber_controls: IFrameGrabberControls => "IFrameGrabberControls" (Other),
     // Sensors.
-    fn as_three_axis_gyroscopes(&mut self) -> Option<&mut dyn IThreeAxisGyroscopes> {
-        None
-    }
-    fn as_three_axis_linear_accelerometers(
-        &mut self,
-    ) -> Option<&mut dyn IThreeAxisLinearAccelerometers> {
-        None
-    }
-    fn as_three_axis_magnetometers(&mut self) -> Option<&mut dyn IThreeAxisMagnetometers> {
-        None
-    }
-    fn as_orientation_sensors(&mut self) -> Option<&mut dyn IOrientationSensors> {
-        None
-    }
-    fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
-        None
-    }
-    fn as_skin_patches(&mut self) -> Option<&mut dyn ISkinPatches> {
-        None
-    }
-    fn as_encoder_arrays(&mut self) -> Option<&mut dyn IEncoderArrays> {
-        None
-    }
-    fn as_temperature_sensors(&mut self) -> Option<&mut dyn ITemperatureSensors> {
-        None
-    }
-    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
-        None
-    }
-    fn as_virtual_analog_sensor(&mut self) -> Option<&mut dyn IVirtualAnalogSensor> {
-        None
-    }
-
-    // Lasers, RGB-D cameras, batteries, mobile bases.
-    fn as_rangefinder_2d(&mut self) -> Option<&mut dyn IRangefinder2D> {
-        None
-    }
-    fn as_rgbd_sensor(&mut self) -> Option<&mut dyn IRGBDSensor> {
-        None
-    }
-    fn as_battery(&mut self) -> Option<&mut dyn IBattery> {
-        None
-    }
-    fn as_odometry_2d(&mut self) -> Option<&mut dyn IOdometry2D> {
-        None
-    }
-    fn as_navigation_2d_velocity(&mut self) -> Option<&mut dyn INavigation2DVelocityActions> {
-        None
-    }
-    fn as_frame_transform_storage_get(&mut self) -> Option<&mut dyn IFrameTransformStorageGet> {
-        None
-    }
-    fn as_frame_transform_storage_set(&mut self) -> Option<&mut dyn IFrameTransformStorageSet> {
-        None
-    }
-
+    as_three_axis_gyroscopes: IThreeAxisGyroscopes => "IThreeAxisGyroscopes" (Sensor),
+    as_three_axis_linear_accelerometers: IThreeAxisLinearAccelerometers => "IThreeAxisLinearAccelerometers" (Sensor),
+    as_three_axis_magnetometers: IThreeAxisMagnetometers => "IThreeAxisMagnetometers" (Sensor),
+    as_orientation_sensors: IOrientationSensors => "IOrientationSensors" (Sensor),
+    as_six_axis_force_torque_sensors: ISixAxisForceTorqueSensors => "ISixAxisForceTorqueSensors" (Sensor),
+    as_skin_patches: ISkinPatches => "ISkinPatches" (Sensor),
+    as_encoder_arrays: IEncoderArrays => "IEncoderArrays" (Sensor),
+    as_temperature_sensors: ITemperatureSensors => "ITemperatureSensors" (Sensor),
+    as_analog_sensor: IAnalogSensor => "IAnalogSensor" (Sensor),
+    as_virtual_analog_sensor: IVirtualAnalogSensor => "IVirtualAnalogSensor" (Sensor),
+    // Lasers, RGB-D cameras, batteries, mobile bases, frames.
+    as_rangefinder_2d: IRangefinder2D => "IRangefinder2D" (Sensor),
+    as_rgbd_sensor: IRGBDSensor => "IRGBDSensor" (Camera),
+    as_battery: IBattery => "IBattery" (Sensor),
+    as_odometry_2d: IOdometry2D => "IOdometry2D" (Sensor),
+    as_navigation_2d_velocity: INavigation2DVelocityActions => "INavigation2DVelocityActions" (Motor),
+    as_frame_transform_storage_get: IFrameTransformStorageGet => "IFrameTransformStorageGet" (Other),
+    as_frame_transform_storage_set: IFrameTransformStorageSet => "IFrameTransformStorageSet" (Other),
     // Wrappers and calibrators.
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        None
-    }
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        None
-    }
-    fn as_calibrator(&mut self) -> Option<&mut dyn ICalibrator> {
-        None
-    }
+    as_wrapper: IWrapper => "IWrapper" (Wrapper),
+    as_multiple_wrapper: IMultipleWrapper => "IMultipleWrapper" (Wrapper),
+    as_calibrator: ICalibrator => "ICalibrator" (Calibrator),
 }
 
 /// The `DeviceDriver` views of an IMU (gyroscope, linear accelerometer, magnetometer and

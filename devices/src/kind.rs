@@ -3,7 +3,7 @@
 //! calibrator); and which known devices to suggest for an unknown name, so that a name
 //! that asks for a motor gets motor devices rather than whatever is spelled alike.
 
-use crate::driver::DeviceDriver;
+use crate::driver::INTERFACES;
 
 /// What a device is for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,124 +35,25 @@ impl Kind {
     }
 }
 
-/// The C++ names of the interfaces `d` offers, in the order of `DeviceDriver`'s views.
-pub fn interfaces_of(d: &mut dyn DeviceDriver) -> Vec<&'static str> {
-    let views: [(bool, &'static str); 40] = [
-        (d.as_encoders().is_some(), "IEncodersTimed"),
-        (d.as_position_control().is_some(), "IPositionControl"),
-        (d.as_velocity_control().is_some(), "IVelocityControl"),
-        (d.as_control_mode().is_some(), "IControlMode"),
-        (d.as_axis_info().is_some(), "IAxisInfo"),
-        (d.as_control_limits().is_some(), "IControlLimits"),
-        (d.as_interaction_mode().is_some(), "IInteractionMode"),
-        (d.as_torque_control().is_some(), "ITorqueControl"),
-        (d.as_motor_encoders().is_some(), "IMotorEncoders"),
-        (d.as_amplifier_control().is_some(), "IAmplifierControl"),
-        (d.as_motor().is_some(), "IMotor"),
-        (d.as_pid_control().is_some(), "IPidControl"),
-        (d.as_current_control().is_some(), "ICurrentControl"),
-        (d.as_pwm_control().is_some(), "IPWMControl"),
-        (d.as_position_direct().is_some(), "IPositionDirect"),
-        (d.as_impedance_control().is_some(), "IImpedanceControl"),
-        (d.as_control_calibration().is_some(), "IControlCalibration"),
-        (d.as_remote_calibrator().is_some(), "IRemoteCalibrator"),
-        (d.as_frame_grabber_image().is_some(), "IFrameGrabberImage"),
-        (
-            d.as_frame_grabber_controls().is_some(),
-            "IFrameGrabberControls",
-        ),
-        (
-            d.as_three_axis_gyroscopes().is_some(),
-            "IThreeAxisGyroscopes",
-        ),
-        (
-            d.as_three_axis_linear_accelerometers().is_some(),
-            "IThreeAxisLinearAccelerometers",
-        ),
-        (
-            d.as_three_axis_magnetometers().is_some(),
-            "IThreeAxisMagnetometers",
-        ),
-        (d.as_orientation_sensors().is_some(), "IOrientationSensors"),
-        (
-            d.as_six_axis_force_torque_sensors().is_some(),
-            "ISixAxisForceTorqueSensors",
-        ),
-        (d.as_skin_patches().is_some(), "ISkinPatches"),
-        (d.as_encoder_arrays().is_some(), "IEncoderArrays"),
-        (d.as_temperature_sensors().is_some(), "ITemperatureSensors"),
-        (d.as_analog_sensor().is_some(), "IAnalogSensor"),
-        (
-            d.as_virtual_analog_sensor().is_some(),
-            "IVirtualAnalogSensor",
-        ),
-        (d.as_rangefinder_2d().is_some(), "IRangefinder2D"),
-        (d.as_rgbd_sensor().is_some(), "IRGBDSensor"),
-        (d.as_battery().is_some(), "IBattery"),
-        (d.as_odometry_2d().is_some(), "IOdometry2D"),
-        (
-            d.as_navigation_2d_velocity().is_some(),
-            "INavigation2DVelocityActions",
-        ),
-        (
-            d.as_frame_transform_storage_get().is_some(),
-            "IFrameTransformStorageGet",
-        ),
-        (
-            d.as_frame_transform_storage_set().is_some(),
-            "IFrameTransformStorageSet",
-        ),
-        (d.as_wrapper().is_some(), "IWrapper"),
-        (d.as_multiple_wrapper().is_some(), "IMultipleWrapper"),
-        (d.as_calibrator().is_some(), "ICalibrator"),
-    ];
-    views
-        .into_iter()
-        .filter_map(|(has, name)| has.then_some(name))
-        .collect()
-}
-
 /// The kind a device's interfaces make it. What it offers comes first: a remapper that
 /// attaches boards (`IMultipleWrapper`) is a motor device; a server that only attaches
 /// (`controlBoard_nws_yarp`) is a network wrapper.
 pub fn kind_of(interfaces: &[&str]) -> Kind {
-    let any = |names: &[&str]| interfaces.iter().any(|i| names.contains(i));
-    if any(&[
-        "IEncodersTimed",
-        "IPositionControl",
-        "IVelocityControl",
-        "ITorqueControl",
-        "IControlMode",
-        "IPWMControl",
-        "ICurrentControl",
-        "INavigation2DVelocityActions",
-    ]) {
-        Kind::Motor
-    } else if any(&["IFrameGrabberImage", "IRGBDSensor"]) {
-        Kind::Camera
-    } else if any(&[
-        "IThreeAxisGyroscopes",
-        "IThreeAxisLinearAccelerometers",
-        "IThreeAxisMagnetometers",
-        "IOrientationSensors",
-        "ISixAxisForceTorqueSensors",
-        "ISkinPatches",
-        "IEncoderArrays",
-        "ITemperatureSensors",
-        "IAnalogSensor",
-        "IVirtualAnalogSensor",
-        "IRangefinder2D",
-        "IBattery",
-        "IOdometry2D",
-    ]) {
-        Kind::Sensor
-    } else if any(&["ICalibrator"]) {
-        Kind::Calibrator
-    } else if any(&["IWrapper", "IMultipleWrapper"]) {
-        Kind::Wrapper
-    } else {
-        Kind::Other
-    }
+    let offers = |kind: Kind| {
+        INTERFACES
+            .iter()
+            .any(|(name, k)| *k == kind && interfaces.contains(name))
+    };
+    [
+        Kind::Motor,
+        Kind::Camera,
+        Kind::Sensor,
+        Kind::Calibrator,
+        Kind::Wrapper,
+    ]
+    .into_iter()
+    .find(|k| offers(*k))
+    .unwrap_or(Kind::Other)
 }
 
 /// Words of a device name, lowercase: split at `_`, `-`, digits and camelCase
