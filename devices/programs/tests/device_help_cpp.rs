@@ -126,15 +126,12 @@ async fn every_registered_device_declares_its_parameters() {
 
 /// Devices whose parameters are not declared yet.
 const PENDING: &[&str] = &[
-    "battery_nws_ros2",
     "canBusAnalogSensor",
     "canBusFtSensor",
     "canBusInertialMTB",
     "canBusSkin",
     "canBusVirtualAnalogSensor",
     "canmotioncontrol",
-    "cartesiancontrollerserver",
-    "controlBoard_nws_ros2",
     "embObjBattery",
     "embObjFTsensor",
     "embObjIMU",
@@ -144,27 +141,8 @@ const PENDING: &[&str] = &[
     "embObjMultipleFTsensors",
     "embObjPOS",
     "embObjSkin",
-    "frameGrabber_nws_ros2",
-    "frameTransformGet_nwc_ros2",
-    "frameTransformSet_nwc_ros2",
-    "imuFilter",
-    "imu_nwc_ros2",
-    "imu_nws_ros2",
-    "magneticField_nws_ros2",
-    "mobileBaseVelocityControl_nws_ros2",
-    "odometry2D_nws_ros2",
     "parametricCalibrator",
     "parametricCalibratorEth",
-    "rangefinder2D_nwc_ros2",
-    "rangefinder2D_nws_ros2",
-    "rgbdSensor_nwc_ros2",
-    "rgbdSensor_nws_ros2",
-    "rgbdToPointCloudSensor_nws_ros2",
-    "skinWrapper",
-    "temperature_nws_ros2",
-    "wrenchStamped_nws_ros2",
-    "xsensmt",
-    "xsensmtx",
 ];
 
 #[tokio::test]

@@ -14,13 +14,13 @@
 //! every message here carries the stamp of its image.
 
 use crate::msgs::{camera_info, point_cloud, stamp_ns};
-use crate::node::{CommonParams, DeviceNode, NodeBuilder};
+use crate::node::{DeviceNode, NodeBuilder};
 use crate::periodic::{Periodic, Throttle};
 use ros2_client::Publisher;
 use std::sync::Arc;
 use std::time::Duration;
 use yarp_devices::rgbd::RgbdStatus;
-use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, Params, SharedDevice};
+use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, SharedDevice};
 use yarp_proto::{Property, Stamp};
 use yarp_ros2_gateway::dynmsg::Value as Ros;
 use yarp_ros2_gateway::image::from_image;
@@ -30,6 +30,66 @@ pub const RGBD: &str = "rgbdSensor_nws_ros2";
 pub const POINT_CLOUD: &str = "rgbdToPointCloudSensor_nws_ros2";
 const IMAGE: &str = "sensor_msgs/msg/Image";
 const CAMERA_INFO: &str = "sensor_msgs/msg/CameraInfo";
+
+yarp_devices::device_params! {
+    /// What `frameGrabber_nws_ros2` reads (C++ `FrameGrabber_nws_ros2_params.md`).
+    pub struct FrameGrabberNwsRos2Params for "frameGrabber_nws_ros2" {
+        /// refresh period of the broadcasted values in s
+        period: f64 = 0.02; "s"; check crate::node::period,
+        /// set the name for ROS node
+        node_name: String = required; check crate::node::node_name,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+        /// set the name for ROS topic
+        topic_name: String = required; check crate::node::topic_name,
+        /// set the name for the reference frame
+        frame_id: String = required,
+    }
+}
+
+yarp_devices::device_params! {
+    /// What `rgbdSensor_nws_ros2` reads (C++ `RgbdSensor_nws_ros2_params.md`).
+    pub struct RgbdSensorNwsRos2Params for "rgbdSensor_nws_ros2" {
+        /// refresh period of the broadcasted values in s
+        period: f64 = 0.02; "s"; check crate::node::period,
+        /// name of the ros2 node
+        node_name: String = required; check crate::node::node_name,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+        /// ros rgb topic (it's also the base name for the rgb camera_info topic)
+        color_topic_name: String = required; check crate::node::topic_name,
+        /// ros depth topic (it's also the base name for the depth camera_info topic)
+        depth_topic_name: String = required; check crate::node::topic_name,
+        /// if 1, it forces synching images time stamp with and cameras time stamp
+        /// (accepted; here every message carries its image's stamp anyway)
+        force_info_synch: i64 = 0,
+        /// The depth image frame
+        depth_frame_id: String = required,
+        /// The color image frame
+        color_frame_id: String = required,
+        /// If 1 a topic publishing 0 if no image has been published on ros2 topic, 1 if
+        /// only the RGB image is bein published, 2 for only the depth image, and 3 for
+        /// both images will be opened
+        pub_status_topic: i64 = 0,
+    }
+}
+
+yarp_devices::device_params! {
+    /// What `rgbdToPointCloudSensor_nws_ros2` reads (C++
+    /// `RgbdToPointCloudSensor_nws_ros2_params.md`).
+    pub struct RgbdToPointCloudSensorNwsRos2Params for "rgbdToPointCloudSensor_nws_ros2" {
+        /// refresh period of the broadcasted values in s
+        period: f64 = 0.03; "s"; check crate::node::period,
+        /// set the name for ROS point cloud topic
+        topic_name: String = required; check crate::node::topic_name,
+        /// set the name of the reference frame
+        frame_id: String = required,
+        /// set the name for ROS node (without a leading '/')
+        node_name: String = required; check crate::node::node_name,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+    }
+}
 
 /// `/a/b/image` -> `/a/b/camera_info` (C++ `substr(0, rfind('/')) + "/camera_info"`).
 pub use yarp_ros2_gateway::camera_info::topic_beside as info_topic;
@@ -82,36 +142,6 @@ struct Camera {
     node_name: String,
 }
 
-fn check_name(p: &Params, key: &str, leading_slash: bool) -> DevResult<String> {
-    let v = p.string(key)?.ok_or_else(|| p.missing(key))?;
-    if v.starts_with('/') != leading_slash {
-        return Err(DeviceError::BadParam {
-            device: p.device.to_string(),
-            param: key.into(),
-            expected: if leading_slash {
-                "a name with a leading '/'"
-            } else {
-                "a name without a leading '/'"
-            },
-            got: v,
-        });
-    }
-    Ok(v)
-}
-
-fn period(p: &Params, default: f64) -> DevResult<Duration> {
-    let s = p.float("period")?.unwrap_or(default);
-    if !(s > 0.0 && s.is_finite()) {
-        return Err(DeviceError::BadParam {
-            device: p.device.to_string(),
-            param: "period".into(),
-            expected: "a period in seconds greater than 0",
-            got: s.to_string(),
-        });
-    }
-    Ok(Duration::from_secs_f64(s))
-}
-
 /// The kind of camera wrapper.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Kind {
@@ -148,33 +178,32 @@ impl CameraNwsRos2 {
 }
 
 impl DeviceDriver for CameraNwsRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        match self.kind {
+            Kind::FrameGrabber => FrameGrabberNwsRos2Params::PARAMS,
+            Kind::Rgbd => RgbdSensorNwsRos2Params::PARAMS,
+            Kind::PointCloud => RgbdToPointCloudSensorNwsRos2Params::PARAMS,
+        }
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
         let name = self.kind.name();
-        let p = Params::new(name, config);
-        let node_name = check_name(&p, "node_name", false)?;
-        let namespace = p.string("namespace")?.unwrap_or_default();
-        let (topics, frame_ids, period) = match self.kind {
+        let (node_name, namespace, topics, frame_ids, period) = match self.kind {
             Kind::FrameGrabber => {
-                let c = CommonParams::read(&p, 0.02)?;
-                let frame = p.string("frame_id")?.ok_or_else(|| p.missing("frame_id"))?;
-                let info = info_topic(&c.topic_name);
+                let p = FrameGrabberNwsRos2Params::read(config)?;
+                let info = info_topic(&p.topic_name);
                 (
-                    vec![(c.topic_name, IMAGE), (info, CAMERA_INFO)],
-                    vec![frame],
-                    c.period,
+                    p.node_name,
+                    p.namespace,
+                    vec![(p.topic_name, IMAGE), (info, CAMERA_INFO)],
+                    vec![p.frame_id],
+                    p.period,
                 )
             }
             Kind::Rgbd => {
-                let color = check_name(&p, "color_topic_name", true)?;
-                let depth = check_name(&p, "depth_topic_name", true)?;
-                let frames = vec![
-                    p.string("color_frame_id")?
-                        .ok_or_else(|| p.missing("color_frame_id"))?,
-                    p.string("depth_frame_id")?
-                        .ok_or_else(|| p.missing("depth_frame_id"))?,
-                ];
-                p.int("force_info_synch")?;
+                let p = RgbdSensorNwsRos2Params::read(config)?;
+                let (color, depth) = (p.color_topic_name, p.depth_topic_name);
                 let (ci, di) = (info_topic(&color), info_topic(&depth));
                 let mut topics = vec![
                     (color, IMAGE),
@@ -182,24 +211,28 @@ impl DeviceDriver for CameraNwsRos2 {
                     (depth, IMAGE),
                     (di, CAMERA_INFO),
                 ];
-                if p.int("pub_status_topic")? == Some(1) {
+                if p.pub_status_topic == 1 {
                     topics.push((
-                        format!("/{node_name}/publisher_status"),
+                        format!("/{}/publisher_status", p.node_name),
                         "std_msgs/msg/UInt8",
                     ));
                 }
-                (topics, frames, period(&p, 0.02)?)
+                let frames = vec![p.color_frame_id, p.depth_frame_id];
+                (p.node_name, p.namespace, topics, frames, p.period)
             }
             Kind::PointCloud => {
-                let topic = check_name(&p, "topic_name", true)?;
-                let frame = p.string("frame_id")?.ok_or_else(|| p.missing("frame_id"))?;
+                let p = RgbdToPointCloudSensorNwsRos2Params::read(config)?;
                 (
-                    vec![(topic, "sensor_msgs/msg/PointCloud2")],
-                    vec![frame],
-                    period(&p, 0.03)?,
+                    p.node_name,
+                    p.namespace,
+                    vec![(p.topic_name, "sensor_msgs/msg/PointCloud2")],
+                    vec![p.frame_id],
+                    p.period,
                 )
             }
         };
+        let namespace = namespace.unwrap_or_default();
+        let period = Duration::from_secs_f64(period);
         let topics: Vec<(&str, &str)> = topics.iter().map(|(t, ty)| (t.as_str(), *ty)).collect();
         let node = Arc::new(Node::new(name, &namespace, &node_name, &topics)?);
         self.camera = Some(Camera {
@@ -435,5 +468,33 @@ mod tests {
         );
         assert_eq!(info_topic("/img"), "/camera_info");
         assert_eq!(info_topic("/a/b/image_raw"), "/a/b/camera_info");
+    }
+
+    #[test]
+    fn parameters_are_checked_as_before() {
+        let read = |t: &str| RgbdToPointCloudSensorNwsRos2Params::read(&Property::from_text(t));
+        let p = read("(node_name pc) (topic_name /pc) (frame_id f)").unwrap();
+        assert_eq!(p.period, 0.03);
+        let e = read("(node_name /pc) (topic_name /pc) (frame_id f)").unwrap_err();
+        assert!(e.to_string().contains("`node_name`"), "{e}");
+        let e = read("(node_name pc) (topic_name /pc)").unwrap_err();
+        assert!(e.to_string().contains("`frame_id`"), "{e}");
+
+        let read = |t: &str| RgbdSensorNwsRos2Params::read(&Property::from_text(t));
+        let all = "(node_name r) (color_topic_name /c) (depth_topic_name /d) \
+                   (color_frame_id cf) (depth_frame_id df)";
+        let p = read(all).unwrap();
+        assert_eq!(
+            (p.period, p.pub_status_topic, p.force_info_synch),
+            (0.02, 0, 0)
+        );
+        let e = read(&all.replace("/d)", "d)")).unwrap_err();
+        assert!(e.to_string().contains("`depth_topic_name`"), "{e}");
+        let e = read(&format!("{all} (force_info_synch yes)")).unwrap_err();
+        assert!(e.to_string().contains("`force_info_synch`"), "{e}");
+
+        let read = |t: &str| FrameGrabberNwsRos2Params::read(&Property::from_text(t));
+        let e = read("(node_name g) (topic_name /g) (frame_id f) (period -1)").unwrap_err();
+        assert!(e.to_string().contains("greater than 0"), "{e}");
     }
 }

@@ -11,13 +11,29 @@ use crate::node::{on_messages, DeviceNode, NodeBuilder};
 use parking_lot::Mutex;
 use std::sync::Arc;
 use yarp_devices::rgbd::{IRGBDSensor, RgbdStatus};
-use yarp_devices::{DevResult, DeviceDriver, DeviceError, Params};
+use yarp_devices::{DevResult, DeviceDriver, DeviceError};
 use yarp_proto::image::{Image, PixelCode};
 use yarp_proto::{Property, Stamp};
 use yarp_ros2_gateway::dynmsg::Value as Ros;
 use yarp_ros2_gateway::image::to_image;
 
 pub const NAME: &str = "rgbdSensor_nwc_ros2";
+
+yarp_devices::device_params! {
+    /// What `rgbdSensor_nwc_ros2` reads (C++ `RgbdSensor_nwc_ros2_params.md`).
+    pub struct RgbdSensorNwcRos2Params for "rgbdSensor_nwc_ros2" {
+        /// name of the ros2 node
+        node_name: String = required,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+        /// ros rgb topic (it's also the base name for the rgb camera_info topic)
+        color_topic_name: String = required,
+        /// ros depth topic (it's also the base name for the depth camera_info topic)
+        depth_topic_name: String = required,
+        /// if 1, it enables the verbose mode of the device (accepted, no effect here)
+        verbose_on: i64 = 0,
+    }
+}
 
 /// What one camera (colour or depth) last received.
 #[derive(Default, Clone)]
@@ -95,15 +111,20 @@ enum Feed {
 }
 
 impl DeviceDriver for RgbdSensorNwcRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        RgbdSensorNwcRos2Params::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        let p = Params::new(NAME, config);
-        let name = |k: &str| p.string(k)?.ok_or_else(|| p.missing(k));
-        let node_name = name("node_name")?;
-        let color = name("color_topic_name")?;
-        let depth = name("depth_topic_name")?;
-        p.int("verbose_on")?;
-        let namespace = p.string("namespace")?.unwrap_or_default();
+        let RgbdSensorNwcRos2Params {
+            node_name,
+            namespace,
+            color_topic_name: color,
+            depth_topic_name: depth,
+            ..
+        } = RgbdSensorNwcRos2Params::read(config)?;
+        let namespace = namespace.unwrap_or_default();
         let mut b = NodeBuilder::new(NAME, &namespace, &node_name)?;
         let subs = [
             (

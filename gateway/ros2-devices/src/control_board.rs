@@ -30,14 +30,30 @@ use tokio::task::JoinHandle;
 use yarp_devices::sensors::periodic::Ticker;
 use yarp_devices::vocabs::JOINTTYPE_PRISMATIC;
 use yarp_devices::{
-    DevResult, DeviceDriver, DeviceError, IMultipleWrapper, IWrapper, Params, SharedDevice,
+    DevResult, DeviceDriver, DeviceError, IMultipleWrapper, IWrapper, SharedDevice,
 };
 use yarp_ros2_gateway::counters::header;
 use yarp_ros2_gateway::dynmsg::{MsgSeed, Value as Ros};
 
 /// The device name.
 pub const NAME: &str = "controlBoard_nws_ros2";
-const DEFAULT_PERIOD_S: f64 = 0.02;
+
+yarp_devices::device_params! {
+    /// What `controlBoard_nws_ros2` reads (C++ `ControlBoard_nws_ros2_params.md`).
+    pub struct ControlBoardNwsRos2Params for "controlBoard_nws_ros2" {
+        /// set the name for ROS node
+        node_name: String = required; check crate::node::node_name,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+        /// set the name for ROS topic
+        topic_name: String = required; check crate::node::topic_name,
+        /// set the base name for the topics and interfaces (a leading '/' is added if
+        /// missing); without it, the control related topics and services are not made
+        msgs_name: String = optional,
+        /// refresh period of the broadcasted values in s
+        period: f64 = 0.02; "s"; check crate::node::period,
+    }
+}
 
 /// How long a service answer waits for the client's reader (as the gateway's services).
 const CLIENT_MATCH_TIMEOUT: Duration = Duration::from_secs(2);
@@ -622,16 +638,27 @@ impl ControlBoardNwsRos2 {
     }
 
     fn open_ros(config: &yarp_proto::Property) -> DevResult<Opened> {
-        let p = Params::new(NAME, config);
-        let params = CommonParams::read(&p, DEFAULT_PERIOD_S)?;
-        let msgs_name = p.string("msgs_name")?.filter(|s| !s.is_empty()).map(|s| {
+        let ControlBoardNwsRos2Params {
+            node_name,
+            namespace,
+            topic_name,
+            msgs_name,
+            period,
+        } = ControlBoardNwsRos2Params::read(config)?;
+        let params = CommonParams {
+            period,
+            node_name,
+            namespace,
+            topic_name,
+        };
+        let msgs_name = msgs_name.filter(|s| !s.is_empty()).map(|s| {
             if s.starts_with('/') {
                 s
             } else {
                 format!("/{s}")
             }
         });
-        let mut b = NodeBuilder::new(NAME, &params.namespace, &params.node_name)?;
+        let mut b = NodeBuilder::new(NAME, params.namespace(), &params.node_name)?;
         let state = Arc::new(b.publisher(&params.topic_name, "sensor_msgs/msg/JointState")?);
         let modes = Arc::new(b.publisher(
             &format!("{}/controlModes", params.topic_name),
@@ -711,6 +738,10 @@ impl ControlBoardNwsRos2 {
 }
 
 impl DeviceDriver for ControlBoardNwsRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        ControlBoardNwsRos2Params::PARAMS
+    }
+
     fn open(&mut self, config: &yarp_proto::Property) -> DevResult<()> {
         self.opened = None;
         self.opened = Some(Self::open_ros(config)?);
@@ -752,7 +783,7 @@ impl IWrapper for ControlBoardNwsRos2 {
             o.node.node.clone(),
             o.state.clone(),
             o.modes.clone(),
-            o.params.period,
+            o.params.period_duration(),
             o.params.node_name.clone(),
         )?);
         Ok(())

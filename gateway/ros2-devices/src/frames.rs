@@ -17,7 +17,7 @@ use std::time::Duration;
 use yarp_devices::frames::{
     FrameTransform, FrameTransformContainer, IFrameTransformStorageGet, IFrameTransformStorageSet,
 };
-use yarp_devices::{DevResult, DeviceDriver, DeviceError, Params};
+use yarp_devices::{DevResult, DeviceDriver, DeviceError};
 use yarp_proto::Property;
 use yarp_ros2_gateway::counters::header;
 use yarp_ros2_gateway::dynmsg::Value as Ros;
@@ -74,25 +74,41 @@ pub fn read_tf_message(m: &Ros, is_static: bool) -> Vec<FrameTransform> {
         .collect()
 }
 
-/// The parameters both clients read.
-struct Common {
-    node: String,
-    namespace: String,
-    topic: String,
-    topic_static: String,
-    refresh: f64,
+yarp_devices::device_params! {
+    /// What `frameTransformGet_nwc_ros2` reads (C++ `FrameTransformGet_nwc_ros2_params.md`).
+    pub struct FrameTransformGetNwcRos2Params for "frameTransformGet_nwc_ros2" {
+        /// The time interval outside which timed ft will be deleted
+        "GENERAL::refresh_interval" refresh_interval: f64 = 0.1; "s",
+        /// The name of the ROS2 node
+        "ROS2::ft_node" ft_node: String = "tfNodeGet",
+        /// optional namespace for ros2 node
+        "ROS2::namespace" namespace: String = optional,
+        /// The name of the ROS2 topic from which fts will be received
+        "ROS2::ft_topic" ft_topic: String = "/tf",
+        /// The name of the ROS2 topic from which static fts will be received
+        "ROS2::ft_topic_static" ft_topic_static: String = "/tf_static",
+    }
 }
 
-fn common(p: &Params, default_node: &str) -> DevResult<Common> {
-    let s =
-        |k: &str, d: &str| -> DevResult<String> { Ok(p.string(k)?.unwrap_or_else(|| d.into())) };
-    Ok(Common {
-        node: s("ROS2::ft_node", default_node)?,
-        namespace: s("ROS2::namespace", "")?,
-        topic: s("ROS2::ft_topic", "/tf")?,
-        topic_static: s("ROS2::ft_topic_static", "/tf_static")?,
-        refresh: p.float("GENERAL::refresh_interval")?.unwrap_or(0.1),
-    })
+yarp_devices::device_params! {
+    /// What `frameTransformSet_nwc_ros2` reads (C++ `FrameTransformSet_nwc_ros2_params.md`).
+    pub struct FrameTransformSetNwcRos2Params for "frameTransformSet_nwc_ros2" {
+        /// The time interval outside which timed ft will be deleted
+        "GENERAL::refresh_interval" refresh_interval: f64 = 0.1; "s",
+        /// The PeriodicThread period in seconds
+        "GENERAL::period" period: f64 = 0.01; "s"; check crate::node::period,
+        /// If 1, the fts will be published not only every "period" seconds but also when
+        /// set functions are called
+        "GENERAL::asynch_pub" asynch_pub: i64 = 1,
+        /// The name of the ROS2 node
+        "ROS2::ft_node" ft_node: String = "tfNodeSet",
+        /// optional namespace for ros2 node
+        "ROS2::namespace" namespace: String = optional,
+        /// The name of the ROS2 topic to which fts will be published
+        "ROS2::ft_topic" ft_topic: String = "/tf",
+        /// The name of the ROS2 topic to which static fts will be published
+        "ROS2::ft_topic_static" ft_topic_static: String = "/tf_static",
+    }
 }
 
 fn lock<T>(m: &Mutex<T>) -> parking_lot::MutexGuard<'_, T> {
@@ -108,16 +124,21 @@ pub struct FrameTransformGetNwcRos2 {
 }
 
 impl DeviceDriver for FrameTransformGetNwcRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        FrameTransformGetNwcRos2Params::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        let c = common(&Params::new(GET, config), "tfNodeGet")?;
-        *lock(&self.container) = FrameTransformContainer::new(c.refresh);
-        let mut b = NodeBuilder::new(GET, &c.namespace, &c.node)?;
+        let c = FrameTransformGetNwcRos2Params::read(config)?;
+        *lock(&self.container) = FrameTransformContainer::new(c.refresh_interval);
+        let namespace = c.namespace.as_deref().unwrap_or("");
+        let mut b = NodeBuilder::new(GET, namespace, &c.ft_node)?;
         let subs = [
-            (b.subscription(&c.topic, TF)?, false),
+            (b.subscription(&c.ft_topic, TF)?, false),
             // transient local: the static frames published before this client started
             (
-                b.subscription_with(&c.topic_static, TF, &crate::node::latched_qos())?,
+                b.subscription_with(&c.ft_topic_static, TF, &crate::node::latched_qos())?,
                 true,
             ),
         ];
@@ -186,33 +207,29 @@ pub struct FrameTransformSetNwcRos2 {
 }
 
 impl DeviceDriver for FrameTransformSetNwcRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        FrameTransformSetNwcRos2Params::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        let p = Params::new(SET, config);
-        let c = common(&p, "tfNodeSet")?;
-        let period = p.float("GENERAL::period")?.unwrap_or(0.01);
-        if !(period > 0.0 && period.is_finite()) {
-            return Err(DeviceError::BadParam {
-                device: SET.into(),
-                param: "GENERAL::period".into(),
-                expected: "a period in seconds greater than 0",
-                got: period.to_string(),
-            });
-        }
-        self.asynch = p.int("GENERAL::asynch_pub")?.unwrap_or(1) == 1;
-        *lock(&self.container) = FrameTransformContainer::new(c.refresh);
-        let mut b = NodeBuilder::new(SET, &c.namespace, &c.node)?;
+        let c = FrameTransformSetNwcRos2Params::read(config)?;
+        let period = c.period;
+        self.asynch = c.asynch_pub == 1;
+        *lock(&self.container) = FrameTransformContainer::new(c.refresh_interval);
+        let namespace = c.namespace.as_deref().unwrap_or("");
+        let mut b = NodeBuilder::new(SET, namespace, &c.ft_node)?;
         let publishing = Arc::new(Publishing {
-            timed: b.publisher(&c.topic, TF)?,
+            timed: b.publisher(&c.ft_topic, TF)?,
             // transient local, as C++ and tf2's static broadcaster: a late listener
             // still gets the static frames
-            statics: b.publisher_with(&c.topic_static, TF, &crate::node::latched_qos())?,
+            statics: b.publisher_with(&c.ft_topic_static, TF, &crate::node::latched_qos())?,
         });
         self.node = Some(b.spin()?);
         let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
         let (s, pb, container) = (stop.clone(), publishing.clone(), self.container.clone());
         let thread = std::thread::Builder::new()
-            .name(format!("{SET} {}", c.node))
+            .name(format!("{SET} {}", c.ft_node))
             .spawn(move || {
                 let mut tick =
                     yarp_devices::sensors::periodic::Ticker::new(Duration::from_secs_f64(period));
@@ -285,5 +302,37 @@ mod tests {
         assert!(m.conforms_to(TF));
         assert_eq!(read_tf_message(&m, false), vec![t]);
         assert!(read_tf_message(&Ros::Struct(vec![]), true).is_empty());
+    }
+
+    #[test]
+    fn parameters_default_as_in_cpp_and_are_read_from_their_groups() {
+        let get = FrameTransformGetNwcRos2Params::read(&Property::new()).unwrap();
+        assert_eq!(
+            (
+                get.ft_node.as_str(),
+                get.ft_topic.as_str(),
+                get.ft_topic_static.as_str()
+            ),
+            ("tfNodeGet", "/tf", "/tf_static")
+        );
+        assert_eq!((get.refresh_interval, get.namespace), (0.1, None));
+        let set = FrameTransformSetNwcRos2Params::read(&Property::new()).unwrap();
+        assert_eq!(
+            (set.ft_node.as_str(), set.period, set.asynch_pub),
+            ("tfNodeSet", 0.01, 1)
+        );
+        let set = FrameTransformSetNwcRos2Params::read(&Property::from_text(
+            "(GENERAL (period 0.5) (asynch_pub 0)) (ROS2 (ft_node n) (namespace ns))",
+        ))
+        .unwrap();
+        assert_eq!((set.period, set.asynch_pub), (0.5, 0));
+        assert_eq!(
+            (set.ft_node.as_str(), set.namespace.as_deref()),
+            ("n", Some("ns"))
+        );
+        let e = FrameTransformSetNwcRos2Params::read(&Property::from_text("(GENERAL (period 0))"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`GENERAL::period`"), "{e}");
     }
 }

@@ -11,13 +11,27 @@ use yarp_devices::sensors::interfaces::{
     IOrientationSensors, IThreeAxisGyroscopes, IThreeAxisLinearAccelerometers,
 };
 use yarp_devices::sensors::{MasStatus, SensorMeasurement};
-use yarp_devices::{DevResult, DeviceDriver, DeviceError, Params};
+use yarp_devices::{DevResult, DeviceDriver, DeviceError};
 use yarp_proto::Property;
 use yarp_ros2_gateway::dynmsg::Value as Ros;
 use yarp_ros2_gateway::mas::quaternion_to_rpy_deg;
 
 pub const NAME: &str = "imu_nwc_ros2";
 const IMU: &str = "sensor_msgs/msg/Imu";
+
+yarp_devices::device_params! {
+    /// What `imu_nwc_ros2` reads (C++ `GenericSensor_nwc_ros2_params.md`).
+    pub struct ImuNwcRos2Params for "imu_nwc_ros2" {
+        /// name of the ros2 node
+        node_name: String = required,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+        /// name of the topic the sensor_msgs/Imu messages are read from
+        topic_name: String = required,
+        /// The name of the sensor the data are coming from
+        sensor_name: String = required,
+    }
+}
 
 /// One received `sensor_msgs/Imu`, in YARP units.
 #[derive(Debug, Clone, PartialEq)]
@@ -93,21 +107,17 @@ impl ImuNwcRos2 {
 }
 
 impl DeviceDriver for ImuNwcRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        ImuNwcRos2Params::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        let p = Params::new(NAME, config);
-        let node_name = p
-            .string("node_name")?
-            .ok_or_else(|| p.missing("node_name"))?;
-        let topic = p
-            .string("topic_name")?
-            .ok_or_else(|| p.missing("topic_name"))?;
-        self.sensor_name = p
-            .string("sensor_name")?
-            .ok_or_else(|| p.missing("sensor_name"))?;
-        let namespace = p.string("namespace")?.unwrap_or_default();
-        let mut b = NodeBuilder::new(NAME, &namespace, &node_name)?;
-        let sub = b.subscription(&topic, IMU)?;
+        let p = ImuNwcRos2Params::read(config)?;
+        self.sensor_name = p.sensor_name;
+        let namespace = p.namespace.as_deref().unwrap_or("");
+        let mut b = NodeBuilder::new(NAME, namespace, &p.node_name)?;
+        let sub = b.subscription(&p.topic_name, IMU)?;
         let node = b.spin()?;
         let latest = self.latest.clone();
         self.task = Some(on_messages(sub, IMU, move |m| {

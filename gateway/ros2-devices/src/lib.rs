@@ -96,3 +96,136 @@ pub fn register(registry: &mut Registry) {
         registry.add(PROVIDER, family);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::BTreeSet;
+
+    const GENERIC_NWS: &[&str] = &["period", "node_name", "namespace", "topic_name"];
+
+    /// yarp-devices-ros2's parameter tables (`*_params.md`), by device.
+    const CPP: &[(&str, &[&str])] = &[
+        ("battery_nws_ros2", GENERIC_NWS),
+        ("imu_nws_ros2", GENERIC_NWS),
+        ("wrenchStamped_nws_ros2", GENERIC_NWS),
+        ("magneticField_nws_ros2", GENERIC_NWS),
+        ("temperature_nws_ros2", GENERIC_NWS),
+        (
+            "controlBoard_nws_ros2",
+            &[
+                "node_name",
+                "namespace",
+                "topic_name",
+                "msgs_name",
+                "period",
+            ],
+        ),
+        (
+            "frameGrabber_nws_ros2",
+            &["period", "node_name", "namespace", "topic_name", "frame_id"],
+        ),
+        (
+            "frameTransformGet_nwc_ros2",
+            &[
+                "GENERAL::refresh_interval",
+                "ROS2::ft_node",
+                "ROS2::namespace",
+                "ROS2::ft_topic",
+                "ROS2::ft_topic_static",
+            ],
+        ),
+        (
+            "frameTransformSet_nwc_ros2",
+            &[
+                "GENERAL::refresh_interval",
+                "GENERAL::period",
+                "GENERAL::asynch_pub",
+                "ROS2::ft_node",
+                "ROS2::namespace",
+                "ROS2::ft_topic",
+                "ROS2::ft_topic_static",
+            ],
+        ),
+        (
+            "mobileBaseVelocityControl_nws_ros2",
+            &["node_name", "namespace", "topic_name"],
+        ),
+        (
+            "imu_nwc_ros2",
+            &["node_name", "namespace", "topic_name", "sensor_name"],
+        ),
+        (
+            "odometry2D_nws_ros2",
+            &[
+                "period",
+                "node_name",
+                "namespace",
+                "topic_name",
+                "odom_frame",
+                "base_frame",
+            ],
+        ),
+        (
+            "rangefinder2D_nwc_ros2",
+            &[
+                "period",
+                "node_name",
+                "namespace",
+                "topic_name",
+                "verbose_on",
+            ],
+        ),
+        (
+            "rangefinder2D_nws_ros2",
+            &["period", "node_name", "namespace", "topic_name", "frame_id"],
+        ),
+        (
+            "rgbdSensor_nwc_ros2",
+            &[
+                "node_name",
+                "namespace",
+                "color_topic_name",
+                "depth_topic_name",
+                "verbose_on",
+            ],
+        ),
+        (
+            "rgbdSensor_nws_ros2",
+            &[
+                "period",
+                "node_name",
+                "namespace",
+                "color_topic_name",
+                "depth_topic_name",
+                "force_info_synch",
+                "depth_frame_id",
+                "color_frame_id",
+                "pub_status_topic",
+            ],
+        ),
+        (
+            "rgbdToPointCloudSensor_nws_ros2",
+            &["period", "topic_name", "frame_id", "node_name", "namespace"],
+        ),
+    ];
+
+    #[test]
+    fn every_driver_declares_the_parameters_of_its_cpp_table() {
+        let mut seen = BTreeSet::new();
+        for family in [CONTROL_BOARD, sensors::DRIVERS, LASERS_CAMERAS_BASES] {
+            for (name, factory) in family {
+                let declared: Vec<&str> = factory().parameters().iter().map(|p| p.name).collect();
+                let (_, cpp) = CPP
+                    .iter()
+                    .find(|(d, _)| d == name)
+                    .unwrap_or_else(|| panic!("{name}: no C++ table here"));
+                let declared: BTreeSet<&str> = declared.into_iter().collect();
+                let cpp: BTreeSet<&str> = cpp.iter().copied().collect();
+                assert_eq!(declared, cpp, "{name}");
+                seen.insert(*name);
+            }
+        }
+        assert_eq!(seen.len(), CPP.len());
+    }
+}

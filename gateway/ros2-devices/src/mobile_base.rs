@@ -17,13 +17,46 @@ use futures::StreamExt;
 use parking_lot::Mutex;
 use ros2_client::Publisher;
 use std::sync::Arc;
-use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, Params, SharedDevice};
+use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, SharedDevice};
 use yarp_proto::Property;
 use yarp_ros2_gateway::dynmsg::{MsgSeed, Value as Ros};
 
 pub const BATTERY: &str = "battery_nws_ros2";
 pub const ODOMETRY: &str = "odometry2D_nws_ros2";
 pub const VELOCITY: &str = "mobileBaseVelocityControl_nws_ros2";
+
+// `battery_nws_ros2` reads [`CommonParams`] (C++ `Battery_nws_ros2_params.md`).
+
+yarp_devices::device_params! {
+    /// What `odometry2D_nws_ros2` reads (C++ `Odometry2D_nws_ros2_params.md`).
+    pub struct Odometry2DNwsRos2Params for "odometry2D_nws_ros2" {
+        /// refresh period of the broadcasted values in s
+        period: f64 = 0.02; "s"; check crate::node::period,
+        /// name of the ros2 node
+        node_name: String = required; check crate::node::node_name,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+        /// name of the topic where the device must publish the data
+        topic_name: String = required; check crate::node::topic_name,
+        /// name of the reference frame for odometry
+        odom_frame: String = required,
+        /// name of the base frame for odometry
+        base_frame: String = required,
+    }
+}
+
+yarp_devices::device_params! {
+    /// What `mobileBaseVelocityControl_nws_ros2` reads (C++
+    /// `MobileBaseVelocityControl_nws_ros2_params.md`).
+    pub struct MobileBaseVelocityControlNwsRos2Params for "mobileBaseVelocityControl_nws_ros2" {
+        /// name of the ros2 node
+        node_name: String = required,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+        /// name of the topic the geometry_msgs/Twist commands are read from
+        topic_name: String = required,
+    }
+}
 
 /// Which of the publishing wrappers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -61,31 +94,54 @@ impl StateNwsRos2 {
             Kind::Odometry => ODOMETRY,
         }
     }
+
+    /// The common parameters and, for the odometry, `odom_frame` and `base_frame`.
+    fn read_params(&self, config: &Property) -> DevResult<(CommonParams, (String, String))> {
+        match self.kind {
+            Kind::Battery => Ok((
+                CommonParams::read_as(BATTERY, config)?,
+                (String::new(), String::new()),
+            )),
+            Kind::Odometry => {
+                let Odometry2DNwsRos2Params {
+                    period,
+                    node_name,
+                    namespace,
+                    topic_name,
+                    odom_frame,
+                    base_frame,
+                } = Odometry2DNwsRos2Params::read(config)?;
+                let common = CommonParams {
+                    period,
+                    node_name,
+                    namespace,
+                    topic_name,
+                };
+                Ok((common, (odom_frame, base_frame)))
+            }
+        }
+    }
 }
 
 impl DeviceDriver for StateNwsRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        match self.kind {
+            Kind::Battery => CommonParams::PARAMS,
+            Kind::Odometry => Odometry2DNwsRos2Params::PARAMS,
+        }
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
         let name = self.name();
-        let p = Params::new(name, config);
-        let params = CommonParams::read(&p, 0.02)?;
-        let mut b = NodeBuilder::new(name, &params.namespace, &params.node_name)?;
-        let (publishers, frames) = match self.kind {
-            Kind::Battery => (
-                vec![b.publisher(&params.topic_name, "sensor_msgs/msg/BatteryState")?],
-                (String::new(), String::new()),
-            ),
-            Kind::Odometry => {
-                let frame = |k: &str| p.string(k)?.ok_or_else(|| p.missing(k));
-                let frames = (frame("odom_frame")?, frame("base_frame")?);
-                (
-                    vec![
-                        b.publisher(&params.topic_name, "nav_msgs/msg/Odometry")?,
-                        b.publisher("/tf", "tf2_msgs/msg/TFMessage")?,
-                    ],
-                    frames,
-                )
-            }
+        let (params, frames) = self.read_params(config)?;
+        let mut b = NodeBuilder::new(name, params.namespace(), &params.node_name)?;
+        let publishers = match self.kind {
+            Kind::Battery => vec![b.publisher(&params.topic_name, "sensor_msgs/msg/BatteryState")?],
+            Kind::Odometry => vec![
+                b.publisher(&params.topic_name, "nav_msgs/msg/Odometry")?,
+                b.publisher("/tf", "tf2_msgs/msg/TFMessage")?,
+            ],
         };
         let node = b.spin()?;
         self.opened = Some(Opened {
@@ -144,7 +200,7 @@ impl IWrapper for StateNwsRos2 {
         let mut errors = Throttle::default();
         self.streamer = Some(Periodic::start(
             &format!("{name} {}", o.params.topic_name),
-            o.params.period,
+            o.params.period_duration(),
             device,
             move |dev| {
                 let wanted = pubs[0].get_subscription_count(&node) > 0;
@@ -193,18 +249,16 @@ pub struct MobileBaseVelocityControlNwsRos2 {
 }
 
 impl DeviceDriver for MobileBaseVelocityControlNwsRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        MobileBaseVelocityControlNwsRos2Params::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        let p = Params::new(VELOCITY, config);
-        let node_name = p
-            .string("node_name")?
-            .ok_or_else(|| p.missing("node_name"))?;
-        let topic = p
-            .string("topic_name")?
-            .ok_or_else(|| p.missing("topic_name"))?;
-        let namespace = p.string("namespace")?.unwrap_or_default();
-        let mut b = NodeBuilder::new(VELOCITY, &namespace, &node_name)?;
-        let sub = b.subscription(&topic, "geometry_msgs/msg/Twist")?;
+        let p = MobileBaseVelocityControlNwsRos2Params::read(config)?;
+        let namespace = p.namespace.as_deref().unwrap_or("");
+        let mut b = NodeBuilder::new(VELOCITY, namespace, &p.node_name)?;
+        let sub = b.subscription(&p.topic_name, "geometry_msgs/msg/Twist")?;
         let node = b.spin()?;
         let target = self.target.clone();
         let seed = MsgSeed::new("geometry_msgs/msg/Twist").expect("Twist is in the catalog");

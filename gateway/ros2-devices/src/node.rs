@@ -11,7 +11,7 @@
 use ros2_client::{Context, Node, Publisher, Server, Subscription};
 use std::sync::Arc;
 use tokio::task::JoinHandle;
-use yarp_devices::{runtime, DevResult, DeviceError, Params};
+use yarp_devices::{runtime, DevResult, DeviceError};
 use yarp_ros2_gateway::dynmsg::Value as Ros;
 use yarp_ros2_gateway::mapping::Qos;
 use yarp_ros2_gateway::ros::{self, RosError};
@@ -21,50 +21,59 @@ fn context() -> Result<Context, RosError> {
     ros::start_context(ros::domain_from_env()?, &ros::networks_from_env())
 }
 
-/// What every wrapper of this crate reads (yarp-devices-ros2's `node_name`, `namespace`,
-/// `topic_name`, `period`), checked as the C++ devices check them.
-#[derive(Debug, Clone)]
-pub struct CommonParams {
-    pub node_name: String,
-    pub namespace: String,
-    pub topic_name: String,
-    pub period: std::time::Duration,
+yarp_devices::device_params! {
+    /// What a wrapper publishing one topic reads (yarp-devices-ros2's
+    /// `GenericSensor_nws_ros2_params.md`, whose rows `Battery_nws_ros2_params.md` repeats):
+    /// `imu_nws_ros2` and the other sensor wrappers and `battery_nws_ros2` read it as it
+    /// is (with [`CommonParams::read_as`]); the wrappers with more parameters declare
+    /// their own table and build it from theirs.
+    pub struct CommonParams for "genericSensor_nws_ros2" {
+        /// refresh period of the broadcasted values in s
+        period: f64 = 0.02; "s"; check crate::node::period,
+        /// name of the ros2 node
+        node_name: String = required; check crate::node::node_name,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+        /// name of the topic where the device must publish the data
+        topic_name: String = required; check crate::node::topic_name,
+    }
 }
 
 impl CommonParams {
-    pub fn read(p: &Params, default_period_s: f64) -> DevResult<CommonParams> {
-        let node_name = p
-            .string("node_name")?
-            .ok_or_else(|| p.missing("node_name"))?;
-        let topic_name = p
-            .string("topic_name")?
-            .ok_or_else(|| p.missing("topic_name"))?;
-        let bad = |param: &str, expected: &'static str, got: String| DeviceError::BadParam {
-            device: p.device.to_string(),
-            param: param.to_string(),
-            expected,
-            got,
-        };
-        if node_name.starts_with('/') {
-            return Err(bad("node_name", "a name without a leading '/'", node_name));
-        }
-        if !topic_name.starts_with('/') {
-            return Err(bad("topic_name", "a name with a leading '/'", topic_name));
-        }
-        let period = p.float("period")?.unwrap_or(default_period_s);
-        if !(period > 0.0 && period.is_finite()) {
-            return Err(bad(
-                "period",
-                "a period in seconds greater than 0",
-                period.to_string(),
-            ));
-        }
-        Ok(CommonParams {
-            node_name,
-            namespace: p.string("namespace")?.unwrap_or_default(),
-            topic_name,
-            period: std::time::Duration::from_secs_f64(period),
-        })
+    /// `period` as a duration (checked greater than 0 when read).
+    pub fn period_duration(&self) -> std::time::Duration {
+        std::time::Duration::from_secs_f64(self.period)
+    }
+
+    /// The node's namespace, `""` (the root) when not given.
+    pub fn namespace(&self) -> &str {
+        self.namespace.as_deref().unwrap_or_default()
+    }
+}
+
+/// A ROS node name as the C++ devices take it: without a leading `/`
+/// (declared `; check crate::node::node_name`).
+pub fn node_name(name: &str) -> Result<(), &'static str> {
+    match name.starts_with('/') {
+        true => Err("a name without a leading '/'"),
+        false => Ok(()),
+    }
+}
+
+/// A ROS topic name as the C++ devices take it: with a leading `/`
+/// (declared `; check crate::node::topic_name`).
+pub fn topic_name(name: &str) -> Result<(), &'static str> {
+    match name.starts_with('/') {
+        true => Ok(()),
+        false => Err("a name with a leading '/'"),
+    }
+}
+
+/// A publishing period in seconds, greater than 0 (declared `; check crate::node::period`).
+pub fn period(s: &f64) -> Result<(), &'static str> {
+    match *s > 0.0 && s.is_finite() {
+        true => Ok(()),
+        false => Err("a period in seconds greater than 0"),
     }
 }
 
@@ -199,4 +208,49 @@ pub fn on_messages(
             }
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use yarp_proto::Property;
+
+    fn read(text: &str) -> DevResult<CommonParams> {
+        CommonParams::read_as("imu_nws_ros2", &Property::from_text(text))
+    }
+
+    fn error(text: &str) -> String {
+        read(text).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn common_params_default_and_check_as_the_cpp_devices() {
+        let p = read("(node_name imu) (topic_name /imu)").unwrap();
+        assert_eq!(p.period_duration(), std::time::Duration::from_millis(20));
+        assert_eq!((p.namespace(), p.node_name.as_str()), ("", "imu"));
+        let p = read("(node_name imu) (topic_name /imu) (namespace robot) (period 1)").unwrap();
+        assert_eq!(p.period_duration(), std::time::Duration::from_secs(1));
+        assert_eq!(p.namespace(), "robot");
+
+        let e = error("(topic_name /imu)");
+        assert!(
+            e.contains("`imu_nws_ros2`") && e.contains("`node_name`"),
+            "{e}"
+        );
+        assert!(error("(node_name imu)").contains("`topic_name`"));
+        let e = error("(node_name /imu) (topic_name /imu)");
+        assert!(
+            e.contains("`node_name`") && e.contains("without a leading '/'"),
+            "{e}"
+        );
+        let e = error("(node_name imu) (topic_name imu)");
+        assert!(
+            e.contains("`topic_name`") && e.contains("with a leading '/'"),
+            "{e}"
+        );
+        for bad in ["0", "-0.1", "fast"] {
+            let e = error(&format!("(node_name imu) (topic_name /imu) (period {bad})"));
+            assert!(e.contains("`period`"), "{e}");
+        }
+    }
 }

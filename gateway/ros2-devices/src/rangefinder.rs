@@ -14,13 +14,46 @@ use parking_lot::Mutex;
 use ros2_client::Publisher;
 use std::sync::Arc;
 use yarp_devices::rangefinder::{IRangefinder2D, LaserStatus};
-use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, Params, SharedDevice};
+use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, SharedDevice};
 use yarp_proto::Property;
 use yarp_ros2_gateway::dynmsg::Value as Ros;
 
 pub const NWS: &str = "rangefinder2D_nws_ros2";
 pub const NWC: &str = "rangefinder2D_nwc_ros2";
 const LASER_SCAN: &str = "sensor_msgs/msg/LaserScan";
+
+yarp_devices::device_params! {
+    /// What `rangefinder2D_nws_ros2` reads (C++ `Rangefinder2D_nws_ros2_params.md`).
+    pub struct Rangefinder2DNwsRos2Params for "rangefinder2D_nws_ros2" {
+        /// refresh period of the broadcasted values in s
+        period: f64 = 0.02; "s"; check crate::node::period,
+        /// name of the ros2 node
+        node_name: String = required; check crate::node::node_name,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+        /// name of the topic where the device must publish the data
+        topic_name: String = required; check crate::node::topic_name,
+        /// name of the base frameId
+        frame_id: String = "laser_frame",
+    }
+}
+
+yarp_devices::device_params! {
+    /// What `rangefinder2D_nwc_ros2` reads (C++ `Rangefinder2D_nwc_ros2_params.md`).
+    pub struct Rangefinder2DNwcRos2Params for "rangefinder2D_nwc_ros2" {
+        /// refresh period of the broadcasted values in s (checked, otherwise unused: the
+        /// client serves each scan as it arrives)
+        period: f64 = 0.02; "s"; check crate::node::period,
+        /// name of the ros2 node
+        node_name: String = required; check crate::node::node_name,
+        /// optional namespace for ros2 node
+        namespace: String = optional,
+        /// name of the topic the scans are read from
+        topic_name: String = required; check crate::node::topic_name,
+        /// if 1, it enables the verbose mode of the device (accepted, no effect here)
+        verbose_on: i64 = 0,
+    }
+}
 
 struct Opened {
     params: CommonParams,
@@ -37,14 +70,26 @@ pub struct Rangefinder2DNwsRos2 {
 }
 
 impl DeviceDriver for Rangefinder2DNwsRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        Rangefinder2DNwsRos2Params::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        let p = Params::new(NWS, config);
-        let params = CommonParams::read(&p, 0.02)?;
-        let frame_id = p
-            .string("frame_id")?
-            .unwrap_or_else(|| "laser_frame".into());
-        let mut b = NodeBuilder::new(NWS, &params.namespace, &params.node_name)?;
+        let Rangefinder2DNwsRos2Params {
+            period,
+            node_name,
+            namespace,
+            topic_name,
+            frame_id,
+        } = Rangefinder2DNwsRos2Params::read(config)?;
+        let params = CommonParams {
+            period,
+            node_name,
+            namespace,
+            topic_name,
+        };
+        let mut b = NodeBuilder::new(NWS, params.namespace(), &params.node_name)?;
         let publisher = Arc::new(b.publisher(&params.topic_name, LASER_SCAN)?);
         let node = b.spin()?;
         self.opened = Some(Opened {
@@ -89,7 +134,7 @@ impl IWrapper for Rangefinder2DNwsRos2 {
             }
         };
         let (node, publisher) = (o.node.node.clone(), o.publisher.clone());
-        let (frame, period) = (o.frame_id.clone(), o.params.period);
+        let (frame, period) = (o.frame_id.clone(), o.params.period_duration());
         let mut errors = Throttle::default();
         self.streamer = Some(Periodic::start(
             &format!("{NWS} {}", o.params.topic_name),
@@ -158,13 +203,15 @@ impl Rangefinder2DNwcRos2 {
 }
 
 impl DeviceDriver for Rangefinder2DNwcRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        Rangefinder2DNwcRos2Params::PARAMS
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
-        let p = Params::new(NWC, config);
-        let params = CommonParams::read(&p, 0.02)?;
-        p.int("verbose_on")?;
-        let mut b = NodeBuilder::new(NWC, &params.namespace, &params.node_name)?;
-        let sub = b.subscription(&params.topic_name, LASER_SCAN)?;
+        let p = Rangefinder2DNwcRos2Params::read(config)?;
+        let mut b = NodeBuilder::new(NWC, p.namespace.as_deref().unwrap_or(""), &p.node_name)?;
+        let sub = b.subscription(&p.topic_name, LASER_SCAN)?;
         let node = b.spin()?;
         let latest = self.latest.clone();
         self.task = Some(on_messages(sub, LASER_SCAN, move |m| {

@@ -23,7 +23,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use yarp_devices::sensors::periodic::Ticker;
 use yarp_devices::sensors::SensorMeasurement;
-use yarp_devices::{DevResult, DeviceDriver, DeviceError, IMultipleWrapper, Params, SharedDevice};
+use yarp_devices::{DevResult, DeviceDriver, DeviceError, IMultipleWrapper, SharedDevice};
 use yarp_ros2_gateway::counters::header;
 use yarp_ros2_gateway::dynmsg::Value as Ros;
 use yarp_ros2_gateway::mas::rpy_deg_to_quaternion;
@@ -253,11 +253,15 @@ pub const DRIVERS: &[(&str, yarp_devices::Factory)] = &[
 ];
 
 impl DeviceDriver for SensorNwsRos2 {
+    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
+        CommonParams::PARAMS
+    }
+
     fn open(&mut self, config: &yarp_proto::Property) -> DevResult<()> {
         self.opened = None;
         let name = self.family.device_name();
-        let params = CommonParams::read(&Params::new(name, config), 0.02)?;
-        let mut b = NodeBuilder::new(name, &params.namespace, &params.node_name)?;
+        let params = CommonParams::read_as(name, config)?;
+        let mut b = NodeBuilder::new(name, params.namespace(), &params.node_name)?;
         let publisher = Arc::new(b.publisher(&params.topic_name, self.family.ros_type())?);
         let node = b.spin()?;
         self.opened = Some(Opened {
@@ -297,7 +301,7 @@ impl IMultipleWrapper for SensorNwsRos2 {
         o.streamer = None;
         let stop = Arc::new(AtomicBool::new(false));
         let (s, node, publisher) = (stop.clone(), o.node.node.clone(), o.publisher.clone());
-        let period = o.params.period;
+        let period = o.params.period_duration();
         let topic = o.params.topic_name.clone();
         let thread = std::thread::Builder::new()
             .name(format!("{name} {topic}"))
