@@ -93,9 +93,9 @@ macro_rules! device_interfaces {
         pub trait DeviceDriver: Send {
             /// Configures and starts the device.
             fn open(&mut self, config: &Property) -> DevResult<()>;
-            /// The parameters the device reads, as declared with [`crate::device_params!`]
+            /// The parameters the device reads, as declared with [`$crate::device_params!`]
             /// (what `--help` prints); empty for a device that declares none.
-            fn parameters(&self) -> &'static [crate::params::ParamSpec] {
+            fn parameters(&self) -> &'static [$crate::params::ParamSpec] {
                 &[]
             }
             /// Stops the device; it may be reopened.

@@ -316,7 +316,7 @@ pub fn check_range<T: PartialOrd + std::fmt::Debug, B: IntoDefault<T>>(
     expected: &'static str,
 ) -> DevResult<Option<T>> {
     match found {
-        Some(v) if !(lo.into_default() <= v && v <= hi.into_default()) => {
+        Some(v) if !(lo.into_default()..=hi.into_default()).contains(&v) => {
             Err(p.invalid(key, expected, format!("{v:?}")))
         }
         found => Ok(found),
@@ -328,7 +328,7 @@ pub fn check_with<T: std::fmt::Debug>(
     p: &Params<'_>,
     key: &str,
     found: Option<T>,
-    check: fn(&T) -> Result<(), &'static str>,
+    check: impl Fn(&T) -> Result<(), &'static str>,
 ) -> DevResult<Option<T>> {
     match found {
         Some(v) => match check(&v) {
@@ -340,7 +340,7 @@ pub fn check_with<T: std::fmt::Debug>(
 }
 
 /// A port name or prefix, as the wrappers need it: `/...`.
-pub fn port_name(name: &String) -> Result<(), &'static str> {
+pub fn port_name(name: &str) -> Result<(), &'static str> {
     match name.starts_with('/') {
         true => Ok(()),
         false => Err("a port name starting with '/'"),
@@ -364,7 +364,9 @@ pub fn check_min<T: PartialOrd + std::fmt::Debug, B: IntoDefault<T>>(
     expected: &'static str,
 ) -> DevResult<Option<T>> {
     match found {
-        Some(v) if !(min.into_default() <= v) => Err(p.invalid(key, expected, format!("{v:?}"))),
+        Some(v) if v.partial_cmp(&min.into_default()).is_none_or(|o| o.is_lt()) => {
+            Err(p.invalid(key, expected, format!("{v:?}")))
+        }
         found => Ok(found),
     }
 }
@@ -561,7 +563,7 @@ macro_rules! device_params {
                         $(let found = $crate::params::check_min(
                             &p, key, found, $min, concat!("a value of at least ", stringify!($min)),
                         )?;)?
-                        $(let found = $crate::params::check_with(&p, key, found, $check)?;)?
+                        $(let found = $crate::params::check_with(&p, key, found, |v| $check(v))?;)?
                         $crate::device_params!(@value p key found $default $ty)
                     },
                 )*})

@@ -77,6 +77,12 @@ crate::device_params! {
         "rectificationMatrix" rectification_matrix: Vec<f64> = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
         /// the image's first row is its top
         "topIsLow" top_is_low: bool = true,
+        /// background image to use, if any (accepted; the patterns are drawn on black)
+        src: String = optional,
+        /// should emit bayer test image (accepted; the image stays RGB)
+        bayer: bool = false,
+        /// should emit a monochrome image (accepted; the image stays RGB)
+        mono: bool = false,
     }
 }
 

@@ -55,8 +55,8 @@ impl IntoDefault<FloatPeriod> for f64 {
 }
 
 /// Only COLOR streaming is offered.
-fn color_only(capabilities: &String) -> Result<(), &'static str> {
-    match capabilities.as_str() {
+fn color_only(capabilities: &str) -> Result<(), &'static str> {
+    match capabilities {
         "COLOR" => Ok(()),
         _ => Err("COLOR (RAW streaming is not available)"),
     }

@@ -15,52 +15,125 @@ pub trait FamilySource {
     fn family_measure(&self, family: SensorFamily, i: usize) -> DevResult<SensorMeasurement>;
 }
 
-/// Implements one MAS interface trait for `$ty: FamilySource`.
-macro_rules! forward_interface {
-    ($ty:ty, $trait:ident, $family:ident,
+/// Implements the MAS interface traits of the families named (`SensorFamily` variants)
+/// for `$ty: FamilySource`; a size of a family without frames is that of its latest
+/// measurement:
+///
+/// ```ignore
+/// yarp_devices::mas_interfaces!(EmbObjImu: ThreeAxisGyroscopes, OrientationSensors);
+/// ```
+#[macro_export]
+macro_rules! mas_interfaces {
+    ($ty:ty: $($family:ident),+ $(,)?) => {
+        $($crate::mas_interfaces!(@one $ty, $family);)+
+    };
+    (@one $ty:ty, ThreeAxisGyroscopes) => {
+        $crate::mas_interfaces!(@framed $ty, IThreeAxisGyroscopes, ThreeAxisGyroscopes, get_nr_of_three_axis_gyroscopes, get_three_axis_gyroscope_status, get_three_axis_gyroscope_name, get_three_axis_gyroscope_frame_name, get_three_axis_gyroscope_measure);
+    };
+    (@one $ty:ty, ThreeAxisLinearAccelerometers) => {
+        $crate::mas_interfaces!(@framed $ty, IThreeAxisLinearAccelerometers, ThreeAxisLinearAccelerometers, get_nr_of_three_axis_linear_accelerometers, get_three_axis_linear_accelerometer_status, get_three_axis_linear_accelerometer_name, get_three_axis_linear_accelerometer_frame_name, get_three_axis_linear_accelerometer_measure);
+    };
+    (@one $ty:ty, ThreeAxisMagnetometers) => {
+        $crate::mas_interfaces!(@framed $ty, IThreeAxisMagnetometers, ThreeAxisMagnetometers, get_nr_of_three_axis_magnetometers, get_three_axis_magnetometer_status, get_three_axis_magnetometer_name, get_three_axis_magnetometer_frame_name, get_three_axis_magnetometer_measure);
+    };
+    (@one $ty:ty, OrientationSensors) => {
+        $crate::mas_interfaces!(@framed $ty, IOrientationSensors, OrientationSensors, get_nr_of_orientation_sensors, get_orientation_sensor_status, get_orientation_sensor_name, get_orientation_sensor_frame_name, get_orientation_sensor_measure_as_roll_pitch_yaw);
+    };
+    (@one $ty:ty, SixAxisForceTorqueSensors) => {
+        $crate::mas_interfaces!(@framed $ty, ISixAxisForceTorqueSensors, SixAxisForceTorqueSensors, get_nr_of_six_axis_force_torque_sensors, get_six_axis_force_torque_sensor_status, get_six_axis_force_torque_sensor_name, get_six_axis_force_torque_sensor_frame_name, get_six_axis_force_torque_sensor_measure);
+    };
+    (@one $ty:ty, TemperatureSensors) => {
+        $crate::mas_interfaces!(@framed $ty, ITemperatureSensors, TemperatureSensors, get_nr_of_temperature_sensors, get_temperature_sensor_status, get_temperature_sensor_name, get_temperature_sensor_frame_name, get_temperature_sensor_measure);
+    };
+    (@one $ty:ty, SkinPatches) => {
+        $crate::mas_interfaces!(@unframed $ty, ISkinPatches, SkinPatches, get_nr_of_skin_patches, get_skin_patch_status, get_skin_patch_name, get_skin_patch_size, get_skin_patch_measure);
+    };
+    (@one $ty:ty, EncoderArrays) => {
+        $crate::mas_interfaces!(@unframed $ty, IEncoderArrays, EncoderArrays, get_nr_of_encoder_arrays, get_encoder_array_status, get_encoder_array_name, get_encoder_array_size, get_encoder_array_measure);
+    };
+    (@framed $ty:ty, $trait:ident, $family:ident,
      $nr:ident, $status:ident, $name:ident, $frame:ident, $measure:ident) => {
         impl $crate::sensors::interfaces::$trait for $ty {
             fn $nr(&self) -> usize {
-                FamilySource::family_count(self, SensorFamily::$family)
+                $crate::sensors::forward::FamilySource::family_count(
+                    self,
+                    $crate::sensors::SensorFamily::$family,
+                )
             }
-            fn $status(&self, i: usize) -> MasStatus {
-                FamilySource::family_status(self, SensorFamily::$family, i)
+            fn $status(&self, i: usize) -> $crate::sensors::interfaces::MasStatus {
+                $crate::sensors::forward::FamilySource::family_status(
+                    self,
+                    $crate::sensors::SensorFamily::$family,
+                    i,
+                )
             }
-            fn $name(&self, i: usize) -> DevResult<String> {
-                FamilySource::family_name(self, SensorFamily::$family, i)
+            fn $name(&self, i: usize) -> $crate::error::DevResult<String> {
+                $crate::sensors::forward::FamilySource::family_name(
+                    self,
+                    $crate::sensors::SensorFamily::$family,
+                    i,
+                )
             }
-            fn $frame(&self, i: usize) -> DevResult<String> {
-                FamilySource::family_frame_name(self, SensorFamily::$family, i)
+            fn $frame(&self, i: usize) -> $crate::error::DevResult<String> {
+                $crate::sensors::forward::FamilySource::family_frame_name(
+                    self,
+                    $crate::sensors::SensorFamily::$family,
+                    i,
+                )
             }
-            fn $measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-                FamilySource::family_measure(self, SensorFamily::$family, i)
+            fn $measure(
+                &self,
+                i: usize,
+            ) -> $crate::error::DevResult<$crate::sensors::interfaces::SensorMeasurement> {
+                $crate::sensors::forward::FamilySource::family_measure(
+                    self,
+                    $crate::sensors::SensorFamily::$family,
+                    i,
+                )
             }
         }
     };
-}
-
-/// Implements one MAS interface trait of a family without frames for `$ty: FamilySource`
-/// (the size of a sensor is that of its latest measurement).
-macro_rules! forward_interface_without_frames {
-    ($ty:ty, $trait:ident, $family:ident,
+    (@unframed $ty:ty, $trait:ident, $family:ident,
      $nr:ident, $status:ident, $name:ident, $size:ident, $measure:ident) => {
         impl $crate::sensors::interfaces::$trait for $ty {
             fn $nr(&self) -> usize {
-                FamilySource::family_count(self, SensorFamily::$family)
+                $crate::sensors::forward::FamilySource::family_count(
+                    self,
+                    $crate::sensors::SensorFamily::$family,
+                )
             }
-            fn $status(&self, i: usize) -> MasStatus {
-                FamilySource::family_status(self, SensorFamily::$family, i)
+            fn $status(&self, i: usize) -> $crate::sensors::interfaces::MasStatus {
+                $crate::sensors::forward::FamilySource::family_status(
+                    self,
+                    $crate::sensors::SensorFamily::$family,
+                    i,
+                )
             }
-            fn $name(&self, i: usize) -> DevResult<String> {
-                FamilySource::family_name(self, SensorFamily::$family, i)
+            fn $name(&self, i: usize) -> $crate::error::DevResult<String> {
+                $crate::sensors::forward::FamilySource::family_name(
+                    self,
+                    $crate::sensors::SensorFamily::$family,
+                    i,
+                )
             }
             fn $size(&self, i: usize) -> usize {
-                FamilySource::family_measure(self, SensorFamily::$family, i)
-                    .map(|m| m.values.len())
-                    .unwrap_or(0)
+                $crate::sensors::forward::FamilySource::family_measure(
+                    self,
+                    $crate::sensors::SensorFamily::$family,
+                    i,
+                )
+                .map(|m| m.values.len())
+                .unwrap_or(0)
             }
-            fn $measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-                FamilySource::family_measure(self, SensorFamily::$family, i)
+            fn $measure(
+                &self,
+                i: usize,
+            ) -> $crate::error::DevResult<$crate::sensors::interfaces::SensorMeasurement> {
+                $crate::sensors::forward::FamilySource::family_measure(
+                    self,
+                    $crate::sensors::SensorFamily::$family,
+                    i,
+                )
             }
         }
     };
@@ -69,88 +142,9 @@ macro_rules! forward_interface_without_frames {
 /// Implements every MAS interface trait for `$ty: FamilySource`.
 macro_rules! impl_mas_interfaces {
     ($ty:ty) => {
-        $crate::sensors::forward::forward_interface!(
-            $ty,
-            IThreeAxisGyroscopes,
-            ThreeAxisGyroscopes,
-            get_nr_of_three_axis_gyroscopes,
-            get_three_axis_gyroscope_status,
-            get_three_axis_gyroscope_name,
-            get_three_axis_gyroscope_frame_name,
-            get_three_axis_gyroscope_measure
-        );
-        $crate::sensors::forward::forward_interface!(
-            $ty,
-            IThreeAxisLinearAccelerometers,
-            ThreeAxisLinearAccelerometers,
-            get_nr_of_three_axis_linear_accelerometers,
-            get_three_axis_linear_accelerometer_status,
-            get_three_axis_linear_accelerometer_name,
-            get_three_axis_linear_accelerometer_frame_name,
-            get_three_axis_linear_accelerometer_measure
-        );
-        $crate::sensors::forward::forward_interface!(
-            $ty,
-            IThreeAxisMagnetometers,
-            ThreeAxisMagnetometers,
-            get_nr_of_three_axis_magnetometers,
-            get_three_axis_magnetometer_status,
-            get_three_axis_magnetometer_name,
-            get_three_axis_magnetometer_frame_name,
-            get_three_axis_magnetometer_measure
-        );
-        $crate::sensors::forward::forward_interface!(
-            $ty,
-            IOrientationSensors,
-            OrientationSensors,
-            get_nr_of_orientation_sensors,
-            get_orientation_sensor_status,
-            get_orientation_sensor_name,
-            get_orientation_sensor_frame_name,
-            get_orientation_sensor_measure_as_roll_pitch_yaw
-        );
-        $crate::sensors::forward::forward_interface!(
-            $ty,
-            ISixAxisForceTorqueSensors,
-            SixAxisForceTorqueSensors,
-            get_nr_of_six_axis_force_torque_sensors,
-            get_six_axis_force_torque_sensor_status,
-            get_six_axis_force_torque_sensor_name,
-            get_six_axis_force_torque_sensor_frame_name,
-            get_six_axis_force_torque_sensor_measure
-        );
-        $crate::sensors::forward::forward_interface!(
-            $ty,
-            ITemperatureSensors,
-            TemperatureSensors,
-            get_nr_of_temperature_sensors,
-            get_temperature_sensor_status,
-            get_temperature_sensor_name,
-            get_temperature_sensor_frame_name,
-            get_temperature_sensor_measure
-        );
-
-        $crate::sensors::forward::forward_interface_without_frames!(
-            $ty,
-            ISkinPatches,
-            SkinPatches,
-            get_nr_of_skin_patches,
-            get_skin_patch_status,
-            get_skin_patch_name,
-            get_skin_patch_size,
-            get_skin_patch_measure
-        );
-
-        $crate::sensors::forward::forward_interface_without_frames!(
-            $ty,
-            IEncoderArrays,
-            EncoderArrays,
-            get_nr_of_encoder_arrays,
-            get_encoder_array_status,
-            get_encoder_array_name,
-            get_encoder_array_size,
-            get_encoder_array_measure
-        );
+        $crate::mas_interfaces!($ty: ThreeAxisGyroscopes, ThreeAxisLinearAccelerometers,
+            ThreeAxisMagnetometers, OrientationSensors, SixAxisForceTorqueSensors,
+            TemperatureSensors, SkinPatches, EncoderArrays);
     };
 }
 
@@ -200,7 +194,5 @@ macro_rules! mas_views {
     };
 }
 
-pub(crate) use forward_interface;
-pub(crate) use forward_interface_without_frames;
 pub(crate) use impl_mas_interfaces;
 pub(crate) use mas_views;

@@ -33,6 +33,7 @@ use icub_eth::entities::mn::{category, service_type, ServiceCommand};
 use icub_eth::id::{entity as en, ids, tag};
 use icub_eth::{Entity, Id32};
 use yarp_devices::sensors::interfaces::*;
+use yarp_devices::sensors::SensorFamily;
 use yarp_devices::{DevResult, DeviceDriver, DeviceError};
 use yarp_proto::Property;
 
@@ -827,100 +828,43 @@ impl DeviceDriver for EmbObjImu {
         }
         Ok(())
     }
-    fn as_three_axis_gyroscopes(&mut self) -> Option<&mut dyn IThreeAxisGyroscopes> {
-        Some(self)
+    yarp_devices::imu_views!();
+}
+
+/// The board's sensors by family: each family is the sensors of its types (the frame of
+/// a sensor is its name, as C++).
+impl yarp_devices::sensors::forward::FamilySource for EmbObjImu {
+    fn family_count(&self, family: SensorFamily) -> usize {
+        kinds_of(family).map_or(0, |k| self.of_kind(k).len())
     }
-    fn as_three_axis_linear_accelerometers(
-        &mut self,
-    ) -> Option<&mut dyn IThreeAxisLinearAccelerometers> {
-        Some(self)
+    fn family_status(&self, family: SensorFamily, i: usize) -> MasStatus {
+        kinds_of(family).map_or(MasStatus::Error, |k| self.status(k, i))
     }
-    fn as_three_axis_magnetometers(&mut self) -> Option<&mut dyn IThreeAxisMagnetometers> {
-        Some(self)
+    fn family_name(&self, family: SensorFamily, i: usize) -> DevResult<String> {
+        self.name(kinds_of(family).unwrap_or(&[]), i)
     }
-    fn as_orientation_sensors(&mut self) -> Option<&mut dyn IOrientationSensors> {
-        Some(self)
+    fn family_frame_name(&self, family: SensorFamily, i: usize) -> DevResult<String> {
+        self.name(kinds_of(family).unwrap_or(&[]), i)
+    }
+    /// Magnetometers in tesla (16 LSB per µT).
+    fn family_measure(&self, family: SensorFamily, i: usize) -> DevResult<SensorMeasurement> {
+        self.measure(kinds_of(family).unwrap_or(&[]), i)
     }
 }
 
-impl IThreeAxisGyroscopes for EmbObjImu {
-    fn get_nr_of_three_axis_gyroscopes(&self) -> usize {
-        self.of_kind(GYR).len()
-    }
-    fn get_three_axis_gyroscope_status(&self, i: usize) -> MasStatus {
-        self.status(GYR, i)
-    }
-    fn get_three_axis_gyroscope_name(&self, i: usize) -> DevResult<String> {
-        self.name(GYR, i)
-    }
-    fn get_three_axis_gyroscope_frame_name(&self, i: usize) -> DevResult<String> {
-        self.name(GYR, i)
-    }
-    fn get_three_axis_gyroscope_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        self.measure(GYR, i)
+/// The board's sensor types of a family.
+fn kinds_of(family: SensorFamily) -> Option<&'static [u8]> {
+    match family {
+        SensorFamily::ThreeAxisGyroscopes => Some(GYR),
+        SensorFamily::ThreeAxisLinearAccelerometers => Some(ACC),
+        SensorFamily::ThreeAxisMagnetometers => Some(MAG),
+        SensorFamily::OrientationSensors => Some(EUL),
+        _ => None,
     }
 }
 
-impl IThreeAxisLinearAccelerometers for EmbObjImu {
-    fn get_nr_of_three_axis_linear_accelerometers(&self) -> usize {
-        self.of_kind(ACC).len()
-    }
-    fn get_three_axis_linear_accelerometer_status(&self, i: usize) -> MasStatus {
-        self.status(ACC, i)
-    }
-    fn get_three_axis_linear_accelerometer_name(&self, i: usize) -> DevResult<String> {
-        self.name(ACC, i)
-    }
-    fn get_three_axis_linear_accelerometer_frame_name(&self, i: usize) -> DevResult<String> {
-        self.name(ACC, i)
-    }
-    fn get_three_axis_linear_accelerometer_measure(
-        &self,
-        i: usize,
-    ) -> DevResult<SensorMeasurement> {
-        self.measure(ACC, i)
-    }
-}
-
-impl IThreeAxisMagnetometers for EmbObjImu {
-    fn get_nr_of_three_axis_magnetometers(&self) -> usize {
-        self.of_kind(MAG).len()
-    }
-    fn get_three_axis_magnetometer_status(&self, i: usize) -> MasStatus {
-        self.status(MAG, i)
-    }
-    fn get_three_axis_magnetometer_name(&self, i: usize) -> DevResult<String> {
-        self.name(MAG, i)
-    }
-    fn get_three_axis_magnetometer_frame_name(&self, i: usize) -> DevResult<String> {
-        self.name(MAG, i)
-    }
-    /// Tesla (16 LSB per µT).
-    fn get_three_axis_magnetometer_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        self.measure(MAG, i)
-    }
-}
-
-impl IOrientationSensors for EmbObjImu {
-    fn get_nr_of_orientation_sensors(&self) -> usize {
-        self.of_kind(EUL).len()
-    }
-    fn get_orientation_sensor_status(&self, i: usize) -> MasStatus {
-        self.status(EUL, i)
-    }
-    fn get_orientation_sensor_name(&self, i: usize) -> DevResult<String> {
-        self.name(EUL, i)
-    }
-    fn get_orientation_sensor_frame_name(&self, i: usize) -> DevResult<String> {
-        self.name(EUL, i)
-    }
-    fn get_orientation_sensor_measure_as_roll_pitch_yaw(
-        &self,
-        i: usize,
-    ) -> DevResult<SensorMeasurement> {
-        self.measure(EUL, i)
-    }
-}
+yarp_devices::mas_interfaces!(EmbObjImu: ThreeAxisGyroscopes, ThreeAxisLinearAccelerometers,
+    ThreeAxisMagnetometers, OrientationSensors);
 
 // ---- embObjMais ----
 
