@@ -67,8 +67,8 @@ impl DeviceBundler {
 }
 
 impl DeviceDriver for DeviceBundler {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        DeviceBundlerParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        DeviceBundlerParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

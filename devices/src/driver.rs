@@ -95,8 +95,8 @@ macro_rules! device_interfaces {
             fn open(&mut self, config: &Property) -> DevResult<()>;
             /// The parameters the device reads, as declared with [`$crate::device_params!`]
             /// (what `--help` prints); empty for a device that declares none.
-            fn parameters(&self) -> &'static [$crate::params::ParamSpec] {
-                &[]
+            fn parameters(&self) -> Vec<$crate::params::ParamSpec> {
+                Vec::new()
             }
             /// Stops the device; it may be reopened.
             fn close(&mut self) -> DevResult<()> {

@@ -238,8 +238,8 @@ impl FakeMotionControl {
 }
 
 impl DeviceDriver for FakeMotionControl {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FakeMotionControlParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FakeMotionControlParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -471,6 +471,13 @@ pub fn documentation(device: &str, params: &[ParamSpec]) -> String {
     doc
 }
 
+/// Prints `device`'s table when `config` has `help`, as C++'s generated parsers do.
+pub fn help_if_asked(device: &str, config: &Property, params: &[ParamSpec]) {
+    if config.check("help") {
+        println!("{}", documentation(device, params));
+    }
+}
+
 /// Declares a device's parameters once; generates the struct, `read` (which, as C++'s
 /// generated parsers, first prints the table when the configuration has `help`) and the
 /// table itself (`PARAMS`, [`documentation`]).
@@ -549,9 +556,18 @@ macro_rules! device_params {
                 device: &str,
                 config: &yarp_proto::Property,
             ) -> $crate::error::DevResult<Self> {
-                if config.check("help") {
-                    println!("{}", $crate::params::documentation(device, Self::PARAMS));
-                }
+                $crate::params::help_if_asked(device, config, Self::PARAMS);
+                Self::parse(device, config)
+            }
+
+            /// As [`Self::read_as`] without printing the table: for a part of a device's
+            /// parameters (the device prints its whole table with [`help_if_asked`]).
+            ///
+            /// [`help_if_asked`]: $crate::params::help_if_asked
+            pub fn parse(
+                device: &str,
+                config: &yarp_proto::Property,
+            ) -> $crate::error::DevResult<Self> {
                 let p = $crate::params::Params::new(device, config);
                 Ok(Self {$(
                     $field: {

@@ -363,8 +363,8 @@ macro_rules! on {
 }
 
 impl DeviceDriver for ControlBoardRemapper {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        ControlBoardRemapperParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        ControlBoardRemapperParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -511,8 +511,8 @@ fn j32(j: usize) -> i32 {
 }
 
 impl DeviceDriver for RemoteControlBoard {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        RemoteControlBoardParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        RemoteControlBoardParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

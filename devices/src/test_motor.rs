@@ -166,8 +166,8 @@ fn wall_clock() -> f64 {
 }
 
 impl DeviceDriver for TestMotor {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        TestMotorParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        TestMotorParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

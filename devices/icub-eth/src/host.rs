@@ -570,10 +570,7 @@ impl HostTransceiver {
             (true, Some(t), Some(last), None) => Some(last + t + Duration::from_micros(1)),
             _ => None,
         };
-        match (req, presence) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        req.into_iter().chain(presence).min()
     }
 
     pub fn poll_event(&mut self) -> Option<HostEvent> {

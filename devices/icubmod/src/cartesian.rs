@@ -238,8 +238,8 @@ impl Drop for CartesianControllerServer {
 }
 
 impl DeviceDriver for CartesianControllerServer {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        CartesianControllerServerParams::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        CartesianControllerServerParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

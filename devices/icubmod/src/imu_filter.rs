@@ -457,8 +457,8 @@ yarp_devices::device_params! {
 }
 
 impl DeviceDriver for ImuFilter {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        ImuFilterParams::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        ImuFilterParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

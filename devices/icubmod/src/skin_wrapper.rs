@@ -45,8 +45,8 @@ impl SkinWrapper {
 }
 
 impl DeviceDriver for SkinWrapper {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        SkinWrapperParams::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        SkinWrapperParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -538,8 +538,8 @@ impl XsensImu {
 const DEG_PER_RAD: f64 = 180.0 / std::f64::consts::PI;
 
 impl DeviceDriver for XsensImu {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        XsensParams::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        XsensParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

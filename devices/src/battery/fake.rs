@@ -95,8 +95,8 @@ impl FakeBattery {
 }
 
 impl DeviceDriver for FakeBattery {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FakeBatteryParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FakeBatteryParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -77,8 +77,8 @@ impl BatteryNwcYarp {
 }
 
 impl DeviceDriver for BatteryNwcYarp {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        BatteryNwcYarpParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        BatteryNwcYarpParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -143,8 +143,8 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 }
 
 impl DeviceDriver for BatteryNwsYarp {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        BatteryNwsYarpParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        BatteryNwsYarpParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -546,8 +546,8 @@ impl ControlBoardNwsDevice {
 
 /// Reads `period` as C++ does: a float number of seconds, greater than zero.
 impl DeviceDriver for ControlBoardNwsDevice {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        ControlBoardNwsYarpParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        ControlBoardNwsYarpParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &yarp_proto::Property) -> DevResult<()> {

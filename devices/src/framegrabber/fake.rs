@@ -473,8 +473,8 @@ impl FakeFrameGrabber {
 }
 
 impl DeviceDriver for FakeFrameGrabber {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FakeFrameGrabberParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FakeFrameGrabberParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -59,9 +59,13 @@ fn refused(reply: &Bottle) -> bool {
         || reply.is_empty()
 }
 
+/// The server's `[fail]` (or a reply without what was asked): the peer is alive and
+/// refused; the error carries its reply.
 fn bad_reply(reply: &Bottle) -> DeviceError {
-    tracing::debug!("{NAME}: unexpected reply {reply}");
-    DeviceError::Unsupported("the remote frame grabber refused or gave an unexpected reply")
+    DeviceError::Refused {
+        device: NAME.into(),
+        command: format!("a request (it replied `{reply}`)"),
+    }
 }
 
 /// Element `i` of a reply as an int.
@@ -354,8 +358,8 @@ impl FrameGrabberNwc {
 }
 
 impl DeviceDriver for FrameGrabberNwc {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FrameGrabberNwcYarpParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FrameGrabberNwcYarpParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -250,8 +250,8 @@ impl FrameGrabberNws {
 }
 
 impl DeviceDriver for FrameGrabberNws {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FrameGrabberNwsYarpParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FrameGrabberNwsYarpParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -47,8 +47,8 @@ impl FakeNavigation {
 }
 
 impl DeviceDriver for FakeNavigation {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FakeNavigationParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FakeNavigationParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

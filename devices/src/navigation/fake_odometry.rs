@@ -65,8 +65,8 @@ impl FakeOdometry2D {
 }
 
 impl DeviceDriver for FakeOdometry2D {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FakeOdometry2DParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FakeOdometry2DParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -181,8 +181,8 @@ fn now_s() -> f64 {
 }
 
 impl DeviceDriver for FakeLaser {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FakeLaserParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FakeLaserParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -75,8 +75,8 @@ impl Rangefinder2DNwcYarp {
 }
 
 impl DeviceDriver for Rangefinder2DNwcYarp {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        Rangefinder2DNwcYarpParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        Rangefinder2DNwcYarpParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

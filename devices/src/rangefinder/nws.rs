@@ -114,8 +114,8 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 }
 
 impl DeviceDriver for Rangefinder2DNwsYarp {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        Rangefinder2DNwsYarpParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        Rangefinder2DNwsYarpParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

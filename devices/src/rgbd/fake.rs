@@ -125,8 +125,8 @@ impl FakeDepthCamera {
 }
 
 impl DeviceDriver for FakeDepthCamera {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FakeDepthCameraParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FakeDepthCameraParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -185,8 +185,8 @@ fn malformed(reply: &Bottle) -> DeviceError {
 }
 
 impl DeviceDriver for RgbdSensorClient {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        RgbdSensorNwcYarpParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        RgbdSensorNwcYarpParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -129,8 +129,8 @@ fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
 }
 
 impl DeviceDriver for RgbdSensorNwsYarp {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        RgbdSensorNwsYarpParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        RgbdSensorNwsYarpParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -151,8 +151,8 @@ impl AnalogSensorClient {
 }
 
 impl DeviceDriver for AnalogSensorClient {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        AnalogSensorClientParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        AnalogSensorClientParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

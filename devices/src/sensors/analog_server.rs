@@ -323,8 +323,8 @@ fn network_error(name: &str, e: impl std::fmt::Display) -> DeviceError {
 }
 
 impl DeviceDriver for AnalogServer {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        AnalogServerParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        AnalogServerParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

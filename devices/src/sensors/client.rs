@@ -281,8 +281,8 @@ impl MultipleAnalogSensorsClient {
 }
 
 impl DeviceDriver for MultipleAnalogSensorsClient {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        MultipleAnalogSensorsClientParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        MultipleAnalogSensorsClientParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

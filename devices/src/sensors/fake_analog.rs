@@ -48,8 +48,8 @@ impl FakeAnalogSensor {
 }
 
 impl DeviceDriver for FakeAnalogSensor {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FakeAnalogSensorParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FakeAnalogSensorParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

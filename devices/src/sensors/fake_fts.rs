@@ -89,8 +89,8 @@ impl FakeFts {
 }
 
 impl DeviceDriver for FakeFts {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FakeFtsParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FakeFtsParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

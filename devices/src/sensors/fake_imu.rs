@@ -117,8 +117,8 @@ impl FakeImu {
 }
 
 impl DeviceDriver for FakeImu {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        FakeImuParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        FakeImuParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

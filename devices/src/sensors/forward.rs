@@ -54,38 +54,9 @@ macro_rules! mas_interfaces {
     (@framed $ty:ty, $trait:ident, $family:ident,
      $nr:ident, $status:ident, $name:ident, $frame:ident, $measure:ident) => {
         impl $crate::sensors::interfaces::$trait for $ty {
-            fn $nr(&self) -> usize {
-                $crate::sensors::forward::FamilySource::family_count(
-                    self,
-                    $crate::sensors::SensorFamily::$family,
-                )
-            }
-            fn $status(&self, i: usize) -> $crate::sensors::interfaces::MasStatus {
-                $crate::sensors::forward::FamilySource::family_status(
-                    self,
-                    $crate::sensors::SensorFamily::$family,
-                    i,
-                )
-            }
-            fn $name(&self, i: usize) -> $crate::error::DevResult<String> {
-                $crate::sensors::forward::FamilySource::family_name(
-                    self,
-                    $crate::sensors::SensorFamily::$family,
-                    i,
-                )
-            }
+            $crate::mas_interfaces!(@common $family, $nr, $status, $name, $measure);
             fn $frame(&self, i: usize) -> $crate::error::DevResult<String> {
                 $crate::sensors::forward::FamilySource::family_frame_name(
-                    self,
-                    $crate::sensors::SensorFamily::$family,
-                    i,
-                )
-            }
-            fn $measure(
-                &self,
-                i: usize,
-            ) -> $crate::error::DevResult<$crate::sensors::interfaces::SensorMeasurement> {
-                $crate::sensors::forward::FamilySource::family_measure(
                     self,
                     $crate::sensors::SensorFamily::$family,
                     i,
@@ -96,26 +67,7 @@ macro_rules! mas_interfaces {
     (@unframed $ty:ty, $trait:ident, $family:ident,
      $nr:ident, $status:ident, $name:ident, $size:ident, $measure:ident) => {
         impl $crate::sensors::interfaces::$trait for $ty {
-            fn $nr(&self) -> usize {
-                $crate::sensors::forward::FamilySource::family_count(
-                    self,
-                    $crate::sensors::SensorFamily::$family,
-                )
-            }
-            fn $status(&self, i: usize) -> $crate::sensors::interfaces::MasStatus {
-                $crate::sensors::forward::FamilySource::family_status(
-                    self,
-                    $crate::sensors::SensorFamily::$family,
-                    i,
-                )
-            }
-            fn $name(&self, i: usize) -> $crate::error::DevResult<String> {
-                $crate::sensors::forward::FamilySource::family_name(
-                    self,
-                    $crate::sensors::SensorFamily::$family,
-                    i,
-                )
-            }
+            $crate::mas_interfaces!(@common $family, $nr, $status, $name, $measure);
             fn $size(&self, i: usize) -> usize {
                 $crate::sensors::forward::FamilySource::family_measure(
                     self,
@@ -125,16 +77,39 @@ macro_rules! mas_interfaces {
                 .map(|m| m.values.len())
                 .unwrap_or(0)
             }
-            fn $measure(
-                &self,
-                i: usize,
-            ) -> $crate::error::DevResult<$crate::sensors::interfaces::SensorMeasurement> {
-                $crate::sensors::forward::FamilySource::family_measure(
-                    self,
-                    $crate::sensors::SensorFamily::$family,
-                    i,
-                )
-            }
+        }
+    };
+    // what every family's trait has: count, status, name, measure
+    (@common $family:ident, $nr:ident, $status:ident, $name:ident, $measure:ident) => {
+        fn $nr(&self) -> usize {
+            $crate::sensors::forward::FamilySource::family_count(
+                self,
+                $crate::sensors::SensorFamily::$family,
+            )
+        }
+        fn $status(&self, i: usize) -> $crate::sensors::interfaces::MasStatus {
+            $crate::sensors::forward::FamilySource::family_status(
+                self,
+                $crate::sensors::SensorFamily::$family,
+                i,
+            )
+        }
+        fn $name(&self, i: usize) -> $crate::error::DevResult<String> {
+            $crate::sensors::forward::FamilySource::family_name(
+                self,
+                $crate::sensors::SensorFamily::$family,
+                i,
+            )
+        }
+        fn $measure(
+            &self,
+            i: usize,
+        ) -> $crate::error::DevResult<$crate::sensors::interfaces::SensorMeasurement> {
+            $crate::sensors::forward::FamilySource::family_measure(
+                self,
+                $crate::sensors::SensorFamily::$family,
+                i,
+            )
         }
     };
 }

@@ -133,8 +133,8 @@ fn locate(
 }
 
 impl DeviceDriver for MultipleAnalogSensorsRemapper {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        MultipleAnalogSensorsRemapperParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        MultipleAnalogSensorsRemapperParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -244,8 +244,8 @@ impl MultipleAnalogSensorsServer {
 }
 
 impl DeviceDriver for MultipleAnalogSensorsServer {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        MultipleAnalogSensorsServerParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        MultipleAnalogSensorsServerParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

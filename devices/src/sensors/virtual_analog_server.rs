@@ -399,8 +399,8 @@ impl VirtualAnalogServer {
 }
 
 impl DeviceDriver for VirtualAnalogServer {
-    fn parameters(&self) -> &'static [crate::params::ParamSpec] {
-        VirtualAnalogServerParams::PARAMS
+    fn parameters(&self) -> Vec<crate::params::ParamSpec> {
+        VirtualAnalogServerParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -178,12 +178,13 @@ impl CameraNwsRos2 {
 }
 
 impl DeviceDriver for CameraNwsRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        match self.kind {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        let params = match self.kind {
             Kind::FrameGrabber => FrameGrabberNwsRos2Params::PARAMS,
             Kind::Rgbd => RgbdSensorNwsRos2Params::PARAMS,
             Kind::PointCloud => RgbdToPointCloudSensorNwsRos2Params::PARAMS,
-        }
+        };
+        params.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -111,8 +111,8 @@ enum Feed {
 }
 
 impl DeviceDriver for RgbdSensorNwcRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        RgbdSensorNwcRos2Params::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        RgbdSensorNwcRos2Params::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

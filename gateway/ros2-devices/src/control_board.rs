@@ -738,8 +738,8 @@ impl ControlBoardNwsRos2 {
 }
 
 impl DeviceDriver for ControlBoardNwsRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        ControlBoardNwsRos2Params::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        ControlBoardNwsRos2Params::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &yarp_proto::Property) -> DevResult<()> {

@@ -124,8 +124,8 @@ pub struct FrameTransformGetNwcRos2 {
 }
 
 impl DeviceDriver for FrameTransformGetNwcRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        FrameTransformGetNwcRos2Params::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        FrameTransformGetNwcRos2Params::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {
@@ -207,8 +207,8 @@ pub struct FrameTransformSetNwcRos2 {
 }
 
 impl DeviceDriver for FrameTransformSetNwcRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        FrameTransformSetNwcRos2Params::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        FrameTransformSetNwcRos2Params::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

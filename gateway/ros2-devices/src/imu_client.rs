@@ -107,8 +107,8 @@ impl ImuNwcRos2 {
 }
 
 impl DeviceDriver for ImuNwcRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        ImuNwcRos2Params::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        ImuNwcRos2Params::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

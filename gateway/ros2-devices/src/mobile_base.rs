@@ -124,11 +124,12 @@ impl StateNwsRos2 {
 }
 
 impl DeviceDriver for StateNwsRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        match self.kind {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        let params = match self.kind {
             Kind::Battery => CommonParams::PARAMS,
             Kind::Odometry => Odometry2DNwsRos2Params::PARAMS,
-        }
+        };
+        params.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {
@@ -249,8 +250,8 @@ pub struct MobileBaseVelocityControlNwsRos2 {
 }
 
 impl DeviceDriver for MobileBaseVelocityControlNwsRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        MobileBaseVelocityControlNwsRos2Params::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        MobileBaseVelocityControlNwsRos2Params::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

@@ -70,8 +70,8 @@ pub struct Rangefinder2DNwsRos2 {
 }
 
 impl DeviceDriver for Rangefinder2DNwsRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        Rangefinder2DNwsRos2Params::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        Rangefinder2DNwsRos2Params::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {
@@ -203,8 +203,8 @@ impl Rangefinder2DNwcRos2 {
 }
 
 impl DeviceDriver for Rangefinder2DNwcRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        Rangefinder2DNwcRos2Params::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        Rangefinder2DNwcRos2Params::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {

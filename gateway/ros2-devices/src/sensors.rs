@@ -253,8 +253,8 @@ pub const DRIVERS: &[(&str, yarp_devices::Factory)] = &[
 ];
 
 impl DeviceDriver for SensorNwsRos2 {
-    fn parameters(&self) -> &'static [yarp_devices::params::ParamSpec] {
-        CommonParams::PARAMS
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        CommonParams::PARAMS.to_vec()
     }
 
     fn open(&mut self, config: &yarp_proto::Property) -> DevResult<()> {

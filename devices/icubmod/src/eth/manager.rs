@@ -545,13 +545,13 @@ impl Board {
             let report = inner
                 .last_missing_report
                 .map(|t| t + self.params.missing_report_period);
-            next = earliest(next, report);
+            next = next.into_iter().chain(report).min();
         } else {
             inner.last_missing_report = None;
             let stale = inner
                 .last_rx
                 .map(|t| t + self.stale_after() + Duration::from_micros(1));
-            next = earliest(next, stale);
+            next = next.into_iter().chain(stale).min();
         }
         drop(inner);
         self.notify();
@@ -817,14 +817,6 @@ impl EthManager {
             }
             None => tracing::debug!("datagram from unknown board {from} dropped"),
         }
-    }
-}
-
-/// The earlier of two optional instants.
-fn earliest(a: Option<Instant>, b: Option<Instant>) -> Option<Instant> {
-    match (a, b) {
-        (Some(a), Some(b)) => Some(a.min(b)),
-        (a, b) => a.or(b),
     }
 }
 
