@@ -32,12 +32,23 @@ impl<'a> Params<'a> {
         Params { device, config }
     }
 
-    /// The raw value of `key` (`GROUP::name` looks inside the group).
+    /// The raw value of `key` (`GROUP::name` looks inside the group, `A::B::name`
+    /// inside group `B` of group `A`).
     pub fn find(&self, key: &str) -> Option<&'a Value> {
-        match key.split_once("::") {
-            Some((group, name)) => self.config.find_group(group)?.find(name),
+        match key.rsplit_once("::") {
+            Some((groups, name)) => self.group(groups)?.find(name),
             None => self.config.find(key),
         }
+    }
+
+    /// The group `A::B` (a line whose values are lines), walked from the top.
+    fn group(&self, path: &str) -> Option<&'a Bottle> {
+        let mut names = path.split("::");
+        let mut group = self.config.find_group(names.next()?)?;
+        for name in names {
+            group = group.find_group(name)?;
+        }
+        Some(group)
     }
 
     /// The error for parameter `key` holding `got` where `expected` was wanted.
@@ -109,11 +120,8 @@ impl<'a> Params<'a> {
         expected: &'static str,
         f: impl Fn(&Value) -> Option<T>,
     ) -> DevResult<Option<Vec<T>>> {
-        let line = match key.split_once("::") {
-            Some((group, name)) => self
-                .config
-                .find_group(group)
-                .and_then(|g| g.find_group(name)),
+        let line = match key.rsplit_once("::") {
+            Some((groups, name)) => self.group(groups).and_then(|g| g.find_group(name)),
             None => self.config.find_group(key),
         };
         let Some(line) = line else {
@@ -638,6 +646,14 @@ mod tests {
 
     #[test]
     fn reads_declared_types_defaults_and_groups() {
+        let nested = Property::from_text("(A (B (c 7) (v 1 2)))");
+        let p = Params::new("x", &nested);
+        assert_eq!(p.int("A::B::c").unwrap(), Some(7));
+        assert_eq!(
+            p.vector("A::B::v", "ints", Value::as_i64).unwrap(),
+            Some(vec![1, 2])
+        );
+        assert_eq!(p.int("A::C::c").unwrap(), None);
         let c =
             Property::from_text("(name /e) (GENERAL (Joints 2) (AxisName a b)) (enabled false)");
         let e = Example::read(&c).unwrap();

@@ -11,10 +11,11 @@
 //! `ISixAxisForceTorqueSensors` (one sensor). A board silent for 100 ms reads as
 //! `Timeout`.
 
+use icub_can::client::strain::AnalogFormat;
 use icub_can::client::{SensorStatus, StrainClient, StrainParams};
 use yarp_proto::Property;
 
-use crate::common::{device_id, lookup_one, now, open_bus, open_error};
+use crate::common::{device_id, now, open_error, CanBusParams};
 use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::sensors::{AnalogStatus, IAnalogSensor, ISixAxisForceTorqueSensors};
@@ -79,15 +80,75 @@ pub fn mas_status(s: SensorStatus) -> MasStatus {
     }
 }
 
+/// The strain messages' two formats.
+fn bits(f: &i64) -> Result<(), &'static str> {
+    match *f == 8 || *f == 16 {
+        true => Ok(()),
+        false => Err("8 or 16"),
+    }
+}
+
+yarp_devices::device_params! {
+    /// What `canBusAnalogSensor` and `canBusFtSensor` read (icub-main's), besides their bus
+    /// ([`CanBusParams`]).
+    pub struct CanBusAnalogSensorParams for "canBusAnalogSensor" {
+        /// The address of the strain (or MAIS) board
+        "canAddress" can_address: i64 = required; in 1..=14,
+        /// Bits per value: 16 (strain) or 8 (MAIS)
+        format: i64 = 16; check bits,
+        /// Number of channels (at most 6 in 16 bits, 16 in 8 bits)
+        channels: i64 = 6,
+        /// Broadcast period asked of the board (1..255)
+        period: i64 = 1; "ms",
+        /// 1: calibrated values scaled by the board's full scales
+        "useCalibration" use_calibration: i64 = 0,
+        /// Name of the sensor (default: the device's name)
+        "sensorName" sensor_name: String = optional,
+        /// Name of the sensor's frame (default: the sensor's name)
+        "frameName" frame_name: String = optional,
+    }
+}
+
 impl DeviceDriver for CanBusAnalogSensor {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        [CanBusAnalogSensorParams::PARAMS, CanBusParams::PARAMS].concat()
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
         self.id = device_id(config, self.kind);
-        let get = |k: &str| lookup_one(config, None, k);
-        let params = StrainParams::from_lookup(&get).map_err(|e| open_error(&self.id, &e))?;
-        self.sensor_name = get("sensorName").unwrap_or_else(|| self.id.clone());
-        self.frame_name = get("frameName").unwrap_or_else(|| self.sensor_name.clone());
-        let bus = open_bus(&self.id, config, None)?;
+        yarp_devices::params::help_if_asked(self.kind, config, &self.parameters());
+        let p = CanBusAnalogSensorParams::parse(&self.id, config)?;
+        let bus_params = CanBusParams::parse(&self.id, config)?;
+        let format = if p.format == 8 {
+            AnalogFormat::Bits8
+        } else {
+            AnalogFormat::Bits16
+        };
+        let max_channels = if format == AnalogFormat::Bits16 {
+            6
+        } else {
+            16
+        };
+        if !(1..=max_channels).contains(&p.channels) {
+            return Err(DeviceError::BadParam {
+                device: self.id.clone(),
+                param: "channels".into(),
+                expected: "1..6 (16-bit format) or 1..16 (8-bit)",
+                got: p.channels.to_string(),
+            });
+        }
+        let params = StrainParams {
+            address: p.can_address as u8,
+            period_ms: p.period.clamp(1, 255) as u8,
+            use_calibration: p.use_calibration > 0,
+            channels: p.channels as usize,
+            format,
+            ..StrainParams::strain(p.can_address as u8)
+        };
+        self.sensor_name = p.sensor_name.unwrap_or_else(|| self.id.clone());
+        self.frame_name = p.frame_name.unwrap_or_else(|| self.sensor_name.clone());
+        let bus = bus_params.open(&self.id)?;
         self.client = Some(StrainClient::open(bus, params).map_err(|e| open_error(&self.id, &e))?);
         Ok(())
     }

@@ -66,6 +66,82 @@ pub fn lookup_one(config: &Property, group: Option<&str>, key: &str) -> Option<S
         .and_then(|v| v.into_iter().next())
 }
 
+yarp_devices::device_params! {
+    /// How an iCub CAN device finds its bus: icub-main's driver and bus number, or (ours)
+    /// a backend URL. Several spellings stand in robots' files: all are read, the first
+    /// given wins.
+    pub struct CanBusParams for "canBus" {
+        /// The bus as a URL: inproc://NAME, udp://HOST:PORT[+n], udp-hub://ADDR, socketcan://IF (else $YARP_ICUB_CAN_BACKEND, else physDevice)
+        "canBackend" can_backend: String = optional,
+        /// An older spelling of canBackend
+        "CanBackend" can_backend_cap: String = optional,
+        /// icub-main's CAN driver: socketcan here (cfw2can, ecan and pcan have no driver in this build), or a URL
+        "physDevice" phys_device: String = optional,
+        /// An older spelling of physDevice
+        "physdevice" phys_device_lower: String = optional,
+        /// The CAN driver as some files name it (sharedcan: the one of physDevice)
+        "canbusDevice" canbus_device: String = optional,
+        /// An older spelling of canbusDevice
+        "canbusdevice" canbus_device_lower: String = optional,
+        /// The bus number (n in a URL, the interface's number)
+        "canDeviceNum" can_device_num: u32 = optional,
+        /// An older spelling of canDeviceNum
+        "CanDeviceNum" can_device_num_cap: u32 = optional,
+        /// The socketcan interface (with n: can{n})
+        "canDeviceName" can_device_name: String = optional,
+        /// An older spelling of canDeviceName
+        "CanDeviceName" can_device_name_cap: String = optional,
+    }
+}
+
+impl CanBusParams {
+    /// The bus these parameters name, as icub-can opens it (`$YARP_ICUB_CAN_BACKEND` when
+    /// no `canBackend` is given; `canbusDevice` when it names an adapter and no
+    /// `physDevice` is given).
+    pub fn open(&self, device: &str) -> Result<Arc<dyn CanBus>, DeviceError> {
+        let env = std::env::var(BACKEND_ENV).ok().filter(|s| !s.is_empty());
+        let backend = self
+            .can_backend
+            .clone()
+            .or(self.can_backend_cap.clone())
+            .or(env);
+        let phys = self
+            .phys_device
+            .clone()
+            .or(self.phys_device_lower.clone())
+            .or_else(|| {
+                self.canbus_device
+                    .clone()
+                    .or(self.canbus_device_lower.clone())
+                    .filter(|d| d.trim_matches('"') != "sharedcan")
+            });
+        let num = self.can_device_num_cap.or(self.can_device_num);
+        let name = self
+            .can_device_name_cap
+            .clone()
+            .or(self.can_device_name.clone());
+        let get = |key: &str| -> Option<String> {
+            match key {
+                "canBackend" => backend.clone(),
+                "physDevice" => phys.clone(),
+                "CanDeviceNum" => num.map(|n| n.to_string()),
+                "CanDeviceName" => name.clone(),
+                _ => None,
+            }
+        };
+        icub_can::bus::config::open_from_params(&get).map_err(|e| bus_error(device, e))
+    }
+}
+
+fn bus_error(device: &str, e: impl std::fmt::Display) -> DeviceError {
+    DeviceError::BadParam {
+        device: device.to_string(),
+        param: "canBackend".into(),
+        expected: "a CAN backend that opens (inproc://, udp://, udp-hub://, socketcan://)",
+        got: e.to_string(),
+    }
+}
+
 /// Opens the CAN bus a device's configuration names: `canBackend`, else the
 /// [`BACKEND_ENV`] variable, else `physDevice` (`canbusDevice` when it names an adapter
 /// rather than `sharedcan`, as `canBusSkin` files do), with `CanDeviceNum`/`canDeviceNum`.
@@ -89,12 +165,7 @@ pub fn open_bus(
             _ => found,
         }
     };
-    icub_can::bus::config::open_from_params(&get).map_err(|e| DeviceError::BadParam {
-        device: device.to_string(),
-        param: "canBackend".into(),
-        expected: "a CAN backend that opens (inproc://, udp://, udp-hub://, socketcan://)",
-        got: e.to_string(),
-    })
+    icub_can::bus::config::open_from_params(&get).map_err(|e| bus_error(device, e))
 }
 
 /// An error from opening a driver core: the message names what failed.

@@ -14,7 +14,7 @@ use icub_can::client::{InertialClient, SensorStatus};
 use yarp_proto::Property;
 
 use crate::analog::mas_status;
-use crate::common::{device_id, lookup, lookup_one, now, open_bus, open_error};
+use crate::common::{device_id, now, open_error, CanBusParams};
 use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::sensors::{
@@ -84,37 +84,42 @@ impl CanBusInertialMtb {
     }
 }
 
+/// Board addresses as a byte each.
+fn board_addresses(ids: &[i64]) -> Result<(), &'static str> {
+    match ids.iter().all(|id| u8::try_from(*id).is_ok()) {
+        true => Ok(()),
+        false => Err("board addresses 1..14"),
+    }
+}
+
+yarp_devices::device_params! {
+    /// What `canBusInertialMTB` reads (icub-main's `CanBusInertialMTB`), besides its bus
+    /// ([`CanBusParams`]).
+    pub struct CanBusInertialMtbParams for "canBusInertialMTB" {
+        /// The CAN addresses of the MTB boards
+        "canAddress" can_address: Vec<i64> = required; check board_addresses,
+        /// acc (accelerometers) or gyro (and accelerometers)
+        "sensorType" sensor_type: String = "acc",
+        /// Period of the boards' messages (1..255)
+        period: f64 = 10.0; "ms",
+    }
+}
+
 impl DeviceDriver for CanBusInertialMtb {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        [CanBusInertialMtbParams::PARAMS, CanBusParams::PARAMS].concat()
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
         self.id = device_id(config, NAME);
-        let addrs =
-            lookup(config, None, "canAddress").ok_or_else(|| DeviceError::MissingParam {
-                device: self.id.clone(),
-                param: "canAddress".into(),
-            })?;
-        self.boards = addrs
-            .iter()
-            .map(|s| {
-                let s = s.trim_matches('"');
-                match s.strip_prefix("0x").or_else(|| s.strip_prefix("0X")) {
-                    Some(h) => u8::from_str_radix(h, 16).ok(),
-                    None => s.parse().ok(),
-                }
-                .ok_or_else(|| DeviceError::BadParam {
-                    device: self.id.clone(),
-                    param: "canAddress".into(),
-                    expected: "board addresses 1..14",
-                    got: s.to_string(),
-                })
-            })
-            .collect::<DevResult<Vec<u8>>>()?;
-        let sensor_type = lookup_one(config, None, "sensorType").unwrap_or_else(|| "acc".into());
-        let period = lookup_one(config, None, "period")
-            .and_then(|p| p.parse::<f64>().ok())
-            .unwrap_or(10.0)
-            .clamp(1.0, 255.0) as u8;
-        let bus = open_bus(&self.id, config, None)?;
+        yarp_devices::params::help_if_asked(NAME, config, &self.parameters());
+        let p = CanBusInertialMtbParams::parse(&self.id, config)?;
+        let bus_params = CanBusParams::parse(&self.id, config)?;
+        self.boards = p.can_address.iter().map(|a| *a as u8).collect();
+        let sensor_type = p.sensor_type;
+        let period = p.period.clamp(1.0, 255.0) as u8;
+        let bus = bus_params.open(&self.id)?;
         let client = InertialClient::open(bus, &self.boards, &sensor_type, period)
             .map_err(|e| open_error(&self.id, &e))?;
         self.with_gyro = client.channels() == self.boards.len() * 6;

@@ -15,7 +15,7 @@ use icub_can::client::SkinClient;
 use yarp_proto::Property;
 
 use crate::analog::mas_status;
-use crate::common::{device_id, lookup, lookup_one, now, open_bus, open_error};
+use crate::common::{device_id, now, open_error, CanBusParams};
 use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::sensors::{
@@ -56,29 +56,39 @@ impl CanBusSkin {
     }
 }
 
+/// Board addresses as a byte each.
+fn board_ids(ids: &[i64]) -> Result<(), &'static str> {
+    match ids.iter().all(|id| u8::try_from(*id).is_ok()) {
+        true => Ok(()),
+        false => Err("a list of board addresses 1..14"),
+    }
+}
+
+yarp_devices::device_params! {
+    /// What `canBusSkin` reads (icub-main's `CanBusSkin`), besides its bus ([`CanBusParams`]).
+    pub struct CanBusSkinParams for "canBusSkin" {
+        /// The CAN addresses of the skin boards (MTBs) of the patch
+        "skinCanIds" skin_can_ids: Vec<i64> = required; check board_ids,
+        /// Period of the boards' messages
+        period: f64 = 20.0; "ms",
+    }
+}
+
 impl DeviceDriver for CanBusSkin {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        [CanBusSkinParams::PARAMS, CanBusParams::PARAMS].concat()
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
         self.id = device_id(config, NAME);
-        let bad = |got: String| DeviceError::BadParam {
-            device: self.id.clone(),
-            param: "skinCanIds".into(),
-            expected: "a list of board addresses 1..14",
-            got,
-        };
-        let ids = lookup(config, None, "skinCanIds").ok_or_else(|| DeviceError::MissingParam {
-            device: self.id.clone(),
-            param: "skinCanIds".into(),
-        })?;
-        let boards = ids
-            .iter()
-            .map(|s| s.parse::<u8>().map_err(|_| bad(s.clone())))
-            .collect::<DevResult<Vec<u8>>>()?;
-        let period_ms = lookup_one(config, None, "period")
-            .and_then(|p| p.parse::<f64>().ok())
-            .unwrap_or(20.0);
-        self.timeout = Duration::from_secs_f64((5.0 * period_ms / 1000.0).max(0.2));
-        let bus = open_bus(&self.id, config, None)?;
+        let table = self.parameters();
+        yarp_devices::params::help_if_asked(NAME, config, &table);
+        let p = CanBusSkinParams::parse(&self.id, config)?;
+        let bus_params = CanBusParams::parse(&self.id, config)?;
+        let boards: Vec<u8> = p.skin_can_ids.iter().map(|&id| id as u8).collect();
+        self.timeout = Duration::from_secs_f64((5.0 * p.period / 1000.0).max(0.2));
+        let bus = bus_params.open(&self.id)?;
         self.client = Some(SkinClient::open(bus, &boards).map_err(|e| open_error(&self.id, &e))?);
         Ok(())
     }

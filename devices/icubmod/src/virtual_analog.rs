@@ -42,7 +42,7 @@ use icub_can::proto::{
 use icub_can::CanFrame;
 use yarp_proto::Property;
 
-use crate::common::{device_id, lookup, lookup_one, open_bus};
+use crate::common::{device_id, CanBusParams};
 use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::sensors::{IVirtualAnalogSensor, VasStatus};
@@ -217,78 +217,70 @@ impl CanBusVirtualAnalogSensor {
             got: got.into(),
         }
     }
+}
 
-    fn required(&self, config: &Property, key: &str) -> DevResult<String> {
-        lookup_one(config, None, key).ok_or_else(|| DeviceError::MissingParam {
-            device: self.id.clone(),
-            param: key.into(),
-        })
+/// A board address on the bus.
+fn board_address(a: &i64) -> Result<(), &'static str> {
+    match (1..=14).contains(a) {
+        true => Ok(()),
+        false => Err("a board address 1..14"),
     }
+}
 
-    /// An integer as icub-main writes them (decimal or `0x` hex, maybe quoted).
-    fn int(&self, config: &Property, key: &str) -> DevResult<i64> {
-        let v = self.required(config, key)?;
-        let v = v.trim().trim_matches('"');
-        let parsed = match v.strip_prefix("0x").or_else(|| v.strip_prefix("0X")) {
-            Some(h) => i64::from_str_radix(h, 16).ok(),
-            None => v
-                .parse::<i64>()
-                .ok()
-                .or_else(|| v.parse::<f64>().ok().map(|f| f as i64)),
-        };
-        parsed.ok_or_else(|| self.bad(key, "an integer", v))
+/// The strain messages' two formats.
+fn bits(f: &i64) -> Result<(), &'static str> {
+    match *f == 8 || *f == 16 {
+        true => Ok(()),
+        false => Err("8 or 16"),
+    }
+}
+
+yarp_devices::device_params! {
+    /// What `canBusVirtualAnalogSensor` reads (icub-main's), besides its bus
+    /// ([`CanBusParams`]).
+    pub struct CanBusVirtualAnalogSensorParams for "canBusVirtualAnalogSensor" {
+        /// The address of the board the torques go to
+        "canAddress" can_address: i64 = required; check board_address,
+        /// Bits per value of the messages
+        format: i64 = required; check bits,
+        /// Period of the messages
+        period: i64 = required; "ms"; min 1,
+        /// Number of values (the strain frames carry six)
+        channels: i64 = required; in 1..=6,
+        /// The full scale of each channel (one positive value per channel)
+        "fullScale" full_scale: Vec<f64> = required,
+        /// Whether the values are calibrated (accepted; the values go as given)
+        "useCalibration" use_calibration: i64 = optional,
     }
 }
 
 impl DeviceDriver for CanBusVirtualAnalogSensor {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        [
+            CanBusVirtualAnalogSensorParams::PARAMS,
+            CanBusParams::PARAMS,
+        ]
+        .concat()
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
         self.id = device_id(config, NAME);
-        let address = self.int(config, "canAddress")?;
-        if !(1..=14).contains(&address) {
-            return Err(self.bad("canAddress", "a board address 1..14", address.to_string()));
-        }
-        let format = self.int(config, "format")?;
-        if format != 8 && format != 16 {
-            return Err(self.bad("format", "8 or 16", format.to_string()));
-        }
-        let period = self.int(config, "period")?;
-        if period <= 0 {
-            return Err(self.bad("period", "a positive period in ms", period.to_string()));
-        }
-        let channels = self.int(config, "channels")?;
-        if !(1..=MAX_CHANNELS as i64).contains(&channels) {
+        yarp_devices::params::help_if_asked(NAME, config, &self.parameters());
+        let p = CanBusVirtualAnalogSensorParams::parse(&self.id, config)?;
+        let bus_params = CanBusParams::parse(&self.id, config)?;
+        let address = p.can_address;
+        let channels = p.channels as usize;
+        let full_scale: Vec<f64> = p.full_scale.iter().take(channels).copied().collect();
+        if full_scale.len() != channels || !full_scale.iter().all(|f| *f > 0.0 && f.is_finite()) {
+            let got: Vec<String> = p.full_scale.iter().map(f64::to_string).collect();
             return Err(self.bad(
-                "channels",
-                "1..6 (the strain frames carry six channels)",
-                channels.to_string(),
+                "fullScale",
+                "one positive full scale per channel",
+                got.join(" "),
             ));
         }
-        let channels = channels as usize;
-        let scales =
-            lookup(config, None, "fullScale").ok_or_else(|| DeviceError::MissingParam {
-                device: self.id.clone(),
-                param: "fullScale".into(),
-            })?;
-        let full_scale = scales
-            .iter()
-            .take(channels)
-            .map(|s| {
-                s.trim()
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|f| *f > 0.0 && f.is_finite())
-            })
-            .collect::<Option<Vec<f64>>>()
-            .filter(|v| v.len() == channels)
-            .ok_or_else(|| {
-                self.bad(
-                    "fullScale",
-                    "one positive full scale per channel",
-                    scales.join(" "),
-                )
-            })?;
-        let bus = open_bus(&self.id, config, None)?;
+        let bus = bus_params.open(&self.id)?;
         // C++ opens the mask for the polling messages host -> canAddress; it has no use
         // for anything else (its own class-3 broadcasts never come back).
         bus.set_filter(IdFilter::ids([make_id(

@@ -126,11 +126,6 @@ async fn every_registered_device_declares_its_parameters() {
 
 /// Devices whose parameters are not declared yet.
 const PENDING: &[&str] = &[
-    "canBusAnalogSensor",
-    "canBusFtSensor",
-    "canBusInertialMTB",
-    "canBusSkin",
-    "canBusVirtualAnalogSensor",
     "canmotioncontrol",
     "embObjBattery",
     "embObjFTsensor",
