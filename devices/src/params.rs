@@ -103,8 +103,8 @@ impl<'a> Params<'a> {
             return Ok((!key.contains("::") && self.config.check(key)).then_some(true));
         };
         let b = match v.as_str() {
-            Some("true" | "1" | "on") => Some(true),
-            Some("false" | "0" | "off") => Some(false),
+            Some("true" | "TRUE" | "True" | "1" | "on") => Some(true),
+            Some("false" | "FALSE" | "False" | "0" | "off") => Some(false),
             Some(_) => None,
             None => v.as_bool(),
         };
@@ -477,6 +477,26 @@ pub fn documentation(device: &str, params: &[ParamSpec]) -> String {
     let _ = writeln!(doc, "Using only mandatory params:\n{}", example(false));
     let _ = writeln!(doc, "{rule}");
     doc
+}
+
+/// `values` when there is one per joint (`joints` of them), else the error naming `key`
+/// (a per-joint line of a robot's file: `GROUP::key v0 v1 ...`).
+pub fn per_joint<T: std::fmt::Display>(
+    device: &str,
+    key: &str,
+    values: Vec<T>,
+    joints: usize,
+) -> DevResult<Vec<T>> {
+    if values.len() == joints {
+        return Ok(values);
+    }
+    let got: Vec<String> = values.iter().map(T::to_string).collect();
+    Err(DeviceError::BadParam {
+        device: device.to_string(),
+        param: key.to_string(),
+        expected: "one number per joint",
+        got: got.join(" "),
+    })
 }
 
 /// Prints `device`'s table when `config` has `help`, as C++'s generated parsers do.

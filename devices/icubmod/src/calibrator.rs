@@ -39,10 +39,11 @@ use icub_can::proto::ControlMode;
 
 use yarp_proto::Property;
 
-use crate::common::{lookup, text};
+use crate::common::text;
 use yarp_devices::driver::{DeviceDriver, ICalibrator, SharedDevice};
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::interfaces::IRemoteCalibrator;
+use yarp_devices::params::per_joint;
 use yarp_devices::vocabs::{CM_HW_FAULT, CM_IDLE, CM_POSITION};
 
 pub(crate) const NAME: &str = "parametricCalibrator";
@@ -431,49 +432,73 @@ fn with<T>(
     f(pd.device())
 }
 
+yarp_devices::device_params! {
+    /// What `parametricCalibrator` reads (icub-main's, for CAN parts), besides
+    /// `CALIB_ORDER` (lists of joints calibrated together, in order). Per-joint lines have
+    /// one value per joint.
+    pub struct ParametricCalibratorParams for "parametricCalibrator" {
+        /// Name of the calibrator in messages
+        "GENERAL::deviceName" device_name: String = required,
+        /// Do not calibrate
+        "GENERAL::skipCalibration" skip_calibration: bool = false,
+        /// Number of joints
+        "GENERAL::joints" joints: usize = optional,
+        /// Number of joints (another spelling)
+        "GENERAL::Joints" joints_cap: usize = optional,
+        /// Calibration type of each joint
+        "CALIBRATION::calibrationType" calibration_type: Vec<f64> = required,
+        /// First calibration parameter of each joint
+        "CALIBRATION::calibration1" calibration1: Vec<f64> = required,
+        /// Second calibration parameter of each joint
+        "CALIBRATION::calibration2" calibration2: Vec<f64> = required,
+        /// Third calibration parameter of each joint
+        "CALIBRATION::calibration3" calibration3: Vec<f64> = required,
+        /// Position each joint goes to after calibration
+        "CALIBRATION::startupPosition" startup_position: Vec<f64> = required; "deg",
+        /// Speed of that move
+        "CALIBRATION::startupVelocity" startup_velocity: Vec<f64> = required; "deg/s",
+        /// How close each joint must get to its startup position
+        "CALIBRATION::startupPosThreshold" startup_pos_threshold: Vec<f64> = required; "deg",
+        /// Park position of each joint
+        "HOME::positionHome" position_home: Vec<f64> = required; "deg",
+        /// Park speed of each joint
+        "HOME::velocityHome" velocity_home: Vec<f64> = required; "deg/s",
+    }
+}
+
 impl DeviceDriver for ParametricCalibrator {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        ParametricCalibratorParams::PARAMS.to_vec()
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let missing = |param: &str| DeviceError::MissingParam {
             device: NAME.to_string(),
             param: param.to_string(),
         };
-        let general = |k: &str| lookup(config, Some("GENERAL"), k).and_then(|v| v.first().cloned());
-        self.name = general("deviceName").ok_or_else(|| missing("GENERAL::deviceName"))?;
-        self.skip = general("skipCalibration").is_some_and(|v| v == "true" || v == "1");
-        let n: usize = general("joints")
-            .or_else(|| general("Joints"))
-            .ok_or_else(|| missing("GENERAL::joints"))?
-            .parse()
-            .map_err(|_| missing("GENERAL::joints"))?;
-        let vector = |group: &str, key: &str| -> DevResult<Vec<f64>> {
-            let v = lookup(config, Some(group), key)
-                .ok_or_else(|| missing(&format!("{group}::{key}")))?;
-            let nums: Vec<f64> = v.iter().filter_map(|s| s.parse().ok()).collect();
-            if nums.len() == n && v.len() == n {
-                Ok(nums)
-            } else {
-                Err(DeviceError::BadParam {
-                    device: self.name.clone(),
-                    param: format!("{group}::{key}"),
-                    expected: "one number per joint",
-                    got: v.join(" "),
-                })
-            }
-        };
-        let kind = vector("CALIBRATION", "calibrationType")?;
+        let p = ParametricCalibratorParams::read(config)?;
+        self.name = p.device_name;
+        self.skip = p.skip_calibration;
+        let n = p
+            .joints
+            .or(p.joints_cap)
+            .ok_or_else(|| missing("GENERAL::joints"))?;
+        let name = self.name.clone();
+        let vector = |key: &str, v: Vec<f64>| per_joint(&name, key, v, n);
+        let kind = vector("CALIBRATION::calibrationType", p.calibration_type)?;
         let (p1, p2, p3) = (
-            vector("CALIBRATION", "calibration1")?,
-            vector("CALIBRATION", "calibration2")?,
-            vector("CALIBRATION", "calibration3")?,
+            vector("CALIBRATION::calibration1", p.calibration1)?,
+            vector("CALIBRATION::calibration2", p.calibration2)?,
+            vector("CALIBRATION::calibration3", p.calibration3)?,
         );
         let (pos, vel) = (
-            vector("CALIBRATION", "startupPosition")?,
-            vector("CALIBRATION", "startupVelocity")?,
+            vector("CALIBRATION::startupPosition", p.startup_position)?,
+            vector("CALIBRATION::startupVelocity", p.startup_velocity)?,
         );
-        let thr = vector("CALIBRATION", "startupPosThreshold")?;
+        let thr = vector("CALIBRATION::startupPosThreshold", p.startup_pos_threshold)?;
         let (hpos, hvel) = (
-            vector("HOME", "positionHome")?,
-            vector("HOME", "velocityHome")?,
+            vector("HOME::positionHome", p.position_home)?,
+            vector("HOME::velocityHome", p.velocity_home)?,
         );
         self.joints = (0..n)
             .map(|j| JointCalib {

@@ -136,8 +136,6 @@ const PENDING: &[&str] = &[
     "embObjMultipleFTsensors",
     "embObjPOS",
     "embObjSkin",
-    "parametricCalibrator",
-    "parametricCalibratorEth",
 ];
 
 #[tokio::test]

@@ -46,6 +46,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use yarp_devices::interfaces::{CalibrationParameters, IRemoteCalibrator};
+use yarp_devices::params::per_joint;
 use yarp_devices::vocabs::{
     CM_FORCE_IDLE, CM_HW_FAULT, CM_IDLE, CM_NOT_CONFIGURED, CM_POSITION, CM_UNKNOWN,
 };
@@ -133,59 +134,59 @@ impl ParametricCalibratorEth {
         self.calibrated
     }
 
-    fn read(&mut self, config: &Property) -> Result<(), ParamError> {
+    fn read(&mut self, id: &str, config: &Property) -> DevResult<()> {
+        yarp_devices::params::help_if_asked(NAME, config, ParametricCalibratorEthParams::PARAMS);
+        let p = ParametricCalibratorEthParams::parse(id, config)?;
         let root = Node::root(config);
-        let general = root.need_group("GENERAL")?;
-        self.name = general.need_string("deviceName", "the calibrator's name")?;
-        self.clear_hw_fault = general
-            .boolean("clearHwFaultBeforeCalibration")
-            .unwrap_or(false);
-        let raw = general.boolean("useRawEncoderData").unwrap_or(false);
-        self.skip = raw || general.boolean("skipCalibration").unwrap_or(false);
+        self.name = p.device_name;
+        self.clear_hw_fault = p.clear_hw_fault;
+        let raw = p.use_raw_encoder_data;
+        self.skip = raw || p.skip_calibration;
         if raw {
             tracing::warn!(device = %self.name, "MotionControl is using raw data from encoders: forcing skipCalibration");
         } else if self.skip {
             tracing::warn!(device = %self.name, "skipping calibration (skipCalibration): be careful using the robot in this configuration");
         }
-        self.skip_recalibration = root
-            .group("MAINTENANCE")
-            .and_then(|m| m.boolean("skipRecalibration"))
-            .unwrap_or(false);
-        let n = general
-            .number("joints")?
-            .or(general.number("Joints")?)
-            .ok_or_else(|| ParamError::missing("GENERAL/joints", "the number of joints"))?
-            as usize;
-        let cal = root.need_group("CALIBRATION")?;
-        let c = |k: &str| cal.need_numbers(k, n);
-        let or = |k: &str, default: f64| -> Result<Vec<f64>, ParamError> {
-            Ok(cal.numbers(k, n)?.unwrap_or_else(|| vec![default; n]))
+        self.skip_recalibration = p.skip_recalibration;
+        let n = p
+            .joints
+            .or(p.joints_cap)
+            .ok_or_else(|| DeviceError::MissingParam {
+                device: id.to_string(),
+                param: "GENERAL::joints".into(),
+            })? as usize;
+        let c = |k: &str, v: Vec<f64>| per_joint(id, &format!("CALIBRATION::{k}"), v, n);
+        let or = |k: &str, v: Option<Vec<f64>>, default: f64| match v {
+            Some(v) => c(k, v),
+            None => Ok(vec![default; n]),
         };
-        let kind = c("calibrationType")?;
+        let kind = c("calibrationType", p.calibration_type)?;
         let (p1, p2, p3, p4, p5) = (
-            c("calibration1")?,
-            c("calibration2")?,
-            c("calibration3")?,
-            c("calibration4")?,
-            c("calibration5")?,
+            c("calibration1", p.calibration1)?,
+            c("calibration2", p.calibration2)?,
+            c("calibration3", p.calibration3)?,
+            c("calibration4", p.calibration4)?,
+            c("calibration5", p.calibration5)?,
         );
-        let zero = c("calibrationZero")?;
-        let delta = or("calibrationDelta", 0.0)?;
+        let zero = c("calibrationZero", p.calibration_zero)?;
+        let delta = or("calibrationDelta", p.calibration_delta, 0.0)?;
         let (pos, vel, thr, max_pwm) = (
-            c("startupPosition")?,
-            c("startupVelocity")?,
-            c("startupPosThreshold")?,
-            c("startupMaxPwm")?,
+            c("startupPosition", p.startup_position)?,
+            c("startupVelocity", p.startup_velocity)?,
+            c("startupPosThreshold", p.startup_pos_threshold)?,
+            c("startupMaxPwm", p.startup_max_pwm)?,
         );
-        let calib_timeout = or("calibrationTimeout", CALIBRATION_TIMEOUT)?;
-        let startup_timeout = or("startupTimeout", STARTUP_TIMEOUT)?;
-        let no_startup = or("startupDisablePosCheck", 0.0)?;
-        let home = root.group("HOME");
-        let no_park = match &home {
-            Some(h) => h.numbers("disableHomeAndPark", n)?,
-            None => None,
-        }
-        .unwrap_or_else(|| vec![0.0; n]);
+        let calib_timeout = or(
+            "calibrationTimeout",
+            p.calibration_timeout,
+            CALIBRATION_TIMEOUT,
+        )?;
+        let startup_timeout = or("startupTimeout", p.startup_timeout, STARTUP_TIMEOUT)?;
+        let no_startup = or("startupDisablePosCheck", p.startup_disable_pos_check, 0.0)?;
+        let no_park = match p.disable_home_and_park {
+            Some(v) => per_joint(id, "HOME::disableHomeAndPark", v, n)?,
+            None => vec![0.0; n],
+        };
         let seconds = |s: f64| Duration::from_secs_f64(s.max(0.0));
         self.joints = (0..n)
             .map(|j| JointCalib {
@@ -210,22 +211,37 @@ impl ParametricCalibratorEth {
             .collect();
         self.parking = match root.group("PARKING_SEQUENCE") {
             Some(seq) => Parking::Sequence {
-                steps: read_sequence(&seq, n)?,
+                steps: read_sequence(&seq, n).map_err(|e| e.for_device(id))?,
                 next: 0,
             },
-            None => {
-                let home = home.ok_or_else(|| {
-                    ParamError::missing("HOME", "the park pose (or PARKING_SEQUENCE)")
-                })?;
-                Parking::Home(Pose {
-                    positions: home.need_numbers("positionHome", n)?,
-                    velocities: home.need_numbers("velocityHome", n)?,
-                })
-            }
+            None => match (p.position_home, p.velocity_home) {
+                (Some(positions), Some(velocities)) => Parking::Home(Pose {
+                    positions: per_joint(id, "HOME::positionHome", positions, n)?,
+                    velocities: per_joint(id, "HOME::velocityHome", velocities, n)?,
+                }),
+                (None, _) if root.group("HOME").is_none() => {
+                    return Err(
+                        ParamError::missing("HOME", "the park pose (or PARKING_SEQUENCE)")
+                            .for_device(id),
+                    )
+                }
+                (None, _) => {
+                    return Err(DeviceError::MissingParam {
+                        device: id.to_string(),
+                        param: "HOME::positionHome".into(),
+                    })
+                }
+                (_, None) => {
+                    return Err(DeviceError::MissingParam {
+                        device: id.to_string(),
+                        param: "HOME::velocityHome".into(),
+                    })
+                }
+            },
         };
         let order = config
             .find_group("CALIB_ORDER")
-            .ok_or_else(|| ParamError::missing("CALIB_ORDER", "lists of joints"))?;
+            .ok_or_else(|| ParamError::missing("CALIB_ORDER", "lists of joints").for_device(id))?;
         self.order = order
             .iter()
             .skip(1)
@@ -243,11 +259,12 @@ impl ParametricCalibratorEth {
                             "lists of joint indices below `joints`",
                             text(set),
                         )
+                        .for_device(id)
                     })
             })
-            .collect::<Result<_, _>>()?;
+            .collect::<DevResult<_>>()?;
         if self.order.is_empty() {
-            return Err(ParamError::missing("CALIB_ORDER", "lists of joints"));
+            return Err(ParamError::missing("CALIB_ORDER", "lists of joints").for_device(id));
         }
         Ok(())
     }
@@ -740,10 +757,75 @@ fn read_sequence(seq: &Node<'_>, n: usize) -> Result<Vec<Pose>, ParamError> {
         .collect()
 }
 
+yarp_devices::device_params! {
+    /// What `parametricCalibratorEth` reads (icub-main's), besides `CALIB_ORDER` (lists of
+    /// joints calibrated together, in order) and `PARKING_SEQUENCE` (`numberOfSequences`
+    /// groups `SEQUENCE_<i>` with `position` and `velocity` per joint). Per-joint lines
+    /// have one value per joint.
+    pub struct ParametricCalibratorEthParams for "parametricCalibratorEth" {
+        /// Name of the calibrator in messages
+        "GENERAL::deviceName" device_name: String = required,
+        /// Number of joints
+        "GENERAL::joints" joints: i64 = optional,
+        /// Number of joints (another spelling)
+        "GENERAL::Joints" joints_cap: i64 = optional,
+        /// Clear the boards' hardware faults before calibrating
+        "GENERAL::clearHwFaultBeforeCalibration" clear_hw_fault: bool = false,
+        /// The motion control uses raw encoder data: calibration is skipped
+        "GENERAL::useRawEncoderData" use_raw_encoder_data: bool = false,
+        /// Do not calibrate
+        "GENERAL::skipCalibration" skip_calibration: bool = false,
+        /// Do not calibrate again on a remote request
+        "MAINTENANCE::skipRecalibration" skip_recalibration: bool = false,
+        /// Calibration type of each joint
+        "CALIBRATION::calibrationType" calibration_type: Vec<f64> = required,
+        /// First calibration parameter of each joint
+        "CALIBRATION::calibration1" calibration1: Vec<f64> = required,
+        /// Second calibration parameter of each joint
+        "CALIBRATION::calibration2" calibration2: Vec<f64> = required,
+        /// Third calibration parameter of each joint
+        "CALIBRATION::calibration3" calibration3: Vec<f64> = required,
+        /// Fourth calibration parameter of each joint
+        "CALIBRATION::calibration4" calibration4: Vec<f64> = required,
+        /// Fifth calibration parameter of each joint
+        "CALIBRATION::calibration5" calibration5: Vec<f64> = required,
+        /// Zero of each joint
+        "CALIBRATION::calibrationZero" calibration_zero: Vec<f64> = required; "deg",
+        /// Correction added to the zero of each joint (default 0)
+        "CALIBRATION::calibrationDelta" calibration_delta: Vec<f64> = optional; "deg",
+        /// Position each joint goes to after calibration
+        "CALIBRATION::startupPosition" startup_position: Vec<f64> = required; "deg",
+        /// Speed of that move
+        "CALIBRATION::startupVelocity" startup_velocity: Vec<f64> = required; "deg/s",
+        /// How close each joint must get to its startup position
+        "CALIBRATION::startupPosThreshold" startup_pos_threshold: Vec<f64> = required; "deg",
+        /// PWM limit of each joint while calibrating
+        "CALIBRATION::startupMaxPwm" startup_max_pwm: Vec<f64> = required,
+        /// Time each joint may take to calibrate (default 20)
+        "CALIBRATION::calibrationTimeout" calibration_timeout: Vec<f64> = optional; "s",
+        /// Time each joint may take to reach its startup position (default 10)
+        "CALIBRATION::startupTimeout" startup_timeout: Vec<f64> = optional; "s",
+        /// 1: do not check that the joint reached its startup position
+        "CALIBRATION::startupDisablePosCheck" startup_disable_pos_check: Vec<f64> = optional,
+        /// Park position of each joint (without PARKING_SEQUENCE)
+        "HOME::positionHome" position_home: Vec<f64> = optional; "deg",
+        /// Park speed of each joint (without PARKING_SEQUENCE)
+        "HOME::velocityHome" velocity_home: Vec<f64> = optional; "deg/s",
+        /// 1: the joint does not go home nor park
+        "HOME::disableHomeAndPark" disable_home_and_park: Vec<f64> = optional,
+        /// Number of SEQUENCE_<i> groups of the park
+        "PARKING_SEQUENCE::numberOfSequences" number_of_sequences: i64 = optional,
+    }
+}
+
 impl DeviceDriver for ParametricCalibratorEth {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        ParametricCalibratorEthParams::PARAMS.to_vec()
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let id = config.find("id").map_or_else(|| NAME.to_string(), text);
-        self.read(config).map_err(|e| e.for_device(&id))?;
+        self.read(&id, config)?;
         self.calibrated = false;
         Ok(())
     }
