@@ -68,15 +68,18 @@ fn sections(out: &str) -> Vec<(String, BTreeSet<String>)> {
     found
 }
 
-/// Runs `yarpdev --device DEVICE --help ARGS` until it has printed the device's help (or
-/// exited, or the time is up); what it printed.
+/// Runs `yarpdev --device DEVICE --help ARGS` until it has printed the device's help, or
+/// exited, or opened (its terminator port `quit` is registered: a device without a table
+/// prints nothing more), or the time is up; what it printed.
 async fn help_output(
     bin: &Path,
     device: &str,
     args: &[&str],
-    conf_home: &Path,
+    net: &Network,
+    quit: Option<&str>,
     env: &[(&str, &Path)],
 ) -> String {
+    let conf_home = net.conf_home.path();
     let cwd = std::env::temp_dir();
     let bin = bin.to_str().expect("utf-8 path");
     let mut all = vec!["--device", device, "--help"];
@@ -86,8 +89,12 @@ async fn help_output(
     loop {
         let out = child.output();
         let done = sections(&out).iter().any(|(h, _)| same_device(h, device));
-        if done || child.is_gone() || std::time::Instant::now() > deadline {
-            return out;
+        let opened = match quit {
+            Some(port) => matches!(net.client.query(port).await, Ok(Some(_))),
+            None => false,
+        };
+        if done || opened || child.is_gone() || std::time::Instant::now() > deadline {
+            return child.output();
         }
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
@@ -155,14 +162,7 @@ async fn help_lists_the_parameters_cpp_lists() {
     let net = start_network().await;
 
     // ours prints the declared table, by the device's name
-    let out = help_output(
-        Path::new(BIN),
-        "remote_controlboard",
-        &[],
-        net.conf_home.path(),
-        &[],
-    )
-    .await;
+    let out = help_output(Path::new(BIN), "remote_controlboard", &[], &net, None, &[]).await;
     let printed = sections(&out);
     let declared: BTreeSet<String> =
         yarp_devices::remote_controlboard::RemoteControlBoardParams::PARAMS
@@ -182,14 +182,10 @@ async fn help_lists_the_parameters_cpp_lists() {
     for (i, entry) in Registry::entries().iter().enumerate() {
         if cpp_list.contains(entry.name) {
             let name = format!("/help{i}");
-            let out = help_output(
-                &cpp_yarpdev,
-                entry.name,
-                &["--name", &name],
-                net.conf_home.path(),
-                &cpp_env,
-            )
-            .await;
+            let quit = format!("{name}/quit");
+            let args = ["--name", name.as_str()];
+            let out =
+                help_output(&cpp_yarpdev, entry.name, &args, &net, Some(&quit), &cpp_env).await;
             cpp.extend(sections(&out));
         }
     }
