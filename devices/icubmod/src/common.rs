@@ -7,9 +7,9 @@ use std::time::Instant;
 
 use icub_can::client::ClientError;
 use icub_can::CanBus;
-use yarp_proto::{Bottle, Property, Value};
+use yarp_proto::{Property, Value};
 
-use yarp_devices::error::DeviceError;
+use yarp_devices::error::{DevResult, DeviceError};
 
 /// Overrides the bus of every iCub CAN device that names none with `canBackend`, so a
 /// robot's XML can run unmodified (see `launch-configs/icub-sim/robot/README.md`).
@@ -35,35 +35,6 @@ pub fn text(v: &Value) -> String {
 /// device name), else `default` (the device type).
 pub fn device_id(config: &Property, default: &str) -> String {
     config.find("id").map_or_else(|| default.to_string(), text)
-}
-
-/// The values after the key of a line `(key v1 v2 ...)`; a single list value
-/// (`(key (v1 v2))`) is flattened.
-fn line_values(line: &Bottle) -> Vec<String> {
-    let rest: Vec<&Value> = line.iter().skip(1).collect();
-    if let [only] = rest.as_slice() {
-        if let Some(list) = only.as_list() {
-            return list.iter().map(text).collect();
-        }
-    }
-    rest.into_iter().map(text).collect()
-}
-
-/// `key`'s values inside section `group` (`None`: top level), or `None` when absent.
-pub fn lookup(config: &Property, group: Option<&str>, key: &str) -> Option<Vec<String>> {
-    let line = match group {
-        Some(g) => config.find_group(g)?.find_group(key)?,
-        None => config.find_group(key)?,
-    };
-    Some(line_values(line))
-}
-
-/// The first value of `key` in `group`, falling back to the top level.
-pub fn lookup_one(config: &Property, group: Option<&str>, key: &str) -> Option<String> {
-    group
-        .and_then(|g| lookup(config, Some(g), key))
-        .or_else(|| lookup(config, None, key))
-        .and_then(|v| v.into_iter().next())
 }
 
 yarp_devices::device_params! {
@@ -95,6 +66,28 @@ yarp_devices::device_params! {
 }
 
 impl CanBusParams {
+    /// The bus parameters of `group` (canmotioncontrol's `CAN`), each falling back to the
+    /// top level, as icub-main looks them up.
+    pub fn parse_in_group(device: &str, config: &Property, group: &str) -> DevResult<Self> {
+        let top = Self::parse(device, config)?;
+        let Some(lines) = config.find_group(group) else {
+            return Ok(top);
+        };
+        let inner = Self::parse(device, &Property::from_bottle(lines))?;
+        Ok(Self {
+            can_backend: inner.can_backend.or(top.can_backend),
+            can_backend_cap: inner.can_backend_cap.or(top.can_backend_cap),
+            phys_device: inner.phys_device.or(top.phys_device),
+            phys_device_lower: inner.phys_device_lower.or(top.phys_device_lower),
+            canbus_device: inner.canbus_device.or(top.canbus_device),
+            canbus_device_lower: inner.canbus_device_lower.or(top.canbus_device_lower),
+            can_device_num: inner.can_device_num.or(top.can_device_num),
+            can_device_num_cap: inner.can_device_num_cap.or(top.can_device_num_cap),
+            can_device_name: inner.can_device_name.or(top.can_device_name),
+            can_device_name_cap: inner.can_device_name_cap.or(top.can_device_name_cap),
+        })
+    }
+
     /// The bus these parameters name, as icub-can opens it (`$YARP_ICUB_CAN_BACKEND` when
     /// no `canBackend` is given; `canbusDevice` when it names an adapter and no
     /// `physDevice` is given).
@@ -142,32 +135,6 @@ fn bus_error(device: &str, e: impl std::fmt::Display) -> DeviceError {
     }
 }
 
-/// Opens the CAN bus a device's configuration names: `canBackend`, else the
-/// [`BACKEND_ENV`] variable, else `physDevice` (`canbusDevice` when it names an adapter
-/// rather than `sharedcan`, as `canBusSkin` files do), with `CanDeviceNum`/`canDeviceNum`.
-/// Keys are looked up in `group` first, then at the top level.
-pub fn open_bus(
-    device: &str,
-    config: &Property,
-    group: Option<&str>,
-) -> Result<Arc<dyn CanBus>, DeviceError> {
-    let env = std::env::var(BACKEND_ENV).ok().filter(|s| !s.is_empty());
-    let get = |key: &str| -> Option<String> {
-        let found = lookup_one(config, group, key);
-        match key {
-            "canBackend" | "CanBackend" => found.or_else(|| env.clone()),
-            "physDevice" | "physdevice" => found.or_else(|| {
-                ["canbusDevice", "canbusdevice"]
-                    .iter()
-                    .find_map(|k| lookup_one(config, group, k))
-                    .filter(|d| d.trim_matches('"') != "sharedcan")
-            }),
-            _ => found,
-        }
-    };
-    icub_can::bus::config::open_from_params(&get).map_err(|e| bus_error(device, e))
-}
-
 /// An error from opening a driver core: the message names what failed.
 pub fn open_error(device: &str, e: &ClientError) -> DeviceError {
     let (param, expected) = match e {
@@ -195,25 +162,5 @@ pub fn call_error(device: &str, e: ClientError) -> DeviceError {
             axes: joints,
         },
         e => DeviceError::failed(device, e),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn lookup_groups_and_lists() {
-        let p = Property::from_text(
-            "(CAN (CanAddresses 1 2 3 4) (CanDeviceNum 1)) (GENERAL (AxisName \"a\" \"b\")) (canAddress 0x0D) (skinCanIds (14 13))",
-        );
-        assert_eq!(
-            lookup(&p, Some("CAN"), "CanAddresses").unwrap(),
-            ["1", "2", "3", "4"]
-        );
-        assert_eq!(lookup(&p, Some("GENERAL"), "AxisName").unwrap(), ["a", "b"]);
-        assert_eq!(lookup(&p, None, "skinCanIds").unwrap(), ["14", "13"]);
-        assert_eq!(lookup_one(&p, Some("CAN"), "canAddress"), Some("13".into()));
-        assert!(lookup(&p, Some("CAN"), "nothing").is_none());
     }
 }

@@ -21,7 +21,7 @@
 //! Each device reads the parameters of the robots-configuration XML files unchanged; the
 //! bus is chosen by `canBackend` (e.g. `udp://127.0.0.1:20000+n`, one port per
 //! `CanDeviceNum`), by the `YARP_ICUB_CAN_BACKEND` environment variable, or by
-//! `physDevice socketcan` (see [`common::open_bus`]). Board faults are errors or
+//! `physDevice socketcan` (see [`common::CanBusParams`]). Board faults are errors or
 //! statuses: a silent board fails a call within its timeout, never hangs it.
 #![forbid(unsafe_code)]
 

@@ -2,8 +2,8 @@
 //! robot part on one CAN network, behind the YARP motor interfaces.
 //!
 //! Configuration: the icub-main groups `CAN`, `GENERAL`, `LIMITS`, `VELOCITY`,
-//! `POS_PIDS`, `TRQ_PIDS` as the iCub XML files give them (read by
-//! [`McParams::from_lookup`]; its docs list which keys are used, among them
+//! `POS_PIDS`, `TRQ_PIDS` as the iCub XML files give them (declared in
+//! [`CanMotionControlParams`]; among them
 //! `GENERAL::TorqueMax`, N·m at full sensor scale: torque references are sent and
 //! measured torques read as `τ · 0x8000 / TorqueMax`, as icub-main does, and
 //! `GENERAL::TorqueId`/`TorqueChan`, the analog-sensor board and channel whose
@@ -11,7 +11,7 @@
 //! addition: `GENERAL::AxisType` (joint types),
 //! `GENERAL::fullscalePWM` (for duty cycles), `LIMITS::motorOverloadCurrents` (reported
 //! as the maximum current), `LIMITS::jntVelMax` (velocity limits). The bus comes from
-//! `CAN::canBackend` (or `physDevice` + `CanDeviceNum`, see [`crate::common::open_bus`]).
+//! `CAN::canBackend` (or `physDevice` + `CanDeviceNum`, see [`crate::common::CanBusParams`]).
 //!
 //! `IMPEDANCE::stiffness`/`damping` (N·m/°, N·m·s/°, one per joint, as icub-main's
 //! `parseImpedanceGroup_NewFormat`; the iCubGenova01 legs have them) are sent to the
@@ -28,14 +28,14 @@
 //! again and the log says what a reset board lost ([`crate::presence`]).
 
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use icub_can::client::{JointPid, McParams, MotorControlClient};
 use icub_can::proto::{ControlMode, PidKind};
 use yarp_proto::{Property, Vocab32};
 
 use crate::boards::{self, Registration};
-use crate::common::{call_error, device_id, lookup, open_bus, open_error};
+use crate::common::{call_error, device_id, open_error, CanBusParams};
 use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::interfaces::*;
@@ -152,62 +152,393 @@ impl CanMotionControl {
     ) -> DevResult<T> {
         f(self.c()?).map_err(|e| call_error(&self.id, e))
     }
+}
 
-    /// Per-joint numbers of `group::key`, `default` when absent or short.
-    fn per_joint(config: &Property, group: &str, key: &str, n: usize, default: f64) -> Vec<f64> {
-        let v: Vec<f64> = lookup(config, Some(group), key)
-            .unwrap_or_default()
+yarp_devices::device_params! {
+    /// What `canmotioncontrol` reads (icub-main's `CanBusMotionControl`), besides its bus
+    /// ([`CanBusParams`], in the `CAN` group or at the top). Per-joint lines have at least
+    /// one value per joint (extra values are ignored, as icub-main does).
+    pub struct CanMotionControlParams for "canmotioncontrol" {
+        /// Number of joints
+        "GENERAL::Joints" joints: usize = required,
+        /// The CAN axis of each joint (identity when absent or short)
+        "GENERAL::AxisMap" axis_map: Vec<f64> = optional,
+        /// Name of each joint (joint<j> when absent)
+        "GENERAL::AxisName" axis_name: Vec<String> = optional,
+        /// revolute or prismatic, per joint
+        "GENERAL::AxisType" axis_type: Vec<String> = optional,
+        /// Encoder ticks per degree of each joint (negative flips it; 0: unused axis)
+        "GENERAL::Encoder" encoder: Vec<f64> = required,
+        /// Zero of each joint
+        "GENERAL::Zeros" zeros: Vec<f64> = optional; "deg",
+        /// Full scale of each joint's torque sensor
+        "GENERAL::TorqueMax" torque_max: Vec<f64> = optional; "Nm",
+        /// CAN address of the board measuring each joint's torque (0: none)
+        "GENERAL::TorqueId" torque_id: Vec<f64> = optional,
+        /// Channel (0..5) of that board
+        "GENERAL::TorqueChan" torque_chan: Vec<f64> = optional,
+        /// Motor encoder ticks per degree of each joint (1 when absent)
+        "GENERAL::Rotor" rotor: Vec<f64> = optional,
+        /// Full-scale PWM of each joint
+        "GENERAL::fullscalePWM" fullscale_pwm: Vec<f64> = optional,
+        /// The boards' CAN addresses (1..14), one per two axes
+        "CAN::CanAddresses" can_addresses: Vec<i64> = required,
+        /// The host's CAN address (0)
+        "CAN::CanMyAddress" can_my_address: f64 = optional,
+        /// How long to wait for a polling reply (500)
+        "CAN::CanTimeout" can_timeout: f64 = optional; "ms",
+        /// 1 where the axis broadcasts its positions
+        "CAN::broadcast_pos" broadcast_pos: Vec<f64> = optional,
+        /// 1 where the axis broadcasts its PID values
+        "CAN::broadcast_pid" broadcast_pid: Vec<f64> = optional,
+        /// 1 where the axis broadcasts its faults
+        "CAN::broadcast_fault" broadcast_fault: Vec<f64> = optional,
+        /// 1 where the axis broadcasts its currents
+        "CAN::broadcast_current" broadcast_current: Vec<f64> = optional,
+        /// 1 where the axis broadcasts its overflows
+        "CAN::broadcast_overflow" broadcast_overflow: Vec<f64> = optional,
+        /// 1 where the axis broadcasts its board prints
+        "CAN::broadcast_canprint" broadcast_canprint: Vec<f64> = optional,
+        /// 1 where the axis broadcasts its speeds and accelerations
+        "CAN::broadcast_vel_acc" broadcast_vel_acc: Vec<f64> = optional,
+        /// 1 where the axis broadcasts its PID errors
+        "CAN::broadcast_pid_err" broadcast_pid_err: Vec<f64> = optional,
+        /// 1 where the axis broadcasts its rotor positions
+        "CAN::broadcast_rotor_pos" broadcast_rotor_pos: Vec<f64> = optional,
+        /// 1 where the axis broadcasts its rotor speeds and accelerations
+        "CAN::broadcast_rotor_vel_acc" broadcast_rotor_vel_acc: Vec<f64> = optional,
+        /// Lowest position of each joint
+        "LIMITS::jntPosMin" jnt_pos_min: Vec<f64> = optional; "deg",
+        /// Highest position of each joint
+        "LIMITS::jntPosMax" jnt_pos_max: Vec<f64> = optional; "deg",
+        /// Highest speed of each joint
+        "LIMITS::jntVelMax" jnt_vel_max: Vec<f64> = optional; "deg/s",
+        /// Current limit of each motor
+        "LIMITS::motorOverloadCurrents" motor_overload_currents: Vec<f64> = optional; "mA",
+        /// Velocity command shift of each joint (at most 15)
+        "VELOCITY::Shifts" velocity_shifts: Vec<f64> = optional,
+        /// Time a velocity command lasts (100)
+        "VELOCITY::Timeout" velocity_timeout: Vec<f64> = optional; "ms",
+        /// JNT speed estimation shift of each joint (at most 15)
+        "VELOCITY::JNT_speed_estimation" jnt_speed_estimation: Vec<f64> = optional,
+        /// JNT accel estimation shift of each joint (at most 15)
+        "VELOCITY::JNT_accel_estimation" jnt_accel_estimation: Vec<f64> = optional,
+        /// MOT speed estimation shift of each joint (at most 15)
+        "VELOCITY::MOT_speed_estimation" mot_speed_estimation: Vec<f64> = optional,
+        /// MOT accel estimation shift of each joint (at most 15)
+        "VELOCITY::MOT_accel_estimation" mot_accel_estimation: Vec<f64> = optional,
+        /// The position PID's proportional gain of each joint (sent at open with kp)
+        "POS_PIDS::kp" pos_pids_kp: Vec<f64> = optional,
+        /// The position PID's derivative gain of each joint (sent at open with kp)
+        "POS_PIDS::kd" pos_pids_kd: Vec<f64> = optional,
+        /// The position PID's integral gain of each joint (sent at open with kp)
+        "POS_PIDS::ki" pos_pids_ki: Vec<f64> = optional,
+        /// The position PID's integral limit of each joint (sent at open with kp)
+        "POS_PIDS::maxInt" pos_pids_max_int: Vec<f64> = optional,
+        /// The position PID's output shift of each joint (sent at open with kp)
+        "POS_PIDS::shift" pos_pids_shift: Vec<f64> = optional,
+        /// The position PID's output limit of each joint (sent at open with kp)
+        "POS_PIDS::maxOutput" pos_pids_max_output: Vec<f64> = optional,
+        /// The position PID's output offset of each joint (sent at open with kp)
+        "POS_PIDS::ko" pos_pids_ko: Vec<f64> = optional,
+        /// The torque PID's proportional gain of each joint (sent at open with kp)
+        "TRQ_PIDS::kp" trq_pids_kp: Vec<f64> = optional,
+        /// The torque PID's derivative gain of each joint (sent at open with kp)
+        "TRQ_PIDS::kd" trq_pids_kd: Vec<f64> = optional,
+        /// The torque PID's integral gain of each joint (sent at open with kp)
+        "TRQ_PIDS::ki" trq_pids_ki: Vec<f64> = optional,
+        /// The torque PID's integral limit of each joint (sent at open with kp)
+        "TRQ_PIDS::maxInt" trq_pids_max_int: Vec<f64> = optional,
+        /// The torque PID's output shift of each joint (sent at open with kp)
+        "TRQ_PIDS::shift" trq_pids_shift: Vec<f64> = optional,
+        /// The torque PID's output limit of each joint (sent at open with kp)
+        "TRQ_PIDS::maxOutput" trq_pids_max_output: Vec<f64> = optional,
+        /// The torque PID's output offset of each joint (sent at open with kp)
+        "TRQ_PIDS::ko" trq_pids_ko: Vec<f64> = optional,
+        /// Impedance stiffness of each joint (with damping)
+        "IMPEDANCE::stiffness" stiffness: Vec<f64> = optional; "Nm/deg",
+        /// Impedance damping of each joint
+        "IMPEDANCE::damping" damping: Vec<f64> = optional; "Nm/(deg/s)",
+    }
+}
+
+/// A per-joint line as icub-main reads it: its first `joints` values (more are ignored),
+/// `default` for every joint when absent.
+fn first_joints(
+    id: &str,
+    key: &str,
+    line: &Option<Vec<f64>>,
+    joints: usize,
+    default: Option<f64>,
+) -> DevResult<Vec<f64>> {
+    match line {
+        Some(v) if v.len() >= joints => Ok(v[..joints].to_vec()),
+        Some(v) => Err(DeviceError::BadParam {
+            device: id.to_string(),
+            param: key.to_string(),
+            expected: "one number per joint",
+            got: format!("{} values for {joints} joints", v.len()),
+        }),
+        None => default
+            .map(|d| vec![d; joints])
+            .ok_or_else(|| DeviceError::MissingParam {
+                device: id.to_string(),
+                param: key.to_string(),
+            }),
+    }
+}
+
+/// A per-joint line read leniently, as icub-main reads its optional ones: a value per
+/// joint where given, `default` elsewhere.
+fn lenient(line: &Option<Vec<f64>>, joints: usize, default: f64) -> Vec<f64> {
+    let v = line.as_deref().unwrap_or_default();
+    (0..joints)
+        .map(|j| v.get(j).copied().unwrap_or(default))
+        .collect()
+}
+
+impl CanMotionControlParams {
+    /// The driver core's parameters (icub-main's `CanBusMotionControlParameters`).
+    fn mc_params(&self, id: &str) -> DevResult<McParams> {
+        use icub_can::proto::mc::per;
+        let n = self.joints;
+        let pj = |key: &str, line: &Option<Vec<f64>>, default: Option<f64>| {
+            first_joints(id, key, line, n, default)
+        };
+        let can_addresses = self
+            .can_addresses
             .iter()
-            .filter_map(|s| s.parse().ok())
+            .map(|a| match u8::try_from(*a) {
+                Ok(a @ 1..=14) => Ok(a),
+                _ => Err(DeviceError::BadParam {
+                    device: id.to_string(),
+                    param: "CAN::CanAddresses".into(),
+                    expected: "board addresses 1..14",
+                    got: a.to_string(),
+                }),
+            })
+            .collect::<DevResult<Vec<u8>>>()?;
+        let axis_map = pj("GENERAL::AxisMap", &self.axis_map, None)
+            .unwrap_or_else(|_| (0..n).map(|j| j as f64).collect())
+            .into_iter()
+            .map(|a| a as usize)
             .collect();
-        (0..n)
-            .map(|j| v.get(j).copied().unwrap_or(default))
-            .collect()
+        let min = pj(
+            "LIMITS::jntPosMin",
+            &self.jnt_pos_min,
+            Some(f64::NEG_INFINITY),
+        )?;
+        let max = pj("LIMITS::jntPosMax", &self.jnt_pos_max, Some(f64::INFINITY))?;
+        let pids =
+            |group: &str, gains: [&Option<Vec<f64>>; 7]| -> DevResult<Option<Vec<JointPid>>> {
+                if gains[0].is_none() {
+                    return Ok(None);
+                }
+                const KEYS: [&str; 7] = ["kp", "kd", "ki", "maxInt", "shift", "maxOutput", "ko"];
+                let g = (0..7)
+                    .map(|k| pj(&format!("{group}::{}", KEYS[k]), gains[k], Some(0.0)))
+                    .collect::<DevResult<Vec<Vec<f64>>>>()?;
+                Ok(Some(
+                    (0..n)
+                        .map(|j| JointPid {
+                            kp: g[0][j],
+                            kd: g[1][j],
+                            ki: g[2][j],
+                            max_int: g[3][j],
+                            scale: g[4][j],
+                            max_output: g[5][j],
+                            offset: g[6][j],
+                        })
+                        .collect(),
+                ))
+            };
+        let estimation = [
+            pj(
+                "VELOCITY::JNT_speed_estimation",
+                &self.jnt_speed_estimation,
+                Some(0.0),
+            )?,
+            pj(
+                "VELOCITY::JNT_accel_estimation",
+                &self.jnt_accel_estimation,
+                Some(0.0),
+            )?,
+            pj(
+                "VELOCITY::MOT_speed_estimation",
+                &self.mot_speed_estimation,
+                Some(0.0),
+            )?,
+            pj(
+                "VELOCITY::MOT_accel_estimation",
+                &self.mot_accel_estimation,
+                Some(0.0),
+            )?,
+        ];
+        let broadcast_policy = {
+            let flags = [
+                (&self.broadcast_pos, per::POSITION),
+                (&self.broadcast_pid, per::PID_VAL),
+                (&self.broadcast_fault, per::STATUS),
+                (&self.broadcast_current, per::CURRENT),
+                (&self.broadcast_overflow, per::OVERFLOW),
+                (&self.broadcast_canprint, per::PRINT),
+                (&self.broadcast_vel_acc, per::VELOCITY),
+                (&self.broadcast_pid_err, per::PID_ERROR),
+                (&self.broadcast_rotor_pos, per::MOTOR_POSITION),
+                (&self.broadcast_rotor_vel_acc, per::MOTOR_SPEED),
+            ];
+            let mut masks: Option<Vec<u32>> = None;
+            for (line, bit) in flags {
+                if let Some(v) = line {
+                    let m = masks.get_or_insert_with(|| vec![0; can_addresses.len()]);
+                    // one flag per axis; a board broadcasts a type if either of its axes asks
+                    for (axis, flag) in v.iter().enumerate() {
+                        if *flag != 0.0 && axis / 2 < m.len() {
+                            m[axis / 2] |= 1 << bit;
+                        }
+                    }
+                }
+            }
+            // interaction modes ride on the additional status, which the wrappers need
+            masks.map(|m| {
+                m.into_iter()
+                    .map(|x| x | (1 << per::ADDITIONAL_STATUS))
+                    .collect()
+            })
+        };
+        let torque_max = self.torque_max.clone().unwrap_or_default();
+        let (ids, chans) = (
+            self.torque_id.clone().unwrap_or_default(),
+            self.torque_chan.clone().unwrap_or_default(),
+        );
+        let params = McParams {
+            host_address: self.can_my_address.unwrap_or(0.0) as u8,
+            reply_timeout: Duration::from_millis(
+                self.can_timeout.map_or(500, |v| v.max(1.0) as u64),
+            ),
+            broadcast_timeout: Duration::from_millis(500),
+            axis_names: self
+                .axis_name
+                .clone()
+                .unwrap_or_else(|| (0..n).map(|j| format!("joint{j}")).collect()),
+            encoder: pj("GENERAL::Encoder", &Some(self.encoder.clone()), None)?,
+            zeros: pj("GENERAL::Zeros", &self.zeros, Some(0.0))?,
+            // as icub-main, a missing or short list means "no sensor" / scale 1
+            torque_scale: (0..n)
+                .map(|j| match torque_max.get(j) {
+                    Some(&max) if max > 0.0 => f64::from(0x8000u16) / max,
+                    _ => 1.0,
+                })
+                .collect(),
+            torque_sensors: (0..n)
+                .map(|j| {
+                    let at = |v: &Vec<f64>| v.get(j).copied().unwrap_or(0.0);
+                    match (at(&ids), at(&chans)) {
+                        (id @ 1.0..=14.0, ch @ 0.0..=5.0) => Some((id as u8, ch as u8)),
+                        (0.0, _) => None,
+                        (id, ch) => {
+                            // icub-main does not check; such a sensor never matches
+                            tracing::warn!(
+                                joint = j,
+                                "[GENERAL] TorqueId {id} / TorqueChan {ch}: not a CAN address 1..14 and a channel 0..5; no measured torque"
+                            );
+                            None
+                        }
+                    }
+                })
+                .collect(),
+            rotor: pj("GENERAL::Rotor", &self.rotor, Some(1.0))?,
+            limits: min.into_iter().zip(max).collect(),
+            vel_shifts: pj("VELOCITY::Shifts", &self.velocity_shifts, Some(0.0))?
+                .into_iter()
+                .map(|v| v as u16)
+                .collect(),
+            estimation_shifts: (0..n)
+                .map(|j| estimation.each_ref().map(|e| e[j] as u8))
+                .collect(),
+            vel_timeouts: pj("VELOCITY::Timeout", &self.velocity_timeout, Some(100.0))?
+                .into_iter()
+                .map(|v| v as u16)
+                .collect(),
+            position_pids: pids(
+                "POS_PIDS",
+                [
+                    &self.pos_pids_kp,
+                    &self.pos_pids_kd,
+                    &self.pos_pids_ki,
+                    &self.pos_pids_max_int,
+                    &self.pos_pids_shift,
+                    &self.pos_pids_max_output,
+                    &self.pos_pids_ko,
+                ],
+            )?,
+            torque_pids: pids(
+                "TRQ_PIDS",
+                [
+                    &self.trq_pids_kp,
+                    &self.trq_pids_kd,
+                    &self.trq_pids_ki,
+                    &self.trq_pids_max_int,
+                    &self.trq_pids_shift,
+                    &self.trq_pids_max_output,
+                    &self.trq_pids_ko,
+                ],
+            )?,
+            broadcast_policy,
+            can_addresses,
+            axis_map,
+        };
+        params.validate().map_err(|e| open_error(id, &e))?;
+        Ok(params)
     }
 }
 
 impl DeviceDriver for CanMotionControl {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        [CanMotionControlParams::PARAMS, CanBusParams::PARAMS].concat()
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
         self.close()?;
         self.id = device_id(config, NAME);
-        let get = |g: &str, k: &str| lookup(config, Some(g), k);
-        let params = McParams::from_lookup(&get).map_err(|e| open_error(&self.id, &e))?;
+        yarp_devices::params::help_if_asked(NAME, config, &self.parameters());
+        let p = CanMotionControlParams::parse(&self.id, config)?;
+        let bus_params = CanBusParams::parse_in_group(&self.id, config, "CAN")?;
+        let params = p.mc_params(&self.id)?;
         let n = params.joints();
-        let bus = open_bus(&self.id, config, Some("CAN"))?;
+        let bus = bus_params.open(&self.id)?;
         let client =
             Arc::new(MotorControlClient::open(bus, params).map_err(|e| open_error(&self.id, &e))?);
-        let types = lookup(config, Some("GENERAL"), "AxisType").unwrap_or_default();
+        let types = p.axis_type.clone().unwrap_or_default();
         self.joint_types = (0..n)
             .map(|j| match types.get(j).map(String::as_str) {
                 Some("prismatic") => JOINTTYPE_PRISMATIC,
                 _ => JOINTTYPE_REVOLUTE,
             })
             .collect();
-        let vmax = Self::per_joint(config, "LIMITS", "jntVelMax", n, 0.0);
+        let vmax = lenient(&p.jnt_vel_max, n, 0.0);
         self.vel_limits = vmax.into_iter().map(|v| (0.0, v)).collect();
-        self.max_currents = Self::per_joint(config, "LIMITS", "motorOverloadCurrents", n, 0.0);
-        self.full_scale_pwm = Self::per_joint(config, "GENERAL", "fullscalePWM", n, 0.0);
+        self.max_currents = lenient(&p.motor_overload_currents, n, 0.0);
+        self.full_scale_pwm = lenient(&p.fullscale_pwm, n, 0.0);
         self.targets = vec![0.0; n];
         self.ref_velocities = vec![0.0; n];
         self.mode_set_at = vec![None; n];
         // icub-main `CanBusMotionControlParameters::fromConfig`: the IMPEDANCE group is
         // optional; when present its two lists must have one value per joint.
         if config.find_group("IMPEDANCE").is_some() {
-            let list = |k: &str| -> DevResult<Vec<f64>> {
-                let v = lookup(config, Some("IMPEDANCE"), k).unwrap_or_default();
-                let nums: Vec<f64> = v.iter().filter_map(|s| s.parse().ok()).collect();
-                if nums.len() == n && v.len() == n {
-                    Ok(nums)
-                } else {
-                    Err(DeviceError::BadParam {
-                        device: self.id.clone(),
-                        param: format!("IMPEDANCE::{k}"),
-                        expected: "one number per joint",
-                        got: v.join(" "),
-                    })
-                }
+            let id = self.id.as_str();
+            let list = |k: &str, v: &Option<Vec<f64>>| {
+                yarp_devices::params::per_joint(
+                    id,
+                    &format!("IMPEDANCE::{k}"),
+                    v.clone().unwrap_or_default(),
+                    n,
+                )
             };
-            let (stiff, damp) = (list("stiffness")?, list("damping")?);
+            let (stiff, damp) = (
+                list("stiffness", &p.stiffness)?,
+                list("damping", &p.damping)?,
+            );
             for j in 0..n {
                 client
                     .set_impedance(j, stiff[j], damp[j])

@@ -133,7 +133,6 @@ async fn every_registered_device_declares_its_parameters() {
 
 /// Devices whose parameters are not declared yet.
 const PENDING: &[&str] = &[
-    "canmotioncontrol",
     "embObjBattery",
     "embObjFTsensor",
     "embObjIMU",

@@ -369,7 +369,9 @@ impl McParams {
         Ok(params)
     }
 
-    fn validate(&self) -> Result<(), ClientError> {
+    /// Checks the parameters fit together (one value per joint, each joint on a listed
+    /// board, shifts at most 15).
+    pub fn validate(&self) -> Result<(), ClientError> {
         let n = self.joints();
         let bad = |m: String| Err(ClientError::Config(m));
         if n == 0 {

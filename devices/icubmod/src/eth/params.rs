@@ -23,6 +23,106 @@ use icub_eth::entities::mn::{category, service_type, ApplConfig};
 use yarp_proto::Property;
 
 use super::config::{Node, ParamError};
+use yarp_proto::Value;
+
+yarp_devices::device_params! {
+    /// The host's address (`hardware/electronics/pc104.xml`), as every `embObj*` device
+    /// reads it.
+    pub struct Pc104Params for "embObj" {
+        /// The host's address on the robot's network
+        "PC104::PC104IpAddress" ip: String = required; check ipv4,
+        /// The host's UDP port
+        "PC104::PC104IpPort" port: f64 = required,
+        /// (1..20)
+        "PC104::PC104TXrate" tx_rate: f64 = optional,
+        /// (1..20)
+        "PC104::PC104RXrate" rx_rate: f64 = optional,
+    }
+}
+
+yarp_devices::device_params! {
+    /// One Ethernet board (`*-eln.xml`), as every `embObj*` device reads it.
+    pub struct EthBoardDeclared for "embObj" {
+        /// The board's address
+        "ETH_BOARD::ETH_BOARD_PROPERTIES::IpAddress" ip: String = required; check ipv4,
+        /// The board's UDP port
+        "ETH_BOARD::ETH_BOARD_PROPERTIES::IpPort" port: f64 = 12345.0,
+        /// The board type (ems4, mc4plus, mc2plus, amc, ...)
+        "ETH_BOARD::ETH_BOARD_PROPERTIES::Type" board_type: String = optional,
+        /// Largest packet the board receives
+        "ETH_BOARD::ETH_BOARD_PROPERTIES::maxSizeRXpacket" max_rx_packet: f64 = 768.0; "bytes",
+        /// Largest ROP
+        "ETH_BOARD::ETH_BOARD_PROPERTIES::maxSizeROP" max_rop: f64 = 384.0; "bytes",
+        /// The board's name in messages (NOT-NAMED when empty)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::Name" name: String = optional,
+        /// synchronized or besteffort
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::execution" execution: String = optional,
+        /// The board's cycle (only 1000 so far)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::period" period: f64 = optional; "us",
+        /// Safety gap of the cycle
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::safetygap" safety_gap: f64 = optional; "us",
+        /// Time of the cycle for receiving (5..990; the three add up to the period)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::maxTimeOfRXactivity" max_rx: f64 = optional; "us",
+        /// Time of the cycle for doing (5..990)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::maxTimeOfDOactivity" max_do: f64 = optional; "us",
+        /// Time of the cycle for transmitting (5..990)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::maxTimeOfTXactivity" max_tx: f64 = optional; "us",
+        /// Cycles between two transmissions of the regular ROPs
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::TXrateOfRegularROPs" tx_rate: f64 = optional,
+        /// Log RX-DO-TX overflows (a boolean; true by default)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::LOGGING::IMMEDIATE::emitRXDOTXoverflow" log_rxdotx_overflow: Value = optional,
+        /// Log period overflows (a boolean)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::LOGGING::IMMEDIATE::emitPERIODoverflow" log_period_overflow: Value = optional,
+        /// Log RX-DO-TX statistics (older name of emitRXDOTXminavgmax)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::LOGGING::PERIODIC::emitRXDOTXstatistics" log_rxdotx_statistics: Value = optional,
+        /// Log RX-DO-TX min, average and max (a boolean)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::LOGGING::PERIODIC::emitRXDOTXminavgmax" log_rxdotx_minavgmax: Value = optional,
+        /// Log the period's min, average and max (a boolean)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::LOGGING::PERIODIC::emitPERIODminavgmax" log_period_minavgmax: Value = optional,
+        /// Log the period's histogram (a boolean)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::LOGGING::PERIODIC::emitPERIODhistogram" log_period_histogram: Value = optional,
+        /// Period of the periodic logs (0..600)
+        "ETH_BOARD::ETH_BOARD_SETTINGS::RUNNINGMODE::LOGGING::PERIODIC::period" log_period: f64 = optional; "s",
+        /// true: the host watches the board's presence
+        "ETH_BOARD::ETH_BOARD_ACTIONS::MONITOR_ITS_PRESENCE::enabled" presence_enabled: String = optional,
+        /// Silence after which the board counts as lost (at most 0.1)
+        "ETH_BOARD::ETH_BOARD_ACTIONS::MONITOR_ITS_PRESENCE::timeout" presence_timeout: f64 = 0.02; "s",
+        /// Period of the reports of a lost board (at most 600)
+        "ETH_BOARD::ETH_BOARD_ACTIONS::MONITOR_ITS_PRESENCE::periodOfMissingReport" missing_report_period: f64 = optional; "s",
+    }
+}
+
+yarp_devices::device_params! {
+    /// The service of an `embObj*` device (`*_service.xml`).
+    pub struct ServiceParams for "embObj" {
+        /// The service: eomn_serv_MC_foc, eomn_serv_AS_strain, ...
+        "SERVICE::type" service_type: String = optional,
+    }
+}
+
+/// An IPv4 address, as the robots' files write it.
+fn ipv4(s: &str) -> Result<(), &'static str> {
+    match s.trim().trim_matches('"').parse::<Ipv4Addr>() {
+        Ok(_) => Ok(()),
+        Err(_) => Err("an IPv4 address"),
+    }
+}
+
+/// A declared read's error in the terms of this module: the path with `/`.
+fn param_error(e: yarp_devices::DeviceError) -> ParamError {
+    match e {
+        yarp_devices::DeviceError::BadParam {
+            param,
+            expected,
+            got,
+            ..
+        } => ParamError::bad(param.replace("::", "/"), expected, got),
+        yarp_devices::DeviceError::MissingParam { param, .. } => {
+            ParamError::missing(param.replace("::", "/"), "a value")
+        }
+        other => ParamError::bad("configuration", "a valid configuration", other.to_string()),
+    }
+}
 
 /// The host's address (`PC104`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -74,41 +174,30 @@ fn ip_of(s: &str, param: &str) -> Result<Ipv4Addr, ParamError> {
 
 /// `PC104` (C++ `eth::parser::read(cfgtotal, pc104data)`).
 pub fn read_pc104(config: &Property) -> Result<Pc104, ParamError> {
-    let g = Node::root(config).need_group("PC104")?;
-    let ip = ip_of(
-        &g.need_string("PC104IpAddress", "an IPv4 address")?,
-        "PC104/PC104IpAddress",
-    )?;
-    let port = g
-        .number("PC104IpPort")?
-        .ok_or_else(|| ParamError::missing("PC104/PC104IpPort", "a UDP port"))?;
-    let rate = |k: &str| -> Result<u32, ParamError> {
-        Ok(g.number(k)?.map_or(1, |v| (v as i64).clamp(1, 20) as u32))
-    };
+    Node::root(config).need_group("PC104")?;
+    let p = Pc104Params::parse("embObj", config).map_err(param_error)?;
+    let ip = ip_of(&p.ip, "PC104/PC104IpAddress")?;
+    let rate = |r: Option<f64>| r.map_or(1, |v| (v as i64).clamp(1, 20) as u32);
     Ok(Pc104 {
         ip,
-        port: port as u16,
-        tx_rate: rate("PC104TXrate")?,
-        rx_rate: rate("PC104RXrate")?,
+        port: p.port as u16,
+        tx_rate: rate(p.tx_rate),
+        rx_rate: rate(p.rx_rate),
     })
 }
 
 /// `ETH_BOARD` (C++ `eth::parser::read(cfgtotal, boarddata)`).
 pub fn read_eth_board(config: &Property) -> Result<EthBoardParams, ParamError> {
     let board = Node::root(config).need_group("ETH_BOARD")?;
-    let props = board.need_group("ETH_BOARD_PROPERTIES")?;
+    board.need_group("ETH_BOARD_PROPERTIES")?;
     let settings = board.need_group("ETH_BOARD_SETTINGS")?;
-    let ip = ip_of(
-        &props.need_string("IpAddress", "an IPv4 address")?,
-        "ETH_BOARD_PROPERTIES/IpAddress",
-    )?;
-    let port = props.number("IpPort")?.map_or(12345, |p| p as u16);
-    let type_name = props.string("Type").unwrap_or_default();
+    let p = EthBoardDeclared::parse("embObj", config).map_err(param_error)?;
+    let ip = ip_of(&p.ip, "ETH_BOARD_PROPERTIES/IpAddress")?;
+    let type_name = p.board_type.clone().unwrap_or_default();
     let board_type = EthBoardType::from_name(&type_name).unwrap_or(EthBoardType::Unknown);
-    let max_rx_packet = props.number("maxSizeRXpacket")?.map_or(768, |v| v as usize);
-    let max_rop = props.number("maxSizeROP")?.map_or(384, |v| v as usize);
-    let name = settings
-        .string("Name")
+    let name = p
+        .name
+        .clone()
         .filter(|n| !n.is_empty())
         .unwrap_or_else(|| "NOT-NAMED".into());
     // icub-main's eth::parser: the defaults of boardSettings (synchronized, no logging)
@@ -117,29 +206,30 @@ pub fn read_eth_board(config: &Property) -> Result<EthBoardParams, ParamError> {
         runnermode: RUNNERMODE_SYNCHRONIZED,
         ..ApplConfig::default()
     };
-    if let Some(rm) = settings.group("RUNNINGMODE") {
-        read_running_mode(&rm, &mut appl, ip)?;
+    if settings.group("RUNNINGMODE").is_some() {
+        running_mode(&p, &mut appl, ip);
     }
     let mut presence_timeout = Some(Duration::from_millis(20));
     let mut missing_report_period = Duration::from_secs(60);
-    if let Some(m) = board
+    if board
         .group("ETH_BOARD_ACTIONS")
         .and_then(|a| a.group("MONITOR_ITS_PRESENCE"))
+        .is_some()
     {
-        let enabled = m.string("enabled").as_deref() == Some("true");
-        let t = m.number("timeout")?.unwrap_or(0.020).min(0.100);
+        let enabled = p.presence_enabled.as_deref() == Some("true");
+        let t = p.presence_timeout.min(0.100);
         presence_timeout = (enabled && t > 0.0).then(|| Duration::from_secs_f64(t));
-        if let Some(p) = m.number("periodOfMissingReport")? {
-            missing_report_period = Duration::from_secs_f64(p.clamp(0.0, 600.0));
+        if let Some(period) = p.missing_report_period {
+            missing_report_period = Duration::from_secs_f64(period.clamp(0.0, 600.0));
         }
     }
     Ok(EthBoardParams {
         ip,
-        port,
+        port: p.port as u16,
         board_type,
         type_name,
-        max_rx_packet,
-        max_rop,
+        max_rx_packet: p.max_rx_packet as usize,
+        max_rop: p.max_rop as usize,
         name,
         appl,
         presence_timeout,
@@ -157,8 +247,8 @@ const RUNNERMODE_BESTEFFORT: u8 = 0;
 /// defaults, the regulars' rate to 1 (<= 0) or 20 (> 200), a sum of activities other than
 /// the period to the defaults; `execution` picks the runner's mode; `LOGGING` the board's
 /// logs (by default only the RX-DO-TX overflow, as C++).
-fn read_running_mode(rm: &Node<'_>, appl: &mut ApplConfig, ip: Ipv4Addr) -> Result<(), ParamError> {
-    appl.runnermode = match rm.string("execution").as_deref() {
+fn running_mode(p: &EthBoardDeclared, appl: &mut ApplConfig, ip: Ipv4Addr) {
+    appl.runnermode = match p.execution.as_deref() {
         Some("besteffort") => RUNNERMODE_BESTEFFORT,
         None | Some("synchronized") => RUNNERMODE_SYNCHRONIZED,
         Some(other) => {
@@ -166,17 +256,17 @@ fn read_running_mode(rm: &Node<'_>, appl: &mut ApplConfig, ip: Ipv4Addr) -> Resu
             RUNNERMODE_SYNCHRONIZED
         }
     };
-    if let Some(p) = rm.number("period")? {
-        if p as i64 != 1000 {
-            tracing::warn!(board = %ip, "ETH_BOARD_SETTINGS::RUNNINGMODE::period can be only 1000 (so far) and it was: {p}");
+    if let Some(period) = p.period {
+        if period as i64 != 1000 {
+            tracing::warn!(board = %ip, "ETH_BOARD_SETTINGS::RUNNINGMODE::period can be only 1000 (so far) and it was: {period}");
         }
         appl.cycletime = 1000;
     }
-    if let Some(g) = rm.number("safetygap")? {
+    if let Some(g) = p.safety_gap {
         appl.safetygap = g as u16;
     }
-    let activity = |key: &str, default: u16| -> Result<Option<u16>, ParamError> {
-        Ok(rm.number(key)?.map(|v| {
+    let activity = |key: &str, value: Option<f64>, default: u16| {
+        value.map(|v| {
             let v = v as i64;
             if (5..=990).contains(&v) {
                 v as u16
@@ -184,18 +274,18 @@ fn read_running_mode(rm: &Node<'_>, appl: &mut ApplConfig, ip: Ipv4Addr) -> Resu
                 tracing::warn!(board = %ip, "ETH_BOARD_SETTINGS::RUNNINGMODE::{key} must be in [5, 990] (so far) and it was: {v}; using the default");
                 default
             }
-        }))
+        })
     };
-    if let Some(v) = activity("maxTimeOfRXactivity", 400)? {
+    if let Some(v) = activity("maxTimeOfRXactivity", p.max_rx, 400) {
         appl.maxtime_rx = v;
     }
-    if let Some(v) = activity("maxTimeOfDOactivity", 300)? {
+    if let Some(v) = activity("maxTimeOfDOactivity", p.max_do, 300) {
         appl.maxtime_do = v;
     }
-    if let Some(v) = activity("maxTimeOfTXactivity", 300)? {
+    if let Some(v) = activity("maxTimeOfTXactivity", p.max_tx, 300) {
         appl.maxtime_tx = v;
     }
-    if let Some(r) = rm.number("TXrateOfRegularROPs")? {
+    if let Some(r) = p.tx_rate {
         let r = r as i64;
         appl.txratedivider = if r <= 0 {
             1
@@ -222,44 +312,27 @@ fn read_running_mode(rm: &Node<'_>, appl: &mut ApplConfig, ip: Ipv4Addr) -> Resu
     const PERIOD_OVERFLOW: u16 = 1 << 2;
     const PERIOD_MINAVGMAX: u16 = 1 << 3;
     const PERIOD_HISTOGRAM: u16 = 1 << 4;
-    // C++ takes a flag only where the value is a boolean (`Value::isBool`)
-    let boolean = |n: &Node<'_>, k: &str| match n.string(k).as_deref().map(str::trim) {
-        Some("true") => Some(true),
-        Some("false") => Some(false),
-        _ => None,
-    };
+    // C++ takes a flag only where the value is a boolean (`Value::isBool`); in C++'s
+    // order: emitRXDOTXminavgmax is the newer name of emitRXDOTXstatistics and wins
+    let flags_given = [
+        (&p.log_rxdotx_overflow, RXDOTX_OVERFLOW),
+        (&p.log_period_overflow, PERIOD_OVERFLOW),
+        (&p.log_rxdotx_statistics, RXDOTX_MINAVGMAX),
+        (&p.log_rxdotx_minavgmax, RXDOTX_MINAVGMAX),
+        (&p.log_period_minavgmax, PERIOD_MINAVGMAX),
+        (&p.log_period_histogram, PERIOD_HISTOGRAM),
+    ];
     let mut flags = RXDOTX_OVERFLOW;
-    let mut period = 0.0;
-    if let Some(log) = rm.group("LOGGING") {
-        // (group, key, flag), in C++'s order: emitRXDOTXminavgmax is the newer name of
-        // emitRXDOTXstatistics and wins
-        const KEYS: [(&str, &str, u16); 6] = [
-            ("IMMEDIATE", "emitRXDOTXoverflow", RXDOTX_OVERFLOW),
-            ("IMMEDIATE", "emitPERIODoverflow", PERIOD_OVERFLOW),
-            ("PERIODIC", "emitRXDOTXstatistics", RXDOTX_MINAVGMAX),
-            ("PERIODIC", "emitRXDOTXminavgmax", RXDOTX_MINAVGMAX),
-            ("PERIODIC", "emitPERIODminavgmax", PERIOD_MINAVGMAX),
-            ("PERIODIC", "emitPERIODhistogram", PERIOD_HISTOGRAM),
-        ];
-        for (group, key, bit) in KEYS {
-            match log.group(group).and_then(|g| boolean(&g, key)) {
-                Some(true) => flags |= bit,
-                Some(false) => flags &= !bit,
-                None => {}
-            }
-        }
-        if let Some(p) = log
-            .group("PERIODIC")
-            .map(|per| per.number("period"))
-            .transpose()?
-            .flatten()
-        {
-            period = p.clamp(0.0, 600.0);
+    for (value, bit) in flags_given {
+        let text = value.as_ref().map(super::config::text);
+        match text.as_deref().map(str::trim) {
+            Some("true") => flags |= bit,
+            Some("false") => flags &= !bit,
+            _ => {}
         }
     }
     appl.logging_flags = flags;
-    appl.logging_period10ms = (100.0 * period) as u16;
-    Ok(())
+    appl.logging_period10ms = (100.0 * p.log_period.unwrap_or(0.0).clamp(0.0, 600.0)) as u16;
 }
 
 /// A service as `SERVICE/type` names it.
@@ -304,8 +377,11 @@ pub fn service_kind(name: &str) -> Option<ServiceKind> {
 
 /// `SERVICE/type`.
 pub fn read_service(config: &Property) -> Result<ServiceKind, ParamError> {
-    let s = Node::root(config).need_group("SERVICE")?;
-    let name = s.need_string("type", "an eomn_serv_* service type")?;
+    Node::root(config).need_group("SERVICE")?;
+    let name = ServiceParams::parse("embObj", config)
+        .map_err(param_error)?
+        .service_type
+        .ok_or_else(|| ParamError::missing("SERVICE/type", "an eomn_serv_* service type"))?;
     service_kind(&name)
         .ok_or_else(|| ParamError::bad("SERVICE/type", "an eomn_serv_* service type", name))
 }
