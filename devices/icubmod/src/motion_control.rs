@@ -300,7 +300,7 @@ fn lenient(line: &Option<Vec<f64>>, joints: usize, default: f64) -> Vec<f64> {
 impl CanMotionControlParams {
     /// The driver core's parameters (icub-main's `CanBusMotionControlParameters`).
     fn mc_params(&self, id: &str) -> DevResult<McParams> {
-        use icub_can::proto::mc::per;
+        use icub_can::client::mc::{broadcast_masks, torque_sensors};
         let n = self.joints;
         let pj = |key: &str, line: &Option<Vec<f64>>, default: Option<f64>| {
             first_joints(id, key, line, n, default)
@@ -374,38 +374,21 @@ impl CanMotionControlParams {
                 Some(0.0),
             )?,
         ];
-        let broadcast_policy = {
-            let flags = [
-                (&self.broadcast_pos, per::POSITION),
-                (&self.broadcast_pid, per::PID_VAL),
-                (&self.broadcast_fault, per::STATUS),
-                (&self.broadcast_current, per::CURRENT),
-                (&self.broadcast_overflow, per::OVERFLOW),
-                (&self.broadcast_canprint, per::PRINT),
-                (&self.broadcast_vel_acc, per::VELOCITY),
-                (&self.broadcast_pid_err, per::PID_ERROR),
-                (&self.broadcast_rotor_pos, per::MOTOR_POSITION),
-                (&self.broadcast_rotor_vel_acc, per::MOTOR_SPEED),
-            ];
-            let mut masks: Option<Vec<u32>> = None;
-            for (line, bit) in flags {
-                if let Some(v) = line {
-                    let m = masks.get_or_insert_with(|| vec![0; can_addresses.len()]);
-                    // one flag per axis; a board broadcasts a type if either of its axes asks
-                    for (axis, flag) in v.iter().enumerate() {
-                        if *flag != 0.0 && axis / 2 < m.len() {
-                            m[axis / 2] |= 1 << bit;
-                        }
-                    }
-                }
-            }
-            // interaction modes ride on the additional status, which the wrappers need
-            masks.map(|m| {
-                m.into_iter()
-                    .map(|x| x | (1 << per::ADDITIONAL_STATUS))
-                    .collect()
-            })
-        };
+        // in the order of icub-can's BROADCAST_FLAGS
+        let flags = [
+            &self.broadcast_pos,
+            &self.broadcast_pid,
+            &self.broadcast_fault,
+            &self.broadcast_current,
+            &self.broadcast_overflow,
+            &self.broadcast_canprint,
+            &self.broadcast_vel_acc,
+            &self.broadcast_pid_err,
+            &self.broadcast_rotor_pos,
+            &self.broadcast_rotor_vel_acc,
+        ]
+        .map(Clone::clone);
+        let broadcast_policy = broadcast_masks(&flags, can_addresses.len());
         let torque_max = self.torque_max.clone().unwrap_or_default();
         let (ids, chans) = (
             self.torque_id.clone().unwrap_or_default(),
@@ -430,23 +413,7 @@ impl CanMotionControlParams {
                     _ => 1.0,
                 })
                 .collect(),
-            torque_sensors: (0..n)
-                .map(|j| {
-                    let at = |v: &Vec<f64>| v.get(j).copied().unwrap_or(0.0);
-                    match (at(&ids), at(&chans)) {
-                        (id @ 1.0..=14.0, ch @ 0.0..=5.0) => Some((id as u8, ch as u8)),
-                        (0.0, _) => None,
-                        (id, ch) => {
-                            // icub-main does not check; such a sensor never matches
-                            tracing::warn!(
-                                joint = j,
-                                "[GENERAL] TorqueId {id} / TorqueChan {ch}: not a CAN address 1..14 and a channel 0..5; no measured torque"
-                            );
-                            None
-                        }
-                    }
-                })
-                .collect(),
+            torque_sensors: torque_sensors(&ids, &chans, n),
             rotor: pj("GENERAL::Rotor", &self.rotor, Some(1.0))?,
             limits: min.into_iter().zip(max).collect(),
             vel_shifts: pj("VELOCITY::Shifts", &self.velocity_shifts, Some(0.0))?

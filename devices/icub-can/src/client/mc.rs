@@ -140,6 +140,65 @@ pub struct McParams {
     pub broadcast_policy: Option<Vec<u32>>,
 }
 
+/// Each joint's torque sensor from `GENERAL`'s `TorqueId` and `TorqueChan` (a missing or
+/// short list means none; `TorqueId` 0 means none).
+pub fn torque_sensors(ids: &[f64], chans: &[f64], joints: usize) -> Vec<Option<(u8, u8)>> {
+    (0..joints)
+        .map(|j| {
+            let at = |v: &[f64]| v.get(j).copied().unwrap_or(0.0);
+            match (at(ids), at(chans)) {
+                (id @ 1.0..=14.0, ch @ 0.0..=5.0) => Some((id as u8, ch as u8)),
+                (0.0, _) => None,
+                (id, ch) => {
+                    // icub-main does not check; such a sensor never matches.
+                    tracing::warn!(
+                        joint = j,
+                        "[GENERAL] TorqueId {id} / TorqueChan {ch}: not a CAN address 1..14 and a channel 0..5; no measured torque"
+                    );
+                    None
+                }
+            }
+        })
+        .collect()
+}
+
+/// The `CAN` group's per-axis broadcast flags and the periodic message each enables.
+pub const BROADCAST_FLAGS: [(&str, u8); 10] = [
+    ("broadcast_pos", per::POSITION),
+    ("broadcast_pid", per::PID_VAL),
+    ("broadcast_fault", per::STATUS),
+    ("broadcast_current", per::CURRENT),
+    ("broadcast_overflow", per::OVERFLOW),
+    ("broadcast_canprint", per::PRINT),
+    ("broadcast_vel_acc", per::VELOCITY),
+    ("broadcast_pid_err", per::PID_ERROR),
+    ("broadcast_rotor_pos", per::MOTOR_POSITION),
+    ("broadcast_rotor_vel_acc", per::MOTOR_SPEED),
+];
+
+/// The broadcast policy of each of `boards` boards from the lines of [`BROADCAST_FLAGS`]
+/// (in its order; `None` where absent): one flag per axis, a board broadcasts a type if
+/// either of its two axes asks; `None` when no line is given.
+pub fn broadcast_masks(lines: &[Option<Vec<f64>>], boards: usize) -> Option<Vec<u32>> {
+    let mut masks: Option<Vec<u32>> = None;
+    for (line, (_, bit)) in lines.iter().zip(BROADCAST_FLAGS) {
+        if let Some(v) = line {
+            let m = masks.get_or_insert_with(|| vec![0; boards]);
+            for (axis, flag) in v.iter().enumerate() {
+                if *flag != 0.0 && axis / 2 < m.len() {
+                    m[axis / 2] |= 1 << bit;
+                }
+            }
+        }
+    }
+    // Interaction modes ride on the additional status, which the wrappers need.
+    masks.map(|m| {
+        m.into_iter()
+            .map(|x| x | (1 << per::ADDITIONAL_STATUS))
+            .collect()
+    })
+}
+
 impl McParams {
     /// Minimal parameters: `joints` joints on `addresses`, identity axis map, one encoder
     /// factor, zero offsets, no limits.
@@ -262,38 +321,11 @@ impl McParams {
         let ja = per_joint("VELOCITY", "JNT_accel_estimation", Some(0.0))?;
         let mv = per_joint("VELOCITY", "MOT_speed_estimation", Some(0.0))?;
         let ma = per_joint("VELOCITY", "MOT_accel_estimation", Some(0.0))?;
-        let broadcast_policy = {
-            let keys = [
-                ("broadcast_pos", per::POSITION),
-                ("broadcast_pid", per::PID_VAL),
-                ("broadcast_fault", per::STATUS),
-                ("broadcast_current", per::CURRENT),
-                ("broadcast_overflow", per::OVERFLOW),
-                ("broadcast_canprint", per::PRINT),
-                ("broadcast_vel_acc", per::VELOCITY),
-                ("broadcast_pid_err", per::PID_ERROR),
-                ("broadcast_rotor_pos", per::MOTOR_POSITION),
-                ("broadcast_rotor_vel_acc", per::MOTOR_SPEED),
-            ];
-            let mut masks: Option<Vec<u32>> = None;
-            for (key, bit) in keys {
-                if let Some(v) = nums("CAN", key)? {
-                    let m = masks.get_or_insert_with(|| vec![0; can_addresses.len()]);
-                    // One flag per axis; a board broadcasts a type if either of its axes asks.
-                    for (axis, flag) in v.iter().enumerate() {
-                        if *flag != 0.0 && axis / 2 < m.len() {
-                            m[axis / 2] |= 1 << bit;
-                        }
-                    }
-                }
-            }
-            // Interaction modes ride on the additional status, which the wrappers need.
-            masks.map(|m| {
-                m.into_iter()
-                    .map(|x| x | (1 << per::ADDITIONAL_STATUS))
-                    .collect()
-            })
-        };
+        let flags = BROADCAST_FLAGS
+            .iter()
+            .map(|(key, _)| nums("CAN", key))
+            .collect::<Result<Vec<_>, _>>()?;
+        let broadcast_policy = broadcast_masks(&flags, can_addresses.len());
         let ms = |group: &str, key: &str, default: u64| -> Result<Duration, ClientError> {
             Ok(Duration::from_millis(
                 nums(group, key)?
@@ -325,27 +357,7 @@ impl McParams {
                     _ => 1.0,
                 })
                 .collect(),
-            torque_sensors: {
-                let (ids, chans) = (lenient("TorqueId"), lenient("TorqueChan"));
-                (0..joints)
-                    .map(|j| {
-                        let at = |v: &Vec<f64>| v.get(j).copied().unwrap_or(0.0);
-                        (j, (at(&ids), at(&chans)))
-                    })
-                    .map(|(j, (id, ch))| match (id, ch) {
-                        (1.0..=14.0, 0.0..=5.0) => Some((id as u8, ch as u8)),
-                        (0.0, _) => None,
-                        _ => {
-                            // icub-main does not check; such a sensor never matches.
-                            tracing::warn!(
-                                joint = j,
-                                "[GENERAL] TorqueId {id} / TorqueChan {ch}: not a CAN address 1..14 and a channel 0..5; no measured torque"
-                            );
-                            None
-                        }
-                    })
-                    .collect()
-            },
+            torque_sensors: torque_sensors(&lenient("TorqueId"), &lenient("TorqueChan"), joints),
             rotor: per_joint("GENERAL", "Rotor", Some(1.0))?,
             limits: min.into_iter().zip(max).collect(),
             vel_shifts: per_joint("VELOCITY", "Shifts", Some(0.0))?
