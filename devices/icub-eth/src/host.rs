@@ -881,6 +881,15 @@ impl Startup {
         &self.facts
     }
 
+    /// When the sequence next needs polling on its own account (a setcheck's settle time;
+    /// its requests' deadlines are the transceiver's, [`HostTransceiver::next_deadline`]).
+    pub fn next_deadline(&self) -> Option<Duration> {
+        match self.phase {
+            Phase::SetWait(at) => Some(at),
+            Phase::Idle | Phase::Waiting(_) => None,
+        }
+    }
+
     /// The step under way (for logs).
     pub fn current_step(&self) -> Option<&str> {
         self.steps.front().map(|s| s.0.as_str())

@@ -187,6 +187,14 @@ impl Board {
         inner
     }
 
+    /// How long a thread waiting on the board sleeps: until `deadline` (a request's retry
+    /// or timeout), at most [`LONGEST_SLEEP`]; the reader's datagrams wake it sooner.
+    fn until(&self, deadline: Option<Duration>, now: Duration) -> Duration {
+        deadline
+            .map_or(LONGEST_SLEEP, |d| d.saturating_sub(now))
+            .clamp(Duration::from_micros(50), LONGEST_SLEEP)
+    }
+
     /// Wakes the threads waiting for the board, if any.
     fn notify(&self) {
         if self.waiters.load(std::sync::atomic::Ordering::Acquire) > 0 {
@@ -226,7 +234,9 @@ impl Board {
                 StartupStatus::Done => break Ok(()),
                 StartupStatus::Failed(e) => break Err(EthError::Startup(e)),
                 StartupStatus::Busy => {
-                    drop(self.wait_changed(inner, Duration::from_millis(1)));
+                    let due = [inner.host.next_deadline(), startup.next_deadline()];
+                    let sleep = self.until(due.into_iter().flatten().min(), now);
+                    drop(self.wait_changed(inner, sleep));
                 }
             }
         };
@@ -265,7 +275,8 @@ impl Board {
                     reason: "request lost".into(),
                 });
             }
-            inner = self.wait_changed(inner, Duration::from_millis(1));
+            let sleep = self.until(inner.host.next_deadline(), now);
+            inner = self.wait_changed(inner, sleep);
         }
     }
 
