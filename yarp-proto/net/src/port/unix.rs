@@ -74,7 +74,7 @@ pub(crate) async fn connect(
     })?;
     let hello = wire::encode_connection_start(&carrier.spec(), shared.name.as_bytes());
     tcp.write_all(&hello).await.map_err(io_err(target))?;
-    // C++ retries 5 times 10 ms apart while the receiver binds; we are more patient
+    // C++ tries 5 times 0.1 s apart while the receiver binds; we try for 2 s, 10 ms apart
     let deadline = tokio::time::Instant::now() + Duration::from_secs(2);
     let unix = loop {
         match UnixStream::connect(&path).await {
