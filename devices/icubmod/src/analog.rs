@@ -80,14 +80,6 @@ pub fn mas_status(s: SensorStatus) -> MasStatus {
     }
 }
 
-/// The strain messages' two formats.
-fn bits(f: &i64) -> Result<(), &'static str> {
-    match *f == 8 || *f == 16 {
-        true => Ok(()),
-        false => Err("8 or 16"),
-    }
-}
-
 yarp_devices::device_params! {
     /// What `canBusAnalogSensor` and `canBusFtSensor` read (icub-main's), besides their bus
     /// ([`CanBusParams`]).
@@ -95,7 +87,7 @@ yarp_devices::device_params! {
         /// The address of the strain (or MAIS) board
         "canAddress" can_address: i64 = required; in 1..=14,
         /// Bits per value: 16 (strain) or 8 (MAIS)
-        format: i64 = 16; check bits,
+        format: i64 = 16; check crate::common::strain_format,
         /// Number of channels (at most 6 in 16 bits, 16 in 8 bits)
         channels: i64 = 6,
         /// Broadcast period asked of the board (1..255)

@@ -37,6 +37,14 @@ pub fn device_id(config: &Property, default: &str) -> String {
     config.find("id").map_or_else(|| default.to_string(), text)
 }
 
+/// The analog sensors' two message formats, bits per value (`format`).
+pub fn strain_format(bits: &i64) -> Result<(), &'static str> {
+    match *bits == 8 || *bits == 16 {
+        true => Ok(()),
+        false => Err("8 or 16"),
+    }
+}
+
 yarp_devices::device_params! {
     /// How an iCub CAN device finds its bus: icub-main's driver and bus number, or (ours)
     /// a backend URL. Several spellings stand in robots' files: all are read, the first

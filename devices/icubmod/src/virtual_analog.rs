@@ -227,14 +227,6 @@ fn board_address(a: &i64) -> Result<(), &'static str> {
     }
 }
 
-/// The strain messages' two formats.
-fn bits(f: &i64) -> Result<(), &'static str> {
-    match *f == 8 || *f == 16 {
-        true => Ok(()),
-        false => Err("8 or 16"),
-    }
-}
-
 yarp_devices::device_params! {
     /// What `canBusVirtualAnalogSensor` reads (icub-main's), besides its bus
     /// ([`CanBusParams`]).
@@ -242,7 +234,7 @@ yarp_devices::device_params! {
         /// The address of the board the torques go to
         "canAddress" can_address: i64 = required; check board_address,
         /// Bits per value of the messages
-        format: i64 = required; check bits,
+        format: i64 = required; check crate::common::strain_format,
         /// Period of the messages
         period: i64 = required; "ms"; min 1,
         /// Number of values (the strain frames carry six)
