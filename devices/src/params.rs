@@ -641,6 +641,49 @@ macro_rules! device_params {
     };
 }
 
+/// The table of a device whose parameters are read by hand (the `embObj*` devices, whose
+/// files name groups at run time): the rows of [`device_params!`] without fields, for
+/// `--help` and [`crate::DeviceDriver::parameters`]. A test keeps such a table equal to
+/// what the device looks up.
+///
+/// ```
+/// yarp_devices::param_table! {
+///     /// What `fakeBoard` reads besides its network groups.
+///     pub const FAKE_BOARD = [
+///         /// Joints of the board
+///         "GENERAL::Joints": usize = required,
+///         /// Encoder units per degree, one per joint
+///         "GENERAL::Encoder": Vec<f64> = optional; "units/deg",
+///     ];
+/// }
+/// assert_eq!(FAKE_BOARD[1].ty, "vector<double>");
+/// ```
+#[macro_export]
+macro_rules! param_table {
+    (
+        $(#[$meta:meta])*
+        $vis:vis const $name:ident = [
+            $(
+                $(#[doc = $doc:literal])+
+                $key:literal : $ty:ty = $default:tt $(; $unit:literal)?
+            ),* $(,)?
+        ];
+    ) => {
+        $(#[$meta])*
+        $vis const $name: &[$crate::params::ParamSpec] = &[$(
+            $crate::params::ParamSpec {
+                name: $key,
+                ty: <$ty as $crate::params::ParamType>::TYPE,
+                unit: $crate::device_params!(@unit $($unit)?),
+                default: $crate::device_params!(@default_text $default),
+                required: $crate::device_params!(@required $default),
+                description: $crate::device_params!(@join $($doc)+),
+                range: None,
+            },
+        )*];
+    };
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

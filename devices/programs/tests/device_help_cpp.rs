@@ -119,30 +119,11 @@ async fn every_registered_device_declares_its_parameters() {
             entry.name
         );
     }
-    // the devices still reading their configuration by hand (issue 32): this list only shrinks
-    let pending: BTreeSet<&str> = PENDING.iter().copied().collect();
-    let undeclared: BTreeSet<&str> = undeclared.into_iter().collect();
     assert!(
-        undeclared.is_subset(&pending),
-        "devices without declared parameters: {:?}",
-        undeclared.difference(&pending).collect::<Vec<_>>()
+        undeclared.is_empty(),
+        "devices without declared parameters: {undeclared:?}"
     );
-    let done: Vec<&&str> = pending.difference(&undeclared).collect();
-    assert!(done.is_empty(), "now declared, drop from PENDING: {done:?}");
 }
-
-/// Devices whose parameters are not declared yet.
-const PENDING: &[&str] = &[
-    "embObjBattery",
-    "embObjFTsensor",
-    "embObjIMU",
-    "embObjInertials",
-    "embObjMais",
-    "embObjMotionControl",
-    "embObjMultipleFTsensors",
-    "embObjPOS",
-    "embObjSkin",
-];
 
 #[tokio::test]
 async fn help_lists_the_parameters_cpp_lists() {

@@ -70,6 +70,7 @@ impl<'a> Node<'a> {
 
     /// The line `(key ...)` of this node.
     fn line(&self, key: &str) -> Option<&'a Bottle> {
+        lookups::note(self, key);
         match *self {
             Node::Root(p) => p.find_group(key),
             Node::Group(b, _) => b.find_group(key),
@@ -166,6 +167,69 @@ impl<'a> Node<'a> {
             ));
         }
         Ok(v)
+    }
+}
+
+/// Which parameters a device looks up, for the test that keeps each `embObj*` device's
+/// declared table ([`crate::eth::tables`]) equal to what its readers read.
+#[doc(hidden)]
+pub mod lookups {
+    use super::Node;
+    use std::cell::RefCell;
+    use yarp_proto::{Bottle, Property};
+
+    thread_local! {
+        /// The lookups of the running [`record`], as (group, key); the group by address.
+        static SEEN: RefCell<Option<Vec<(usize, String)>>> = const { RefCell::new(None) };
+    }
+
+    pub(super) fn note(node: &Node, key: &str) {
+        SEEN.with_borrow_mut(|seen| {
+            if let Some(seen) = seen {
+                let group = match node {
+                    Node::Root(_) => 0,
+                    Node::Group(b, _) => std::ptr::from_ref::<Bottle>(b) as usize,
+                };
+                seen.push((group, key.to_string()));
+            }
+        });
+    }
+
+    /// Runs `f` and returns what it looked up in `config`, each as its path from the top
+    /// (`SERVICE::PROPERTIES::SENSORS::id`).
+    pub fn record<R>(config: &Property, f: impl FnOnce() -> R) -> (R, Vec<String>) {
+        SEEN.with_borrow_mut(|seen| *seen = Some(Vec::new()));
+        let r = f();
+        let seen = SEEN.with_borrow_mut(Option::take).unwrap_or_default();
+        let mut paths = std::collections::HashMap::new();
+        for (name, group) in config.iter() {
+            walk(
+                group,
+                String::from_utf8_lossy(name).into_owned(),
+                &mut paths,
+            );
+        }
+        let keys = seen
+            .into_iter()
+            .filter_map(|(group, key)| match group {
+                0 => Some(key),
+                g => paths.get(&g).map(|p| format!("{p}::{key}")),
+            })
+            .collect();
+        (r, keys)
+    }
+
+    /// The path of every group under `group` (itself named `path`), by address.
+    fn walk(group: &Bottle, path: String, paths: &mut std::collections::HashMap<usize, String>) {
+        for line in group.iter().skip(1).filter_map(|v| v.as_list()) {
+            let Some(name) = line.get(0).and_then(|v| v.as_str()) else {
+                continue;
+            };
+            if line.iter().skip(1).any(|v| v.as_list().is_some()) {
+                walk(line, format!("{path}::{name}"), paths);
+            }
+        }
+        paths.insert(std::ptr::from_ref(group) as usize, path);
     }
 }
 

@@ -27,6 +27,7 @@ pub mod sensors;
 pub mod service;
 pub mod service_config;
 pub mod skin_spec;
+pub mod tables;
 
 pub use calibrator::ParametricCalibratorEth;
 pub use motion_control::EmbObjMotionControl;

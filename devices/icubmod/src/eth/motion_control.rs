@@ -558,7 +558,12 @@ impl EmbObjMotionControl {
 }
 
 impl DeviceDriver for EmbObjMotionControl {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        super::tables::of(NAME)
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
+        super::tables::help_if_asked(NAME, config);
         self.close()?;
         self.id = config.find("id").map_or_else(|| NAME.to_string(), text);
         let id = self.id.clone();

@@ -223,7 +223,12 @@ impl EmbObjFtSensor {
 }
 
 impl DeviceDriver for EmbObjFtSensor {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        super::tables::of(FT_SENSOR)
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
+        super::tables::help_if_asked(FT_SENSOR, config);
         let mut name = String::new();
         let mut calibrated = true;
         self.c
@@ -490,7 +495,12 @@ impl EmbObjMultipleFtSensors {
 }
 
 impl DeviceDriver for EmbObjMultipleFtSensors {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        super::tables::of(MULTIPLE_FT)
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
+        super::tables::help_if_asked(MULTIPLE_FT, config);
         let mut sensors = Vec::new();
         self.c.open(MULTIPLE_FT, config, category::FT, |root, st| {
             sensors = multiple_ft_settings(root)?;
@@ -686,6 +696,15 @@ impl EmbObjImu {
         }
     }
 
+    /// The C++ name this device was made as (`embObjIMU` by default).
+    fn device_name(&self) -> &'static str {
+        if self.kind_name.is_empty() {
+            IMU
+        } else {
+            self.kind_name
+        }
+    }
+
     /// Folds every status received since the last call into the cache (as C++ does in
     /// `update()`, ROP by ROP) and returns the reading of sensor `k`.
     fn reading(&self, k: usize) -> DevResult<[i16; 4]> {
@@ -787,12 +806,13 @@ const MAG: &[u8] = &[sensor_type::IMU_MAG];
 const EUL: &[u8] = &[sensor_type::IMU_EUL];
 
 impl DeviceDriver for EmbObjImu {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        super::tables::of(self.device_name())
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let name = if self.kind_name.is_empty() {
-            IMU
-        } else {
-            self.kind_name
-        };
+        super::tables::help_if_asked(self.device_name(), config);
+        let name = self.device_name();
         let sensors = inertial_sensors(config).map_err(|e| e.for_device(name))?;
         let n = sensors.len();
         self.c
@@ -909,7 +929,12 @@ impl EmbObjMais {
 }
 
 impl DeviceDriver for EmbObjMais {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        super::tables::of(MAIS)
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
+        super::tables::help_if_asked(MAIS, config);
         let mut name = String::new();
         self.c.open(MAIS, config, category::MAIS, |root, st| {
             let (set, sensors) = settings(root)?;
@@ -1209,7 +1234,12 @@ impl EmbObjSkin {
 }
 
 impl DeviceDriver for EmbObjSkin {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        super::tables::of(SKIN)
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
+        super::tables::help_if_asked(SKIN, config);
         let id = config.find("id").map_or_else(|| SKIN.to_string(), text);
         let on_ports = skin_patches_on_ports(config).map_err(|e| e.for_device(&id))?;
         let spec = SkinSpec::read(&Node::root(config)).map_err(|e| e.for_device(&id))?;
@@ -1370,7 +1400,12 @@ impl IEncoderArrays for EmbObjPos {
 }
 
 impl DeviceDriver for EmbObjPos {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        super::tables::of(POS)
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
+        super::tables::help_if_asked(POS, config);
         let mut names = Vec::new();
         self.c.open(POS, config, category::POS, |root, st| {
             let (set, _) = settings(root)?;
@@ -1432,7 +1467,12 @@ impl EmbObjBattery {
 }
 
 impl DeviceDriver for EmbObjBattery {
+    fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
+        super::tables::of(BATTERY)
+    }
+
     fn open(&mut self, config: &Property) -> DevResult<()> {
+        super::tables::help_if_asked(BATTERY, config);
         self.c.open(BATTERY, config, category::BATTERY, |root, st| {
             let (set, _) = settings(root)?;
             let rate = set.number("acquisitionRate")?.unwrap_or(1000.0);
