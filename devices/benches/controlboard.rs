@@ -66,9 +66,7 @@ impl DeviceDriver for StaticBoard {
     fn open(&mut self, _: &Property) -> DevResult<()> {
         Ok(())
     }
-    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
-        Some(self)
-    }
+    yarp_devices::views!(as_encoders);
 }
 
 impl IEncoders for StaticBoard {

@@ -110,6 +110,19 @@ macro_rules! device_interfaces {
             )*
         }
 
+        /// The type of each view of [`DeviceDriver`], named as the view: what [`views!`]
+        /// implements a view with.
+        ///
+        /// [`views!`]: crate::views
+        #[allow(non_camel_case_types)]
+        pub mod views {
+            use super::*;
+            $(
+                #[doc = concat!("What [`DeviceDriver::", stringify!($view), "`] returns.")]
+                pub type $view<'a> = Option<&'a mut dyn $trait>;
+            )*
+        }
+
         /// Every interface a device may offer: its C++ name and the kind it makes a device,
         /// in the order of [`DeviceDriver`]'s views.
         pub const INTERFACES: &[(&str, Kind)] = &[$(($cpp, Kind::$kind)),*];
@@ -175,32 +188,31 @@ crate::device_interfaces! {
     as_calibrator: ICalibrator => "ICalibrator" (Calibrator),
 }
 
+/// The `DeviceDriver` views a driver offers as itself, by name: inside
+/// `impl DeviceDriver for T { ... }`, `yarp_devices::views!(as_encoders, as_axis_info);`
+/// for a `T` that implements `IEncoders` and `IAxisInfo` (the types come from the one
+/// declaration of the interfaces, [`views`]).
+#[macro_export]
+macro_rules! views {
+    ($($view:ident),+ $(,)?) => {$(
+        fn $view(&mut self) -> $crate::driver::views::$view<'_> {
+            Some(self)
+        }
+    )+};
+}
+
 /// The `DeviceDriver` views of an IMU (gyroscope, linear accelerometer, magnetometer and
 /// orientation sensor: fakeIMU, imuFilter, xsensmtx): use inside
 /// `impl DeviceDriver for T { ... }` as `crate::imu_views!();`.
 #[macro_export]
 macro_rules! imu_views {
     () => {
-        fn as_three_axis_gyroscopes(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::IThreeAxisGyroscopes> {
-            Some(self)
-        }
-        fn as_three_axis_linear_accelerometers(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::IThreeAxisLinearAccelerometers> {
-            Some(self)
-        }
-        fn as_three_axis_magnetometers(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::IThreeAxisMagnetometers> {
-            Some(self)
-        }
-        fn as_orientation_sensors(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::IOrientationSensors> {
-            Some(self)
-        }
+        $crate::views!(
+            as_three_axis_gyroscopes,
+            as_three_axis_linear_accelerometers,
+            as_three_axis_magnetometers,
+            as_orientation_sensors,
+        );
     };
 }
 
@@ -260,32 +272,25 @@ macro_rules! single_imu_interfaces {
 #[macro_export]
 macro_rules! motor_control_views {
     () => {
-        $crate::motor_control_views!(
-            as_encoders: IEncoders,
-            as_position_control: IPositionControl,
-            as_velocity_control: IVelocityControl,
-            as_control_mode: IControlMode,
-            as_axis_info: IAxisInfo,
-            as_control_limits: IControlLimits,
-            as_interaction_mode: IInteractionMode,
-            as_torque_control: ITorqueControl,
-            as_motor_encoders: IMotorEncoders,
-            as_amplifier_control: IAmplifierControl,
-            as_motor: IMotor,
-            as_pid_control: IPidControl,
-            as_current_control: ICurrentControl,
-            as_pwm_control: IPwmControl,
-            as_position_direct: IPositionDirect,
-            as_impedance_control: IImpedanceControl,
-            as_control_calibration: IControlCalibration,
+        $crate::views!(
+            as_encoders,
+            as_position_control,
+            as_velocity_control,
+            as_control_mode,
+            as_axis_info,
+            as_control_limits,
+            as_interaction_mode,
+            as_torque_control,
+            as_motor_encoders,
+            as_amplifier_control,
+            as_motor,
+            as_pid_control,
+            as_current_control,
+            as_pwm_control,
+            as_position_direct,
+            as_impedance_control,
+            as_control_calibration,
         );
-    };
-    ($($method:ident: $iface:ident),+ $(,)?) => {
-        $(
-            fn $method(&mut self) -> Option<&mut dyn $crate::interfaces::$iface> {
-                Some(self)
-            }
-        )+
     };
 }
 

@@ -376,15 +376,11 @@ impl DeviceDriver for ControlBoardRemapper {
         self.detach_all()
     }
 
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    crate::views!(as_multiple_wrapper);
 
     crate::motor_control_views!();
 
-    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
-        Some(self)
-    }
+    crate::views!(as_remote_calibrator);
 }
 
 /// What the layout needs to know about an attached device.

@@ -544,9 +544,7 @@ impl DeviceDriver for RemoteControlBoard {
 
     crate::motor_control_views!();
 
-    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
-        Some(self)
-    }
+    crate::views!(as_remote_calibrator);
 }
 
 impl Drop for RemoteControlBoard {

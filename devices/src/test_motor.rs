@@ -178,15 +178,7 @@ impl DeviceDriver for TestMotor {
         Ok(())
     }
 
-    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
-        Some(self)
-    }
-    fn as_position_control(&mut self) -> Option<&mut dyn IPositionControl> {
-        Some(self)
-    }
-    fn as_velocity_control(&mut self) -> Option<&mut dyn IVelocityControl> {
-        Some(self)
-    }
+    crate::views!(as_encoders, as_position_control, as_velocity_control);
 }
 
 impl IEncoders for TestMotor {

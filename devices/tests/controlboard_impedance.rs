@@ -144,9 +144,7 @@ impl DeviceDriver for SpyCalibrator {
     fn open(&mut self, _: &Property) -> DevResult<()> {
         Ok(())
     }
-    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
-        Some(self)
-    }
+    yarp_devices::views!(as_remote_calibrator);
 }
 
 impl IRemoteCalibrator for SpyCalibrator {
@@ -406,9 +404,7 @@ impl DeviceDriver for SlowCalibrator {
     fn open(&mut self, _: &Property) -> DevResult<()> {
         Ok(())
     }
-    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
-        Some(self)
-    }
+    yarp_devices::views!(as_remote_calibrator);
 }
 
 impl IRemoteCalibrator for SlowCalibrator {

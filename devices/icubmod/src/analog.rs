@@ -150,9 +150,7 @@ impl DeviceDriver for CanBusAnalogSensor {
         Ok(())
     }
 
-    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
-        Some(self)
-    }
+    yarp_devices::views!(as_analog_sensor);
 
     fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
         if self.client.is_none() || self.is_ft() {

@@ -277,9 +277,7 @@ impl DeviceDriver for CartesianControllerServer {
         Ok(())
     }
 
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    yarp_devices::views!(as_multiple_wrapper);
 }
 
 impl IMultipleWrapper for CartesianControllerServer {

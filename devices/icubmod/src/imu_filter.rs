@@ -521,9 +521,7 @@ impl DeviceDriver for ImuFilter {
         Ok(())
     }
 
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    yarp_devices::views!(as_multiple_wrapper);
     yarp_devices::imu_views!();
 }
 

@@ -132,17 +132,11 @@ impl DeviceDriver for CanBusInertialMtb {
         Ok(())
     }
 
-    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
-        Some(self)
-    }
-    fn as_three_axis_linear_accelerometers(
-        &mut self,
-    ) -> Option<&mut dyn IThreeAxisLinearAccelerometers> {
-        Some(self)
-    }
-    fn as_three_axis_gyroscopes(&mut self) -> Option<&mut dyn IThreeAxisGyroscopes> {
-        Some(self)
-    }
+    yarp_devices::views!(
+        as_analog_sensor,
+        as_three_axis_linear_accelerometers,
+        as_three_axis_gyroscopes
+    );
 }
 
 impl IAnalogSensor for CanBusInertialMtb {

@@ -526,48 +526,22 @@ impl DeviceDriver for CanMotionControl {
         Ok(())
     }
 
-    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
-        Some(self)
-    }
-    fn as_position_control(&mut self) -> Option<&mut dyn IPositionControl> {
-        Some(self)
-    }
-    fn as_velocity_control(&mut self) -> Option<&mut dyn IVelocityControl> {
-        Some(self)
-    }
-    fn as_control_mode(&mut self) -> Option<&mut dyn IControlMode> {
-        Some(self)
-    }
-    fn as_axis_info(&mut self) -> Option<&mut dyn IAxisInfo> {
-        Some(self)
-    }
-    fn as_control_limits(&mut self) -> Option<&mut dyn IControlLimits> {
-        Some(self)
-    }
-    fn as_interaction_mode(&mut self) -> Option<&mut dyn IInteractionMode> {
-        Some(self)
-    }
-    fn as_torque_control(&mut self) -> Option<&mut dyn ITorqueControl> {
-        Some(self)
-    }
-    fn as_motor_encoders(&mut self) -> Option<&mut dyn IMotorEncoders> {
-        Some(self)
-    }
-    fn as_amplifier_control(&mut self) -> Option<&mut dyn IAmplifierControl> {
-        Some(self)
-    }
-    fn as_pid_control(&mut self) -> Option<&mut dyn IPidControl> {
-        Some(self)
-    }
-    fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
-        Some(self)
-    }
-    fn as_impedance_control(&mut self) -> Option<&mut dyn IImpedanceControl> {
-        Some(self)
-    }
-    fn as_control_calibration(&mut self) -> Option<&mut dyn IControlCalibration> {
-        Some(self)
-    }
+    yarp_devices::views!(
+        as_encoders,
+        as_position_control,
+        as_velocity_control,
+        as_control_mode,
+        as_axis_info,
+        as_control_limits,
+        as_interaction_mode,
+        as_torque_control,
+        as_motor_encoders,
+        as_amplifier_control,
+        as_pid_control,
+        as_pwm_control,
+        as_impedance_control,
+        as_control_calibration
+    );
 }
 
 /// icub-main `CanBusMotionControlParameters::fromConfig`, "IMPEDANCE LIMITS (UNDER

@@ -98,13 +98,7 @@ impl DeviceDriver for CanBusSkin {
         Ok(())
     }
 
-    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
-        Some(self)
-    }
-
-    fn as_skin_patches(&mut self) -> Option<&mut dyn ISkinPatches> {
-        Some(self)
-    }
+    yarp_devices::views!(as_analog_sensor, as_skin_patches);
 }
 
 impl IAnalogSensor for CanBusSkin {

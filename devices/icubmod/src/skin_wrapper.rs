@@ -74,9 +74,7 @@ impl DeviceDriver for SkinWrapper {
         Some(&mut self.server)
     }
 
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    yarp_devices::views!(as_multiple_wrapper);
 }
 
 impl IMultipleWrapper for SkinWrapper {

@@ -342,9 +342,7 @@ impl DeviceDriver for CanBusVirtualAnalogSensor {
         Ok(())
     }
 
-    fn as_virtual_analog_sensor(&mut self) -> Option<&mut dyn IVirtualAnalogSensor> {
-        Some(self)
-    }
+    yarp_devices::views!(as_virtual_analog_sensor);
 }
 
 impl Drop for CanBusVirtualAnalogSensor {

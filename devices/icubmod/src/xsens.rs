@@ -585,9 +585,7 @@ impl DeviceDriver for XsensImu {
         Ok(())
     }
 
-    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
-        Some(self)
-    }
+    yarp_devices::views!(as_analog_sensor);
     yarp_devices::imu_views!();
 }
 

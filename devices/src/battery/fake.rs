@@ -116,9 +116,7 @@ impl DeviceDriver for FakeBattery {
         Ok(())
     }
 
-    fn as_battery(&mut self) -> Option<&mut dyn IBattery> {
-        Some(self)
-    }
+    crate::views!(as_battery);
 }
 
 impl IBattery for FakeBattery {

@@ -112,9 +112,7 @@ impl DeviceDriver for BatteryNwcYarp {
         Ok(())
     }
 
-    fn as_battery(&mut self) -> Option<&mut dyn IBattery> {
-        Some(self)
-    }
+    crate::views!(as_battery);
 }
 
 impl Drop for BatteryNwcYarp {

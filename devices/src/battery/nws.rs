@@ -12,7 +12,7 @@
 
 use super::protocol::{handle_rpc, read_battery, BatteryData, ChargeWarnings};
 use super::BatteryStatus;
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
+use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use crate::sensors::params::now;
@@ -171,13 +171,7 @@ impl DeviceDriver for BatteryNwsYarp {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
-
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    crate::views!(as_wrapper, as_multiple_wrapper);
 }
 
 impl IWrapper for BatteryNwsYarp {

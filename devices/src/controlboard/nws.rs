@@ -21,7 +21,7 @@ use super::rpc::{handle_rpc, RpcStamp};
 use super::single_port::handle_single_port;
 use super::state::{envelope_time, positions_bottle, JointData};
 use super::streaming::{handle_command, CommandMessage};
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
+use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use crate::sensors::periodic::Ticker;
@@ -585,13 +585,7 @@ impl DeviceDriver for ControlBoardNwsDevice {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
-
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    crate::views!(as_wrapper, as_multiple_wrapper);
 }
 
 impl IWrapper for ControlBoardNwsDevice {

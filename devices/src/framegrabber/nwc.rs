@@ -390,13 +390,7 @@ impl DeviceDriver for FrameGrabberNwc {
         Ok(())
     }
 
-    fn as_frame_grabber_image(&mut self) -> Option<&mut dyn IFrameGrabberImage> {
-        Some(self)
-    }
-
-    fn as_frame_grabber_controls(&mut self) -> Option<&mut dyn IFrameGrabberControls> {
-        Some(self)
-    }
+    crate::views!(as_frame_grabber_image, as_frame_grabber_controls);
 }
 
 impl Drop for FrameGrabberNwc {

@@ -286,9 +286,7 @@ impl DeviceDriver for FrameGrabberNws {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
+    crate::views!(as_wrapper);
 }
 
 impl IWrapper for FrameGrabberNws {

@@ -56,9 +56,7 @@ impl DeviceDriver for FakeNavigation {
         Ok(())
     }
 
-    fn as_navigation_2d_velocity(&mut self) -> Option<&mut dyn INavigation2DVelocityActions> {
-        Some(self)
-    }
+    crate::views!(as_navigation_2d_velocity);
 }
 
 impl INavigation2DVelocityActions for FakeNavigation {

@@ -80,9 +80,7 @@ impl DeviceDriver for FakeOdometry2D {
         Ok(())
     }
 
-    fn as_odometry_2d(&mut self) -> Option<&mut dyn IOdometry2D> {
-        Some(self)
-    }
+    crate::views!(as_odometry_2d);
 }
 
 impl IOdometry2D for FakeOdometry2D {

@@ -260,9 +260,7 @@ impl DeviceDriver for FakeLaser {
         Ok(())
     }
 
-    fn as_rangefinder_2d(&mut self) -> Option<&mut dyn IRangefinder2D> {
-        Some(self)
-    }
+    crate::views!(as_rangefinder_2d);
 }
 
 impl IRangefinder2D for FakeLaser {

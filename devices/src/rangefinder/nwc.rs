@@ -110,9 +110,7 @@ impl DeviceDriver for Rangefinder2DNwcYarp {
         Ok(())
     }
 
-    fn as_rangefinder_2d(&mut self) -> Option<&mut dyn IRangefinder2D> {
-        Some(self)
-    }
+    crate::views!(as_rangefinder_2d);
 }
 
 impl Drop for Rangefinder2DNwcYarp {

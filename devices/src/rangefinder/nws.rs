@@ -8,7 +8,7 @@
 //! attach answers `return_value_error_not_ready`.
 
 use super::protocol::{handle_rpc, LaserScan2D};
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
+use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use crate::sensors::params::now;
@@ -141,13 +141,7 @@ impl DeviceDriver for Rangefinder2DNwsYarp {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
-
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    crate::views!(as_wrapper, as_multiple_wrapper);
 }
 
 impl IWrapper for Rangefinder2DNwsYarp {

@@ -147,9 +147,7 @@ impl DeviceDriver for FakeDepthCamera {
         self.grabber.close()
     }
 
-    fn as_rgbd_sensor(&mut self) -> Option<&mut dyn IRGBDSensor> {
-        Some(self)
-    }
+    crate::views!(as_rgbd_sensor);
 }
 
 impl IRGBDSensor for FakeDepthCamera {

@@ -231,9 +231,7 @@ impl DeviceDriver for RgbdSensorClient {
         Ok(())
     }
 
-    fn as_rgbd_sensor(&mut self) -> Option<&mut dyn IRGBDSensor> {
-        Some(self)
-    }
+    crate::views!(as_rgbd_sensor);
 }
 
 impl Drop for RgbdSensorClient {

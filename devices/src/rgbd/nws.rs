@@ -10,7 +10,7 @@
 
 use super::protocol::handle_rpc;
 use super::RgbdStatus;
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
+use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
 use std::sync::{mpsc, Arc};
@@ -156,13 +156,7 @@ impl DeviceDriver for RgbdSensorNwsYarp {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
-
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    crate::views!(as_wrapper, as_multiple_wrapper);
 }
 
 impl IWrapper for RgbdSensorNwsYarp {

@@ -213,9 +213,7 @@ impl DeviceDriver for AnalogSensorClient {
         Ok(())
     }
 
-    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
-        Some(self)
-    }
+    crate::views!(as_analog_sensor);
 }
 
 impl IAnalogSensor for AnalogSensorClient {

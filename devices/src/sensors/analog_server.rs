@@ -10,7 +10,7 @@
 
 use super::interfaces::{AnalogStatus, IAnalogSensor};
 use super::params::{now, positive_ms};
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, Params, SharedDevice};
+use crate::driver::{DeviceDriver, IWrapper, Params, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use parking_lot::Mutex;
@@ -368,12 +368,7 @@ impl DeviceDriver for AnalogServer {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    crate::views!(as_wrapper, as_multiple_wrapper);
 }
 
 impl IWrapper for AnalogServer {

@@ -59,9 +59,7 @@ impl DeviceDriver for FakeAnalogSensor {
         Ok(())
     }
 
-    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
-        Some(self)
-    }
+    crate::views!(as_analog_sensor);
 }
 
 impl IAnalogSensor for FakeAnalogSensor {

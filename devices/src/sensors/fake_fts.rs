@@ -102,12 +102,7 @@ impl DeviceDriver for FakeFts {
         Ok(())
     }
 
-    fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
-        Some(self)
-    }
-    fn as_temperature_sensors(&mut self) -> Option<&mut dyn ITemperatureSensors> {
-        Some(self)
-    }
+    crate::views!(as_six_axis_force_torque_sensors, as_temperature_sensors);
 }
 
 impl ISixAxisForceTorqueSensors for FakeFts {

@@ -126,46 +126,16 @@ macro_rules! impl_mas_interfaces {
 /// The `as_*` methods of `DeviceDriver` for a type given `impl_mas_interfaces!`.
 macro_rules! mas_views {
     () => {
-        fn as_three_axis_gyroscopes(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::interfaces::IThreeAxisGyroscopes> {
-            Some(self)
-        }
-        fn as_three_axis_linear_accelerometers(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::interfaces::IThreeAxisLinearAccelerometers> {
-            Some(self)
-        }
-        fn as_three_axis_magnetometers(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::interfaces::IThreeAxisMagnetometers> {
-            Some(self)
-        }
-        fn as_orientation_sensors(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::interfaces::IOrientationSensors> {
-            Some(self)
-        }
-        fn as_six_axis_force_torque_sensors(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::interfaces::ISixAxisForceTorqueSensors> {
-            Some(self)
-        }
-        fn as_temperature_sensors(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::interfaces::ITemperatureSensors> {
-            Some(self)
-        }
-        fn as_skin_patches(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::interfaces::ISkinPatches> {
-            Some(self)
-        }
-        fn as_encoder_arrays(
-            &mut self,
-        ) -> Option<&mut dyn $crate::sensors::interfaces::IEncoderArrays> {
-            Some(self)
-        }
+        crate::views!(
+            as_three_axis_gyroscopes,
+            as_three_axis_linear_accelerometers,
+            as_three_axis_magnetometers,
+            as_orientation_sensors,
+            as_six_axis_force_torque_sensors,
+            as_temperature_sensors,
+            as_skin_patches,
+            as_encoder_arrays
+        );
     };
 }
 

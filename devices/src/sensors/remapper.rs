@@ -172,9 +172,7 @@ impl DeviceDriver for MultipleAnalogSensorsRemapper {
         self.detach_all()
     }
 
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    crate::views!(as_multiple_wrapper);
 
     mas_views!();
 }

@@ -10,7 +10,7 @@ use super::interfaces::{MasStatus, SensorMeasurement};
 use super::params::{now, positive_ms};
 use super::rpc::{fail_reply, handle_rpc};
 use super::wire::{SensorMetadata, SensorRpcData, SensorStreamingData};
-use crate::driver::{DeviceDriver, IMultipleWrapper, IWrapper, SharedDevice};
+use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use std::sync::Arc;
@@ -259,13 +259,7 @@ impl DeviceDriver for MultipleAnalogSensorsServer {
         IWrapper::detach(self)
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
-
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    crate::views!(as_wrapper, as_multiple_wrapper);
 }
 
 impl IWrapper for MultipleAnalogSensorsServer {

@@ -447,9 +447,7 @@ impl DeviceDriver for VirtualAnalogServer {
         Ok(())
     }
 
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    crate::views!(as_multiple_wrapper);
 }
 
 fn port_error(name: &str, e: impl std::fmt::Display) -> DeviceError {

@@ -251,9 +251,7 @@ impl DeviceDriver for CameraNwsRos2 {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
+    yarp_devices::views!(as_wrapper);
 }
 
 impl IWrapper for CameraNwsRos2 {

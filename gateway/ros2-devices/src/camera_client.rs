@@ -166,9 +166,7 @@ impl DeviceDriver for RgbdSensorNwcRos2 {
         Ok(())
     }
 
-    fn as_rgbd_sensor(&mut self) -> Option<&mut dyn IRGBDSensor> {
-        Some(self)
-    }
+    yarp_devices::views!(as_rgbd_sensor);
 }
 
 fn update(state: &Mutex<State>, feed: Feed, m: &Ros) {

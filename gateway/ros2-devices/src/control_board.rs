@@ -29,9 +29,7 @@ use std::time::Duration;
 use tokio::task::JoinHandle;
 use yarp_devices::sensors::periodic::Ticker;
 use yarp_devices::vocabs::JOINTTYPE_PRISMATIC;
-use yarp_devices::{
-    DevResult, DeviceDriver, DeviceError, IMultipleWrapper, IWrapper, SharedDevice,
-};
+use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, SharedDevice};
 use yarp_ros2_gateway::counters::header;
 use yarp_ros2_gateway::dynmsg::{MsgSeed, Value as Ros};
 
@@ -753,13 +751,7 @@ impl DeviceDriver for ControlBoardNwsRos2 {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
-
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    yarp_devices::views!(as_wrapper, as_multiple_wrapper);
 }
 
 impl IWrapper for ControlBoardNwsRos2 {

@@ -164,9 +164,7 @@ impl DeviceDriver for FrameTransformGetNwcRos2 {
         Ok(())
     }
 
-    fn as_frame_transform_storage_get(&mut self) -> Option<&mut dyn IFrameTransformStorageGet> {
-        Some(self)
-    }
+    yarp_devices::views!(as_frame_transform_storage_get);
 }
 
 impl IFrameTransformStorageGet for FrameTransformGetNwcRos2 {
@@ -254,9 +252,7 @@ impl DeviceDriver for FrameTransformSetNwcRos2 {
         Ok(())
     }
 
-    fn as_frame_transform_storage_set(&mut self) -> Option<&mut dyn IFrameTransformStorageSet> {
-        Some(self)
-    }
+    yarp_devices::views!(as_frame_transform_storage_set);
 }
 
 impl IFrameTransformStorageSet for FrameTransformSetNwcRos2 {

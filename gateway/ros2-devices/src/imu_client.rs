@@ -137,17 +137,11 @@ impl DeviceDriver for ImuNwcRos2 {
         Ok(())
     }
 
-    fn as_three_axis_gyroscopes(&mut self) -> Option<&mut dyn IThreeAxisGyroscopes> {
-        Some(self)
-    }
-    fn as_three_axis_linear_accelerometers(
-        &mut self,
-    ) -> Option<&mut dyn IThreeAxisLinearAccelerometers> {
-        Some(self)
-    }
-    fn as_orientation_sensors(&mut self) -> Option<&mut dyn IOrientationSensors> {
-        Some(self)
-    }
+    yarp_devices::views!(
+        as_three_axis_gyroscopes,
+        as_three_axis_linear_accelerometers,
+        as_orientation_sensors
+    );
 }
 
 /// One of the three families, all answered from the last message.

@@ -160,9 +160,7 @@ impl DeviceDriver for StateNwsRos2 {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
+    yarp_devices::views!(as_wrapper);
 }
 
 fn read_battery(dev: &mut dyn DeviceDriver) -> DevResult<BatteryReading> {
@@ -297,9 +295,7 @@ impl DeviceDriver for MobileBaseVelocityControlNwsRos2 {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
+    yarp_devices::views!(as_wrapper);
 }
 
 impl IWrapper for MobileBaseVelocityControlNwsRos2 {

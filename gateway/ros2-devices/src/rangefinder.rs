@@ -107,9 +107,7 @@ impl DeviceDriver for Rangefinder2DNwsRos2 {
         Ok(())
     }
 
-    fn as_wrapper(&mut self) -> Option<&mut dyn IWrapper> {
-        Some(self)
-    }
+    yarp_devices::views!(as_wrapper);
 }
 
 impl IWrapper for Rangefinder2DNwsRos2 {
@@ -240,9 +238,7 @@ impl DeviceDriver for Rangefinder2DNwcRos2 {
         Ok(())
     }
 
-    fn as_rangefinder_2d(&mut self) -> Option<&mut dyn IRangefinder2D> {
-        Some(self)
-    }
+    yarp_devices::views!(as_rangefinder_2d);
 }
 
 impl IRangefinder2D for Rangefinder2DNwcRos2 {

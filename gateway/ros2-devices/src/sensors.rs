@@ -278,9 +278,7 @@ impl DeviceDriver for SensorNwsRos2 {
         Ok(())
     }
 
-    fn as_multiple_wrapper(&mut self) -> Option<&mut dyn IMultipleWrapper> {
-        Some(self)
-    }
+    yarp_devices::views!(as_multiple_wrapper);
 }
 
 impl IMultipleWrapper for SensorNwsRos2 {

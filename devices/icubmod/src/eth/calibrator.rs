@@ -835,13 +835,7 @@ impl DeviceDriver for ParametricCalibratorEth {
         Ok(())
     }
 
-    fn as_calibrator(&mut self) -> Option<&mut dyn ICalibrator> {
-        Some(self)
-    }
-
-    fn as_remote_calibrator(&mut self) -> Option<&mut dyn IRemoteCalibrator> {
-        Some(self)
-    }
+    yarp_devices::views!(as_calibrator, as_remote_calibrator);
 }
 
 impl ICalibrator for ParametricCalibratorEth {

@@ -611,60 +611,26 @@ impl DeviceDriver for EmbObjMotionControl {
         Ok(())
     }
 
-    fn as_encoders(&mut self) -> Option<&mut dyn IEncoders> {
-        Some(self)
-    }
-    fn as_position_control(&mut self) -> Option<&mut dyn IPositionControl> {
-        Some(self)
-    }
-    fn as_velocity_control(&mut self) -> Option<&mut dyn IVelocityControl> {
-        Some(self)
-    }
-    fn as_control_mode(&mut self) -> Option<&mut dyn IControlMode> {
-        Some(self)
-    }
-    fn as_axis_info(&mut self) -> Option<&mut dyn IAxisInfo> {
-        Some(self)
-    }
-    fn as_control_limits(&mut self) -> Option<&mut dyn IControlLimits> {
-        Some(self)
-    }
-    fn as_interaction_mode(&mut self) -> Option<&mut dyn IInteractionMode> {
-        Some(self)
-    }
-    fn as_torque_control(&mut self) -> Option<&mut dyn ITorqueControl> {
-        Some(self)
-    }
-    fn as_motor_encoders(&mut self) -> Option<&mut dyn IMotorEncoders> {
-        Some(self)
-    }
-    fn as_amplifier_control(&mut self) -> Option<&mut dyn IAmplifierControl> {
-        Some(self)
-    }
-    fn as_motor(&mut self) -> Option<&mut dyn IMotor> {
-        Some(self)
-    }
-    fn as_pid_control(&mut self) -> Option<&mut dyn IPidControl> {
-        Some(self)
-    }
-    fn as_current_control(&mut self) -> Option<&mut dyn ICurrentControl> {
-        Some(self)
-    }
-    fn as_pwm_control(&mut self) -> Option<&mut dyn IPwmControl> {
-        Some(self)
-    }
-    fn as_position_direct(&mut self) -> Option<&mut dyn IPositionDirect> {
-        Some(self)
-    }
-    fn as_impedance_control(&mut self) -> Option<&mut dyn IImpedanceControl> {
-        Some(self)
-    }
-    fn as_control_calibration(&mut self) -> Option<&mut dyn IControlCalibration> {
-        Some(self)
-    }
-    fn as_virtual_analog_sensor(&mut self) -> Option<&mut dyn IVirtualAnalogSensor> {
-        Some(self)
-    }
+    yarp_devices::views!(
+        as_encoders,
+        as_position_control,
+        as_velocity_control,
+        as_control_mode,
+        as_axis_info,
+        as_control_limits,
+        as_interaction_mode,
+        as_torque_control,
+        as_motor_encoders,
+        as_amplifier_control,
+        as_motor,
+        as_pid_control,
+        as_current_control,
+        as_pwm_control,
+        as_position_direct,
+        as_impedance_control,
+        as_control_calibration,
+        as_virtual_analog_sensor
+    );
 }
 
 /// C++ `embObjMotionControl` as `IVirtualAnalogSensor`: the joint torques estimated by

@@ -309,15 +309,11 @@ impl DeviceDriver for EmbObjFtSensor {
         self.calibrated = calibrated;
         Ok(())
     }
-    fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
-        Some(self)
-    }
-    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
-        Some(self)
-    }
-    fn as_temperature_sensors(&mut self) -> Option<&mut dyn ITemperatureSensors> {
-        Some(self)
-    }
+    yarp_devices::views!(
+        as_six_axis_force_torque_sensors,
+        as_analog_sensor,
+        as_temperature_sensors
+    );
 }
 
 /// The strain's temperature (C++ `embObjFTsensor` as `ITemperatureSensors`): the
@@ -526,12 +522,7 @@ impl DeviceDriver for EmbObjMultipleFtSensors {
         self.frames = sensors.into_iter().map(|s| s.frame).collect();
         Ok(())
     }
-    fn as_six_axis_force_torque_sensors(&mut self) -> Option<&mut dyn ISixAxisForceTorqueSensors> {
-        Some(self)
-    }
-    fn as_temperature_sensors(&mut self) -> Option<&mut dyn ITemperatureSensors> {
-        Some(self)
-    }
+    yarp_devices::views!(as_six_axis_force_torque_sensors, as_temperature_sensors);
 }
 
 impl ISixAxisForceTorqueSensors for EmbObjMultipleFtSensors {
@@ -959,12 +950,7 @@ impl DeviceDriver for EmbObjMais {
         self.name = name;
         Ok(())
     }
-    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
-        Some(self)
-    }
-    fn as_encoder_arrays(&mut self) -> Option<&mut dyn IEncoderArrays> {
-        Some(self)
-    }
+    yarp_devices::views!(as_analog_sensor, as_encoder_arrays);
 }
 
 impl IEncoderArrays for EmbObjMais {
@@ -1288,9 +1274,7 @@ impl DeviceDriver for EmbObjSkin {
         }
         Ok(())
     }
-    fn as_analog_sensor(&mut self) -> Option<&mut dyn IAnalogSensor> {
-        Some(self)
-    }
+    yarp_devices::views!(as_analog_sensor);
 }
 
 impl IAnalogSensor for EmbObjSkin {
@@ -1436,9 +1420,7 @@ impl DeviceDriver for EmbObjPos {
         Ok(())
     }
 
-    fn as_encoder_arrays(&mut self) -> Option<&mut dyn IEncoderArrays> {
-        Some(self)
-    }
+    yarp_devices::views!(as_encoder_arrays);
 }
 
 // ---- embObjBattery ----
@@ -1505,9 +1487,7 @@ impl DeviceDriver for EmbObjBattery {
         })
     }
 
-    fn as_battery(&mut self) -> Option<&mut dyn yarp_devices::battery::IBattery> {
-        Some(self)
-    }
+    yarp_devices::views!(as_battery);
 }
 
 /// C++'s `std::trunc(10 * v) / 10` on the board's float (in single precision, so 48.3
