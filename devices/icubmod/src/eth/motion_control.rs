@@ -611,26 +611,8 @@ impl DeviceDriver for EmbObjMotionControl {
         Ok(())
     }
 
-    yarp_devices::views!(
-        as_encoders,
-        as_position_control,
-        as_velocity_control,
-        as_control_mode,
-        as_axis_info,
-        as_control_limits,
-        as_interaction_mode,
-        as_torque_control,
-        as_motor_encoders,
-        as_amplifier_control,
-        as_motor,
-        as_pid_control,
-        as_current_control,
-        as_pwm_control,
-        as_position_direct,
-        as_impedance_control,
-        as_control_calibration,
-        as_virtual_analog_sensor
-    );
+    yarp_devices::motor_control_views!();
+    yarp_devices::views!(as_virtual_analog_sensor);
 }
 
 /// C++ `embObjMotionControl` as `IVirtualAnalogSensor`: the joint torques estimated by

@@ -45,6 +45,36 @@ use super::skin_spec::SkinSpec;
 
 use yarp_proto::stamp::now;
 
+/// `IAnalogSensor` of a single-sensor device with `values()` and `c: Common`: its
+/// `channels` values, timed out while they cannot be read.
+macro_rules! analog_sensor {
+    ($ty:ty, $channels:literal) => {
+        impl IAnalogSensor for $ty {
+            fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
+                match self.values() {
+                    Ok(v) => {
+                        *out = v;
+                        AnalogStatus::Ok
+                    }
+                    Err(_) => AnalogStatus::Timeout,
+                }
+            }
+            fn get_state(&mut self, _ch: usize) -> AnalogStatus {
+                match self.c.status() {
+                    MasStatus::Ok => AnalogStatus::Ok,
+                    _ => AnalogStatus::Timeout,
+                }
+            }
+            fn get_channels(&mut self) -> usize {
+                $channels
+            }
+            fn calibrate_sensor(&mut self) -> DevResult<()> {
+                Ok(())
+            }
+        }
+    };
+}
+
 /// What every sensor device shares: its name, its board, its service.
 #[derive(Default)]
 struct Common {
@@ -375,29 +405,7 @@ impl ISixAxisForceTorqueSensors for EmbObjFtSensor {
     }
 }
 
-impl IAnalogSensor for EmbObjFtSensor {
-    fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
-        match self.values() {
-            Ok(v) => {
-                *out = v;
-                AnalogStatus::Ok
-            }
-            Err(_) => AnalogStatus::Timeout,
-        }
-    }
-    fn get_state(&mut self, _ch: usize) -> AnalogStatus {
-        match self.c.status() {
-            MasStatus::Ok => AnalogStatus::Ok,
-            _ => AnalogStatus::Timeout,
-        }
-    }
-    fn get_channels(&mut self) -> usize {
-        6
-    }
-    fn calibrate_sensor(&mut self) -> DevResult<()> {
-        Ok(())
-    }
-}
+analog_sensor!(EmbObjFtSensor, 6);
 
 // ---- embObjMultipleFTsensors ----
 
@@ -985,29 +993,7 @@ impl IEncoderArrays for EmbObjMais {
     }
 }
 
-impl IAnalogSensor for EmbObjMais {
-    fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
-        match self.values() {
-            Ok(v) => {
-                *out = v;
-                AnalogStatus::Ok
-            }
-            Err(_) => AnalogStatus::Timeout,
-        }
-    }
-    fn get_state(&mut self, _ch: usize) -> AnalogStatus {
-        match self.c.status() {
-            MasStatus::Ok => AnalogStatus::Ok,
-            _ => AnalogStatus::Timeout,
-        }
-    }
-    fn get_channels(&mut self) -> usize {
-        15
-    }
-    fn calibrate_sensor(&mut self) -> DevResult<()> {
-        Ok(())
-    }
-}
+analog_sensor!(EmbObjMais, 15);
 
 // ---- embObjSkin ----
 
