@@ -658,6 +658,13 @@ enum Op {
         data: Vec<u8>,
         retry: Retry,
     },
+    /// set only (`setRemoteValue`).
+    Set {
+        id: Id32,
+        data: Vec<u8>,
+    },
+    /// The waits a device's `open()` makes between two steps.
+    Pause(Duration),
 }
 
 impl Op {
@@ -666,6 +673,7 @@ impl Op {
             Op::Ask { retry, .. } | Op::Command { retry, .. } | Op::SetCheck { retry, .. } => {
                 *retry
             }
+            Op::Set { .. } | Op::Pause(_) => Retry::asks(1, Duration::ZERO),
         }
     }
 }
@@ -685,6 +693,8 @@ enum Phase {
     Waiting(RequestId),
     /// setcheck: set sent, ask at this time.
     SetWait(Duration),
+    /// A pause ending at this time.
+    Until(Duration),
 }
 
 /// The result of [`Startup::poll`].
@@ -700,21 +710,30 @@ pub enum StartupStatus {
 pub struct BoardFacts {
     pub management_version: Option<Version>,
     pub appl_status: Option<ApplStatus>,
+    /// The endpoints whose protocol version was found equal to ours.
+    pub verified_endpoints: Vec<u8>,
     /// `EthResource::askBoardVersion(): detected wrong board. expecting X and detected Y`.
     pub warnings: Vec<String>,
 }
 
-/// A board's bring-up as `EthResource` and the `embObj*` devices' `open()` do it:
+/// A board's bring-up as `EthResource` does it, and the steps of the `embObj*` devices'
+/// `open()`, each with icub-main's retries ([`Retry`]), driven without I/O: the caller
+/// polls it after every datagram and at [`Startup::next_deadline`] and
+/// [`HostTransceiver::next_deadline`].
+///
+/// [`Startup::board`] is `EthResource::verifyBoard` and `askBoardVersion`:
 ///
 /// 1. `verifyBoardPresence`: ask `comm status managementprotocolversion`, 1 s × 21 attempts;
 /// 2. `verifyBoardTransceiver`: the management version must equal ours;
 /// 3. `cleanBoardBehaviour`: service `stop` of `all` (0.5 s × 3);
 /// 4. `setTimingOfRunningCycle`: setcheck `appl config` (5 retries, 10 ms, 2 s);
-/// 5. `askBoardVersion`: ask `appl status` (0.5 s), warn on a different board type;
-/// 6. `verifyEPprotocol`: query the endpoint descriptors (0.1 s), compare management's and
-///    each service endpoint's version with ours;
-/// 7. per service: `verifyactivate` (0.5 s × 3), config setchecks (10 retries, 10 ms,
-///    50 ms), `regsig_load` (0.5 s × 3), `start` (0.5 s × 3).
+/// 5. `askBoardVersion`: ask `appl status` (0.5 s), warn on a different board type.
+///
+/// A device then adds its steps to [`Startup::steps`] in its own order: `verifyEPprotocol`
+/// ([`Startup::verify_endpoints`]: the endpoint descriptors, 0.1 s once; management's and
+/// the endpoint's versions must be ours), `serviceVerifyActivate`, `serviceSetRegulars`,
+/// `serviceStart` (0.5 s × 3 each), `setcheckRemoteValue` (10 retries, 10 ms, 50 ms),
+/// `setRemoteValue` and its pauses.
 #[derive(Debug)]
 pub struct Startup {
     steps: VecDeque<(String, Op, Check)>,
@@ -723,6 +742,8 @@ pub struct Startup {
     started_at: Option<Duration>,
     facts: BoardFacts,
     appl_config: ApplConfig,
+    /// A board's bring-up turns the presence monitor on when done.
+    board: bool,
 }
 
 fn service_name(cat: u8) -> String {
@@ -743,7 +764,8 @@ fn service_name(cat: u8) -> String {
         .unwrap_or_else(|| format!("category {cat}"))
 }
 
-fn service_endpoint(cat: u8) -> u8 {
+/// The endpoint that carries a service category.
+pub fn service_endpoint(cat: u8) -> u8 {
     match cat {
         category::MC => ep::MOTION_CONTROL,
         category::SKIN => ep::SKIN,
@@ -752,129 +774,190 @@ fn service_endpoint(cat: u8) -> u8 {
 }
 
 impl Startup {
+    /// The board's bring-up ([`Self::board`]), then `verifyEPprotocol` of the services'
+    /// endpoints and, service after service, `verifyactivate`, its configuration's
+    /// setchecks, `regsig_load` and `start`.
     pub fn new(appl_config: ApplConfig, services: &[ServiceSpec]) -> Self {
-        let svc = |op: ServiceOperation, cat: u8, c: ServiceCommand| Op::Command {
-            cmd: ids::SERVICE_COMMAND,
-            data: {
-                let mut c = c;
-                c.operation = op as u8;
-                c.category = cat;
-                c.to_bytes()
-            },
-            reply: ids::SERVICE_COMMAND_RESULT,
-            retry: Retry::SERVICE_COMMAND,
-        };
-        let mut steps = VecDeque::new();
-        steps.push_back((
-            "verifyBoardPresence".to_string(),
-            Op::Ask {
-                id: ids::COMM_MANAGEMENT_PROTOCOL_VERSION,
-                retry: Retry::BOARD_PRESENCE,
-            },
-            Check::ManagementVersion,
-        ));
-        steps.push_back((
-            "cleanBoardBehaviour".to_string(),
-            svc(
-                ServiceOperation::Stop,
-                category::ALL,
-                ServiceCommand::bare(ServiceOperation::Stop, category::ALL),
-            ),
-            Check::ServiceOk("serviceStop(eomn_serv_category_all)".into()),
-        ));
-        steps.push_back((
-            "setTimingOfRunningCycle".to_string(),
-            Op::SetCheck {
-                id: ids::APPL_CONFIG,
-                data: appl_config.to_bytes(),
-                retry: Retry::APPL_CONFIG,
-            },
-            Check::None,
-        ));
-        steps.push_back((
-            "askBoardVersion".to_string(),
-            Op::Ask {
-                id: ids::APPL_STATUS,
-                retry: Retry::BOARD_VERSION,
-            },
-            Check::ApplStatus,
-        ));
+        let mut s = Self::board(appl_config);
         let mut eps: Vec<u8> = services
             .iter()
             .map(|s| service_endpoint(s.category))
             .collect();
         eps.sort_unstable();
         eps.dedup();
+        s.verify_endpoints(&eps);
+        for sp in services {
+            let act = sp.activate.clone().unwrap_or_else(|| {
+                ServiceCommand::bare(ServiceOperation::VerifyActivate, sp.category)
+            });
+            s.verify_activate(&act);
+            for (id, data) in &sp.configs {
+                s.setcheck(*id, data);
+            }
+            if !sp.regulars.is_empty() {
+                s.set_regulars(sp.category, &sp.regulars);
+            }
+            s.start(sp.category);
+        }
+        s
+    }
+
+    /// `EthResource::verifyBoard` and `askBoardVersion` (the steps above); when done, the
+    /// transceiver watches the board's presence.
+    pub fn board(appl_config: ApplConfig) -> Self {
+        let mut s = Self::steps();
+        s.board = true;
+        s.appl_config = appl_config;
+        s.push(
+            "verifyBoardPresence",
+            Op::Ask {
+                id: ids::COMM_MANAGEMENT_PROTOCOL_VERSION,
+                retry: Retry::BOARD_PRESENCE,
+            },
+            Check::ManagementVersion,
+        );
+        s.service_command(
+            "cleanBoardBehaviour",
+            category::ALL,
+            ServiceCommand::bare(ServiceOperation::Stop, category::ALL),
+            Retry::SERVICE_COMMAND,
+        );
+        s.push(
+            "setTimingOfRunningCycle",
+            Op::SetCheck {
+                id: ids::APPL_CONFIG,
+                data: appl_config.to_bytes(),
+                retry: Retry::APPL_CONFIG,
+            },
+            Check::None,
+        );
+        s.push(
+            "askBoardVersion",
+            Op::Ask {
+                id: ids::APPL_STATUS,
+                retry: Retry::BOARD_VERSION,
+            },
+            Check::ApplStatus,
+        );
+        s
+    }
+
+    /// No step yet: a device's steps on a board already up.
+    pub fn steps() -> Self {
+        Self {
+            steps: VecDeque::new(),
+            phase: Phase::Idle,
+            attempt: 0,
+            started_at: None,
+            facts: BoardFacts::default(),
+            appl_config: ApplConfig::default(),
+            board: false,
+        }
+    }
+
+    fn push(&mut self, name: impl Into<String>, op: Op, check: Check) -> &mut Self {
+        self.steps.push_back((name.into(), op, check));
+        self
+    }
+
+    /// A service command and its `commandresult`, which must say `latestcommandisok`.
+    fn service_command(
+        &mut self,
+        what: &str,
+        category: u8,
+        mut cmd: ServiceCommand,
+        retry: Retry,
+    ) -> &mut Self {
+        cmd.category = category;
+        self.push(
+            what,
+            Op::Command {
+                cmd: ids::SERVICE_COMMAND,
+                data: cmd.to_bytes(),
+                reply: ids::SERVICE_COMMAND_RESULT,
+                retry,
+            },
+            Check::ServiceOk(what.to_string()),
+        )
+    }
+
+    /// `verifyEPprotocol` of `endpoints` (none: no step): one query of the endpoint
+    /// descriptors (0.1 s, asked once as C++); management's version and each endpoint's
+    /// listed must be ours (one the board does not list passes, as in C++: the
+    /// service's `verifyactivate` then fails).
+    pub fn verify_endpoints(&mut self, endpoints: &[u8]) -> &mut Self {
+        if endpoints.is_empty() {
+            return self;
+        }
         let q = QueryArray {
             opc: opc::QUERY_ARRAY_EPDES,
             endpoint: ep::ALL,
             set_number: 0,
             set_size: 0,
         };
-        // C++ asks the endpoints only when a service needs them (verifyEPprotocol)
-        if !eps.is_empty() {
-            steps.push_back((
-                "verifyEPprotocol".to_string(),
-                Op::Command {
-                    cmd: ids::COMM_QUERY_ARRAY,
-                    data: q.to_bytes(),
-                    reply: ids::COMM_REPLY_ARRAY,
-                    // C++ asks once (the devices' own check asks up to three times)
-                    retry: Retry::asks(1, Retry::ENDPOINTS.timeout),
-                },
-                Check::Endpoints(eps),
-            ));
-        }
-        for sp in services {
-            let name = service_name(sp.category);
-            let act = sp.activate.clone().unwrap_or_else(|| {
-                ServiceCommand::bare(ServiceOperation::VerifyActivate, sp.category)
-            });
-            steps.push_back((
-                format!("serviceVerifyActivate({name})"),
-                svc(ServiceOperation::VerifyActivate, sp.category, act),
-                Check::ServiceOk(format!("serviceVerifyActivate({name})")),
-            ));
-            for (id, data) in &sp.configs {
-                steps.push_back((
-                    format!("setcheckRemoteValue({id})"),
-                    Op::SetCheck {
-                        id: *id,
-                        data: data.clone(),
-                        retry: Retry::DEVICE_SETCHECK,
-                    },
-                    Check::None,
-                ));
-            }
-            if !sp.regulars.is_empty() {
-                steps.push_back((
-                    format!("serviceSetRegulars({name})"),
-                    svc(
-                        ServiceOperation::RegsigLoad,
-                        sp.category,
-                        ServiceCommand::regsig_load(sp.category, &sp.regulars),
-                    ),
-                    Check::ServiceOk(format!("serviceSetRegulars({name})")),
-                ));
-            }
-            steps.push_back((
-                format!("serviceStart({name})"),
-                svc(
-                    ServiceOperation::Start,
-                    sp.category,
-                    ServiceCommand::bare(ServiceOperation::Start, sp.category),
-                ),
-                Check::ServiceOk(format!("serviceStart({name})")),
-            ));
-        }
-        Self {
-            steps,
-            phase: Phase::Idle,
-            attempt: 0,
-            started_at: None,
-            facts: BoardFacts::default(),
-            appl_config,
-        }
+        self.push(
+            "verifyEPprotocol",
+            Op::Command {
+                cmd: ids::COMM_QUERY_ARRAY,
+                data: q.to_bytes(),
+                reply: ids::COMM_REPLY_ARRAY,
+                retry: Retry::asks(1, Retry::ENDPOINTS.timeout),
+            },
+            Check::Endpoints(endpoints.to_vec()),
+        )
+    }
+
+    /// `serviceVerifyActivate(category, param)` with the service's configuration.
+    pub fn verify_activate(&mut self, activate: &ServiceCommand) -> &mut Self {
+        let mut cmd = activate.clone();
+        cmd.operation = ServiceOperation::VerifyActivate as u8;
+        let what = format!("serviceVerifyActivate({})", service_name(cmd.category));
+        self.service_command(&what, cmd.category, cmd, Retry::SERVICE_COMMAND)
+    }
+
+    /// `serviceSetRegulars(category, id32s)`.
+    pub fn set_regulars(&mut self, category: u8, regulars: &[Id32]) -> &mut Self {
+        let what = format!("serviceSetRegulars({})", service_name(category));
+        let cmd = ServiceCommand::regsig_load(category, regulars);
+        self.service_command(&what, category, cmd, Retry::SERVICE_COMMAND)
+    }
+
+    /// `serviceStart(category)`.
+    pub fn start(&mut self, category: u8) -> &mut Self {
+        let what = format!("serviceStart({})", service_name(category));
+        let cmd = ServiceCommand::bare(ServiceOperation::Start, category);
+        self.service_command(&what, category, cmd, Retry::SERVICE_COMMAND)
+    }
+
+    /// `setcheckRemoteValue(id, value, 10, 0.010, 0.050)`, as the devices configure
+    /// entities ([`Retry::DEVICE_SETCHECK`]).
+    pub fn setcheck(&mut self, id: Id32, data: &[u8]) -> &mut Self {
+        self.push(
+            format!("setcheckRemoteValue({id})"),
+            Op::SetCheck {
+                id,
+                data: data.to_vec(),
+                retry: Retry::DEVICE_SETCHECK,
+            },
+            Check::None,
+        )
+    }
+
+    /// `setRemoteValue(id, value)`: sent once.
+    pub fn set(&mut self, id: Id32, data: &[u8]) -> &mut Self {
+        self.push(
+            format!("setRemoteValue({id})"),
+            Op::Set {
+                id,
+                data: data.to_vec(),
+            },
+            Check::None,
+        )
+    }
+
+    /// A wait of the device's `open()` between two steps.
+    pub fn pause(&mut self, d: Duration) -> &mut Self {
+        self.push("pause", Op::Pause(d), Check::None)
     }
 
     pub fn facts(&self) -> &BoardFacts {
@@ -885,7 +968,7 @@ impl Startup {
     /// its requests' deadlines are the transceiver's, [`HostTransceiver::next_deadline`]).
     pub fn next_deadline(&self) -> Option<Duration> {
         match self.phase {
-            Phase::SetWait(at) => Some(at),
+            Phase::SetWait(at) | Phase::Until(at) => Some(at),
             Phase::Idle | Phase::Waiting(_) => None,
         }
     }
@@ -900,7 +983,9 @@ impl Startup {
         self.started_at.get_or_insert(now);
         loop {
             let Some((name, op, check)) = self.steps.front().cloned() else {
-                host.monitor_presence(true, now);
+                if self.board {
+                    host.monitor_presence(true, now);
+                }
                 return StartupStatus::Done;
             };
             match self.run(host, &op, now) {
@@ -977,7 +1062,15 @@ impl Startup {
                             host.set(*id, data, now).map_err(|e| e.to_string())?;
                             self.phase = Phase::SetWait(now + retry.settle);
                         }
+                        Op::Set { id, data } => {
+                            host.set(*id, data, now).map_err(|e| e.to_string())?;
+                            return Ok(Some(Vec::new()));
+                        }
+                        Op::Pause(d) => self.phase = Phase::Until(now + *d),
                     }
+                }
+                Phase::Until(at) => {
+                    return Ok((now >= at).then(Vec::new));
                 }
                 Phase::SetWait(at) => {
                     if now < at {
@@ -1080,6 +1173,7 @@ impl Startup {
                         Some(_) | None => {}
                     }
                 }
+                self.facts.verified_endpoints.extend(eps);
                 Ok(())
             }
             Check::ServiceOk(what) => {

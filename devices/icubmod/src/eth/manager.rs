@@ -19,7 +19,7 @@ use std::time::{Duration, Instant};
 use icub_eth::host::{
     HostConfig, HostEvent, HostTransceiver, RequestError, Startup, StartupError, StartupStatus,
 };
-use icub_eth::{Entity, Id32, Retry};
+use icub_eth::{Entity, Id32};
 
 use super::params::{AddressMap, EthBoardParams, Pc104};
 
@@ -223,23 +223,8 @@ impl Board {
             BringUp::Failed(e) => return Err(e.clone()),
             BringUp::NotYet => {}
         }
-        let mut startup = Startup::new(self.params.appl, &[]);
-        let result = loop {
-            let mut inner = self.lock();
-            let now = self.now();
-            inner.host.handle_timeout(now);
-            let status = startup.poll(&mut inner.host, now);
-            self.flush(&mut inner);
-            match status {
-                StartupStatus::Done => break Ok(()),
-                StartupStatus::Failed(e) => break Err(EthError::Startup(e)),
-                StartupStatus::Busy => {
-                    let due = [inner.host.next_deadline(), startup.next_deadline()];
-                    let sleep = self.until(due.into_iter().flatten().min(), now);
-                    drop(self.wait_changed(inner, sleep));
-                }
-            }
-        };
+        let mut startup = Startup::board(self.params.appl);
+        let result = self.drive(&mut startup);
         for w in &startup.facts().warnings {
             tracing::warn!(board = %self.who(), "{w}");
         }
@@ -255,6 +240,38 @@ impl Board {
             tracing::info!(board = %self.who(), "board is up");
         }
         result
+    }
+
+    /// Runs a device's start-up steps on the board, once it is up (C++'s blocking calls
+    /// of `open()`); the endpoints the steps verify are not asked again.
+    pub fn run(&self, steps: &mut Startup) -> Result<(), EthError> {
+        self.bring_up()?;
+        self.drive(steps)?;
+        for ep in &steps.facts().verified_endpoints {
+            self.set_endpoint_verified(*ep);
+        }
+        Ok(())
+    }
+
+    /// Polls `startup` until it ends, sleeping until its or the transceiver's next
+    /// deadline or the next datagram.
+    fn drive(&self, startup: &mut Startup) -> Result<(), EthError> {
+        loop {
+            let mut inner = self.lock();
+            let now = self.now();
+            inner.host.handle_timeout(now);
+            let status = startup.poll(&mut inner.host, now);
+            self.flush(&mut inner);
+            match status {
+                StartupStatus::Done => return Ok(()),
+                StartupStatus::Failed(e) => return Err(EthError::Startup(e)),
+                StartupStatus::Busy => {
+                    let due = [inner.host.next_deadline(), startup.next_deadline()];
+                    let sleep = self.until(due.into_iter().flatten().min(), now);
+                    drop(self.wait_changed(inner, sleep));
+                }
+            }
+        }
     }
 
     /// Waits (bounded by the request's own timeout) for a request's outcome.
@@ -346,33 +363,6 @@ impl Board {
             r
         };
         self.wait(r)
-    }
-
-    /// `theNVmanager::setcheck`: set, wait, ask back and compare, as `retry` says.
-    pub fn setcheck(&self, id: Id32, data: &[u8], retry: Retry) -> Result<(), EthError> {
-        // a set the host refuses (a variable it does not know) is not retried
-        let mut refused = None;
-        let checked = retry
-            .run(|timeout| {
-                if let Err(e) = self.set(id, data) {
-                    refused = Some(e);
-                    return Ok(());
-                }
-                std::thread::sleep(retry.settle);
-                match self.ask(id, timeout) {
-                    Ok(v) if v == data => Ok(()),
-                    Ok(_) => Err("the board holds a different value".to_string()),
-                    Err(e) => Err(e.to_string()),
-                }
-            })
-            .map_err(|last| EthError::Board {
-                who: self.who(),
-                reason: format!(
-                    "setcheck of {id} failed after {} attempts: {last}",
-                    retry.attempts()
-                ),
-            });
-        refused.map_or(checked, Err)
     }
 
     /// How long a board may be silent before its values are refused: ten times its

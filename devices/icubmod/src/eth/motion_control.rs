@@ -27,6 +27,7 @@ use icub_eth::entities::mc::{
     Setpoint,
 };
 use icub_eth::entities::mn::{category, ServiceCommand};
+use icub_eth::host::Startup;
 use icub_eth::id::{endpoint as ep, entity as en, ids, tag};
 use icub_eth::{Entity, Id32, Retry};
 use yarp_devices::interfaces::*;
@@ -459,40 +460,41 @@ impl EmbObjMotionControl {
         p: &McParams,
         service: &[u8],
     ) -> Result<(), EthError> {
-        board.bring_up()?;
-        service::verify_endpoint(board, service::endpoint_of(category::MC))?;
-        service::verify_activate(
-            board,
-            &ServiceCommand::verify_activate(category::MC, p.service.service_type, 0, 0, service),
-        )?;
+        let mut steps = Startup::steps();
+        service::verify_endpoint(board, &mut steps, service::endpoint_of(category::MC));
+        steps.verify_activate(&ServiceCommand::verify_activate(
+            category::MC,
+            p.service.service_type,
+            0,
+            0,
+            service,
+        ));
         for j in 0..p.joints {
             let f = p.axis_map[j] as u8;
-            board.set(ids::joint(f, tag::MC_JOINT_CMMNDS_CONTROLMODE), &[cm::IDLE])?;
+            steps.set(ids::joint(f, tag::MC_JOINT_CMMNDS_CONTROLMODE), &[cm::IDLE]);
         }
-        std::thread::sleep(Duration::from_millis(10));
+        steps.pause(Duration::from_millis(10));
         let mut regulars = Vec::new();
         for f in 0..p.joints as u8 {
             regulars.push(ids::joint(f, tag::MC_JOINT_STATUS_CORE));
             regulars.push(ids::joint(f, tag::MC_JOINT_STATUS_ADDINFO_MULTIENC));
             regulars.push(ids::motor(f, tag::MC_MOTOR_STATUS));
         }
-        service::set_regulars(board, category::MC, &regulars)?;
-        std::thread::sleep(Duration::from_millis(5));
+        steps.set_regulars(category::MC, &regulars);
+        steps.pause(Duration::from_millis(5));
         for j in 0..p.joints {
             let f = p.axis_map[j] as u8;
-            service::setcheck(
-                board,
+            steps.setcheck(
                 ids::joint(f, tag::MC_JOINT_CONFIG),
                 &self.jconfig[j].to_bytes(),
-            )?;
+            );
         }
         for j in 0..p.joints {
             let f = p.axis_map[j] as u8;
-            service::setcheck(
-                board,
+            steps.setcheck(
                 ids::motor(f, tag::MC_MOTOR_CONFIG),
                 &self.mconfig[j].to_bytes(),
-            )?;
+            );
         }
         // eOmc_controller_config_t: the control loop's duration (the board's cycle, µs)
         // and whether the board may skip recalibration (MAINTENANCE/skipRecalibration)
@@ -500,8 +502,7 @@ impl EmbObjMotionControl {
             .to_le_bytes()
             .to_vec();
         controller.extend_from_slice(&[u8::from(self.skip_recalibration), 0, 0, 0]);
-        service::setcheck(
-            board,
+        steps.setcheck(
             Id32::new(
                 ep::MOTION_CONTROL,
                 en::MC_CONTROLLER,
@@ -509,8 +510,9 @@ impl EmbObjMotionControl {
                 tag::MC_CONTROLLER_CONFIG,
             ),
             &controller,
-        )?;
-        service::start(board, category::MC)
+        );
+        steps.start(category::MC);
+        board.run(&mut steps)
     }
 
     /// The PID kind of a YARP PID type.
