@@ -15,7 +15,7 @@
 
 use criterion::{criterion_group, Criterion};
 use std::hint::black_box;
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 use yarp_devices::framegrabber::{decode_image, encode_image, Image, PixelCode};
 use yarp_devices::{runtime, PolyDriver};
 use yarp_net::nameserver::NameServer;
@@ -46,12 +46,7 @@ fn codec(c: &mut Criterion) {
     });
 }
 
-fn now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_secs_f64())
-        .unwrap_or(0.0)
-}
+use yarp_proto::stamp::now;
 
 /// Streams for a few seconds and prints frames/s and frame age percentiles.
 fn end_to_end() {

@@ -35,12 +35,7 @@ fn stamp(m: &Json) -> f64 {
     f(m, &["header", "stamp", "sec"]) + f(m, &["header", "stamp", "nanosec"]) * 1e-9
 }
 
-fn now() -> f64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap()
-        .as_secs_f64()
-}
+use yarp_proto::stamp::now;
 
 /// Real devices: `fakeIMU` and `fakeFTs` (constant readings: every channel 10) each
 /// served by a `multipleanalogsensorsserver`.

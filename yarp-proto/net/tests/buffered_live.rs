@@ -3,7 +3,7 @@
 
 mod common;
 use common::{name_server, T};
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::Duration;
 use tokio::time::timeout;
 use yarp_net::buffered::{BufferedPort, RpcServer};
 use yarp_net::nameserver::NameServer;
@@ -28,12 +28,7 @@ async fn until(what: &str, mut cond: impl FnMut() -> bool) {
     .unwrap_or_else(|_| panic!("timed out waiting for {what}"));
 }
 
-fn now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .expect("clock after 1970")
-        .as_secs_f64()
-}
+use yarp_proto::stamp::now;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn latest_only_drops_old_messages_for_a_slow_reader() {
