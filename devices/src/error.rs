@@ -33,6 +33,10 @@ pub enum DeviceError {
     Unsupported(&'static str),
     #[error("device is not open")]
     NotOpen,
+    /// The device works but has nothing to give yet (no image or measurement received
+    /// from its server so far, a stream that timed out): C++'s `NOT_READY`.
+    #[error("not ready: {0}")]
+    NotReady(&'static str),
     /// A run-time fault of the hardware or of a remote peer: a silent CAN board, a bus-off,
     /// a remote device that does not answer. `device` names the device or the remote port.
     #[error("device `{device}`: {reason}")]

@@ -61,12 +61,38 @@ async fn receive<T>(
 
 /// Calls the server at the other end of `rpc` (blocking the caller, at most
 /// [`RPC_TIMEOUT`]); a failure names `device` and the request.
-pub(crate) fn call(device: &'static str, rpc: &Arc<Port>, cmd: Bottle) -> DevResult<Bottle> {
+pub(crate) fn call(device: &str, rpc: &Arc<Port>, cmd: Bottle) -> DevResult<Bottle> {
+    call_within(device, rpc, cmd, RPC_TIMEOUT)
+}
+
+/// Sends `cmd` to `device`'s server on `rpc` and waits for its reply at most `timeout`
+/// (blocking the caller): no reply is a `Timeout`, a broken connection `PeerLost`.
+pub(crate) fn call_within(
+    device: &str,
+    rpc: &Arc<Port>,
+    cmd: Bottle,
+    timeout: Duration,
+) -> DevResult<Bottle> {
     let port = rpc.clone();
-    let what = cmd.to_string();
-    runtime::block_on(async move { tokio::time::timeout(RPC_TIMEOUT, port.rpc(&cmd)).await })
-        .map_err(|_| DeviceError::failed(device, format!("no reply to {what} in {RPC_TIMEOUT:?}")))?
-        .map_err(|e| DeviceError::failed(device, format!("{what}: {e}")))
+    let command = cmd.to_string();
+    match runtime::block_on(async move { tokio::time::timeout(timeout, port.rpc(&cmd)).await }) {
+        Ok(Ok(reply)) => Ok(reply),
+        Ok(Err(e)) => {
+            tracing::warn!("{device}: `{command}`: {e}");
+            Err(DeviceError::PeerLost {
+                device: device.to_string(),
+                reason: e.to_string(),
+            })
+        }
+        Err(_) => {
+            tracing::warn!("{device}: `{command}`: no reply within {timeout:?}");
+            Err(DeviceError::Timeout {
+                device: device.to_string(),
+                command,
+                after: timeout,
+            })
+        }
+    }
 }
 
 async fn close_port(port: Arc<Port>) {
@@ -140,19 +166,27 @@ impl<T: Send + 'static> NwcPorts<T> {
 
     /// Calls a thrift method of the server whose reply is a `yarp::dev::ReturnValue`
     /// followed by the `return_*` struct's fields: those fields when the code is OK;
-    /// `Unsupported(unsupported)` when the server does not implement it; else a failure
-    /// naming the request and the reply.
+    /// `Unsupported(unsupported)` when the server does not implement it, `NotReady` when
+    /// it is not ready, `Refused` when the method failed there; a reply that is no
+    /// `ReturnValue` is a failure naming the request and the reply.
     pub fn call_returning(&self, cmd: Bottle, unsupported: &'static str) -> DevResult<Vec<Value>> {
-        let what = cmd.to_string();
+        let command = cmd.to_string();
         let reply = self.call(cmd)?;
         match parse_reply(&reply) {
             Some((0, fields)) => Ok(fields),
             Some((code, _)) if code == ReturnCode::NotImplemented as i32 => {
                 Err(DeviceError::Unsupported(unsupported))
             }
-            _ => Err(DeviceError::failed(
+            Some((code, _)) if code == ReturnCode::NotReady as i32 => {
+                Err(DeviceError::NotReady("the server is not ready"))
+            }
+            Some(_) => Err(DeviceError::Refused {
+                device: self.device.to_string(),
+                command,
+            }),
+            None => Err(DeviceError::failed(
                 self.device,
-                format!("{what} answered {reply}"),
+                format!("{command} answered {reply}"),
             )),
         }
     }

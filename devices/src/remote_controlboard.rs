@@ -358,32 +358,13 @@ impl RemoteControlBoard {
     /// a `[fail]` reply or no reply is an error.
     pub fn call(&self, cmd: &Bottle) -> DevResult<Bottle> {
         let link = self.link()?;
-        let port = link.rpc.clone();
-        let c = cmd.clone();
-        let r =
-            runtime::block_on(async move { tokio::time::timeout(RPC_TIMEOUT, port.rpc(&c)).await });
-        match r {
-            Ok(Ok(reply)) if reply_ok(&reply) => Ok(reply),
-            Ok(Ok(reply)) => {
-                tracing::debug!("{NAME}: `{cmd}` answered `{reply}`");
-                Err(self.refused(cmd))
-            }
-            Ok(Err(e)) => {
-                tracing::warn!("{NAME}: `{cmd}`: {e}");
-                Err(DeviceError::PeerLost {
-                    device: link.remote.clone(),
-                    reason: e.to_string(),
-                })
-            }
-            Err(_) => {
-                tracing::warn!("{NAME}: `{cmd}`: no reply within {RPC_TIMEOUT:?}");
-                Err(DeviceError::Timeout {
-                    device: link.remote.clone(),
-                    command: cmd.to_string(),
-                    after: RPC_TIMEOUT,
-                })
-            }
+        let reply =
+            crate::nwc_ports::call_within(&link.remote, &link.rpc, cmd.clone(), RPC_TIMEOUT)?;
+        if reply_ok(&reply) {
+            return Ok(reply);
         }
+        tracing::debug!("{NAME}: `{cmd}` answered `{reply}`");
+        Err(self.refused(cmd))
     }
 
     /// The remote control board refused `cmd` (or answered it without what was asked).

@@ -73,12 +73,12 @@ pub fn outcome_from_reply(reply: &Bottle) -> OutcomeResponse {
 }
 
 /// A Trigger/SetBool response for the YARP reply, or for the reason there was none.
-pub fn outcome_from_call(reply: Result<Bottle, String>) -> OutcomeResponse {
+pub fn outcome_from_call<E: std::fmt::Display>(reply: Result<Bottle, E>) -> OutcomeResponse {
     match reply {
         Ok(b) => outcome_from_reply(&b),
-        Err(message) => OutcomeResponse {
+        Err(e) => OutcomeResponse {
             success: false,
-            message,
+            message: e.to_string(),
         },
     }
 }

@@ -349,9 +349,10 @@ impl FrameGrabberNwc {
     /// `[visr] [set] ...` answers `[visr] [set] <1|0>`.
     fn visr_set(&self, what: i32, args: &[Value]) -> DevResult<()> {
         match reply_int(&self.visr(SET, what, args)?, 2)? {
-            0 => Err(DeviceError::Unsupported(
-                "the remote camera refused the setting",
-            )),
+            0 => Err(DeviceError::Refused {
+                device: NAME.into(),
+                command: format!("[visr] [set] {}", Vocab32(what)),
+            }),
             _ => Ok(()),
         }
     }
@@ -415,12 +416,12 @@ impl IFrameGrabberImage for FrameGrabberNwc {
                 .ok_or_else(|| bad_reply(&reply))?;
             return Image::from_bottle(b).map_err(|e| {
                 tracing::error!("{NAME}: bad image in RPC reply: {e}");
-                DeviceError::Unsupported("the remote frame grabber sent a malformed image")
+                DeviceError::failed(NAME, format!("the server sent a malformed image: {e}"))
             });
         }
         self.latest(|l| l.image.clone())
             .flatten()
-            .ok_or(DeviceError::Unsupported("no image received yet"))
+            .ok_or(DeviceError::NotReady("no image received yet"))
     }
 
     fn height(&mut self) -> usize {

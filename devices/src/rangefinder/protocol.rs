@@ -112,8 +112,9 @@ impl ReturnCode {
     /// The code C++ would give for a device call that failed with `e`.
     pub fn of(e: &DeviceError) -> ReturnCode {
         match e {
-            DeviceError::NotOpen => ReturnCode::NotReady,
+            DeviceError::NotOpen | DeviceError::NotReady(_) => ReturnCode::NotReady,
             DeviceError::Unsupported(_) => ReturnCode::NotImplemented,
+            DeviceError::Timeout { .. } | DeviceError::PeerLost { .. } => ReturnCode::Communication,
             _ => ReturnCode::MethodFailed,
         }
     }

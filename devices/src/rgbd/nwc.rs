@@ -176,7 +176,7 @@ impl RgbdSensorClient {
         let stream = if depth { &c.depth } else { &c.rgb };
         stream
             .latest(|l| Some((l.image.clone()?, l.stamp.unwrap_or(Stamp::new(0, 0.0)))))
-            .ok_or(DeviceError::Unsupported("no image received yet"))
+            .ok_or(DeviceError::NotReady("no image received yet"))
     }
 }
 

@@ -134,18 +134,14 @@ impl AnalogSensorClient {
         for v in args.into_items() {
             cmd.push(v);
         }
-        let reply = runtime::block_on(async move {
-            tokio::time::timeout(RPC_TIMEOUT, rpc.rpc(&cmd))
-                .await
-                .map_err(|_| "no reply".to_string())?
-                .map_err(|e| e.to_string())
-        })
-        .map_err(|e| network_error("remote", e))?;
+        let command = cmd.to_string();
+        let reply = crate::nwc_ports::call_within(NAME, &rpc, cmd, RPC_TIMEOUT)?;
         match reply.get(0) {
             Some(v) if v.is_int() && v.as_i64() == Some(0) => Ok(()),
-            _ => Err(DeviceError::Unsupported(
-                "analogsensorclient: the server did not calibrate",
-            )),
+            _ => Err(DeviceError::Refused {
+                device: NAME.to_string(),
+                command,
+            }),
         }
     }
 }

@@ -268,7 +268,7 @@ impl MultipleAnalogSensorsClient {
     pub fn measure(&self, family: SensorFamily, i: usize) -> DevResult<SensorMeasurement> {
         let status = self.status();
         if status != MasStatus::Ok {
-            return Err(DeviceError::Unsupported(
+            return Err(DeviceError::NotReady(
                 "measurement: the stream from the server is not OK (waiting or timed out)",
             ));
         }

@@ -1,7 +1,7 @@
 //! Service bridges: ROS service servers calling YARP RPC ports, YARP RPC ports calling
 //! ROS services, and the generic text RPC over String topics.
 
-use super::yarp_rpc::YarpRpc;
+use super::yarp_rpc::{RpcError, YarpRpc};
 use super::CALL_TIMEOUT;
 use crate::counters::Counters;
 use crate::dynmsg::{MsgSeed, Value as Ros};
@@ -27,7 +27,7 @@ pub(super) async fn serve_ros<Req, Resp>(
     mut rpc: YarpRpc,
     c: Arc<Counters>,
     cmd: impl Fn(&Req) -> Bottle,
-    resp: impl Fn(Result<Bottle, String>) -> Resp,
+    resp: impl Fn(Result<Bottle, RpcError>) -> Resp,
 ) where
     Req: Message + Clone + 'static,
     Resp: Message + 'static,
@@ -141,7 +141,10 @@ pub(super) async fn text_rpc(
             }
             Err(e) => {
                 let refused = format!("`{text}`: {e}");
-                (service::fail_reply(&e).to_string(), Some(refused))
+                (
+                    service::fail_reply(&e.to_string()).to_string(),
+                    Some(refused),
+                )
             }
         };
         if let Some(why) = &refused {

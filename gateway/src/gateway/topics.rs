@@ -2,7 +2,7 @@
 
 use super::beside::Beside;
 use super::demand::Gate;
-use super::yarp_rpc::YarpRpc;
+use super::yarp_rpc::{RpcError, YarpRpc};
 use super::{now_ns, RECONNECT_PERIOD};
 use crate::axis_info;
 use crate::convert;
@@ -75,15 +75,15 @@ impl JointNameSource {
     }
 }
 
-async fn ask_joints(rpc: &mut YarpRpc) -> Result<Joints, String> {
+async fn ask_joints(rpc: &mut YarpRpc) -> Result<Joints, RpcError> {
     let reply = rpc.call(&axis_info::axes_request()).await?;
-    let n = axis_info::parse_axes(&reply).ok_or_else(|| format!("bad axes reply {reply}"))?;
+    let n = axis_info::parse_axes(&reply).ok_or_else(|| rpc.bad_reply("[get] [axes]", &reply))?;
     let mut joints = Joints::default();
     for j in 0..n {
         let reply = rpc.call(&axis_info::name_request(j)).await?;
-        joints
-            .names
-            .push(axis_info::parse_name(&reply).ok_or_else(|| format!("bad name reply {reply}"))?);
+        joints.names.push(
+            axis_info::parse_name(&reply).ok_or_else(|| rpc.bad_reply("[get] [name]", &reply))?,
+        );
         // A board that cannot tell the type is taken as revolute (the common case).
         let reply = rpc.call(&axis_info::type_request(j)).await?;
         joints
