@@ -105,6 +105,43 @@ macro_rules! closes_when_dropped {
     };
 }
 
+/// What the blocking ports share: opening through a [`Network`], the port underneath,
+/// its name and contact, connecting and disconnecting.
+macro_rules! port_basics {
+    ($ty:ident, $inner:path) => {
+        impl $ty {
+            pub fn open(net: &Network, name: &str) -> Result<$ty, PortError> {
+                let inner = block(net.rt, <$inner>::open(name, net.ns.clone()))?;
+                Ok($ty {
+                    inner: Some(inner),
+                    rt: net.rt,
+                })
+            }
+
+            fn port(&self) -> &$inner {
+                // only `close` and `drop` take it, and both consume the value
+                self.inner.as_ref().expect("port used after close")
+            }
+
+            pub fn name(&self) -> &str {
+                self.port().name()
+            }
+
+            pub fn contact(&self) -> &Contact {
+                self.port().contact()
+            }
+
+            pub fn connect(&self, target: &str, carrier: Option<&str>) -> Result<(), PortError> {
+                block(self.rt, self.port().connect(target, carrier))
+            }
+
+            pub fn disconnect(&self, target: &str) -> bool {
+                self.port().disconnect(target)
+            }
+        }
+    };
+}
+
 /// Closes in the background without blocking: from a runtime thread we must not wait,
 /// elsewhere we wait (bounded) so that the port is unregistered before the program ends.
 fn close_on_drop<F>(rt: &'static Runtime, close: F)
@@ -193,36 +230,9 @@ pub struct Port {
     rt: &'static Runtime,
 }
 
+port_basics!(Port, port::Port);
+
 impl Port {
-    pub fn open(net: &Network, name: &str) -> Result<Port, PortError> {
-        let inner = block(net.rt, port::Port::open(name, net.ns.clone()))?;
-        Ok(Port {
-            inner: Some(inner),
-            rt: net.rt,
-        })
-    }
-
-    fn port(&self) -> &port::Port {
-        // only `close` and `drop` take it, and both consume the value
-        self.inner.as_ref().expect("port used after close")
-    }
-
-    pub fn name(&self) -> &str {
-        self.port().name()
-    }
-
-    pub fn contact(&self) -> &Contact {
-        self.port().contact()
-    }
-
-    pub fn connect(&self, target: &str, carrier: Option<&str>) -> Result<(), PortError> {
-        block(self.rt, self.port().connect(target, carrier))
-    }
-
-    pub fn disconnect(&self, target: &str) -> bool {
-        self.port().disconnect(target)
-    }
-
     pub fn outputs(&self) -> Vec<String> {
         self.port().outputs()
     }
@@ -282,36 +292,9 @@ pub struct BufferedPort {
     rt: &'static Runtime,
 }
 
+port_basics!(BufferedPort, buffered::BufferedPort);
+
 impl BufferedPort {
-    pub fn open(net: &Network, name: &str) -> Result<BufferedPort, PortError> {
-        let inner = block(net.rt, buffered::BufferedPort::open(name, net.ns.clone()))?;
-        Ok(BufferedPort {
-            inner: Some(inner),
-            rt: net.rt,
-        })
-    }
-
-    fn port(&self) -> &buffered::BufferedPort {
-        // only `close` and `drop` take it, and both consume the value
-        self.inner.as_ref().expect("port used after close")
-    }
-
-    pub fn name(&self) -> &str {
-        self.port().name()
-    }
-
-    pub fn contact(&self) -> &Contact {
-        self.port().contact()
-    }
-
-    pub fn connect(&self, target: &str, carrier: Option<&str>) -> Result<(), PortError> {
-        block(self.rt, self.port().connect(target, carrier))
-    }
-
-    pub fn disconnect(&self, target: &str) -> bool {
-        self.port().disconnect(target)
-    }
-
     pub fn set_strict(&self, strict: bool) {
         self.port().set_strict(strict)
     }
