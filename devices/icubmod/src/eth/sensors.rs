@@ -372,7 +372,7 @@ impl ITemperatureSensors for EmbObjFtSensor {
             .data
             .first()
             .map(|d| f64::from(d.value) / 10.0)
-            .ok_or_else(|| DeviceError::failed(&self.c.id, "no temperature from the board yet"))?;
+            .ok_or(DeviceError::NotReady("no temperature from the board yet"))?;
         Ok(SensorMeasurement::new(vec![v], now()))
     }
 }
