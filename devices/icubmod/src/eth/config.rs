@@ -1,6 +1,8 @@
 //! Reading the groups of a device's configuration the way icub-main's parsers do
 //! (`findGroup(..).find(..)`, multi-value lines `(key v1 v2 ...)`), with errors that name
-//! the parameter by its path (`ETH_BOARD/ETH_BOARD_PROPERTIES/IpAddress`).
+//! the parameter by its path from the group it was read in (`GENERAL/Encoder`,
+//! `ETH_BOARD/ETH_BOARD_PROPERTIES`). What each device looks up is listed in its table
+//! ([`crate::eth::tables`]), which a test keeps equal to these lookups ([`lookups`]).
 
 use yarp_proto::{Bottle, Property, Value};
 
