@@ -346,24 +346,35 @@ impl DeviceDriver for EmbObjFtSensor {
     );
 }
 
-/// The strain's temperature (C++ `embObjFTsensor` as `ITemperatureSensors`): the
-/// board's temperature service, 0.1 °C units; an error while the board sends none.
-impl ITemperatureSensors for EmbObjFtSensor {
-    fn get_nr_of_temperature_sensors(&self) -> usize {
+/// One strain sensor in both families C++ serves: its force-torque, and the strain2's
+/// temperature (the board's temperature service, 0.1 °C units; `NotReady` while the
+/// board sends none), under the sensor's name, which is also its frame.
+impl yarp_devices::sensors::forward::FamilySource for EmbObjFtSensor {
+    fn family_count(&self, _family: SensorFamily) -> usize {
         1
     }
-    fn get_temperature_sensor_status(&self, i: usize) -> MasStatus {
-        self.get_six_axis_force_torque_sensor_status(i)
+    fn family_status(&self, _family: SensorFamily, i: usize) -> MasStatus {
+        if i == 0 {
+            self.c.status()
+        } else {
+            MasStatus::Error
+        }
     }
-    fn get_temperature_sensor_name(&self, i: usize) -> DevResult<String> {
-        self.get_six_axis_force_torque_sensor_name(i)
-    }
-    fn get_temperature_sensor_frame_name(&self, i: usize) -> DevResult<String> {
-        self.get_six_axis_force_torque_sensor_name(i)
-    }
-    fn get_temperature_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+    fn family_name(&self, _family: SensorFamily, i: usize) -> DevResult<String> {
         if i != 0 {
             return Err(no_sensor(&self.c.id, i, 1));
+        }
+        Ok(self.name.clone())
+    }
+    fn family_frame_name(&self, family: SensorFamily, i: usize) -> DevResult<String> {
+        self.family_name(family, i)
+    }
+    fn family_measure(&self, family: SensorFamily, i: usize) -> DevResult<SensorMeasurement> {
+        if i != 0 {
+            return Err(no_sensor(&self.c.id, i, 1));
+        }
+        if family != SensorFamily::TemperatureSensors {
+            return Ok(SensorMeasurement::new(self.values()?, now()));
         }
         let st: icub_eth::entities::analog::TemperatureStatus =
             self.c
@@ -377,33 +388,7 @@ impl ITemperatureSensors for EmbObjFtSensor {
     }
 }
 
-impl ISixAxisForceTorqueSensors for EmbObjFtSensor {
-    fn get_nr_of_six_axis_force_torque_sensors(&self) -> usize {
-        1
-    }
-    fn get_six_axis_force_torque_sensor_status(&self, i: usize) -> MasStatus {
-        if i == 0 {
-            self.c.status()
-        } else {
-            MasStatus::Error
-        }
-    }
-    fn get_six_axis_force_torque_sensor_name(&self, i: usize) -> DevResult<String> {
-        if i != 0 {
-            return Err(no_sensor(&self.c.id, i, 1));
-        }
-        Ok(self.name.clone())
-    }
-    fn get_six_axis_force_torque_sensor_frame_name(&self, i: usize) -> DevResult<String> {
-        self.get_six_axis_force_torque_sensor_name(i)
-    }
-    fn get_six_axis_force_torque_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        if i != 0 {
-            return Err(no_sensor(&self.c.id, i, 1));
-        }
-        Ok(SensorMeasurement::new(self.values()?, now()))
-    }
-}
+yarp_devices::mas_interfaces!(EmbObjFtSensor: SixAxisForceTorqueSensors, TemperatureSensors);
 
 analog_sensor!(EmbObjFtSensor, 6);
 
@@ -533,60 +518,42 @@ impl DeviceDriver for EmbObjMultipleFtSensors {
     yarp_devices::views!(as_six_axis_force_torque_sensors, as_temperature_sensors);
 }
 
-impl ISixAxisForceTorqueSensors for EmbObjMultipleFtSensors {
-    fn get_nr_of_six_axis_force_torque_sensors(&self) -> usize {
+/// The board's sensors as both families C++ serves them: force-torque, and each sensor's
+/// temperature (°C, the board's 0.1 °C units) under the same name and frame.
+impl yarp_devices::sensors::forward::FamilySource for EmbObjMultipleFtSensors {
+    fn family_count(&self, _family: SensorFamily) -> usize {
         self.names.len()
     }
-    fn get_six_axis_force_torque_sensor_status(&self, i: usize) -> MasStatus {
+    fn family_status(&self, _family: SensorFamily, i: usize) -> MasStatus {
         if i < self.names.len() {
             self.c.status()
         } else {
             MasStatus::Error
         }
     }
-    fn get_six_axis_force_torque_sensor_name(&self, i: usize) -> DevResult<String> {
+    fn family_name(&self, _family: SensorFamily, i: usize) -> DevResult<String> {
         self.names
             .get(i)
             .cloned()
             .ok_or_else(|| no_sensor(&self.c.id, i, self.names.len()))
     }
-    fn get_six_axis_force_torque_sensor_frame_name(&self, i: usize) -> DevResult<String> {
+    fn family_frame_name(&self, _family: SensorFamily, i: usize) -> DevResult<String> {
         self.frames
             .get(i)
             .cloned()
             .ok_or_else(|| no_sensor(&self.c.id, i, self.names.len()))
     }
-    fn get_six_axis_force_torque_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
+    fn family_measure(&self, family: SensorFamily, i: usize) -> DevResult<SensorMeasurement> {
         let s = self.status_of(i)?;
-        Ok(SensorMeasurement::new(
-            s.timed_value.values.iter().map(|v| f64::from(*v)).collect(),
-            now(),
-        ))
+        let values = match family {
+            SensorFamily::TemperatureSensors => vec![f64::from(s.timed_value.temperature) / 10.0],
+            _ => s.timed_value.values.iter().map(|v| f64::from(*v)).collect(),
+        };
+        Ok(SensorMeasurement::new(values, now()))
     }
 }
 
-impl ITemperatureSensors for EmbObjMultipleFtSensors {
-    fn get_nr_of_temperature_sensors(&self) -> usize {
-        self.names.len()
-    }
-    fn get_temperature_sensor_status(&self, i: usize) -> MasStatus {
-        self.get_six_axis_force_torque_sensor_status(i)
-    }
-    fn get_temperature_sensor_name(&self, i: usize) -> DevResult<String> {
-        self.get_six_axis_force_torque_sensor_name(i)
-    }
-    fn get_temperature_sensor_frame_name(&self, i: usize) -> DevResult<String> {
-        self.get_six_axis_force_torque_sensor_frame_name(i)
-    }
-    /// °C (the board's 0.1 °C units).
-    fn get_temperature_sensor_measure(&self, i: usize) -> DevResult<SensorMeasurement> {
-        let s = self.status_of(i)?;
-        Ok(SensorMeasurement::new(
-            vec![f64::from(s.timed_value.temperature) / 10.0],
-            now(),
-        ))
-    }
-}
+yarp_devices::mas_interfaces!(EmbObjMultipleFtSensors: SixAxisForceTorqueSensors, TemperatureSensors);
 
 // ---- embObjIMU / embObjInertials ----
 
