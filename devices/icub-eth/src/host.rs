@@ -730,7 +730,7 @@ pub struct BoardFacts {
 /// 5. `askBoardVersion`: ask `appl status` (0.5 s), warn on a different board type.
 ///
 /// A device then adds its steps to [`Startup::steps`] in its own order: `verifyEPprotocol`
-/// ([`Startup::verify_endpoints`]: the endpoint descriptors, 0.1 s once; management's and
+/// ([`Startup::verify_endpoints`]: the endpoint descriptors, [`Retry::ENDPOINTS`]; management's and
 /// the endpoint's versions must be ours), `serviceVerifyActivate`, `serviceSetRegulars`,
 /// `serviceStart` (0.5 s × 3 each), `setcheckRemoteValue` (10 retries, 10 ms, 50 ms),
 /// `setRemoteValue` and its pauses.
@@ -881,10 +881,10 @@ impl Startup {
         )
     }
 
-    /// `verifyEPprotocol` of `endpoints` (none: no step): one query of the endpoint
-    /// descriptors (0.1 s, asked once as C++); management's version and each endpoint's
-    /// listed must be ours (one the board does not list passes, as in C++: the
-    /// service's `verifyactivate` then fails).
+    /// `verifyEPprotocol` of `endpoints` (none: no step): the endpoint descriptors, as
+    /// [`Retry::ENDPOINTS`] (C++'s 0.1 s, asked again on a loaded host); management's
+    /// version and each listed endpoint's must be ours (one the board does not list
+    /// passes, as in C++: the service's `verifyactivate` then fails).
     pub fn verify_endpoints(&mut self, endpoints: &[u8]) -> &mut Self {
         if endpoints.is_empty() {
             return self;
@@ -901,7 +901,7 @@ impl Startup {
                 cmd: ids::COMM_QUERY_ARRAY,
                 data: q.to_bytes(),
                 reply: ids::COMM_REPLY_ARRAY,
-                retry: Retry::asks(1, Retry::ENDPOINTS.timeout),
+                retry: Retry::ENDPOINTS,
             },
             Check::Endpoints(endpoints.to_vec()),
         )

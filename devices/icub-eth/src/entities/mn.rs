@@ -46,17 +46,6 @@ pub mod versions {
     pub const MC: Version = Version::new(1, 27);
     pub const AS: Version = Version::new(1, 11);
     pub const SK: Version = Version::new(2, 0);
-
-    /// The version of an endpoint.
-    pub fn of_endpoint(ep: u8) -> Option<Version> {
-        Some(match ep {
-            0 => MN,
-            1 => MC,
-            2 => AS,
-            3 => SK,
-            _ => return None,
-        })
-    }
 }
 
 /// `eOmn_transceiver_properties_t` (24 bytes).
