@@ -298,24 +298,7 @@ impl FrameGrabberNwc {
             .ok_or(DeviceError::NotOpen)?
             .rpc
             .clone();
-        runtime::block_on(async move {
-            match tokio::time::timeout(RPC_TIMEOUT, port.rpc(&cmd)).await {
-                Ok(Ok(reply)) => Ok(reply),
-                Ok(Err(e)) => {
-                    tracing::error!("{NAME}: {cmd}: {e}");
-                    Err(DeviceError::failed(NAME, format!("{cmd}: {e}")))
-                }
-                Err(_) => {
-                    tracing::error!("{NAME}: {cmd}: no reply in {RPC_TIMEOUT:?}");
-                    Err(DeviceError::failed(
-                        NAME,
-                        format!(
-                            "the remote frame grabber did not answer {cmd} within {RPC_TIMEOUT:?}"
-                        ),
-                    ))
-                }
-            }
-        })
+        crate::nwc_ports::call_within(NAME, &port, cmd, RPC_TIMEOUT)
     }
 
     fn streaming(&self) -> bool {
