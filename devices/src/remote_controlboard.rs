@@ -15,6 +15,8 @@
 //! RPC); velocity, position-direct, torque, current and duty-cycle references go out on
 //! `command:o` as `(head) (values)`; everything else is an RPC on `rpc:o`.
 
+use crate::controlboard::methods::{self as m, Method};
+use crate::controlboard::v3::{self, Answer, Group};
 use crate::controlboard::{CommandMessage, JointData, PROTOCOL_VERSION_NUMBER};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
@@ -45,14 +47,6 @@ const fn v(s: &str) -> i32 {
 }
 const TORQUES_DIRECT: i32 = v("dtq");
 const STATE_ERR: &str = "no fresh state from the remote control board (stateExt:i)";
-
-/// A reply that is `[ok]` but lacks the value asked: the peer speaks another protocol.
-fn bad_reply() -> DeviceError {
-    DeviceError::failed(
-        NAME,
-        "the remote control board's reply lacks the value asked",
-    )
-}
 
 /// The last state received on `<local>/stateExt:i`.
 #[derive(Debug, Clone)]
@@ -156,16 +150,6 @@ fn settings(config: &Property) -> DevResult<Settings> {
     })
 }
 
-/// C++ `CHECK_FAIL`: a reply is a failure when it is empty or starts with `[fail]`
-/// (`[nak]` too: the command was not understood).
-fn reply_ok(reply: &Bottle) -> bool {
-    match reply.get(0) {
-        None => false,
-        Some(Value::Vocab32(x)) => x.0 != FAILED && x.0 != NAK,
-        Some(_) => true,
-    }
-}
-
 /// Opens the ports and runs the C++ connection sequence; returns the link. On failure
 /// the ports opened so far are closed (unregistered) again.
 async fn connect(s: Settings, ns: NameClient) -> Result<Link, String> {
@@ -245,8 +229,7 @@ async fn handshake(
         let remote_rpc = remote_rpc.clone();
         async move {
             match tokio::time::timeout(RPC_TIMEOUT, rpc.rpc(&cmd)).await {
-                Ok(Ok(r)) if reply_ok(&r) => Ok(r),
-                Ok(Ok(r)) => Err(format!("{remote_rpc}: `{cmd}` answered `{r}`")),
+                Ok(Ok(r)) => Ok((cmd, r)),
                 Ok(Err(e)) => Err(format!("{remote_rpc}: `{cmd}`: {e}")),
                 Err(_) => Err(format!(
                     "{remote_rpc}: `{cmd}`: no reply in {RPC_TIMEOUT:?}"
@@ -254,29 +237,31 @@ async fn handshake(
             }
         }
     };
-    let prot = call(bottle![Vocab32(GET), Vocab32(PROTOCOL_VERSION)]).await?;
-    let (major, minor) = (
-        prot.get(1).and_then(Value::as_i32),
-        prot.get(2).and_then(Value::as_i32),
-    );
-    if major != Some(PROTOCOL_VERSION_NUMBER.0) {
+    let bad = |(cmd, reply): (Bottle, Bottle)| format!("{remote_rpc}: `{cmd}` answered `{reply}`");
+    let exchange = call(v3::request(&m::ProtocolVersion {})).await?;
+    let (major, minor, _) = match v3::answer::<m::ProtocolVersion>(&exchange.1) {
+        Answer::Value(v) => v,
+        _ => return Err(bad(exchange)),
+    };
+    let (our_major, our_minor, _) = PROTOCOL_VERSION_NUMBER;
+    if major != our_major {
         let msg = format!(
-            "protocol version mismatch: the server speaks {prot}, this client {}.{}",
-            PROTOCOL_VERSION_NUMBER.0, PROTOCOL_VERSION_NUMBER.1
+            "protocol version mismatch: the server speaks {major}.{minor}, this client {our_major}.{our_minor}"
         );
         if !s.ignore_protocol {
             return Err(msg);
         }
         tracing::warn!("{NAME} {local}: {msg} (ignored: ignoreProtocolCheck)");
-    } else if minor != Some(PROTOCOL_VERSION_NUMBER.1) {
-        tracing::warn!("{NAME} {local}: the server speaks protocol {prot}; minor versions differ");
+    } else if minor != our_minor {
+        tracing::warn!(
+            "{NAME} {local}: the server speaks protocol {major}.{minor}; minor versions differ"
+        );
     }
-    let axes = call(bottle![Vocab32(GET), Vocab32(AXES)]).await?;
-    axes.get(2)
-        .and_then(Value::as_i64)
-        .and_then(|n| usize::try_from(n).ok())
-        .filter(|n| *n > 0)
-        .ok_or_else(|| format!("{remote}: bad number of axes in `{axes}`"))
+    let exchange = call(v3::request(&m::Axes {})).await?;
+    match v3::answer::<m::Axes>(&exchange.1) {
+        Answer::Value(n) if n > 0 => Ok(n),
+        _ => Err(format!("{remote}: bad number of axes in `{}`", exchange.1)),
+    }
 }
 
 /// Connects `from` to our `to` as C++ `Network::connect` does: through `from`'s admin
@@ -360,11 +345,30 @@ impl RemoteControlBoard {
         let link = self.link()?;
         let reply =
             crate::nwc_ports::call_within(&link.remote, &link.rpc, cmd.clone(), RPC_TIMEOUT)?;
-        if reply_ok(&reply) {
+        if v3::reply_ok(&reply) {
             return Ok(reply);
         }
         tracing::debug!("{NAME}: `{cmd}` answered `{reply}`");
         Err(self.refused(cmd))
+    }
+
+    /// Makes the remote call `method` and returns its reply's value.
+    pub fn ask<M: Method>(&self, method: M) -> DevResult<M::Reply> {
+        let link = self.link()?;
+        let cmd = v3::request(&method);
+        let reply =
+            crate::nwc_ports::call_within(&link.remote, &link.rpc, cmd.clone(), RPC_TIMEOUT)?;
+        match v3::answer::<M>(&reply) {
+            Answer::Value(v) => Ok(v),
+            Answer::Refused => {
+                tracing::debug!("{NAME}: `{cmd}` answered `{reply}`");
+                Err(self.refused(&cmd))
+            }
+            Answer::Malformed => Err(DeviceError::failed(
+                &link.remote,
+                format!("the reply `{reply}` to `{cmd}` lacks the value asked"),
+            )),
+        }
     }
 
     /// The remote control board refused `cmd` (or answered it without what was asked).
@@ -380,35 +384,7 @@ impl RemoteControlBoard {
 
     /// The number of axes, asked over RPC as C++ `getAxes` does (`[get] [axes]`).
     pub fn axes(&self) -> DevResult<usize> {
-        let v = self.get_value(bottle![Vocab32(GET), Vocab32(AXES)])?;
-        v.as_i64()
-            .and_then(|n| usize::try_from(n).ok())
-            .ok_or_else(bad_reply)
-    }
-
-    fn set(&self, cmd: Bottle) -> DevResult<()> {
-        self.call(&cmd).map(|_| ())
-    }
-
-    /// A `get` whose value is the reply's third element (`[is] [xxx] value ...`).
-    fn get_value(&self, cmd: Bottle) -> DevResult<Value> {
-        let r = self.call(&cmd)?;
-        r.get(2).cloned().ok_or_else(bad_reply)
-    }
-
-    fn get_f64(&self, cmd: Bottle) -> DevResult<f64> {
-        self.get_value(cmd)?.as_f64().ok_or_else(bad_reply)
-    }
-
-    fn get_f64s(&self, cmd: Bottle) -> DevResult<Vec<f64>> {
-        let v = self.get_value(cmd)?;
-        v.as_list()
-            .and_then(|l| l.iter().map(Value::as_f64).collect())
-            .ok_or_else(bad_reply)
-    }
-
-    fn get_bool(&self, cmd: Bottle) -> DevResult<bool> {
-        Ok(self.get_f64(cmd)? != 0.0)
+        self.ask(m::Axes {})
     }
 
     /// Sends a streaming command on `command:o` (dropped if the connection is busy,
@@ -481,12 +457,6 @@ impl RemoteControlBoard {
 fn joints_value(joints: &[usize]) -> Value {
     Value::List(joints.iter().map(|j| *j as i32).collect())
 }
-fn floats_value(v: &[f64]) -> Value {
-    Value::List(v.iter().copied().collect())
-}
-fn vocabs_value(v: &[Vocab32]) -> Value {
-    Value::List(v.iter().copied().collect())
-}
 fn j32(j: usize) -> i32 {
     j as i32
 }
@@ -556,20 +526,18 @@ impl IEncoders for RemoteControlBoard {
         })
     }
     fn set_encoder(&mut self, j: usize, value: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(ENCODER), j32(j), value])
+        self.ask(m::SetEncoder { j, value })
     }
     fn reset_encoder(&mut self, j: usize) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(E_RESET), j32(j)])
+        self.ask(m::ResetEncoder { j })
     }
     fn reset_encoders(&mut self) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(E_RESETS)])
+        self.ask(m::ResetEncoders {})
     }
     fn set_encoders(&mut self, values: &[f64]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(ENCODERS),
-            floats_value(values)
-        ])
+        self.ask(m::SetEncoders {
+            values: values.to_vec(),
+        })
     }
     fn get_encoders(&mut self) -> DevResult<Vec<f64>> {
         self.state_vec(|d| &d.joint_position)
@@ -589,149 +557,106 @@ impl IEncoders for RemoteControlBoard {
     }
 }
 
+fn group(joints: &[usize]) -> Group {
+    Group(joints.to_vec())
+}
+
 impl IPositionControl for RemoteControlBoard {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
     fn position_move(&mut self, j: usize, target: f64) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(POSITION_MOVE),
-            j32(j),
-            target
-        ])
+        self.ask(m::PositionMove { j, target })
     }
     fn relative_move(&mut self, j: usize, delta: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(RELATIVE_MOVE), j32(j), delta])
+        self.ask(m::RelativeMove { j, delta })
     }
     fn check_motion_done(&mut self, j: usize) -> DevResult<bool> {
-        self.get_bool(bottle![Vocab32(GET), Vocab32(MOTION_DONE), j32(j)])
+        self.ask(m::CheckMotionDone { j })
     }
     fn set_ref_speed(&mut self, j: usize, speed: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(REF_SPEED), j32(j), speed])
+        self.ask(m::SetRefSpeed { j, speed })
     }
     fn set_ref_acceleration(&mut self, j: usize, acc: f64) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(REF_ACCELERATION),
-            j32(j),
-            acc
-        ])
+        self.ask(m::SetRefAcceleration { j, acc })
     }
     fn get_ref_speed(&mut self, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(REF_SPEED), j32(j)])
+        self.ask(m::GetRefSpeed { j })
     }
     fn get_ref_acceleration(&mut self, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(REF_ACCELERATION), j32(j)])
+        self.ask(m::GetRefAcceleration { j })
     }
     fn stop(&mut self, j: usize) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(STOP), j32(j)])
+        self.ask(m::Stop { j })
     }
     fn get_target_position(&mut self, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(POSITION_MOVE), j32(j)])
+        self.ask(m::GetTargetPosition { j })
     }
     fn position_moves(&mut self, targets: &[f64]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(POSITION_MOVES),
-            floats_value(targets)
-        ])
+        self.ask(m::PositionMoves {
+            targets: targets.to_vec(),
+        })
     }
     fn position_move_group(&mut self, joints: &[usize], targets: &[f64]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(POSITION_MOVE_GROUP),
-            joints.len() as i32,
-            joints_value(joints),
-            floats_value(targets)
-        ])
+        let (joints, targets) = (group(joints), targets.to_vec());
+        self.ask(m::PositionMoveGroup { joints, targets })
     }
     fn relative_moves(&mut self, deltas: &[f64]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(RELATIVE_MOVES),
-            floats_value(deltas)
-        ])
+        self.ask(m::RelativeMoves {
+            deltas: deltas.to_vec(),
+        })
     }
     fn relative_move_group(&mut self, joints: &[usize], deltas: &[f64]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(RELATIVE_MOVE_GROUP),
-            joints.len() as i32,
-            joints_value(joints),
-            floats_value(deltas)
-        ])
+        let (joints, deltas) = (group(joints), deltas.to_vec());
+        self.ask(m::RelativeMoveGroup { joints, deltas })
     }
     fn check_motion_dones(&mut self) -> DevResult<bool> {
-        self.get_bool(bottle![Vocab32(GET), Vocab32(MOTION_DONES)])
+        self.ask(m::CheckMotionDones {})
     }
     fn check_motion_done_group(&mut self, joints: &[usize]) -> DevResult<bool> {
-        self.get_bool(bottle![
-            Vocab32(GET),
-            Vocab32(MOTION_DONE_GROUP),
-            joints.len() as i32,
-            joints_value(joints)
-        ])
+        self.ask(m::CheckMotionDoneGroup {
+            joints: group(joints),
+        })
     }
     fn set_ref_speeds(&mut self, speeds: &[f64]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(REF_SPEEDS),
-            floats_value(speeds)
-        ])
+        self.ask(m::SetRefSpeeds {
+            speeds: speeds.to_vec(),
+        })
     }
     fn set_ref_speed_group(&mut self, joints: &[usize], speeds: &[f64]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(REF_SPEED_GROUP),
-            joints.len() as i32,
-            joints_value(joints),
-            floats_value(speeds)
-        ])
+        let (joints, speeds) = (group(joints), speeds.to_vec());
+        self.ask(m::SetRefSpeedGroup { joints, speeds })
     }
     fn set_ref_accelerations(&mut self, accs: &[f64]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(REF_ACCELERATIONS),
-            floats_value(accs)
-        ])
+        self.ask(m::SetRefAccelerations {
+            accs: accs.to_vec(),
+        })
     }
     fn set_ref_acceleration_group(&mut self, joints: &[usize], accs: &[f64]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(REF_ACCELERATION_GROUP),
-            joints.len() as i32,
-            joints_value(joints),
-            floats_value(accs)
-        ])
+        let (joints, accs) = (group(joints), accs.to_vec());
+        self.ask(m::SetRefAccelerationGroup { joints, accs })
     }
     fn get_ref_speeds(&mut self) -> DevResult<Vec<f64>> {
-        self.get_f64s(bottle![Vocab32(GET), Vocab32(REF_SPEEDS)])
+        self.ask(m::GetRefSpeeds {})
     }
     fn get_ref_accelerations(&mut self) -> DevResult<Vec<f64>> {
-        self.get_f64s(bottle![Vocab32(GET), Vocab32(REF_ACCELERATIONS)])
+        self.ask(m::GetRefAccelerations {})
     }
     fn stops(&mut self) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(STOPS)])
+        self.ask(m::Stops {})
     }
     fn stop_group(&mut self, joints: &[usize]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(STOP_GROUP),
-            joints.len() as i32,
-            joints_value(joints)
-        ])
+        self.ask(m::StopGroup {
+            joints: group(joints),
+        })
     }
     fn get_target_positions(&mut self) -> DevResult<Vec<f64>> {
-        self.get_f64s(bottle![Vocab32(GET), Vocab32(POSITION_MOVES)])
+        self.ask(m::GetTargetPositions {})
     }
     fn get_target_position_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
-        self.get_f64s(bottle![
-            Vocab32(GET),
-            Vocab32(POSITION_MOVE_GROUP),
-            joints.len() as i32,
-            joints_value(joints)
-        ])
+        self.ask(m::GetTargetPositionGroup {
+            joints: group(joints),
+        })
     }
 }
 
@@ -744,7 +669,7 @@ impl IVelocityControl for RemoteControlBoard {
         self.stream(bottle![Vocab32(VELOCITY_MOVE), j32(j)], vec![speed])
     }
     fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(VELOCITY_MOVE), j32(j)])
+        self.ask(m::GetRefVelocity { j })
     }
     fn velocity_moves(&mut self, speeds: &[f64]) -> DevResult<()> {
         self.check_all(speeds)?;
@@ -762,7 +687,7 @@ impl IVelocityControl for RemoteControlBoard {
         )
     }
     fn get_ref_velocities(&mut self) -> DevResult<Vec<f64>> {
-        self.get_f64s(bottle![Vocab32(GET), Vocab32(VELOCITY_MOVES)])
+        self.ask(m::GetRefVelocities {})
     }
 }
 
@@ -778,13 +703,7 @@ impl IControlMode for RemoteControlBoard {
         })
     }
     fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(ICONTROLMODE),
-            Vocab32(CM_CONTROL_MODE),
-            j32(j),
-            mode
-        ])
+        self.ask(m::SetControlMode { j, mode })
     }
     fn get_control_modes(&mut self) -> DevResult<Vec<Vocab32>> {
         self.state(|d, _| {
@@ -794,22 +713,13 @@ impl IControlMode for RemoteControlBoard {
         })
     }
     fn set_control_modes(&mut self, modes: &[Vocab32]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(ICONTROLMODE),
-            Vocab32(CM_CONTROL_MODES),
-            vocabs_value(modes)
-        ])
+        self.ask(m::SetControlModes {
+            modes: modes.to_vec(),
+        })
     }
     fn set_control_modes_group(&mut self, joints: &[usize], modes: &[Vocab32]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(ICONTROLMODE),
-            Vocab32(CM_CONTROL_MODE_GROUP),
-            joints.len() as i32,
-            joints_value(joints),
-            vocabs_value(modes)
-        ])
+        let (joints, modes) = (group(joints), modes.to_vec());
+        self.ask(m::SetControlModesGroup { joints, modes })
     }
 }
 
@@ -825,13 +735,7 @@ impl IInteractionMode for RemoteControlBoard {
         })
     }
     fn set_interaction_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(INTERACTION_MODE_IFACE),
-            Vocab32(INTERACTION_MODE),
-            j32(j),
-            mode
-        ])
+        self.ask(m::SetInteractionMode { j, mode })
     }
     fn get_interaction_modes(&mut self) -> DevResult<Vec<Vocab32>> {
         self.state(|d, _| {
@@ -841,68 +745,41 @@ impl IInteractionMode for RemoteControlBoard {
         })
     }
     fn set_interaction_modes(&mut self, modes: &[Vocab32]) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(INTERACTION_MODE_IFACE),
-            Vocab32(INTERACTION_MODES),
-            vocabs_value(modes)
-        ])
+        self.ask(m::SetInteractionModes {
+            modes: modes.to_vec(),
+        })
     }
     fn set_interaction_modes_group(
         &mut self,
         joints: &[usize],
         modes: &[Vocab32],
     ) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(INTERACTION_MODE_IFACE),
-            Vocab32(INTERACTION_MODE_GROUP),
-            joints.len() as i32,
-            joints_value(joints),
-            vocabs_value(modes)
-        ])
+        let (joints, modes) = (group(joints), modes.to_vec());
+        self.ask(m::SetInteractionModesGroup { joints, modes })
     }
 }
 
 impl IAxisInfo for RemoteControlBoard {
     fn get_axis_name(&mut self, j: usize) -> DevResult<String> {
-        let v = self.get_value(bottle![Vocab32(GET), Vocab32(INFO_NAME), j32(j)])?;
-        v.as_str().map(str::to_string).ok_or_else(bad_reply)
+        self.ask(m::GetAxisName { j })
     }
     fn get_joint_type(&mut self, j: usize) -> DevResult<Vocab32> {
-        let v = self.get_value(bottle![Vocab32(GET), Vocab32(INFO_TYPE), j32(j)])?;
-        v.as_i32()
-            .or_else(|| v.as_vocab().map(|x| x.0))
-            .map(Vocab32)
-            .ok_or_else(bad_reply)
+        self.ask(m::GetJointType { j }).map(Vocab32)
     }
 }
 
 impl IControlLimits for RemoteControlBoard {
     fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(LIMITS), j32(j), min, max])
+        self.ask(m::SetLimits { j, min, max })
     }
     fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        let r = self.call(&bottle![Vocab32(GET), Vocab32(LIMITS), j32(j)])?;
-        two_numbers(&r)
+        self.ask(m::GetLimits { j })
     }
     fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(VEL_LIMITS), j32(j), min, max])
+        self.ask(m::SetVelLimits { j, min, max })
     }
     fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        let r = self.call(&bottle![Vocab32(GET), Vocab32(VEL_LIMITS), j32(j)])?;
-        two_numbers(&r)
-    }
-}
-
-/// `[is] [xxx] a b ...` -> (a, b).
-fn two_numbers(r: &Bottle) -> DevResult<(f64, f64)> {
-    match (
-        r.get(2).and_then(Value::as_f64),
-        r.get(3).and_then(Value::as_f64),
-    ) {
-        (Some(a), Some(b)) => Ok((a, b)),
-        _ => Err(bad_reply()),
+        self.ask(m::GetVelLimits { j })
     }
 }
 
@@ -918,28 +795,19 @@ impl ITorqueControl for RemoteControlBoard {
         self.stream(bottle![Vocab32(TORQUES_DIRECT), j32(j)], vec![t])
     }
     fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(TORQUE), Vocab32(REF), j32(j)])
+        self.ask(m::GetRefTorque { j })
     }
     fn get_torques(&mut self) -> DevResult<Vec<f64>> {
         self.state_vec(|d| &d.torque)
     }
     fn get_torque_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        let r = self.call(&bottle![
-            Vocab32(GET),
-            Vocab32(TORQUE),
-            Vocab32(RANGE),
-            j32(j)
-        ])?;
-        two_numbers(&r)
+        self.ask(m::GetTorqueRange { j })
     }
 }
 
 impl IMotorEncoders for RemoteControlBoard {
     fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
-        let v = self.get_value(bottle![Vocab32(GET), Vocab32(MOTOR_ENCODER_NUMBER)])?;
-        v.as_i64()
-            .and_then(|n| usize::try_from(n).ok())
-            .ok_or_else(bad_reply)
+        self.ask(m::GetNumOfMotorEncoders {})
     }
     fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
         self.state_one(m, |d| &d.motor_position)
@@ -963,198 +831,112 @@ impl IMotorEncoders for RemoteControlBoard {
 
 impl IAmplifierControl for RemoteControlBoard {
     fn enable_amp(&mut self, j: usize) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(AMP_ENABLE), j32(j)])
+        self.ask(m::EnableAmp { j })
     }
     fn disable_amp(&mut self, j: usize) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(AMP_DISABLE), j32(j)])
+        self.ask(m::DisableAmp { j })
     }
     fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>> {
-        let v = self.get_value(bottle![Vocab32(GET), Vocab32(AMP_STATUS)])?;
-        v.as_list()
-            .and_then(|l| l.iter().map(Value::as_i32).collect())
-            .ok_or_else(bad_reply)
+        self.ask(m::GetAmpStatuses {})
     }
     fn get_current(&mut self, j: usize) -> DevResult<f64> {
         self.state_one(j, |d| &d.current)
     }
     fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_MAXCURRENT), j32(j)])
+        self.ask(m::GetMaxCurrent { j })
     }
-    fn set_max_current(&mut self, j: usize, v: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(AMP_MAXCURRENT), j32(j), v])
+    fn set_max_current(&mut self, j: usize, value: f64) -> DevResult<()> {
+        self.ask(m::SetMaxCurrent { j, value })
     }
     fn get_amp_status(&mut self, j: usize) -> DevResult<i32> {
-        let v = self.get_value(bottle![Vocab32(GET), Vocab32(AMP_STATUS_SINGLE), j32(j)])?;
-        v.as_i32().ok_or_else(bad_reply)
+        self.ask(m::GetAmpStatus { j })
     }
     fn get_nominal_current(&mut self, m: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_NOMINAL_CURRENT), j32(m)])
+        self.ask(m::GetNominalCurrent { m })
     }
-    fn set_nominal_current(&mut self, m: usize, v: f64) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(AMP_NOMINAL_CURRENT),
-            j32(m),
-            v
-        ])
+    fn set_nominal_current(&mut self, m: usize, value: f64) -> DevResult<()> {
+        self.ask(m::SetNominalCurrent { m, value })
     }
     fn get_peak_current(&mut self, m: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_PEAK_CURRENT), j32(m)])
+        self.ask(m::GetPeakCurrent { m })
     }
-    fn set_peak_current(&mut self, m: usize, v: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(AMP_PEAK_CURRENT), j32(m), v])
+    fn set_peak_current(&mut self, m: usize, value: f64) -> DevResult<()> {
+        self.ask(m::SetPeakCurrent { m, value })
     }
     fn get_pwm(&mut self, m: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_PWM), j32(m)])
+        self.ask(m::GetPwm { m })
     }
     fn get_pwm_limit(&mut self, m: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_PWM_LIMIT), j32(m)])
+        self.ask(m::GetPwmLimit { m })
     }
-    fn set_pwm_limit(&mut self, m: usize, v: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(AMP_PWM_LIMIT), j32(m), v])
+    fn set_pwm_limit(&mut self, m: usize, value: f64) -> DevResult<()> {
+        self.ask(m::SetPwmLimit { m, value })
     }
     fn get_power_supply_voltage(&mut self, m: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(AMP_VOLTAGE_SUPPLY), j32(m)])
+        self.ask(m::GetPowerSupplyVoltage { m })
     }
 }
 
 impl IMotor for RemoteControlBoard {
     fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(TEMPERATURE), j32(m)])
+        self.ask(m::GetTemperature { m })
     }
     fn get_number_of_motors(&mut self) -> DevResult<usize> {
-        let v = self.get_value(bottle![Vocab32(GET), Vocab32(MOTORS_NUMBER)])?;
-        v.as_i64()
-            .and_then(|n| usize::try_from(n).ok())
-            .ok_or_else(bad_reply)
+        self.ask(m::GetNumberOfMotors {})
     }
     fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(GEARBOX_RATIO), j32(m)])
+        self.ask(m::GetGearboxRatio { m })
     }
-    fn set_gearbox_ratio(&mut self, m: usize, v: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(GEARBOX_RATIO), j32(m), v])
+    fn set_gearbox_ratio(&mut self, m: usize, value: f64) -> DevResult<()> {
+        self.ask(m::SetGearboxRatio { m, value })
     }
     fn get_temperature_limit(&mut self, m: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(TEMPERATURE_LIMIT), j32(m)])
+        self.ask(m::GetTemperatureLimit { m })
     }
-    fn set_temperature_limit(&mut self, m: usize, v: f64) -> DevResult<()> {
-        self.set(bottle![Vocab32(SET), Vocab32(TEMPERATURE_LIMIT), j32(m), v])
+    fn set_temperature_limit(&mut self, m: usize, value: f64) -> DevResult<()> {
+        self.ask(m::SetTemperatureLimit { m, value })
     }
 }
 
 impl IPidControl for RemoteControlBoard {
-    fn get_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<Pid> {
-        let gains = self.get_f64s(bottle![
-            Vocab32(GET),
-            Vocab32(PID),
-            Vocab32(PID),
-            pid_type,
-            j32(j)
-        ])?;
-        Ok(Pid::from_slice(&gains))
+    fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
+        self.ask(m::GetPid { ty, j })
     }
-    fn set_pid(&mut self, pid_type: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(PID),
-            Vocab32(PID),
-            pid_type,
-            j32(j),
-            floats_value(&pid.to_array())
-        ])
+    fn set_pid(&mut self, ty: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
+        self.ask(m::SetPid { ty, j, pid })
     }
-    fn enable_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(PID),
-            Vocab32(PID_ENABLE),
-            pid_type,
-            j32(j)
-        ])
+    fn enable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
+        self.ask(m::EnablePid { ty, j })
     }
-    fn disable_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(PID),
-            Vocab32(PID_DISABLE),
-            pid_type,
-            j32(j)
-        ])
+    fn disable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
+        self.ask(m::DisablePid { ty, j })
     }
-    fn is_pid_enabled(&mut self, pid_type: Vocab32, j: usize) -> DevResult<bool> {
-        self.get_bool(bottle![
-            Vocab32(GET),
-            Vocab32(PID),
-            Vocab32(PID_ENABLE),
-            pid_type,
-            j32(j)
-        ])
+    fn is_pid_enabled(&mut self, ty: Vocab32, j: usize) -> DevResult<bool> {
+        self.ask(m::IsPidEnabled { ty, j })
     }
-    fn set_pid_reference(&mut self, pid_type: Vocab32, j: usize, r: f64) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(PID),
-            Vocab32(REF),
-            pid_type,
-            j32(j),
-            r
-        ])
+    fn set_pid_reference(&mut self, ty: Vocab32, j: usize, value: f64) -> DevResult<()> {
+        self.ask(m::SetPidReference { ty, j, value })
     }
-    fn get_pid_reference(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![
-            Vocab32(GET),
-            Vocab32(PID),
-            Vocab32(REF),
-            pid_type,
-            j32(j)
-        ])
+    fn get_pid_reference(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
+        self.ask(m::GetPidReference { ty, j })
     }
-    fn get_pid_error(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![
-            Vocab32(GET),
-            Vocab32(PID),
-            Vocab32(PID_ERROR),
-            pid_type,
-            j32(j)
-        ])
+    fn get_pid_error(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
+        self.ask(m::GetPidError { ty, j })
     }
-    fn get_pid_output(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![
-            Vocab32(GET),
-            Vocab32(PID),
-            Vocab32(PID_OUTPUT),
-            pid_type,
-            j32(j)
-        ])
+    fn get_pid_output(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
+        self.ask(m::GetPidOutput { ty, j })
     }
-    fn reset_pid(&mut self, pid_type: Vocab32, j: usize) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(PID),
-            Vocab32(PID_RESET),
-            pid_type,
-            j32(j)
-        ])
+    fn reset_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
+        self.ask(m::ResetPid { ty, j })
     }
 }
 
 impl ICurrentControl for RemoteControlBoard {
     fn get_ref_current(&mut self, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![
-            Vocab32(GET),
-            Vocab32(CURRENT_IFACE),
-            Vocab32(REF),
-            j32(j)
-        ])
+        self.ask(m::GetRefCurrent { j })
     }
     fn get_current_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        let r = self.call(&bottle![
-            Vocab32(GET),
-            Vocab32(CURRENT_IFACE),
-            Vocab32(RANGE),
-            j32(j)
-        ])?;
-        two_numbers(&r)
+        self.ask(m::GetCurrentRange { j })
     }
     fn set_ref_current(&mut self, j: usize, current: f64) -> DevResult<()> {
         let j = self.joint(j)?;
@@ -1186,12 +968,7 @@ impl ICurrentControl for RemoteControlBoard {
 
 impl IPwmControl for RemoteControlBoard {
     fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![
-            Vocab32(GET),
-            Vocab32(PWM_IFACE),
-            Vocab32(REF),
-            j32(j)
-        ])
+        self.ask(m::GetRefDutyCycle { j })
     }
     fn set_ref_duty_cycle(&mut self, j: usize, duty: f64) -> DevResult<()> {
         let j = self.joint(j)?;
@@ -1218,7 +995,7 @@ impl IPositionDirect for RemoteControlBoard {
         self.stream(bottle![Vocab32(POSITION_DIRECT), j32(j)], vec![reference])
     }
     fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
-        self.get_f64(bottle![Vocab32(GET), Vocab32(POSITION_DIRECT), j32(j)])
+        self.ask(m::GetRefPosition { j })
     }
     fn set_positions(&mut self, references: &[f64]) -> DevResult<()> {
         self.check_all(references)?;
@@ -1236,16 +1013,19 @@ impl IPositionDirect for RemoteControlBoard {
         )
     }
     fn get_ref_positions(&mut self) -> DevResult<Vec<f64>> {
-        self.get_f64s(bottle![Vocab32(GET), Vocab32(POSITION_DIRECTS)])
+        self.ask(m::GetRefPositions {})
     }
     fn get_ref_positions_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
-        self.get_f64s(bottle![
-            Vocab32(GET),
-            Vocab32(POSITION_DIRECT_GROUP),
-            joints.len() as i32,
-            joints_value(joints)
-        ])
+        self.ask(m::GetRefPositionsGroup {
+            joints: group(joints),
+        })
     }
+}
+
+/// An impedance reply's list, padded with 0 to 4 values as C++ reads missing items.
+fn padded(mut v: Vec<f64>) -> Vec<f64> {
+    v.resize(4.max(v.len()), 0.0);
+    v
 }
 
 impl IImpedanceControl for RemoteControlBoard {
@@ -1253,54 +1033,32 @@ impl IImpedanceControl for RemoteControlBoard {
         self.axes()
     }
     fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        let v = self.impedance_list(IMP_PARAM, j)?;
+        let v = padded(self.ask(m::GetImpedance { j })?);
         Ok((v[0], v[1]))
     }
     fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(IMPEDANCE),
-            Vocab32(IMP_PARAM),
-            j32(j),
-            floats_value(&[stiffness, damping])
-        ])
+        self.ask(m::SetImpedance {
+            j,
+            values: vec![stiffness, damping],
+        })
     }
     fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
-        Ok(self.impedance_list(IMP_OFFSET, j)?[0])
+        Ok(padded(self.ask(m::GetImpedanceOffset { j })?)[0])
     }
     fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(SET),
-            Vocab32(IMPEDANCE),
-            Vocab32(IMP_OFFSET),
-            j32(j),
-            floats_value(&[offset])
-        ])
+        self.ask(m::SetImpedanceOffset {
+            j,
+            values: vec![offset],
+        })
     }
     fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits> {
-        // C++ 3.12 asks with the generic `[llim]`
-        let v = self.impedance_list(LIMITS, j)?;
+        let v = padded(self.ask(m::GetImpedanceLimits { j })?);
         Ok(ImpedanceLimits {
             min_stiffness: v[0],
             max_stiffness: v[1],
             min_damping: v[2],
             max_damping: v[3],
         })
-    }
-}
-
-impl RemoteControlBoard {
-    /// `[get] [iimp] <what> j` -> the reply's list, padded with 0 to 4 values as C++
-    /// reads missing items.
-    fn impedance_list(&self, what: i32, j: usize) -> DevResult<Vec<f64>> {
-        let mut v = self.get_f64s(bottle![
-            Vocab32(GET),
-            Vocab32(IMPEDANCE),
-            Vocab32(what),
-            j32(j)
-        ])?;
-        v.resize(4.max(v.len()), 0.0);
-        Ok(v)
     }
 }
 
@@ -1313,102 +1071,82 @@ impl IControlCalibration for RemoteControlBoard {
         p2: f64,
         p3: f64,
     ) -> DevResult<()> {
-        self.set(bottle![
-            Vocab32(CALIBRATE_JOINT),
-            j32(j),
-            kind as i32,
+        self.ask(m::CalibrateAxisWithParams {
+            j,
+            kind,
             p1,
             p2,
-            p3
-        ])
+            p3,
+        })
     }
     fn set_calibration_parameters(
         &mut self,
         j: usize,
         params: &CalibrationParameters,
     ) -> DevResult<()> {
-        // C++ sends type and param1..4 only
-        self.set(bottle![
-            Vocab32(CALIBRATE_JOINT_PARAMS),
-            j32(j),
-            params.kind as i32,
-            params.param1,
-            params.param2,
-            params.param3,
-            params.param4
-        ])
+        let CalibrationParameters {
+            kind,
+            param1: p1,
+            param2: p2,
+            param3: p3,
+            param4: p4,
+            ..
+        } = *params;
+        self.ask(m::SetCalibrationParameters {
+            j,
+            kind,
+            p1,
+            p2,
+            p3,
+            p4,
+        })
     }
     fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
-        // `[fail]` means "not done"; no answer stays an error
-        match self.call(&bottle![Vocab32(CALIBRATE_DONE), j32(j)]) {
-            Ok(_) => Ok(true),
-            Err(DeviceError::Refused { .. }) => Ok(false),
-            Err(e) => Err(e),
-        }
+        self.ask(m::CalibrationDone { j })
     }
-    // These four send a lone vocab, as C++ does; a 3.12 server refuses commands shorter
-    // than two elements, so they fail against it as they do in C++.
     fn calibrate_robot(&mut self) -> DevResult<()> {
-        self.set(bottle![Vocab32(CALIBRATE)])
+        self.ask(m::CalibrateRobot {})
     }
     fn park(&mut self, _wait: bool) -> DevResult<()> {
-        self.set(bottle![Vocab32(PARK)])
+        // a lone vocab, as C++ sends it
+        self.ask(m::Park { wait: None })
     }
     fn abort_calibration(&mut self) -> DevResult<()> {
-        self.set(bottle![Vocab32(ABORTCALIB)])
+        self.ask(m::AbortCalibration {})
     }
     fn abort_park(&mut self) -> DevResult<()> {
-        self.set(bottle![Vocab32(ABORTPARK)])
-    }
-}
-
-impl RemoteControlBoard {
-    /// `[set] [reca] <what> [j]`.
-    fn remote_calibrator(&self, what: i32, j: Option<usize>) -> DevResult<()> {
-        let mut cmd = bottle![
-            Vocab32(SET),
-            Vocab32(REMOTE_CALIBRATOR_IFACE),
-            Vocab32(what)
-        ];
-        if let Some(j) = j {
-            cmd.push(j32(j));
-        }
-        self.set(cmd)
+        self.ask(m::AbortPark {})
     }
 }
 
 impl IRemoteCalibrator for RemoteControlBoard {
     fn is_calibrator_device_present(&mut self) -> DevResult<bool> {
-        self.get_bool(bottle![
-            Vocab32(GET),
-            Vocab32(REMOTE_CALIBRATOR_IFACE),
-            Vocab32(IS_CALIBRATOR_PRESENT)
-        ])
+        self.ask(m::IsCalibratorPresent {})
     }
     fn calibrate_single_joint(&mut self, j: usize) -> DevResult<()> {
-        self.remote_calibrator(CALIBRATE_SINGLE_JOINT, Some(j))
+        self.ask(m::CalibrateSingleJoint { j })
     }
     fn calibrate_whole_part(&mut self) -> DevResult<()> {
-        self.remote_calibrator(CALIBRATE_WHOLE_PART, None)
+        self.ask(m::CalibrateWholePart {})
     }
     fn homing_single_joint(&mut self, j: usize) -> DevResult<()> {
-        self.remote_calibrator(HOMING_SINGLE_JOINT, Some(j))
+        self.ask(m::HomingSingleJoint { j })
     }
     fn homing_whole_part(&mut self) -> DevResult<()> {
-        self.remote_calibrator(HOMING_WHOLE_PART, None)
+        self.ask(m::HomingWholePart {})
     }
     fn park_single_joint(&mut self, j: usize, _wait: bool) -> DevResult<()> {
         // the wait flag does not travel (C++ drops it too)
-        self.remote_calibrator(PARK_SINGLE_JOINT, Some(j))
+        self.ask(m::ParkSingleJoint { j })
     }
     fn park_whole_part(&mut self) -> DevResult<()> {
-        self.remote_calibrator(PARK_WHOLE_PART, None)
+        self.ask(m::ParkWholePart {})
     }
     fn quit_calibrate(&mut self) -> DevResult<()> {
-        self.remote_calibrator(QUIT_CALIBRATE, None)
+        self.ask(m::QuitCalibrate {})
     }
     fn quit_park(&mut self) -> DevResult<()> {
-        self.remote_calibrator(QUIT_PARK, None)
+        self.ask(m::QuitPark {})
     }
 }
 
@@ -1445,10 +1183,10 @@ mod tests {
 
     #[test]
     fn failure_replies() {
-        assert!(!reply_ok(&Bottle::new()));
-        assert!(!reply_ok(&Bottle::from_text("[fail]")));
-        assert!(!reply_ok(&Bottle::from_text("[nak]")));
-        assert!(reply_ok(&Bottle::from_text("[ok]")));
-        assert!(reply_ok(&Bottle::from_text("[is] [axes] 4 [ok]")));
+        assert!(!v3::reply_ok(&Bottle::new()));
+        assert!(!v3::reply_ok(&Bottle::from_text("[fail]")));
+        assert!(!v3::reply_ok(&Bottle::from_text("[nak]")));
+        assert!(v3::reply_ok(&Bottle::from_text("[ok]")));
+        assert!(v3::reply_ok(&Bottle::from_text("[is] [axes] 4 [ok]")));
     }
 }

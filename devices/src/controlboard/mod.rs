@@ -3,11 +3,13 @@
 //! state (`state`) and the ports and tasks that serve them (`nws`); and YARP 2's
 //! single-port mode of YARP's design paper (`single_port`).
 
+pub mod methods;
 mod nws;
 mod rpc;
 mod single_port;
 mod state;
 mod streaming;
+pub mod v3;
 
 pub use nws::{port_prefix, ControlBoardNws, ControlBoardNwsDevice, DEFAULT_PERIOD};
 pub use rpc::{handle_rpc, RpcStamp, PROTOCOL_VERSION_NUMBER};

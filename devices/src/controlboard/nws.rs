@@ -17,6 +17,7 @@
 //! `remote_controlboard` attached here waits for its own RPC on the device runtime), and a
 //! plain thread does that without handing a runtime worker over every period.
 
+use super::methods::Request;
 use super::rpc::{handle_rpc, RpcStamp};
 use super::single_port::handle_single_port;
 use super::state::{envelope_time, positions_bottle, JointData};
@@ -372,9 +373,10 @@ async fn serve_rpc(port: Arc<Port>, slot: Slot) {
 /// calibrating, homing or parking takes seconds and the state streams and the other
 /// clients of the part must go on meanwhile.
 fn remote_calibrator_target(cmd: &Bottle, part: &SharedDevice) -> Option<SharedDevice> {
-    let is = |i: usize, v: i32| super::rpc::vocab(cmd.get(i)) == v;
-    if !(is(0, crate::vocabs::SET) && is(1, crate::vocabs::REMOTE_CALIBRATOR_IFACE)) {
-        return None;
+    match Request::from_v3(cmd)? {
+        Request::IsCalibratorPresent(_) => return None,
+        r if !r.is_remote_calibrator() => return None,
+        _ => {}
     }
     lock(part)
         .device()
@@ -384,8 +386,10 @@ fn remote_calibrator_target(cmd: &Bottle, part: &SharedDevice) -> Option<SharedD
 
 /// `[set] [reca] [quca|qupa]`.
 fn is_quit(cmd: &Bottle) -> bool {
-    use crate::vocabs::{QUIT_CALIBRATE, QUIT_PARK};
-    matches!(super::rpc::vocab(cmd.get(2)), QUIT_CALIBRATE | QUIT_PARK)
+    matches!(
+        Request::from_v3(cmd),
+        Some(Request::QuitCalibrate(_) | Request::QuitPark(_))
+    )
 }
 
 /// Raises the quit flag of the part's calibrator, which is busy with a procedure (the

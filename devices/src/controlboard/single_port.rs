@@ -7,7 +7,8 @@
 //!   `[ok]`); `help more` adds an explanation after each. The listing is YARP 2's.
 //! * `get` replies carry no `[tsta] <count> <time>` timestamp: `[is] [axes] 2 [ok]`.
 
-use super::rpc::{handle_rpc, vocab, RpcStamp};
+use super::rpc::{handle_rpc, RpcStamp};
+use super::v3::vocab;
 use crate::driver::DeviceDriver;
 use crate::vocabs::{OK, TIMESTAMP};
 use yarp_proto::{Bottle, Value, Vocab32};

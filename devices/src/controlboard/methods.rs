@@ -1,0 +1,543 @@
+//! The control-board protocol, one typed method per remote call: its arguments, its
+//! reply, its 3.12 form and how a device serves it, declared once in the table below.
+//! The server (`rpc.rs`) decodes a [`Request`] and serves it; the client
+//! (`remote_controlboard`) sends the method structs. A method added here must be
+//! handled wherever [`Request`] is matched.
+
+use super::rpc::RpcStamp;
+use super::v3::{self, Form, Group, Style, Wire3};
+use crate::driver::DeviceDriver;
+use crate::error::{DevResult, DeviceError};
+use crate::interfaces::{CalibrationParameters, Pid};
+use crate::vocabs::*;
+use yarp_proto::{Bottle, Vocab32};
+
+/// One remote call of the control board.
+pub trait Method: Sized {
+    type Reply: Wire3;
+    const V3: Form;
+    fn put_args(&self, b: &mut Bottle);
+    fn take_args(c: &mut v3::Cursor<'_>) -> Option<Self>;
+    /// Serves the call on `dev`.
+    fn serve(self, dev: &mut dyn DeviceDriver) -> DevResult<Self::Reply>;
+}
+
+/// The device's interface `as_x`, or `Unsupported`.
+macro_rules! via {
+    ($d:ident . $as:ident) => {
+        $d.$as().ok_or(DeviceError::Unsupported(stringify!($as)))?
+    };
+}
+
+/// A group command needs one value per joint.
+fn sized<T>(joints: &Group, values: &[T]) -> DevResult<()> {
+    if joints.len() == values.len() {
+        Ok(())
+    } else {
+        Err(DeviceError::WrongSize {
+            expected: joints.len(),
+            got: values.len(),
+        })
+    }
+}
+
+/// The number of controlled joints (C++ `controlledJoints`).
+fn axes(d: &mut dyn DeviceDriver) -> DevResult<usize> {
+    if let Some(e) = d.as_encoders() {
+        return e.get_axes();
+    }
+    if let Some(p) = d.as_position_control() {
+        return p.get_axes();
+    }
+    via!(d.as_velocity_control).get_axes()
+}
+
+/// `f(j)` for every joint.
+fn each<T>(n: usize, f: impl FnMut(usize) -> DevResult<T>) -> DevResult<Vec<T>> {
+    (0..n).map(f).collect()
+}
+
+macro_rules! control_board_methods {
+    ($(
+        $(#[$doc:meta])*
+        $name:ident { $($arg:ident : $ty:ty),* } -> $reply:ty,
+            $style:ident [$($head:ident),+] => |$d:ident| $serve:expr;
+    )*) => {
+        $(
+            $(#[$doc])*
+            #[derive(Debug, Clone, PartialEq)]
+            pub struct $name { $(pub $arg: $ty),* }
+
+            impl Method for $name {
+                type Reply = $reply;
+                const V3: Form = Form { head: &[$($head),+], style: Style::$style };
+                fn put_args(&self, _b: &mut Bottle) {
+                    $( self.$arg.put(_b); )*
+                }
+                fn take_args(_c: &mut v3::Cursor<'_>) -> Option<Self> {
+                    Some(Self { $($arg: Wire3::take(_c)?),* })
+                }
+                #[allow(unused_variables)]
+                fn serve(self, $d: &mut dyn DeviceDriver) -> DevResult<$reply> {
+                    let Self { $($arg),* } = self;
+                    $serve
+                }
+            }
+        )*
+
+        /// Any control-board call, as a server receives it.
+        #[derive(Debug, Clone, PartialEq)]
+        pub enum Request { $($name($name)),* }
+
+        impl Request {
+            /// The call `cmd` makes in 3.12's encoding, if it is one this protocol has.
+            pub fn from_v3(cmd: &Bottle) -> Option<Request> {
+                $( if let Some(m) = v3::decode::<$name>(cmd) { return Some(Request::$name(m)); } )*
+                None
+            }
+
+            /// Serves the call on `dev` and answers `cmd` in 3.12's encoding.
+            pub fn serve_v3(self, cmd: &Bottle, dev: &mut dyn DeviceDriver, stamp: &mut RpcStamp) -> Bottle {
+                match self { $(Request::$name(m) => v3::reply::<$name>(cmd, m.serve(dev), stamp)),* }
+            }
+
+            /// Every method's 3.12 form, in the table's order.
+            pub const FORMS: &'static [Form] = &[$(<$name as Method>::V3),*];
+        }
+    };
+}
+
+control_board_methods! {
+    /// `[get] [prot]`: the protocol version this server speaks.
+    ProtocolVersion {} -> (i32, i32, i32), Echo [GET, PROTOCOL_VERSION] =>
+        |d| Ok(super::PROTOCOL_VERSION_NUMBER);
+    Axes {} -> usize, Get [GET, AXES] => |d| via!(d.as_encoders).get_axes();
+
+    // IPositionControl
+    PositionMove { j: usize, target: f64 } -> (), Set [SET, POSITION_MOVE] =>
+        |d| via!(d.as_position_control).position_move(j, target);
+    PositionMoves { targets: Vec<f64> } -> (), Set [SET, POSITION_MOVES] =>
+        |d| via!(d.as_position_control).position_moves(&targets);
+    PositionMoveGroup { joints: Group, targets: Vec<f64> } -> (), Set [SET, POSITION_MOVE_GROUP] =>
+        |d| { sized(&joints, &targets)?; via!(d.as_position_control).position_move_group(&joints, &targets) };
+    RelativeMove { j: usize, delta: f64 } -> (), Set [SET, RELATIVE_MOVE] =>
+        |d| via!(d.as_position_control).relative_move(j, delta);
+    RelativeMoves { deltas: Vec<f64> } -> (), Set [SET, RELATIVE_MOVES] =>
+        |d| via!(d.as_position_control).relative_moves(&deltas);
+    RelativeMoveGroup { joints: Group, deltas: Vec<f64> } -> (), Set [SET, RELATIVE_MOVE_GROUP] =>
+        |d| { sized(&joints, &deltas)?; via!(d.as_position_control).relative_move_group(&joints, &deltas) };
+    SetRefSpeed { j: usize, speed: f64 } -> (), Set [SET, REF_SPEED] =>
+        |d| via!(d.as_position_control).set_ref_speed(j, speed);
+    SetRefSpeeds { speeds: Vec<f64> } -> (), Set [SET, REF_SPEEDS] =>
+        |d| via!(d.as_position_control).set_ref_speeds(&speeds);
+    SetRefSpeedGroup { joints: Group, speeds: Vec<f64> } -> (), Set [SET, REF_SPEED_GROUP] =>
+        |d| { sized(&joints, &speeds)?; via!(d.as_position_control).set_ref_speed_group(&joints, &speeds) };
+    SetRefAcceleration { j: usize, acc: f64 } -> (), Set [SET, REF_ACCELERATION] =>
+        |d| via!(d.as_position_control).set_ref_acceleration(j, acc);
+    SetRefAccelerations { accs: Vec<f64> } -> (), Set [SET, REF_ACCELERATIONS] =>
+        |d| via!(d.as_position_control).set_ref_accelerations(&accs);
+    SetRefAccelerationGroup { joints: Group, accs: Vec<f64> } -> (), Set [SET, REF_ACCELERATION_GROUP] =>
+        |d| { sized(&joints, &accs)?; via!(d.as_position_control).set_ref_acceleration_group(&joints, &accs) };
+    Stop { j: usize } -> (), Set [SET, STOP] => |d| via!(d.as_position_control).stop(j);
+    Stops {} -> (), Set [SET, STOPS] => |d| via!(d.as_position_control).stops();
+    StopGroup { joints: Group } -> (), Set [SET, STOP_GROUP] =>
+        |d| via!(d.as_position_control).stop_group(&joints);
+    CheckMotionDone { j: usize } -> bool, Get [GET, MOTION_DONE] =>
+        |d| via!(d.as_position_control).check_motion_done(j);
+    CheckMotionDones {} -> bool, Get [GET, MOTION_DONES] =>
+        |d| via!(d.as_position_control).check_motion_dones();
+    CheckMotionDoneGroup { joints: Group } -> bool, Get [GET, MOTION_DONE_GROUP] =>
+        |d| via!(d.as_position_control).check_motion_done_group(&joints);
+    GetTargetPosition { j: usize } -> f64, Get [GET, POSITION_MOVE] =>
+        |d| via!(d.as_position_control).get_target_position(j);
+    GetTargetPositions {} -> Vec<f64>, Get [GET, POSITION_MOVES] =>
+        |d| via!(d.as_position_control).get_target_positions();
+    GetTargetPositionGroup { joints: Group } -> Vec<f64>, Get [GET, POSITION_MOVE_GROUP] =>
+        |d| via!(d.as_position_control).get_target_position_group(&joints);
+    GetRefSpeed { j: usize } -> f64, Get [GET, REF_SPEED] =>
+        |d| via!(d.as_position_control).get_ref_speed(j);
+    GetRefSpeeds {} -> Vec<f64>, Get [GET, REF_SPEEDS] =>
+        |d| via!(d.as_position_control).get_ref_speeds();
+    GetRefSpeedGroup { joints: Group } -> Vec<f64>, Get [GET, REF_SPEED_GROUP] =>
+        |d| via!(d.as_position_control).get_ref_speed_group(&joints);
+    GetRefAcceleration { j: usize } -> f64, Get [GET, REF_ACCELERATION] =>
+        |d| via!(d.as_position_control).get_ref_acceleration(j);
+    GetRefAccelerations {} -> Vec<f64>, Get [GET, REF_ACCELERATIONS] =>
+        |d| via!(d.as_position_control).get_ref_accelerations();
+    GetRefAccelerationGroup { joints: Group } -> Vec<f64>, Get [GET, REF_ACCELERATION_GROUP] =>
+        |d| via!(d.as_position_control).get_ref_acceleration_group(&joints);
+
+    // IVelocityControl (single-joint and group moves travel on command:i only)
+    VelocityMoves { speeds: Vec<f64> } -> (), Set [SET, VELOCITY_MOVES] =>
+        |d| via!(d.as_velocity_control).velocity_moves(&speeds);
+    GetRefVelocity { j: usize } -> f64, Get [GET, VELOCITY_MOVE] =>
+        |d| via!(d.as_velocity_control).get_ref_velocity(j);
+    GetRefVelocities {} -> Vec<f64>, Get [GET, VELOCITY_MOVES] =>
+        |d| via!(d.as_velocity_control).get_ref_velocities();
+    GetRefVelocityGroup { joints: Group } -> Vec<f64>, Get [GET, VELOCITY_MOVE_GROUP] =>
+        |d| { let v = via!(d.as_velocity_control); joints.iter().map(|&j| v.get_ref_velocity(j)).collect() };
+
+    // IEncoders (readings come from the state port; these are what RPC serves)
+    GetEncoder { j: usize } -> f64, Get [GET, ENCODER] => |d| via!(d.as_encoders).get_encoder(j);
+    GetEncoders {} -> Vec<f64>, Get [GET, ENCODERS] => |d| via!(d.as_encoders).get_encoders();
+    GetEncoderSpeed { j: usize } -> f64, Get [GET, ENCODER_SPEED] =>
+        |d| via!(d.as_encoders).get_encoder_speed(j);
+    GetEncoderSpeeds {} -> Vec<f64>, Get [GET, ENCODER_SPEEDS] =>
+        |d| via!(d.as_encoders).get_encoder_speeds();
+    GetEncoderAcceleration { j: usize } -> f64, Get [GET, ENCODER_ACCELERATION] =>
+        |d| via!(d.as_encoders).get_encoder_acceleration(j);
+    GetEncoderAccelerations {} -> Vec<f64>, Get [GET, ENCODER_ACCELERATIONS] =>
+        |d| via!(d.as_encoders).get_encoder_accelerations();
+    SetEncoder { j: usize, value: f64 } -> (), Set [SET, ENCODER] =>
+        |d| via!(d.as_encoders).set_encoder(j, value);
+    SetEncoders { values: Vec<f64> } -> (), Set [SET, ENCODERS] =>
+        |d| via!(d.as_encoders).set_encoders(&values);
+    ResetEncoder { j: usize } -> (), Set [SET, E_RESET] => |d| via!(d.as_encoders).reset_encoder(j);
+    ResetEncoders {} -> (), Set [SET, E_RESETS] => |d| via!(d.as_encoders).reset_encoders();
+
+    // IMotorEncoders
+    GetNumOfMotorEncoders {} -> usize, Get [GET, MOTOR_ENCODER_NUMBER] =>
+        |d| via!(d.as_motor_encoders).get_num_of_motor_encoders();
+    GetMotorEncoder { m: usize } -> f64, Get [GET, MOTOR_ENCODER] =>
+        |d| via!(d.as_motor_encoders).get_motor_encoder(m);
+    GetMotorEncoders {} -> Vec<f64>, Get [GET, MOTOR_ENCODERS] =>
+        |d| via!(d.as_motor_encoders).get_motor_encoders();
+    GetMotorEncoderSpeed { m: usize } -> f64, Get [GET, MOTOR_ENCODER_SPEED] =>
+        |d| via!(d.as_motor_encoders).get_motor_encoder_speed(m);
+    GetMotorEncoderSpeeds {} -> Vec<f64>, Get [GET, MOTOR_ENCODER_SPEEDS] =>
+        |d| via!(d.as_motor_encoders).get_motor_encoder_speeds();
+    GetMotorEncoderAcceleration { m: usize } -> f64, Get [GET, MOTOR_ENCODER_ACCELERATION] =>
+        |d| via!(d.as_motor_encoders).get_motor_encoder_acceleration(m);
+    GetMotorEncoderAccelerations {} -> Vec<f64>, Get [GET, MOTOR_ENCODER_ACCELERATIONS] =>
+        |d| via!(d.as_motor_encoders).get_motor_encoder_accelerations();
+    GetMotorEncoderCpr { m: usize } -> f64, Get [GET, MOTOR_CPR] =>
+        |d| via!(d.as_motor_encoders).get_motor_encoder_counts_per_revolution(m);
+    SetMotorEncoderCpr { m: usize, cpr: f64 } -> (), Set [SET, MOTOR_CPR] =>
+        |d| via!(d.as_motor_encoders).set_motor_encoder_counts_per_revolution(m, cpr);
+
+    // IControlLimits
+    GetLimits { j: usize } -> (f64, f64), Get [GET, LIMITS] => |d| via!(d.as_control_limits).get_limits(j);
+    SetLimits { j: usize, min: f64, max: f64 } -> (), Set [SET, LIMITS] =>
+        |d| via!(d.as_control_limits).set_limits(j, min, max);
+    GetVelLimits { j: usize } -> (f64, f64), Get [GET, VEL_LIMITS] =>
+        |d| via!(d.as_control_limits).get_vel_limits(j);
+    SetVelLimits { j: usize, min: f64, max: f64 } -> (), Set [SET, VEL_LIMITS] =>
+        |d| via!(d.as_control_limits).set_vel_limits(j, min, max);
+
+    // IAxisInfo (the joint type travels as its int32 value)
+    GetAxisName { j: usize } -> String, Get [GET, INFO_NAME] => |d| via!(d.as_axis_info).get_axis_name(j);
+    GetJointType { j: usize } -> i32, Get [GET, INFO_TYPE] =>
+        |d| via!(d.as_axis_info).get_joint_type(j).map(|t| t.0);
+
+    // IAmplifierControl
+    EnableAmp { j: usize } -> (), Set [SET, AMP_ENABLE] => |d| via!(d.as_amplifier_control).enable_amp(j);
+    DisableAmp { j: usize } -> (), Set [SET, AMP_DISABLE] => |d| via!(d.as_amplifier_control).disable_amp(j);
+    GetAmpStatuses {} -> Vec<i32>, Get [GET, AMP_STATUS] => |d| via!(d.as_amplifier_control).get_amp_statuses();
+    GetAmpStatus { j: usize } -> i32, Get [GET, AMP_STATUS_SINGLE] =>
+        |d| via!(d.as_amplifier_control).get_amp_status(j);
+    GetCurrent { j: usize } -> f64, Get [GET, AMP_CURRENT] => |d| via!(d.as_amplifier_control).get_current(j);
+    GetCurrents {} -> Vec<f64>, Get [GET, AMP_CURRENTS] =>
+        |d| { let n = via!(d.as_encoders).get_axes()?; let a = via!(d.as_amplifier_control); each(n, |j| a.get_current(j)) };
+    GetMaxCurrent { j: usize } -> f64, Get [GET, AMP_MAXCURRENT] =>
+        |d| via!(d.as_amplifier_control).get_max_current(j);
+    SetMaxCurrent { j: usize, value: f64 } -> (), Set [SET, AMP_MAXCURRENT] =>
+        |d| via!(d.as_amplifier_control).set_max_current(j, value);
+    GetNominalCurrent { m: usize } -> f64, Get [GET, AMP_NOMINAL_CURRENT] =>
+        |d| via!(d.as_amplifier_control).get_nominal_current(m);
+    SetNominalCurrent { m: usize, value: f64 } -> (), Set [SET, AMP_NOMINAL_CURRENT] =>
+        |d| via!(d.as_amplifier_control).set_nominal_current(m, value);
+    GetPeakCurrent { m: usize } -> f64, Get [GET, AMP_PEAK_CURRENT] =>
+        |d| via!(d.as_amplifier_control).get_peak_current(m);
+    SetPeakCurrent { m: usize, value: f64 } -> (), Set [SET, AMP_PEAK_CURRENT] =>
+        |d| via!(d.as_amplifier_control).set_peak_current(m, value);
+    GetPwm { m: usize } -> f64, Get [GET, AMP_PWM] => |d| via!(d.as_amplifier_control).get_pwm(m);
+    GetPwmLimit { m: usize } -> f64, Get [GET, AMP_PWM_LIMIT] =>
+        |d| via!(d.as_amplifier_control).get_pwm_limit(m);
+    SetPwmLimit { m: usize, value: f64 } -> (), Set [SET, AMP_PWM_LIMIT] =>
+        |d| via!(d.as_amplifier_control).set_pwm_limit(m, value);
+    GetPowerSupplyVoltage { m: usize } -> f64, Get [GET, AMP_VOLTAGE_SUPPLY] =>
+        |d| via!(d.as_amplifier_control).get_power_supply_voltage(m);
+
+    // IMotor
+    GetNumberOfMotors {} -> usize, Get [GET, MOTORS_NUMBER] => |d| via!(d.as_motor).get_number_of_motors();
+    GetTemperature { m: usize } -> f64, Get [GET, TEMPERATURE] => |d| via!(d.as_motor).get_temperature(m);
+    GetTemperatures {} -> Vec<f64>, Get [GET, TEMPERATURES] =>
+        |d| { let motor = via!(d.as_motor); let n = motor.get_number_of_motors()?; each(n, |m| motor.get_temperature(m)) };
+    GetTemperatureLimit { m: usize } -> f64, Get [GET, TEMPERATURE_LIMIT] =>
+        |d| via!(d.as_motor).get_temperature_limit(m);
+    SetTemperatureLimit { m: usize, value: f64 } -> (), Set [SET, TEMPERATURE_LIMIT] =>
+        |d| via!(d.as_motor).set_temperature_limit(m, value);
+    GetGearboxRatio { m: usize } -> f64, Get [GET, GEARBOX_RATIO] => |d| via!(d.as_motor).get_gearbox_ratio(m);
+    SetGearboxRatio { m: usize, value: f64 } -> (), Set [SET, GEARBOX_RATIO] =>
+        |d| via!(d.as_motor).set_gearbox_ratio(m, value);
+
+    // IPositionDirect (references are set on command:i only)
+    GetRefPosition { j: usize } -> f64, Get [GET, POSITION_DIRECT] =>
+        |d| via!(d.as_position_direct).get_ref_position(j);
+    GetRefPositions {} -> Vec<f64>, Get [GET, POSITION_DIRECTS] =>
+        |d| via!(d.as_position_direct).get_ref_positions();
+    GetRefPositionsGroup { joints: Group } -> Vec<f64>, Get [GET, POSITION_DIRECT_GROUP] =>
+        |d| via!(d.as_position_direct).get_ref_positions_group(&joints);
+
+    // IControlMode (readings come from the state port)
+    GetControlMode { j: usize } -> Vocab32, GetMode [GET, ICONTROLMODE, CM_CONTROL_MODE] =>
+        |d| via!(d.as_control_mode).get_control_mode(j);
+    GetControlModes {} -> Vec<Vocab32>, GetMode [GET, ICONTROLMODE, CM_CONTROL_MODES] =>
+        |d| via!(d.as_control_mode).get_control_modes();
+    GetControlModesGroup { joints: Group } -> Vec<Vocab32>, GetMode [GET, ICONTROLMODE, CM_CONTROL_MODE_GROUP] =>
+        |d| via!(d.as_control_mode).get_control_modes_group(&joints);
+    SetControlMode { j: usize, mode: Vocab32 } -> (), Set [SET, ICONTROLMODE, CM_CONTROL_MODE] =>
+        |d| via!(d.as_control_mode).set_control_mode(j, mode);
+    SetControlModes { modes: Vec<Vocab32> } -> (), Set [SET, ICONTROLMODE, CM_CONTROL_MODES] =>
+        |d| via!(d.as_control_mode).set_control_modes(&modes);
+    SetControlModesGroup { joints: Group, modes: Vec<Vocab32> } -> (), Set [SET, ICONTROLMODE, CM_CONTROL_MODE_GROUP] =>
+        |d| { sized(&joints, &modes)?; via!(d.as_control_mode).set_control_modes_group(&joints, &modes) };
+
+    // IInteractionMode
+    GetInteractionMode { j: usize } -> Vocab32, GetPlain [GET, INTERACTION_MODE_IFACE, INTERACTION_MODE] =>
+        |d| via!(d.as_interaction_mode).get_interaction_mode(j);
+    GetInteractionModes {} -> Vec<Vocab32>, GetPlain [GET, INTERACTION_MODE_IFACE, INTERACTION_MODES] =>
+        |d| via!(d.as_interaction_mode).get_interaction_modes();
+    GetInteractionModesGroup { joints: Group } -> Vec<Vocab32>, GetPlain [GET, INTERACTION_MODE_IFACE, INTERACTION_MODE_GROUP] =>
+        |d| via!(d.as_interaction_mode).get_interaction_modes_group(&joints);
+    SetInteractionMode { j: usize, mode: Vocab32 } -> (), Set [SET, INTERACTION_MODE_IFACE, INTERACTION_MODE] =>
+        |d| via!(d.as_interaction_mode).set_interaction_mode(j, mode);
+    SetInteractionModes { modes: Vec<Vocab32> } -> (), Set [SET, INTERACTION_MODE_IFACE, INTERACTION_MODES] =>
+        |d| via!(d.as_interaction_mode).set_interaction_modes(&modes);
+    SetInteractionModesGroup { joints: Group, modes: Vec<Vocab32> } -> (), Set [SET, INTERACTION_MODE_IFACE, INTERACTION_MODE_GROUP] =>
+        |d| via!(d.as_interaction_mode).set_interaction_modes_group(&joints, &modes);
+
+    // ITorqueControl (references are set one by one or all, here or on command:i)
+    GetTorque { j: usize } -> f64, Get [GET, TORQUE, TRQ] => |d| via!(d.as_torque_control).get_torque(j);
+    GetTorques {} -> Vec<f64>, Get [GET, TORQUE, TRQS] => |d| via!(d.as_torque_control).get_torques();
+    GetRefTorque { j: usize } -> f64, Get [GET, TORQUE, REF] => |d| via!(d.as_torque_control).get_ref_torque(j);
+    GetRefTorques {} -> Vec<f64>, Get [GET, TORQUE, REFS] => |d| via!(d.as_torque_control).get_ref_torques();
+    SetRefTorque { j: usize, value: f64 } -> (), Set [SET, TORQUE, REF] =>
+        |d| via!(d.as_torque_control).set_ref_torque(j, value);
+    SetRefTorques { values: Vec<f64> } -> (), Set [SET, TORQUE, REFS] =>
+        |d| {
+            // C++ wants exactly the controlled joints
+            let t = via!(d.as_torque_control);
+            let n = t.get_axes()?;
+            if values.len() != n {
+                return Err(DeviceError::WrongSize { expected: n, got: values.len() });
+            }
+            values.iter().enumerate().try_for_each(|(j, v)| t.set_ref_torque(j, *v))
+        };
+    GetTorqueRange { j: usize } -> (f64, f64), Get [GET, TORQUE, RANGE] =>
+        |d| via!(d.as_torque_control).get_torque_range(j);
+    GetTorqueRanges {} -> (Vec<f64>, Vec<f64>), Get [GET, TORQUE, RANGES] =>
+        |d| { let t = via!(d.as_torque_control); let n = t.get_axes()?; Ok(each(n, |j| t.get_torque_range(j))?.into_iter().unzip()) };
+    GetMotorTorqueParams { j: usize } -> Vec<f64>, Get [GET, TORQUE, MOTOR_PARAMS] =>
+        |d| via!(d.as_torque_control).get_motor_torque_params(j).map(|p| p.to_vec());
+
+    // ICurrentControl, IPwmControl readings (references are set on command:i only)
+    GetCurrentRange { j: usize } -> (f64, f64), GetBare [GET, CURRENT_IFACE, RANGE] =>
+        |d| via!(d.as_current_control).get_current_range(j);
+    GetCurrentRanges {} -> (Vec<f64>, Vec<f64>), GetBare [GET, CURRENT_IFACE, RANGES] =>
+        |d| { let n = axes(d)?; let c = via!(d.as_current_control); Ok(each(n, |j| c.get_current_range(j))?.into_iter().unzip()) };
+    GetRefCurrent { j: usize } -> f64, GetBare [GET, CURRENT_IFACE, REF] =>
+        |d| via!(d.as_current_control).get_ref_current(j);
+    GetRefCurrents {} -> Vec<f64>, GetBare [GET, CURRENT_IFACE, REFS] =>
+        |d| { let n = axes(d)?; let c = via!(d.as_current_control); each(n, |j| c.get_ref_current(j)) };
+    GetRefDutyCycle { j: usize } -> f64, GetBare [GET, PWM_IFACE, REF] =>
+        |d| via!(d.as_pwm_control).get_ref_duty_cycle(j);
+    GetRefDutyCycles {} -> Vec<f64>, GetBare [GET, PWM_IFACE, REFS] =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pwm_control); each(n, |j| p.get_ref_duty_cycle(j)) };
+    GetDutyCycle { j: usize } -> f64, GetBare [GET, PWM_IFACE, PWM_OUTPUT] =>
+        |d| via!(d.as_pwm_control).get_duty_cycle(j);
+    /// C++ answers the references here (sic), which we copy.
+    GetDutyCycles {} -> Vec<f64>, GetBare [GET, PWM_IFACE, PWM_OUTPUTS] =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pwm_control); each(n, |j| p.get_ref_duty_cycle(j)) };
+
+    // IPidControl: `[set|get] [pid] <what> <pid type> <joint> ...`
+    SetPid { ty: Vocab32, j: usize, pid: Pid } -> (), Set [SET, PID, PID] =>
+        |d| via!(d.as_pid_control).set_pid(ty, j, pid);
+    EnablePid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_ENABLE] =>
+        |d| via!(d.as_pid_control).enable_pid(ty, j);
+    DisablePid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_DISABLE] =>
+        |d| via!(d.as_pid_control).disable_pid(ty, j);
+    SetPidReference { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, REF] =>
+        |d| via!(d.as_pid_control).set_pid_reference(ty, j, value);
+    ResetPid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_RESET] =>
+        |d| via!(d.as_pid_control).reset_pid(ty, j);
+    SetPidErrorLimit { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, PID_ERROR_LIMIT] =>
+        |d| via!(d.as_pid_control).set_pid_error_limit(ty, j, value);
+    SetPidOffset { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, PID_OFFSET] =>
+        |d| via!(d.as_pid_control).set_pid_offset(ty, j, value);
+    GetPid { ty: Vocab32, j: usize } -> Pid, GetBare [GET, PID, PID] => |d| via!(d.as_pid_control).get_pid(ty, j);
+    IsPidEnabled { ty: Vocab32, j: usize } -> bool, GetBare [GET, PID, PID_ENABLE] =>
+        |d| via!(d.as_pid_control).is_pid_enabled(ty, j);
+    GetPidReference { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, REF] =>
+        |d| via!(d.as_pid_control).get_pid_reference(ty, j);
+    GetPidError { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_ERROR] =>
+        |d| via!(d.as_pid_control).get_pid_error(ty, j);
+    GetPidOutput { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_OUTPUT] =>
+        |d| via!(d.as_pid_control).get_pid_output(ty, j);
+    GetPidErrorLimit { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_ERROR_LIMIT] =>
+        |d| via!(d.as_pid_control).get_pid_error_limit(ty, j);
+    GetPids { ty: Vocab32 } -> Vec<Pid>, GetBare [GET, PID, PIDS] =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid(ty, j)) };
+    GetPidReferences { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, REFS] =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_reference(ty, j)) };
+    GetPidErrorLimits { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_ERROR_LIMITS] =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_error_limit(ty, j)) };
+    GetPidErrors { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_ERRORS] =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_error(ty, j)) };
+    GetPidOutputs { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_OUTPUTS] =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_output(ty, j)) };
+
+    // IImpedanceControl: values travel in a list, which C++ reads padded with zeros
+    SetImpedance { j: usize, values: Vec<f64> } -> (), Set [SET, IMPEDANCE, IMP_PARAM] =>
+        |d| { let v = padded(values); via!(d.as_impedance_control).set_impedance(j, v[0], v[1]) };
+    SetImpedanceOffset { j: usize, values: Vec<f64> } -> (), Set [SET, IMPEDANCE, IMP_OFFSET] =>
+        |d| via!(d.as_impedance_control).set_impedance_offset(j, padded(values)[0]);
+    GetImpedance { j: usize } -> Vec<f64>, Get [GET, IMPEDANCE, IMP_PARAM] =>
+        |d| via!(d.as_impedance_control).get_impedance(j).map(|(k, b)| vec![k, b]);
+    GetImpedanceOffset { j: usize } -> Vec<f64>, Get [GET, IMPEDANCE, IMP_OFFSET] =>
+        |d| via!(d.as_impedance_control).get_impedance_offset(j).map(|o| vec![o]);
+    /// 3.12 names the limits with the generic `[llim]`.
+    GetImpedanceLimits { j: usize } -> Vec<f64>, Get [GET, IMPEDANCE, LIMITS] =>
+        |d| via!(d.as_impedance_control).get_current_impedance_limit(j)
+            .map(|l| vec![l.min_stiffness, l.max_stiffness, l.min_damping, l.max_damping]);
+
+    // IControlCalibration, which C++ recognises by its first vocab
+    CalibrateAxisWithParams { j: usize, kind: u32, p1: f64, p2: f64, p3: f64 } -> (), Set [CALIBRATE_JOINT] =>
+        |d| via!(d.as_control_calibration).calibrate_axis_with_params(j, kind, p1, p2, p3);
+    /// C++ sends the type and param1..4 only.
+    SetCalibrationParameters { j: usize, kind: u32, p1: f64, p2: f64, p3: f64, p4: f64 } -> (), Set [CALIBRATE_JOINT_PARAMS] =>
+        |d| {
+            let params = CalibrationParameters { kind, param1: p1, param2: p2, param3: p3, param4: p4, ..Default::default() };
+            via!(d.as_control_calibration).set_calibration_parameters(j, &params)
+        };
+    /// `[fail]` means "not done".
+    CalibrationDone { j: usize } -> bool, Check [CALIBRATE_DONE] =>
+        |d| via!(d.as_control_calibration).calibration_done(j);
+    // These four are a lone vocab from C++'s client, which a 3.12 server refuses as
+    // shorter than two elements.
+    CalibrateRobot {} -> (), Set [CALIBRATE] => |d| via!(d.as_control_calibration).calibrate_robot();
+    AbortCalibration {} -> (), Set [ABORTCALIB] => |d| via!(d.as_control_calibration).abort_calibration();
+    AbortPark {} -> (), Set [ABORTPARK] => |d| via!(d.as_control_calibration).abort_park();
+    /// As C++: "client would get stuck if returning false".
+    Park { wait: Option<bool> } -> (), Set [PARK] =>
+        |d| {
+            if let Err(e) = via!(d.as_control_calibration).park(wait.unwrap_or(false)) {
+                tracing::warn!("controlBoard rpc: park failed: {e}");
+            }
+            Ok(())
+        };
+
+    // IRemoteCalibrator: `[set|get] [reca] <what> [j]`
+    IsCalibratorPresent {} -> bool, GetBare [GET, REMOTE_CALIBRATOR_IFACE, IS_CALIBRATOR_PRESENT] =>
+        |d| via!(d.as_remote_calibrator).is_calibrator_device_present();
+    CalibrateSingleJoint { j: usize } -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, CALIBRATE_SINGLE_JOINT] =>
+        |d| via!(d.as_remote_calibrator).calibrate_single_joint(j);
+    CalibrateWholePart {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, CALIBRATE_WHOLE_PART] =>
+        |d| via!(d.as_remote_calibrator).calibrate_whole_part();
+    HomingSingleJoint { j: usize } -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, HOMING_SINGLE_JOINT] =>
+        |d| via!(d.as_remote_calibrator).homing_single_joint(j);
+    HomingWholePart {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, HOMING_WHOLE_PART] =>
+        |d| via!(d.as_remote_calibrator).homing_whole_part();
+    /// C++ calls `parkSingleJoint(j)`, whose default waits; the flag does not travel.
+    ParkSingleJoint { j: usize } -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, PARK_SINGLE_JOINT] =>
+        |d| via!(d.as_remote_calibrator).park_single_joint(j, true);
+    ParkWholePart {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, PARK_WHOLE_PART] =>
+        |d| via!(d.as_remote_calibrator).park_whole_part();
+    QuitCalibrate {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, QUIT_CALIBRATE] =>
+        |d| via!(d.as_remote_calibrator).quit_calibrate();
+    QuitPark {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, QUIT_PARK] =>
+        |d| via!(d.as_remote_calibrator).quit_park();
+}
+
+/// An impedance list padded with zeros to the values C++ reads.
+fn padded(mut v: Vec<f64>) -> Vec<f64> {
+    v.resize(v.len().max(2), 0.0);
+    v
+}
+
+impl Request {
+    /// Whether the call is one of `IRemoteCalibrator`'s, which a part forwards to its
+    /// calibrator device.
+    pub fn is_remote_calibrator(&self) -> bool {
+        matches!(
+            self,
+            Request::IsCalibratorPresent(_)
+                | Request::CalibrateSingleJoint(_)
+                | Request::CalibrateWholePart(_)
+                | Request::HomingSingleJoint(_)
+                | Request::HomingWholePart(_)
+                | Request::ParkSingleJoint(_)
+                | Request::ParkWholePart(_)
+                | Request::QuitCalibrate(_)
+                | Request::QuitPark(_)
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn no_head_is_a_prefix_of_another() {
+        // a request must decode as one method only
+        for (i, a) in Request::FORMS.iter().enumerate() {
+            for (k, b) in Request::FORMS.iter().enumerate() {
+                if i != k && b.head.len() >= a.head.len() {
+                    assert_ne!(
+                        a.head,
+                        &b.head[..a.head.len()],
+                        "{a:?} is a prefix of {b:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn requests_round_trip_through_3_12_bottles() {
+        let group = || Group(vec![0, 2]);
+        let cases: Vec<Request> = vec![
+            Request::PositionMoveGroup(PositionMoveGroup {
+                joints: group(),
+                targets: vec![1.0, 2.0],
+            }),
+            Request::SetPid(SetPid {
+                ty: Vocab32::new("pos1"),
+                j: 1,
+                pid: Pid::from_slice(&[1.0, 2.0, 3.0]),
+            }),
+            Request::SetControlModesGroup(SetControlModesGroup {
+                joints: group(),
+                modes: vec![Vocab32::new("idl"); 2],
+            }),
+            Request::CalibrateAxisWithParams(CalibrateAxisWithParams {
+                j: 3,
+                kind: 4,
+                p1: 1.0,
+                p2: 2.0,
+                p3: 3.0,
+            }),
+            Request::Park(Park { wait: None }),
+            Request::QuitPark(QuitPark {}),
+        ];
+        for r in cases {
+            let b = match &r {
+                Request::PositionMoveGroup(m) => v3::request(m),
+                Request::SetPid(m) => v3::request(m),
+                Request::SetControlModesGroup(m) => v3::request(m),
+                Request::CalibrateAxisWithParams(m) => v3::request(m),
+                Request::Park(m) => v3::request(m),
+                Request::QuitPark(m) => v3::request(m),
+                _ => unreachable!(),
+            };
+            assert_eq!(Request::from_v3(&b), Some(r), "{b}");
+        }
+    }
+
+    #[test]
+    fn group_counts_must_match() {
+        let b = Bottle::from_text("[set] [pmg] 3 (0 1) (1.0 2.0)");
+        assert_eq!(Request::from_v3(&b), None);
+    }
+}
