@@ -351,11 +351,11 @@ impl ControlBoardRemapper {
 
 /// The interface `$view` of the board owning joint `$j`, as `$i` with board joint `$l`.
 macro_rules! on {
-    ($self:ident, $j:expr, $view:ident, $what:literal, |$i:ident, $l:ident| $body:expr) => {
+    ($self:ident, $j:expr, $view:ident, |$i:ident, $l:ident| $body:expr) => {
         $self.on($j, |d, $l| {
             let $i = d.$view().ok_or(DeviceError::Unsupported(concat!(
-                "a board of the remapper lacks ",
-                $what
+                "a board of the remapper lacks the interface of ",
+                stringify!($view)
             )))?;
             $body
         })
@@ -455,26 +455,22 @@ impl IEncoders for ControlBoardRemapper {
         self.axes()
     }
     fn get_encoder(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_encoders, "IEncoders", |e, l| e.get_encoder(l))
+        on!(self, j, as_encoders, |e, l| e.get_encoder(l))
     }
     fn get_encoder_speed(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_encoders, "IEncoders", |e, l| e
-            .get_encoder_speed(l))
+        on!(self, j, as_encoders, |e, l| e.get_encoder_speed(l))
     }
     fn get_encoder_acceleration(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_encoders, "IEncoders", |e, l| e
-            .get_encoder_acceleration(l))
+        on!(self, j, as_encoders, |e, l| e.get_encoder_acceleration(l))
     }
     fn get_encoder_timed(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_encoders, "IEncoders", |e, l| e
-            .get_encoder_timed(l))
+        on!(self, j, as_encoders, |e, l| e.get_encoder_timed(l))
     }
     fn set_encoder(&mut self, j: usize, value: f64) -> DevResult<()> {
-        on!(self, j, as_encoders, "IEncoders", |e, l| e
-            .set_encoder(l, value))
+        on!(self, j, as_encoders, |e, l| e.set_encoder(l, value))
     }
     fn reset_encoder(&mut self, j: usize) -> DevResult<()> {
-        on!(self, j, as_encoders, "IEncoders", |e, l| e.reset_encoder(l))
+        on!(self, j, as_encoders, |e, l| e.reset_encoder(l))
     }
 }
 
@@ -483,39 +479,36 @@ impl IPositionControl for ControlBoardRemapper {
         self.axes()
     }
     fn position_move(&mut self, j: usize, target: f64) -> DevResult<()> {
-        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+        on!(self, j, as_position_control, |p, l| p
             .position_move(l, target))
     }
     fn relative_move(&mut self, j: usize, delta: f64) -> DevResult<()> {
-        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+        on!(self, j, as_position_control, |p, l| p
             .relative_move(l, delta))
     }
     fn check_motion_done(&mut self, j: usize) -> DevResult<bool> {
-        on!(self, j, as_position_control, "IPositionControl", |p, l| p
-            .check_motion_done(l))
+        on!(self, j, as_position_control, |p, l| p.check_motion_done(l))
     }
     fn set_ref_speed(&mut self, j: usize, speed: f64) -> DevResult<()> {
-        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+        on!(self, j, as_position_control, |p, l| p
             .set_ref_speed(l, speed))
     }
     fn set_ref_acceleration(&mut self, j: usize, acc: f64) -> DevResult<()> {
-        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+        on!(self, j, as_position_control, |p, l| p
             .set_ref_acceleration(l, acc))
     }
     fn get_ref_speed(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_position_control, "IPositionControl", |p, l| p
-            .get_ref_speed(l))
+        on!(self, j, as_position_control, |p, l| p.get_ref_speed(l))
     }
     fn get_ref_acceleration(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+        on!(self, j, as_position_control, |p, l| p
             .get_ref_acceleration(l))
     }
     fn stop(&mut self, j: usize) -> DevResult<()> {
-        on!(self, j, as_position_control, "IPositionControl", |p, l| p
-            .stop(l))
+        on!(self, j, as_position_control, |p, l| p.stop(l))
     }
     fn get_target_position(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_position_control, "IPositionControl", |p, l| p
+        on!(self, j, as_position_control, |p, l| p
             .get_target_position(l))
     }
 }
@@ -525,12 +518,11 @@ impl IVelocityControl for ControlBoardRemapper {
         self.axes()
     }
     fn velocity_move(&mut self, j: usize, speed: f64) -> DevResult<()> {
-        on!(self, j, as_velocity_control, "IVelocityControl", |v, l| v
+        on!(self, j, as_velocity_control, |v, l| v
             .velocity_move(l, speed))
     }
     fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_velocity_control, "IVelocityControl", |v, l| v
-            .get_ref_velocity(l))
+        on!(self, j, as_velocity_control, |v, l| v.get_ref_velocity(l))
     }
 }
 
@@ -539,12 +531,10 @@ impl IControlMode for ControlBoardRemapper {
         self.axes()
     }
     fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
-        on!(self, j, as_control_mode, "IControlMode", |c, l| c
-            .get_control_mode(l))
+        on!(self, j, as_control_mode, |c, l| c.get_control_mode(l))
     }
     fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
-        on!(self, j, as_control_mode, "IControlMode", |c, l| c
-            .set_control_mode(l, mode))
+        on!(self, j, as_control_mode, |c, l| c.set_control_mode(l, mode))
     }
 }
 
@@ -553,42 +543,37 @@ impl IInteractionMode for ControlBoardRemapper {
         self.axes()
     }
     fn get_interaction_mode(&mut self, j: usize) -> DevResult<Vocab32> {
-        on!(self, j, as_interaction_mode, "IInteractionMode", |i, l| i
+        on!(self, j, as_interaction_mode, |i, l| i
             .get_interaction_mode(l))
     }
     fn set_interaction_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
-        on!(self, j, as_interaction_mode, "IInteractionMode", |i, l| i
+        on!(self, j, as_interaction_mode, |i, l| i
             .set_interaction_mode(l, mode))
     }
 }
 
 impl IAxisInfo for ControlBoardRemapper {
     fn get_axis_name(&mut self, j: usize) -> DevResult<String> {
-        on!(self, j, as_axis_info, "IAxisInfo", |a, l| a
-            .get_axis_name(l))
+        on!(self, j, as_axis_info, |a, l| a.get_axis_name(l))
     }
     fn get_joint_type(&mut self, j: usize) -> DevResult<Vocab32> {
-        on!(self, j, as_axis_info, "IAxisInfo", |a, l| a
-            .get_joint_type(l))
+        on!(self, j, as_axis_info, |a, l| a.get_joint_type(l))
     }
 }
 
 impl IControlLimits for ControlBoardRemapper {
     fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        on!(self, j, as_control_limits, "IControlLimits", |c, l| c
-            .set_limits(l, min, max))
+        on!(self, j, as_control_limits, |c, l| c.set_limits(l, min, max))
     }
     fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_control_limits, "IControlLimits", |c, l| c
-            .get_limits(l))
+        on!(self, j, as_control_limits, |c, l| c.get_limits(l))
     }
     fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        on!(self, j, as_control_limits, "IControlLimits", |c, l| c
+        on!(self, j, as_control_limits, |c, l| c
             .set_vel_limits(l, min, max))
     }
     fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_control_limits, "IControlLimits", |c, l| c
-            .get_vel_limits(l))
+        on!(self, j, as_control_limits, |c, l| c.get_vel_limits(l))
     }
 }
 
@@ -597,20 +582,16 @@ impl ITorqueControl for ControlBoardRemapper {
         self.axes()
     }
     fn get_torque(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_torque_control, "ITorqueControl", |t, l| t
-            .get_torque(l))
+        on!(self, j, as_torque_control, |t, l| t.get_torque(l))
     }
     fn set_ref_torque(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(self, j, as_torque_control, "ITorqueControl", |t, l| t
-            .set_ref_torque(l, v))
+        on!(self, j, as_torque_control, |t, l| t.set_ref_torque(l, v))
     }
     fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_torque_control, "ITorqueControl", |t, l| t
-            .get_ref_torque(l))
+        on!(self, j, as_torque_control, |t, l| t.get_ref_torque(l))
     }
     fn get_torque_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_torque_control, "ITorqueControl", |t, l| t
-            .get_torque_range(l))
+        on!(self, j, as_torque_control, |t, l| t.get_torque_range(l))
     }
 }
 
@@ -619,262 +600,160 @@ impl IMotorEncoders for ControlBoardRemapper {
         self.axes()
     }
     fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor_encoders, "IMotorEncoders", |e, l| e
-            .get_motor_encoder(l))
+        on!(self, m, as_motor_encoders, |e, l| e.get_motor_encoder(l))
     }
     fn get_motor_encoder_speed(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor_encoders, "IMotorEncoders", |e, l| e
+        on!(self, m, as_motor_encoders, |e, l| e
             .get_motor_encoder_speed(l))
     }
     fn get_motor_encoder_acceleration(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor_encoders, "IMotorEncoders", |e, l| e
+        on!(self, m, as_motor_encoders, |e, l| e
             .get_motor_encoder_acceleration(l))
     }
 }
 
 impl IAmplifierControl for ControlBoardRemapper {
     fn enable_amp(&mut self, j: usize) -> DevResult<()> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.enable_amp(l)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a.enable_amp(l))
     }
     fn disable_amp(&mut self, j: usize) -> DevResult<()> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.disable_amp(l)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a.disable_amp(l))
     }
     fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>> {
         (0..self.axes()?)
             .map(|j| {
-                on!(
-                    self,
-                    j,
-                    as_amplifier_control,
-                    "IAmplifierControl",
-                    |a, l| a
-                        .get_amp_statuses()?
-                        .get(l)
-                        .copied()
-                        .ok_or(DeviceError::Unsupported(
-                            "a board of the remapper reported too few amplifier statuses"
-                        ))
-                )
+                on!(self, j, as_amplifier_control, |a, l| a
+                    .get_amp_statuses()?
+                    .get(l)
+                    .copied()
+                    .ok_or(DeviceError::Unsupported(
+                        "a board of the remapper reported too few amplifier statuses"
+                    )))
             })
             .collect()
     }
     fn get_current(&mut self, j: usize) -> DevResult<f64> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.get_current(l)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a.get_current(l))
     }
     fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.get_max_current(l)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a.get_max_current(l))
     }
     fn set_max_current(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.set_max_current(l, v)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a
+            .set_max_current(l, v))
     }
     fn get_nominal_current(&mut self, j: usize) -> DevResult<f64> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.get_nominal_current(l)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a
+            .get_nominal_current(l))
     }
     fn set_nominal_current(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.set_nominal_current(l, v)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a
+            .set_nominal_current(l, v))
     }
     fn get_peak_current(&mut self, j: usize) -> DevResult<f64> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.get_peak_current(l)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a.get_peak_current(l))
     }
     fn set_peak_current(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.set_peak_current(l, v)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a
+            .set_peak_current(l, v))
     }
     fn get_pwm(&mut self, j: usize) -> DevResult<f64> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.get_pwm(l)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a.get_pwm(l))
     }
     fn get_pwm_limit(&mut self, j: usize) -> DevResult<f64> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.get_pwm_limit(l)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a.get_pwm_limit(l))
     }
     fn set_pwm_limit(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.set_pwm_limit(l, v)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a.set_pwm_limit(l, v))
     }
     fn get_power_supply_voltage(&mut self, j: usize) -> DevResult<f64> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.get_power_supply_voltage(l)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a
+            .get_power_supply_voltage(l))
     }
     fn get_amp_status(&mut self, j: usize) -> DevResult<i32> {
-        on!(
-            self,
-            j,
-            as_amplifier_control,
-            "IAmplifierControl",
-            |a, l| a.get_amp_status(l)
-        )
+        on!(self, j, as_amplifier_control, |a, l| a.get_amp_status(l))
     }
 }
 
 impl IMotor for ControlBoardRemapper {
     fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor, "IMotor", |x, l| x.get_temperature(l))
+        on!(self, m, as_motor, |x, l| x.get_temperature(l))
     }
     fn get_number_of_motors(&mut self) -> DevResult<usize> {
         // one motor per joint of the part, as C++ (motors and joints are remapped alike)
         self.axes()
     }
     fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor, "IMotor", |x, l| x.get_gearbox_ratio(l))
+        on!(self, m, as_motor, |x, l| x.get_gearbox_ratio(l))
     }
     fn set_gearbox_ratio(&mut self, m: usize, v: f64) -> DevResult<()> {
-        on!(self, m, as_motor, "IMotor", |x, l| x
-            .set_gearbox_ratio(l, v))
+        on!(self, m, as_motor, |x, l| x.set_gearbox_ratio(l, v))
     }
     fn get_temperature_limit(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor, "IMotor", |x, l| x
-            .get_temperature_limit(l))
+        on!(self, m, as_motor, |x, l| x.get_temperature_limit(l))
     }
     fn set_temperature_limit(&mut self, m: usize, v: f64) -> DevResult<()> {
-        on!(self, m, as_motor, "IMotor", |x, l| x
-            .set_temperature_limit(l, v))
+        on!(self, m, as_motor, |x, l| x.set_temperature_limit(l, v))
     }
 }
 
 impl IPidControl for ControlBoardRemapper {
     fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
-        on!(self, j, as_pid_control, "IPidControl", |p, l| p
-            .get_pid(ty, l))
+        on!(self, j, as_pid_control, |p, l| p.get_pid(ty, l))
     }
     fn set_pid(&mut self, ty: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
-        on!(self, j, as_pid_control, "IPidControl", |p, l| p
-            .set_pid(ty, l, pid))
+        on!(self, j, as_pid_control, |p, l| p.set_pid(ty, l, pid))
     }
     fn enable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        on!(self, j, as_pid_control, "IPidControl", |p, l| p
-            .enable_pid(ty, l))
+        on!(self, j, as_pid_control, |p, l| p.enable_pid(ty, l))
     }
     fn disable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        on!(self, j, as_pid_control, "IPidControl", |p, l| p
-            .disable_pid(ty, l))
+        on!(self, j, as_pid_control, |p, l| p.disable_pid(ty, l))
     }
     fn is_pid_enabled(&mut self, ty: Vocab32, j: usize) -> DevResult<bool> {
-        on!(self, j, as_pid_control, "IPidControl", |p, l| p
-            .is_pid_enabled(ty, l))
+        on!(self, j, as_pid_control, |p, l| p.is_pid_enabled(ty, l))
     }
     fn set_pid_reference(&mut self, ty: Vocab32, j: usize, r: f64) -> DevResult<()> {
-        on!(self, j, as_pid_control, "IPidControl", |p, l| p
+        on!(self, j, as_pid_control, |p, l| p
             .set_pid_reference(ty, l, r))
     }
     fn get_pid_reference(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        on!(self, j, as_pid_control, "IPidControl", |p, l| p
-            .get_pid_reference(ty, l))
+        on!(self, j, as_pid_control, |p, l| p.get_pid_reference(ty, l))
     }
     fn get_pid_error(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        on!(self, j, as_pid_control, "IPidControl", |p, l| p
-            .get_pid_error(ty, l))
+        on!(self, j, as_pid_control, |p, l| p.get_pid_error(ty, l))
     }
     fn get_pid_output(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        on!(self, j, as_pid_control, "IPidControl", |p, l| p
-            .get_pid_output(ty, l))
+        on!(self, j, as_pid_control, |p, l| p.get_pid_output(ty, l))
     }
     fn reset_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        on!(self, j, as_pid_control, "IPidControl", |p, l| p
-            .reset_pid(ty, l))
+        on!(self, j, as_pid_control, |p, l| p.reset_pid(ty, l))
     }
 }
 
 impl ICurrentControl for ControlBoardRemapper {
     fn get_ref_current(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_current_control, "ICurrentControl", |c, l| c
-            .get_ref_current(l))
+        on!(self, j, as_current_control, |c, l| c.get_ref_current(l))
     }
     fn get_current_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_current_control, "ICurrentControl", |c, l| c
-            .get_current_range(l))
+        on!(self, j, as_current_control, |c, l| c.get_current_range(l))
     }
     fn set_ref_current(&mut self, j: usize, current: f64) -> DevResult<()> {
-        on!(self, j, as_current_control, "ICurrentControl", |c, l| c
+        on!(self, j, as_current_control, |c, l| c
             .set_ref_current(l, current))
     }
 }
 
 impl IPwmControl for ControlBoardRemapper {
     fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_pwm_control, "IPWMControl", |c, l| c
-            .get_ref_duty_cycle(l))
+        on!(self, j, as_pwm_control, |c, l| c.get_ref_duty_cycle(l))
     }
     fn set_ref_duty_cycle(&mut self, j: usize, duty: f64) -> DevResult<()> {
-        on!(self, j, as_pwm_control, "IPWMControl", |c, l| c
+        on!(self, j, as_pwm_control, |c, l| c
             .set_ref_duty_cycle(l, duty))
     }
     fn get_duty_cycle(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_pwm_control, "IPWMControl", |c, l| c
-            .get_duty_cycle(l))
+        on!(self, m, as_pwm_control, |c, l| c.get_duty_cycle(l))
     }
 }
 
@@ -883,49 +762,23 @@ impl IImpedanceControl for ControlBoardRemapper {
         self.axes()
     }
     fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(
-            self,
-            j,
-            as_impedance_control,
-            "IImpedanceControl",
-            |i, l| i.get_impedance(l)
-        )
+        on!(self, j, as_impedance_control, |i, l| i.get_impedance(l))
     }
     fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
-        on!(
-            self,
-            j,
-            as_impedance_control,
-            "IImpedanceControl",
-            |i, l| i.set_impedance(l, stiffness, damping)
-        )
+        on!(self, j, as_impedance_control, |i, l| i
+            .set_impedance(l, stiffness, damping))
     }
     fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
-        on!(
-            self,
-            j,
-            as_impedance_control,
-            "IImpedanceControl",
-            |i, l| i.get_impedance_offset(l)
-        )
+        on!(self, j, as_impedance_control, |i, l| i
+            .get_impedance_offset(l))
     }
     fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
-        on!(
-            self,
-            j,
-            as_impedance_control,
-            "IImpedanceControl",
-            |i, l| i.set_impedance_offset(l, offset)
-        )
+        on!(self, j, as_impedance_control, |i, l| i
+            .set_impedance_offset(l, offset))
     }
     fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits> {
-        on!(
-            self,
-            j,
-            as_impedance_control,
-            "IImpedanceControl",
-            |i, l| i.get_current_impedance_limit(l)
-        )
+        on!(self, j, as_impedance_control, |i, l| i
+            .get_current_impedance_limit(l))
     }
 }
 
@@ -938,35 +791,20 @@ impl IControlCalibration for ControlBoardRemapper {
         p2: f64,
         p3: f64,
     ) -> DevResult<()> {
-        on!(
-            self,
-            j,
-            as_control_calibration,
-            "IControlCalibration",
-            |c, l| c.calibrate_axis_with_params(l, kind, p1, p2, p3)
-        )
+        on!(self, j, as_control_calibration, |c, l| c
+            .calibrate_axis_with_params(l, kind, p1, p2, p3))
     }
     fn set_calibration_parameters(
         &mut self,
         j: usize,
         params: &CalibrationParameters,
     ) -> DevResult<()> {
-        on!(
-            self,
-            j,
-            as_control_calibration,
-            "IControlCalibration",
-            |c, l| c.set_calibration_parameters(l, params)
-        )
+        on!(self, j, as_control_calibration, |c, l| c
+            .set_calibration_parameters(l, params))
     }
     fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
-        on!(
-            self,
-            j,
-            as_control_calibration,
-            "IControlCalibration",
-            |c, l| c.calibration_done(l)
-        )
+        on!(self, j, as_control_calibration, |c, l| c
+            .calibration_done(l))
     }
 }
 
@@ -990,13 +828,8 @@ impl IRemoteCalibrator for ControlBoardRemapper {
         if let Some(r) = self.on_calibrator(|c| c.calibrate_single_joint(j)) {
             return r;
         }
-        on!(
-            self,
-            j,
-            as_remote_calibrator,
-            "IRemoteCalibrator",
-            |c, l| c.calibrate_single_joint(l)
-        )
+        on!(self, j, as_remote_calibrator, |c, l| c
+            .calibrate_single_joint(l))
     }
     fn calibrate_whole_part(&mut self) -> DevResult<()> {
         if let Some(r) = self.on_calibrator(|c| c.calibrate_whole_part()) {
@@ -1008,13 +841,8 @@ impl IRemoteCalibrator for ControlBoardRemapper {
         if let Some(r) = self.on_calibrator(|c| c.homing_single_joint(j)) {
             return r;
         }
-        on!(
-            self,
-            j,
-            as_remote_calibrator,
-            "IRemoteCalibrator",
-            |c, l| c.homing_single_joint(l)
-        )
+        on!(self, j, as_remote_calibrator, |c, l| c
+            .homing_single_joint(l))
     }
     fn homing_whole_part(&mut self) -> DevResult<()> {
         if let Some(r) = self.on_calibrator(|c| c.homing_whole_part()) {
@@ -1026,13 +854,8 @@ impl IRemoteCalibrator for ControlBoardRemapper {
         if let Some(r) = self.on_calibrator(|c| c.park_single_joint(j, wait)) {
             return r;
         }
-        on!(
-            self,
-            j,
-            as_remote_calibrator,
-            "IRemoteCalibrator",
-            |c, l| c.park_single_joint(l, wait)
-        )
+        on!(self, j, as_remote_calibrator, |c, l| c
+            .park_single_joint(l, wait))
     }
     fn park_whole_part(&mut self) -> DevResult<()> {
         if let Some(r) = self.on_calibrator(|c| c.park_whole_part()) {
@@ -1059,12 +882,11 @@ impl IPositionDirect for ControlBoardRemapper {
         self.axes()
     }
     fn set_position(&mut self, j: usize, reference: f64) -> DevResult<()> {
-        on!(self, j, as_position_direct, "IPositionDirect", |p, l| p
+        on!(self, j, as_position_direct, |p, l| p
             .set_position(l, reference))
     }
     fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_position_direct, "IPositionDirect", |p, l| p
-            .get_ref_position(l))
+        on!(self, j, as_position_direct, |p, l| p.get_ref_position(l))
     }
 }
 
