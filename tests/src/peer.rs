@@ -13,6 +13,9 @@ use std::sync::OnceLock;
 /// How to install the C++ YARP peer (3.12.3 with its device plugins and icub-main's host).
 pub const CPP_YARP_INSTALL: &str = "tests/peers/install-cpp-peers.sh icub (then set \
      YARP_CPP_BIN to the directory it prints)";
+/// How to install the C++ YARP 4.0.0 peer.
+pub const CPP_YARP4_INSTALL: &str = "tests/peers/install-cpp-peers.sh yarp4 (then set \
+     YARP_CPP4_BIN to the directory it prints)";
 /// How to install the rclpy peer.
 pub const RCLPY_INSTALL: &str =
     "tests/peers/install-ros2.sh (then set ROS_VENV to the directory it prints)";
@@ -105,6 +108,36 @@ pub fn cpp_command(program: &Path) -> Command {
         cmd.env("YARP_DATA_DIRS", dirs);
     }
     cmd
+}
+
+/// The directory of C++ YARP 4.0.0's programs: `$YARP_CPP4_BIN`, else the build of
+/// `tests/peers/install-cpp-peers.sh yarp4` in `~/.cache/yarp-rs/cpp-yarp4`.
+pub fn cpp4_bin_dir() -> Option<PathBuf> {
+    let mut dirs: Vec<PathBuf> = std::env::var_os("YARP_CPP4_BIN")
+        .map(PathBuf::from)
+        .into_iter()
+        .collect();
+    if let Some(home) = std::env::var_os("HOME") {
+        dirs.push(PathBuf::from(home).join(".cache/yarp-rs/cpp-yarp4/bin"));
+    }
+    dirs.into_iter().find(|d| d.join("yarp").is_file())
+}
+
+/// A C++ YARP 4.0.0 program, or `None` after [`peer_missing`].
+#[track_caller]
+pub fn cpp4_program(test: &str, name: &str) -> Option<PathBuf> {
+    let found = cpp4_bin_dir()
+        .map(|d| real_cpp_program(&d, name))
+        .filter(|p| p.is_file());
+    if found.is_none() {
+        peer_missing(
+            test,
+            "C++ YARP 4.0.0",
+            &format!("no `{name}` program in $YARP_CPP4_BIN or ~/.cache/yarp-rs/cpp-yarp4/bin"),
+            CPP_YARP4_INSTALL,
+        );
+    }
+    found
 }
 
 /// The device plugins `yarpdev --list` of the C++ peer reports (read once per process).

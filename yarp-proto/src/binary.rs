@@ -5,7 +5,7 @@
 //! elements are written without their own tags. All numbers are little-endian.
 
 use crate::error::DecodeError;
-use crate::tags;
+use crate::tags::{self, Generation};
 use crate::value::{Bottle, Value};
 use crate::vocab::Vocab32;
 
@@ -14,49 +14,68 @@ pub const MAX_DEPTH: usize = 256;
 
 /// Encodes a top-level Bottle.
 pub fn encode(b: &Bottle) -> Vec<u8> {
+    encode_as(b, Generation::V3)
+}
+
+/// The encoding of a top-level Bottle in `generation`'s numbering of tags.
+pub fn encode_as(b: &Bottle, generation: Generation) -> Vec<u8> {
     let mut out = Vec::with_capacity(encoded_len_hint(b));
-    encode_into(b, &mut out);
+    Writer(generation).top_level(b, &mut out);
     out
 }
 
 /// Appends the encoding of a top-level Bottle to `out`.
 pub fn encode_into(b: &Bottle, out: &mut Vec<u8>) {
-    let sub = b.homogeneous_tag();
-    put_i32(out, tags::LIST | sub);
-    write_content(b, sub, out);
+    Writer(Generation::V3).top_level(b, out);
 }
 
 fn encoded_len_hint(b: &Bottle) -> usize {
     8 + b.len() * 12
 }
 
-fn write_content(b: &Bottle, sub: i32, out: &mut Vec<u8>) {
-    put_i32(out, b.len() as i32);
-    for v in b.iter() {
-        if sub == 0 {
-            put_i32(out, v.tag());
+/// Writes Bottles in one generation's numbering of tags.
+#[derive(Clone, Copy)]
+struct Writer(Generation);
+
+impl Writer {
+    fn top_level(self, b: &Bottle, out: &mut Vec<u8>) {
+        let sub = b.homogeneous_tag_in(self.0);
+        put_i32(out, tags::LIST | sub);
+        self.content(b, sub, out);
+    }
+
+    fn content(self, b: &Bottle, sub: i32, out: &mut Vec<u8>) {
+        put_i32(out, b.len() as i32);
+        for v in b.iter() {
+            if sub == 0 {
+                put_i32(out, v.tag_in(self.0));
+            }
+            self.raw(v, out);
         }
-        write_raw(v, out);
+    }
+
+    /// The element body (everything after its tag).
+    fn raw(self, v: &Value, out: &mut Vec<u8>) {
+        match v {
+            Value::Int8(x) => out.push(*x as u8),
+            Value::Int16(x) => out.extend_from_slice(&x.to_le_bytes()),
+            Value::Int32(x) => put_i32(out, *x),
+            Value::Int64(x) => out.extend_from_slice(&x.to_le_bytes()),
+            Value::Float32(x) => out.extend_from_slice(&x.to_le_bytes()),
+            Value::Float64(x) => out.extend_from_slice(&x.to_le_bytes()),
+            Value::Vocab32(x) => put_i32(out, x.0),
+            Value::String(s) | Value::Blob(s) => {
+                put_i32(out, s.len() as i32);
+                out.extend_from_slice(s);
+            }
+            Value::List(b) => self.content(b, b.homogeneous_tag_in(self.0), out),
+            Value::Dict(b) => self.top_level(b, out),
+        }
     }
 }
 
-/// The element body (everything after its tag).
 fn write_raw(v: &Value, out: &mut Vec<u8>) {
-    match v {
-        Value::Int8(x) => out.push(*x as u8),
-        Value::Int16(x) => out.extend_from_slice(&x.to_le_bytes()),
-        Value::Int32(x) => put_i32(out, *x),
-        Value::Int64(x) => out.extend_from_slice(&x.to_le_bytes()),
-        Value::Float32(x) => out.extend_from_slice(&x.to_le_bytes()),
-        Value::Float64(x) => out.extend_from_slice(&x.to_le_bytes()),
-        Value::Vocab32(x) => put_i32(out, x.0),
-        Value::String(s) | Value::Blob(s) => {
-            put_i32(out, s.len() as i32);
-            out.extend_from_slice(s);
-        }
-        Value::List(b) => write_content(b, b.homogeneous_tag(), out),
-        Value::Dict(b) => encode_into(b, out),
-    }
+    Writer(Generation::V3).raw(v, out)
 }
 
 fn put_i32(out: &mut Vec<u8>, x: i32) {
@@ -109,11 +128,32 @@ fn segment_content<'a>(
     }
 }
 
-/// Decodes a top-level Bottle; returns it with the number of bytes it used.
+/// Decodes a top-level Bottle; returns it with the number of bytes it used. Read as
+/// YARP 3's unless it holds a tag only YARP 4.0 has ([`generation_of`]).
 pub fn decode(bytes: &[u8]) -> Result<(Bottle, usize), DecodeError> {
+    match decode_as(bytes, Generation::V3) {
+        Err(DecodeError::UnknownTag { tag, .. }) if Generation::V4.owns(tag) => {
+            decode_as(bytes, Generation::V4)
+        }
+        r => r,
+    }
+}
+
+/// Decodes a top-level Bottle written in `generation`'s numbering of tags.
+pub fn decode_as(bytes: &[u8], generation: Generation) -> Result<(Bottle, usize), DecodeError> {
     let mut r = Reader::new(bytes);
+    r.generation = generation;
     let b = r.top_level(0)?;
     Ok((b, r.pos))
+}
+
+/// The generation whose numbering `bytes` (a binary Bottle) is written in, as
+/// [`decode`] reads it: YARP 4.0 when 3's reading meets a tag only 4.0 has.
+pub fn generation_of(bytes: &[u8]) -> Generation {
+    match decode_as(bytes, Generation::V3) {
+        Err(DecodeError::UnknownTag { tag, .. }) if Generation::V4.owns(tag) => Generation::V4,
+        _ => Generation::V3,
+    }
 }
 
 /// A string or blob at least this long may take over the buffer given to
@@ -131,7 +171,12 @@ pub fn decode_owned(mut bytes: Vec<u8>) -> Result<(Bottle, usize), DecodeError> 
         path: Vec::new(),
         found: None,
     });
-    let mut b = r.top_level(0)?;
+    let mut b = match r.top_level(0) {
+        Err(DecodeError::UnknownTag { tag, .. }) if Generation::V4.owns(tag) => {
+            return decode_as(&bytes, Generation::V4);
+        }
+        b => b?,
+    };
     let used = r.pos;
     if let Some((path, start, len)) = r.reuse.and_then(|r| r.found) {
         bytes.copy_within(start..start + len, 0);
@@ -167,6 +212,7 @@ pub fn decode_value(tag: i32, bytes: &[u8]) -> Result<(Value, usize), DecodeErro
 struct Reader<'a> {
     buf: &'a [u8],
     pos: usize,
+    generation: Generation,
     /// Set by [`decode_owned`]: looks for the one string or blob that will take over the
     /// buffer (decoded as empty, filled in afterwards).
     reuse: Option<Reuse>,
@@ -186,6 +232,7 @@ impl<'a> Reader<'a> {
         Reader {
             buf,
             pos: 0,
+            generation: Generation::V3,
             reuse: None,
         }
     }
@@ -269,14 +316,15 @@ impl<'a> Reader<'a> {
 
     fn value(&mut self, tag: i32, depth: usize) -> Result<Value, DecodeError> {
         let at = self.pos;
+        let g = self.generation;
         Ok(match tag {
+            t if t == g.float32() => Value::Float32(f32::from_le_bytes(self.array("float32")?)),
+            t if t == g.float64() => Value::Float64(f64::from_le_bytes(self.array("float64")?)),
             tags::INT8 => Value::Int8(self.array::<1>("int8")?[0] as i8),
             tags::INT16 => Value::Int16(i16::from_le_bytes(self.array("int16")?)),
             tags::INT32 => Value::Int32(self.i32("int32")?),
             tags::INT64 => Value::Int64(i64::from_le_bytes(self.array("int64")?)),
             tags::VOCAB32 => Value::Vocab32(Vocab32(self.i32("vocab")?)),
-            tags::FLOAT32 => Value::Float32(f32::from_le_bytes(self.array("float32")?)),
-            tags::FLOAT64 => Value::Float64(f64::from_le_bytes(self.array("float64")?)),
             tags::STRING => Value::String(self.sized("string")?),
             tags::BLOB => Value::Blob(self.sized("blob")?),
             t if t & tags::GROUP_MASK != 0 => {
@@ -480,5 +528,27 @@ mod segment_tests {
             let joined: Vec<u8> = encode_segments(&b).concat();
             assert_eq!(joined, b.encode());
         }
+    }
+
+    #[test]
+    fn yarp_4_numbers_floats_anew_and_is_read_as_it_says() {
+        let b = Bottle::from_text("1 2.5 (0.5 1.5) [ok]");
+        let v4 = encode_as(&b, Generation::V4);
+        // the mixed top level tags each element; the list of doubles is compacted
+        assert_eq!(&v4[..8], &[0x00, 0x01, 0, 0, 4, 0, 0, 0]);
+        assert_eq!(&v4[16..20], &tags::v4::FLOAT64.to_le_bytes());
+        assert_eq!(&v4[28..32], &(tags::LIST | tags::v4::FLOAT64).to_le_bytes());
+        assert_eq!(generation_of(&v4), Generation::V4);
+        assert_eq!(generation_of(&encode(&b)), Generation::V3);
+        assert_eq!(decode(&v4).unwrap().0, b);
+        assert_eq!(decode_owned(v4.clone()).unwrap().0, b);
+        // 4.0's FLOAT32 is 3's FLOAT64: read as 4.0 only when asked
+        let f32s = Bottle::from(vec![Value::Float32(0.5)]);
+        let bytes = encode_as(&f32s, Generation::V4);
+        assert_eq!(decode_as(&bytes, Generation::V4).unwrap().0, f32s);
+        assert!(decode(&bytes).is_err(), "4 bytes read as 3.12's float64");
+        // without floats both generations write the same bytes
+        let plain = Bottle::from_text("[get] [axes] 3 \"s\"");
+        assert_eq!(encode_as(&plain, Generation::V4), encode(&plain));
     }
 }

@@ -38,17 +38,22 @@ impl Value {
 
     /// The wire tag of this value (lists include their homogeneous subtype, as C++ does).
     pub fn tag(&self) -> i32 {
+        self.tag_in(tags::Generation::V3)
+    }
+
+    /// The wire tag of this value in `generation`'s numbering.
+    pub fn tag_in(&self, generation: tags::Generation) -> i32 {
         match self {
             Value::Int8(_) => tags::INT8,
             Value::Int16(_) => tags::INT16,
             Value::Int32(_) => tags::INT32,
             Value::Int64(_) => tags::INT64,
-            Value::Float32(_) => tags::FLOAT32,
-            Value::Float64(_) => tags::FLOAT64,
+            Value::Float32(_) => generation.float32(),
+            Value::Float64(_) => generation.float64(),
             Value::Vocab32(_) => tags::VOCAB32,
             Value::String(_) => tags::STRING,
             Value::Blob(_) => tags::BLOB,
-            Value::List(b) => tags::LIST | b.homogeneous_tag(),
+            Value::List(b) => tags::LIST | b.homogeneous_tag_in(generation),
             Value::Dict(_) => tags::LIST | tags::DICT,
         }
     }
@@ -273,7 +278,13 @@ impl Bottle {
         crate::binary::encode(self)
     }
 
+    /// The binary encoding for a peer of `generation` (YARP 4.0 numbers floats anew).
+    pub fn encode_as(&self, generation: crate::tags::Generation) -> Vec<u8> {
+        crate::binary::encode_as(self, generation)
+    }
+
     /// Decodes a binary Bottle. Trailing bytes after the Bottle are ignored, as C++ does.
+    /// A Bottle of C++ YARP 4.0 is read as one when it says so (a tag only 4.0 has).
     pub fn decode(bytes: &[u8]) -> Result<Bottle, crate::DecodeError> {
         crate::binary::decode(bytes).map(|(b, _)| b)
     }
@@ -340,9 +351,14 @@ impl Bottle {
     /// The tag of the homogeneous (compacted) form, or 0 when elements must be tagged:
     /// C++ compacts a non-empty list whose elements all share one simple type.
     pub fn homogeneous_tag(&self) -> i32 {
+        self.homogeneous_tag_in(tags::Generation::V3)
+    }
+
+    /// [`Bottle::homogeneous_tag`] in `generation`'s numbering.
+    pub fn homogeneous_tag_in(&self, generation: tags::Generation) -> i32 {
         let mut first = None;
         for v in &self.items {
-            let t = v.tag();
+            let t = v.tag_in(generation);
             match first {
                 None => first = Some(t),
                 Some(f) if f != t => return 0,

@@ -36,6 +36,7 @@ use tokio::net::TcpListener;
 use tokio::sync::{mpsc, oneshot, watch};
 use yarp_proto::nameserver::RegisterRequest;
 use yarp_proto::port_admin::{Connection, PortSnapshot};
+use yarp_proto::tags::Generation;
 use yarp_proto::wire::Carrier;
 use yarp_proto::{Bottle, Contact, DecodeError, PortRef, Stamp, Value};
 
@@ -135,11 +136,34 @@ impl Incoming {
         self.reply.is_some()
     }
 
-    /// Sends the reply (no effect when none is expected). Dropping the message without
-    /// replying lets the sender go on without a reply, as C++ does.
+    /// The generation of YARP whose numbering of tags the sender used, as far as the
+    /// payload tells (a message without floats reads the same in both; so does a
+    /// payload already taken by [`Incoming::take_bottle`]): YARP 3 unless it says 4.0.
+    pub fn generation(&self) -> Generation {
+        if self.is_text || self.decoded.is_some() {
+            Generation::V3
+        } else {
+            yarp_proto::binary::generation_of(&self.payload)
+        }
+    }
+
+    /// Sends the reply (no effect when none is expected), numbered as the request was
+    /// ([`Incoming::generation`]). Dropping the message without replying lets the sender
+    /// go on without a reply, as C++ does.
     pub fn reply(&mut self, b: Bottle) {
+        let generation = self.generation();
+        self.reply_in(b, generation);
+    }
+
+    /// Sends the reply encoded for a peer of `generation` (a server that knows its
+    /// client's generation from elsewhere, such as the port it was asked on).
+    pub fn reply_in(&mut self, b: Bottle, generation: Generation) {
         if let Some(tx) = self.reply.take() {
-            let _ = tx.send(ReplyBody::Bottle(b));
+            let body = match generation {
+                Generation::V4 if !self.is_text => ReplyBody::Encoded(b.encode_as(generation)),
+                _ => ReplyBody::Bottle(b),
+            };
+            let _ = tx.send(body);
         }
     }
 

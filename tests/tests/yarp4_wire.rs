@@ -1,0 +1,107 @@
+//! C++ YARP 4.0.0 renumbered the float tags of binary Bottles (`FLOAT64` 20, `FLOAT32`
+//! 10, which was 3's `FLOAT64`; `VOCAB64` 18 is new), so a 3.12 reader misreads its
+//! floats. Live against C++ 4.0's `yarp` (tests/peers/install-cpp-peers.sh yarp4), under
+//! our name server: what it writes reads here with its values and the bytes we would write
+//! for a 4.0 peer, and its RPCs get their replies numbered as they asked.
+//! Run under ../shared/netns-run.
+
+use std::io::Write;
+use std::process::Stdio;
+use yarp_interop_tests::*;
+use yarp_net::port::Port;
+use yarp_proto::tags::Generation;
+use yarp_proto::Bottle;
+
+fn runtime() -> tokio::runtime::Runtime {
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(1)
+        .enable_all()
+        .build()
+        .expect("runtime")
+}
+
+/// Lines whose floats need the new tags: scalars, a compacted list of doubles, a mixed one.
+const LINES: [&str; 3] = [
+    "1 2.5 hello [ok] (3.25 4)",
+    "(0.5 -1.25 1e+300)",
+    "[is] [enc] 0.125 [tsta] 7 1795000000.5 [ok]",
+];
+
+#[test]
+fn what_cpp_4_writes_reads_here_with_its_floats_and_our_4_0_bytes() {
+    let test = "what_cpp_4_writes_reads_here_with_its_floats_and_our_4_0_bytes";
+    let Some(yarp) = cpp4_program(test, "yarp") else {
+        return;
+    };
+    let rt = runtime();
+    let port = rt
+        .block_on(Port::open("/y4/in", name_client()))
+        .expect("open /y4/in");
+    let mut writer = cpp_command(&yarp)
+        .args(["write", "/y4/w", "/y4/in"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn C++ 4.0 yarp write");
+    let mut stdin = writer.stdin.take().unwrap();
+    let _writer = Reaped(writer);
+    for line in LINES {
+        writeln!(stdin, "{line}").unwrap();
+    }
+    stdin.flush().unwrap();
+    for line in LINES {
+        let msg = rt
+            .block_on(async { tokio::time::timeout(3 * T, port.read()).await })
+            .unwrap_or_else(|_| panic!("nothing from C++ 4.0 yarp write for `{line}`"))
+            .expect("port open");
+        let want = Bottle::from_text(line);
+        assert_eq!(msg.bottle().unwrap(), want, "`{line}`");
+        assert_eq!(msg.generation(), Generation::V4, "`{line}`");
+        assert_eq!(
+            msg.payload,
+            want.encode_as(Generation::V4),
+            "bytes of `{line}`"
+        );
+        assert_ne!(
+            msg.payload,
+            want.encode(),
+            "3.12's bytes of `{line}` differ"
+        );
+    }
+    drop(stdin);
+    rt.block_on(port.close());
+}
+
+#[test]
+fn cpp_4_rpc_gets_its_reply_numbered_as_it_asked() {
+    let test = "cpp_4_rpc_gets_its_reply_numbered_as_it_asked";
+    let Some(yarp) = cpp4_program(test, "yarp") else {
+        return;
+    };
+    let rt = runtime();
+    let port = std::sync::Arc::new(
+        rt.block_on(Port::open("/y4/rpc", name_client()))
+            .expect("open /y4/rpc"),
+    );
+    let server = port.clone();
+    rt.spawn(async move {
+        while let Some(mut msg) = server.read().await {
+            let mut reply = msg.bottle().unwrap_or_default();
+            reply
+                .push(0.125)
+                .push(vec![1.5, 2.5].into_iter().collect::<Bottle>());
+            msg.reply(reply);
+        }
+    });
+    let out = cpp_rpc_output(&yarp, "/y4/rpc", "1 2.5\n");
+    println!("C++ 4.0 yarp rpc printed:\n{out}");
+    assert!(
+        out.contains("Response: 1 2.5 0.125 (1.5 2.5)"),
+        "C++ 4.0 yarp rpc printed:\n{out}"
+    );
+    let port = std::sync::Arc::try_unwrap(port).ok();
+    if let Some(p) = port {
+        rt.block_on(p.close());
+    }
+}
