@@ -1,64 +1,51 @@
 //! Joint names from a control board's RPC port (C++ `IAxisInfo` over `/<part>/rpc:i`):
 //! `[get] [axes]` answers `[is] [axes] N [ok]`, `[get] [name] j` answers
-//! `[is] [name] "name" [ok]`, `[get] [type] j` answers `[is] [type] <joint type vocab>
-//! [ok]` (`VOCAB_JOINTTYPE_PRISMATIC` for prismatic joints). Request building and reply parsing are pure.
+//! `[is] [name] "name" [ok]`, `[get] [type] j` answers `[is] [type] <joint type> [ok]`
+//! (`VOCAB_JOINTTYPE_PRISMATIC` for prismatic joints). The requests and replies are the
+//! control-board protocol's own (`yarp_devices::controlboard::methods`).
 
-use yarp_proto::{Bottle, Value, Vocab32};
+use yarp_devices::controlboard::methods::{self as m, Method};
+use yarp_devices::controlboard::v3::{self, Answer};
+use yarp_proto::Bottle;
 
 /// `[get] [axes]`.
 pub fn axes_request() -> Bottle {
-    let mut b = Bottle::new();
-    b.add_vocab("get").add_vocab("axes");
-    b
+    v3::request(&m::Axes {})
 }
 
 /// `[get] [name] j`.
 pub fn name_request(j: usize) -> Bottle {
-    let mut b = Bottle::new();
-    b.add_vocab("get").add_vocab("name");
-    b.push(j as i32);
-    b
+    v3::request(&m::GetAxisName { j })
 }
 
 /// `[get] [type] j` (C++ `IAxisInfo::getJointType`).
 pub fn type_request(j: usize) -> Bottle {
-    let mut b = Bottle::new();
-    b.add_vocab("get").add_vocab("type");
-    b.push(j as i32);
-    b
+    v3::request(&m::GetJointType { j })
+}
+
+/// The value of `M`'s reply, if it is one.
+fn value<M: Method>(reply: &Bottle) -> Option<M::Reply> {
+    match v3::answer::<M>(reply) {
+        Answer::Value(v) => Some(v),
+        Answer::Refused | Answer::Malformed => None,
+    }
 }
 
 /// Whether a `[get] [type] j` reply names a prismatic joint (`None`: not a type reply).
 /// C++ sends the vocab (`VOCAB_JOINTTYPE_PRISMATIC`) as an int32; a vocab value is
 /// accepted too.
 pub fn parse_prismatic(reply: &Bottle) -> Option<bool> {
-    let t = is_reply(reply, "type")?.first()?;
-    let code = t.as_vocab().map(|v| v.0).or_else(|| t.as_i32())?;
-    Some(code == yarp_devices::vocabs::JOINTTYPE_PRISMATIC.0)
-}
-
-fn is_reply<'a>(reply: &'a Bottle, what: &str) -> Option<&'a [Value]> {
-    let items = reply.items();
-    let ok = items.first()? == &Value::Vocab32(Vocab32::encode("is"))
-        && items.get(1)? == &Value::Vocab32(Vocab32::encode(what));
-    ok.then(|| &items[2..])
+    value::<m::GetJointType>(reply).map(|t| t == yarp_devices::vocabs::JOINTTYPE_PRISMATIC.0)
 }
 
 /// The axis count from a `[get] [axes]` reply.
 pub fn parse_axes(reply: &Bottle) -> Option<usize> {
-    let n = is_reply(reply, "axes")?.first()?;
-    n.is_int()
-        .then(|| n.as_i64())
-        .flatten()
-        .and_then(|n| usize::try_from(n).ok())
+    value::<m::Axes>(reply)
 }
 
 /// The joint name from a `[get] [name] j` reply.
 pub fn parse_name(reply: &Bottle) -> Option<String> {
-    is_reply(reply, "name")?
-        .first()?
-        .as_str()
-        .map(str::to_string)
+    value::<m::GetAxisName>(reply)
 }
 
 #[cfg(test)]
