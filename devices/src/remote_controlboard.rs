@@ -676,7 +676,7 @@ impl IVelocityControl for RemoteControlBoard {
         self.stream(bottle![Vocab32(VELOCITY_MOVES)], speeds.to_vec())
     }
     fn velocity_move_group(&mut self, joints: &[usize], speeds: &[f64]) -> DevResult<()> {
-        check_group(joints, speeds)?;
+        m::sized(joints, speeds)?;
         self.stream(
             bottle![
                 Vocab32(VELOCITY_MOVE_GROUP),
@@ -953,7 +953,7 @@ impl ICurrentControl for RemoteControlBoard {
         )
     }
     fn set_ref_current_group(&mut self, joints: &[usize], currents: &[f64]) -> DevResult<()> {
-        check_group(joints, currents)?;
+        m::sized(joints, currents)?;
         self.stream(
             bottle![
                 Vocab32(CURRENT_IFACE),
@@ -1002,7 +1002,7 @@ impl IPositionDirect for RemoteControlBoard {
         self.stream(bottle![Vocab32(POSITION_DIRECTS)], references.to_vec())
     }
     fn set_positions_group(&mut self, joints: &[usize], references: &[f64]) -> DevResult<()> {
-        check_group(joints, references)?;
+        m::sized(joints, references)?;
         self.stream(
             bottle![
                 Vocab32(POSITION_DIRECT_GROUP),
@@ -1147,18 +1147,6 @@ impl IRemoteCalibrator for RemoteControlBoard {
     }
     fn quit_park(&mut self) -> DevResult<()> {
         self.ask(m::QuitPark {})
-    }
-}
-
-/// A group command needs one value per joint.
-fn check_group(joints: &[usize], values: &[f64]) -> DevResult<()> {
-    if joints.len() == values.len() {
-        Ok(())
-    } else {
-        Err(DeviceError::WrongSize {
-            expected: joints.len(),
-            got: values.len(),
-        })
     }
 }
 

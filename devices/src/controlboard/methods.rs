@@ -30,7 +30,7 @@ macro_rules! via {
 }
 
 /// A group command needs one value per joint.
-fn sized<T>(joints: &Group, values: &[T]) -> DevResult<()> {
+pub fn sized<T>(joints: &[usize], values: &[T]) -> DevResult<()> {
     if joints.len() == values.len() {
         Ok(())
     } else {
