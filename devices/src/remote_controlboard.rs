@@ -16,18 +16,19 @@
 //! `command:o` as `(head) (values)`; everything else is an RPC on `rpc:o`.
 
 use crate::controlboard::methods::{self as m, Method};
+use crate::controlboard::streaming::{Joints, Kind, Stream};
 use crate::controlboard::v3::{self, Answer, Group};
 use crate::controlboard::{CommandMessage, JointData, PROTOCOL_VERSION_NUMBER};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::interfaces::*;
 use crate::runtime;
-use crate::vocabs::*;
 use parking_lot::{Mutex, MutexGuard};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use yarp_net::nameserver::NameClient;
 use yarp_net::port::Port;
+use yarp_proto::tags::Generation;
 use yarp_proto::{bottle, Bottle, Property, Stamp, Value, Vocab32};
 
 /// The C++ device name.
@@ -42,10 +43,6 @@ pub const RPC_TIMEOUT: Duration = Duration::from_secs(5);
 /// Default staleness limit of the streamed state (C++ `timeout`).
 pub const DEFAULT_TIMEOUT: Duration = Duration::from_millis(500);
 
-const fn v(s: &str) -> i32 {
-    Vocab32::new(s).0
-}
-const TORQUES_DIRECT: i32 = v("dtq");
 const STATE_ERR: &str = "no fresh state from the remote control board (stateExt:i)";
 
 /// The last state received on `<local>/stateExt:i`.
@@ -389,8 +386,9 @@ impl RemoteControlBoard {
 
     /// Sends a streaming command on `command:o` (dropped if the connection is busy,
     /// unless `writeStrict on`).
-    fn stream(&self, head: Bottle, body: Vec<f64>) -> DevResult<()> {
+    fn stream(&self, kind: Kind, joints: Joints, body: Vec<f64>) -> DevResult<()> {
         let link = self.link()?;
+        let head = Stream { kind, joints }.head(Generation::V3);
         let msg = CommandMessage::new(head, body).to_bottle();
         if link.write_strict {
             let port = link.command.clone();
@@ -452,13 +450,6 @@ impl RemoteControlBoard {
         let link = self.link.as_ref()?;
         lock(&link.latest).as_ref().and_then(|r| r.stamp)
     }
-}
-
-fn joints_value(joints: &[usize]) -> Value {
-    Value::List(joints.iter().map(|j| *j as i32).collect())
-}
-fn j32(j: usize) -> i32 {
-    j as i32
 }
 
 impl DeviceDriver for RemoteControlBoard {
@@ -666,23 +657,20 @@ impl IVelocityControl for RemoteControlBoard {
     }
     fn velocity_move(&mut self, j: usize, speed: f64) -> DevResult<()> {
         let j = self.joint(j)?;
-        self.stream(bottle![Vocab32(VELOCITY_MOVE), j32(j)], vec![speed])
+        self.stream(Kind::VelocityMove, Joints::One(j), vec![speed])
     }
     fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
         self.ask(m::GetRefVelocity { j })
     }
     fn velocity_moves(&mut self, speeds: &[f64]) -> DevResult<()> {
         self.check_all(speeds)?;
-        self.stream(bottle![Vocab32(VELOCITY_MOVES)], speeds.to_vec())
+        self.stream(Kind::VelocityMoves, Joints::All, speeds.to_vec())
     }
     fn velocity_move_group(&mut self, joints: &[usize], speeds: &[f64]) -> DevResult<()> {
         m::sized(joints, speeds)?;
         self.stream(
-            bottle![
-                Vocab32(VELOCITY_MOVE_GROUP),
-                joints.len() as i32,
-                joints_value(joints)
-            ],
+            Kind::VelocityMoveGroup,
+            Joints::Group(joints.to_vec()),
             speeds.to_vec(),
         )
     }
@@ -792,7 +780,7 @@ impl ITorqueControl for RemoteControlBoard {
     }
     fn set_ref_torque(&mut self, j: usize, t: f64) -> DevResult<()> {
         let j = self.joint(j)?;
-        self.stream(bottle![Vocab32(TORQUES_DIRECT), j32(j)], vec![t])
+        self.stream(Kind::RefTorque, Joints::One(j), vec![t])
     }
     fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
         self.ask(m::GetRefTorque { j })
@@ -940,27 +928,17 @@ impl ICurrentControl for RemoteControlBoard {
     }
     fn set_ref_current(&mut self, j: usize, current: f64) -> DevResult<()> {
         let j = self.joint(j)?;
-        self.stream(
-            bottle![Vocab32(CURRENT_IFACE), Vocab32(REF), j32(j)],
-            vec![current],
-        )
+        self.stream(Kind::RefCurrent, Joints::One(j), vec![current])
     }
     fn set_ref_currents(&mut self, currents: &[f64]) -> DevResult<()> {
         self.check_all(currents)?;
-        self.stream(
-            bottle![Vocab32(CURRENT_IFACE), Vocab32(REFS)],
-            currents.to_vec(),
-        )
+        self.stream(Kind::RefCurrents, Joints::All, currents.to_vec())
     }
     fn set_ref_current_group(&mut self, joints: &[usize], currents: &[f64]) -> DevResult<()> {
         m::sized(joints, currents)?;
         self.stream(
-            bottle![
-                Vocab32(CURRENT_IFACE),
-                Vocab32(REF_GROUP),
-                joints.len() as i32,
-                joints_value(joints)
-            ],
+            Kind::RefCurrentGroup,
+            Joints::Group(joints.to_vec()),
             currents.to_vec(),
         )
     }
@@ -972,14 +950,11 @@ impl IPwmControl for RemoteControlBoard {
     }
     fn set_ref_duty_cycle(&mut self, j: usize, duty: f64) -> DevResult<()> {
         let j = self.joint(j)?;
-        self.stream(
-            bottle![Vocab32(PWM_IFACE), Vocab32(REF), j32(j)],
-            vec![duty],
-        )
+        self.stream(Kind::RefDutyCycle, Joints::One(j), vec![duty])
     }
     fn set_ref_duty_cycles(&mut self, duties: &[f64]) -> DevResult<()> {
         self.check_all(duties)?;
-        self.stream(bottle![Vocab32(PWM_IFACE), Vocab32(REFS)], duties.to_vec())
+        self.stream(Kind::RefDutyCycles, Joints::All, duties.to_vec())
     }
     fn get_duty_cycle(&mut self, m: usize) -> DevResult<f64> {
         self.state_one(m, |d| &d.pwm_duty_cycle)
@@ -992,23 +967,20 @@ impl IPositionDirect for RemoteControlBoard {
     }
     fn set_position(&mut self, j: usize, reference: f64) -> DevResult<()> {
         let j = self.joint(j)?;
-        self.stream(bottle![Vocab32(POSITION_DIRECT), j32(j)], vec![reference])
+        self.stream(Kind::Position, Joints::One(j), vec![reference])
     }
     fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
         self.ask(m::GetRefPosition { j })
     }
     fn set_positions(&mut self, references: &[f64]) -> DevResult<()> {
         self.check_all(references)?;
-        self.stream(bottle![Vocab32(POSITION_DIRECTS)], references.to_vec())
+        self.stream(Kind::Positions, Joints::All, references.to_vec())
     }
     fn set_positions_group(&mut self, joints: &[usize], references: &[f64]) -> DevResult<()> {
         m::sized(joints, references)?;
         self.stream(
-            bottle![
-                Vocab32(POSITION_DIRECT_GROUP),
-                joints.len() as i32,
-                joints_value(joints)
-            ],
+            Kind::PositionGroup,
+            Joints::Group(joints.to_vec()),
             references.to_vec(),
         )
     }

@@ -8,7 +8,7 @@ mod nws;
 mod rpc;
 mod single_port;
 mod state;
-mod streaming;
+pub mod streaming;
 pub mod v3;
 
 pub use nws::{port_prefix, ControlBoardNws, ControlBoardNwsDevice, DEFAULT_PERIOD};

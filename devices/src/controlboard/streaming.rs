@@ -10,12 +10,14 @@
 //! `[dtqg] n (joints)`; current `[icur] [ref] j`, `[icur] [refs]`, `[icur] [refg] n
 //! (joints)`; duty cycle `[ipwm] [ref] j`, `[ipwm] [refs]`.
 
+use super::v3::{Group, Wire3};
 use crate::driver::DeviceDriver;
 use crate::error::DeviceError;
 use crate::vocabs::{
     CURRENT_IFACE, POSITION_DIRECT, POSITION_DIRECTS, POSITION_DIRECT_GROUP, POSITION_MOVES,
     PWM_IFACE, REF, REFS, REF_GROUP, VELOCITY_MOVE, VELOCITY_MOVES, VELOCITY_MOVE_GROUP,
 };
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value, Vocab32};
 
 const fn v(s: &str) -> i32 {
@@ -24,6 +26,174 @@ const fn v(s: &str) -> i32 {
 const TORQUES_DIRECT: i32 = v("dtq");
 const TORQUES_DIRECTS: i32 = v("dtqs");
 const TORQUES_DIRECT_GROUP: i32 = v("dtqg");
+// YARP 4.0 names the interface first (`[ivel] [vmo] j`; current and PWM always did).
+const IPOS: i32 = v("ipos");
+const IPOD: i32 = v("ipod");
+const IVEL: i32 = v("ivel");
+const ITRQ: i32 = v("itrq");
+
+/// What a streaming command sets. Each has one shape of joints ([`Shape`]) and a head in
+/// each generation ([`Kind::heads`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    PositionMoves,
+    VelocityMove,
+    VelocityMoves,
+    VelocityMoveGroup,
+    RefTorque,
+    RefTorques,
+    RefTorqueGroup,
+    Position,
+    Positions,
+    PositionGroup,
+    RefDutyCycle,
+    RefDutyCycles,
+    RefCurrent,
+    RefCurrents,
+    RefCurrentGroup,
+}
+
+/// Which joints a command addresses, after its head's vocabs.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Joints {
+    /// `j`: one joint, the first value.
+    One(usize),
+    /// nothing: every joint, one value each (fewer are accepted, as C++ does).
+    All,
+    /// `n (j1 j2 ...)`: these joints, one value each.
+    Group(Vec<usize>),
+}
+
+impl Kind {
+    const ALL: [Kind; 15] = [
+        Kind::PositionMoves,
+        Kind::VelocityMove,
+        Kind::VelocityMoves,
+        Kind::VelocityMoveGroup,
+        Kind::RefTorque,
+        Kind::RefTorques,
+        Kind::RefTorqueGroup,
+        Kind::Position,
+        Kind::Positions,
+        Kind::PositionGroup,
+        Kind::RefDutyCycle,
+        Kind::RefDutyCycles,
+        Kind::RefCurrent,
+        Kind::RefCurrents,
+        Kind::RefCurrentGroup,
+    ];
+
+    /// The head's vocabs in YARP 3.12 and in 4.0.
+    fn heads(self) -> (&'static [i32], &'static [i32]) {
+        match self {
+            Kind::PositionMoves => (&[POSITION_MOVES], &[IPOS, POSITION_MOVES]),
+            Kind::VelocityMove => (&[VELOCITY_MOVE], &[IVEL, VELOCITY_MOVE]),
+            Kind::VelocityMoves => (&[VELOCITY_MOVES], &[IVEL, VELOCITY_MOVES]),
+            Kind::VelocityMoveGroup => (&[VELOCITY_MOVE_GROUP], &[IVEL, VELOCITY_MOVE_GROUP]),
+            Kind::RefTorque => (&[TORQUES_DIRECT], &[ITRQ, TORQUES_DIRECT]),
+            Kind::RefTorques => (&[TORQUES_DIRECTS], &[ITRQ, TORQUES_DIRECTS]),
+            Kind::RefTorqueGroup => (&[TORQUES_DIRECT_GROUP], &[ITRQ, TORQUES_DIRECT_GROUP]),
+            Kind::Position => (&[POSITION_DIRECT], &[IPOD, POSITION_DIRECT]),
+            Kind::Positions => (&[POSITION_DIRECTS], &[IPOD, POSITION_DIRECTS]),
+            Kind::PositionGroup => (&[POSITION_DIRECT_GROUP], &[IPOD, POSITION_DIRECT_GROUP]),
+            Kind::RefDutyCycle => (&[PWM_IFACE, REF], &[PWM_IFACE, REF]),
+            Kind::RefDutyCycles => (&[PWM_IFACE, REFS], &[PWM_IFACE, REFS]),
+            Kind::RefCurrent => (&[CURRENT_IFACE, REF], &[CURRENT_IFACE, REF]),
+            Kind::RefCurrents => (&[CURRENT_IFACE, REFS], &[CURRENT_IFACE, REFS]),
+            Kind::RefCurrentGroup => (&[CURRENT_IFACE, REF_GROUP], &[CURRENT_IFACE, REF_GROUP]),
+        }
+    }
+
+    fn head(self, generation: Generation) -> &'static [i32] {
+        match generation {
+            Generation::V3 => self.heads().0,
+            Generation::V4 => self.heads().1,
+        }
+    }
+}
+
+/// A streaming command's head: what it sets and on which joints.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Stream {
+    pub kind: Kind,
+    pub joints: Joints,
+}
+
+impl Stream {
+    /// The head Bottle for a server of `generation`.
+    pub fn head(&self, generation: Generation) -> Bottle {
+        let mut b: Bottle = self
+            .kind
+            .head(generation)
+            .iter()
+            .map(|v| Vocab32(*v))
+            .collect();
+        match &self.joints {
+            Joints::One(j) => j.put(&mut b),
+            Joints::All => {}
+            Joints::Group(js) => Group(js.clone()).put(&mut b),
+        }
+        b
+    }
+
+    /// Reads a received head, in either generation's form: the command, and which
+    /// generation's form it had (icur and ipwm heads read as 3.12's: both are the same).
+    pub fn decode(head: &Bottle) -> Result<(Stream, Generation), CommandError> {
+        let items = head.items();
+        let starts = |h: &[i32]| {
+            items.len() >= h.len()
+                && h.iter()
+                    .zip(items)
+                    .all(|(h, v)| v.as_vocab().map(|x| x.0) == Some(*h))
+        };
+        let found = Kind::ALL.iter().find_map(|&k| {
+            let (v3, v4) = k.heads();
+            [(Generation::V3, v3), (Generation::V4, v4)]
+                .into_iter()
+                .find(|(_, h)| starts(h))
+                .map(|(g, h)| (k, g, h.len()))
+        });
+        let Some((kind, generation, at)) = found else {
+            return Err(CommandError::Unknown(head.to_string()));
+        };
+        let bad = || CommandError::BadHead(head.to_string());
+        // the joints are ints, strictly: a head C++ cannot read is refused
+        let int = |i: usize| items.get(i).filter(|v| v.is_int()).and_then(Value::as_i64);
+        let joint = |i: usize| int(i).and_then(|j| usize::try_from(j).ok()).ok_or_else(bad);
+        let joints = match kind {
+            Kind::PositionMoves
+            | Kind::VelocityMoves
+            | Kind::RefTorques
+            | Kind::Positions
+            | Kind::RefDutyCycles
+            | Kind::RefCurrents => Joints::All,
+            Kind::VelocityMove
+            | Kind::RefTorque
+            | Kind::Position
+            | Kind::RefDutyCycle
+            | Kind::RefCurrent => Joints::One(joint(at)?),
+            Kind::VelocityMoveGroup
+            | Kind::RefTorqueGroup
+            | Kind::PositionGroup
+            | Kind::RefCurrentGroup => {
+                let n = joint(at)?;
+                let js = items
+                    .get(at + 1)
+                    .and_then(Value::as_list)
+                    .ok_or_else(bad)?
+                    .iter()
+                    .map(|v| v.as_i64().and_then(|x| usize::try_from(x).ok()))
+                    .collect::<Option<Vec<usize>>>()
+                    .ok_or_else(bad)?;
+                if js.len() != n {
+                    return Err(CommandError::MissingValues(head.to_string()));
+                }
+                Joints::Group(js)
+            }
+        };
+        Ok((Stream { kind, joints }, generation))
+    }
+}
 
 /// One streaming command: the head Bottle and the values.
 #[derive(Debug, Clone, PartialEq)]
@@ -88,21 +258,13 @@ impl CommandMessage {
     }
 }
 
-fn vocab_at(b: &Bottle, i: usize) -> i32 {
-    match b.get(i) {
-        Some(Value::Vocab32(x)) => x.0,
-        _ => 0,
-    }
-}
-
 /// Applies one streaming command to `dev`, which has `axes` joints.
 pub fn handle_command(
     msg: &CommandMessage,
     dev: &mut dyn DeviceDriver,
     axes: usize,
 ) -> Result<(), CommandError> {
-    let head = &msg.head;
-    let body = &msg.body;
+    let (head, body) = (&msg.head, msg.body.as_slice());
     let command = || format!("({head}) ({} values)", body.len());
     if body.len() > axes {
         return Err(CommandError::TooManyValues {
@@ -110,130 +272,61 @@ pub fn handle_command(
             axes,
         });
     }
-    let int_at = |i: usize| -> Result<i64, CommandError> {
-        head.get(i)
-            .filter(|v| v.is_int())
-            .and_then(Value::as_i64)
-            .ok_or_else(|| CommandError::BadHead(head.to_string()))
+    let (Stream { kind, joints }, _) = Stream::decode(head)?;
+    let too_few = || CommandError::MissingValues(head.to_string());
+    // the one value, or the group's values (one per joint)
+    let (one, group) = match &joints {
+        Joints::One(j) => (Some((*j, *body.first().ok_or_else(too_few)?)), &[][..]),
+        Joints::Group(js) if js.len() != body.len() => return Err(too_few()),
+        Joints::Group(js) => (None, js.as_slice()),
+        Joints::All => (None, &[][..]),
     };
-    let joint_at = |i: usize| -> Result<usize, CommandError> {
-        usize::try_from(int_at(i)?).map_err(|_| CommandError::BadHead(head.to_string()))
-    };
-    let first = || -> Result<f64, CommandError> {
-        body.first()
-            .copied()
-            .ok_or_else(|| CommandError::MissingValues(head.to_string()))
-    };
-    // `n (joints...)` starting at `i`, with one value per joint
-    let group = |i: usize| -> Result<Vec<usize>, CommandError> {
-        let n = usize::try_from(int_at(i)?).map_err(|_| CommandError::BadHead(head.to_string()))?;
-        let joints = head
-            .get(i + 1)
-            .and_then(Value::as_list)
-            .ok_or_else(|| CommandError::BadHead(head.to_string()))?
-            .iter()
-            .map(|v| v.as_i64().and_then(|x| usize::try_from(x).ok()))
-            .collect::<Option<Vec<usize>>>()
-            .ok_or_else(|| CommandError::BadHead(head.to_string()))?;
-        if joints.len() != n || body.len() != n {
-            return Err(CommandError::MissingValues(head.to_string()));
+    let (j, x) = one.unwrap_or_default();
+    macro_rules! via {
+        ($as:ident, $name:literal) => {
+            dev.$as().ok_or_else(|| CommandError::NoInterface {
+                command: command(),
+                interface: $name,
+            })?
+        };
+    }
+    match kind {
+        Kind::PositionMoves => via!(as_position_control, "IPositionControl").position_moves(body),
+        Kind::VelocityMove => via!(as_velocity_control, "IVelocityControl").velocity_move(j, x),
+        Kind::VelocityMoves => via!(as_velocity_control, "IVelocityControl").velocity_moves(body),
+        Kind::VelocityMoveGroup => {
+            via!(as_velocity_control, "IVelocityControl").velocity_move_group(group, body)
         }
-        Ok(joints)
-    };
-    let missing = |interface: &'static str| CommandError::NoInterface {
-        command: command(),
-        interface,
-    };
-    let refused = |source: DeviceError| CommandError::Device {
-        command: command(),
-        source,
-    };
-    match vocab_at(head, 0) {
-        POSITION_MOVES => dev
-            .as_position_control()
-            .ok_or_else(|| missing("IPositionControl"))?
-            .position_moves(body),
-        VELOCITY_MOVE => {
-            let (j, x) = (joint_at(1)?, first()?);
-            dev.as_velocity_control()
-                .ok_or_else(|| missing("IVelocityControl"))?
-                .velocity_move(j, x)
-        }
-        VELOCITY_MOVES => dev
-            .as_velocity_control()
-            .ok_or_else(|| missing("IVelocityControl"))?
-            .velocity_moves(body),
-        VELOCITY_MOVE_GROUP => {
-            let joints = group(1)?;
-            dev.as_velocity_control()
-                .ok_or_else(|| missing("IVelocityControl"))?
-                .velocity_move_group(&joints, body)
-        }
-        TORQUES_DIRECT => {
-            let (j, x) = (joint_at(1)?, first()?);
-            dev.as_torque_control()
-                .ok_or_else(|| missing("ITorqueControl"))?
-                .set_ref_torque(j, x)
-        }
-        TORQUES_DIRECTS | TORQUES_DIRECT_GROUP => {
-            let joints: Vec<usize> = if vocab_at(head, 0) == TORQUES_DIRECTS {
-                (0..body.len()).collect()
+        Kind::RefTorque => via!(as_torque_control, "ITorqueControl").set_ref_torque(j, x),
+        Kind::RefTorques | Kind::RefTorqueGroup => {
+            let t = via!(as_torque_control, "ITorqueControl");
+            let all: Vec<usize> = (0..body.len()).collect();
+            let js = if kind == Kind::RefTorques {
+                &all[..]
             } else {
-                group(1)?
+                group
             };
-            let t = dev
-                .as_torque_control()
-                .ok_or_else(|| missing("ITorqueControl"))?;
-            joints
-                .iter()
+            js.iter()
                 .zip(body)
                 .try_for_each(|(j, x)| t.set_ref_torque(*j, *x))
         }
-        POSITION_DIRECT => {
-            let (j, x) = (joint_at(1)?, first()?);
-            dev.as_position_direct()
-                .ok_or_else(|| missing("IPositionDirect"))?
-                .set_position(j, x)
+        Kind::Position => via!(as_position_direct, "IPositionDirect").set_position(j, x),
+        Kind::Positions => via!(as_position_direct, "IPositionDirect").set_positions(body),
+        Kind::PositionGroup => {
+            via!(as_position_direct, "IPositionDirect").set_positions_group(group, body)
         }
-        POSITION_DIRECTS => dev
-            .as_position_direct()
-            .ok_or_else(|| missing("IPositionDirect"))?
-            .set_positions(body),
-        POSITION_DIRECT_GROUP => {
-            let joints = group(1)?;
-            dev.as_position_direct()
-                .ok_or_else(|| missing("IPositionDirect"))?
-                .set_positions_group(&joints, body)
+        Kind::RefDutyCycle => via!(as_pwm_control, "IPWMControl").set_ref_duty_cycle(j, x),
+        Kind::RefDutyCycles => via!(as_pwm_control, "IPWMControl").set_ref_duty_cycles(body),
+        Kind::RefCurrent => via!(as_current_control, "ICurrentControl").set_ref_current(j, x),
+        Kind::RefCurrents => via!(as_current_control, "ICurrentControl").set_ref_currents(body),
+        Kind::RefCurrentGroup => {
+            via!(as_current_control, "ICurrentControl").set_ref_current_group(group, body)
         }
-        PWM_IFACE if vocab_at(head, 1) == REF => {
-            let (j, x) = (joint_at(2)?, first()?);
-            dev.as_pwm_control()
-                .ok_or_else(|| missing("IPWMControl"))?
-                .set_ref_duty_cycle(j, x)
-        }
-        PWM_IFACE if vocab_at(head, 1) == REFS => dev
-            .as_pwm_control()
-            .ok_or_else(|| missing("IPWMControl"))?
-            .set_ref_duty_cycles(body),
-        CURRENT_IFACE if vocab_at(head, 1) == REF => {
-            let (j, x) = (joint_at(2)?, first()?);
-            dev.as_current_control()
-                .ok_or_else(|| missing("ICurrentControl"))?
-                .set_ref_current(j, x)
-        }
-        CURRENT_IFACE if vocab_at(head, 1) == REFS => dev
-            .as_current_control()
-            .ok_or_else(|| missing("ICurrentControl"))?
-            .set_ref_currents(body),
-        CURRENT_IFACE if vocab_at(head, 1) == REF_GROUP => {
-            let joints = group(2)?;
-            dev.as_current_control()
-                .ok_or_else(|| missing("ICurrentControl"))?
-                .set_ref_current_group(&joints, body)
-        }
-        _ => return Err(CommandError::Unknown(head.to_string())),
     }
-    .map_err(refused)
+    .map_err(|source| CommandError::Device {
+        command: command(),
+        source,
+    })
 }
 
 #[cfg(test)]
