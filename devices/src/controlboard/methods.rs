@@ -6,18 +6,26 @@
 
 use super::rpc::RpcStamp;
 use super::v3::{self, Form, Group, Style, Wire3};
+use super::v4::{self, Wire4};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::interfaces::{CalibrationParameters, Pid};
+use crate::sensors::wire::WireWriter;
 use crate::vocabs::*;
 use yarp_proto::{Bottle, Vocab32};
 
 /// One remote call of the control board.
 pub trait Method: Sized {
-    type Reply: Wire3;
+    type Reply: Wire3 + Wire4;
     const V3: Form;
+    /// Its name in YARP 4.0's thrift `ControlBoardMsgs`, if 4.0 has it in our form.
+    const V4: Option<&'static str>;
+    /// The elements its arguments make in a 4.0 call.
+    const ARGS4: usize;
     fn put_args(&self, b: &mut Bottle);
     fn take_args(c: &mut v3::Cursor<'_>) -> Option<Self>;
+    fn put_args4(&self, w: &mut WireWriter);
+    fn take_args4(c: &mut v4::Cursor4<'_>) -> Option<Self>;
     /// Serves the call on `dev`.
     fn serve(self, dev: &mut dyn DeviceDriver) -> DevResult<Self::Reply>;
 }
@@ -27,6 +35,14 @@ macro_rules! via {
     ($d:ident . $as:ident) => {
         $d.$as().ok_or(DeviceError::Unsupported(stringify!($as)))?
     };
+}
+
+/// The first of `names` (a table row's optional thrift name).
+const fn first(names: &[&'static str]) -> Option<&'static str> {
+    match names {
+        [n, ..] => Some(n),
+        [] => None,
+    }
 }
 
 /// A group command needs one value per joint.
@@ -61,7 +77,7 @@ macro_rules! control_board_methods {
     ($(
         $(#[$doc:meta])*
         $name:ident { $($arg:ident : $ty:ty),* } -> $reply:ty,
-            $style:ident [$($head:ident),+] => |$d:ident| $serve:expr;
+            $style:ident [$($head:ident),+] $(, v4 $v4:literal)? => |$d:ident| $serve:expr;
     )*) => {
         $(
             $(#[$doc])*
@@ -71,11 +87,19 @@ macro_rules! control_board_methods {
             impl Method for $name {
                 type Reply = $reply;
                 const V3: Form = Form { head: &[$($head),+], style: Style::$style };
+                const V4: Option<&'static str> = first(&[$($v4)?]);
+                const ARGS4: usize = 0 $(+ <$ty as Wire4>::COUNT)*;
                 fn put_args(&self, _b: &mut Bottle) {
                     $( self.$arg.put(_b); )*
                 }
                 fn take_args(_c: &mut v3::Cursor<'_>) -> Option<Self> {
                     Some(Self { $($arg: Wire3::take(_c)?),* })
+                }
+                fn put_args4(&self, _w: &mut WireWriter) {
+                    $( self.$arg.put4(_w); )*
+                }
+                fn take_args4(_c: &mut v4::Cursor4<'_>) -> Option<Self> {
+                    Some(Self { $($arg: Wire4::take4(_c)?),* })
                 }
                 #[allow(unused_variables)]
                 fn serve(self, $d: &mut dyn DeviceDriver) -> DevResult<$reply> {
@@ -101,8 +125,48 @@ macro_rules! control_board_methods {
                 match self { $(Request::$name(m) => v3::reply::<$name>(cmd, m.serve(dev), stamp)),* }
             }
 
+            /// The call named `name` in 4.0's thrift form, with its arguments `args`, if it
+            /// is one this protocol has in that form.
+            pub fn from_v4(name: &str, args: &[yarp_proto::Value]) -> Option<Request> {
+                $( if <$name as Method>::V4 == Some(name) {
+                    return v4::decode::<$name>(args).map(Request::$name);
+                } )*
+                None
+            }
+
+            /// Serves the call on `dev` and answers it in 4.0's thrift form.
+            pub fn serve_v4(self, dev: &mut dyn DeviceDriver) -> Vec<u8> {
+                match self { $(Request::$name(m) => v4::reply::<$name>(m.serve(dev))),* }
+            }
+
             /// Every method's 3.12 form, in the table's order.
             pub const FORMS: &'static [Form] = &[$(<$name as Method>::V3),*];
+
+            /// The thrift names of the methods 4.0 has in our form.
+            pub const V4_NAMES: &'static [&'static str] = &{
+                const ALL: [Option<&str>; [$(stringify!($name)),*].len()] = [$(<$name as Method>::V4),*];
+                const N: usize = {
+                    let mut n = 0;
+                    let mut i = 0;
+                    while i < ALL.len() {
+                        if ALL[i].is_some() {
+                            n += 1;
+                        }
+                        i += 1;
+                    }
+                    n
+                };
+                let mut out = [""; N];
+                let (mut i, mut k) = (0, 0);
+                while i < ALL.len() {
+                    if let Some(n) = ALL[i] {
+                        out[k] = n;
+                        k += 1;
+                    }
+                    i += 1;
+                }
+                out
+            };
         }
     };
 }
@@ -111,172 +175,172 @@ control_board_methods! {
     /// `[get] [prot]`: the protocol version this server speaks.
     ProtocolVersion {} -> (i32, i32, i32), Echo [GET, PROTOCOL_VERSION] =>
         |d| Ok(super::PROTOCOL_VERSION_NUMBER);
-    Axes {} -> usize, Get [GET, AXES] => |d| via!(d.as_encoders).get_axes();
+    Axes {} -> usize, Get [GET, AXES], v4 "getAxesRPC" => |d| via!(d.as_encoders).get_axes();
 
     // IPositionControl
-    PositionMove { j: usize, target: f64 } -> (), Set [SET, POSITION_MOVE] =>
+    PositionMove { j: usize, target: f64 } -> (), Set [SET, POSITION_MOVE], v4 "positionMoveOneRPC" =>
         |d| via!(d.as_position_control).position_move(j, target);
-    PositionMoves { targets: Vec<f64> } -> (), Set [SET, POSITION_MOVES] =>
+    PositionMoves { targets: Vec<f64> } -> (), Set [SET, POSITION_MOVES], v4 "positionMoveAllRPC" =>
         |d| via!(d.as_position_control).position_moves(&targets);
-    PositionMoveGroup { joints: Group, targets: Vec<f64> } -> (), Set [SET, POSITION_MOVE_GROUP] =>
+    PositionMoveGroup { joints: Group, targets: Vec<f64> } -> (), Set [SET, POSITION_MOVE_GROUP], v4 "positionMoveGroupRPC" =>
         |d| { sized(&joints, &targets)?; via!(d.as_position_control).position_move_group(&joints, &targets) };
-    RelativeMove { j: usize, delta: f64 } -> (), Set [SET, RELATIVE_MOVE] =>
+    RelativeMove { j: usize, delta: f64 } -> (), Set [SET, RELATIVE_MOVE], v4 "relativeMoveOneRPC" =>
         |d| via!(d.as_position_control).relative_move(j, delta);
-    RelativeMoves { deltas: Vec<f64> } -> (), Set [SET, RELATIVE_MOVES] =>
+    RelativeMoves { deltas: Vec<f64> } -> (), Set [SET, RELATIVE_MOVES], v4 "relativeMoveAllRPC" =>
         |d| via!(d.as_position_control).relative_moves(&deltas);
-    RelativeMoveGroup { joints: Group, deltas: Vec<f64> } -> (), Set [SET, RELATIVE_MOVE_GROUP] =>
+    RelativeMoveGroup { joints: Group, deltas: Vec<f64> } -> (), Set [SET, RELATIVE_MOVE_GROUP], v4 "relativeMoveGroupRPC" =>
         |d| { sized(&joints, &deltas)?; via!(d.as_position_control).relative_move_group(&joints, &deltas) };
-    SetRefSpeed { j: usize, speed: f64 } -> (), Set [SET, REF_SPEED] =>
+    SetRefSpeed { j: usize, speed: f64 } -> (), Set [SET, REF_SPEED], v4 "setTrajSpeedOneRPC" =>
         |d| via!(d.as_position_control).set_ref_speed(j, speed);
-    SetRefSpeeds { speeds: Vec<f64> } -> (), Set [SET, REF_SPEEDS] =>
+    SetRefSpeeds { speeds: Vec<f64> } -> (), Set [SET, REF_SPEEDS], v4 "setTrajSpeedAllRPC" =>
         |d| via!(d.as_position_control).set_ref_speeds(&speeds);
-    SetRefSpeedGroup { joints: Group, speeds: Vec<f64> } -> (), Set [SET, REF_SPEED_GROUP] =>
+    SetRefSpeedGroup { joints: Group, speeds: Vec<f64> } -> (), Set [SET, REF_SPEED_GROUP], v4 "setTrajSpeedGroupRPC" =>
         |d| { sized(&joints, &speeds)?; via!(d.as_position_control).set_ref_speed_group(&joints, &speeds) };
-    SetRefAcceleration { j: usize, acc: f64 } -> (), Set [SET, REF_ACCELERATION] =>
+    SetRefAcceleration { j: usize, acc: f64 } -> (), Set [SET, REF_ACCELERATION], v4 "setTrajAccelerationOneRPC" =>
         |d| via!(d.as_position_control).set_ref_acceleration(j, acc);
-    SetRefAccelerations { accs: Vec<f64> } -> (), Set [SET, REF_ACCELERATIONS] =>
+    SetRefAccelerations { accs: Vec<f64> } -> (), Set [SET, REF_ACCELERATIONS], v4 "setTrajAccelerationsAllRPC" =>
         |d| via!(d.as_position_control).set_ref_accelerations(&accs);
-    SetRefAccelerationGroup { joints: Group, accs: Vec<f64> } -> (), Set [SET, REF_ACCELERATION_GROUP] =>
+    SetRefAccelerationGroup { joints: Group, accs: Vec<f64> } -> (), Set [SET, REF_ACCELERATION_GROUP], v4 "setTrajAccelerationsGroupRPC" =>
         |d| { sized(&joints, &accs)?; via!(d.as_position_control).set_ref_acceleration_group(&joints, &accs) };
-    Stop { j: usize } -> (), Set [SET, STOP] => |d| via!(d.as_position_control).stop(j);
-    Stops {} -> (), Set [SET, STOPS] => |d| via!(d.as_position_control).stops();
-    StopGroup { joints: Group } -> (), Set [SET, STOP_GROUP] =>
+    Stop { j: usize } -> (), Set [SET, STOP], v4 "stopOneRPC" => |d| via!(d.as_position_control).stop(j);
+    Stops {} -> (), Set [SET, STOPS], v4 "stopAllRPC" => |d| via!(d.as_position_control).stops();
+    StopGroup { joints: Group } -> (), Set [SET, STOP_GROUP], v4 "stopGroupRPC" =>
         |d| via!(d.as_position_control).stop_group(&joints);
-    CheckMotionDone { j: usize } -> bool, Get [GET, MOTION_DONE] =>
+    CheckMotionDone { j: usize } -> bool, Get [GET, MOTION_DONE], v4 "checkMotionDoneOneRPC" =>
         |d| via!(d.as_position_control).check_motion_done(j);
-    CheckMotionDones {} -> bool, Get [GET, MOTION_DONES] =>
+    CheckMotionDones {} -> bool, Get [GET, MOTION_DONES], v4 "checkMotionDoneAllRPC" =>
         |d| via!(d.as_position_control).check_motion_dones();
-    CheckMotionDoneGroup { joints: Group } -> bool, Get [GET, MOTION_DONE_GROUP] =>
+    CheckMotionDoneGroup { joints: Group } -> bool, Get [GET, MOTION_DONE_GROUP], v4 "checkMotionDoneGroupRPC" =>
         |d| via!(d.as_position_control).check_motion_done_group(&joints);
-    GetTargetPosition { j: usize } -> f64, Get [GET, POSITION_MOVE] =>
+    GetTargetPosition { j: usize } -> f64, Get [GET, POSITION_MOVE], v4 "getTargetPositionOneRPC" =>
         |d| via!(d.as_position_control).get_target_position(j);
-    GetTargetPositions {} -> Vec<f64>, Get [GET, POSITION_MOVES] =>
+    GetTargetPositions {} -> Vec<f64>, Get [GET, POSITION_MOVES], v4 "getTargetPositionAllRPC" =>
         |d| via!(d.as_position_control).get_target_positions();
-    GetTargetPositionGroup { joints: Group } -> Vec<f64>, Get [GET, POSITION_MOVE_GROUP] =>
+    GetTargetPositionGroup { joints: Group } -> Vec<f64>, Get [GET, POSITION_MOVE_GROUP], v4 "getTargetPositionGroupRPC" =>
         |d| via!(d.as_position_control).get_target_position_group(&joints);
-    GetRefSpeed { j: usize } -> f64, Get [GET, REF_SPEED] =>
+    GetRefSpeed { j: usize } -> f64, Get [GET, REF_SPEED], v4 "getTrajSpeedOneRPC" =>
         |d| via!(d.as_position_control).get_ref_speed(j);
-    GetRefSpeeds {} -> Vec<f64>, Get [GET, REF_SPEEDS] =>
+    GetRefSpeeds {} -> Vec<f64>, Get [GET, REF_SPEEDS], v4 "getTrajSpeedsAllRPC" =>
         |d| via!(d.as_position_control).get_ref_speeds();
-    GetRefSpeedGroup { joints: Group } -> Vec<f64>, Get [GET, REF_SPEED_GROUP] =>
+    GetRefSpeedGroup { joints: Group } -> Vec<f64>, Get [GET, REF_SPEED_GROUP], v4 "getTrajSpeedsGroupRPC" =>
         |d| via!(d.as_position_control).get_ref_speed_group(&joints);
-    GetRefAcceleration { j: usize } -> f64, Get [GET, REF_ACCELERATION] =>
+    GetRefAcceleration { j: usize } -> f64, Get [GET, REF_ACCELERATION], v4 "getTrajAccelerationOneRPC" =>
         |d| via!(d.as_position_control).get_ref_acceleration(j);
-    GetRefAccelerations {} -> Vec<f64>, Get [GET, REF_ACCELERATIONS] =>
+    GetRefAccelerations {} -> Vec<f64>, Get [GET, REF_ACCELERATIONS], v4 "getTrajAccelerationAllRPC" =>
         |d| via!(d.as_position_control).get_ref_accelerations();
-    GetRefAccelerationGroup { joints: Group } -> Vec<f64>, Get [GET, REF_ACCELERATION_GROUP] =>
+    GetRefAccelerationGroup { joints: Group } -> Vec<f64>, Get [GET, REF_ACCELERATION_GROUP], v4 "getTrajAccelerationGroupRPC" =>
         |d| via!(d.as_position_control).get_ref_acceleration_group(&joints);
 
     // IVelocityControl (single-joint and group moves travel on command:i only)
-    VelocityMoves { speeds: Vec<f64> } -> (), Set [SET, VELOCITY_MOVES] =>
+    VelocityMoves { speeds: Vec<f64> } -> (), Set [SET, VELOCITY_MOVES], v4 "velocityMoveAllRPC" =>
         |d| via!(d.as_velocity_control).velocity_moves(&speeds);
-    GetRefVelocity { j: usize } -> f64, Get [GET, VELOCITY_MOVE] =>
+    GetRefVelocity { j: usize } -> f64, Get [GET, VELOCITY_MOVE], v4 "getTargetVelocityOneRPC" =>
         |d| via!(d.as_velocity_control).get_ref_velocity(j);
-    GetRefVelocities {} -> Vec<f64>, Get [GET, VELOCITY_MOVES] =>
+    GetRefVelocities {} -> Vec<f64>, Get [GET, VELOCITY_MOVES], v4 "getTargetVelocityAllRPC" =>
         |d| via!(d.as_velocity_control).get_ref_velocities();
-    GetRefVelocityGroup { joints: Group } -> Vec<f64>, Get [GET, VELOCITY_MOVE_GROUP] =>
+    GetRefVelocityGroup { joints: Group } -> Vec<f64>, Get [GET, VELOCITY_MOVE_GROUP], v4 "getTargetVelocityGroupRPC" =>
         |d| { let v = via!(d.as_velocity_control); joints.iter().map(|&j| v.get_ref_velocity(j)).collect() };
 
     // IEncoders (readings come from the state port; these are what RPC serves)
-    GetEncoder { j: usize } -> f64, Get [GET, ENCODER] => |d| via!(d.as_encoders).get_encoder(j);
-    GetEncoders {} -> Vec<f64>, Get [GET, ENCODERS] => |d| via!(d.as_encoders).get_encoders();
-    GetEncoderSpeed { j: usize } -> f64, Get [GET, ENCODER_SPEED] =>
+    GetEncoder { j: usize } -> f64, Get [GET, ENCODER], v4 "getEncoderOneRPC" => |d| via!(d.as_encoders).get_encoder(j);
+    GetEncoders {} -> Vec<f64>, Get [GET, ENCODERS], v4 "getEncoderAllRPC" => |d| via!(d.as_encoders).get_encoders();
+    GetEncoderSpeed { j: usize } -> f64, Get [GET, ENCODER_SPEED], v4 "getEncoderSpeedOneRPC" =>
         |d| via!(d.as_encoders).get_encoder_speed(j);
-    GetEncoderSpeeds {} -> Vec<f64>, Get [GET, ENCODER_SPEEDS] =>
+    GetEncoderSpeeds {} -> Vec<f64>, Get [GET, ENCODER_SPEEDS], v4 "getEncoderSpeedAllRPC" =>
         |d| via!(d.as_encoders).get_encoder_speeds();
-    GetEncoderAcceleration { j: usize } -> f64, Get [GET, ENCODER_ACCELERATION] =>
+    GetEncoderAcceleration { j: usize } -> f64, Get [GET, ENCODER_ACCELERATION], v4 "getEncoderAccelerationOneRPC" =>
         |d| via!(d.as_encoders).get_encoder_acceleration(j);
-    GetEncoderAccelerations {} -> Vec<f64>, Get [GET, ENCODER_ACCELERATIONS] =>
+    GetEncoderAccelerations {} -> Vec<f64>, Get [GET, ENCODER_ACCELERATIONS], v4 "getEncoderAccelerationAllRPC" =>
         |d| via!(d.as_encoders).get_encoder_accelerations();
-    SetEncoder { j: usize, value: f64 } -> (), Set [SET, ENCODER] =>
+    SetEncoder { j: usize, value: f64 } -> (), Set [SET, ENCODER], v4 "setEncoderOneRPC" =>
         |d| via!(d.as_encoders).set_encoder(j, value);
-    SetEncoders { values: Vec<f64> } -> (), Set [SET, ENCODERS] =>
+    SetEncoders { values: Vec<f64> } -> (), Set [SET, ENCODERS], v4 "setEncoderAllRPC" =>
         |d| via!(d.as_encoders).set_encoders(&values);
-    ResetEncoder { j: usize } -> (), Set [SET, E_RESET] => |d| via!(d.as_encoders).reset_encoder(j);
-    ResetEncoders {} -> (), Set [SET, E_RESETS] => |d| via!(d.as_encoders).reset_encoders();
+    ResetEncoder { j: usize } -> (), Set [SET, E_RESET], v4 "resetEncoderOneRPC" => |d| via!(d.as_encoders).reset_encoder(j);
+    ResetEncoders {} -> (), Set [SET, E_RESETS], v4 "resetEncoderAllRPC" => |d| via!(d.as_encoders).reset_encoders();
 
     // IMotorEncoders
-    GetNumOfMotorEncoders {} -> usize, Get [GET, MOTOR_ENCODER_NUMBER] =>
+    GetNumOfMotorEncoders {} -> usize, Get [GET, MOTOR_ENCODER_NUMBER], v4 "getNumberOfMotorEncodersRPC" =>
         |d| via!(d.as_motor_encoders).get_num_of_motor_encoders();
-    GetMotorEncoder { m: usize } -> f64, Get [GET, MOTOR_ENCODER] =>
+    GetMotorEncoder { m: usize } -> f64, Get [GET, MOTOR_ENCODER], v4 "getMotorEncoderOneRPC" =>
         |d| via!(d.as_motor_encoders).get_motor_encoder(m);
-    GetMotorEncoders {} -> Vec<f64>, Get [GET, MOTOR_ENCODERS] =>
+    GetMotorEncoders {} -> Vec<f64>, Get [GET, MOTOR_ENCODERS], v4 "getMotorEncoderAllRPC" =>
         |d| via!(d.as_motor_encoders).get_motor_encoders();
-    GetMotorEncoderSpeed { m: usize } -> f64, Get [GET, MOTOR_ENCODER_SPEED] =>
+    GetMotorEncoderSpeed { m: usize } -> f64, Get [GET, MOTOR_ENCODER_SPEED], v4 "getMotorEncoderSpeedOneRPC" =>
         |d| via!(d.as_motor_encoders).get_motor_encoder_speed(m);
-    GetMotorEncoderSpeeds {} -> Vec<f64>, Get [GET, MOTOR_ENCODER_SPEEDS] =>
+    GetMotorEncoderSpeeds {} -> Vec<f64>, Get [GET, MOTOR_ENCODER_SPEEDS], v4 "getMotorEncoderSpeedAllRPC" =>
         |d| via!(d.as_motor_encoders).get_motor_encoder_speeds();
-    GetMotorEncoderAcceleration { m: usize } -> f64, Get [GET, MOTOR_ENCODER_ACCELERATION] =>
+    GetMotorEncoderAcceleration { m: usize } -> f64, Get [GET, MOTOR_ENCODER_ACCELERATION], v4 "getMotorEncoderAccelerationOneRPC" =>
         |d| via!(d.as_motor_encoders).get_motor_encoder_acceleration(m);
-    GetMotorEncoderAccelerations {} -> Vec<f64>, Get [GET, MOTOR_ENCODER_ACCELERATIONS] =>
+    GetMotorEncoderAccelerations {} -> Vec<f64>, Get [GET, MOTOR_ENCODER_ACCELERATIONS], v4 "getMotorEncoderAccelerationAllRPC" =>
         |d| via!(d.as_motor_encoders).get_motor_encoder_accelerations();
-    GetMotorEncoderCpr { m: usize } -> f64, Get [GET, MOTOR_CPR] =>
+    GetMotorEncoderCpr { m: usize } -> f64, Get [GET, MOTOR_CPR], v4 "getMotorEncoderCountsPerRevolutionRPC" =>
         |d| via!(d.as_motor_encoders).get_motor_encoder_counts_per_revolution(m);
-    SetMotorEncoderCpr { m: usize, cpr: f64 } -> (), Set [SET, MOTOR_CPR] =>
+    SetMotorEncoderCpr { m: usize, cpr: f64 } -> (), Set [SET, MOTOR_CPR], v4 "setMotorEncoderCountsPerRevolutionRPC" =>
         |d| via!(d.as_motor_encoders).set_motor_encoder_counts_per_revolution(m, cpr);
 
     // IControlLimits
-    GetLimits { j: usize } -> (f64, f64), Get [GET, LIMITS] => |d| via!(d.as_control_limits).get_limits(j);
-    SetLimits { j: usize, min: f64, max: f64 } -> (), Set [SET, LIMITS] =>
+    GetLimits { j: usize } -> (f64, f64), Get [GET, LIMITS], v4 "getPosLimitsRPC" => |d| via!(d.as_control_limits).get_limits(j);
+    SetLimits { j: usize, min: f64, max: f64 } -> (), Set [SET, LIMITS], v4 "setPosLimitsRPC" =>
         |d| via!(d.as_control_limits).set_limits(j, min, max);
-    GetVelLimits { j: usize } -> (f64, f64), Get [GET, VEL_LIMITS] =>
+    GetVelLimits { j: usize } -> (f64, f64), Get [GET, VEL_LIMITS], v4 "getVelLimitsRPC" =>
         |d| via!(d.as_control_limits).get_vel_limits(j);
-    SetVelLimits { j: usize, min: f64, max: f64 } -> (), Set [SET, VEL_LIMITS] =>
+    SetVelLimits { j: usize, min: f64, max: f64 } -> (), Set [SET, VEL_LIMITS], v4 "setVelLimitsRPC" =>
         |d| via!(d.as_control_limits).set_vel_limits(j, min, max);
 
     // IAxisInfo (the joint type travels as its int32 value)
-    GetAxisName { j: usize } -> String, Get [GET, INFO_NAME] => |d| via!(d.as_axis_info).get_axis_name(j);
-    GetJointType { j: usize } -> i32, Get [GET, INFO_TYPE] =>
+    GetAxisName { j: usize } -> String, Get [GET, INFO_NAME], v4 "getAxisNameRPC" => |d| via!(d.as_axis_info).get_axis_name(j);
+    GetJointType { j: usize } -> i32, Get [GET, INFO_TYPE], v4 "getJointTypeRPC" =>
         |d| via!(d.as_axis_info).get_joint_type(j).map(|t| t.0);
 
     // IAmplifierControl
-    EnableAmp { j: usize } -> (), Set [SET, AMP_ENABLE] => |d| via!(d.as_amplifier_control).enable_amp(j);
-    DisableAmp { j: usize } -> (), Set [SET, AMP_DISABLE] => |d| via!(d.as_amplifier_control).disable_amp(j);
-    GetAmpStatuses {} -> Vec<i32>, Get [GET, AMP_STATUS] => |d| via!(d.as_amplifier_control).get_amp_statuses();
-    GetAmpStatus { j: usize } -> i32, Get [GET, AMP_STATUS_SINGLE] =>
+    EnableAmp { j: usize } -> (), Set [SET, AMP_ENABLE], v4 "enableAmpRPC" => |d| via!(d.as_amplifier_control).enable_amp(j);
+    DisableAmp { j: usize } -> (), Set [SET, AMP_DISABLE], v4 "disableAmpRPC" => |d| via!(d.as_amplifier_control).disable_amp(j);
+    GetAmpStatuses {} -> Vec<i32>, Get [GET, AMP_STATUS], v4 "getAmpStatusAllRPC" => |d| via!(d.as_amplifier_control).get_amp_statuses();
+    GetAmpStatus { j: usize } -> i32, Get [GET, AMP_STATUS_SINGLE], v4 "getAmpStatusOneRPC" =>
         |d| via!(d.as_amplifier_control).get_amp_status(j);
     GetCurrent { j: usize } -> f64, Get [GET, AMP_CURRENT] => |d| via!(d.as_amplifier_control).get_current(j);
     GetCurrents {} -> Vec<f64>, Get [GET, AMP_CURRENTS] =>
         |d| { let n = via!(d.as_encoders).get_axes()?; let a = via!(d.as_amplifier_control); each(n, |j| a.get_current(j)) };
-    GetMaxCurrent { j: usize } -> f64, Get [GET, AMP_MAXCURRENT] =>
+    GetMaxCurrent { j: usize } -> f64, Get [GET, AMP_MAXCURRENT], v4 "getMaxCurrentRPC" =>
         |d| via!(d.as_amplifier_control).get_max_current(j);
-    SetMaxCurrent { j: usize, value: f64 } -> (), Set [SET, AMP_MAXCURRENT] =>
+    SetMaxCurrent { j: usize, value: f64 } -> (), Set [SET, AMP_MAXCURRENT], v4 "setMaxCurrentRPC" =>
         |d| via!(d.as_amplifier_control).set_max_current(j, value);
-    GetNominalCurrent { m: usize } -> f64, Get [GET, AMP_NOMINAL_CURRENT] =>
+    GetNominalCurrent { m: usize } -> f64, Get [GET, AMP_NOMINAL_CURRENT], v4 "getNominalCurrentRPC" =>
         |d| via!(d.as_amplifier_control).get_nominal_current(m);
-    SetNominalCurrent { m: usize, value: f64 } -> (), Set [SET, AMP_NOMINAL_CURRENT] =>
+    SetNominalCurrent { m: usize, value: f64 } -> (), Set [SET, AMP_NOMINAL_CURRENT], v4 "setNominalCurrentRPC" =>
         |d| via!(d.as_amplifier_control).set_nominal_current(m, value);
-    GetPeakCurrent { m: usize } -> f64, Get [GET, AMP_PEAK_CURRENT] =>
+    GetPeakCurrent { m: usize } -> f64, Get [GET, AMP_PEAK_CURRENT], v4 "getPeakCurrentRPC" =>
         |d| via!(d.as_amplifier_control).get_peak_current(m);
-    SetPeakCurrent { m: usize, value: f64 } -> (), Set [SET, AMP_PEAK_CURRENT] =>
+    SetPeakCurrent { m: usize, value: f64 } -> (), Set [SET, AMP_PEAK_CURRENT], v4 "setPeakCurrentRPC" =>
         |d| via!(d.as_amplifier_control).set_peak_current(m, value);
-    GetPwm { m: usize } -> f64, Get [GET, AMP_PWM] => |d| via!(d.as_amplifier_control).get_pwm(m);
-    GetPwmLimit { m: usize } -> f64, Get [GET, AMP_PWM_LIMIT] =>
+    GetPwm { m: usize } -> f64, Get [GET, AMP_PWM], v4 "getPWMRPC" => |d| via!(d.as_amplifier_control).get_pwm(m);
+    GetPwmLimit { m: usize } -> f64, Get [GET, AMP_PWM_LIMIT], v4 "getPWMLimitRPC" =>
         |d| via!(d.as_amplifier_control).get_pwm_limit(m);
-    SetPwmLimit { m: usize, value: f64 } -> (), Set [SET, AMP_PWM_LIMIT] =>
+    SetPwmLimit { m: usize, value: f64 } -> (), Set [SET, AMP_PWM_LIMIT], v4 "setPWMLimitRPC" =>
         |d| via!(d.as_amplifier_control).set_pwm_limit(m, value);
-    GetPowerSupplyVoltage { m: usize } -> f64, Get [GET, AMP_VOLTAGE_SUPPLY] =>
+    GetPowerSupplyVoltage { m: usize } -> f64, Get [GET, AMP_VOLTAGE_SUPPLY], v4 "getPowerSupplyVoltageRPC" =>
         |d| via!(d.as_amplifier_control).get_power_supply_voltage(m);
 
     // IMotor
-    GetNumberOfMotors {} -> usize, Get [GET, MOTORS_NUMBER] => |d| via!(d.as_motor).get_number_of_motors();
-    GetTemperature { m: usize } -> f64, Get [GET, TEMPERATURE] => |d| via!(d.as_motor).get_temperature(m);
-    GetTemperatures {} -> Vec<f64>, Get [GET, TEMPERATURES] =>
+    GetNumberOfMotors {} -> usize, Get [GET, MOTORS_NUMBER], v4 "getNumberOfMotorsRPC" => |d| via!(d.as_motor).get_number_of_motors();
+    GetTemperature { m: usize } -> f64, Get [GET, TEMPERATURE], v4 "getTemperatureOneRPC" => |d| via!(d.as_motor).get_temperature(m);
+    GetTemperatures {} -> Vec<f64>, Get [GET, TEMPERATURES], v4 "getTemperatureAllRPC" =>
         |d| { let motor = via!(d.as_motor); let n = motor.get_number_of_motors()?; each(n, |m| motor.get_temperature(m)) };
-    GetTemperatureLimit { m: usize } -> f64, Get [GET, TEMPERATURE_LIMIT] =>
+    GetTemperatureLimit { m: usize } -> f64, Get [GET, TEMPERATURE_LIMIT], v4 "getTemperatureLimitRPC" =>
         |d| via!(d.as_motor).get_temperature_limit(m);
-    SetTemperatureLimit { m: usize, value: f64 } -> (), Set [SET, TEMPERATURE_LIMIT] =>
+    SetTemperatureLimit { m: usize, value: f64 } -> (), Set [SET, TEMPERATURE_LIMIT], v4 "setTemperatureLimitRPC" =>
         |d| via!(d.as_motor).set_temperature_limit(m, value);
-    GetGearboxRatio { m: usize } -> f64, Get [GET, GEARBOX_RATIO] => |d| via!(d.as_motor).get_gearbox_ratio(m);
-    SetGearboxRatio { m: usize, value: f64 } -> (), Set [SET, GEARBOX_RATIO] =>
+    GetGearboxRatio { m: usize } -> f64, Get [GET, GEARBOX_RATIO], v4 "getGearboxRatioRPC" => |d| via!(d.as_motor).get_gearbox_ratio(m);
+    SetGearboxRatio { m: usize, value: f64 } -> (), Set [SET, GEARBOX_RATIO], v4 "setGearboxRatioRPC" =>
         |d| via!(d.as_motor).set_gearbox_ratio(m, value);
 
     // IPositionDirect (references are set on command:i only)
-    GetRefPosition { j: usize } -> f64, Get [GET, POSITION_DIRECT] =>
+    GetRefPosition { j: usize } -> f64, Get [GET, POSITION_DIRECT], v4 "getRefPositionOneRPC" =>
         |d| via!(d.as_position_direct).get_ref_position(j);
-    GetRefPositions {} -> Vec<f64>, Get [GET, POSITION_DIRECTS] =>
+    GetRefPositions {} -> Vec<f64>, Get [GET, POSITION_DIRECTS], v4 "getRefPositionAllRPC" =>
         |d| via!(d.as_position_direct).get_ref_positions();
-    GetRefPositionsGroup { joints: Group } -> Vec<f64>, Get [GET, POSITION_DIRECT_GROUP] =>
+    GetRefPositionsGroup { joints: Group } -> Vec<f64>, Get [GET, POSITION_DIRECT_GROUP], v4 "getRefPositionGroupRPC" =>
         |d| via!(d.as_position_direct).get_ref_positions_group(&joints);
 
     // IControlMode (readings come from the state port)
@@ -286,35 +350,35 @@ control_board_methods! {
         |d| via!(d.as_control_mode).get_control_modes();
     GetControlModesGroup { joints: Group } -> Vec<Vocab32>, GetMode [GET, ICONTROLMODE, CM_CONTROL_MODE_GROUP] =>
         |d| via!(d.as_control_mode).get_control_modes_group(&joints);
-    SetControlMode { j: usize, mode: Vocab32 } -> (), Set [SET, ICONTROLMODE, CM_CONTROL_MODE] =>
+    SetControlMode { j: usize, mode: Vocab32 } -> (), Set [SET, ICONTROLMODE, CM_CONTROL_MODE], v4 "setControlModeOneRPC" =>
         |d| via!(d.as_control_mode).set_control_mode(j, mode);
-    SetControlModes { modes: Vec<Vocab32> } -> (), Set [SET, ICONTROLMODE, CM_CONTROL_MODES] =>
+    SetControlModes { modes: Vec<Vocab32> } -> (), Set [SET, ICONTROLMODE, CM_CONTROL_MODES], v4 "setControlModeAllRPC" =>
         |d| via!(d.as_control_mode).set_control_modes(&modes);
-    SetControlModesGroup { joints: Group, modes: Vec<Vocab32> } -> (), Set [SET, ICONTROLMODE, CM_CONTROL_MODE_GROUP] =>
+    SetControlModesGroup { joints: Group, modes: Vec<Vocab32> } -> (), Set [SET, ICONTROLMODE, CM_CONTROL_MODE_GROUP], v4 "setControlModeGroupRPC" =>
         |d| { sized(&joints, &modes)?; via!(d.as_control_mode).set_control_modes_group(&joints, &modes) };
 
     // IInteractionMode
-    GetInteractionMode { j: usize } -> Vocab32, GetPlain [GET, INTERACTION_MODE_IFACE, INTERACTION_MODE] =>
+    GetInteractionMode { j: usize } -> Vocab32, GetPlain [GET, INTERACTION_MODE_IFACE, INTERACTION_MODE], v4 "getInteractionModeOneRPC" =>
         |d| via!(d.as_interaction_mode).get_interaction_mode(j);
-    GetInteractionModes {} -> Vec<Vocab32>, GetPlain [GET, INTERACTION_MODE_IFACE, INTERACTION_MODES] =>
+    GetInteractionModes {} -> Vec<Vocab32>, GetPlain [GET, INTERACTION_MODE_IFACE, INTERACTION_MODES], v4 "getInteractionModesAllRPC" =>
         |d| via!(d.as_interaction_mode).get_interaction_modes();
-    GetInteractionModesGroup { joints: Group } -> Vec<Vocab32>, GetPlain [GET, INTERACTION_MODE_IFACE, INTERACTION_MODE_GROUP] =>
+    GetInteractionModesGroup { joints: Group } -> Vec<Vocab32>, GetPlain [GET, INTERACTION_MODE_IFACE, INTERACTION_MODE_GROUP], v4 "getInteractionModesGroupRPC" =>
         |d| via!(d.as_interaction_mode).get_interaction_modes_group(&joints);
-    SetInteractionMode { j: usize, mode: Vocab32 } -> (), Set [SET, INTERACTION_MODE_IFACE, INTERACTION_MODE] =>
+    SetInteractionMode { j: usize, mode: Vocab32 } -> (), Set [SET, INTERACTION_MODE_IFACE, INTERACTION_MODE], v4 "setInteractionModeOneRPC" =>
         |d| via!(d.as_interaction_mode).set_interaction_mode(j, mode);
-    SetInteractionModes { modes: Vec<Vocab32> } -> (), Set [SET, INTERACTION_MODE_IFACE, INTERACTION_MODES] =>
+    SetInteractionModes { modes: Vec<Vocab32> } -> (), Set [SET, INTERACTION_MODE_IFACE, INTERACTION_MODES], v4 "setInteractionModesAllRPC" =>
         |d| via!(d.as_interaction_mode).set_interaction_modes(&modes);
-    SetInteractionModesGroup { joints: Group, modes: Vec<Vocab32> } -> (), Set [SET, INTERACTION_MODE_IFACE, INTERACTION_MODE_GROUP] =>
+    SetInteractionModesGroup { joints: Group, modes: Vec<Vocab32> } -> (), Set [SET, INTERACTION_MODE_IFACE, INTERACTION_MODE_GROUP], v4 "setInteractionModesGroupRPC" =>
         |d| via!(d.as_interaction_mode).set_interaction_modes_group(&joints, &modes);
 
     // ITorqueControl (references are set one by one or all, here or on command:i)
     GetTorque { j: usize } -> f64, Get [GET, TORQUE, TRQ] => |d| via!(d.as_torque_control).get_torque(j);
     GetTorques {} -> Vec<f64>, Get [GET, TORQUE, TRQS] => |d| via!(d.as_torque_control).get_torques();
-    GetRefTorque { j: usize } -> f64, Get [GET, TORQUE, REF] => |d| via!(d.as_torque_control).get_ref_torque(j);
-    GetRefTorques {} -> Vec<f64>, Get [GET, TORQUE, REFS] => |d| via!(d.as_torque_control).get_ref_torques();
-    SetRefTorque { j: usize, value: f64 } -> (), Set [SET, TORQUE, REF] =>
+    GetRefTorque { j: usize } -> f64, Get [GET, TORQUE, REF], v4 "getRefTorqueOneRPC" => |d| via!(d.as_torque_control).get_ref_torque(j);
+    GetRefTorques {} -> Vec<f64>, Get [GET, TORQUE, REFS], v4 "getRefTorqueAllRPC" => |d| via!(d.as_torque_control).get_ref_torques();
+    SetRefTorque { j: usize, value: f64 } -> (), Set [SET, TORQUE, REF], v4 "setRefTorqueOneRPC" =>
         |d| via!(d.as_torque_control).set_ref_torque(j, value);
-    SetRefTorques { values: Vec<f64> } -> (), Set [SET, TORQUE, REFS] =>
+    SetRefTorques { values: Vec<f64> } -> (), Set [SET, TORQUE, REFS], v4 "setRefTorqueAllRPC" =>
         |d| {
             // C++ wants exactly the controlled joints
             let t = via!(d.as_torque_control);
@@ -324,67 +388,67 @@ control_board_methods! {
             }
             values.iter().enumerate().try_for_each(|(j, v)| t.set_ref_torque(j, *v))
         };
-    GetTorqueRange { j: usize } -> (f64, f64), Get [GET, TORQUE, RANGE] =>
+    GetTorqueRange { j: usize } -> (f64, f64), Get [GET, TORQUE, RANGE], v4 "getTorqueRangeOneRPC" =>
         |d| via!(d.as_torque_control).get_torque_range(j);
-    GetTorqueRanges {} -> (Vec<f64>, Vec<f64>), Get [GET, TORQUE, RANGES] =>
+    GetTorqueRanges {} -> (Vec<f64>, Vec<f64>), Get [GET, TORQUE, RANGES], v4 "getTorqueRangeAllRPC" =>
         |d| { let t = via!(d.as_torque_control); let n = t.get_axes()?; Ok(each(n, |j| t.get_torque_range(j))?.into_iter().unzip()) };
-    GetMotorTorqueParams { j: usize } -> Vec<f64>, Get [GET, TORQUE, MOTOR_PARAMS] =>
+    GetMotorTorqueParams { j: usize } -> Vec<f64>, Get [GET, TORQUE, MOTOR_PARAMS], v4 "getMotorTorqueParamsRPC" =>
         |d| via!(d.as_torque_control).get_motor_torque_params(j).map(|p| p.to_vec());
 
     // ICurrentControl, IPwmControl readings (references are set on command:i only)
-    GetCurrentRange { j: usize } -> (f64, f64), GetBare [GET, CURRENT_IFACE, RANGE] =>
+    GetCurrentRange { j: usize } -> (f64, f64), GetBare [GET, CURRENT_IFACE, RANGE], v4 "getCurrentRangeOneRPC" =>
         |d| via!(d.as_current_control).get_current_range(j);
-    GetCurrentRanges {} -> (Vec<f64>, Vec<f64>), GetBare [GET, CURRENT_IFACE, RANGES] =>
+    GetCurrentRanges {} -> (Vec<f64>, Vec<f64>), GetBare [GET, CURRENT_IFACE, RANGES], v4 "getCurrentRangeAllRPC" =>
         |d| { let n = axes(d)?; let c = via!(d.as_current_control); Ok(each(n, |j| c.get_current_range(j))?.into_iter().unzip()) };
-    GetRefCurrent { j: usize } -> f64, GetBare [GET, CURRENT_IFACE, REF] =>
+    GetRefCurrent { j: usize } -> f64, GetBare [GET, CURRENT_IFACE, REF], v4 "getRefCurrentOneRPC" =>
         |d| via!(d.as_current_control).get_ref_current(j);
-    GetRefCurrents {} -> Vec<f64>, GetBare [GET, CURRENT_IFACE, REFS] =>
+    GetRefCurrents {} -> Vec<f64>, GetBare [GET, CURRENT_IFACE, REFS], v4 "getRefCurrentAllRPC" =>
         |d| { let n = axes(d)?; let c = via!(d.as_current_control); each(n, |j| c.get_ref_current(j)) };
-    GetRefDutyCycle { j: usize } -> f64, GetBare [GET, PWM_IFACE, REF] =>
+    GetRefDutyCycle { j: usize } -> f64, GetBare [GET, PWM_IFACE, REF], v4 "getRefDutyCycleOneRPC" =>
         |d| via!(d.as_pwm_control).get_ref_duty_cycle(j);
-    GetRefDutyCycles {} -> Vec<f64>, GetBare [GET, PWM_IFACE, REFS] =>
+    GetRefDutyCycles {} -> Vec<f64>, GetBare [GET, PWM_IFACE, REFS], v4 "getRefDutyCycleAllRPC" =>
         |d| { let n = axes(d)?; let p = via!(d.as_pwm_control); each(n, |j| p.get_ref_duty_cycle(j)) };
-    GetDutyCycle { j: usize } -> f64, GetBare [GET, PWM_IFACE, PWM_OUTPUT] =>
+    GetDutyCycle { j: usize } -> f64, GetBare [GET, PWM_IFACE, PWM_OUTPUT], v4 "getDutyCycleOneRPC" =>
         |d| via!(d.as_pwm_control).get_duty_cycle(j);
     /// C++ answers the references here (sic), which we copy.
-    GetDutyCycles {} -> Vec<f64>, GetBare [GET, PWM_IFACE, PWM_OUTPUTS] =>
+    GetDutyCycles {} -> Vec<f64>, GetBare [GET, PWM_IFACE, PWM_OUTPUTS], v4 "getDutyCycleAllRPC" =>
         |d| { let n = axes(d)?; let p = via!(d.as_pwm_control); each(n, |j| p.get_ref_duty_cycle(j)) };
 
     // IPidControl: `[set|get] [pid] <what> <pid type> <joint> ...`
-    SetPid { ty: Vocab32, j: usize, pid: Pid } -> (), Set [SET, PID, PID] =>
+    SetPid { ty: Vocab32, j: usize, pid: Pid } -> (), Set [SET, PID, PID], v4 "setPidRPC" =>
         |d| via!(d.as_pid_control).set_pid(ty, j, pid);
-    EnablePid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_ENABLE] =>
+    EnablePid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_ENABLE], v4 "enablePidRPC" =>
         |d| via!(d.as_pid_control).enable_pid(ty, j);
-    DisablePid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_DISABLE] =>
+    DisablePid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_DISABLE], v4 "disablePidRPC" =>
         |d| via!(d.as_pid_control).disable_pid(ty, j);
-    SetPidReference { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, REF] =>
+    SetPidReference { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, REF], v4 "setPidReferenceRPC" =>
         |d| via!(d.as_pid_control).set_pid_reference(ty, j, value);
-    ResetPid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_RESET] =>
+    ResetPid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_RESET], v4 "resetPidRPC" =>
         |d| via!(d.as_pid_control).reset_pid(ty, j);
-    SetPidErrorLimit { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, PID_ERROR_LIMIT] =>
+    SetPidErrorLimit { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, PID_ERROR_LIMIT], v4 "setPidErrorLimitRPC" =>
         |d| via!(d.as_pid_control).set_pid_error_limit(ty, j, value);
-    SetPidOffset { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, PID_OFFSET] =>
+    SetPidOffset { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, PID_OFFSET], v4 "setPidOffsetOneRPC" =>
         |d| via!(d.as_pid_control).set_pid_offset(ty, j, value);
-    GetPid { ty: Vocab32, j: usize } -> Pid, GetBare [GET, PID, PID] => |d| via!(d.as_pid_control).get_pid(ty, j);
-    IsPidEnabled { ty: Vocab32, j: usize } -> bool, GetBare [GET, PID, PID_ENABLE] =>
+    GetPid { ty: Vocab32, j: usize } -> Pid, GetBare [GET, PID, PID], v4 "getPidRPC" => |d| via!(d.as_pid_control).get_pid(ty, j);
+    IsPidEnabled { ty: Vocab32, j: usize } -> bool, GetBare [GET, PID, PID_ENABLE], v4 "isPidEnabledRPC" =>
         |d| via!(d.as_pid_control).is_pid_enabled(ty, j);
-    GetPidReference { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, REF] =>
+    GetPidReference { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, REF], v4 "getPidReferenceRPC" =>
         |d| via!(d.as_pid_control).get_pid_reference(ty, j);
-    GetPidError { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_ERROR] =>
+    GetPidError { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_ERROR], v4 "getPidErrorRPC" =>
         |d| via!(d.as_pid_control).get_pid_error(ty, j);
-    GetPidOutput { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_OUTPUT] =>
+    GetPidOutput { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_OUTPUT], v4 "getPidOutputRPC" =>
         |d| via!(d.as_pid_control).get_pid_output(ty, j);
-    GetPidErrorLimit { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_ERROR_LIMIT] =>
+    GetPidErrorLimit { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_ERROR_LIMIT], v4 "getPidErrorLimitRPC" =>
         |d| via!(d.as_pid_control).get_pid_error_limit(ty, j);
-    GetPids { ty: Vocab32 } -> Vec<Pid>, GetBare [GET, PID, PIDS] =>
+    GetPids { ty: Vocab32 } -> Vec<Pid>, GetBare [GET, PID, PIDS], v4 "getPidsRPC" =>
         |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid(ty, j)) };
-    GetPidReferences { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, REFS] =>
+    GetPidReferences { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, REFS], v4 "getPidReferencesRPC" =>
         |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_reference(ty, j)) };
-    GetPidErrorLimits { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_ERROR_LIMITS] =>
+    GetPidErrorLimits { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_ERROR_LIMITS], v4 "getPidErrorLimitsRPC" =>
         |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_error_limit(ty, j)) };
-    GetPidErrors { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_ERRORS] =>
+    GetPidErrors { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_ERRORS], v4 "getPidErrorsRPC" =>
         |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_error(ty, j)) };
-    GetPidOutputs { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_OUTPUTS] =>
+    GetPidOutputs { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_OUTPUTS], v4 "getPidOutputsRPC" =>
         |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_output(ty, j)) };
 
     // IImpedanceControl: values travel in a list, which C++ reads padded with zeros
@@ -402,10 +466,10 @@ control_board_methods! {
             .map(|l| vec![l.min_stiffness, l.max_stiffness, l.min_damping, l.max_damping]);
 
     // IControlCalibration, which C++ recognises by its first vocab
-    CalibrateAxisWithParams { j: usize, kind: u32, p1: f64, p2: f64, p3: f64 } -> (), Set [CALIBRATE_JOINT] =>
+    CalibrateAxisWithParams { j: usize, kind: u32, p1: f64, p2: f64, p3: f64 } -> (), Set [CALIBRATE_JOINT], v4 "calibrateAxisWithParamsRPC" =>
         |d| via!(d.as_control_calibration).calibrate_axis_with_params(j, kind, p1, p2, p3);
     /// C++ sends the type and param1..4 only.
-    SetCalibrationParameters { j: usize, kind: u32, p1: f64, p2: f64, p3: f64, p4: f64 } -> (), Set [CALIBRATE_JOINT_PARAMS] =>
+    SetCalibrationParameters { j: usize, kind: u32, p1: f64, p2: f64, p3: f64, p4: f64 } -> (), Set [CALIBRATE_JOINT_PARAMS], v4 "setCalibrationParametersRPC" =>
         |d| {
             let params = CalibrationParameters { kind, param1: p1, param2: p2, param3: p3, param4: p4, ..Default::default() };
             via!(d.as_control_calibration).set_calibration_parameters(j, &params)
@@ -415,11 +479,11 @@ control_board_methods! {
         |d| via!(d.as_control_calibration).calibration_done(j);
     // These four are a lone vocab from C++'s client, which a 3.12 server refuses as
     // shorter than two elements.
-    CalibrateRobot {} -> (), Set [CALIBRATE] => |d| via!(d.as_control_calibration).calibrate_robot();
-    AbortCalibration {} -> (), Set [ABORTCALIB] => |d| via!(d.as_control_calibration).abort_calibration();
-    AbortPark {} -> (), Set [ABORTPARK] => |d| via!(d.as_control_calibration).abort_park();
+    CalibrateRobot {} -> (), Set [CALIBRATE], v4 "calibrateRobotRPC" => |d| via!(d.as_control_calibration).calibrate_robot();
+    AbortCalibration {} -> (), Set [ABORTCALIB], v4 "abortCalibrationRPC" => |d| via!(d.as_control_calibration).abort_calibration();
+    AbortPark {} -> (), Set [ABORTPARK], v4 "abortParkRPC" => |d| via!(d.as_control_calibration).abort_park();
     /// As C++: "client would get stuck if returning false".
-    Park { wait: Option<bool> } -> (), Set [PARK] =>
+    Park { wait: Option<bool> } -> (), Set [PARK], v4 "parkRPC" =>
         |d| {
             if let Err(e) = via!(d.as_control_calibration).park(wait.unwrap_or(false)) {
                 tracing::warn!("controlBoard rpc: park failed: {e}");
@@ -428,24 +492,24 @@ control_board_methods! {
         };
 
     // IRemoteCalibrator: `[set|get] [reca] <what> [j]`
-    IsCalibratorPresent {} -> bool, GetBare [GET, REMOTE_CALIBRATOR_IFACE, IS_CALIBRATOR_PRESENT] =>
+    IsCalibratorPresent {} -> bool, GetBare [GET, REMOTE_CALIBRATOR_IFACE, IS_CALIBRATOR_PRESENT], v4 "isCalibratorDevicePresentRPC" =>
         |d| via!(d.as_remote_calibrator).is_calibrator_device_present();
-    CalibrateSingleJoint { j: usize } -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, CALIBRATE_SINGLE_JOINT] =>
+    CalibrateSingleJoint { j: usize } -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, CALIBRATE_SINGLE_JOINT], v4 "calibrateSingleJointRPC" =>
         |d| via!(d.as_remote_calibrator).calibrate_single_joint(j);
-    CalibrateWholePart {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, CALIBRATE_WHOLE_PART] =>
+    CalibrateWholePart {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, CALIBRATE_WHOLE_PART], v4 "calibrateWholePartRPC" =>
         |d| via!(d.as_remote_calibrator).calibrate_whole_part();
-    HomingSingleJoint { j: usize } -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, HOMING_SINGLE_JOINT] =>
+    HomingSingleJoint { j: usize } -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, HOMING_SINGLE_JOINT], v4 "homingSingleJointRPC" =>
         |d| via!(d.as_remote_calibrator).homing_single_joint(j);
-    HomingWholePart {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, HOMING_WHOLE_PART] =>
+    HomingWholePart {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, HOMING_WHOLE_PART], v4 "homingWholePartRPC" =>
         |d| via!(d.as_remote_calibrator).homing_whole_part();
     /// C++ calls `parkSingleJoint(j)`, whose default waits; the flag does not travel.
-    ParkSingleJoint { j: usize } -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, PARK_SINGLE_JOINT] =>
+    ParkSingleJoint { j: usize } -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, PARK_SINGLE_JOINT], v4 "parkSingleJointRPC" =>
         |d| via!(d.as_remote_calibrator).park_single_joint(j, true);
-    ParkWholePart {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, PARK_WHOLE_PART] =>
+    ParkWholePart {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, PARK_WHOLE_PART], v4 "parkWholePartRPC" =>
         |d| via!(d.as_remote_calibrator).park_whole_part();
-    QuitCalibrate {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, QUIT_CALIBRATE] =>
+    QuitCalibrate {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, QUIT_CALIBRATE], v4 "quitCalibrateRPC" =>
         |d| via!(d.as_remote_calibrator).quit_calibrate();
-    QuitPark {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, QUIT_PARK] =>
+    QuitPark {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, QUIT_PARK], v4 "quitParkRPC" =>
         |d| via!(d.as_remote_calibrator).quit_park();
 }
 

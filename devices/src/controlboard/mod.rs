@@ -10,6 +10,7 @@ mod single_port;
 mod state;
 pub mod streaming;
 pub mod v3;
+pub mod v4;
 
 pub use nws::{port_prefix, ControlBoardNws, ControlBoardNwsDevice, DEFAULT_PERIOD};
 pub use rpc::{handle_rpc, RpcStamp, PROTOCOL_VERSION_NUMBER};

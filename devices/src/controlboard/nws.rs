@@ -2,6 +2,7 @@
 //! tasks serving them (the thin tokio layer over `rpc`, `streaming` and `state`).
 //!
 //! * `/<name>/rpc:i` — RPC (`handle_rpc`);
+//! * `/<name>/nws/rpc:i` — YARP 4.0's RPC, its thrift form (`v4::handle_rpc`);
 //! * `/<name>/command:i` — streaming commands (`handle_command`), no replies;
 //! * `/<name>/state:o` — joint positions every `period`, with an envelope;
 //! * `/<name>/stateExt:o` — the whole `jointData`, same envelope.
@@ -163,17 +164,20 @@ impl ControlBoardNws {
         let rpc = Arc::new(Port::open(&rpc_name, ns.clone()).await?);
         let command = Arc::new(Port::open(&format!("{prefix}/command:i"), ns.clone()).await?);
         let state = Arc::new(Port::open(&format!("{prefix}/state:o"), ns.clone()).await?);
-        let state_ext = Arc::new(Port::open(&format!("{prefix}/stateExt:o"), ns).await?);
+        let state_ext = Arc::new(Port::open(&format!("{prefix}/stateExt:o"), ns.clone()).await?);
+        // YARP 4.0's clients ask here, in its thrift form
+        let rpc4 = Arc::new(Port::open(&format!("{prefix}/nws/rpc:i"), ns).await?);
         let slot: Slot = Arc::new(Mutex::new(None));
         let tasks = vec![
             tokio::spawn(serve_rpc(rpc.clone(), slot.clone())),
             tokio::spawn(serve_commands(command.clone(), slot.clone())),
+            tokio::spawn(serve_rpc4(rpc4.clone(), slot.clone())),
         ];
         Ok(ControlBoardNws {
             rpc_contact: rpc.contact().clone(),
             rpc_name,
             prefix,
-            ports: vec![rpc, command, state, state_ext],
+            ports: vec![rpc, command, state, state_ext, rpc4],
             state: 2,
             state_ext: Some(3),
             slot,
@@ -365,6 +369,26 @@ async fn serve_rpc(port: Arc<Port>, slot: Slot) {
             },
         };
         msg.reply(reply);
+    }
+}
+
+/// YARP 4.0's RPC (`<name>/nws/rpc:i`): thrift calls, answered as C++ 4.0 answers them.
+async fn serve_rpc4(port: Arc<Port>, slot: Slot) {
+    while let Some(mut msg) = port.read().await {
+        let reply = match (msg.bottle(), attached(&slot)) {
+            (Ok(cmd), Some(a)) => {
+                device_call(|| super::v4::handle_rpc(&cmd, lock(&a.device).device()))
+            }
+            (Err(e), _) => {
+                tracing::warn!("{}: undecodable call from {}: {e}", port.name(), msg.from);
+                super::v4::fail_reply()
+            }
+            (Ok(cmd), None) => {
+                tracing::warn!("{}: `{cmd}` but no device is attached", port.name());
+                super::v4::fail_reply()
+            }
+        };
+        msg.reply_encoded(reply);
     }
 }
 

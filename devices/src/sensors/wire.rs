@@ -57,15 +57,40 @@ pub enum WireError {
     NotAList { family: &'static str },
 }
 
-/// The thrift wire writer (C++ `WireWriter`) for the few forms the MAS protocol uses.
+/// The thrift wire writer (C++ `WireWriter`), in one generation's numbering of tags
+/// (YARP 4.0 renumbered the floats).
 #[derive(Debug, Default)]
 pub struct WireWriter {
     out: Vec<u8>,
+    generation: tags::Generation,
 }
 
 impl WireWriter {
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// A writer for a peer of `generation`.
+    pub fn for_generation(generation: tags::Generation) -> Self {
+        WireWriter {
+            out: Vec::new(),
+            generation,
+        }
+    }
+
+    /// `writeBool`: the vocab `ok` or `fail`.
+    pub fn bool(&mut self, b: bool) -> &mut Self {
+        self.vocab(Vocab32::new(if b { "ok" } else { "fail" }))
+    }
+
+    /// A `list<i32>` (or of an enum): compact, as the generated code writes it.
+    pub fn int32_list(&mut self, v: impl ExactSizeIterator<Item = i32>) -> &mut Self {
+        self.i32(tags::LIST | tags::INT32);
+        self.i32(v.len() as i32);
+        for x in v {
+            self.i32(x);
+        }
+        self
     }
 
     fn i32(&mut self, x: i32) {
@@ -99,7 +124,7 @@ impl WireWriter {
     }
 
     pub fn float64(&mut self, x: f64) -> &mut Self {
-        self.i32(tags::FLOAT64);
+        self.i32(self.generation.float64());
         self.out.extend_from_slice(&x.to_le_bytes());
         self
     }
@@ -113,7 +138,7 @@ impl WireWriter {
 
     /// A `yarp::sig::Vector`: its own compact float64 list.
     pub fn float_vector(&mut self, v: &[f64]) -> &mut Self {
-        self.i32(tags::LIST | tags::FLOAT64);
+        self.i32(tags::LIST | self.generation.float64());
         self.i32(v.len() as i32);
         for x in v {
             self.out.extend_from_slice(&x.to_le_bytes());

@@ -1,0 +1,492 @@
+//! YARP 4.0's encoding of the control-board protocol: the thrift service
+//! `ControlBoardMsgs` on `<name>/nws/rpc:i`. A call is a list: the method's name as one
+//! string (`"positionMoveOneRPC"`), then its arguments; a reply is the method's
+//! `ReturnValue` alone, or a list of it and the values asked. Values are written as C++'s
+//! generated code writes them (`yarp::os::idl::WireWriter`, 4.0's tags) and read as its
+//! `WireReader` reads them (any integer tag for an integer, any number for a double).
+//! The methods are those of `methods.rs`, by their thrift name; each value's form is its
+//! [`Wire4`] impl.
+
+use super::methods::{Method, Request};
+use super::v3::Group;
+use crate::driver::DeviceDriver;
+use crate::error::{DevResult, DeviceError};
+use crate::interfaces::Pid;
+use crate::sensors::wire::WireWriter;
+use yarp_proto::tags::Generation;
+use yarp_proto::{Bottle, Value, Vocab32};
+
+/// The protocol number 4.0's generated code compares (its `.thrift` declares none: 0).
+pub const PROTOCOL: i16 = 0;
+/// The YARP version our 4.0 form follows, as `getRemoteProtocolVersion` reports it.
+pub const YARP_VERSION: (i16, i16, i16) = (4, 0, 0);
+
+/// C++ `yarp::dev::ReturnValue`: what a 4.0 call returns besides its values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReturnValue {
+    Ok,
+    Generic,
+    NotImplemented,
+    Communication,
+    Deprecated,
+    MethodFailed,
+    NotReady,
+    OutOfBounds,
+    /// `miss`: what a C++ client holds when the call itself failed.
+    Uninitialized,
+}
+
+impl ReturnValue {
+    /// The code for a device call that failed with `e`.
+    pub fn of(e: &DeviceError) -> ReturnValue {
+        match e {
+            DeviceError::NotOpen | DeviceError::NotReady(_) => ReturnValue::NotReady,
+            DeviceError::Unsupported(_) => ReturnValue::NotImplemented,
+            DeviceError::Timeout { .. } | DeviceError::PeerLost { .. } => {
+                ReturnValue::Communication
+            }
+            DeviceError::InvalidJoint { .. } | DeviceError::WrongSize { .. } => {
+                ReturnValue::OutOfBounds
+            }
+            _ => ReturnValue::MethodFailed,
+        }
+    }
+
+    fn vocab(self) -> Vocab32 {
+        Vocab32::new(match self {
+            ReturnValue::Ok => "ok",
+            ReturnValue::Generic => "err1",
+            ReturnValue::NotImplemented => "err2",
+            ReturnValue::Communication => "err3",
+            ReturnValue::Deprecated => "err4",
+            ReturnValue::MethodFailed => "err5",
+            ReturnValue::NotReady => "err6",
+            ReturnValue::OutOfBounds => "err7",
+            ReturnValue::Uninitialized => "miss",
+        })
+    }
+
+    fn from_vocab(v: Vocab32) -> ReturnValue {
+        const ALL: [ReturnValue; 9] = [
+            ReturnValue::Ok,
+            ReturnValue::Generic,
+            ReturnValue::NotImplemented,
+            ReturnValue::Communication,
+            ReturnValue::Deprecated,
+            ReturnValue::MethodFailed,
+            ReturnValue::NotReady,
+            ReturnValue::OutOfBounds,
+            ReturnValue::Uninitialized,
+        ];
+        ALL.into_iter()
+            .find(|r| r.vocab() == v)
+            .unwrap_or(ReturnValue::Generic)
+    }
+
+    /// Always 16 bytes: a list of one tagged vocab (`ReturnValue::write`).
+    fn put(self, w: &mut WireWriter) {
+        w.list_header(1).vocab(self.vocab());
+    }
+}
+
+/// A value as 4.0's generated code writes it and reads it.
+pub trait Wire4: Sized {
+    /// The elements it adds to a call or reply: a thrift struct is written flat.
+    const COUNT: usize = 1;
+    fn put4(&self, w: &mut WireWriter);
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self>;
+    /// What C++ writes in a reply whose call failed.
+    fn zero() -> Self;
+}
+
+/// The values of a call or reply not read yet.
+pub struct Cursor4<'a>(std::slice::Iter<'a, Value>);
+
+impl<'a> Cursor4<'a> {
+    pub fn new(items: &'a [Value]) -> Self {
+        Cursor4(items.iter())
+    }
+    fn next(&mut self) -> Option<&'a Value> {
+        self.0.next()
+    }
+}
+
+impl Wire4 for () {
+    const COUNT: usize = 0;
+    fn put4(&self, _: &mut WireWriter) {}
+    fn take4(_: &mut Cursor4<'_>) -> Option<Self> {
+        Some(())
+    }
+    fn zero() -> Self {}
+}
+
+impl Wire4 for f64 {
+    fn put4(&self, w: &mut WireWriter) {
+        w.float64(*self);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        c.next()?.as_f64()
+    }
+    fn zero() -> Self {
+        0.0
+    }
+}
+
+impl Wire4 for i32 {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32(*self);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        c.next().filter(|v| v.is_int() || v.is_vocab())?.as_i32()
+    }
+    fn zero() -> Self {
+        0
+    }
+}
+
+/// Joints, motors and counts are i32 (i16 in some calls: C++ reads either).
+impl Wire4 for usize {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32(i32::try_from(*self).unwrap_or(i32::MAX));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        usize::try_from(i32::take4(c)?).ok()
+    }
+    fn zero() -> Self {
+        0
+    }
+}
+
+impl Wire4 for u32 {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32(i32::try_from(*self).unwrap_or(i32::MAX));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        u32::try_from(i32::take4(c)?).ok()
+    }
+    fn zero() -> Self {
+        0
+    }
+}
+
+/// `writeBool`: the vocab `ok` or `fail`; read true unless 0 or `fail`.
+impl Wire4 for bool {
+    fn put4(&self, w: &mut WireWriter) {
+        w.bool(*self);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        let v = c.next().filter(|v| v.is_int() || v.is_vocab())?.as_i32()?;
+        Some(v != 0 && v != Vocab32::new("fail").0)
+    }
+    fn zero() -> Self {
+        false
+    }
+}
+
+impl Wire4 for Option<bool> {
+    fn put4(&self, w: &mut WireWriter) {
+        w.bool(self.unwrap_or(false));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        bool::take4(c).map(Some)
+    }
+    fn zero() -> Self {
+        None
+    }
+}
+
+impl Wire4 for String {
+    fn put4(&self, w: &mut WireWriter) {
+        w.string(self);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        c.next()?.as_str().map(str::to_string)
+    }
+    fn zero() -> Self {
+        String::new()
+    }
+}
+
+/// Control modes, interaction modes, PID types and joint types are thrift enums whose
+/// values are vocabs, written with the int32 tag.
+impl Wire4 for Vocab32 {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32(self.0);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        i32::take4(c).map(Vocab32)
+    }
+    fn zero() -> Self {
+        Vocab32(0)
+    }
+}
+
+/// A list of items of one type: the compact form C++ writes (and requires).
+fn take_list<'a, T>(c: &mut Cursor4<'a>, item: impl Fn(&'a Value) -> Option<T>) -> Option<Vec<T>> {
+    c.next()?.as_list()?.iter().map(item).collect()
+}
+
+impl Wire4 for Vec<f64> {
+    fn put4(&self, w: &mut WireWriter) {
+        w.float_vector(self);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        take_list(c, Value::as_f64)
+    }
+    fn zero() -> Self {
+        Vec::new()
+    }
+}
+
+impl Wire4 for Vec<i32> {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32_list(self.iter().copied());
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        take_list(c, Value::as_i32)
+    }
+    fn zero() -> Self {
+        Vec::new()
+    }
+}
+
+impl Wire4 for Vec<Vocab32> {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32_list(self.iter().map(|v| v.0));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        take_list(c, |v| v.as_i32().map(Vocab32))
+    }
+    fn zero() -> Self {
+        Vec::new()
+    }
+}
+
+/// A group's joints: a `list<i32>` (4.0 sends no count before it).
+impl Wire4 for Group {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32_list(self.0.iter().map(|j| i32::try_from(*j).unwrap_or(i32::MAX)));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        take_list(c, |v| usize::try_from(v.as_i64()?).ok()).map(Group)
+    }
+    fn zero() -> Self {
+        Group(Vec::new())
+    }
+}
+
+/// `yarp::dev::Pid` (`PidDataGains`): a nested list of ten tagged doubles.
+impl Wire4 for Pid {
+    fn put4(&self, w: &mut WireWriter) {
+        let gains = self.to_array();
+        w.list_header(gains.len());
+        for g in gains {
+            w.float64(g);
+        }
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        take_list(c, Value::as_f64).map(|g| Pid::from_slice(&g))
+    }
+    fn zero() -> Self {
+        Pid::default()
+    }
+}
+
+/// `list<yPid>`: a list of nested PIDs.
+impl Wire4 for Vec<Pid> {
+    fn put4(&self, w: &mut WireWriter) {
+        w.list_header(self.len());
+        for p in self {
+            p.put4(w);
+        }
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        let list = c.next()?.as_list()?;
+        let mut inner = Cursor4::new(list.items());
+        (0..list.len()).map(|_| Pid::take4(&mut inner)).collect()
+    }
+    fn zero() -> Self {
+        Vec::new()
+    }
+}
+
+impl<A: Wire4, B: Wire4> Wire4 for (A, B) {
+    const COUNT: usize = A::COUNT + B::COUNT;
+    fn put4(&self, w: &mut WireWriter) {
+        self.0.put4(w);
+        self.1.put4(w);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        Some((A::take4(c)?, B::take4(c)?))
+    }
+    fn zero() -> Self {
+        (A::zero(), B::zero())
+    }
+}
+
+impl<A: Wire4, B: Wire4, C: Wire4> Wire4 for (A, B, C) {
+    const COUNT: usize = A::COUNT + B::COUNT + C::COUNT;
+    fn put4(&self, w: &mut WireWriter) {
+        self.0.put4(w);
+        self.1.put4(w);
+        self.2.put4(w);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        Some((A::take4(c)?, B::take4(c)?, C::take4(c)?))
+    }
+    fn zero() -> Self {
+        (A::zero(), B::zero(), C::zero())
+    }
+}
+
+/// The reply to a call of `M` that gave `result`.
+pub fn reply<M: Method>(result: DevResult<M::Reply>) -> Vec<u8> {
+    let mut w = WireWriter::for_generation(Generation::V4);
+    let (ret, value) = match result {
+        Ok(v) => (ReturnValue::Ok, v),
+        Err(e) => {
+            tracing::warn!(
+                "controlBoard_nws_yarp (4.0): {} failed: {e}",
+                M::V4.unwrap_or("?")
+            );
+            (ReturnValue::of(&e), M::Reply::zero())
+        }
+    };
+    if M::Reply::COUNT == 0 {
+        ret.put(&mut w);
+    } else {
+        w.list_header(1 + M::Reply::COUNT);
+        ret.put(&mut w);
+        value.put4(&mut w);
+    }
+    w.into_bytes()
+}
+
+/// `m`'s arguments from a call's values after its name, if they are all there.
+pub fn decode<M: Method>(args: &[Value]) -> Option<M> {
+    M::take_args4(&mut Cursor4::new(args))
+}
+
+/// The call `m` as 4.0 writes it.
+pub fn request<M: Method>(m: &M) -> Vec<u8> {
+    let mut w = WireWriter::for_generation(Generation::V4);
+    w.list_header(1 + M::ARGS4)
+        .string(M::V4.unwrap_or_default());
+    m.put_args4(&mut w);
+    w.into_bytes()
+}
+
+/// What a 4.0 reply to `M` says: its return value, and the value asked when it is `ok`.
+pub fn answer<M: Method>(reply: &Bottle) -> Option<(ReturnValue, Option<M::Reply>)> {
+    let ret = |v: &Value| -> Option<ReturnValue> {
+        let l = v.as_list()?;
+        Some(ReturnValue::from_vocab(l.get(0)?.as_vocab()?))
+    };
+    if M::Reply::COUNT == 0 {
+        // the bare ReturnValue: its one vocab is the Bottle's
+        let code = ReturnValue::from_vocab(reply.get(0)?.as_vocab()?);
+        let unit = M::Reply::take4(&mut Cursor4::new(&[]))?;
+        return Some((code, (code == ReturnValue::Ok).then_some(unit)));
+    }
+    let code = ret(reply.get(0)?)?;
+    let value = M::Reply::take4(&mut Cursor4::new(&reply.items()[1..]));
+    Some((code, value.filter(|_| code == ReturnValue::Ok)))
+}
+
+/// The `[fail]` C++'s generated reader answers a call it cannot read.
+pub fn fail_reply() -> Vec<u8> {
+    crate::sensors::rpc::fail_reply()
+}
+
+/// `getRemoteProtocolVersion`'s reply: a list of one, then four untagged int16 (not a
+/// Bottle C++ or we could read as one).
+pub fn protocol_reply() -> Vec<u8> {
+    let mut w = WireWriter::for_generation(Generation::V4);
+    let (major, minor, patch) = YARP_VERSION;
+    w.list_header(1)
+        .raw_int16(PROTOCOL)
+        .raw_int16(major)
+        .raw_int16(minor)
+        .raw_int16(patch);
+    w.into_bytes()
+}
+
+/// The interfaces `getDeviceInterfacesRPC` reports, by C++'s key (sorted, as C++'s
+/// `std::map` sends them), and whether `dev` offers each.
+fn interfaces(dev: &mut dyn DeviceDriver) -> Vec<(&'static str, bool)> {
+    let mut v = vec![
+        ("iAmplifierControl", dev.as_amplifier_control().is_some()),
+        ("iAxisInfo", dev.as_axis_info().is_some()),
+        (
+            "iControlCalibration",
+            dev.as_control_calibration().is_some(),
+        ),
+        ("iControlLimits", dev.as_control_limits().is_some()),
+        ("iControlMode", dev.as_control_mode().is_some()),
+        ("iCurrentControl", dev.as_current_control().is_some()),
+        ("iEncodersTimed", dev.as_encoders().is_some()),
+        ("iImpedanceControl", dev.as_impedance_control().is_some()),
+        ("iInteractionMode", dev.as_interaction_mode().is_some()),
+        // 4.0's new interfaces, not in our framework yet
+        ("iJointBrake", false),
+        ("iJointFault", false),
+        ("iMotor", dev.as_motor().is_some()),
+        ("iMotorEncoders", dev.as_motor_encoders().is_some()),
+        ("iPidControl", dev.as_pid_control().is_some()),
+        ("iPositionControl", dev.as_position_control().is_some()),
+        ("iPositionDirect", dev.as_position_direct().is_some()),
+        // no IPreciselyTimed view in our framework (C++'s fake has none either)
+        ("iPreciselyTimed", false),
+        ("iPWMControl", dev.as_pwm_control().is_some()),
+        ("iRemoteCalibrator", dev.as_remote_calibrator().is_some()),
+        ("iRemoteVariables", false),
+        ("iTorqueControl", dev.as_torque_control().is_some()),
+        ("iVelocityControl", dev.as_velocity_control().is_some()),
+        ("iVelocityDirect", false),
+    ];
+    v.sort_by_key(|(k, _)| *k);
+    v
+}
+
+/// Serves one 4.0 call (a Bottle decoded from its bytes, or typed at a prompt) on `dev`
+/// and returns the reply's bytes.
+pub fn handle_rpc(cmd: &Bottle, dev: &mut dyn DeviceDriver) -> Vec<u8> {
+    let Some(name) = cmd.get(0).and_then(Value::as_str) else {
+        return fail_reply();
+    };
+    let args = &cmd.items()[1..];
+    match name {
+        "getRemoteProtocolVersion" => return protocol_reply(),
+        "getDeviceInterfacesRPC" => {
+            let ifaces = interfaces(dev);
+            let mut w = WireWriter::for_generation(Generation::V4);
+            w.list_header(2);
+            ReturnValue::Ok.put(&mut w);
+            w.list_header(ifaces.len());
+            for (k, has) in ifaces {
+                w.list_header(2).string(k).bool(has);
+            }
+            return w.into_bytes();
+        }
+        "help" => {
+            let mut w = WireWriter::for_generation(Generation::V4);
+            let names = Request::V4_NAMES;
+            w.list_header(2).vocab(Vocab32::new("many"));
+            w.list_header(names.len() + 2)
+                .string("*** Available commands:");
+            for n in names {
+                w.string(n);
+            }
+            w.string("help");
+            return w.into_bytes();
+        }
+        _ => {}
+    }
+    match Request::from_v4(name, args) {
+        Some(req) => req.serve_v4(dev),
+        None => {
+            tracing::warn!("controlBoard_nws_yarp (4.0): `{cmd}` is no call of ControlBoardMsgs (unknown, malformed or not served yet): replying [fail]");
+            fail_reply()
+        }
+    }
+}
