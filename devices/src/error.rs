@@ -31,6 +31,10 @@ pub enum DeviceError {
     WrongSize { expected: usize, got: usize },
     #[error("operation not supported: {0}")]
     Unsupported(&'static str),
+    /// The device behind a wrapper lacks the interface a call needs (C++ 4.0's wrappers
+    /// answer these "not ready").
+    #[error("the device offers no {0}")]
+    NoInterface(&'static str),
     #[error("device is not open")]
     NotOpen,
     /// The device works but has nothing to give yet (no image or measurement received

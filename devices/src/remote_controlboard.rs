@@ -17,7 +17,7 @@
 
 use crate::controlboard::methods::{self as m, Method};
 use crate::controlboard::streaming::{Joints, Kind, Stream};
-use crate::controlboard::v3::{self, Answer, Group};
+use crate::controlboard::v3::{self, Answer, Group, Listed, PidType};
 use crate::controlboard::{CommandMessage, JointData, PROTOCOL_VERSION_NUMBER};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
@@ -888,34 +888,42 @@ impl IMotor for RemoteControlBoard {
 
 impl IPidControl for RemoteControlBoard {
     fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
-        self.ask(m::GetPid { ty, j })
+        self.ask(m::GetPid { ty: PidType(ty), j })
     }
     fn set_pid(&mut self, ty: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
-        self.ask(m::SetPid { ty, j, pid })
+        self.ask(m::SetPid {
+            ty: PidType(ty),
+            j,
+            pid,
+        })
     }
     fn enable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        self.ask(m::EnablePid { ty, j })
+        self.ask(m::EnablePid { ty: PidType(ty), j })
     }
     fn disable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        self.ask(m::DisablePid { ty, j })
+        self.ask(m::DisablePid { ty: PidType(ty), j })
     }
     fn is_pid_enabled(&mut self, ty: Vocab32, j: usize) -> DevResult<bool> {
-        self.ask(m::IsPidEnabled { ty, j })
+        self.ask(m::IsPidEnabled { ty: PidType(ty), j })
     }
     fn set_pid_reference(&mut self, ty: Vocab32, j: usize, value: f64) -> DevResult<()> {
-        self.ask(m::SetPidReference { ty, j, value })
+        self.ask(m::SetPidReference {
+            ty: PidType(ty),
+            j,
+            value,
+        })
     }
     fn get_pid_reference(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        self.ask(m::GetPidReference { ty, j })
+        self.ask(m::GetPidReference { ty: PidType(ty), j })
     }
     fn get_pid_error(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        self.ask(m::GetPidError { ty, j })
+        self.ask(m::GetPidError { ty: PidType(ty), j })
     }
     fn get_pid_output(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        self.ask(m::GetPidOutput { ty, j })
+        self.ask(m::GetPidOutput { ty: PidType(ty), j })
     }
     fn reset_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        self.ask(m::ResetPid { ty, j })
+        self.ask(m::ResetPid { ty: PidType(ty), j })
     }
 }
 
@@ -1005,26 +1013,26 @@ impl IImpedanceControl for RemoteControlBoard {
         self.axes()
     }
     fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        let v = padded(self.ask(m::GetImpedance { j })?);
+        let v = padded(self.ask(m::GetImpedance { j })?.0);
         Ok((v[0], v[1]))
     }
     fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
         self.ask(m::SetImpedance {
             j,
-            values: vec![stiffness, damping],
+            values: Listed(vec![stiffness, damping]),
         })
     }
     fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
-        Ok(padded(self.ask(m::GetImpedanceOffset { j })?)[0])
+        Ok(padded(self.ask(m::GetImpedanceOffset { j })?.0)[0])
     }
     fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
         self.ask(m::SetImpedanceOffset {
             j,
-            values: vec![offset],
+            values: Listed(vec![offset]),
         })
     }
     fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits> {
-        let v = padded(self.ask(m::GetImpedanceLimits { j })?);
+        let v = padded(self.ask(m::GetImpedanceLimits { j })?.0);
         Ok(ImpedanceLimits {
             min_stiffness: v[0],
             max_stiffness: v[1],
@@ -1074,7 +1082,7 @@ impl IControlCalibration for RemoteControlBoard {
         })
     }
     fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
-        self.ask(m::CalibrationDone { j })
+        self.ask(m::CalibrationDone { j }).map(|d| d.0)
     }
     fn calibrate_robot(&mut self) -> DevResult<()> {
         self.ask(m::CalibrateRobot {})

@@ -5,7 +5,7 @@
 //! handled wherever [`Request`] is matched.
 
 use super::rpc::RpcStamp;
-use super::v3::{self, Form, Group, Style, Wire3};
+use super::v3::{self, Done, Form, Group, Listed, PidType, Style, Wire3};
 use super::v4::{self, Wire4};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
@@ -30,10 +30,10 @@ pub trait Method: Sized {
     fn serve(self, dev: &mut dyn DeviceDriver) -> DevResult<Self::Reply>;
 }
 
-/// The device's interface `as_x`, or `Unsupported`.
+/// The device's interface `as_x`, or `NoInterface`.
 macro_rules! via {
     ($d:ident . $as:ident) => {
-        $d.$as().ok_or(DeviceError::Unsupported(stringify!($as)))?
+        $d.$as().ok_or(DeviceError::NoInterface(stringify!($as)))?
     };
 }
 
@@ -77,7 +77,7 @@ macro_rules! control_board_methods {
     ($(
         $(#[$doc:meta])*
         $name:ident { $($arg:ident : $ty:ty),* } -> $reply:ty,
-            $style:ident [$($head:ident),+] $(, v4 $v4:literal)? => |$d:ident| $serve:expr;
+            $style:ident [$($head:ident),*] $(, v4 $v4:literal)? => |$d:ident| $serve:expr;
     )*) => {
         $(
             $(#[$doc])*
@@ -86,7 +86,7 @@ macro_rules! control_board_methods {
 
             impl Method for $name {
                 type Reply = $reply;
-                const V3: Form = Form { head: &[$($head),+], style: Style::$style };
+                const V3: Form = Form { head: &[$($head),*], style: Style::$style };
                 const V4: Option<&'static str> = first(&[$($v4)?]);
                 const ARGS4: usize = 0 $(+ <$ty as Wire4>::COUNT)*;
                 fn put_args(&self, _b: &mut Bottle) {
@@ -299,8 +299,8 @@ control_board_methods! {
     GetAmpStatuses {} -> Vec<i32>, Get [GET, AMP_STATUS], v4 "getAmpStatusAllRPC" => |d| via!(d.as_amplifier_control).get_amp_statuses();
     GetAmpStatus { j: usize } -> i32, Get [GET, AMP_STATUS_SINGLE], v4 "getAmpStatusOneRPC" =>
         |d| via!(d.as_amplifier_control).get_amp_status(j);
-    GetCurrent { j: usize } -> f64, Get [GET, AMP_CURRENT] => |d| via!(d.as_amplifier_control).get_current(j);
-    GetCurrents {} -> Vec<f64>, Get [GET, AMP_CURRENTS] =>
+    GetCurrent { j: usize } -> f64, Get [GET, AMP_CURRENT], v4 "getCurrentOneRPC" => |d| via!(d.as_amplifier_control).get_current(j);
+    GetCurrents {} -> Vec<f64>, Get [GET, AMP_CURRENTS], v4 "getCurrentAllRPC" =>
         |d| { let n = via!(d.as_encoders).get_axes()?; let a = via!(d.as_amplifier_control); each(n, |j| a.get_current(j)) };
     GetMaxCurrent { j: usize } -> f64, Get [GET, AMP_MAXCURRENT], v4 "getMaxCurrentRPC" =>
         |d| via!(d.as_amplifier_control).get_max_current(j);
@@ -415,55 +415,55 @@ control_board_methods! {
         |d| { let n = axes(d)?; let p = via!(d.as_pwm_control); each(n, |j| p.get_ref_duty_cycle(j)) };
 
     // IPidControl: `[set|get] [pid] <what> <pid type> <joint> ...`
-    SetPid { ty: Vocab32, j: usize, pid: Pid } -> (), Set [SET, PID, PID], v4 "setPidRPC" =>
-        |d| via!(d.as_pid_control).set_pid(ty, j, pid);
-    EnablePid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_ENABLE], v4 "enablePidRPC" =>
-        |d| via!(d.as_pid_control).enable_pid(ty, j);
-    DisablePid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_DISABLE], v4 "disablePidRPC" =>
-        |d| via!(d.as_pid_control).disable_pid(ty, j);
-    SetPidReference { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, REF], v4 "setPidReferenceRPC" =>
-        |d| via!(d.as_pid_control).set_pid_reference(ty, j, value);
-    ResetPid { ty: Vocab32, j: usize } -> (), Set [SET, PID, PID_RESET], v4 "resetPidRPC" =>
-        |d| via!(d.as_pid_control).reset_pid(ty, j);
-    SetPidErrorLimit { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, PID_ERROR_LIMIT], v4 "setPidErrorLimitRPC" =>
-        |d| via!(d.as_pid_control).set_pid_error_limit(ty, j, value);
-    SetPidOffset { ty: Vocab32, j: usize, value: f64 } -> (), Set [SET, PID, PID_OFFSET], v4 "setPidOffsetOneRPC" =>
-        |d| via!(d.as_pid_control).set_pid_offset(ty, j, value);
-    GetPid { ty: Vocab32, j: usize } -> Pid, GetBare [GET, PID, PID], v4 "getPidRPC" => |d| via!(d.as_pid_control).get_pid(ty, j);
-    IsPidEnabled { ty: Vocab32, j: usize } -> bool, GetBare [GET, PID, PID_ENABLE], v4 "isPidEnabledRPC" =>
-        |d| via!(d.as_pid_control).is_pid_enabled(ty, j);
-    GetPidReference { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, REF], v4 "getPidReferenceRPC" =>
-        |d| via!(d.as_pid_control).get_pid_reference(ty, j);
-    GetPidError { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_ERROR], v4 "getPidErrorRPC" =>
-        |d| via!(d.as_pid_control).get_pid_error(ty, j);
-    GetPidOutput { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_OUTPUT], v4 "getPidOutputRPC" =>
-        |d| via!(d.as_pid_control).get_pid_output(ty, j);
-    GetPidErrorLimit { ty: Vocab32, j: usize } -> f64, GetBare [GET, PID, PID_ERROR_LIMIT], v4 "getPidErrorLimitRPC" =>
-        |d| via!(d.as_pid_control).get_pid_error_limit(ty, j);
-    GetPids { ty: Vocab32 } -> Vec<Pid>, GetBare [GET, PID, PIDS], v4 "getPidsRPC" =>
-        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid(ty, j)) };
-    GetPidReferences { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, REFS], v4 "getPidReferencesRPC" =>
-        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_reference(ty, j)) };
-    GetPidErrorLimits { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_ERROR_LIMITS], v4 "getPidErrorLimitsRPC" =>
-        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_error_limit(ty, j)) };
-    GetPidErrors { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_ERRORS], v4 "getPidErrorsRPC" =>
-        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_error(ty, j)) };
-    GetPidOutputs { ty: Vocab32 } -> Vec<f64>, GetBare [GET, PID, PID_OUTPUTS], v4 "getPidOutputsRPC" =>
-        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_output(ty, j)) };
+    SetPid { ty: PidType, j: usize, pid: Pid } -> (), Set [SET, PID, PID], v4 "setPidRPC" =>
+        |d| via!(d.as_pid_control).set_pid(ty.0, j, pid);
+    EnablePid { ty: PidType, j: usize } -> (), Set [SET, PID, PID_ENABLE], v4 "enablePidRPC" =>
+        |d| via!(d.as_pid_control).enable_pid(ty.0, j);
+    DisablePid { ty: PidType, j: usize } -> (), Set [SET, PID, PID_DISABLE], v4 "disablePidRPC" =>
+        |d| via!(d.as_pid_control).disable_pid(ty.0, j);
+    SetPidReference { ty: PidType, j: usize, value: f64 } -> (), Set [SET, PID, REF], v4 "setPidReferenceRPC" =>
+        |d| via!(d.as_pid_control).set_pid_reference(ty.0, j, value);
+    ResetPid { ty: PidType, j: usize } -> (), Set [SET, PID, PID_RESET], v4 "resetPidRPC" =>
+        |d| via!(d.as_pid_control).reset_pid(ty.0, j);
+    SetPidErrorLimit { ty: PidType, j: usize, value: f64 } -> (), Set [SET, PID, PID_ERROR_LIMIT], v4 "setPidErrorLimitRPC" =>
+        |d| via!(d.as_pid_control).set_pid_error_limit(ty.0, j, value);
+    SetPidOffset { ty: PidType, j: usize, value: f64 } -> (), Set [SET, PID, PID_OFFSET], v4 "setPidOffsetOneRPC" =>
+        |d| via!(d.as_pid_control).set_pid_offset(ty.0, j, value);
+    GetPid { ty: PidType, j: usize } -> Pid, GetBare [GET, PID, PID], v4 "getPidRPC" => |d| via!(d.as_pid_control).get_pid(ty.0, j);
+    IsPidEnabled { ty: PidType, j: usize } -> bool, GetBare [GET, PID, PID_ENABLE], v4 "isPidEnabledRPC" =>
+        |d| via!(d.as_pid_control).is_pid_enabled(ty.0, j);
+    GetPidReference { ty: PidType, j: usize } -> f64, GetBare [GET, PID, REF], v4 "getPidReferenceRPC" =>
+        |d| via!(d.as_pid_control).get_pid_reference(ty.0, j);
+    GetPidError { ty: PidType, j: usize } -> f64, GetBare [GET, PID, PID_ERROR], v4 "getPidErrorRPC" =>
+        |d| via!(d.as_pid_control).get_pid_error(ty.0, j);
+    GetPidOutput { ty: PidType, j: usize } -> f64, GetBare [GET, PID, PID_OUTPUT], v4 "getPidOutputRPC" =>
+        |d| via!(d.as_pid_control).get_pid_output(ty.0, j);
+    GetPidErrorLimit { ty: PidType, j: usize } -> f64, GetBare [GET, PID, PID_ERROR_LIMIT], v4 "getPidErrorLimitRPC" =>
+        |d| via!(d.as_pid_control).get_pid_error_limit(ty.0, j);
+    GetPids { ty: PidType } -> Vec<Pid>, GetBare [GET, PID, PIDS], v4 "getPidsRPC" =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid(ty.0, j)) };
+    GetPidReferences { ty: PidType } -> Vec<f64>, GetBare [GET, PID, REFS], v4 "getPidReferencesRPC" =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_reference(ty.0, j)) };
+    GetPidErrorLimits { ty: PidType } -> Vec<f64>, GetBare [GET, PID, PID_ERROR_LIMITS], v4 "getPidErrorLimitsRPC" =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_error_limit(ty.0, j)) };
+    GetPidErrors { ty: PidType } -> Vec<f64>, GetBare [GET, PID, PID_ERRORS], v4 "getPidErrorsRPC" =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_error(ty.0, j)) };
+    GetPidOutputs { ty: PidType } -> Vec<f64>, GetBare [GET, PID, PID_OUTPUTS], v4 "getPidOutputsRPC" =>
+        |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid_output(ty.0, j)) };
 
     // IImpedanceControl: values travel in a list, which C++ reads padded with zeros
-    SetImpedance { j: usize, values: Vec<f64> } -> (), Set [SET, IMPEDANCE, IMP_PARAM] =>
-        |d| { let v = padded(values); via!(d.as_impedance_control).set_impedance(j, v[0], v[1]) };
-    SetImpedanceOffset { j: usize, values: Vec<f64> } -> (), Set [SET, IMPEDANCE, IMP_OFFSET] =>
-        |d| via!(d.as_impedance_control).set_impedance_offset(j, padded(values)[0]);
-    GetImpedance { j: usize } -> Vec<f64>, Get [GET, IMPEDANCE, IMP_PARAM] =>
-        |d| via!(d.as_impedance_control).get_impedance(j).map(|(k, b)| vec![k, b]);
-    GetImpedanceOffset { j: usize } -> Vec<f64>, Get [GET, IMPEDANCE, IMP_OFFSET] =>
-        |d| via!(d.as_impedance_control).get_impedance_offset(j).map(|o| vec![o]);
+    SetImpedance { j: usize, values: Listed<2> } -> (), Set [SET, IMPEDANCE, IMP_PARAM], v4 "setImpedanceRPC" =>
+        |d| { let v = padded(values.0); via!(d.as_impedance_control).set_impedance(j, v[0], v[1]) };
+    SetImpedanceOffset { j: usize, values: Listed<1> } -> (), Set [SET, IMPEDANCE, IMP_OFFSET], v4 "setImpedanceOffsetRPC" =>
+        |d| via!(d.as_impedance_control).set_impedance_offset(j, padded(values.0)[0]);
+    GetImpedance { j: usize } -> Listed<2>, Get [GET, IMPEDANCE, IMP_PARAM], v4 "getImpedanceRPC" =>
+        |d| via!(d.as_impedance_control).get_impedance(j).map(|(k, b)| Listed(vec![k, b]));
+    GetImpedanceOffset { j: usize } -> Listed<1>, Get [GET, IMPEDANCE, IMP_OFFSET], v4 "getImpedanceOffsetRPC" =>
+        |d| via!(d.as_impedance_control).get_impedance_offset(j).map(|o| Listed(vec![o]));
     /// 3.12 names the limits with the generic `[llim]`.
-    GetImpedanceLimits { j: usize } -> Vec<f64>, Get [GET, IMPEDANCE, LIMITS] =>
+    GetImpedanceLimits { j: usize } -> Listed<4>, Get [GET, IMPEDANCE, LIMITS], v4 "getCurrentImpedanceLimitRPC" =>
         |d| via!(d.as_impedance_control).get_current_impedance_limit(j)
-            .map(|l| vec![l.min_stiffness, l.max_stiffness, l.min_damping, l.max_damping]);
+            .map(|l| Listed(vec![l.min_stiffness, l.max_stiffness, l.min_damping, l.max_damping]));
 
     // IControlCalibration, which C++ recognises by its first vocab
     CalibrateAxisWithParams { j: usize, kind: u32, p1: f64, p2: f64, p3: f64 } -> (), Set [CALIBRATE_JOINT], v4 "calibrateAxisWithParamsRPC" =>
@@ -474,9 +474,9 @@ control_board_methods! {
             let params = CalibrationParameters { kind, param1: p1, param2: p2, param3: p3, param4: p4, ..Default::default() };
             via!(d.as_control_calibration).set_calibration_parameters(j, &params)
         };
-    /// `[fail]` means "not done".
-    CalibrationDone { j: usize } -> bool, Check [CALIBRATE_DONE] =>
-        |d| via!(d.as_control_calibration).calibration_done(j);
+    /// `[fail]` (4.0: a failed return value) means "not done".
+    CalibrationDone { j: usize } -> Done, Check [CALIBRATE_DONE], v4 "calibrationDoneRPC" =>
+        |d| via!(d.as_control_calibration).calibration_done(j).map(Done);
     // These four are a lone vocab from C++'s client, which a 3.12 server refuses as
     // shorter than two elements.
     CalibrateRobot {} -> (), Set [CALIBRATE], v4 "calibrateRobotRPC" => |d| via!(d.as_control_calibration).calibrate_robot();
@@ -511,6 +511,41 @@ control_board_methods! {
         |d| via!(d.as_remote_calibrator).quit_calibrate();
     QuitPark {} -> (), Set [SET, REMOTE_CALIBRATOR_IFACE, QUIT_PARK], v4 "quitParkRPC" =>
         |d| via!(d.as_remote_calibrator).quit_park();
+
+    // 4.0 only: references 3.12 streams on command:i, which 4.0's client sends by RPC
+    // (always for one joint's current and duty cycle; all of them without streaming)
+    SetRefCurrent { j: usize, value: f64 } -> (), Set [], v4 "setRefCurrentOneRPC" =>
+        |d| via!(d.as_current_control).set_ref_current(j, value);
+    SetRefCurrents { values: Vec<f64> } -> (), Set [], v4 "setRefCurrentAllRPC" =>
+        |d| via!(d.as_current_control).set_ref_currents(&values);
+    SetRefCurrentGroup { joints: Group, values: Vec<f64> } -> (), Set [], v4 "setRefCurrentGroupRPC" =>
+        |d| { sized(&joints, &values)?; via!(d.as_current_control).set_ref_current_group(&joints, &values) };
+    SetRefDutyCycle { j: usize, value: f64 } -> (), Set [], v4 "setRefDutyCycleOneRPC" =>
+        |d| via!(d.as_pwm_control).set_ref_duty_cycle(j, value);
+    SetRefDutyCycles { values: Vec<f64> } -> (), Set [], v4 "setRefDutyCycleAllRPC" =>
+        |d| via!(d.as_pwm_control).set_ref_duty_cycles(&values);
+    VelocityMove { j: usize, value: f64 } -> (), Set [], v4 "velocityMoveOneRPC" =>
+        |d| via!(d.as_velocity_control).velocity_move(j, value);
+    VelocityMoveGroup { joints: Group, values: Vec<f64> } -> (), Set [], v4 "velocityMoveGroupRPC" =>
+        |d| { sized(&joints, &values)?; via!(d.as_velocity_control).velocity_move_group(&joints, &values) };
+    SetPosition { j: usize, value: f64 } -> (), Set [], v4 "setRefPositionOneRPC" =>
+        |d| via!(d.as_position_direct).set_position(j, value);
+    SetPositions { values: Vec<f64> } -> (), Set [], v4 "setRefPositionAllRPC" =>
+        |d| via!(d.as_position_direct).set_positions(&values);
+    SetPositionsGroup { joints: Group, values: Vec<f64> } -> (), Set [], v4 "setRefPositionGroupRPC" =>
+        |d| { sized(&joints, &values)?; via!(d.as_position_direct).set_positions_group(&joints, &values) };
+    SetRefTorqueGroup { joints: Group, values: Vec<f64> } -> (), Set [], v4 "setRefTorqueGroupRPC" =>
+        |d| {
+            sized(&joints, &values)?;
+            let t = via!(d.as_torque_control);
+            joints.iter().zip(&values).try_for_each(|(j, v)| t.set_ref_torque(*j, *v))
+        };
+    GetRefTorqueGroup { joints: Group } -> Vec<f64>, Get [], v4 "getRefTorqueGroupRPC" =>
+        |d| { let t = via!(d.as_torque_control); joints.iter().map(|&j| t.get_ref_torque(j)).collect() };
+    GetEncoderTimed { j: usize } -> (f64, f64), Get [], v4 "getEncoderTimedOneRPC" =>
+        |d| via!(d.as_encoders).get_encoder_timed(j);
+    GetEncodersTimed {} -> (Vec<f64>, Vec<f64>), Get [], v4 "getEncoderTimedAllRPC" =>
+        |d| via!(d.as_encoders).get_encoders_timed();
 }
 
 /// An impedance list padded with zeros to the values C++ reads.
@@ -547,7 +582,8 @@ mod tests {
         // a request must decode as one method only
         for (i, a) in Request::FORMS.iter().enumerate() {
             for (k, b) in Request::FORMS.iter().enumerate() {
-                if i != k && b.head.len() >= a.head.len() {
+                // an empty head: a method 3.12 does not have
+                if i != k && !a.head.is_empty() && b.head.len() >= a.head.len() {
                     assert_ne!(
                         a.head,
                         &b.head[..a.head.len()],
@@ -567,7 +603,7 @@ mod tests {
                 targets: vec![1.0, 2.0],
             }),
             Request::SetPid(SetPid {
-                ty: Vocab32::new("pos1"),
+                ty: PidType(Vocab32::new("pos")),
                 j: 1,
                 pid: Pid::from_slice(&[1.0, 2.0, 3.0]),
             }),

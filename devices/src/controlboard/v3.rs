@@ -246,6 +246,46 @@ impl Wire3 for Pid {
     }
 }
 
+/// Values 3.12 sends as one list and 4.0 as `N` separate doubles (the impedance's).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Listed<const N: usize>(pub Vec<f64>);
+
+impl<const N: usize> Wire3 for Listed<N> {
+    fn put(&self, b: &mut Bottle) {
+        self.0.put(b);
+    }
+    fn take(c: &mut Cursor<'_>) -> Option<Self> {
+        Vec::<f64>::take(c).map(Listed)
+    }
+}
+
+/// A PID's type, as 3.12 names it (`[pos]`, `[vel]`, `[trq]`, `[cur]`); 4.0 numbers
+/// them (`pos1`), see `v4.rs`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PidType(pub Vocab32);
+
+impl Wire3 for PidType {
+    fn put(&self, b: &mut Bottle) {
+        self.0.put(b);
+    }
+    fn take(c: &mut Cursor<'_>) -> Option<Self> {
+        Vocab32::take(c).map(PidType)
+    }
+}
+
+/// Whether a calibration is done: 3.12's `[ok]`/`[fail]`, 4.0's return value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Done(pub bool);
+
+impl Wire3 for Done {
+    fn put(&self, b: &mut Bottle) {
+        self.0.put(b);
+    }
+    fn take(c: &mut Cursor<'_>) -> Option<Self> {
+        bool::take(c).map(Done)
+    }
+}
+
 /// The joints of a group command: their count, then their list (`n (j1 j2 ...)`).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Group(pub Vec<usize>);
@@ -283,7 +323,10 @@ pub fn request<M: Method>(m: &M) -> Bottle {
 pub fn decode<M: Method>(cmd: &Bottle) -> Option<M> {
     let head = M::V3.head;
     let items = cmd.items();
-    if items.len() < head.len() || !head.iter().zip(items).all(|(h, v)| vocab(Some(v)) == *h) {
+    if head.is_empty()
+        || items.len() < head.len()
+        || !head.iter().zip(items).all(|(h, v)| vocab(Some(v)) == *h)
+    {
         return None;
     }
     M::take_args(&mut Cursor::request(&items[head.len()..]))

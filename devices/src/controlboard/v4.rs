@@ -8,7 +8,7 @@
 //! [`Wire4`] impl.
 
 use super::methods::{Method, Request};
-use super::v3::Group;
+use super::v3::{Done, Group, Listed, PidType};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::interfaces::Pid;
@@ -40,7 +40,10 @@ impl ReturnValue {
     /// The code for a device call that failed with `e`.
     pub fn of(e: &DeviceError) -> ReturnValue {
         match e {
-            DeviceError::NotOpen | DeviceError::NotReady(_) => ReturnValue::NotReady,
+            // C++ 4.0's wrapper answers a call its device has no interface for "not ready"
+            DeviceError::NotOpen | DeviceError::NotReady(_) | DeviceError::NoInterface(_) => {
+                ReturnValue::NotReady
+            }
             DeviceError::Unsupported(_) => ReturnValue::NotImplemented,
             DeviceError::Timeout { .. } | DeviceError::PeerLost { .. } => {
                 ReturnValue::Communication
@@ -97,6 +100,14 @@ pub trait Wire4: Sized {
     fn take4(c: &mut Cursor4<'_>) -> Option<Self>;
     /// What C++ writes in a reply whose call failed.
     fn zero() -> Self;
+    /// The return value a successful call with this reply carries.
+    fn ret(&self) -> ReturnValue {
+        ReturnValue::Ok
+    }
+    /// The reply a return value other than `ok` stands for, if it stands for one.
+    fn from_failure(_: ReturnValue) -> Option<Self> {
+        None
+    }
 }
 
 /// The values of a call or reply not read yet.
@@ -275,6 +286,72 @@ impl Wire4 for Group {
     }
 }
 
+/// 4.0 numbers the PID types (`pos1`, `pos2`, ...; new ones `pod1`, `ved1`, `mix1`): its
+/// first of each of 3.12's four is 3.12's (`pos1` is `pos`).
+impl Wire4 for PidType {
+    fn put4(&self, w: &mut WireWriter) {
+        let name = self.0.as_string();
+        let numbered = match name.as_str() {
+            "pos" | "vel" | "trq" | "cur" => Vocab32::new(&format!("{name}1")),
+            _ => self.0,
+        };
+        w.int32(numbered.0);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        let v = Vocab32::take4(c)?;
+        let name = v.as_string();
+        Some(PidType(match name.as_str() {
+            "pos1" | "vel1" | "trq1" | "cur1" => Vocab32::new(&name[..3]),
+            _ => v,
+        }))
+    }
+    fn zero() -> Self {
+        PidType(Vocab32(0))
+    }
+}
+
+/// `N` doubles, flat (the impedance's stiffness and damping, ...), padded with zeros as
+/// C++ reads a short 3.12 list.
+impl<const N: usize> Wire4 for Listed<N> {
+    const COUNT: usize = N;
+    fn put4(&self, w: &mut WireWriter) {
+        for i in 0..N {
+            w.float64(self.0.get(i).copied().unwrap_or(0.0));
+        }
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        (0..N)
+            .map(|_| f64::take4(c))
+            .collect::<Option<_>>()
+            .map(Listed)
+    }
+    fn zero() -> Self {
+        Listed(vec![0.0; N])
+    }
+}
+
+/// 4.0 answers "done" with `ok` and "not done" with a failure, and nothing else.
+impl Wire4 for Done {
+    const COUNT: usize = 0;
+    fn put4(&self, _: &mut WireWriter) {}
+    fn take4(_: &mut Cursor4<'_>) -> Option<Self> {
+        Some(Done(true))
+    }
+    fn zero() -> Self {
+        Done(false)
+    }
+    fn ret(&self) -> ReturnValue {
+        if self.0 {
+            ReturnValue::Ok
+        } else {
+            ReturnValue::MethodFailed
+        }
+    }
+    fn from_failure(_: ReturnValue) -> Option<Self> {
+        Some(Done(false))
+    }
+}
+
 /// `yarp::dev::Pid` (`PidDataGains`): a nested list of ten tagged doubles.
 impl Wire4 for Pid {
     fn put4(&self, w: &mut WireWriter) {
@@ -343,7 +420,7 @@ impl<A: Wire4, B: Wire4, C: Wire4> Wire4 for (A, B, C) {
 pub fn reply<M: Method>(result: DevResult<M::Reply>) -> Vec<u8> {
     let mut w = WireWriter::for_generation(Generation::V4);
     let (ret, value) = match result {
-        Ok(v) => (ReturnValue::Ok, v),
+        Ok(v) => (v.ret(), v),
         Err(e) => {
             tracing::warn!(
                 "controlBoard_nws_yarp (4.0): {} failed: {e}",
@@ -385,8 +462,11 @@ pub fn answer<M: Method>(reply: &Bottle) -> Option<(ReturnValue, Option<M::Reply
     if M::Reply::COUNT == 0 {
         // the bare ReturnValue: its one vocab is the Bottle's
         let code = ReturnValue::from_vocab(reply.get(0)?.as_vocab()?);
-        let unit = M::Reply::take4(&mut Cursor4::new(&[]))?;
-        return Some((code, (code == ReturnValue::Ok).then_some(unit)));
+        let value = match code {
+            ReturnValue::Ok => M::Reply::take4(&mut Cursor4::new(&[])),
+            failed => M::Reply::from_failure(failed),
+        };
+        return Some((code, value));
     }
     let code = ret(reply.get(0)?)?;
     let value = M::Reply::take4(&mut Cursor4::new(&reply.items()[1..]));

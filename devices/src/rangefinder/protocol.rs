@@ -113,7 +113,7 @@ impl ReturnCode {
     pub fn of(e: &DeviceError) -> ReturnCode {
         match e {
             DeviceError::NotOpen | DeviceError::NotReady(_) => ReturnCode::NotReady,
-            DeviceError::Unsupported(_) => ReturnCode::NotImplemented,
+            DeviceError::Unsupported(_) | DeviceError::NoInterface(_) => ReturnCode::NotImplemented,
             DeviceError::Timeout { .. } | DeviceError::PeerLost { .. } => ReturnCode::Communication,
             _ => ReturnCode::MethodFailed,
         }
