@@ -171,8 +171,8 @@ fn cpp_client_chain(bin: &Path, name: &str, remote: &str) -> Reaped {
     )
 }
 
-/// Calls the 4.0 client answers by RPC to its server (its getters of encoders, modes and
-/// torques read the streamed state instead).
+/// Calls the 4.0 client answers by RPC to its server, then getters it answers from the
+/// state its server streams (`stateExt:o`, in 4.0's form for 4.0's clients).
 const CLIENT_CALLS: &[&str] = &[
     "getAxesRPC",
     "positionMoveOneRPC 1 10.0",
@@ -214,6 +214,14 @@ const CLIENT_CALLS: &[&str] = &[
     "getImpedanceRPC 0",
     "isCalibratorDevicePresentRPC",
     "stopAllRPC",
+    // read by the client from the streamed state (4.0's jointData)
+    "getEncoderOneRPC 1",
+    "getEncoderAllRPC",
+    "getEncoderSpeedOneRPC 0",
+    "getMotorEncoderOneRPC 2",
+    "getDutyCycleOneRPC 0",
+    "getTemperatureOneRPC 0",
+    "getTorqueRangeAllRPC",
 ];
 
 /// Calls whose reply differs because the fakes differ, not the protocol: our
@@ -249,6 +257,11 @@ const FAKES_DIFFER: &[(&str, &str, &str)] = &[
         "calibrationDoneRPC 0",
         "Response: [ok]",
         "3.12's fake is calibrated; 4.0's does not implement it",
+    ),
+    (
+        "getTorqueRangeAllRPC",
+        "Response: ([ok]) (0.0 0.0 0.0 0.0) (0.0 0.0 0.0 0.0)",
+        "as getTorqueRangeOneRPC",
     ),
 ];
 

@@ -36,6 +36,7 @@ use tokio::runtime::Handle;
 use tokio::task::JoinHandle;
 use yarp_net::nameserver::NameClient;
 use yarp_net::port::{Port, PortError};
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Contact, Stamp, Vocab32};
 
 /// The C++ device name.
@@ -65,6 +66,29 @@ struct Attached {
 
 type Slot = Arc<Mutex<Option<Attached>>>;
 
+/// The local prefixes of the YARP 4.0 clients that called `/nws/rpc:i` (from
+/// `<local>/nwc/rpc:o`): their `<local>/stateExt:i` gets 4.0's `jointData`.
+#[derive(Clone, Default)]
+struct Clients4(Arc<Mutex<std::collections::BTreeSet<String>>>);
+
+impl Clients4 {
+    fn note(&self, from: &str) {
+        if let Some(prefix) = from.strip_suffix("/nwc/rpc:o") {
+            if !lock(&self.0).contains(prefix) {
+                lock(&self.0).insert(prefix.to_string());
+            }
+        }
+    }
+    /// Whether the reader port `to` is a 4.0 client's.
+    fn reads(&self, to: &str) -> bool {
+        to.strip_suffix("/stateExt:i")
+            .is_some_and(|prefix| lock(&self.0).contains(prefix))
+    }
+    fn any(&self) -> bool {
+        !lock(&self.0).is_empty()
+    }
+}
+
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // the guarded data stays consistent even if a holder panicked
     m.lock()
@@ -92,6 +116,7 @@ pub struct ControlBoardNws {
     state: usize,
     state_ext: Option<usize>,
     slot: Slot,
+    clients4: Clients4,
     period: Duration,
     tasks: Vec<JoinHandle<()>>,
     publisher: Option<Publisher>,
@@ -106,6 +131,7 @@ struct Publisher {
 impl Publisher {
     fn start(
         slot: Slot,
+        clients4: Clients4,
         state: &Arc<Port>,
         state_ext: Option<&Arc<Port>>,
         period: Duration,
@@ -118,7 +144,7 @@ impl Publisher {
         );
         match std::thread::Builder::new()
             .name("cb_nws state:o".into())
-            .spawn(move || publish(&slot, &st, ext.as_ref(), period, &s))
+            .spawn(move || publish(&slot, &clients4, &st, ext.as_ref(), period, &s))
         {
             Ok(thread) => Some(Publisher { stop, thread }),
             Err(e) => {
@@ -168,10 +194,11 @@ impl ControlBoardNws {
         // YARP 4.0's clients ask here, in its thrift form
         let rpc4 = Arc::new(Port::open(&format!("{prefix}/nws/rpc:i"), ns).await?);
         let slot: Slot = Arc::new(Mutex::new(None));
+        let clients4 = Clients4::default();
         let tasks = vec![
             tokio::spawn(serve_rpc(rpc.clone(), slot.clone())),
             tokio::spawn(serve_commands(command.clone(), slot.clone())),
-            tokio::spawn(serve_rpc4(rpc4.clone(), slot.clone())),
+            tokio::spawn(serve_rpc4(rpc4.clone(), slot.clone(), clients4.clone())),
         ];
         Ok(ControlBoardNws {
             rpc_contact: rpc.contact().clone(),
@@ -181,6 +208,7 @@ impl ControlBoardNws {
             state: 2,
             state_ext: Some(3),
             slot,
+            clients4,
             period,
             tasks,
             publisher: None,
@@ -207,6 +235,7 @@ impl ControlBoardNws {
             state: 0,
             state_ext: None,
             slot,
+            clients4: Clients4::default(),
             period,
             tasks,
             publisher: None,
@@ -248,6 +277,7 @@ impl ControlBoardNws {
         *lock(&self.slot) = Some(Attached { device, axes });
         self.publisher = Publisher::start(
             self.slot.clone(),
+            self.clients4.clone(),
             &self.ports[self.state],
             self.state_ext.map(|i| &self.ports[i]),
             self.period,
@@ -373,8 +403,9 @@ async fn serve_rpc(port: Arc<Port>, slot: Slot) {
 }
 
 /// YARP 4.0's RPC (`<name>/nws/rpc:i`): thrift calls, answered as C++ 4.0 answers them.
-async fn serve_rpc4(port: Arc<Port>, slot: Slot) {
+async fn serve_rpc4(port: Arc<Port>, slot: Slot, clients4: Clients4) {
     while let Some(mut msg) = port.read().await {
+        clients4.note(&msg.from);
         let reply = match (msg.bottle(), attached(&slot)) {
             (Ok(cmd), Some(a)) => {
                 device_call(|| super::v4::handle_rpc(&cmd, lock(&a.device).device()))
@@ -493,6 +524,7 @@ async fn serve_commands(port: Arc<Port>, slot: Slot) {
 /// out on the single port and there is no `stateExt:o`.
 fn publish(
     slot: &Slot,
+    clients4: &Clients4,
     state: &Weak<Port>,
     state_ext: Option<&Weak<Port>>,
     period: Duration,
@@ -540,7 +572,19 @@ fn publish(
         let stamp = Stamp::new(count, time);
         count = if count == i32::MAX { 0 } else { count + 1 };
         if let Some(state_ext) = to_ext {
-            state_ext.write_nowait(&data.to_bottle(), Some(stamp));
+            if clients4.any() {
+                let forms = [
+                    (data.to_bottle(), Generation::V3),
+                    (data.to_bottle_as(Generation::V4), Generation::V4),
+                ];
+                state_ext.write_nowait_each(
+                    &forms,
+                    |to| usize::from(clients4.reads(to)),
+                    Some(stamp),
+                );
+            } else {
+                state_ext.write_nowait(&data.to_bottle(), Some(stamp));
+            }
         }
         if to_state {
             state.write_nowait(&positions_bottle(&data.joint_position.values), Some(stamp));

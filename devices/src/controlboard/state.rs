@@ -3,10 +3,12 @@
 //!
 //! `jointData` travels as a Bottle of 22 elements: for each of its 11 channels, in order,
 //! a homogeneous list (float64, or int32 for the two mode channels) followed by its
-//! validity flag, the vocab `[ok]` or `[fail]` (thrift `bool`).
+//! validity flag, the vocab `[ok]` or `[fail]` (thrift `bool`). YARP 4.0's has 24: the
+//! duty cycles as float32, and the motor temperatures (float32) appended.
 
 use crate::driver::DeviceDriver;
 use crate::vocabs::{FAILED, OK};
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value, Vocab32};
 
 /// One channel of the extended state: a value per joint and whether the device gave it.
@@ -51,12 +53,14 @@ pub struct JointData {
     pub control_mode: Channel<i32>,
     /// Interaction modes as vocab codes (`IM_*`), sent as int32.
     pub interaction_mode: Channel<i32>,
+    /// Motor temperatures: YARP 4.0's `jointData` only.
+    pub temperature: Channel<f64>,
 }
 
 /// Why a received `stateExt` Bottle is not a `jointData`.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum StateError {
-    #[error("jointData has 22 elements, got {0}")]
+    #[error("jointData has 22 elements (YARP 4.0: 24), got {0}")]
     WrongLength(usize),
     #[error("jointData element {index} should be {expected}, got `{got}`")]
     WrongType {
@@ -102,24 +106,42 @@ impl JointData {
         ]
     }
 
-    /// The Bottle C++ writes for this `jointData`.
+    /// The Bottle C++ 3.12 writes for this `jointData`.
     pub fn to_bottle(&self) -> Bottle {
-        let mut b = Bottle::with_capacity(2 * CHANNELS);
+        self.to_bottle_as(Generation::V3)
+    }
+
+    /// The Bottle C++ of `generation` writes for this `jointData` (to encode in its
+    /// numbering of tags).
+    pub fn to_bottle_as(&self, generation: Generation) -> Bottle {
+        let v4 = generation == Generation::V4;
+        let mut b = Bottle::with_capacity(2 * CHANNELS + 2);
         let flag = |valid: bool| Vocab32(if valid { OK } else { FAILED });
+        let float32s = |c: &Channel<f64>| {
+            Value::List(c.values.iter().map(|x| Value::Float32(*x as f32)).collect())
+        };
         for c in self.float_channels() {
-            b.push(Value::List(c.values.iter().copied().collect()));
+            if v4 && std::ptr::eq(c, &self.pwm_duty_cycle) {
+                b.push(float32s(c));
+            } else {
+                b.push(Value::List(c.values.iter().copied().collect()));
+            }
             b.push(flag(c.valid));
         }
         for c in [&self.control_mode, &self.interaction_mode] {
             b.push(Value::List(c.values.iter().copied().collect()));
             b.push(flag(c.valid));
         }
+        if v4 {
+            b.push(float32s(&self.temperature));
+            b.push(flag(self.temperature.valid));
+        }
         b
     }
 
     /// Reads a received `jointData` Bottle (numbers of any numeric type are accepted).
     pub fn from_bottle(b: &Bottle) -> Result<JointData, StateError> {
-        if b.len() != 2 * CHANNELS {
+        if b.len() != 2 * CHANNELS && b.len() != 2 * CHANNELS + 2 {
             return Err(StateError::WrongLength(b.len()));
         }
         let wrong = |index: usize, expected: &'static str| StateError::WrongType {
@@ -159,6 +181,17 @@ impl JointData {
                 })
                 .collect::<Result<_, _>>()?;
             c.valid = flag(i + 1)?;
+        }
+        if b.len() == 2 * CHANNELS + 2 {
+            let i = 2 * CHANNELS;
+            let list = b[i]
+                .as_list()
+                .ok_or_else(|| wrong(i, "a list of numbers"))?;
+            d.temperature.values = list
+                .iter()
+                .map(|v| v.as_f64().ok_or_else(|| wrong(i, "a list of numbers")))
+                .collect::<Result<_, _>>()?;
+            d.temperature.valid = flag(i + 1)?;
         }
         Ok(d)
     }
@@ -218,6 +251,11 @@ impl JointData {
                 dev.as_interaction_mode()
                     .map(|i| i.get_interaction_modes().map(vocab_codes)),
             ),
+            temperature: Channel::read(
+                n,
+                dev.as_motor()
+                    .map(|m| (0..n).map(|j| m.get_temperature(j)).collect()),
+            ),
         };
         (data, times)
     }
@@ -269,6 +307,19 @@ mod tests {
         assert_eq!(b.len(), 22);
         assert_eq!(b[3], Value::Vocab32(Vocab32::new("fail")));
         assert_eq!(JointData::from_bottle(&b).unwrap(), d);
+        // 4.0's: duty cycles and temperatures as float32, read back the same
+        d.temperature = Channel {
+            values: vec![30.5, 31.0],
+            valid: true,
+        };
+        let b4 = d.to_bottle_as(Generation::V4);
+        assert_eq!(b4.len(), 24);
+        assert_eq!(
+            b4[14].as_list().unwrap().homogeneous_tag_in(Generation::V4),
+            10
+        );
+        let back = Bottle::decode(&b4.encode_as(Generation::V4)).unwrap();
+        assert_eq!(JointData::from_bottle(&back).unwrap(), d);
     }
 
     #[test]

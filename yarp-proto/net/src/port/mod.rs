@@ -534,6 +534,65 @@ impl Port {
         n
     }
 
+    /// Sends, without waiting, to each output the form of a message its reader takes:
+    /// `forms` holds a Bottle per generation of YARP, and `pick` tells, from the name of
+    /// the port an output goes to, which of them (by index) it gets. Returns how many
+    /// outputs took one.
+    pub fn write_nowait_each(
+        &self,
+        forms: &[(Bottle, Generation)],
+        pick: impl Fn(&str) -> usize,
+        stamp: Option<Stamp>,
+    ) -> usize {
+        let outs: Vec<_> = self
+            .shared
+            .lock()
+            .outputs
+            .values()
+            .map(|o| {
+                (
+                    pick(&o.route.to).min(forms.len().saturating_sub(1)),
+                    o.sender(),
+                )
+            })
+            .collect();
+        let mut msgs: Vec<Option<Arc<output::Outgoing>>> = vec![None; forms.len()];
+        let mut n = 0;
+        for (k, tx) in outs {
+            let Some((b, generation)) = forms.get(k) else {
+                continue;
+            };
+            let msg = msgs[k]
+                .get_or_insert_with(|| {
+                    Arc::new(output::Outgoing::new_as(
+                        Arc::new(b.clone()),
+                        stamp,
+                        *generation,
+                    ))
+                })
+                .clone();
+            if Self::offer(&tx, &msg, msg.encoded_len()) {
+                n += 1;
+            }
+        }
+        n
+    }
+
+    /// Queues `msg` (`size` bytes encoded) on one output unless the output is behind on
+    /// large messages: then it misses this one (as when its queue is full), so that what
+    /// it holds stays within OUTPUT_QUEUE_BYTES.
+    fn offer(
+        tx: &tokio::sync::mpsc::Sender<output::Job>,
+        msg: &Arc<output::Outgoing>,
+        size: usize,
+    ) -> bool {
+        let queued = tx.max_capacity() - tx.capacity();
+        if queued > 0 && queued.saturating_mul(size) >= OUTPUT_QUEUE_BYTES {
+            return false;
+        }
+        tx.try_send(output::Job::Data(msg.clone())).is_ok()
+    }
+
     fn send(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
         let outs: Vec<_> = self
             .shared
@@ -547,19 +606,7 @@ impl Port {
         }
         let msg = Arc::new(output::Outgoing::new(Arc::new(b.clone()), stamp));
         let size = msg.encoded_len();
-        let mut n = 0;
-        for tx in outs {
-            // a connection behind on large messages misses this one (as when its queue
-            // is full): what it holds stays within OUTPUT_QUEUE_BYTES
-            let queued = tx.max_capacity() - tx.capacity();
-            if queued > 0 && queued.saturating_mul(size) >= OUTPUT_QUEUE_BYTES {
-                continue;
-            }
-            if tx.try_send(output::Job::Data(msg.clone())).is_ok() {
-                n += 1;
-            }
-        }
-        n
+        outs.iter().filter(|tx| Self::offer(tx, &msg, size)).count()
     }
 
     /// Sends a Bottle on the first output and waits for the reply (C++ `Port::write(cmd,

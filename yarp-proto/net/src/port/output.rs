@@ -12,6 +12,7 @@ use tokio::task::JoinHandle;
 use tokio::time::timeout;
 use yarp_proto::port_admin::Route;
 use yarp_proto::portmonitor::{Monitor, Side};
+use yarp_proto::tags::Generation;
 use yarp_proto::wire::modifiers::CarrierName;
 use yarp_proto::wire::{
     self, encode_connection_start, text_carrier, Carrier, CarrierSpec, Decoder, DecoderConfig,
@@ -71,15 +72,36 @@ pub(crate) struct Outgoing {
     binary: OnceLock<Vec<u8>>,
     text: OnceLock<Vec<u8>>,
     stamp: Option<Stamp>,
+    /// The numbering of tags the reader expects (YARP 4.0 renumbered the floats).
+    generation: Generation,
 }
 
 impl Outgoing {
     pub(crate) fn new(bottle: Arc<Bottle>, stamp: Option<Stamp>) -> Outgoing {
+        Outgoing::new_as(bottle, stamp, Generation::V3)
+    }
+
+    /// A message for readers of `generation`.
+    pub(crate) fn new_as(
+        bottle: Arc<Bottle>,
+        stamp: Option<Stamp>,
+        generation: Generation,
+    ) -> Outgoing {
         Outgoing {
             bottle,
             binary: OnceLock::new(),
             text: OnceLock::new(),
             stamp,
+            generation,
+        }
+    }
+
+    /// The binary encoding as segments: YARP 3's lends large strings and blobs from the
+    /// Bottle; another generation's is encoded whole.
+    fn segments(&self) -> Vec<std::borrow::Cow<'_, [u8]>> {
+        match self.generation {
+            Generation::V3 => yarp_proto::binary::encode_segments(&self.bottle),
+            _ => vec![std::borrow::Cow::Borrowed(self.payload())],
         }
     }
 
@@ -103,16 +125,14 @@ impl Outgoing {
     pub(crate) fn encoded_len(&self) -> usize {
         match self.binary.get() {
             Some(b) => b.len(),
-            None => yarp_proto::binary::encode_segments(&self.bottle)
-                .iter()
-                .map(|s| s.len())
-                .sum(),
+            None => self.segments().iter().map(|s| s.len()).sum(),
         }
     }
 
     /// The encoded Bottle.
     pub(crate) fn payload(&self) -> &[u8] {
-        self.binary.get_or_init(|| self.bottle.encode())
+        self.binary
+            .get_or_init(|| self.bottle.encode_as(self.generation))
     }
 
     /// The envelope, if any.
@@ -136,7 +156,7 @@ impl Outgoing {
         cmd: &PortCommand,
         f: impl FnOnce(&[&[u8]]) -> R,
     ) -> R {
-        let segs = yarp_proto::binary::encode_segments(&self.bottle);
+        let segs = self.segments();
         let len: usize = segs.iter().map(|s| s.len()).sum();
         let mut head = Vec::with_capacity(64);
         Index::new(vec![cmd.binary_len() as u32, len as u32]).encode(&mut head);
@@ -163,7 +183,7 @@ impl Outgoing {
             _ => {
                 // the bytes of `wire::encode_message(cmd, &[&encoding])`: index, port
                 // command, payload; the payload straight from the Bottle's segments
-                let segs = yarp_proto::binary::encode_segments(&self.bottle);
+                let segs = self.segments();
                 let len: usize = segs.iter().map(|s| s.len()).sum();
                 let mut head = Vec::with_capacity(64);
                 Index::new(vec![cmd.binary_len() as u32, len as u32]).encode(&mut head);
