@@ -95,6 +95,35 @@ pub(crate) fn call_within(
     }
 }
 
+/// [`call_within`] for a call already encoded (a thrift call, as YARP 4.0's generated
+/// code writes it); `command` names it in errors.
+pub(crate) fn call_encoded_within(
+    device: &str,
+    rpc: &Arc<Port>,
+    bytes: Vec<u8>,
+    command: &str,
+    timeout: Duration,
+) -> DevResult<Bottle> {
+    let port = rpc.clone();
+    match runtime::block_on(
+        async move { tokio::time::timeout(timeout, port.rpc_encoded(bytes)).await },
+    ) {
+        Ok(Ok(reply)) => Ok(reply),
+        Ok(Err(e)) => {
+            tracing::warn!("{device}: `{command}`: {e}");
+            Err(DeviceError::PeerLost {
+                device: device.to_string(),
+                reason: e.to_string(),
+            })
+        }
+        Err(_) => Err(DeviceError::Timeout {
+            device: device.to_string(),
+            command: command.to_string(),
+            after: timeout,
+        }),
+    }
+}
+
 async fn close_port(port: Arc<Port>) {
     if let Ok(p) = Arc::try_unwrap(port) {
         p.close().await;

@@ -18,6 +18,7 @@
 use crate::controlboard::methods::{self as m, Method};
 use crate::controlboard::streaming::{Joints, Kind, Stream};
 use crate::controlboard::v3::{self, Answer, Group, Listed, PidType};
+use crate::controlboard::v4;
 use crate::controlboard::{CommandMessage, JointData, PROTOCOL_VERSION_NUMBER};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
@@ -33,10 +34,15 @@ use yarp_proto::{bottle, Bottle, Property, Stamp, Value, Vocab32};
 
 /// The C++ device name.
 pub const NAME: &str = "remote_controlboard";
+/// Its name in YARP 4.0, where `remote_controlboard` is a deprecated alias.
+pub const NAME_4: &str = "controlBoard_nwc_yarp";
 
-/// Drivers of this family, by C++ name.
-pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] =
-    &[(NAME, || Box::new(RemoteControlBoard::new()))];
+/// Drivers of this family, by C++ name: 3.12's name takes 3.12's parameters, 4.0's its
+/// own; either talks to a server of either generation.
+pub(crate) const DRIVERS: &[(&str, crate::driver::Factory)] = &[
+    (NAME, || Box::new(RemoteControlBoard::new())),
+    (NAME_4, || Box::new(RemoteControlBoard::yarp4())),
+];
 
 /// How long an RPC may wait for its reply before the call fails.
 pub const RPC_TIMEOUT: Duration = Duration::from_secs(5);
@@ -63,14 +69,21 @@ struct Link {
     axes: usize,
     timeout: Duration,
     write_strict: bool,
+    /// YARP 4.0's client sends the references it would stream by RPC.
+    use_streaming: bool,
     /// The remote control board's port prefix, named in errors.
     remote: String,
+    /// The server's generation of the protocol, found when opening.
+    generation: Generation,
 }
 
-/// The `remote_controlboard` device.
+/// The `remote_controlboard` (3.12) and `controlBoard_nwc_yarp` (4.0) device.
 #[derive(Default)]
 pub struct RemoteControlBoard {
     link: Option<Link>,
+    /// Which of the two names it was made by (its parameters, and the protocol it
+    /// prefers from a server that speaks both).
+    name: Generation,
 }
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -114,45 +127,143 @@ crate::device_params! {
     }
 }
 
+crate::device_params! {
+    /// What `controlBoard_nwc_yarp` reads (C++ 4.0's `ControlBoard_nwc_yarp_params.md`:
+    /// fast_tcp by default, a carrier for the commands of its own, and no protocol
+    /// override).
+    pub struct ControlBoardNwcParams for "controlBoard_nwc_yarp" {
+        /// Prefix of the port to which to connect.
+        remote: String = required,
+        /// Port prefix of the port opened by this device.
+        local: String = required,
+        /// It can be 'on' or 'off'
+        "writeStrict" write_strict: String = optional,
+        /// carrier used for streaming robot state
+        carrier: String = "fast_tcp",
+        /// carrier used for the streamed commands
+        carrier_cmd: String = "fast_tcp",
+        /// timeout for the input port which receives the streamed robot state
+        timeout: f64 = 0.5; "s"; check crate::params::positive,
+        /// stream the references (velocity, position direct, torque, current, PWM); else send them by RPC
+        use_streaming: bool = true,
+        /// Enable the usage of local Qos
+        "local_qos::enable" local_qos_enable: bool = false,
+        /// Local Qos. See https://yarp.it/latest/channelprioritization.html
+        "local_qos::thread_priority" local_qos_thread_priority: i64 = 0,
+        /// Local Qos. See https://yarp.it/latest/channelprioritization.html
+        "local_qos::thread_policy" local_qos_thread_policy: i64 = 0,
+        /// Local Qos. See https://yarp.it/latest/channelprioritization.html
+        "local_qos::packet_priority" local_qos_packet_priority: String = optional,
+        /// Enable the usage of remote Qos
+        "remote_qos::enable" remote_qos_enable: bool = false,
+        /// Remote Qos. See https://yarp.it/latest/channelprioritization.html
+        "remote_qos::thread_priority" remote_qos_thread_priority: i64 = 0,
+        /// Remote Qos. See https://yarp.it/latest/channelprioritization.html.
+        "remote_qos::thread_policy" remote_qos_thread_policy: i64 = 0,
+        /// Remote Qos. See https://yarp.it/latest/channelprioritization.html.
+        "remote_qos::packet_priority" remote_qos_packet_priority: String = optional,
+        /// For development purpose only
+        diagnostic: bool = false,
+    }
+}
+
 /// The settings read from the configuration.
 struct Settings {
     remote: String,
     local: String,
     carrier: String,
+    carrier_cmd: String,
     timeout: Duration,
     write_strict: bool,
+    use_streaming: bool,
     ignore_protocol: bool,
+    /// The protocol to speak to a server that speaks both.
+    prefer: Generation,
 }
 
-fn settings(config: &Property) -> DevResult<Settings> {
-    let p = RemoteControlBoardParams::read(config)?;
-    let bad = |param: &str, expected, got: String| DeviceError::BadParam {
-        device: NAME.into(),
-        param: param.into(),
-        expected,
-        got,
+fn settings(config: &Property, name: Generation) -> DevResult<Settings> {
+    let device = match name {
+        Generation::V3 => NAME,
+        Generation::V4 => NAME_4,
     };
-    let write_strict = match p.write_strict.as_deref() {
-        None | Some("off") => false,
-        Some("on") => true,
-        Some(other) => return Err(bad("writeStrict", "on or off", other.to_string())),
+    let s = match name {
+        Generation::V3 => {
+            let p = RemoteControlBoardParams::read(config)?;
+            Settings {
+                remote: p.remote,
+                local: p.local,
+                carrier_cmd: p.carrier.clone(),
+                carrier: p.carrier,
+                timeout: Duration::from_secs_f64(p.timeout),
+                write_strict: false,
+                use_streaming: true,
+                ignore_protocol: p.ignore_protocol_check,
+                prefer: name,
+            }
+            .strict(p.write_strict.as_deref(), device)?
+        }
+        Generation::V4 => {
+            let p = ControlBoardNwcParams::read(config)?;
+            Settings {
+                remote: p.remote,
+                local: p.local,
+                carrier: p.carrier,
+                carrier_cmd: p.carrier_cmd,
+                timeout: Duration::from_secs_f64(p.timeout),
+                write_strict: false,
+                use_streaming: p.use_streaming,
+                ignore_protocol: false,
+                prefer: name,
+            }
+            .strict(p.write_strict.as_deref(), device)?
+        }
     };
     Ok(Settings {
-        remote: crate::controlboard::port_prefix(&p.remote),
-        local: crate::controlboard::port_prefix(&p.local),
-        carrier: p.carrier,
-        timeout: Duration::from_secs_f64(p.timeout),
-        write_strict,
-        ignore_protocol: p.ignore_protocol_check,
+        remote: crate::controlboard::port_prefix(&s.remote),
+        local: crate::controlboard::port_prefix(&s.local),
+        ..s
     })
+}
+
+impl Settings {
+    /// `writeStrict`: `on`, `off` or absent.
+    fn strict(mut self, value: Option<&str>, device: &str) -> DevResult<Settings> {
+        self.write_strict = match value {
+            None | Some("off") => false,
+            Some("on") => true,
+            Some(other) => {
+                return Err(DeviceError::BadParam {
+                    device: device.into(),
+                    param: "writeStrict".into(),
+                    expected: "on or off",
+                    got: other.to_string(),
+                })
+            }
+        };
+        Ok(self)
+    }
 }
 
 /// Opens the ports and runs the C++ connection sequence; returns the link. On failure
 /// the ports opened so far are closed (unregistered) again.
 async fn connect(s: Settings, ns: NameClient) -> Result<Link, String> {
     let local = &s.local;
+    // the server's generation: 4.0's answers on /nws/rpc:i, 3.12's on /rpc:i (ours on both)
+    let has = |suffix: &str| {
+        let (ns, port) = (ns.clone(), format!("{}/{suffix}", s.remote));
+        async move { ns.query(&port).await.ok().flatten().is_some() }
+    };
+    let generation = match (has("rpc:i").await, has("nws/rpc:i").await) {
+        (true, true) => s.prefer,
+        (false, true) => Generation::V4,
+        _ => Generation::V3,
+    };
+    let rpc_suffix = match generation {
+        Generation::V3 => "rpc:o",
+        Generation::V4 => "nwc/rpc:o",
+    };
     let mut ports: Vec<Arc<Port>> = Vec::new();
-    for suffix in ["rpc:o", "command:o", "stateExt:i"] {
+    for suffix in [rpc_suffix, "command:o", "stateExt:i"] {
         let name = format!("{local}/{suffix}");
         match Port::open(&name, ns.clone()).await {
             Ok(p) => ports.push(Arc::new(p)),
@@ -165,7 +276,11 @@ async fn connect(s: Settings, ns: NameClient) -> Result<Link, String> {
     let (rpc, command, state) = (ports[0].clone(), ports[1].clone(), ports[2].clone());
     let latest = Arc::new(Mutex::new(None));
     let reader = tokio::spawn(read_state(state.clone(), latest.clone()));
-    match handshake(&s, &ns, &rpc, &command, &state).await {
+    let shook = match generation {
+        Generation::V3 => handshake(&s, &ns, &rpc, &command, &state).await,
+        Generation::V4 => handshake4(&s, &ns, &rpc, &command, &state).await,
+    };
+    match shook {
         Ok(axes) => Ok(Link {
             rpc,
             command,
@@ -175,7 +290,9 @@ async fn connect(s: Settings, ns: NameClient) -> Result<Link, String> {
             axes,
             timeout: s.timeout,
             write_strict: s.write_strict,
+            use_streaming: s.use_streaming,
             remote: s.remote.clone(),
+            generation,
         }),
         Err(e) => {
             reader.abort();
@@ -261,6 +378,64 @@ async fn handshake(
     }
 }
 
+/// YARP 4.0's sequence (C++ `ControlBoard_nwc_yarp::open`): commands on `carrier_cmd`,
+/// the state on `carrier`, then `nwc/rpc:o` to `nws/rpc:i`; the protocol number must
+/// be 4.0's, the axes known and the interfaces listed. Returns the number of axes.
+async fn handshake4(
+    s: &Settings,
+    ns: &NameClient,
+    rpc: &Arc<Port>,
+    command: &Port,
+    state: &Port,
+) -> Result<usize, String> {
+    let remote = &s.remote;
+    let remote_cmd = format!("{remote}/command:i");
+    command
+        .connect(&remote_cmd, Some(&s.carrier_cmd))
+        .await
+        .map_err(|e| format!("cannot connect to {remote_cmd} ({}): {e}", s.carrier_cmd))?;
+    connect_state(
+        ns,
+        &format!("{remote}/stateExt:o"),
+        state.name(),
+        &s.carrier,
+    )
+    .await?;
+    let remote_rpc = format!("{remote}/nws/rpc:i");
+    rpc.connect(&remote_rpc, Some("tcp"))
+        .await
+        .map_err(|e| format!("cannot connect to {remote_rpc}: {e}"))?;
+    let call = |bytes: Vec<u8>| {
+        let rpc = rpc.clone();
+        async move { tokio::time::timeout(RPC_TIMEOUT, rpc.rpc_encoded(bytes)).await }
+    };
+    // the protocol version's reply is no Bottle: it comes back as bytes
+    let protocol = match call(v4::protocol_request()).await {
+        Ok(Err(yarp_net::port::PortError::BadReply { bytes, .. })) => v4::protocol_of(&bytes),
+        other => {
+            tracing::warn!("{remote_rpc}: getRemoteProtocolVersion answered {other:?}");
+            None
+        }
+    };
+    if protocol != Some(v4::PROTOCOL) {
+        return Err(format!(
+            "{remote_rpc}: invalid communication protocol: the server speaks {protocol:?}, this client {}",
+            v4::PROTOCOL
+        ));
+    }
+    let axes = match call(v4::request(&m::Axes {})).await {
+        Ok(Ok(reply)) => v4::answer::<m::Axes>(&reply).and_then(|(_, n)| n),
+        _ => None,
+    };
+    let axes = axes.ok_or_else(|| {
+        format!("{remote_rpc}: problems with obtaining the number of controlled axes")
+    })?;
+    match call(v4::interfaces_request()).await {
+        Ok(Ok(reply)) if v4::returned_ok(&reply) => Ok(axes),
+        _ => Err(format!("{remote_rpc}: unable to getDeviceInterfacesRPC")),
+    }
+}
+
 /// Connects `from` to our `to` as C++ `Network::connect` does: through `from`'s admin
 /// port, asking first whether the connection exists (`[list] [out] "<to>"`).
 async fn connect_state(ns: &NameClient, from: &str, to: &str, carrier: &str) -> Result<(), String> {
@@ -320,6 +495,14 @@ impl RemoteControlBoard {
         Self::default()
     }
 
+    /// `controlBoard_nwc_yarp`: 4.0's parameters, 4.0's protocol preferred.
+    pub fn yarp4() -> Self {
+        RemoteControlBoard {
+            link: None,
+            name: Generation::V4,
+        }
+    }
+
     fn link(&self) -> DevResult<&Link> {
         self.link.as_ref().ok_or(DeviceError::NotOpen)
     }
@@ -352,6 +535,9 @@ impl RemoteControlBoard {
     /// Makes the remote call `method` and returns its reply's value.
     pub fn ask<M: Method>(&self, method: M) -> DevResult<M::Reply> {
         let link = self.link()?;
+        if link.generation == Generation::V4 {
+            return self.ask4(link, method);
+        }
         let cmd = v3::request(&method);
         let reply =
             crate::nwc_ports::call_within(&link.remote, &link.rpc, cmd.clone(), RPC_TIMEOUT)?;
@@ -364,6 +550,30 @@ impl RemoteControlBoard {
             Answer::Malformed => Err(DeviceError::failed(
                 &link.remote,
                 format!("the reply `{reply}` to `{cmd}` lacks the value asked"),
+            )),
+        }
+    }
+
+    /// [`Self::ask`] of a 4.0 server, in its thrift form.
+    fn ask4<M: Method>(&self, link: &Link, method: M) -> DevResult<M::Reply> {
+        let Some(name) = M::V4 else {
+            return Err(DeviceError::Unsupported(
+                "a call YARP 4.0's control-board protocol has not",
+            ));
+        };
+        let reply = crate::nwc_ports::call_encoded_within(
+            &link.remote,
+            &link.rpc,
+            v4::request(&method),
+            name,
+            RPC_TIMEOUT,
+        )?;
+        match v4::answer::<M>(&reply) {
+            Some((_, Some(v))) => Ok(v),
+            Some((code, None)) => Err(code.error(&link.remote, name)),
+            None => Err(DeviceError::failed(
+                &link.remote,
+                format!("the reply `{reply}` to {name} is not its return value"),
             )),
         }
     }
@@ -388,15 +598,61 @@ impl RemoteControlBoard {
     /// unless `writeStrict on`).
     fn stream(&self, kind: Kind, joints: Joints, body: Vec<f64>) -> DevResult<()> {
         let link = self.link()?;
-        let head = Stream { kind, joints }.head(Generation::V3);
-        let msg = CommandMessage::new(head, body).to_bottle();
+        let generation = link.generation;
+        if generation == Generation::V4 && !link.use_streaming {
+            return self.reference_by_rpc(kind, joints, body);
+        }
+        let head = Stream { kind, joints }.head(generation);
+        let msg = Arc::new(CommandMessage::new(head, body).to_bottle());
+        let port = link.command.clone();
         if link.write_strict {
-            let port = link.command.clone();
-            runtime::block_on(async move { port.write_strict(&msg, None).await });
+            runtime::block_on(async move { port.write_shared_as(msg, None, generation).await });
         } else {
-            link.command.write_nowait(&msg, None);
+            port.write_nowait_each(&[(Arc::unwrap_or_clone(msg), generation)], |_| 0, None);
         }
         Ok(())
+    }
+
+    /// A reference sent by RPC, as 4.0's client does without streaming.
+    fn reference_by_rpc(&self, kind: Kind, joints: Joints, values: Vec<f64>) -> DevResult<()> {
+        let group = |j: Joints| match j {
+            Joints::Group(js) => Group(js),
+            _ => Group(Vec::new()),
+        };
+        let one = |j: &Joints, v: &[f64]| match j {
+            Joints::One(j) => (*j, v.first().copied().unwrap_or(0.0)),
+            _ => (0, 0.0),
+        };
+        let (j, value) = one(&joints, &values);
+        match kind {
+            Kind::PositionMoves => self.ask(m::PositionMoves { targets: values }),
+            Kind::VelocityMove => self.ask(m::VelocityMove { j, value }),
+            Kind::VelocityMoves => self.ask(m::VelocityMoves { speeds: values }),
+            Kind::VelocityMoveGroup => self.ask(m::VelocityMoveGroup {
+                joints: group(joints),
+                values,
+            }),
+            Kind::RefTorque => self.ask(m::SetRefTorque { j, value }),
+            Kind::RefTorques => self.ask(m::SetRefTorques { values }),
+            Kind::RefTorqueGroup => self.ask(m::SetRefTorqueGroup {
+                joints: group(joints),
+                values,
+            }),
+            Kind::Position => self.ask(m::SetPosition { j, value }),
+            Kind::Positions => self.ask(m::SetPositions { values }),
+            Kind::PositionGroup => self.ask(m::SetPositionsGroup {
+                joints: group(joints),
+                values,
+            }),
+            Kind::RefDutyCycle => self.ask(m::SetRefDutyCycle { j, value }),
+            Kind::RefDutyCycles => self.ask(m::SetRefDutyCycles { values }),
+            Kind::RefCurrent => self.ask(m::SetRefCurrent { j, value }),
+            Kind::RefCurrents => self.ask(m::SetRefCurrents { values }),
+            Kind::RefCurrentGroup => self.ask(m::SetRefCurrentGroup {
+                joints: group(joints),
+                values,
+            }),
+        }
     }
 
     /// An "all joints" command needs one value per joint.
@@ -458,7 +714,7 @@ impl DeviceDriver for RemoteControlBoard {
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let s = settings(config)?;
+        let s = settings(config, self.name)?;
         let remote = s.remote.clone();
         let unreachable = |e: String| DeviceError::BadParam {
             device: NAME.into(),
@@ -1137,12 +1393,16 @@ mod tests {
     #[test]
     fn settings_follow_cpp_defaults_and_reject_bad_values() {
         let p = |t: &str| Property::from_config_text(t).unwrap();
-        let s = settings(&p("remote /r\nlocal l\n")).unwrap();
+        let s = settings(&p("remote /r\nlocal l\n"), Generation::V3).unwrap();
         assert_eq!((s.remote.as_str(), s.local.as_str()), ("/r", "/l"));
-        assert_eq!(s.carrier, "udp");
+        assert_eq!((s.carrier.as_str(), s.carrier_cmd.as_str()), ("udp", "udp"));
         assert_eq!(s.timeout, DEFAULT_TIMEOUT);
         assert!(!s.write_strict && !s.ignore_protocol);
-        let err = |t: &str| settings(&p(t)).err().unwrap().to_string();
+        // 4.0's name: fast_tcp for both, streaming on
+        let s = settings(&p("remote /r\nlocal l\n"), Generation::V4).unwrap();
+        assert_eq!((s.carrier.as_str(), s.carrier_cmd.as_str()), ("fast_tcp", "fast_tcp"));
+        assert!(s.use_streaming && s.prefer == Generation::V4);
+        let err = |t: &str| settings(&p(t), Generation::V3).err().unwrap().to_string();
         assert!(err("local /l\n").contains("`remote`"));
         assert!(err("remote /r\n").contains("`local`"));
         assert!(err("remote /r\nlocal /l\ntimeout -1\n").contains("`timeout`"));

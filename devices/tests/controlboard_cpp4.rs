@@ -305,3 +305,80 @@ fn cpp_4_controlboard_nwc_drives_our_wrapper() {
     assert_eq!(ours.len(), CLIENT_CALLS.len(), "{table}");
     assert!(bad.is_empty(), "{} calls differ:\n{table}", bad.len());
 }
+
+/// Our client, by either name, opens against C++ 4.0's wrapper (finding it speaks 4.0:
+/// it answers on `/nws/rpc:i`), calls it in 4.0's thrift form, streams 4.0's command
+/// heads and reads 4.0's `jointData`.
+#[test]
+fn our_clients_drive_cpp_4_fake_motion_control() {
+    let test = "our_clients_drive_cpp_4_fake_motion_control";
+    let Some(yarp) = cpp4_program(test, "yarp") else {
+        return;
+    };
+    let bin = yarp.parent().unwrap().to_path_buf();
+    let _cpp = cpp_board(&bin, "/c4fake");
+    for (k, device) in ["controlBoard_nwc_yarp", "remote_controlboard"]
+        .iter()
+        .enumerate()
+    {
+        let mut remote = PolyDriver::open(
+            &Property::from_config_text(format!(
+                "device {device}\nremote /c4fake\nlocal /ours4_{k}\n"
+            ))
+            .unwrap(),
+        )
+        .unwrap_or_else(|e| panic!("our {device} opens against C++ 4.0: {e}"));
+        let d = remote.device();
+        assert_eq!(d.as_encoders().unwrap().get_axes().unwrap(), 4, "{device}");
+        let q = controlboard_common::wait_for("encoders streamed by C++ 4.0", || {
+            d.as_encoders().unwrap().get_encoders().ok()
+        });
+        assert_eq!(q.len(), 4);
+        let pos = d.as_position_control().unwrap();
+        pos.position_move(0, 10.0 + k as f64).unwrap();
+        assert_eq!(
+            pos.get_target_position(0).unwrap(),
+            10.0 + k as f64,
+            "{device}"
+        );
+        pos.set_ref_speed(1, 12.5).unwrap();
+        assert_eq!(pos.get_ref_speed(1).unwrap(), 12.5, "{device}");
+        controlboard_common::wait_for("C++ 4.0's encoder 0 at the target", || {
+            let q = d.as_encoders().unwrap().get_encoder(0).ok()?;
+            ((q - (10.0 + k as f64)).abs() < 1e-9).then_some(())
+        });
+        // a mode set by RPC comes back in the streamed state
+        let vel = yarp_proto::Vocab32::new("vel");
+        d.as_control_mode()
+            .unwrap()
+            .set_control_mode(2, vel)
+            .unwrap();
+        controlboard_common::wait_for("joint 2 in velocity mode", || {
+            (d.as_control_mode().unwrap().get_control_mode(2).ok()? == vel).then_some(())
+        });
+        // a reference streamed with 4.0's head reaches C++ 4.0's fake
+        d.as_velocity_control()
+            .unwrap()
+            .velocity_move(2, 3.25)
+            .unwrap();
+        controlboard_common::wait_for("velocity reference streamed", || {
+            let r = d.as_velocity_control().unwrap().get_ref_velocity(2).ok()?;
+            (r == 3.25).then_some(())
+        });
+        // PID types travel numbered (3.12's `pos` is 4.0's `pos1`)
+        let pos_pid = yarp_proto::Vocab32::new("pos");
+        let pid = d.as_pid_control().unwrap().get_pid(pos_pid, 0);
+        assert!(pid.is_ok(), "{device}: getPid of a position PID: {pid:?}");
+        let names: Vec<String> = (0..4)
+            .map(|j| d.as_axis_info().unwrap().get_axis_name(j).unwrap())
+            .collect();
+        assert_eq!(names, ["joint0", "joint1", "joint2", "joint3"], "{device}");
+        // a refused call keeps its kind (4.0's fake has no amplifier enable)
+        let e = d.as_amplifier_control().unwrap().enable_amp(0).unwrap_err();
+        assert!(
+            matches!(e, yarp_devices::DeviceError::Unsupported(_)),
+            "{device}: {e:?}"
+        );
+        drop(remote);
+    }
+}

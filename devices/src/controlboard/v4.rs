@@ -478,6 +478,55 @@ pub fn fail_reply() -> Vec<u8> {
     crate::sensors::rpc::fail_reply()
 }
 
+/// The `getRemoteProtocolVersion` call.
+pub fn protocol_request() -> Vec<u8> {
+    let mut w = WireWriter::for_generation(Generation::V4);
+    w.list_header(1).string("getRemoteProtocolVersion");
+    w.into_bytes()
+}
+
+/// The `getDeviceInterfacesRPC` call.
+pub fn interfaces_request() -> Vec<u8> {
+    let mut w = WireWriter::for_generation(Generation::V4);
+    w.list_header(1).string("getDeviceInterfacesRPC");
+    w.into_bytes()
+}
+
+/// Whether a reply of a `return_*` struct starts with an `ok` return value.
+pub fn returned_ok(reply: &Bottle) -> bool {
+    reply
+        .get(0)
+        .and_then(Value::as_list)
+        .and_then(|rv| rv.get(0)?.as_vocab())
+        == Some(ReturnValue::Ok.vocab())
+}
+
+/// The protocol number in a `getRemoteProtocolVersion` reply's bytes.
+pub fn protocol_of(reply: &[u8]) -> Option<i16> {
+    let b = reply.get(8..10)?;
+    Some(i16::from_le_bytes([b[0], b[1]]))
+}
+
+impl ReturnValue {
+    /// The error a client reports for a call `command` of `device` that returned this.
+    pub fn error(self, device: &str, command: &str) -> DeviceError {
+        match self {
+            ReturnValue::NotImplemented => {
+                DeviceError::Unsupported("not implemented by the remote device")
+            }
+            ReturnValue::NotReady => DeviceError::NotReady("the remote device is not ready"),
+            ReturnValue::Communication => DeviceError::PeerLost {
+                device: device.to_string(),
+                reason: format!("`{command}`: the server lost its own device"),
+            },
+            _ => DeviceError::Refused {
+                device: device.to_string(),
+                command: format!("{command} ({:?})", self),
+            },
+        }
+    }
+}
+
 /// `getRemoteProtocolVersion`'s reply: a list of one, then four untagged int16 (not a
 /// Bottle C++ or we could read as one).
 pub fn protocol_reply() -> Vec<u8> {

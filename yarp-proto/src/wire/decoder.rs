@@ -35,6 +35,9 @@ use super::number::{YarpNumber, INDEX_VALUE};
 use super::scan::{BottleScanner, Scan};
 use super::text_carrier::{ACK_TEXT, WELCOME_PREFIX};
 
+/// The longest reply that is no Bottle (its end found by the acknowledgement after it).
+const RAW_REPLY_MAX: usize = 4096;
+
 /// Default limit for one message, reply or text payload: 256 MiB.
 pub const DEFAULT_MAX_MESSAGE_SIZE: usize = 256 * 1024 * 1024;
 /// Default limit for one text line: 16 MiB.
@@ -105,6 +108,9 @@ struct Expect {
     reply: bool,
     ack: bool,
     reverse: bool,
+    /// The reply may be no Bottle (a thrift server's protocol version): it then ends
+    /// where its acknowledgement starts.
+    raw: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -283,9 +289,20 @@ impl Decoder {
             reply: command.expects_reply() && spec.supports_reply,
             ack: spec.requires_ack,
             reverse: command.key() == b'r',
+            raw: false,
         };
         if e.reply || e.ack || e.reverse {
             self.expect.push_back(e);
+        }
+    }
+
+    /// As [`Decoder::expect_response`], for a call whose reply may be no Bottle (a
+    /// thrift call): such a reply ends where its acknowledgement starts, so it is only
+    /// read on carriers that acknowledge.
+    pub fn expect_raw_response(&mut self, command: &PortCommand) {
+        self.expect_response(command);
+        if let Some(e) = self.expect.back_mut().filter(|e| e.ack) {
+            e.raw = true;
         }
     }
 
@@ -849,9 +866,26 @@ impl Decoder {
             return Ok(Step::NeedMore);
         }
         let scanner = self.scanner.get_or_insert_with(BottleScanner::new);
-        let scan = scanner
-            .scan(self.buf.get(start..).unwrap_or_default())
-            .map_err(WireError::BadReply)?;
+        let scan = match scanner.scan(self.buf.get(start..).unwrap_or_default()) {
+            Ok(scan) => scan,
+            Err(e) if self.expect.front().is_some_and(|f| f.raw) => {
+                // A reply that is no Bottle (a thrift server's protocol version: a list
+                // header, then raw int16s) ends where the acknowledgement starts, as the
+                // C++ reader that knows its form would stop there.
+                self.scanner = None;
+                let avail = self.avail();
+                match (1..avail.len()).find(|&i| YarpNumber::is_at(&avail[i..])) {
+                    Some(end) => Scan::Complete(end),
+                    None if avail.len() < RAW_REPLY_MAX => {
+                        self.need = avail_len + 8;
+                        self.hint = self.need as usize;
+                        return Ok(Step::NeedMore);
+                    }
+                    None => return Err(WireError::BadReply(e)),
+                }
+            }
+            Err(e) => return Err(WireError::BadReply(e)),
+        };
         match scan {
             Scan::NeedAtLeast(n) => {
                 self.too_large("reply", n)?;

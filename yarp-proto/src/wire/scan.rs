@@ -6,7 +6,7 @@
 //! rules as [`crate::binary::decode`] (which then validates the complete bytes).
 
 use crate::binary::MAX_DEPTH;
-use crate::tags;
+use crate::tags::{self, Generation};
 use crate::DecodeError;
 
 /// Outcome of a scan step.
@@ -40,6 +40,9 @@ pub struct BottleScanner {
     stack: Vec<Frame>,
     want: Want,
     pos: usize,
+    /// Read as YARP 3's until a tag only 4.0 has shows the Bottle is 4.0's (as
+    /// `Bottle::decode` does); then scanned again from the start.
+    generation: Generation,
 }
 
 impl Default for BottleScanner {
@@ -59,6 +62,7 @@ impl BottleScanner {
             stack: Vec::new(),
             want: Want::TopTag,
             pos: 0,
+            generation: Generation::V3,
         }
     }
 
@@ -111,11 +115,14 @@ impl BottleScanner {
                         }
                     };
                     let body_at = self.pos + tag_len;
+                    let g = self.generation;
                     let fixed = match tag {
                         tags::INT8 => Some(1usize),
                         tags::INT16 => Some(2),
-                        tags::INT32 | tags::VOCAB32 | tags::FLOAT32 => Some(4),
-                        tags::INT64 | tags::FLOAT64 => Some(8),
+                        tags::INT32 | tags::VOCAB32 => Some(4),
+                        tags::INT64 => Some(8),
+                        t if t == g.float32() => Some(4),
+                        t if t == g.float64() => Some(8),
                         _ => None,
                     };
                     if let Some(n) = fixed {
@@ -156,6 +163,13 @@ impl BottleScanner {
                             Want::TopTag
                         } else {
                             Want::Count(tag & tags::UNIT_MASK)
+                        };
+                        continue;
+                    }
+                    if self.generation == Generation::V3 && Generation::V4.owns(tag) {
+                        *self = BottleScanner {
+                            generation: Generation::V4,
+                            ..BottleScanner::new()
                         };
                         continue;
                     }

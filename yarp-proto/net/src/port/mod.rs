@@ -69,8 +69,9 @@ pub enum PortError {
     },
     #[error(transparent)]
     Output(#[from] OutputError),
-    #[error("the reply is not a valid Bottle: {0}")]
-    BadReply(#[from] DecodeError),
+    /// The reply is no Bottle; its bytes are here for a caller that knows their form.
+    #[error("the reply is not a valid Bottle: {error}")]
+    BadReply { error: DecodeError, bytes: Vec<u8> },
     #[error("port {0} has no output connection for the RPC")]
     NotConnected(String),
     #[error("port closed")]
@@ -516,7 +517,17 @@ impl Port {
     /// copy is made, and readers in this process (`local` carrier) receive this very
     /// Bottle through [`Incoming::shared_bottle`].
     pub async fn write_shared(&self, b: Arc<Bottle>, stamp: Option<Stamp>) -> usize {
-        let msg = Arc::new(output::Outgoing::new(b, stamp));
+        self.write_shared_as(b, stamp, Generation::V3).await
+    }
+
+    /// As [`Port::write_shared`], encoded for readers of `generation`.
+    pub async fn write_shared_as(
+        &self,
+        b: Arc<Bottle>,
+        stamp: Option<Stamp>,
+        generation: Generation,
+    ) -> usize {
+        let msg = Arc::new(output::Outgoing::new_as(b, stamp, generation));
         let outs: Vec<_> = self
             .shared
             .lock()
@@ -609,9 +620,21 @@ impl Port {
         outs.iter().filter(|tx| Self::offer(tx, &msg, size)).count()
     }
 
+    /// Sends an encoded message (a thrift call, exactly as its generated code writes it)
+    /// on the first output and waits for the reply; a reply that is no Bottle comes back
+    /// as [`PortError::BadReply`] with its bytes.
+    pub async fn rpc_encoded(&self, bytes: Vec<u8>) -> Result<Bottle, PortError> {
+        self.rpc_message(output::Outgoing::encoded(bytes)).await
+    }
+
     /// Sends a Bottle on the first output and waits for the reply (C++ `Port::write(cmd,
     /// reply)`).
     pub async fn rpc(&self, b: &Bottle) -> Result<Bottle, PortError> {
+        self.rpc_message(output::Outgoing::new(Arc::new(b.clone()), None))
+            .await
+    }
+
+    async fn rpc_message(&self, msg: output::Outgoing) -> Result<Bottle, PortError> {
         let tx = self
             .shared
             .lock()
@@ -621,8 +644,7 @@ impl Port {
             .map(|o| o.sender())
             .ok_or_else(|| PortError::NotConnected(self.shared.name.clone()))?;
         let (rtx, rrx) = oneshot::channel();
-        let msg = Arc::new(output::Outgoing::new(Arc::new(b.clone()), None));
-        tx.send(output::Job::Rpc(msg, rtx))
+        tx.send(output::Job::Rpc(Arc::new(msg), rtx))
             .await
             .map_err(|_| PortError::Closed)?;
         let reply = rrx.await.map_err(|_| PortError::Closed)??;

@@ -74,6 +74,8 @@ pub(crate) struct Outgoing {
     stamp: Option<Stamp>,
     /// The numbering of tags the reader expects (YARP 4.0 renumbered the floats).
     generation: Generation,
+    /// Given encoded (a thrift call), whose reply may be no Bottle.
+    encoded: bool,
 }
 
 impl Outgoing {
@@ -93,12 +95,32 @@ impl Outgoing {
             text: OnceLock::new(),
             stamp,
             generation,
+            encoded: false,
         }
+    }
+
+    /// A message already encoded (a thrift call): binary carriers send `bytes` as they
+    /// are; text and local ones the Bottle they decode to.
+    pub(crate) fn encoded(bytes: Vec<u8>) -> Outgoing {
+        let bottle = Bottle::decode(&bytes).unwrap_or_default();
+        let generation = yarp_proto::binary::generation_of(&bytes);
+        let mut msg = Outgoing::new_as(Arc::new(bottle), None, generation);
+        msg.encoded = true;
+        let _ = msg.binary.set(bytes);
+        msg
+    }
+
+    /// Whether this is a message already encoded ([`Outgoing::encoded`]).
+    pub(crate) fn is_encoded(&self) -> bool {
+        self.encoded
     }
 
     /// The binary encoding as segments: YARP 3's lends large strings and blobs from the
     /// Bottle; another generation's is encoded whole.
     fn segments(&self) -> Vec<std::borrow::Cow<'_, [u8]>> {
+        if let Some(encoded) = self.binary.get() {
+            return vec![std::borrow::Cow::Borrowed(encoded)];
+        }
         match self.generation {
             Generation::V3 => yarp_proto::binary::encode_segments(&self.bottle),
             _ => vec![std::borrow::Cow::Borrowed(self.payload())],
@@ -493,9 +515,16 @@ async fn serve(
                 msg.write_to(stream, spec.framing, &cmd)
                     .await
                     .map_err(io_err)?;
-                decoder.expect_response(&cmd);
+                if msg.is_encoded() {
+                    decoder.expect_raw_response(&cmd);
+                } else {
+                    decoder.expect_response(&cmd);
+                }
                 let reply = await_reply(stream, decoder, target, spec).await;
-                let failed = reply.is_err();
+                // the connection is still good after a reply that is no Bottle
+                let failed = reply
+                    .as_ref()
+                    .is_err_and(|e| !matches!(e, PortError::BadReply { .. }));
                 let _ = reply_tx.send(reply);
                 if failed {
                     return Err(OutputError::PeerClosed(target.to_string()));
@@ -580,10 +609,21 @@ pub(crate) async fn await_reply(
     spec: CarrierSpec,
 ) -> Result<Bottle, PortError> {
     let mut reply = None;
+    let mut undecodable = None;
     loop {
         match next_event(stream, decoder, target).await? {
             Event::Reply(bytes) => {
-                reply = Some(Bottle::decode(&bytes)?);
+                // a reply that is no Bottle (a thrift server's protocol version) is the
+                // caller's to read: its bytes travel in the error
+                match Bottle::decode(&bytes) {
+                    Ok(b) => reply = Some(b),
+                    Err(error) => {
+                        undecodable = Some(PortError::BadReply {
+                            error,
+                            bytes: bytes.clone(),
+                        })
+                    }
+                }
                 // the next large reply is read into the same (already mapped) memory
                 decoder.recycle(bytes);
                 if !spec.requires_ack {
@@ -599,6 +639,9 @@ pub(crate) async fn await_reply(
             Event::Ack(_) => break,
             _ => {}
         }
+    }
+    if let Some(e) = undecodable {
+        return Err(e);
     }
     // an acknowledgement without a reply: the receiver did not answer
     Ok(reply.unwrap_or_default())
