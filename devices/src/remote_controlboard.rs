@@ -1400,7 +1400,10 @@ mod tests {
         assert!(!s.write_strict && !s.ignore_protocol);
         // 4.0's name: fast_tcp for both, streaming on
         let s = settings(&p("remote /r\nlocal l\n"), Generation::V4).unwrap();
-        assert_eq!((s.carrier.as_str(), s.carrier_cmd.as_str()), ("fast_tcp", "fast_tcp"));
+        assert_eq!(
+            (s.carrier.as_str(), s.carrier_cmd.as_str()),
+            ("fast_tcp", "fast_tcp")
+        );
         assert!(s.use_streaming && s.prefer == Generation::V4);
         let err = |t: &str| settings(&p(t), Generation::V3).err().unwrap().to_string();
         assert!(err("local /l\n").contains("`remote`"));

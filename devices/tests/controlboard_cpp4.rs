@@ -382,3 +382,76 @@ fn our_clients_drive_cpp_4_fake_motion_control() {
         drop(remote);
     }
 }
+
+/// Beyond C++: a C++ 4.0 client drives a robot whose wrapper is C++ 3.12's, through ours
+/// (our `remote_controlboard` on the 3.12 wrapper, served again by our wrapper, which
+/// speaks 4.0 to the 4.0 client). C++ cannot bridge the two generations.
+#[test]
+fn cpp_4_client_drives_a_cpp_3_12_robot_through_ours() {
+    let test = "cpp_4_client_drives_a_cpp_3_12_robot_through_ours";
+    let Some(yarp4) = cpp4_program(test, "yarp") else {
+        return;
+    };
+    let Some(bin312) =
+        yarp_interop_tests::cpp_devices(test, &["controlBoard_nws_yarp", "fakeMotionControl"])
+    else {
+        return;
+    };
+    let bin4 = yarp4.parent().unwrap().to_path_buf();
+    // the 3.12 robot
+    let _robot = cpp_yarpdev(
+        &bin312,
+        &[
+            "--device",
+            "controlBoard_nws_yarp",
+            "--subdevice",
+            "fakeMotionControl",
+            "--name",
+            "/r312",
+            "--period",
+            "0.01",
+            "--GENERAL::Joints",
+            "4",
+        ],
+        "/r312/stateExt:o",
+    );
+    // our bridge: a 3.12 client of it, served by our wrapper (both generations)
+    name_client();
+    let _bridge = PolyDriver::open(
+        &Property::from_config_text(
+            "device controlBoard_nws_yarp\nsubdevice remote_controlboard\nname /bridge\n\
+             period 0.01\nremote /r312\nlocal /bridge/to312\n",
+        )
+        .unwrap(),
+    )
+    .expect("our bridge opens on the C++ 3.12 robot");
+    let calls = [
+        "getAxesRPC",
+        "positionMoveOneRPC 1 10.0",
+        "getTargetPositionOneRPC 1",
+        "setTrajSpeedOneRPC 1 12.5",
+        "getTrajSpeedOneRPC 1",
+        "getAxisNameRPC 2",
+        "getEncoderOneRPC 1",
+        "getPidRPC 829648752 0",
+    ];
+    let replies = client_session(&bin4, "/c4bridge", "/bridge", &calls);
+    let want = [
+        "Response: ([ok]) 4",
+        "Response: [ok]",
+        "Response: ([ok]) 10.0",
+        "Response: [ok]",
+        "Response: ([ok]) 12.5",
+        "Response: ([ok]) joint2",
+        "Response: ([ok]) 10.0",
+    ];
+    let table: String = calls
+        .iter()
+        .zip(&replies)
+        .map(|(c, r)| format!("{c:32} {r}\n"))
+        .collect();
+    eprintln!("C++ 4.0 client -> our wrapper -> our 3.12 client -> C++ 3.12 robot:\n{table}");
+    assert_eq!(replies.len(), calls.len(), "{table}");
+    assert_eq!(&replies[..want.len()], &want[..], "{table}");
+    assert!(replies[7].starts_with("Response: ([ok]) ("), "{table}");
+}
