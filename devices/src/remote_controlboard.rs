@@ -17,7 +17,7 @@
 
 use crate::controlboard::methods::{self as m, Method};
 use crate::controlboard::streaming::{Joints, Kind, Stream};
-use crate::controlboard::v3::{self, Answer, Group, Listed, PidType};
+use crate::controlboard::v3::{self, Answer, Group, Listed, PidType, J16};
 use crate::controlboard::v4;
 use crate::controlboard::{CommandMessage, JointData, PROTOCOL_VERSION_NUMBER};
 use crate::driver::DeviceDriver;
@@ -1014,16 +1014,24 @@ impl IAxisInfo for RemoteControlBoard {
 
 impl IControlLimits for RemoteControlBoard {
     fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        self.ask(m::SetLimits { j, min, max })
+        self.ask(m::SetLimits {
+            j: J16(j),
+            min,
+            max,
+        })
     }
     fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        self.ask(m::GetLimits { j })
+        self.ask(m::GetLimits { j: J16(j) })
     }
     fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        self.ask(m::SetVelLimits { j, min, max })
+        self.ask(m::SetVelLimits {
+            j: J16(j),
+            min,
+            max,
+        })
     }
     fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        self.ask(m::GetVelLimits { j })
+        self.ask(m::GetVelLimits { j: J16(j) })
     }
 }
 
@@ -1144,42 +1152,66 @@ impl IMotor for RemoteControlBoard {
 
 impl IPidControl for RemoteControlBoard {
     fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
-        self.ask(m::GetPid { ty: PidType(ty), j })
+        self.ask(m::GetPid {
+            ty: PidType(ty),
+            j: J16(j),
+        })
     }
     fn set_pid(&mut self, ty: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
         self.ask(m::SetPid {
             ty: PidType(ty),
-            j,
+            j: J16(j),
             pid,
         })
     }
     fn enable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        self.ask(m::EnablePid { ty: PidType(ty), j })
+        self.ask(m::EnablePid {
+            ty: PidType(ty),
+            j: J16(j),
+        })
     }
     fn disable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        self.ask(m::DisablePid { ty: PidType(ty), j })
+        self.ask(m::DisablePid {
+            ty: PidType(ty),
+            j: J16(j),
+        })
     }
     fn is_pid_enabled(&mut self, ty: Vocab32, j: usize) -> DevResult<bool> {
-        self.ask(m::IsPidEnabled { ty: PidType(ty), j })
+        self.ask(m::IsPidEnabled {
+            ty: PidType(ty),
+            j: J16(j),
+        })
     }
     fn set_pid_reference(&mut self, ty: Vocab32, j: usize, value: f64) -> DevResult<()> {
         self.ask(m::SetPidReference {
             ty: PidType(ty),
-            j,
+            j: J16(j),
             value,
         })
     }
     fn get_pid_reference(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        self.ask(m::GetPidReference { ty: PidType(ty), j })
+        self.ask(m::GetPidReference {
+            ty: PidType(ty),
+            j: J16(j),
+        })
     }
     fn get_pid_error(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        self.ask(m::GetPidError { ty: PidType(ty), j })
+        self.ask(m::GetPidError {
+            ty: PidType(ty),
+            j: J16(j),
+        })
     }
     fn get_pid_output(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        self.ask(m::GetPidOutput { ty: PidType(ty), j })
+        self.ask(m::GetPidOutput {
+            ty: PidType(ty),
+            j: J16(j),
+        })
     }
     fn reset_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        self.ask(m::ResetPid { ty: PidType(ty), j })
+        self.ask(m::ResetPid {
+            ty: PidType(ty),
+            j: J16(j),
+        })
     }
 }
 

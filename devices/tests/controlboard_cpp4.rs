@@ -455,3 +455,193 @@ fn cpp_4_client_drives_a_cpp_3_12_robot_through_ours() {
     assert_eq!(&replies[..want.len()], &want[..], "{table}");
     assert!(replies[7].starts_with("Response: ([ok]) ("), "{table}");
 }
+
+/// Where the recordings of C++ 4.0.0 are kept (`tests/vectors-yarp4`, see its README).
+fn vectors4() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/vectors-yarp4")
+}
+
+/// Lines written by C++ 4.0's `yarp write`: floats in every form the tags distinguish.
+const BOTTLE_LINES: &[&str] = &[
+    "1 2.5 hello [ok] (3.25 4)",
+    "(0.5 -1.25 1e+300)",
+    "[is] [enc] 0.125 [tsta] 7 1795000000.5 [ok]",
+    "(1 2 3) (a b) 0.0",
+    "{\"k\" 1.5}",
+];
+
+/// Records what C++ 4.0.0 puts on the wire into `tests/vectors-yarp4` (run by hand:
+/// `cargo test -p yarp-devices --test controlboard_cpp4 -- --ignored record`, under
+/// netns-run, with the 4.0 peer built): its Bottles, every thrift call its
+/// `controlBoard_nwc_yarp` makes for the calls of `CLIENT_CALLS`, and its wrapper's
+/// `jointData`.
+#[test]
+#[ignore = "records vectors from C++ 4.0.0; run by hand"]
+fn record_cpp_4_vectors() {
+    use serde_json::json;
+    use std::sync::{Arc, Mutex};
+    use yarp_net::port::Port;
+    let Some(yarp) = cpp4_program("record_cpp_4_vectors", "yarp") else {
+        return;
+    };
+    let bin = yarp.parent().unwrap().to_path_buf();
+    let ns = name_client();
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .unwrap();
+    let hexs = |b: &[u8]| b.iter().map(|x| format!("{x:02x}")).collect::<String>();
+    // 1. Bottles from `yarp write`
+    let input = rt.block_on(Port::open("/rec4/in", ns.clone())).unwrap();
+    let mut writer = cpp_command(&yarp)
+        .args(["write", "/rec4/w", "/rec4/in"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut stdin = writer.stdin.take().unwrap();
+    let _writer = Reaped(writer);
+    let mut bottles = Vec::new();
+    for (i, line) in BOTTLE_LINES.iter().enumerate() {
+        writeln!(stdin, "{line}").unwrap();
+        stdin.flush().unwrap();
+        let msg = rt
+            .block_on(async { tokio::time::timeout(3 * T, input.read()).await })
+            .unwrap()
+            .unwrap();
+        bottles.push(json!({
+            "id": format!("b4-{:03}", i + 1), "kind": "bottle",
+            "note": "C++ 4.0.0 `yarp write` of the text, as received",
+            "text": line, "payload_hex": hexs(&msg.payload),
+        }));
+    }
+    drop(stdin);
+    // 2. The calls of C++ 4.0's client, served by a port of ours answering as our wrapper
+    let server = Arc::new(
+        rt.block_on(Port::open("/rec4srv/nws/rpc:i", ns.clone()))
+            .unwrap(),
+    );
+    let _command = rt
+        .block_on(Port::open("/rec4srv/command:i", ns.clone()))
+        .unwrap();
+    let _state = rt
+        .block_on(Port::open("/rec4srv/stateExt:o", ns.clone()))
+        .unwrap();
+    let calls = Arc::new(Mutex::new(Vec::new()));
+    {
+        let (server, calls) = (server.clone(), calls.clone());
+        rt.spawn(async move {
+            let mut fake = yarp_devices::FakeMotionControl::with_joints(4);
+            while let Some(mut msg) = server.read().await {
+                let b = msg.bottle().unwrap_or_default();
+                calls
+                    .lock()
+                    .unwrap()
+                    .push((msg.payload.clone(), b.to_string()));
+                msg.reply_encoded(yarp_devices::controlboard::v4::handle_rpc(&b, &mut fake));
+            }
+        });
+    }
+    let _ = client_session(&bin, "/rec4chain", "/rec4srv", CLIENT_CALLS);
+    let mut records = Vec::new();
+    for (i, (payload, text)) in calls.lock().unwrap().iter().enumerate() {
+        records.push(json!({
+            "id": format!("cb4-{:03}", i + 1), "kind": "thrift_call",
+            "note": "a call of C++ 4.0.0's controlBoard_nwc_yarp to <remote>/nws/rpc:i",
+            "decoded": text, "payload_hex": hexs(payload),
+        }));
+    }
+    // 3. jointData from C++ 4.0's wrapper
+    let _cpp = cpp_board(&bin, "/rec4cpp");
+    let state = rt.block_on(Port::open("/rec4/state", ns)).unwrap();
+    let out = cpp_command(&yarp)
+        .args(["connect", "/rec4cpp/stateExt:o", "/rec4/state", "tcp"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "yarp connect: {out:?}");
+    let msg = rt
+        .block_on(async { tokio::time::timeout(3 * T, state.read()).await })
+        .unwrap()
+        .unwrap();
+    records.push(json!({
+        "id": format!("cb4-{:03}", records.len() + 1), "kind": "state_ext",
+        "note": "C++ 4.0.0 controlBoard_nws_yarp over fakeMotionControl (4 joints): stateExt:o",
+        "payload_hex": hexs(&msg.payload),
+    }));
+    let write = |name: &str, recs: &[serde_json::Value]| {
+        let text: String = recs.iter().map(|r| format!("{r}\n")).collect();
+        std::fs::write(vectors4().join(name), text).unwrap();
+    };
+    write("bottles.jsonl", &bottles);
+    write("controlboard.jsonl", &records);
+}
+
+fn load4(name: &str) -> Vec<serde_json::Value> {
+    let text =
+        std::fs::read_to_string(vectors4().join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+    text.lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+fn unhex(v: &serde_json::Value) -> Vec<u8> {
+    let s = v.as_str().unwrap();
+    (0..s.len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(&s[i..i + 2], 16).unwrap())
+        .collect()
+}
+
+/// The recordings of C++ 4.0.0, replayed offline: its Bottles read and write back byte
+/// for byte in 4.0's numbering, every call of its client is one of our typed methods and
+/// our client writes it byte for byte, and its `jointData` reads and writes back.
+#[test]
+fn cpp_4_recorded_vectors() {
+    use yarp_devices::controlboard::methods::Request;
+    use yarp_devices::controlboard::JointData;
+    use yarp_proto::tags::Generation;
+    use yarp_proto::Bottle;
+    for r in load4("bottles.jsonl") {
+        let bytes = unhex(&r["payload_hex"]);
+        let want = Bottle::from_text(r["text"].as_str().unwrap());
+        assert_eq!(Bottle::decode(&bytes).unwrap(), want, "{}", r["id"]);
+        assert_eq!(want.encode_as(Generation::V4), bytes, "{}", r["id"]);
+    }
+    let (mut typed, mut special) = (0, 0);
+    for r in load4("controlboard.jsonl") {
+        let bytes = unhex(&r["payload_hex"]);
+        let b = Bottle::decode(&bytes).unwrap_or_else(|e| panic!("{}: {e}", r["id"]));
+        match r["kind"].as_str().unwrap() {
+            "thrift_call" => {
+                let name = b.get(0).and_then(|v| v.as_str()).unwrap();
+                match Request::from_v4(name, &b.items()[1..]) {
+                    Some(req) => {
+                        assert_eq!(req.to_v4(), bytes, "{} {}", r["id"], r["decoded"]);
+                        typed += 1;
+                    }
+                    None => {
+                        assert!(
+                            ["getRemoteProtocolVersion", "getDeviceInterfacesRPC"].contains(&name),
+                            "{}: {name} is none of our methods",
+                            r["id"]
+                        );
+                        special += 1;
+                    }
+                }
+            }
+            "state_ext" => {
+                let d = JointData::from_bottle(&b).unwrap();
+                assert_eq!(d.axes(), 4);
+                assert_eq!(
+                    d.to_bottle_as(Generation::V4).encode_as(Generation::V4),
+                    bytes
+                );
+            }
+            k => panic!("unknown kind {k}"),
+        }
+    }
+    println!("C++ 4.0 client calls: {typed} typed and written byte for byte, {special} handshake");
+    assert!(typed >= 30, "{typed}");
+}

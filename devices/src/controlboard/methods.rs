@@ -5,7 +5,7 @@
 //! handled wherever [`Request`] is matched.
 
 use super::rpc::RpcStamp;
-use super::v3::{self, Done, Form, Group, Listed, PidType, Style, Wire3};
+use super::v3::{self, Done, Form, Group, Listed, PidType, Style, Wire3, J16};
 use super::v4::{self, Wire4};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
@@ -132,6 +132,11 @@ macro_rules! control_board_methods {
                     return v4::decode::<$name>(args).map(Request::$name);
                 } )*
                 None
+            }
+
+            /// The call in 4.0's thrift form, as a client writes it.
+            pub fn to_v4(&self) -> Vec<u8> {
+                match self { $(Request::$name(m) => v4::request(m)),* }
             }
 
             /// Serves the call on `dev` and answers it in 4.0's thrift form.
@@ -280,13 +285,13 @@ control_board_methods! {
         |d| via!(d.as_motor_encoders).set_motor_encoder_counts_per_revolution(m, cpr);
 
     // IControlLimits
-    GetLimits { j: usize } -> (f64, f64), Get [GET, LIMITS], v4 "getPosLimitsRPC" => |d| via!(d.as_control_limits).get_limits(j);
-    SetLimits { j: usize, min: f64, max: f64 } -> (), Set [SET, LIMITS], v4 "setPosLimitsRPC" =>
-        |d| via!(d.as_control_limits).set_limits(j, min, max);
-    GetVelLimits { j: usize } -> (f64, f64), Get [GET, VEL_LIMITS], v4 "getVelLimitsRPC" =>
-        |d| via!(d.as_control_limits).get_vel_limits(j);
-    SetVelLimits { j: usize, min: f64, max: f64 } -> (), Set [SET, VEL_LIMITS], v4 "setVelLimitsRPC" =>
-        |d| via!(d.as_control_limits).set_vel_limits(j, min, max);
+    GetLimits { j: J16 } -> (f64, f64), Get [GET, LIMITS], v4 "getPosLimitsRPC" => |d| via!(d.as_control_limits).get_limits(j.0);
+    SetLimits { j: J16, min: f64, max: f64 } -> (), Set [SET, LIMITS], v4 "setPosLimitsRPC" =>
+        |d| via!(d.as_control_limits).set_limits(j.0, min, max);
+    GetVelLimits { j: J16 } -> (f64, f64), Get [GET, VEL_LIMITS], v4 "getVelLimitsRPC" =>
+        |d| via!(d.as_control_limits).get_vel_limits(j.0);
+    SetVelLimits { j: J16, min: f64, max: f64 } -> (), Set [SET, VEL_LIMITS], v4 "setVelLimitsRPC" =>
+        |d| via!(d.as_control_limits).set_vel_limits(j.0, min, max);
 
     // IAxisInfo (the joint type travels as its int32 value)
     GetAxisName { j: usize } -> String, Get [GET, INFO_NAME], v4 "getAxisNameRPC" => |d| via!(d.as_axis_info).get_axis_name(j);
@@ -415,31 +420,31 @@ control_board_methods! {
         |d| { let n = axes(d)?; let p = via!(d.as_pwm_control); each(n, |j| p.get_ref_duty_cycle(j)) };
 
     // IPidControl: `[set|get] [pid] <what> <pid type> <joint> ...`
-    SetPid { ty: PidType, j: usize, pid: Pid } -> (), Set [SET, PID, PID], v4 "setPidRPC" =>
-        |d| via!(d.as_pid_control).set_pid(ty.0, j, pid);
-    EnablePid { ty: PidType, j: usize } -> (), Set [SET, PID, PID_ENABLE], v4 "enablePidRPC" =>
-        |d| via!(d.as_pid_control).enable_pid(ty.0, j);
-    DisablePid { ty: PidType, j: usize } -> (), Set [SET, PID, PID_DISABLE], v4 "disablePidRPC" =>
-        |d| via!(d.as_pid_control).disable_pid(ty.0, j);
-    SetPidReference { ty: PidType, j: usize, value: f64 } -> (), Set [SET, PID, REF], v4 "setPidReferenceRPC" =>
-        |d| via!(d.as_pid_control).set_pid_reference(ty.0, j, value);
-    ResetPid { ty: PidType, j: usize } -> (), Set [SET, PID, PID_RESET], v4 "resetPidRPC" =>
-        |d| via!(d.as_pid_control).reset_pid(ty.0, j);
-    SetPidErrorLimit { ty: PidType, j: usize, value: f64 } -> (), Set [SET, PID, PID_ERROR_LIMIT], v4 "setPidErrorLimitRPC" =>
-        |d| via!(d.as_pid_control).set_pid_error_limit(ty.0, j, value);
-    SetPidOffset { ty: PidType, j: usize, value: f64 } -> (), Set [SET, PID, PID_OFFSET], v4 "setPidOffsetOneRPC" =>
-        |d| via!(d.as_pid_control).set_pid_offset(ty.0, j, value);
-    GetPid { ty: PidType, j: usize } -> Pid, GetBare [GET, PID, PID], v4 "getPidRPC" => |d| via!(d.as_pid_control).get_pid(ty.0, j);
-    IsPidEnabled { ty: PidType, j: usize } -> bool, GetBare [GET, PID, PID_ENABLE], v4 "isPidEnabledRPC" =>
-        |d| via!(d.as_pid_control).is_pid_enabled(ty.0, j);
-    GetPidReference { ty: PidType, j: usize } -> f64, GetBare [GET, PID, REF], v4 "getPidReferenceRPC" =>
-        |d| via!(d.as_pid_control).get_pid_reference(ty.0, j);
-    GetPidError { ty: PidType, j: usize } -> f64, GetBare [GET, PID, PID_ERROR], v4 "getPidErrorRPC" =>
-        |d| via!(d.as_pid_control).get_pid_error(ty.0, j);
-    GetPidOutput { ty: PidType, j: usize } -> f64, GetBare [GET, PID, PID_OUTPUT], v4 "getPidOutputRPC" =>
-        |d| via!(d.as_pid_control).get_pid_output(ty.0, j);
-    GetPidErrorLimit { ty: PidType, j: usize } -> f64, GetBare [GET, PID, PID_ERROR_LIMIT], v4 "getPidErrorLimitRPC" =>
-        |d| via!(d.as_pid_control).get_pid_error_limit(ty.0, j);
+    SetPid { ty: PidType, j: J16, pid: Pid } -> (), Set [SET, PID, PID], v4 "setPidRPC" =>
+        |d| via!(d.as_pid_control).set_pid(ty.0, j.0, pid);
+    EnablePid { ty: PidType, j: J16 } -> (), Set [SET, PID, PID_ENABLE], v4 "enablePidRPC" =>
+        |d| via!(d.as_pid_control).enable_pid(ty.0, j.0);
+    DisablePid { ty: PidType, j: J16 } -> (), Set [SET, PID, PID_DISABLE], v4 "disablePidRPC" =>
+        |d| via!(d.as_pid_control).disable_pid(ty.0, j.0);
+    SetPidReference { ty: PidType, j: J16, value: f64 } -> (), Set [SET, PID, REF], v4 "setPidReferenceRPC" =>
+        |d| via!(d.as_pid_control).set_pid_reference(ty.0, j.0, value);
+    ResetPid { ty: PidType, j: J16 } -> (), Set [SET, PID, PID_RESET], v4 "resetPidRPC" =>
+        |d| via!(d.as_pid_control).reset_pid(ty.0, j.0);
+    SetPidErrorLimit { ty: PidType, j: J16, value: f64 } -> (), Set [SET, PID, PID_ERROR_LIMIT], v4 "setPidErrorLimitRPC" =>
+        |d| via!(d.as_pid_control).set_pid_error_limit(ty.0, j.0, value);
+    SetPidOffset { ty: PidType, j: J16, value: f64 } -> (), Set [SET, PID, PID_OFFSET], v4 "setPidOffsetOneRPC" =>
+        |d| via!(d.as_pid_control).set_pid_offset(ty.0, j.0, value);
+    GetPid { ty: PidType, j: J16 } -> Pid, GetBare [GET, PID, PID], v4 "getPidRPC" => |d| via!(d.as_pid_control).get_pid(ty.0, j.0);
+    IsPidEnabled { ty: PidType, j: J16 } -> bool, GetBare [GET, PID, PID_ENABLE], v4 "isPidEnabledRPC" =>
+        |d| via!(d.as_pid_control).is_pid_enabled(ty.0, j.0);
+    GetPidReference { ty: PidType, j: J16 } -> f64, GetBare [GET, PID, REF], v4 "getPidReferenceRPC" =>
+        |d| via!(d.as_pid_control).get_pid_reference(ty.0, j.0);
+    GetPidError { ty: PidType, j: J16 } -> f64, GetBare [GET, PID, PID_ERROR], v4 "getPidErrorRPC" =>
+        |d| via!(d.as_pid_control).get_pid_error(ty.0, j.0);
+    GetPidOutput { ty: PidType, j: J16 } -> f64, GetBare [GET, PID, PID_OUTPUT], v4 "getPidOutputRPC" =>
+        |d| via!(d.as_pid_control).get_pid_output(ty.0, j.0);
+    GetPidErrorLimit { ty: PidType, j: J16 } -> f64, GetBare [GET, PID, PID_ERROR_LIMIT], v4 "getPidErrorLimitRPC" =>
+        |d| via!(d.as_pid_control).get_pid_error_limit(ty.0, j.0);
     GetPids { ty: PidType } -> Vec<Pid>, GetBare [GET, PID, PIDS], v4 "getPidsRPC" =>
         |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid(ty.0, j)) };
     GetPidReferences { ty: PidType } -> Vec<f64>, GetBare [GET, PID, REFS], v4 "getPidReferencesRPC" =>
@@ -604,7 +609,7 @@ mod tests {
             }),
             Request::SetPid(SetPid {
                 ty: PidType(Vocab32::new("pos")),
-                j: 1,
+                j: J16(1),
                 pid: Pid::from_slice(&[1.0, 2.0, 3.0]),
             }),
             Request::SetControlModesGroup(SetControlModesGroup {

@@ -259,6 +259,19 @@ impl<const N: usize> Wire3 for Listed<N> {
     }
 }
 
+/// A joint that 4.0 sends as an int16 (the PIDs' and the limits' calls); an int32 in 3.12.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct J16(pub usize);
+
+impl Wire3 for J16 {
+    fn put(&self, b: &mut Bottle) {
+        self.0.put(b);
+    }
+    fn take(c: &mut Cursor<'_>) -> Option<Self> {
+        usize::take(c).map(J16)
+    }
+}
+
 /// A PID's type, as 3.12 names it (`[pos]`, `[vel]`, `[trq]`, `[cur]`); 4.0 numbers
 /// them (`pos1`), see `v4.rs`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -8,7 +8,7 @@
 //! [`Wire4`] impl.
 
 use super::methods::{Method, Request};
-use super::v3::{Done, Group, Listed, PidType};
+use super::v3::{Done, Group, Listed, PidType, J16};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::interfaces::Pid;
@@ -165,6 +165,19 @@ impl Wire4 for usize {
     }
     fn zero() -> Self {
         0
+    }
+}
+
+/// 4.0's `i16` joints: tag INT16 and two bytes (read from any integer, as C++ does).
+impl Wire4 for J16 {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int16(i16::try_from(self.0).unwrap_or(i16::MAX));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        usize::take4(c).map(J16)
+    }
+    fn zero() -> Self {
+        J16(0)
     }
 }
 

@@ -117,6 +117,13 @@ impl WireWriter {
         self
     }
 
+    /// A tagged int16 (tag, then two bytes).
+    pub fn int16(&mut self, x: i16) -> &mut Self {
+        self.i32(tags::INT16);
+        self.out.extend_from_slice(&x.to_le_bytes());
+        self
+    }
+
     pub fn vocab(&mut self, v: Vocab32) -> &mut Self {
         self.i32(tags::VOCAB32);
         self.i32(v.0);
