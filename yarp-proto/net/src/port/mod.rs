@@ -78,6 +78,16 @@ pub enum PortError {
     Closed,
 }
 
+/// A Bottle that does not decode (without the bytes it came from).
+impl From<DecodeError> for PortError {
+    fn from(error: DecodeError) -> Self {
+        PortError::BadReply {
+            error,
+            bytes: Vec::new(),
+        }
+    }
+}
+
 /// A message received by a port.
 #[derive(Debug)]
 pub struct Incoming {
