@@ -6,52 +6,17 @@
 //! `*_cpp` tests, whose name server is ours.) Without the C++ peer the tests say SKIPPED
 //! loudly; in CI they fail. Run under netns-run.
 
-use std::io::Write;
-use std::net::TcpListener;
 use std::path::{Path, PathBuf};
-use std::process::{ChildStdin, Stdio};
-use std::sync::OnceLock;
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 use yarp_devices::PolyDriver;
 use yarp_interop_tests::{cpp_command, Reaped, T};
 use yarp_proto::Property;
 
-/// A C++ `yarpserver` on 127.0.0.1 for this test process, announced by a private
-/// `yarp.conf` (`YARP_CONFIG_HOME`, so our devices and the C++ programs both use it).
-fn cpp_server(bin: &Path) {
-    static SERVER: OnceLock<(Reaped, ChildStdin, tempfile::TempDir)> = OnceLock::new();
-    SERVER.get_or_init(|| {
-        let dir = tempfile::tempdir().unwrap();
-        std::env::set_var("YARP_CONFIG_HOME", dir.path());
-        // Below the ephemeral range: yarpserver hands out numbers from its own port up,
-        // and an ephemeral one collides with outgoing connections (C++ yarpdev then fails
-        // to open its ports and never registers).
-        let port = yarp_interop_tests::low_ports()
-            .find(|p| TcpListener::bind(("127.0.0.1", *p)).is_ok())
-            .expect("a free port below the ephemeral range");
-        std::fs::File::create(dir.path().join("yarp.conf"))
-            .and_then(|mut f| writeln!(f, "127.0.0.1 {port} yarp"))
-            .unwrap();
-        let mut cmd = cpp_command(&bin.join("yarpserver"));
-        cmd.args(["--ip", "127.0.0.1", "--socket", &port.to_string(), "--read"])
-            .env("YARP_CONFIG_HOME", dir.path());
-        // Kept in a static for every test of this process: tied to the process, so it
-        // does not outlive it.
-        let (server, tie) =
-            yarp_interop_tests::spawn_tied_to_process(&cmd).expect("spawn C++ yarpserver");
-        let start = Instant::now();
-        while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
-            assert!(start.elapsed() < T, "C++ yarpserver did not listen");
-            std::thread::sleep(Duration::from_millis(20));
-        }
-        (server, tie, dir)
-    });
-}
-
 /// The C++ bin directory with the devices `devices`, and the C++ name server running.
 fn setup(test: &str, devices: &[&str]) -> Option<PathBuf> {
     let bin = yarp_interop_tests::cpp_devices(test, devices)?;
-    cpp_server(&bin);
+    yarp_interop_tests::cpp_yarpserver(&bin);
     Some(bin)
 }
 
