@@ -94,6 +94,8 @@ struct Joint {
     ref_speed: f64,
     ref_acc: f64,
     ref_vel: f64,
+    /// YARP 4.0's direct velocity reference (`IVelocityDirect`).
+    ref_vel_direct: f64,
     mode: Vocab32,
     interaction: Vocab32,
     name: String,
@@ -163,6 +165,7 @@ impl FakeMotionControl {
                 ref_speed: 0.0,
                 ref_acc: 0.0,
                 ref_vel: 0.0,
+                ref_vel_direct: 0.0,
                 mode: CM_POSITION,
                 // the C++ fake starts with zeroed (unknown) interaction modes
                 interaction: IM_UNKNOWN,
@@ -317,6 +320,7 @@ impl DeviceDriver for FakeMotionControl {
     }
 
     crate::motor_control_views!();
+    crate::views!(as_velocity_direct);
 }
 
 impl IEncoders for FakeMotionControl {
@@ -394,6 +398,19 @@ impl IVelocityControl for FakeMotionControl {
     }
     fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
         Ok(self.joint(j)?.ref_vel)
+    }
+}
+
+impl IVelocityDirect for FakeMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        Ok(self.joints.len())
+    }
+    fn set_ref_velocity_direct(&mut self, j: usize, v: f64) -> DevResult<()> {
+        self.updated(j)?.ref_vel_direct = v;
+        Ok(())
+    }
+    fn get_ref_velocity_direct(&mut self, j: usize) -> DevResult<f64> {
+        Ok(self.joint(j)?.ref_vel_direct)
     }
 }
 

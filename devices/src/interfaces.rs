@@ -209,6 +209,38 @@ pub trait IVelocityControl {
     }
 }
 
+/// YARP 4.0's `IVelocityDirect`: velocity references a joint follows directly, in the
+/// control mode VELOCITY_DIRECT (`[veld]`), unlike `IVelocityControl`'s trajectories.
+pub trait IVelocityDirect {
+    fn get_axes(&mut self) -> DevResult<usize>;
+    fn set_ref_velocity_direct(&mut self, j: usize, v: f64) -> DevResult<()>;
+    fn get_ref_velocity_direct(&mut self, j: usize) -> DevResult<f64>;
+    fn set_ref_velocities_direct(&mut self, v: &[f64]) -> DevResult<()> {
+        check_len(self.get_axes()?, v.len())?;
+        v.iter()
+            .enumerate()
+            .try_for_each(|(j, x)| self.set_ref_velocity_direct(j, *x))
+    }
+    fn set_ref_velocities_direct_group(&mut self, joints: &[usize], v: &[f64]) -> DevResult<()> {
+        check_len(joints.len(), v.len())?;
+        joints
+            .iter()
+            .zip(v)
+            .try_for_each(|(j, x)| self.set_ref_velocity_direct(*j, *x))
+    }
+    fn get_ref_velocities_direct(&mut self) -> DevResult<Vec<f64>> {
+        (0..self.get_axes()?)
+            .map(|j| self.get_ref_velocity_direct(j))
+            .collect()
+    }
+    fn get_ref_velocities_direct_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
+        joints
+            .iter()
+            .map(|&j| self.get_ref_velocity_direct(j))
+            .collect()
+    }
+}
+
 /// `IControlMode`: modes are vocabs (`crate::vocabs::CM_*`).
 pub trait IControlMode {
     fn get_axes(&mut self) -> DevResult<usize>;

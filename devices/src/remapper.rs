@@ -380,7 +380,7 @@ impl DeviceDriver for ControlBoardRemapper {
 
     crate::motor_control_views!();
 
-    crate::views!(as_remote_calibrator);
+    crate::views!(as_remote_calibrator, as_velocity_direct);
 }
 
 /// What the layout needs to know about an attached device.
@@ -523,6 +523,20 @@ impl IVelocityControl for ControlBoardRemapper {
     }
     fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
         on!(self, j, as_velocity_control, |v, l| v.get_ref_velocity(l))
+    }
+}
+
+impl IVelocityDirect for ControlBoardRemapper {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn set_ref_velocity_direct(&mut self, j: usize, v: f64) -> DevResult<()> {
+        on!(self, j, as_velocity_direct, |d, l| d
+            .set_ref_velocity_direct(l, v))
+    }
+    fn get_ref_velocity_direct(&mut self, j: usize) -> DevResult<f64> {
+        on!(self, j, as_velocity_direct, |d, l| d
+            .get_ref_velocity_direct(l))
     }
 }
 

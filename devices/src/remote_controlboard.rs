@@ -602,7 +602,13 @@ impl RemoteControlBoard {
         if generation == Generation::V4 && !link.use_streaming {
             return self.reference_by_rpc(kind, joints, body);
         }
-        let head = Stream { kind, joints }.head(generation);
+        let stream = Stream { kind, joints };
+        if !stream.has_form(generation) {
+            return Err(DeviceError::Unsupported(
+                "a YARP 3.12 control board has no IVelocityDirect",
+            ));
+        }
+        let head = stream.head(generation);
         let msg = Arc::new(CommandMessage::new(head, body).to_bottle());
         let port = link.command.clone();
         if link.write_strict {
@@ -648,6 +654,12 @@ impl RemoteControlBoard {
             Kind::RefDutyCycles => self.ask(m::SetRefDutyCycles { values }),
             Kind::RefCurrent => self.ask(m::SetRefCurrent { j, value }),
             Kind::RefCurrents => self.ask(m::SetRefCurrents { values }),
+            Kind::VelocityDirect => self.ask(m::SetRefVelocityDirect { j, value }),
+            Kind::VelocitiesDirect => self.ask(m::SetRefVelocitiesDirect { values }),
+            Kind::VelocitiesDirectGroup => self.ask(m::SetRefVelocitiesDirectGroup {
+                joints: group(joints),
+                values,
+            }),
             Kind::RefCurrentGroup => self.ask(m::SetRefCurrentGroup {
                 joints: group(joints),
                 values,
@@ -742,7 +754,7 @@ impl DeviceDriver for RemoteControlBoard {
 
     crate::motor_control_views!();
 
-    crate::views!(as_remote_calibrator);
+    crate::views!(as_remote_calibrator, as_velocity_direct);
 }
 
 impl Drop for RemoteControlBoard {
@@ -932,6 +944,39 @@ impl IVelocityControl for RemoteControlBoard {
     }
     fn get_ref_velocities(&mut self) -> DevResult<Vec<f64>> {
         self.ask(m::GetRefVelocities {})
+    }
+}
+
+impl IVelocityDirect for RemoteControlBoard {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn set_ref_velocity_direct(&mut self, j: usize, v: f64) -> DevResult<()> {
+        let j = self.joint(j)?;
+        self.stream(Kind::VelocityDirect, Joints::One(j), vec![v])
+    }
+    fn set_ref_velocities_direct(&mut self, v: &[f64]) -> DevResult<()> {
+        self.check_all(v)?;
+        self.stream(Kind::VelocitiesDirect, Joints::All, v.to_vec())
+    }
+    fn set_ref_velocities_direct_group(&mut self, joints: &[usize], v: &[f64]) -> DevResult<()> {
+        m::sized(joints, v)?;
+        self.stream(
+            Kind::VelocitiesDirectGroup,
+            Joints::Group(joints.to_vec()),
+            v.to_vec(),
+        )
+    }
+    fn get_ref_velocity_direct(&mut self, j: usize) -> DevResult<f64> {
+        self.ask(m::GetRefVelocityDirect { j })
+    }
+    fn get_ref_velocities_direct(&mut self) -> DevResult<Vec<f64>> {
+        self.ask(m::GetRefVelocitiesDirect {})
+    }
+    fn get_ref_velocities_direct_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
+        self.ask(m::GetRefVelocitiesDirectGroup {
+            joints: group(joints),
+        })
     }
 }
 

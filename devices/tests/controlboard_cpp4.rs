@@ -106,6 +106,9 @@ const CALLS: &[&str] = &[
     "stopOneRPC 0",
     "getNumberOfMotorsRPC",
     "getDeviceInterfacesRPC",
+    "setRefVelocityOneRPC 1 2.5",
+    "getRefVelocityOneRPC 1",
+    "getRefVelocityAllRPC",
     "noSuchMethodRPC",
 ];
 
@@ -121,12 +124,12 @@ fn cpp_4_yarp_rpc_gets_cpp_4_answers_from_our_wrapper() {
     let _theirs = cpp_board(&bin, "/c4_cpp");
     let theirs = cpp_rpc(&yarp, "/c4_cpp/nws/rpc:i", CALLS);
     // getRemoteProtocolVersion's reply is no Bottle: `yarp rpc` prints no Response line
-    // for it, from either; C++ 4.0's fake offers 4.0's new IJointBrake, IJointFault and
-    // IVelocityDirect, which our framework lacks so far
+    // for it, from either; C++ 4.0's fake offers 4.0's new IJointBrake and IJointFault,
+    // which our framework lacks so far
     let theirs: Vec<String> = theirs
         .iter()
         .map(|l| {
-            ["iJointBrake", "iJointFault", "iVelocityDirect"]
+            ["iJointBrake", "iJointFault"]
                 .iter()
                 .fold(l.clone(), |l, i| {
                     l.replace(&format!("({i} [ok])"), &format!("({i} [fail])"))
@@ -214,6 +217,10 @@ const CLIENT_CALLS: &[&str] = &[
     "getImpedanceRPC 0",
     "isCalibratorDevicePresentRPC",
     "stopAllRPC",
+    "setRefVelocityOneRPC 2 1.5",
+    "getRefVelocityOneRPC 2",
+    "setRefVelocityGroupRPC (0 1) (0.5 0.25)",
+    "getRefVelocityGroupRPC (0 1)",
     // read by the client from the streamed state (4.0's jointData)
     "getEncoderOneRPC 1",
     "getEncoderAllRPC",
@@ -262,6 +269,11 @@ const FAKES_DIFFER: &[(&str, &str, &str)] = &[
         "getTorqueRangeAllRPC",
         "Response: ([ok]) (0.0 0.0 0.0 0.0) (0.0 0.0 0.0 0.0)",
         "as getTorqueRangeOneRPC",
+    ),
+    (
+        "getRefVelocityGroupRPC (0 1)",
+        "Response: ([ok]) (0.5 0.25)",
+        "C++ 4.0's fake walks all its joints with the group's indices (past the group's end): undefined values",
     ),
 ];
 
@@ -364,6 +376,12 @@ fn our_clients_drive_cpp_4_fake_motion_control() {
         controlboard_common::wait_for("velocity reference streamed", || {
             let r = d.as_velocity_control().unwrap().get_ref_velocity(2).ok()?;
             (r == 3.25).then_some(())
+        });
+        // 4.0's IVelocityDirect: streamed (`[ived] [vdso] j`), read back by RPC
+        let vd = d.as_velocity_direct().unwrap();
+        vd.set_ref_velocity_direct(1, 2.5).unwrap();
+        controlboard_common::wait_for("direct velocity reference streamed", || {
+            (vd.get_ref_velocity_direct(1).ok()? == 2.5).then_some(())
         });
         // PID types travel numbered (3.12's `pos` is 4.0's `pos1`)
         let pos_pid = yarp_proto::Vocab32::new("pos");

@@ -547,6 +547,19 @@ control_board_methods! {
         };
     GetRefTorqueGroup { joints: Group } -> Vec<f64>, Get [], v4 "getRefTorqueGroupRPC" =>
         |d| { let t = via!(d.as_torque_control); joints.iter().map(|&j| t.get_ref_torque(j)).collect() };
+    // 4.0's IVelocityDirect (VELOCITY_DIRECT): references set by RPC or streamed
+    SetRefVelocityDirect { j: usize, value: f64 } -> (), Set [], v4 "setRefVelocityOneRPC" =>
+        |d| via!(d.as_velocity_direct).set_ref_velocity_direct(j, value);
+    SetRefVelocitiesDirect { values: Vec<f64> } -> (), Set [], v4 "setRefVelocityAllRPC" =>
+        |d| via!(d.as_velocity_direct).set_ref_velocities_direct(&values);
+    SetRefVelocitiesDirectGroup { joints: Group, values: Vec<f64> } -> (), Set [], v4 "setRefVelocityGroupRPC" =>
+        |d| { sized(&joints, &values)?; via!(d.as_velocity_direct).set_ref_velocities_direct_group(&joints, &values) };
+    GetRefVelocityDirect { j: usize } -> f64, Get [], v4 "getRefVelocityOneRPC" =>
+        |d| via!(d.as_velocity_direct).get_ref_velocity_direct(j);
+    GetRefVelocitiesDirect {} -> Vec<f64>, Get [], v4 "getRefVelocityAllRPC" =>
+        |d| via!(d.as_velocity_direct).get_ref_velocities_direct();
+    GetRefVelocitiesDirectGroup { joints: Group } -> Vec<f64>, Get [], v4 "getRefVelocityGroupRPC" =>
+        |d| via!(d.as_velocity_direct).get_ref_velocities_direct_group(&joints);
     GetEncoderTimed { j: usize } -> (f64, f64), Get [], v4 "getEncoderTimedOneRPC" =>
         |d| via!(d.as_encoders).get_encoder_timed(j);
     GetEncodersTimed {} -> (Vec<f64>, Vec<f64>), Get [], v4 "getEncoderTimedAllRPC" =>

@@ -31,6 +31,10 @@ const IPOS: i32 = v("ipos");
 const IPOD: i32 = v("ipod");
 const IVEL: i32 = v("ivel");
 const ITRQ: i32 = v("itrq");
+const IVED: i32 = v("ived");
+const VDSO: i32 = v("vdso");
+const VDSA: i32 = v("vdsa");
+const VDSG: i32 = v("vdsg");
 
 /// What a streaming command sets. Each has one shape of joints ([`Shape`]) and a head in
 /// each generation ([`Kind::heads`]).
@@ -51,6 +55,10 @@ pub enum Kind {
     RefCurrent,
     RefCurrents,
     RefCurrentGroup,
+    /// 4.0's `IVelocityDirect` (no 3.12 form).
+    VelocityDirect,
+    VelocitiesDirect,
+    VelocitiesDirectGroup,
 }
 
 /// Which joints a command addresses, after its head's vocabs.
@@ -65,7 +73,7 @@ pub enum Joints {
 }
 
 impl Kind {
-    const ALL: [Kind; 15] = [
+    const ALL: [Kind; 18] = [
         Kind::PositionMoves,
         Kind::VelocityMove,
         Kind::VelocityMoves,
@@ -81,6 +89,9 @@ impl Kind {
         Kind::RefCurrent,
         Kind::RefCurrents,
         Kind::RefCurrentGroup,
+        Kind::VelocityDirect,
+        Kind::VelocitiesDirect,
+        Kind::VelocitiesDirectGroup,
     ];
 
     /// The head's vocabs in YARP 3.12 and in 4.0.
@@ -101,6 +112,9 @@ impl Kind {
             Kind::RefCurrent => (&[CURRENT_IFACE, REF], &[CURRENT_IFACE, REF]),
             Kind::RefCurrents => (&[CURRENT_IFACE, REFS], &[CURRENT_IFACE, REFS]),
             Kind::RefCurrentGroup => (&[CURRENT_IFACE, REF_GROUP], &[CURRENT_IFACE, REF_GROUP]),
+            Kind::VelocityDirect => (&[], &[IVED, VDSO]),
+            Kind::VelocitiesDirect => (&[], &[IVED, VDSA]),
+            Kind::VelocitiesDirectGroup => (&[], &[IVED, VDSG]),
         }
     }
 
@@ -120,6 +134,12 @@ pub struct Stream {
 }
 
 impl Stream {
+    /// Whether the command has a form in `generation` (4.0's IVelocityDirect has none
+    /// in 3.12).
+    pub fn has_form(&self, generation: Generation) -> bool {
+        !self.kind.head(generation).is_empty()
+    }
+
     /// The head Bottle for a server of `generation`.
     pub fn head(&self, generation: Generation) -> Bottle {
         let mut b: Bottle = self
@@ -140,8 +160,10 @@ impl Stream {
     /// generation's form it had (icur and ipwm heads read as 3.12's: both are the same).
     pub fn decode(head: &Bottle) -> Result<(Stream, Generation), CommandError> {
         let items = head.items();
+        // an empty head: no form in that generation
         let starts = |h: &[i32]| {
-            items.len() >= h.len()
+            !h.is_empty()
+                && items.len() >= h.len()
                 && h.iter()
                     .zip(items)
                     .all(|(h, v)| v.as_vocab().map(|x| x.0) == Some(*h))
@@ -166,16 +188,19 @@ impl Stream {
             | Kind::RefTorques
             | Kind::Positions
             | Kind::RefDutyCycles
-            | Kind::RefCurrents => Joints::All,
+            | Kind::RefCurrents
+            | Kind::VelocitiesDirect => Joints::All,
             Kind::VelocityMove
             | Kind::RefTorque
             | Kind::Position
             | Kind::RefDutyCycle
-            | Kind::RefCurrent => Joints::One(joint(at)?),
+            | Kind::RefCurrent
+            | Kind::VelocityDirect => Joints::One(joint(at)?),
             Kind::VelocityMoveGroup
             | Kind::RefTorqueGroup
             | Kind::PositionGroup
-            | Kind::RefCurrentGroup => {
+            | Kind::RefCurrentGroup
+            | Kind::VelocitiesDirectGroup => {
                 let n = joint(at)?;
                 let js = items
                     .get(at + 1)
@@ -321,6 +346,15 @@ pub fn handle_command(
         Kind::RefCurrents => via!(as_current_control, "ICurrentControl").set_ref_currents(body),
         Kind::RefCurrentGroup => {
             via!(as_current_control, "ICurrentControl").set_ref_current_group(group, body)
+        }
+        Kind::VelocityDirect => {
+            via!(as_velocity_direct, "IVelocityDirect").set_ref_velocity_direct(j, x)
+        }
+        Kind::VelocitiesDirect => {
+            via!(as_velocity_direct, "IVelocityDirect").set_ref_velocities_direct(body)
+        }
+        Kind::VelocitiesDirectGroup => {
+            via!(as_velocity_direct, "IVelocityDirect").set_ref_velocities_direct_group(group, body)
         }
     }
     .map_err(|source| CommandError::Device {

@@ -584,7 +584,7 @@ fn interfaces(dev: &mut dyn DeviceDriver) -> Vec<(&'static str, bool)> {
         ("iRemoteVariables", false),
         ("iTorqueControl", dev.as_torque_control().is_some()),
         ("iVelocityControl", dev.as_velocity_control().is_some()),
-        ("iVelocityDirect", false),
+        ("iVelocityDirect", dev.as_velocity_direct().is_some()),
     ];
     v.sort_by_key(|(k, _)| *k);
     v
