@@ -146,6 +146,7 @@ crate::device_interfaces! {
     as_position_control: IPositionControl => "IPositionControl" (Motor),
     as_velocity_control: IVelocityControl => "IVelocityControl" (Motor),
     as_velocity_direct: IVelocityDirect => "IVelocityDirect" (Motor),
+    as_joint_brake: IJointBrake => "IJointBrake" (Other),
     as_control_mode: IControlMode => "IControlMode" (Motor),
     as_axis_info: IAxisInfo => "IAxisInfo" (Other),
     as_control_limits: IControlLimits => "IControlLimits" (Other),

@@ -96,6 +96,9 @@ struct Joint {
     ref_vel: f64,
     /// YARP 4.0's direct velocity reference (`IVelocityDirect`).
     ref_vel_direct: f64,
+    /// YARP 4.0's brake (`IJointBrake`): engaged, and engaged automatically.
+    braked: bool,
+    auto_brake: bool,
     mode: Vocab32,
     interaction: Vocab32,
     name: String,
@@ -166,6 +169,8 @@ impl FakeMotionControl {
                 ref_acc: 0.0,
                 ref_vel: 0.0,
                 ref_vel_direct: 0.0,
+                braked: false,
+                auto_brake: false,
                 mode: CM_POSITION,
                 // the C++ fake starts with zeroed (unknown) interaction modes
                 interaction: IM_UNKNOWN,
@@ -320,7 +325,7 @@ impl DeviceDriver for FakeMotionControl {
     }
 
     crate::motor_control_views!();
-    crate::views!(as_velocity_direct);
+    crate::views!(as_velocity_direct, as_joint_brake);
 }
 
 impl IEncoders for FakeMotionControl {
@@ -411,6 +416,24 @@ impl IVelocityDirect for FakeMotionControl {
     }
     fn get_ref_velocity_direct(&mut self, j: usize) -> DevResult<f64> {
         Ok(self.joint(j)?.ref_vel_direct)
+    }
+}
+
+/// As C++ 4.0's fake: flags kept, nothing else moves.
+impl IJointBrake for FakeMotionControl {
+    fn is_joint_braked(&mut self, j: usize) -> DevResult<bool> {
+        Ok(self.joint(j)?.braked)
+    }
+    fn set_manual_brake_active(&mut self, j: usize, active: bool) -> DevResult<()> {
+        self.updated(j)?.braked = active;
+        Ok(())
+    }
+    fn set_auto_brake_enabled(&mut self, j: usize, enabled: bool) -> DevResult<()> {
+        self.updated(j)?.auto_brake = enabled;
+        Ok(())
+    }
+    fn get_auto_brake_enabled(&mut self, j: usize) -> DevResult<bool> {
+        Ok(self.joint(j)?.auto_brake)
     }
 }
 

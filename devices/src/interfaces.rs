@@ -241,6 +241,14 @@ pub trait IVelocityDirect {
     }
 }
 
+/// YARP 4.0's `IJointBrake`: a joint's brake, engaged by hand or automatically.
+pub trait IJointBrake {
+    fn is_joint_braked(&mut self, j: usize) -> DevResult<bool>;
+    fn set_manual_brake_active(&mut self, j: usize, active: bool) -> DevResult<()>;
+    fn set_auto_brake_enabled(&mut self, j: usize, enabled: bool) -> DevResult<()>;
+    fn get_auto_brake_enabled(&mut self, j: usize) -> DevResult<bool>;
+}
+
 /// `IControlMode`: modes are vocabs (`crate::vocabs::CM_*`).
 pub trait IControlMode {
     fn get_axes(&mut self) -> DevResult<usize>;

@@ -380,7 +380,7 @@ impl DeviceDriver for ControlBoardRemapper {
 
     crate::motor_control_views!();
 
-    crate::views!(as_remote_calibrator, as_velocity_direct);
+    crate::views!(as_remote_calibrator, as_velocity_direct, as_joint_brake);
 }
 
 /// What the layout needs to know about an attached device.
@@ -537,6 +537,23 @@ impl IVelocityDirect for ControlBoardRemapper {
     fn get_ref_velocity_direct(&mut self, j: usize) -> DevResult<f64> {
         on!(self, j, as_velocity_direct, |d, l| d
             .get_ref_velocity_direct(l))
+    }
+}
+
+impl IJointBrake for ControlBoardRemapper {
+    fn is_joint_braked(&mut self, j: usize) -> DevResult<bool> {
+        on!(self, j, as_joint_brake, |b, l| b.is_joint_braked(l))
+    }
+    fn set_manual_brake_active(&mut self, j: usize, active: bool) -> DevResult<()> {
+        on!(self, j, as_joint_brake, |b, l| b
+            .set_manual_brake_active(l, active))
+    }
+    fn set_auto_brake_enabled(&mut self, j: usize, enabled: bool) -> DevResult<()> {
+        on!(self, j, as_joint_brake, |b, l| b
+            .set_auto_brake_enabled(l, enabled))
+    }
+    fn get_auto_brake_enabled(&mut self, j: usize) -> DevResult<bool> {
+        on!(self, j, as_joint_brake, |b, l| b.get_auto_brake_enabled(l))
     }
 }
 

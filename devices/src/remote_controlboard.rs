@@ -754,7 +754,7 @@ impl DeviceDriver for RemoteControlBoard {
 
     crate::motor_control_views!();
 
-    crate::views!(as_remote_calibrator, as_velocity_direct);
+    crate::views!(as_remote_calibrator, as_velocity_direct, as_joint_brake);
 }
 
 impl Drop for RemoteControlBoard {
@@ -977,6 +977,21 @@ impl IVelocityDirect for RemoteControlBoard {
         self.ask(m::GetRefVelocitiesDirectGroup {
             joints: group(joints),
         })
+    }
+}
+
+impl IJointBrake for RemoteControlBoard {
+    fn is_joint_braked(&mut self, j: usize) -> DevResult<bool> {
+        self.ask(m::IsJointBraked { j })
+    }
+    fn set_manual_brake_active(&mut self, j: usize, active: bool) -> DevResult<()> {
+        self.ask(m::SetManualBrakeActive { j, active })
+    }
+    fn set_auto_brake_enabled(&mut self, j: usize, enabled: bool) -> DevResult<()> {
+        self.ask(m::SetAutoBrakeEnabled { j, enabled })
+    }
+    fn get_auto_brake_enabled(&mut self, j: usize) -> DevResult<bool> {
+        self.ask(m::GetAutoBrakeEnabled { j })
     }
 }
 

@@ -109,6 +109,11 @@ const CALLS: &[&str] = &[
     "setRefVelocityOneRPC 1 2.5",
     "getRefVelocityOneRPC 1",
     "getRefVelocityAllRPC",
+    "setManualBrakeActiveRPC 1 [ok]",
+    "isJointBrakedRPC 1",
+    "setAutoBrakeEnabledRPC 0 [ok]",
+    "getAutoBrakeEnabledRPC 0",
+    "getAutoBrakeEnabledRPC 1",
     "noSuchMethodRPC",
 ];
 
@@ -124,16 +129,14 @@ fn cpp_4_yarp_rpc_gets_cpp_4_answers_from_our_wrapper() {
     let _theirs = cpp_board(&bin, "/c4_cpp");
     let theirs = cpp_rpc(&yarp, "/c4_cpp/nws/rpc:i", CALLS);
     // getRemoteProtocolVersion's reply is no Bottle: `yarp rpc` prints no Response line
-    // for it, from either; C++ 4.0's fake offers 4.0's new IJointBrake and IJointFault,
-    // which our framework lacks so far
+    // for it, from either; C++ 4.0's fake offers 4.0's new IJointFault, which our
+    // framework lacks so far
     let theirs: Vec<String> = theirs
         .iter()
         .map(|l| {
-            ["iJointBrake", "iJointFault"]
-                .iter()
-                .fold(l.clone(), |l, i| {
-                    l.replace(&format!("({i} [ok])"), &format!("({i} [fail])"))
-                })
+            ["iJointFault"].iter().fold(l.clone(), |l, i| {
+                l.replace(&format!("({i} [ok])"), &format!("({i} [fail])"))
+            })
         })
         .collect();
     let calls = &CALLS[1..];
@@ -221,6 +224,9 @@ const CLIENT_CALLS: &[&str] = &[
     "getRefVelocityOneRPC 2",
     "setRefVelocityGroupRPC (0 1) (0.5 0.25)",
     "getRefVelocityGroupRPC (0 1)",
+    "setManualBrakeActiveRPC 3 [ok]",
+    "isJointBrakedRPC 3",
+    "isJointBrakedRPC 2",
     // read by the client from the streamed state (4.0's jointData)
     "getEncoderOneRPC 1",
     "getEncoderAllRPC",
@@ -383,6 +389,11 @@ fn our_clients_drive_cpp_4_fake_motion_control() {
         controlboard_common::wait_for("direct velocity reference streamed", || {
             (vd.get_ref_velocity_direct(1).ok()? == 2.5).then_some(())
         });
+        // 4.0's IJointBrake, by RPC
+        let brake = d.as_joint_brake().unwrap();
+        brake.set_manual_brake_active(3, true).unwrap();
+        assert!(brake.is_joint_braked(3).unwrap(), "{device}");
+        assert!(!brake.get_auto_brake_enabled(3).unwrap(), "{device}");
         // PID types travel numbered (3.12's `pos` is 4.0's `pos1`)
         let pos_pid = yarp_proto::Vocab32::new("pos");
         let pid = d.as_pid_control().unwrap().get_pid(pos_pid, 0);

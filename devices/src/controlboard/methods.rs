@@ -560,6 +560,15 @@ control_board_methods! {
         |d| via!(d.as_velocity_direct).get_ref_velocities_direct();
     GetRefVelocitiesDirectGroup { joints: Group } -> Vec<f64>, Get [], v4 "getRefVelocityGroupRPC" =>
         |d| via!(d.as_velocity_direct).get_ref_velocities_direct_group(&joints);
+    // 4.0's IJointBrake
+    IsJointBraked { j: usize } -> bool, Get [], v4 "isJointBrakedRPC" =>
+        |d| via!(d.as_joint_brake).is_joint_braked(j);
+    SetManualBrakeActive { j: usize, active: bool } -> (), Set [], v4 "setManualBrakeActiveRPC" =>
+        |d| via!(d.as_joint_brake).set_manual_brake_active(j, active);
+    SetAutoBrakeEnabled { j: usize, enabled: bool } -> (), Set [], v4 "setAutoBrakeEnabledRPC" =>
+        |d| via!(d.as_joint_brake).set_auto_brake_enabled(j, enabled);
+    GetAutoBrakeEnabled { j: usize } -> bool, Get [], v4 "getAutoBrakeEnabledRPC" =>
+        |d| via!(d.as_joint_brake).get_auto_brake_enabled(j);
     GetEncoderTimed { j: usize } -> (f64, f64), Get [], v4 "getEncoderTimedOneRPC" =>
         |d| via!(d.as_encoders).get_encoder_timed(j);
     GetEncodersTimed {} -> (Vec<f64>, Vec<f64>), Get [], v4 "getEncoderTimedAllRPC" =>

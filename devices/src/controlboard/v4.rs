@@ -569,8 +569,8 @@ fn interfaces(dev: &mut dyn DeviceDriver) -> Vec<(&'static str, bool)> {
         ("iEncodersTimed", dev.as_encoders().is_some()),
         ("iImpedanceControl", dev.as_impedance_control().is_some()),
         ("iInteractionMode", dev.as_interaction_mode().is_some()),
-        // 4.0's new interfaces, not in our framework yet
-        ("iJointBrake", false),
+        ("iJointBrake", dev.as_joint_brake().is_some()),
+        // 4.0's IJointFault: not in our framework yet
         ("iJointFault", false),
         ("iMotor", dev.as_motor().is_some()),
         ("iMotorEncoders", dev.as_motor_encoders().is_some()),
