@@ -75,24 +75,12 @@ pub(crate) fn call_within(
 ) -> DevResult<Bottle> {
     let port = rpc.clone();
     let command = cmd.to_string();
-    match runtime::block_on(async move { tokio::time::timeout(timeout, port.rpc(&cmd)).await }) {
-        Ok(Ok(reply)) => Ok(reply),
-        Ok(Err(e)) => {
-            tracing::warn!("{device}: `{command}`: {e}");
-            Err(DeviceError::PeerLost {
-                device: device.to_string(),
-                reason: e.to_string(),
-            })
-        }
-        Err(_) => {
-            tracing::warn!("{device}: `{command}`: no reply within {timeout:?}");
-            Err(DeviceError::Timeout {
-                device: device.to_string(),
-                command,
-                after: timeout,
-            })
-        }
-    }
+    within(
+        device,
+        &command,
+        timeout,
+        async move { port.rpc(&cmd).await },
+    )
 }
 
 /// [`call_within`] for a call already encoded (a thrift call, as YARP 4.0's generated
@@ -105,9 +93,19 @@ pub(crate) fn call_encoded_within(
     timeout: Duration,
 ) -> DevResult<Bottle> {
     let port = rpc.clone();
-    match runtime::block_on(
-        async move { tokio::time::timeout(timeout, port.rpc_encoded(bytes)).await },
-    ) {
+    within(device, command, timeout, async move {
+        port.rpc_encoded(bytes).await
+    })
+}
+
+/// Waits for `call`'s reply at most `timeout` (blocking the caller).
+fn within(
+    device: &str,
+    command: &str,
+    timeout: Duration,
+    call: impl std::future::Future<Output = Result<Bottle, yarp_net::port::PortError>> + Send + 'static,
+) -> DevResult<Bottle> {
+    match runtime::block_on(async move { tokio::time::timeout(timeout, call).await }) {
         Ok(Ok(reply)) => Ok(reply),
         Ok(Err(e)) => {
             tracing::warn!("{device}: `{command}`: {e}");
@@ -116,11 +114,14 @@ pub(crate) fn call_encoded_within(
                 reason: e.to_string(),
             })
         }
-        Err(_) => Err(DeviceError::Timeout {
-            device: device.to_string(),
-            command: command.to_string(),
-            after: timeout,
-        }),
+        Err(_) => {
+            tracing::warn!("{device}: `{command}`: no reply within {timeout:?}");
+            Err(DeviceError::Timeout {
+                device: device.to_string(),
+                command: command.to_string(),
+                after: timeout,
+            })
+        }
     }
 }
 

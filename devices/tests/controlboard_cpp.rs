@@ -15,35 +15,13 @@
 
 mod controlboard_common;
 
-use controlboard_common::{name_client, T};
-use std::io::{Read, Write};
+use controlboard_common::{cpp_board, finish, our_board};
+use std::io::Write;
 use std::path::Path;
-use std::process::{Child, Stdio};
-use std::time::Instant;
+use std::process::Stdio;
 use yarp_devices::PolyDriver;
 use yarp_interop_tests::{cpp_command, cpp_devices, cpp_program, cpp_yarpdev, Reaped};
 use yarp_proto::Property;
-
-/// Waits for `child` at most `T`, killing it if it is still running; returns its stdout.
-fn finish(mut child: Child) -> String {
-    let mut stdout = child.stdout.take().expect("piped stdout");
-    let reader = std::thread::spawn(move || {
-        let mut out = String::new();
-        let _ = stdout.read_to_string(&mut out);
-        out
-    });
-    let start = Instant::now();
-    while child.try_wait().expect("try_wait").is_none() {
-        // the paced method table takes ~10 s itself; a loaded machine slows C++ too
-        if start.elapsed() > 6 * T {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("C++ program did not finish within {:?}", 6 * T);
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    reader.join().unwrap_or_default()
-}
 
 /// C++ `yarp rpc <port>` with `input` typed: the `Response` lines it printed.
 fn cpp_rpc(yarp: &Path, port: &str, input: &[u8]) -> Vec<String> {
@@ -60,39 +38,6 @@ fn cpp_rpc(yarp: &Path, port: &str, input: &[u8]) -> Vec<String> {
         .filter(|l| l.starts_with("Response"))
         .map(str::to_string)
         .collect()
-}
-
-/// Our `controlBoard_nws_yarp` over a 4-joint `fakeMotionControl` named `name`.
-fn our_board(name: &str) -> PolyDriver {
-    name_client();
-    PolyDriver::open(
-        &Property::from_config_text(format!(
-            "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname {name}\n\
-             period 0.01\n[GENERAL]\njoints 4\n"
-        ))
-        .unwrap(),
-    )
-    .expect("open our wrapper")
-}
-
-/// C++ `controlBoard_nws_yarp` named `name` over C++ `fakeMotionControl` (4 joints).
-fn cpp_board(bin: &Path, name: &str) -> Reaped {
-    cpp_yarpdev(
-        bin,
-        &[
-            "--device",
-            "controlBoard_nws_yarp",
-            "--subdevice",
-            "fakeMotionControl",
-            "--name",
-            name,
-            "--period",
-            "0.01",
-            "--GENERAL::Joints",
-            "4",
-        ],
-        &format!("{name}/stateExt:o"),
-    )
 }
 
 /// C++ `remote_controlboard` connected to the board `remote`, wrapped by C++

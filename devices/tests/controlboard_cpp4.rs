@@ -6,67 +6,13 @@
 
 mod controlboard_common;
 
-use controlboard_common::{name_client, T};
-use std::io::{Read, Write};
+use controlboard_common::{cpp_board, finish, name_client, our_board, T};
+use std::io::Write;
 use std::path::Path;
-use std::process::{Child, Stdio};
-use std::time::Instant;
+use std::process::Stdio;
 use yarp_devices::PolyDriver;
 use yarp_interop_tests::{cpp4_program, cpp_command, cpp_yarpdev, Reaped};
 use yarp_proto::Property;
-
-/// Our `controlBoard_nws_yarp` named `name` over our `fakeMotionControl` (4 joints).
-fn our_board(name: &str) -> PolyDriver {
-    name_client();
-    PolyDriver::open(
-        &Property::from_config_text(format!(
-            "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname {name}\n\
-             period 0.01\n[GENERAL]\njoints 4\n"
-        ))
-        .unwrap(),
-    )
-    .expect("open our wrapper")
-}
-
-/// C++ 4.0 `controlBoard_nws_yarp` named `name` over its `fakeMotionControl` (4 joints).
-fn cpp_board(bin: &Path, name: &str) -> Reaped {
-    cpp_yarpdev(
-        bin,
-        &[
-            "--device",
-            "controlBoard_nws_yarp",
-            "--subdevice",
-            "fakeMotionControl",
-            "--name",
-            name,
-            "--period",
-            "0.01",
-            "--GENERAL::Joints",
-            "4",
-        ],
-        &format!("{name}/stateExt:o"),
-    )
-}
-
-/// Waits for `child` at most a few `T`, killing it if it is still running; its stdout.
-fn finish(mut child: Child) -> String {
-    let mut stdout = child.stdout.take().expect("piped stdout");
-    let reader = std::thread::spawn(move || {
-        let mut out = String::new();
-        let _ = stdout.read_to_string(&mut out);
-        out
-    });
-    let start = Instant::now();
-    while child.try_wait().expect("try_wait").is_none() {
-        if start.elapsed() > 6 * T {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("C++ program did not finish within {:?}", 6 * T);
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    reader.join().unwrap_or_default()
-}
 
 /// C++ 4.0 `yarp rpc <port>` with `lines` typed, paced: the `Response` lines it printed.
 fn cpp_rpc(yarp: &Path, port: &str, lines: &[&str]) -> Vec<String> {

@@ -88,3 +88,58 @@ pub fn with_recorded_stamps(
     }
     out
 }
+
+/// Our `controlBoard_nws_yarp` named `name` over our `fakeMotionControl` (4 joints).
+pub fn our_board(name: &str) -> yarp_devices::PolyDriver {
+    name_client();
+    yarp_devices::PolyDriver::open(
+        &yarp_proto::Property::from_config_text(format!(
+            "device controlBoard_nws_yarp\nsubdevice fakeMotionControl\nname {name}\n\
+             period 0.01\n[GENERAL]\njoints 4\n"
+        ))
+        .unwrap(),
+    )
+    .expect("open our wrapper")
+}
+
+/// C++ `controlBoard_nws_yarp` (of the peer in `bin`, 3.12 or 4.0) named `name` over
+/// its `fakeMotionControl` (4 joints).
+pub fn cpp_board(bin: &std::path::Path, name: &str) -> yarp_interop_tests::Reaped {
+    yarp_interop_tests::cpp_yarpdev(
+        bin,
+        &[
+            "--device",
+            "controlBoard_nws_yarp",
+            "--subdevice",
+            "fakeMotionControl",
+            "--name",
+            name,
+            "--period",
+            "0.01",
+            "--GENERAL::Joints",
+            "4",
+        ],
+        &format!("{name}/stateExt:o"),
+    )
+}
+
+/// Waits for `child` at most `T`, killing it if it is still running; returns its stdout.
+pub fn finish(mut child: std::process::Child) -> String {
+    let mut stdout = child.stdout.take().expect("piped stdout");
+    let reader = std::thread::spawn(move || {
+        let mut out = String::new();
+        let _ = std::io::Read::read_to_string(&mut stdout, &mut out);
+        out
+    });
+    let start = std::time::Instant::now();
+    while child.try_wait().expect("try_wait").is_none() {
+        // the paced method table takes ~10 s itself; a loaded machine slows C++ too
+        if start.elapsed() > 6 * T {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("C++ program did not finish within {:?}", 6 * T);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    reader.join().unwrap_or_default()
+}
