@@ -84,6 +84,12 @@ enum End {
 }
 
 async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
+    // The two TCP ports name a unix_stream connection's socket. Taken now: once the
+    // sender drops the TCP stream after its handshake, the peer's address may be gone.
+    let tcp_ports = (
+        stream.local_addr().map_or(0, |a| a.port()),
+        stream.peer_addr().map_or(0, |a| a.port()),
+    );
     let id = shared.next_id();
     let kill = Arc::new(Notify::new());
     let mut shutdown = shared.shutdown.clone();
@@ -117,13 +123,9 @@ async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
         Ok(End::Http(head)) => super::http::serve(&shared, &mut stream, head).await,
         Ok(End::Mjpeg(head)) => super::mjpeg::serve_output(&shared, stream, head).await,
         Ok(End::Unix(carrier)) => {
-            let ports = (
-                stream.local_addr().map_or(0, |a| a.port()),
-                stream.peer_addr().map_or(0, |a| a.port()),
-            );
             drop(stream);
             let from = conn_from(&conn_name);
-            super::unix::serve_input(&shared, id, kill, from, carrier, ports).await;
+            super::unix::serve_input(&shared, id, kill, from, carrier, tcp_ports).await;
         }
         Ok(End::Shmem) => {
             let from = conn_from(&conn_name);
