@@ -345,16 +345,6 @@ pub fn decode<M: Method>(cmd: &Bottle) -> Option<M> {
     M::take_args(&mut Cursor::request(&items[head.len()..]))
 }
 
-/// Whether `cmd` starts with `M`'s head, whatever its arguments.
-pub fn is<M: Method>(cmd: &Bottle) -> bool {
-    let head = M::V3.head;
-    cmd.len() >= head.len()
-        && head
-            .iter()
-            .zip(cmd.items())
-            .all(|(h, v)| vocab(Some(v)) == *h)
-}
-
 /// The reply to `cmd` after serving it: shaped by `M`'s style, `[fail]` on failure.
 pub fn reply<M: Method>(cmd: &Bottle, result: DevResult<M::Reply>, stamp: &mut RpcStamp) -> Bottle {
     let mut b = Bottle::new();
