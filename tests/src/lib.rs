@@ -102,29 +102,57 @@ struct Net {
 }
 
 /// Candidate ports for a test name server (ours or C++ `yarpserver`), below the kernel's
-/// ephemeral range: see [`bind_name_server`] for why.
+/// ephemeral range: see [`bind_name_server`] for why. A name server hands out numbers
+/// from its own port upwards, so two servers whose ports are close give the same
+/// numbers to different processes, and a C++ port given a taken one fails with
+/// "address conflict". Each candidate is therefore the base of a block of
+/// [`PORT_BLOCK`] numbers that this process claims, with a lock file, until it ends;
+/// only when every block is taken do candidates fall back to scattered numbers.
 pub fn low_ports() -> impl Iterator<Item = u16> {
     let seed = std::process::id() as u64
         ^ std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map(|d| d.subsec_nanos() as u64)
             .unwrap_or(0);
+    let blocks = (BLOCKS_TO - BLOCKS_FROM) / PORT_BLOCK;
+    let first = seed % blocks as u64;
+    let claimed = (0..blocks)
+        .map(move |i| ((first + i as u64) % blocks as u64) as u16)
+        .filter_map(claim_block);
     let mut x = seed | 1;
-    (0..200).map(move |_| {
+    let scattered = (0..200).map(move |_| {
         x ^= x << 13;
         x ^= x >> 7;
         x ^= x << 17;
-        // the pool reaches base + 9999: keep it below 32768
-        10_000 + (x % 12_000) as u16
-    })
+        BLOCKS_FROM + (x % (BLOCKS_TO - BLOCKS_FROM - 10_000) as u64) as u16
+    });
+    claimed.chain(scattered)
+}
+
+/// Port numbers a test name server may use: its own and what it hands out.
+pub const PORT_BLOCK: u16 = 1000;
+const BLOCKS_FROM: u16 = 10_000;
+/// The kernel's ephemeral range starts at 32768.
+const BLOCKS_TO: u16 = 32_000;
+
+/// Claims block `n` for this process (its lock is held until the process ends) and
+/// gives its first port number, or `None` when another process holds it.
+fn claim_block(n: u16) -> Option<u16> {
+    static HELD: std::sync::Mutex<Vec<std::fs::File>> = std::sync::Mutex::new(Vec::new());
+    let dir = std::env::temp_dir().join("yarp-rs-test-port-blocks");
+    std::fs::create_dir_all(&dir).ok()?;
+    let file = std::fs::File::create(dir.join(n.to_string())).ok()?;
+    file.try_lock().ok()?;
+    HELD.lock().unwrap_or_else(|e| e.into_inner()).push(file);
+    Some(BLOCKS_FROM + n * PORT_BLOCK)
 }
 
 /// Binds a name server for a test process on 127.0.0.1 below the kernel's ephemeral
 /// port range (32768 and up here). The server hands out port numbers from its own
 /// upwards, as `yarpserver` does; from an ephemeral base those numbers collide with the
 /// outgoing connections of every test in the namespace, and a C++ port given one fails
-/// with "address conflict". The base is picked from the process id and the clock, so
-/// concurrent test processes start their pools apart.
+/// with "address conflict". The port is the base of a block this process claims
+/// ([`low_ports`]), so concurrent test processes hand out numbers apart.
 pub async fn bind_name_server() -> NameServer {
     for port in low_ports() {
         if let Ok(ns) = NameServer::bind(("127.0.0.1", port), "127.0.0.1").await {
