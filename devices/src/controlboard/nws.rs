@@ -67,7 +67,8 @@ struct Attached {
 type Slot = Arc<Mutex<Option<Attached>>>;
 
 /// The local prefixes of the YARP 4.0 clients that called `/nws/rpc:i` (from
-/// `<local>/nwc/rpc:o`): their `<local>/stateExt:i` gets 4.0's `jointData`.
+/// `<local>/nwc/rpc:o`): their `<local>/stateExt:i` gets 4.0's `jointData`. A 3.12
+/// client calling `/rpc:i` from `<local>/rpc:o` takes its prefix back to 3.12's form.
 #[derive(Clone, Default)]
 struct Clients4(Arc<Mutex<std::collections::BTreeSet<String>>>);
 
@@ -77,6 +78,11 @@ impl Clients4 {
             if !lock(&self.0).contains(prefix) {
                 lock(&self.0).insert(prefix.to_string());
             }
+        }
+    }
+    fn forget(&self, from: &str) {
+        if let Some(prefix) = from.strip_suffix("/rpc:o") {
+            lock(&self.0).remove(prefix);
         }
     }
     /// Whether the reader port `to` is a 4.0 client's.
@@ -196,7 +202,7 @@ impl ControlBoardNws {
         let slot: Slot = Arc::new(Mutex::new(None));
         let clients4 = Clients4::default();
         let tasks = vec![
-            tokio::spawn(serve_rpc(rpc.clone(), slot.clone())),
+            tokio::spawn(serve_rpc(rpc.clone(), slot.clone(), clients4.clone())),
             tokio::spawn(serve_commands(command.clone(), slot.clone())),
             tokio::spawn(serve_rpc4(rpc4.clone(), slot.clone(), clients4.clone())),
         ];
@@ -364,9 +370,10 @@ fn attached(slot: &Slot) -> Option<Attached> {
     lock(slot).clone()
 }
 
-async fn serve_rpc(port: Arc<Port>, slot: Slot) {
+async fn serve_rpc(port: Arc<Port>, slot: Slot, clients4: Clients4) {
     let mut stamp = RpcStamp::new();
     while let Some(mut msg) = port.read().await {
+        clients4.forget(&msg.from);
         let reply = match msg.bottle() {
             Err(e) => {
                 tracing::warn!(

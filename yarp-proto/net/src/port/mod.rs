@@ -577,22 +577,19 @@ impl Port {
                 )
             })
             .collect();
-        let mut msgs: Vec<Option<Arc<output::Outgoing>>> = vec![None; forms.len()];
+        // each form is built, and measured, once for all the outputs that take it
+        let mut msgs: Vec<Option<(Arc<output::Outgoing>, usize)>> = vec![None; forms.len()];
         let mut n = 0;
         for (k, tx) in outs {
             let Some((b, generation)) = forms.get(k) else {
                 continue;
             };
-            let msg = msgs[k]
-                .get_or_insert_with(|| {
-                    Arc::new(output::Outgoing::new_as(
-                        Arc::new(b.clone()),
-                        stamp,
-                        *generation,
-                    ))
-                })
-                .clone();
-            if Self::offer(&tx, &msg, msg.encoded_len()) {
+            let (msg, len) = msgs[k].get_or_insert_with(|| {
+                let msg = output::Outgoing::new_as(Arc::new(b.clone()), stamp, *generation);
+                let len = msg.encoded_len();
+                (Arc::new(msg), len)
+            });
+            if Self::offer(&tx, msg, *len) {
                 n += 1;
             }
         }
