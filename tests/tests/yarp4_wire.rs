@@ -105,3 +105,48 @@ fn cpp_4_rpc_gets_its_reply_numbered_as_it_asked() {
         rt.block_on(p.close());
     }
 }
+
+/// Starts `yarp read <port>` of the C++ `yarp` program given and waits for its port.
+fn cpp_reader(yarp: &std::path::Path, port: &str) -> Reaped {
+    name_client();
+    let child = cpp_command(yarp)
+        .args(["read", port])
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn C++ yarp read");
+    let child = Reaped(child);
+    let start = std::time::Instant::now();
+    while !registered(port) {
+        assert!(start.elapsed() < T, "{port} never registered");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child
+}
+
+/// A server tells its clients' generations by their ports' admin (`getPid`, which 4.0
+/// no longer answers): C++ 3.12's, C++ 4.0's and ours.
+#[test]
+fn peer_generations_of_cpp_3_12_cpp_4_and_our_ports() {
+    let test = "peer_generations_of_cpp_3_12_cpp_4_and_our_ports";
+    let (Some(yarp3), Some(yarp4)) = (cpp_program(test, "yarp"), cpp4_program(test, "yarp")) else {
+        return;
+    };
+    let _r3 = cpp_reader(&yarp3, "/gen/r3");
+    let _r4 = cpp_reader(&yarp4, "/gen/r4");
+    let rt = runtime();
+    let ours = rt
+        .block_on(Port::open("/gen/ours", name_client()))
+        .expect("open /gen/ours");
+    let peers = yarp_net::peer_generation::PeerGenerations::new(name_client());
+    rt.block_on(async {
+        assert_eq!(peers.of("/gen/r3").await, Generation::V3);
+        assert_eq!(peers.of("/gen/r4").await, Generation::V4);
+        assert_eq!(peers.of("/gen/ours").await, Generation::V3);
+        // known without asking again; unknown ports are 3's
+        assert_eq!(peers.known("/gen/r4"), Some(Generation::V4));
+        assert_eq!(peers.of("/gen/nobody").await, Generation::V3);
+    });
+    rt.block_on(ours.close());
+}

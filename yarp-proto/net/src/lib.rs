@@ -6,6 +6,7 @@ pub mod dgram;
 pub mod heap;
 pub mod nameserver;
 pub mod network;
+pub mod peer_generation;
 pub mod port;
 pub mod realtime;
 pub mod rpc;
