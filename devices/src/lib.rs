@@ -28,6 +28,7 @@ pub mod robotinterface;
 pub mod runtime;
 pub mod sensors;
 pub mod test_motor;
+pub mod thrift;
 pub mod vocabs;
 mod wrapper_ports;
 

@@ -1,15 +1,19 @@
 //! The ports of a YARP network client device (`*_nwc_yarp`): a stream port fed by the
 //! server's streaming port, keeping the latest message with its envelope time, and an RPC
-//! port connected to the server's RPC port. The counterpart of `wrapper_ports` (NWS).
+//! port connected to the server's RPC port, a thrift service. The counterpart of
+//! `wrapper_ports` (NWS). The server's YARP generation, asked on opening (as 4.0's clients
+//! check the protocol), says how calls are written; replies of either are read.
 
 use crate::error::{DevResult, DeviceError};
-use crate::rangefinder::protocol::{parse_reply, ReturnCode};
+use crate::rangefinder::protocol::parse_reply;
 use crate::runtime;
+use crate::thrift::{self, ReturnValue};
 use parking_lot::{Mutex, MutexGuard};
 use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::nameserver::NameClient;
-use yarp_net::port::Port;
+use yarp_net::port::{Port, PortError};
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value};
 
 /// How long an RPC call waits for the server's reply.
@@ -35,6 +39,8 @@ pub(crate) struct NwcPorts<T> {
     stream: Arc<Port>,
     task: tokio::task::JoinHandle<()>,
     rpc: Arc<Port>,
+    /// The server's generation of YARP.
+    generation: Generation,
     latest: Latest<T>,
 }
 
@@ -99,12 +105,12 @@ pub(crate) fn call_encoded_within(
 }
 
 /// Waits for `call`'s reply at most `timeout` (blocking the caller).
-fn within(
+fn within<R: Send + 'static>(
     device: &str,
     command: &str,
     timeout: Duration,
-    call: impl std::future::Future<Output = Result<Bottle, yarp_net::port::PortError>> + Send + 'static,
-) -> DevResult<Bottle> {
+    call: impl std::future::Future<Output = Result<R, PortError>> + Send + 'static,
+) -> DevResult<R> {
     match runtime::block_on(async move { tokio::time::timeout(timeout, call).await }) {
         Ok(Ok(reply)) => Ok(reply),
         Ok(Err(e)) => {
@@ -122,6 +128,38 @@ fn within(
                 after: timeout,
             })
         }
+    }
+}
+
+/// The server's generation, from its `getRemoteProtocolVersion` (which both answer);
+/// a protocol other than ours is refused, as 4.0's clients refuse it.
+async fn server_generation(rpc: &Port) -> Result<Generation, String> {
+    let asked = tokio::time::timeout(
+        RPC_TIMEOUT,
+        rpc.rpc_encoded(thrift::protocol_version_request()),
+    )
+    .await
+    .map_err(|_| {
+        format!(
+            "no reply to {} within {RPC_TIMEOUT:?}",
+            thrift::GET_PROTOCOL_VERSION
+        )
+    })?;
+    let bytes = match asked {
+        Err(PortError::BadReply { bytes, .. }) => bytes,
+        Ok(b) => b.encode(),
+        Err(e) => return Err(e.to_string()),
+    };
+    match thrift::protocol_version_of(&bytes) {
+        Some((thrift::PROTOCOL, version)) => Ok(thrift::generation_of_version(version)),
+        Some((protocol, version)) => Err(format!(
+            "invalid communication protocol: the server (YARP {version:?}) speaks {protocol}, this client {}",
+            thrift::PROTOCOL
+        )),
+        None => Err(format!(
+            "not a thrift service: {} answered {bytes:?}",
+            thrift::GET_PROTOCOL_VERSION
+        )),
     }
 }
 
@@ -173,6 +211,14 @@ impl<T: Send + 'static> NwcPorts<T> {
             close_port(stream).await;
             return Err(format!("connecting {rpc_name} to {remote_rpc}: {e}"));
         }
+        let generation = match server_generation(&rpc).await {
+            Ok(g) => g,
+            Err(e) => {
+                rpc.close().await;
+                close_port(stream).await;
+                return Err(format!("{remote_rpc}: {e}"));
+            }
+        };
         let latest = Latest::default();
         let task = tokio::spawn(receive(device, stream.clone(), latest.clone(), parse));
         Ok(NwcPorts {
@@ -180,6 +226,7 @@ impl<T: Send + 'static> NwcPorts<T> {
             stream,
             task,
             rpc: Arc::new(rpc),
+            generation,
             latest,
         })
     }
@@ -189,11 +236,6 @@ impl<T: Send + 'static> NwcPorts<T> {
         self.latest.lock()
     }
 
-    /// Calls the server (blocking the caller, at most [`RPC_TIMEOUT`]).
-    pub fn call(&self, cmd: Bottle) -> DevResult<Bottle> {
-        call(self.device, &self.rpc, cmd)
-    }
-
     /// Calls a thrift method of the server whose reply is a `yarp::dev::ReturnValue`
     /// followed by the `return_*` struct's fields: those fields when the code is OK;
     /// `Unsupported(unsupported)` when the server does not implement it, `NotReady` when
@@ -201,13 +243,33 @@ impl<T: Send + 'static> NwcPorts<T> {
     /// `ReturnValue` is a failure naming the request and the reply.
     pub fn call_returning(&self, cmd: Bottle, unsupported: &'static str) -> DevResult<Vec<Value>> {
         let command = cmd.to_string();
-        let reply = self.call(cmd)?;
-        match parse_reply(&reply) {
-            Some((0, fields)) => Ok(fields),
-            Some((code, _)) if code == ReturnCode::NotImplemented as i32 => {
-                Err(DeviceError::Unsupported(unsupported))
+        let port = self.rpc.clone();
+        let bytes = cmd.encode_as(self.generation);
+        let reply = within(self.device, &command, RPC_TIMEOUT, async move {
+            match port.rpc_encoded(bytes).await {
+                Ok(b) => Ok(Ok(b)),
+                // a setter's reply is its ReturnValue alone, in 3.12 no Bottle
+                Err(PortError::BadReply { error, bytes }) => match ReturnValue::from_bare(&bytes) {
+                    Some(r) => Ok(Err(r)),
+                    None => Err(PortError::BadReply { error, bytes }),
+                },
+                Err(e) => Err(e),
             }
-            Some((code, _)) if code == ReturnCode::NotReady as i32 => {
+        })?;
+        let parsed = match &reply {
+            Err(bare) => Some((*bare, Vec::new())),
+            // 3.12's bare `ok` (a tag and 0) reads as an empty compact list
+            Ok(b) if b.is_empty() => Some((ReturnValue::Ok, Vec::new())),
+            // 4.0's bare ReturnValue decodes as a Bottle of its one vocab
+            Ok(b) if b.len() == 1 && b.get(0).is_some_and(|v| v.as_vocab().is_some()) => {
+                ReturnValue::from_bare(&b.encode()).map(|r| (r, Vec::new()))
+            }
+            Ok(b) => parse_reply(b),
+        };
+        match parsed {
+            Some((ReturnValue::Ok, fields)) => Ok(fields),
+            Some((ReturnValue::NotImplemented, _)) => Err(DeviceError::Unsupported(unsupported)),
+            Some((ReturnValue::NotReady, _)) => {
                 Err(DeviceError::NotReady("the server is not ready"))
             }
             Some(_) => Err(DeviceError::Refused {
@@ -216,7 +278,7 @@ impl<T: Send + 'static> NwcPorts<T> {
             }),
             None => Err(DeviceError::failed(
                 self.device,
-                format!("{command} answered {reply}"),
+                format!("{command} answered {reply:?}"),
             )),
         }
     }

@@ -410,17 +410,19 @@ async fn handshake4(
         async move { tokio::time::timeout(RPC_TIMEOUT, rpc.rpc_encoded(bytes)).await }
     };
     // the protocol version's reply is no Bottle: it comes back as bytes
-    let protocol = match call(v4::protocol_request()).await {
-        Ok(Err(yarp_net::port::PortError::BadReply { bytes, .. })) => v4::protocol_of(&bytes),
+    let protocol = match call(crate::thrift::protocol_version_request()).await {
+        Ok(Err(yarp_net::port::PortError::BadReply { bytes, .. })) => {
+            crate::thrift::protocol_version_of(&bytes).map(|(p, _)| p)
+        }
         other => {
             tracing::warn!("{remote_rpc}: getRemoteProtocolVersion answered {other:?}");
             None
         }
     };
-    if protocol != Some(v4::PROTOCOL) {
+    if protocol != Some(crate::thrift::PROTOCOL) {
         return Err(format!(
             "{remote_rpc}: invalid communication protocol: the server speaks {protocol:?}, this client {}",
-            v4::PROTOCOL
+            crate::thrift::PROTOCOL
         ));
     }
     let axes = match call(v4::request(&m::Axes {})).await {
@@ -614,7 +616,11 @@ impl RemoteControlBoard {
         if link.write_strict {
             runtime::block_on(async move { port.write_shared_as(msg, None, generation).await });
         } else {
-            port.write_nowait_each(&[(Arc::unwrap_or_clone(msg), generation)], |_| 0, None);
+            port.write_nowait_each(
+                &[(Arc::unwrap_or_clone(msg), generation)],
+                |_| Some(0),
+                None,
+            );
         }
         Ok(())
     }

@@ -2,14 +2,17 @@
 //! RPC port open together with the device (one refused closes those already open), a
 //! task answers the RPC port with whatever device is attached at the time, and all close
 //! together. Shared by `rangefinder2D_nws_yarp`, `rgbdSensor_nws_yarp` and
-//! `battery_nws_yarp`.
+//! `battery_nws_yarp`. Each request is answered in its client's YARP generation, and
+//! [`WrapperPorts::peers`] tells the stream tasks their readers'.
 
 use crate::driver::{DeviceDriver, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
 use parking_lot::Mutex;
 use std::sync::Arc;
+use yarp_net::peer_generation::PeerGenerations;
 use yarp_net::port::Port;
+use yarp_proto::tags::Generation;
 use yarp_proto::Bottle;
 
 /// The device a wrapper serves, shared with its RPC task (`None` while detached).
@@ -22,13 +25,15 @@ pub(crate) enum Reply {
     Encoded(Vec<u8>),
 }
 
-/// Answers one request: the decoded command (empty when undecodable) and the attached
-/// device, if any.
-pub(crate) type Answer = fn(&Bottle, Option<&mut dyn DeviceDriver>) -> Reply;
+/// Answers one request: the decoded command (empty when undecodable), the attached
+/// device, if any, and the generation of YARP the client runs.
+pub(crate) type Answer = fn(&Bottle, Option<&mut dyn DeviceDriver>, Generation) -> Reply;
 
 pub(crate) struct WrapperPorts {
     /// The stream ports, in the order given to [`WrapperPorts::open`].
     pub streams: Vec<Arc<Port>>,
+    /// The generations of the clients and readers.
+    pub peers: PeerGenerations,
     rpc: Arc<Port>,
     rpc_task: tokio::task::JoinHandle<()>,
 }
@@ -65,9 +70,12 @@ impl WrapperPorts {
                 }
             }
             let rpc = opened.pop().expect("the rpc port was opened last");
-            let rpc_task = tokio::spawn(serve_rpc(wrapper, rpc.clone(), slot, answer));
+            let peers = PeerGenerations::new(ns);
+            let rpc_task =
+                tokio::spawn(serve_rpc(wrapper, rpc.clone(), slot, answer, peers.clone()));
             Ok(WrapperPorts {
                 streams: opened,
+                peers,
                 rpc,
                 rpc_task,
             })
@@ -87,19 +95,30 @@ impl WrapperPorts {
     }
 }
 
-async fn serve_rpc(wrapper: &'static str, port: Arc<Port>, slot: Slot, answer: Answer) {
+async fn serve_rpc(
+    wrapper: &'static str,
+    port: Arc<Port>,
+    slot: Slot,
+    answer: Answer,
+    peers: PeerGenerations,
+) {
     while let Some(mut msg) = port.read().await {
         let cmd = msg.bottle().unwrap_or_else(|e| {
             tracing::warn!("{wrapper}: undecodable request from {}: {e}", msg.from);
             Bottle::new()
         });
+        // a request with 4.0's float tags says it; most hold none and ask the sender
+        let generation = match msg.generation() {
+            Generation::V4 => Generation::V4,
+            Generation::V3 => peers.of(&msg.from).await,
+        };
         let device = slot.lock().clone();
         let reply = match device {
             Some(d) => {
                 let mut pd = d.lock();
-                answer(&cmd, Some(pd.device()))
+                answer(&cmd, Some(pd.device()), generation)
             }
-            None => answer(&cmd, None),
+            None => answer(&cmd, None, generation),
         };
         if msg.wants_reply() {
             match reply {

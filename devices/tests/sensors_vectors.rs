@@ -44,7 +44,7 @@ fn yarp_rpc_replies_are_byte_exact() {
     for r in recs.iter().filter(|r| r["kind"] == "yarp_rpc") {
         let req = unit(r["request"].as_array().unwrap(), "message");
         let cmd = Bottle::decode(&hex_of(&req["payload_hex"])).unwrap();
-        let mut got = handle_rpc(&cmd, &md);
+        let mut got = handle_rpc(&cmd, &md, yarp_proto::tags::Generation::V3);
         got.extend_from_slice(&ack());
         assert_eq!(
             hex::encode(&got),
@@ -75,7 +75,11 @@ fn cpp_client_open_request_and_reply_are_byte_exact() {
         hex_of(&req["port_command_hex"]),
         PortCommand::data(true).header()
     );
-    let reply = handle_rpc(&Bottle::decode(&request).unwrap(), &md);
+    let reply = handle_rpc(
+        &Bottle::decode(&request).unwrap(),
+        &md,
+        yarp_proto::tags::Generation::V3,
+    );
     assert_eq!(hex::encode(reply), unit(units, "reply")["payload_hex"]);
 
     // calls answered from the metadata (no traffic) have what the C++ client returned

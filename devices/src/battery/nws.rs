@@ -21,7 +21,9 @@ use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Duration;
+use yarp_net::peer_generation::PeerGenerations;
 use yarp_net::port::Port;
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Property, Stamp};
 
 const NAME: &str = "battery_nws_yarp";
@@ -88,7 +90,13 @@ fn log_line(d: &BatteryData) -> String {
     )
 }
 
-async fn stream_battery(port: Arc<Port>, period: Duration, device: SharedDevice, log: bool) {
+async fn stream_battery(
+    port: Arc<Port>,
+    peers: PeerGenerations,
+    period: Duration,
+    device: SharedDevice,
+    log: bool,
+) {
     let mut ticker = Ticker::new(period);
     let mut last = BatteryData::default();
     let mut warnings = ChargeWarnings::default();
@@ -115,7 +123,11 @@ async fn stream_battery(port: Arc<Port>, period: Duration, device: SharedDevice,
         match read {
             Ok(d) => {
                 failing = false;
-                port.write_nowait(&d.to_bottle(), Some(Stamp::new(count, now())));
+                port.write_nowait_by_generation(
+                    &d.to_bottle(),
+                    &peers,
+                    Some(Stamp::new(count, now())),
+                );
                 count = count.wrapping_add(1);
                 if d.status != BatteryStatus::OkStandby as i32 {
                     if let Some(msg) = warnings.check(d.charge) {
@@ -138,8 +150,12 @@ async fn stream_battery(port: Arc<Port>, period: Duration, device: SharedDevice,
     }
 }
 
-fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
-    Reply::Encoded(handle_rpc(cmd, dev.and_then(|d| d.as_battery())))
+fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>, generation: Generation) -> Reply {
+    Reply::Encoded(handle_rpc(
+        cmd,
+        dev.and_then(|d| d.as_battery()),
+        generation,
+    ))
 }
 
 impl DeviceDriver for BatteryNwsYarp {
@@ -187,8 +203,10 @@ impl IWrapper for BatteryNwsYarp {
             ))?;
         }
         *self.slot.lock() = Some(device.clone());
-        let (port, period, log) = (ports.streams[0].clone(), self.period, self.log);
-        self.stream_task = Some(runtime::handle().spawn(stream_battery(port, period, device, log)));
+        let (port, peers) = (ports.streams[0].clone(), ports.peers.clone());
+        let (period, log) = (self.period, self.log);
+        self.stream_task =
+            Some(runtime::handle().spawn(stream_battery(port, peers, period, device, log)));
         Ok(())
     }
 

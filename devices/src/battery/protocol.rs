@@ -1,18 +1,21 @@
-//! The wire forms of `battery_nws_yarp` (C++ YARP 3.12), pure:
+//! The wire forms of `battery_nws_yarp` (C++ YARP 3.12 and 4.0), pure:
 //!
 //! - the stream on `<name>/data:o`, a `yarp::dev::BatteryData` (`BatteryData.thrift`):
 //!   `(charge voltage current temperature status)`, four float64 and the
 //!   `IBattery::Battery_status` as int32;
 //! - the `IBatteryMsgs` thrift service on `<name>/rpc:i`, one method, `getBatteryInfoRPC`,
-//!   answered `(return_code info)` (`return_get_BatteryInfo`: a `yarp::dev::ReturnValue`
-//!   int32, then the string), and the `getRemoteProtocolVersion` of every 3.12 service.
+//!   answered `(return_code info)` (`return_get_BatteryInfo`: a `yarp::dev::ReturnValue`,
+//!   then the string), and the `getRemoteProtocolVersion` of every service.
+//!
+//! 4.0 kept both but renumbered the float tags and re-laid `ReturnValue`
+//! (`crate::thrift`): each peer gets its generation's bytes.
 
 use super::{BatteryStatus, IBattery};
 use crate::error::DeviceError;
-use crate::rangefinder::protocol::ReturnCode;
-use crate::sensors::rpc::{fail_reply, is_protocol_version_request, protocol_version_reply};
 use crate::sensors::wire::WireWriter;
+use crate::thrift::{fail_reply, is_protocol_version_request, protocol_version_reply, ReturnValue};
 use thiserror::Error;
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value};
 
 /// C++ `yarp::dev::BatteryData`.
@@ -34,9 +37,9 @@ pub struct BatteryData {
 pub struct BatteryDataError(&'static str);
 
 impl BatteryData {
-    /// The message bytes as C++'s `BufferedPort<BatteryData>` writes them.
-    pub fn encode(&self) -> Vec<u8> {
-        let mut w = WireWriter::new();
+    /// The message bytes as C++'s `BufferedPort<BatteryData>` of `generation` writes them.
+    pub fn encode(&self, generation: Generation) -> Vec<u8> {
+        let mut w = WireWriter::for_generation(generation);
         w.list_header(5)
             .float64(self.charge)
             .float64(self.voltage)
@@ -114,10 +117,11 @@ impl Default for BatteryData {
 /// The one method of `IBatteryMsgs`.
 const GET_INFO: &str = "getBatteryInfoRPC";
 
-/// Answers one request on `dev` (`None`: no device attached, `return_value_error_not_ready`).
-pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IBattery>) -> Vec<u8> {
+/// Answers one request of a client of `generation` on `dev` (`None`: no device
+/// attached, `return_value_error_not_ready`).
+pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IBattery>, generation: Generation) -> Vec<u8> {
     if is_protocol_version_request(cmd) {
-        return protocol_version_reply();
+        return protocol_version_reply(generation);
     }
     let mut items = cmd.iter().peekable();
     if items.peek().and_then(|v| v.as_str()) == Some("__direct__") {
@@ -131,16 +135,18 @@ pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IBattery>) -> Vec<u8> {
     if method.as_deref() != Some(GET_INFO) || items.next().is_some() {
         return fail_reply();
     }
-    let (code, info) = match dev.map(|d| d.get_battery_info()) {
-        None => (ReturnCode::NotReady, String::new()),
-        Some(Ok(info)) => (ReturnCode::Ok, info),
+    let (ret, info) = match dev.map(|d| d.get_battery_info()) {
+        None => (ReturnValue::NotReady, String::new()),
+        Some(Ok(info)) => (ReturnValue::Ok, info),
         Some(Err(e)) => {
             tracing::error!("battery_nws_yarp: could not retrieve the battery info: {e}");
-            (ReturnCode::of(&e), String::new())
+            (ReturnValue::of(&e), String::new())
         }
     };
-    let mut w = WireWriter::new();
-    w.list_header(2).int32(code as i32).string(&info);
+    let mut w = WireWriter::for_generation(generation);
+    w.list_header(2);
+    ret.put(&mut w);
+    w.string(&info);
     w.into_bytes()
 }
 
@@ -198,7 +204,11 @@ mod tests {
             temperature: 25.0,
             status: 2,
         };
-        let bytes = d.encode();
+        let bytes = d.encode(Generation::V3);
+        assert_eq!(
+            d.encode(Generation::V4),
+            d.to_bottle().encode_as(Generation::V4)
+        );
         assert_eq!(bytes, d.to_bottle().encode());
         // list tag (BOTTLE_TAG_LIST = 256), 5 elements, then tagged float64 (0x0a = 10)
         assert_eq!(&bytes[..8], &[0, 1, 0, 0, 5, 0, 0, 0]);
@@ -213,7 +223,7 @@ mod tests {
         let mut b = FakeBattery::new();
         b.open(&Property::new()).unwrap();
         let ask = |text: &str, dev: Option<&mut dyn IBattery>| {
-            Bottle::decode(&handle_rpc(&Bottle::from_text(text), dev)).unwrap()
+            Bottle::decode(&handle_rpc(&Bottle::from_text(text), dev, Generation::V3)).unwrap()
         };
         let r = ask("getBatteryInfoRPC", Some(&mut b));
         assert_eq!(r.get(0).and_then(Value::as_i32), Some(0));
@@ -234,8 +244,12 @@ mod tests {
         }
         for dev in [Some(&mut b as &mut dyn IBattery), None] {
             assert_eq!(
-                handle_rpc(&Bottle::from_text("getRemoteProtocolVersion"), dev),
-                protocol_version_reply()
+                handle_rpc(
+                    &Bottle::from_text("getRemoteProtocolVersion"),
+                    dev,
+                    Generation::V4
+                ),
+                protocol_version_reply(Generation::V4)
             );
         }
     }

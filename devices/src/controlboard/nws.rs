@@ -419,11 +419,11 @@ async fn serve_rpc4(port: Arc<Port>, slot: Slot, clients4: Clients4) {
             }
             (Err(e), _) => {
                 tracing::warn!("{}: undecodable call from {}: {e}", port.name(), msg.from);
-                super::v4::fail_reply()
+                crate::thrift::fail_reply()
             }
             (Ok(cmd), None) => {
                 tracing::warn!("{}: `{cmd}` but no device is attached", port.name());
-                super::v4::fail_reply()
+                crate::thrift::fail_reply()
             }
         };
         msg.reply_encoded(reply);
@@ -586,7 +586,7 @@ fn publish(
                 ];
                 state_ext.write_nowait_each(
                     &forms,
-                    |to| usize::from(clients4.reads(to)),
+                    |to| Some(usize::from(clients4.reads(to))),
                     Some(stamp),
                 );
             } else {

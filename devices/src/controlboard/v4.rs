@@ -10,87 +10,14 @@
 use super::methods::{Method, Request};
 use super::v3::{Done, Group, Listed, PidType, J16};
 use crate::driver::DeviceDriver;
-use crate::error::{DevResult, DeviceError};
+use crate::error::DevResult;
 use crate::interfaces::Pid;
 use crate::sensors::wire::WireWriter;
 use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value, Vocab32};
 
-/// The protocol number 4.0's generated code compares (its `.thrift` declares none: 0).
-pub const PROTOCOL: i16 = 0;
-/// The YARP version our 4.0 form follows, as `getRemoteProtocolVersion` reports it.
-pub const YARP_VERSION: (i16, i16, i16) = (4, 0, 0);
-
-/// C++ `yarp::dev::ReturnValue`: what a 4.0 call returns besides its values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ReturnValue {
-    Ok,
-    Generic,
-    NotImplemented,
-    Communication,
-    Deprecated,
-    MethodFailed,
-    NotReady,
-    OutOfBounds,
-    /// `miss`: what a C++ client holds when the call itself failed.
-    Uninitialized,
-}
-
-impl ReturnValue {
-    /// The code for a device call that failed with `e`.
-    pub fn of(e: &DeviceError) -> ReturnValue {
-        match e {
-            // C++ 4.0's wrapper answers a call its device has no interface for "not ready"
-            DeviceError::NotOpen | DeviceError::NotReady(_) | DeviceError::NoInterface(_) => {
-                ReturnValue::NotReady
-            }
-            DeviceError::Unsupported(_) => ReturnValue::NotImplemented,
-            DeviceError::Timeout { .. } | DeviceError::PeerLost { .. } => {
-                ReturnValue::Communication
-            }
-            DeviceError::InvalidJoint { .. } | DeviceError::WrongSize { .. } => {
-                ReturnValue::OutOfBounds
-            }
-            _ => ReturnValue::MethodFailed,
-        }
-    }
-
-    fn vocab(self) -> Vocab32 {
-        Vocab32::new(match self {
-            ReturnValue::Ok => "ok",
-            ReturnValue::Generic => "err1",
-            ReturnValue::NotImplemented => "err2",
-            ReturnValue::Communication => "err3",
-            ReturnValue::Deprecated => "err4",
-            ReturnValue::MethodFailed => "err5",
-            ReturnValue::NotReady => "err6",
-            ReturnValue::OutOfBounds => "err7",
-            ReturnValue::Uninitialized => "miss",
-        })
-    }
-
-    fn from_vocab(v: Vocab32) -> ReturnValue {
-        const ALL: [ReturnValue; 9] = [
-            ReturnValue::Ok,
-            ReturnValue::Generic,
-            ReturnValue::NotImplemented,
-            ReturnValue::Communication,
-            ReturnValue::Deprecated,
-            ReturnValue::MethodFailed,
-            ReturnValue::NotReady,
-            ReturnValue::OutOfBounds,
-            ReturnValue::Uninitialized,
-        ];
-        ALL.into_iter()
-            .find(|r| r.vocab() == v)
-            .unwrap_or(ReturnValue::Generic)
-    }
-
-    /// Always 16 bytes: a list of one tagged vocab (`ReturnValue::write`).
-    fn put(self, w: &mut WireWriter) {
-        w.list_header(1).vocab(self.vocab());
-    }
-}
+pub use crate::thrift::ReturnValue;
+use crate::thrift::{fail_reply, protocol_version_reply};
 
 /// A value as 4.0's generated code writes it and reads it.
 pub trait Wire4: Sized {
@@ -486,18 +413,6 @@ pub fn answer<M: Method>(reply: &Bottle) -> Option<(ReturnValue, Option<M::Reply
     Some((code, value.filter(|_| code == ReturnValue::Ok)))
 }
 
-/// The `[fail]` C++'s generated reader answers a call it cannot read.
-pub fn fail_reply() -> Vec<u8> {
-    crate::sensors::rpc::fail_reply()
-}
-
-/// The `getRemoteProtocolVersion` call.
-pub fn protocol_request() -> Vec<u8> {
-    let mut w = WireWriter::for_generation(Generation::V4);
-    w.list_header(1).string("getRemoteProtocolVersion");
-    w.into_bytes()
-}
-
 /// The `getDeviceInterfacesRPC` call.
 pub fn interfaces_request() -> Vec<u8> {
     let mut w = WireWriter::for_generation(Generation::V4);
@@ -512,45 +427,6 @@ pub fn returned_ok(reply: &Bottle) -> bool {
         .and_then(Value::as_list)
         .and_then(|rv| rv.get(0)?.as_vocab())
         == Some(ReturnValue::Ok.vocab())
-}
-
-/// The protocol number in a `getRemoteProtocolVersion` reply's bytes.
-pub fn protocol_of(reply: &[u8]) -> Option<i16> {
-    let b = reply.get(8..10)?;
-    Some(i16::from_le_bytes([b[0], b[1]]))
-}
-
-impl ReturnValue {
-    /// The error a client reports for a call `command` of `device` that returned this.
-    pub fn error(self, device: &str, command: &str) -> DeviceError {
-        match self {
-            ReturnValue::NotImplemented => {
-                DeviceError::Unsupported("not implemented by the remote device")
-            }
-            ReturnValue::NotReady => DeviceError::NotReady("the remote device is not ready"),
-            ReturnValue::Communication => DeviceError::PeerLost {
-                device: device.to_string(),
-                reason: format!("`{command}`: the server lost its own device"),
-            },
-            _ => DeviceError::Refused {
-                device: device.to_string(),
-                command: format!("{command} ({:?})", self),
-            },
-        }
-    }
-}
-
-/// `getRemoteProtocolVersion`'s reply: a list of one, then four untagged int16 (not a
-/// Bottle C++ or we could read as one).
-pub fn protocol_reply() -> Vec<u8> {
-    let mut w = WireWriter::for_generation(Generation::V4);
-    let (major, minor, patch) = YARP_VERSION;
-    w.list_header(1)
-        .raw_int16(PROTOCOL)
-        .raw_int16(major)
-        .raw_int16(minor)
-        .raw_int16(patch);
-    w.into_bytes()
 }
 
 /// The interfaces `getDeviceInterfacesRPC` reports, by C++'s key (sorted, as C++'s
@@ -598,7 +474,7 @@ pub fn handle_rpc(cmd: &Bottle, dev: &mut dyn DeviceDriver) -> Vec<u8> {
     };
     let args = &cmd.items()[1..];
     match name {
-        "getRemoteProtocolVersion" => return protocol_reply(),
+        "getRemoteProtocolVersion" => return protocol_version_reply(Generation::V4),
         "getDeviceInterfacesRPC" => {
             let ifaces = interfaces(dev);
             let mut w = WireWriter::for_generation(Generation::V4);

@@ -16,7 +16,9 @@ use crate::sensors::periodic::Ticker;
 use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
 use std::sync::Arc;
 use std::time::Duration;
+use yarp_net::peer_generation::PeerGenerations;
 use yarp_net::port::Port;
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Property, Stamp};
 
 const NAME: &str = "rangefinder2D_nws_yarp";
@@ -83,7 +85,12 @@ fn read_scan(device: &SharedDevice) -> DevResult<(LaserScan2D, f64)> {
     Ok((scan, if t.is_nan() { now() } else { t }))
 }
 
-async fn stream_scans(port: Arc<Port>, period: Duration, device: SharedDevice) {
+async fn stream_scans(
+    port: Arc<Port>,
+    peers: PeerGenerations,
+    period: Duration,
+    device: SharedDevice,
+) {
     let mut ticker = Ticker::new(period);
     let mut count: i32 = 0;
     let mut failing = false;
@@ -95,7 +102,11 @@ async fn stream_scans(port: Arc<Port>, period: Duration, device: SharedDevice) {
         match read_scan(&device) {
             Ok((scan, t)) => {
                 failing = false;
-                port.write_nowait(&scan.to_bottle(), Some(Stamp::new(count, t)));
+                port.write_nowait_by_generation(
+                    &scan.to_bottle(),
+                    &peers,
+                    Some(Stamp::new(count, t)),
+                );
                 count = count.wrapping_add(1);
             }
             Err(e) => {
@@ -109,8 +120,12 @@ async fn stream_scans(port: Arc<Port>, period: Duration, device: SharedDevice) {
     }
 }
 
-fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
-    Reply::Encoded(handle_rpc(cmd, dev.and_then(|d| d.as_rangefinder_2d())))
+fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>, generation: Generation) -> Reply {
+    Reply::Encoded(handle_rpc(
+        cmd,
+        dev.and_then(|d| d.as_rangefinder_2d()),
+        generation,
+    ))
 }
 
 impl DeviceDriver for Rangefinder2DNwsYarp {
@@ -164,8 +179,8 @@ impl IWrapper for Rangefinder2DNwsYarp {
             dev.get_horizontal_resolution()?;
         }
         *self.slot.lock() = Some(device.clone());
-        let (port, period) = (ports.streams[0].clone(), self.period);
-        self.stream_task = Some(runtime::handle().spawn(stream_scans(port, period, device)));
+        let (port, peers, period) = (ports.streams[0].clone(), ports.peers.clone(), self.period);
+        self.stream_task = Some(runtime::handle().spawn(stream_scans(port, peers, period, device)));
         Ok(())
     }
 

@@ -1,18 +1,21 @@
-//! The wire forms of `rangefinder2D_nws_yarp` (C++ YARP 3.12), pure:
+//! The wire forms of `rangefinder2D_nws_yarp` (C++ YARP 3.12 and 4.0), pure:
 //!
 //! - the stream, a `yarp::sig::LaserScan2D` (`LaserScan2D.thrift`): `(angle_min angle_max
 //!   range_min range_max (scans...) status)`, four tagged float64, the scans as a
 //!   `yarp::sig::Vector` (compact float64 list) and the status as int32;
 //! - the `IRangefinder2DMsgs` thrift service on `<name>/rpc:i`: commands are the method
 //!   name split at `_` (`getDistanceRange RPC`), replies a list whose first element is the
-//!   `yarp::dev::ReturnValue` (an int32 code) followed by the `return_*` struct's fields;
-//!   and the `getRemoteProtocolVersion` of every 3.12 service.
+//!   `yarp::dev::ReturnValue` followed by the `return_*` struct's fields, or a setter's
+//!   `ReturnValue` alone; and the `getRemoteProtocolVersion` of every service.
+//!
+//! YARP 4.0 kept the service and the scan but renumbered the float tags and re-laid
+//! `ReturnValue` (see `crate::thrift`): each is written in the peer's generation.
 
 use super::{IRangefinder2D, LaserStatus};
-use crate::error::DeviceError;
-use crate::sensors::rpc::{is_protocol_version_request, protocol_version_reply};
 use crate::sensors::wire::WireWriter;
+use crate::thrift::{is_protocol_version_request, protocol_version_reply, word, ReturnValue};
 use thiserror::Error;
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value, Vocab32};
 
 /// C++ `yarp::sig::LaserScan2D`.
@@ -33,9 +36,9 @@ pub struct LaserScan2D {
 pub struct ScanError(&'static str);
 
 impl LaserScan2D {
-    /// The message bytes as C++'s `BufferedPort<LaserScan2D>` writes them.
-    pub fn encode(&self) -> Vec<u8> {
-        let mut w = WireWriter::new();
+    /// The message bytes as C++'s `BufferedPort<LaserScan2D>` of `generation` writes them.
+    pub fn encode(&self, generation: Generation) -> Vec<u8> {
+        let mut w = WireWriter::for_generation(generation);
         w.list_header(6)
             .float64(self.angle_min)
             .float64(self.angle_max)
@@ -96,30 +99,6 @@ impl LaserScan2D {
     }
 }
 
-/// C++ `yarp::dev::ReturnValue::return_code`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ReturnCode {
-    Ok = 0,
-    Generic = 1,
-    NotImplemented = 2,
-    Communication = 3,
-    Deprecated = 4,
-    MethodFailed = 5,
-    NotReady = 6,
-}
-
-impl ReturnCode {
-    /// The code C++ would give for a device call that failed with `e`.
-    pub fn of(e: &DeviceError) -> ReturnCode {
-        match e {
-            DeviceError::NotOpen | DeviceError::NotReady(_) => ReturnCode::NotReady,
-            DeviceError::Unsupported(_) | DeviceError::NoInterface(_) => ReturnCode::NotImplemented,
-            DeviceError::Timeout { .. } | DeviceError::PeerLost { .. } => ReturnCode::Communication,
-            _ => ReturnCode::MethodFailed,
-        }
-    }
-}
-
 /// The methods of `IRangefinder2DMsgs`, by thrift name.
 const METHODS: &[&str] = &[
     "getDeviceStatus_RPC",
@@ -133,20 +112,6 @@ const METHODS: &[&str] = &[
     "setHorizontalResolution_RPC",
     "setScanRate_RPC",
 ];
-
-/// The `[fail]` reply of a request C++'s generated reader does not accept.
-pub fn fail_reply() -> Vec<u8> {
-    crate::sensors::rpc::fail_reply()
-}
-
-/// A command word: thrift tags may be strings or vocabs.
-fn word(v: &Value) -> Option<String> {
-    match v {
-        Value::String(s) => Some(String::from_utf8_lossy(s).into_owned()),
-        Value::Vocab32(v) => Some(v.as_string()),
-        _ => None,
-    }
-}
 
 /// Splits a request into its method and arguments, joining words with `_` as C++'s
 /// generated `read` does (`getScanRate RPC` and `getScanRate_RPC` are the same method).
@@ -181,29 +146,39 @@ pub fn parse_request(cmd: &Bottle) -> Option<(&'static str, Vec<f64>)> {
     None
 }
 
-/// Answers one request on `dev` (`None`: no device attached, every method answers
-/// `return_value_error_not_ready`).
-pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IRangefinder2D>) -> Vec<u8> {
+/// Answers one request of a client of `generation` on `dev` (`None`: no device
+/// attached, every method answers `return_value_error_not_ready`).
+pub fn handle_rpc(
+    cmd: &Bottle,
+    dev: Option<&mut dyn IRangefinder2D>,
+    generation: Generation,
+) -> Vec<u8> {
     if is_protocol_version_request(cmd) {
-        return protocol_version_reply();
+        return protocol_version_reply(generation);
     }
     let Some((method, args)) = parse_request(cmd) else {
-        return fail_reply();
+        return crate::thrift::fail_reply();
     };
-    let mut w = WireWriter::new();
+    let head = |ret: ReturnValue| {
+        let mut w = WireWriter::for_generation(generation);
+        w.list_header(reply_len(method));
+        ret.put(&mut w);
+        w
+    };
     let Some(dev) = dev else {
-        let fields = reply_len(method) - 1;
-        w.list_header(fields + 1).int32(ReturnCode::NotReady as i32);
+        if reply_len(method) == 1 {
+            return ReturnValue::NotReady.bare(generation);
+        }
+        let mut w = head(ReturnValue::NotReady);
         default_fields(&mut w, method);
         return w.into_bytes();
     };
-    match method {
+    let w = match method {
         "getDeviceStatus_RPC" => {
             let r = dev.get_device_status();
-            let status = r.as_ref().map_or(0, |s| *s as i32);
-            w.list_header(2)
-                .int32(code(r.as_ref().err()))
-                .vocab(Vocab32(status));
+            let mut w = head(ReturnValue::of_result(&r));
+            w.vocab(Vocab32(r.map_or(0, |s| s as i32)));
+            w
         }
         "getDistanceRange_RPC" | "getScanLimits_RPC" => {
             let r = if method == "getDistanceRange_RPC" {
@@ -211,11 +186,10 @@ pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IRangefinder2D>) -> Vec<u8>
             } else {
                 dev.get_scan_limits()
             };
-            let (min, max) = r.as_ref().map_or((0.0, 0.0), |p| *p);
-            w.list_header(3)
-                .int32(code(r.as_ref().err()))
-                .float64(min)
-                .float64(max);
+            let mut w = head(ReturnValue::of_result(&r));
+            let (min, max) = r.unwrap_or((0.0, 0.0));
+            w.float64(min).float64(max);
+            w
         }
         "getHorizontalResolution_RPC" | "getScanRate_RPC" => {
             let r = if method == "getScanRate_RPC" {
@@ -223,13 +197,15 @@ pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IRangefinder2D>) -> Vec<u8>
             } else {
                 dev.get_horizontal_resolution()
             };
-            let x = r.as_ref().map_or(0.0, |x| *x);
-            w.list_header(2).int32(code(r.as_ref().err())).float64(x);
+            let mut w = head(ReturnValue::of_result(&r));
+            w.float64(r.unwrap_or(0.0));
+            w
         }
         "getDeviceInfo_RPC" => {
             let r = dev.get_device_info();
-            let info = r.as_ref().map_or("", |s| s.as_str());
-            w.list_header(2).int32(code(r.as_ref().err())).string(info);
+            let mut w = head(ReturnValue::of_result(&r));
+            w.string(r.as_deref().unwrap_or(""));
+            w
         }
         set => {
             let r = match set {
@@ -238,15 +214,11 @@ pub fn handle_rpc(cmd: &Bottle, dev: Option<&mut dyn IRangefinder2D>) -> Vec<u8>
                 "setHorizontalResolution_RPC" => dev.set_horizontal_resolution(args[0]),
                 _ => dev.set_scan_rate(args[0]),
             };
-            w.list_header(1).int32(code(r.as_ref().err()));
+            // a setter's reply is its ReturnValue alone, no list around it
+            return ReturnValue::of_result(&r).bare(generation);
         }
-    }
+    };
     w.into_bytes()
-}
-
-/// The int32 a reply starts with.
-fn code(err: Option<&DeviceError>) -> i32 {
-    err.map_or(ReturnCode::Ok, ReturnCode::of) as i32
 }
 
 /// Elements of a method's reply (C++ `s_reply_len`).
@@ -277,10 +249,10 @@ fn default_fields(w: &mut WireWriter, method: &str) {
     }
 }
 
-/// A decoded reply: the return code and the fields after it.
-pub fn parse_reply(reply: &Bottle) -> Option<(i32, Vec<Value>)> {
-    let code = reply.get(0)?.as_i32()?;
-    Some((code, reply.iter().skip(1).cloned().collect()))
+/// A decoded reply of either generation: its return value and the fields after it.
+pub fn parse_reply(reply: &Bottle) -> Option<(ReturnValue, Vec<Value>)> {
+    let ret = ReturnValue::from_value(reply.get(0)?)?;
+    Some((ret, reply.iter().skip(1).cloned().collect()))
 }
 
 /// The status a `getDeviceStatus_RPC` reply or a scan carries.
@@ -309,7 +281,7 @@ mod tests {
     }
 
     fn ask(text: &str, dev: Option<&mut dyn IRangefinder2D>) -> Bottle {
-        Bottle::decode(&handle_rpc(&Bottle::from_text(text), dev)).unwrap()
+        Bottle::decode(&handle_rpc(&Bottle::from_text(text), dev, Generation::V3)).unwrap()
     }
 
     fn nums(b: &Bottle) -> Vec<f64> {
@@ -326,7 +298,11 @@ mod tests {
             scans: vec![1.0, 2.5, f64::INFINITY],
             status: 1,
         };
-        assert_eq!(s.encode(), s.to_bottle().encode());
+        assert_eq!(s.encode(Generation::V3), s.to_bottle().encode());
+        assert_eq!(
+            s.encode(Generation::V4),
+            s.to_bottle().encode_as(Generation::V4)
+        );
         assert_eq!(LaserScan2D::from_bottle(&s.to_bottle()).unwrap(), s);
         assert!(LaserScan2D::from_bottle(&Bottle::from_text("1 2 3")).is_err());
     }
@@ -347,13 +323,27 @@ mod tests {
             r.get(1).and_then(Value::as_str),
             Some("Fake Laser device for test/debugging")
         );
-        let r = ask("setScanRate RPC 25", Some(&mut l));
-        assert_eq!(r.to_string(), "0");
+        let set =
+            |l: &mut FakeLaser, g| handle_rpc(&Bottle::from_text("setScanRate RPC 25"), Some(l), g);
+        // a setter's reply is its ReturnValue alone: 3.12's tag and code, no Bottle
+        assert_eq!(set(&mut l, Generation::V3), [1, 0, 0, 0, 0, 0, 0, 0]);
+        // 4.0's: a list of one vocab
+        assert_eq!(
+            set(&mut l, Generation::V4),
+            ReturnValue::Ok.bare(Generation::V4)
+        );
         let r = ask("getScanRate RPC", Some(&mut l));
         assert_eq!(r.get(1).and_then(Value::as_f64), Some(25.0));
-        let bytes = handle_rpc(&Bottle::from_text("setScanRate RPC 25"), Some(&mut l));
-        // a one-element thrift list stays mixed: list tag, count, tagged int32
-        assert_eq!(bytes, [0, 1, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0]);
+        // 4.0's getter: its ReturnValue nested, its floats tagged 20
+        let r = handle_rpc(
+            &Bottle::from_text("getScanRate RPC"),
+            Some(&mut l),
+            Generation::V4,
+        );
+        let b = Bottle::decode(&r).unwrap();
+        assert_eq!(b.to_string(), "([ok]) 25.0");
+        // the ReturnValue is a mixed list of one tagged vocab (a Bottle would compact it)
+        assert_eq!(r[..20], [0, 1, 0, 0, 2, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 9, 0, 0, 0]);
     }
 
     #[test]
@@ -370,21 +360,26 @@ mod tests {
             assert_eq!(ask(bad, Some(&mut l)).to_string(), "[fail]", "{bad}");
         }
         assert_eq!(nums(&ask("getDistanceRange RPC", None)), [6.0, 0.0, 0.0]);
-        assert_eq!(ask("setScanRate RPC 2", None).to_string(), "6");
+        let set = handle_rpc(
+            &Bottle::from_text("setScanRate RPC 2"),
+            None,
+            Generation::V3,
+        );
+        assert_eq!(ReturnValue::from_bare(&set), Some(ReturnValue::NotReady));
     }
 
     #[test]
     fn protocol_version_with_and_without_a_device() {
         let mut l = laser();
-        let want = protocol_version_reply();
+        let want = protocol_version_reply(Generation::V3);
         let ask = |text: &str, dev: Option<&mut dyn IRangefinder2D>| {
-            handle_rpc(&Bottle::from_text(text), dev)
+            handle_rpc(&Bottle::from_text(text), dev, Generation::V3)
         };
         assert_eq!(ask("getRemoteProtocolVersion", Some(&mut l)), want);
         assert_eq!(ask("__direct__ getRemoteProtocolVersion", None), want);
         assert_eq!(
             ask("getRemoteProtocolVersion 1", None),
-            crate::sensors::rpc::fail_reply()
+            crate::thrift::fail_reply()
         );
     }
 }

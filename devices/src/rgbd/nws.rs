@@ -16,6 +16,7 @@ use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 use yarp_net::port::Port;
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Property};
 
 const NAME: &str = "rgbdSensor_nws_yarp";
@@ -124,7 +125,8 @@ fn stream_images(
     }
 }
 
-fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>) -> Reply {
+/// (3.12's vocab protocol: YARP 4.0's clients speak another, `RGBDSensorMsgs`.)
+fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>, _: Generation) -> Reply {
     Reply::Bottle(handle_rpc(cmd, dev.and_then(|d| d.as_rgbd_sensor())))
 }
 

@@ -2,11 +2,14 @@
 //! pure function from the request Bottle to the reply bytes.
 //!
 //! Commands (the C++ generated `read`): `getMetadata` (no arguments),
-//! `getRemoteProtocolVersion` (every 3.12 thrift service has it) and `help [function]`,
+//! `getRemoteProtocolVersion` (every thrift service has it) and `help [function]`,
 //! optionally behind `__direct__`. Anything else, or extra arguments,
-//! gets `[fail]`, as C++ `WireReader::fail` answers.
+//! gets `[fail]`, as C++ `WireReader::fail` answers. The service is the same in YARP
+//! 3.12 and 4.0 and so are its replies' bytes (they hold no floats).
 
 use super::wire::{SensorRpcData, WireWriter};
+use crate::thrift::{fail_reply, is_protocol_version_request, protocol_version_reply, word};
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value, Vocab32};
 
 /// The one service method.
@@ -15,51 +18,6 @@ const HELP: &str = "help";
 const PROTOTYPE: &str = "SensorRPCData MultipleAnalogSensorsMetadata::getMetadata()";
 const METHOD_HELP: &str =
     "Read the sensor metadata necessary to configure the MultipleAnalogSensorsClient device.";
-
-/// The method every thrift service of C++ YARP 3.12 answers besides its own (not listed
-/// by `help`): newer clients call it on connecting and refuse a server whose
-/// `protocol_version` differs from theirs.
-pub const GET_PROTOCOL_VERSION: &str = "getRemoteProtocolVersion";
-
-/// The YARP version this implementation speaks the protocols of, as C++ reports it in
-/// `getRemoteProtocolVersion`.
-pub const YARP_VERSION: [i16; 3] = [3, 12, 3];
-
-/// The `getRemoteProtocolVersion` reply: a one-element list header followed by an
-/// `ApplicationNetworkProtocolVersion` written untagged (four int16: the service's
-/// protocol version, 0 for every 3.12 service, then YARP's major, minor and patch).
-pub fn protocol_version_reply() -> Vec<u8> {
-    let mut w = WireWriter::new();
-    w.list_header(1).raw_int16(0);
-    for part in YARP_VERSION {
-        w.raw_int16(part);
-    }
-    w.into_bytes()
-}
-
-/// Whether `cmd` is `getRemoteProtocolVersion`, optionally behind `__direct__`, without
-/// arguments (with arguments C++ fails the request).
-pub fn is_protocol_version_request(cmd: &Bottle) -> bool {
-    let mut words = cmd.iter().map(Some).map(tag).peekable();
-    if words.peek() == Some(&Some("__direct__".to_string())) {
-        words.next();
-    }
-    words.next() == Some(Some(GET_PROTOCOL_VERSION.to_string())) && words.next().is_none()
-}
-
-/// The `[fail]` reply (a plain Bottle, compact vocab list, as C++ writes it).
-pub fn fail_reply() -> Vec<u8> {
-    Bottle::new().with(Vocab32::new("fail")).encode()
-}
-
-/// A command word: thrift tags may be strings or vocabs.
-fn tag(v: Option<&Value>) -> Option<String> {
-    match v? {
-        Value::String(s) => Some(String::from_utf8_lossy(s).into_owned()),
-        Value::Vocab32(v) => Some(v.as_string()),
-        _ => None,
-    }
-}
 
 /// Lines of C++ `MultipleAnalogSensorsMetadata::help(functionName)`.
 fn help_lines(function: &str) -> Vec<&'static str> {
@@ -93,17 +51,18 @@ fn help_reply(function: &str) -> Vec<u8> {
     w.into_bytes()
 }
 
-/// Serves one request against the server's metadata; returns the reply bytes.
-pub fn handle_rpc(cmd: &Bottle, metadata: &SensorRpcData) -> Vec<u8> {
+/// Serves one request of a client of `generation` against the server's metadata;
+/// returns the reply bytes.
+pub fn handle_rpc(cmd: &Bottle, metadata: &SensorRpcData, generation: Generation) -> Vec<u8> {
     if is_protocol_version_request(cmd) {
-        return protocol_version_reply();
+        return protocol_version_reply(generation);
     }
     let mut args = cmd.iter().peekable();
-    let mut word = tag(args.next());
-    if word.as_deref() == Some("__direct__") {
-        word = tag(args.next());
+    let mut method = args.next().and_then(word);
+    if method.as_deref() == Some("__direct__") {
+        method = args.next().and_then(word);
     }
-    match word.as_deref() {
+    match method.as_deref() {
         Some(GET_METADATA) if args.peek().is_none() => metadata.encode_reply(),
         Some(HELP) => {
             let function = match args.next() {
@@ -131,7 +90,7 @@ mod tests {
     }
 
     fn reply(text: &str) -> String {
-        Bottle::decode(&handle_rpc(&Bottle::from_text(text), &md()))
+        Bottle::decode(&handle_rpc(&Bottle::from_text(text), &md(), Generation::V3))
             .unwrap()
             .to_string()
     }
@@ -169,7 +128,11 @@ mod tests {
             "getRemoteProtocolVersion",
             "__direct__ getRemoteProtocolVersion",
         ] {
-            assert_eq!(handle_rpc(&Bottle::from_text(text), &md()), want, "{text}");
+            assert_eq!(
+                handle_rpc(&Bottle::from_text(text), &md(), Generation::V3),
+                want,
+                "{text}"
+            );
         }
     }
 

@@ -8,15 +8,17 @@
 use super::family::{access, SensorFamily};
 use super::interfaces::{MasStatus, SensorMeasurement};
 use super::params::{now, positive_ms};
-use super::rpc::{fail_reply, handle_rpc};
+use super::rpc::handle_rpc;
 use super::wire::{SensorMetadata, SensorRpcData, SensorStreamingData};
 use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::runtime;
+use crate::thrift::fail_reply;
 use std::sync::Arc;
 use std::time::Duration;
 use thiserror::Error;
 use yarp_net::nameserver::NameClient;
+use yarp_net::peer_generation::PeerGenerations;
 use yarp_net::port::{Port, PortError};
 use yarp_proto::{Property, Stamp};
 
@@ -117,7 +119,7 @@ impl Serving {
         metadata: SensorRpcData,
     ) -> Result<Serving, PortError> {
         let stream = Arc::new(Port::open(&format!("{prefix}/measures:o"), ns.clone()).await?);
-        let rpc = match Port::open(&format!("{prefix}/rpc:o"), ns).await {
+        let rpc = match Port::open(&format!("{prefix}/rpc:o"), ns.clone()).await {
             Ok(p) => Arc::new(p),
             Err(e) => {
                 close_port(stream).await;
@@ -125,13 +127,16 @@ impl Serving {
             }
         };
         let metadata = Arc::new(metadata);
+        // 4.0 renumbered the float tags of the measurements: each reader gets its own
+        let peers = PeerGenerations::new(ns);
         let tasks = vec![
-            tokio::spawn(serve_rpc(rpc.clone(), metadata.clone())),
+            tokio::spawn(serve_rpc(rpc.clone(), metadata.clone(), peers.clone())),
             tokio::spawn(stream_measurements(
                 stream.clone(),
                 period,
                 device,
                 metadata,
+                peers,
             )),
         ];
         Ok(Serving { rpc, stream, tasks })
@@ -156,10 +161,10 @@ async fn close_port(port: Arc<Port>) {
     }
 }
 
-async fn serve_rpc(port: Arc<Port>, metadata: Arc<SensorRpcData>) {
+async fn serve_rpc(port: Arc<Port>, metadata: Arc<SensorRpcData>, peers: PeerGenerations) {
     while let Some(mut msg) = port.read().await {
         let reply = match msg.bottle() {
-            Ok(cmd) => handle_rpc(&cmd, &metadata),
+            Ok(cmd) => handle_rpc(&cmd, &metadata, peers.of(&msg.from).await),
             Err(e) => {
                 tracing::warn!("{NAME}: undecodable request from {}: {e}", msg.from);
                 fail_reply()
@@ -177,6 +182,7 @@ async fn stream_measurements(
     period: Duration,
     device: SharedDevice,
     metadata: Arc<SensorRpcData>,
+    peers: PeerGenerations,
 ) {
     let mut ticker = super::periodic::Ticker::new(period);
     let mut count: i32 = 0;
@@ -197,7 +203,7 @@ async fn stream_measurements(
                 failing = false;
                 let stamp = Stamp::new(count, now());
                 count = count.wrapping_add(1);
-                port.write_nowait(&data.to_bottle(), Some(stamp));
+                port.write_nowait_by_generation(&data.to_bottle(), &peers, Some(stamp));
             }
             Err(e) => {
                 // log once per failure streak, not every period

@@ -78,6 +78,11 @@ impl WireWriter {
         }
     }
 
+    /// The generation whose tags it writes.
+    pub fn generation(&self) -> tags::Generation {
+        self.generation
+    }
+
     /// `writeBool`: the vocab `ok` or `fail`.
     pub fn bool(&mut self, b: bool) -> &mut Self {
         self.vocab(Vocab32::new(if b { "ok" } else { "fail" }))

@@ -91,7 +91,9 @@ impl RpcClient {
                 target: self.target.clone(),
                 source,
             })?;
-        self.decoder.expect_response(&pc);
+        // a reply that is no Bottle (a thrift setter's bare ReturnValue in 3.12) comes
+        // back as PortError::BadReply with its bytes
+        self.decoder.expect_raw_response(&pc);
         await_reply(&mut self.stream, &mut self.decoder, &self.target, self.spec).await
     }
 

@@ -557,12 +557,12 @@ impl Port {
 
     /// Sends, without waiting, to each output the form of a message its reader takes:
     /// `forms` holds a Bottle per generation of YARP, and `pick` tells, from the name of
-    /// the port an output goes to, which of them (by index) it gets. Returns how many
-    /// outputs took one.
+    /// the port an output goes to, which of them (by index) it gets, if any. Returns how
+    /// many outputs took one.
     pub fn write_nowait_each(
         &self,
         forms: &[(Bottle, Generation)],
-        pick: impl Fn(&str) -> usize,
+        pick: impl Fn(&str) -> Option<usize>,
         stamp: Option<Stamp>,
     ) -> usize {
         let outs: Vec<_> = self
@@ -570,12 +570,7 @@ impl Port {
             .lock()
             .outputs
             .values()
-            .map(|o| {
-                (
-                    pick(&o.route.to).min(forms.len().saturating_sub(1)),
-                    o.sender(),
-                )
-            })
+            .filter_map(|o| Some((pick(&o.route.to)?, o.sender())))
             .collect();
         // each form is built, and measured, once for all the outputs that take it
         let mut msgs: Vec<Option<(Arc<output::Outgoing>, usize)>> = vec![None; forms.len()];
@@ -594,6 +589,28 @@ impl Port {
             }
         }
         n
+    }
+
+    /// Sends `b`, without waiting, to each reader in its own YARP generation's bytes
+    /// (told by `peers`); a reader whose generation is not known yet is asked, and misses
+    /// the messages sent meanwhile rather than get bytes it would misread.
+    pub fn write_nowait_by_generation(
+        &self,
+        b: &Bottle,
+        peers: &crate::peer_generation::PeerGenerations,
+        stamp: Option<Stamp>,
+    ) -> usize {
+        let forms = [(b.clone(), Generation::V3), (b.clone(), Generation::V4)];
+        self.write_nowait_each(
+            &forms,
+            |to| {
+                peers.known(to).map(|g| match g {
+                    Generation::V3 => 0,
+                    Generation::V4 => 1,
+                })
+            },
+            stamp,
+        )
     }
 
     /// Queues `msg` (`size` bytes encoded) on one output unless the output is behind on
