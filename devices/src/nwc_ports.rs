@@ -261,9 +261,10 @@ impl<T: Send + 'static> NwcPorts<T> {
             // 3.12's bare `ok` (a tag and 0) reads as an empty compact list
             Ok(b) if b.is_empty() => Some((ReturnValue::Ok, Vec::new())),
             // 4.0's bare ReturnValue decodes as a Bottle of its one vocab
-            Ok(b) if b.len() == 1 && b.get(0).is_some_and(|v| v.as_vocab().is_some()) => {
-                ReturnValue::from_bare(&b.encode()).map(|r| (r, Vec::new()))
-            }
+            Ok(b) if b.len() == 1 => b
+                .get(0)
+                .and_then(|v| v.as_vocab())
+                .map(|v| (ReturnValue::from_vocab(v), Vec::new())),
             Ok(b) => parse_reply(b),
         };
         match parsed {

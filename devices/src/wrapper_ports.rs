@@ -29,6 +29,12 @@ pub(crate) enum Reply {
 /// device, if any, and the generation of YARP the client runs.
 pub(crate) type Answer = fn(&Bottle, Option<&mut dyn DeviceDriver>, Generation) -> Reply;
 
+/// The port that tells a client's generation, from the name of its RPC port: a port of
+/// the same client other than that one, whose C++ `PortCore` is locked for as long as
+/// the call waits for our reply (its admin would not answer before we do). `None`: do
+/// not ask (the protocol is the same in both generations, or the client is unknown).
+pub(crate) type ClientPort = fn(&str) -> Option<String>;
+
 pub(crate) struct WrapperPorts {
     /// The stream ports, in the order given to [`WrapperPorts::open`].
     pub streams: Vec<Arc<Port>>,
@@ -47,6 +53,7 @@ impl WrapperPorts {
         rpc: String,
         slot: Slot,
         answer: Answer,
+        client_port: ClientPort,
     ) -> DevResult<WrapperPorts> {
         let refused = move |why: String| DeviceError::BadParam {
             device: wrapper.into(),
@@ -71,8 +78,13 @@ impl WrapperPorts {
             }
             let rpc = opened.pop().expect("the rpc port was opened last");
             let peers = PeerGenerations::new(ns);
-            let rpc_task =
-                tokio::spawn(serve_rpc(wrapper, rpc.clone(), slot, answer, peers.clone()));
+            let rpc_task = tokio::spawn(serve_rpc(
+                wrapper,
+                rpc.clone(),
+                slot,
+                (answer, client_port),
+                peers.clone(),
+            ));
             Ok(WrapperPorts {
                 streams: opened,
                 peers,
@@ -99,7 +111,7 @@ async fn serve_rpc(
     wrapper: &'static str,
     port: Arc<Port>,
     slot: Slot,
-    answer: Answer,
+    (answer, client_port): (Answer, ClientPort),
     peers: PeerGenerations,
 ) {
     while let Some(mut msg) = port.read().await {
@@ -108,9 +120,10 @@ async fn serve_rpc(
             Bottle::new()
         });
         // a request with 4.0's float tags says it; most hold none and ask the sender
-        let generation = match msg.generation() {
-            Generation::V4 => Generation::V4,
-            Generation::V3 => peers.of(&msg.from).await,
+        let generation = match (msg.generation(), client_port(&msg.from)) {
+            (Generation::V4, _) => Generation::V4,
+            (Generation::V3, Some(port)) => peers.of(&port).await,
+            (Generation::V3, None) => Generation::V3,
         };
         let device = slot.lock().clone();
         let reply = match device {

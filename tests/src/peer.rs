@@ -8,7 +8,6 @@ use std::ffi::OsString;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::sync::OnceLock;
 
 /// How to install the C++ YARP peer (3.12.3 with its device plugins and icub-main's host).
 pub const CPP_YARP_INSTALL: &str = "tests/peers/install-cpp-peers.sh icub (then set \
@@ -140,10 +139,16 @@ pub fn cpp4_program(test: &str, name: &str) -> Option<PathBuf> {
     found
 }
 
-/// The device plugins `yarpdev --list` of the C++ peer reports (read once per process).
+/// The device plugins `yarpdev --list` of the C++ peer in `bin` reports (read once per
+/// process and peer).
 fn cpp_device_list(bin: &Path) -> BTreeSet<String> {
-    static LIST: OnceLock<BTreeSet<String>> = OnceLock::new();
-    LIST.get_or_init(|| {
+    static LISTS: std::sync::Mutex<Vec<(PathBuf, BTreeSet<String>)>> =
+        std::sync::Mutex::new(Vec::new());
+    let mut lists = LISTS.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, list)) = lists.iter().find(|(b, _)| b == bin) {
+        return list.clone();
+    }
+    let list = {
         let out = cpp_command(&real_cpp_program(bin, "yarpdev"))
             .arg("--list")
             .stdin(Stdio::null())
@@ -157,9 +162,10 @@ fn cpp_device_list(bin: &Path) -> BTreeSet<String> {
         text.lines()
             .filter_map(|l| l.split("Device \"").nth(1)?.split('"').next())
             .map(str::to_string)
-            .collect()
-    })
-    .clone()
+            .collect::<BTreeSet<String>>()
+    };
+    lists.push((bin.to_path_buf(), list.clone()));
+    list
 }
 
 /// The device names the C++ `yarpdev --list` of `bin` reports.
@@ -172,6 +178,18 @@ pub fn cpp_device_names(bin: &Path) -> BTreeSet<String> {
 #[track_caller]
 pub fn cpp_devices(test: &str, devices: &[&str]) -> Option<PathBuf> {
     let bin = cpp_program(test, "yarpdev")?.parent()?.to_path_buf();
+    devices_in(test, bin, devices)
+}
+
+/// [`cpp_devices`] of the C++ YARP 4.0.0 peer.
+#[track_caller]
+pub fn cpp4_devices(test: &str, devices: &[&str]) -> Option<PathBuf> {
+    let bin = cpp4_program(test, "yarpdev")?.parent()?.to_path_buf();
+    devices_in(test, bin, devices)
+}
+
+#[track_caller]
+fn devices_in(test: &str, bin: PathBuf, devices: &[&str]) -> Option<PathBuf> {
     let list = cpp_device_list(&bin);
     let absent: Vec<&str> = devices
         .iter()

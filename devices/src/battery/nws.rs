@@ -174,6 +174,8 @@ impl DeviceDriver for BatteryNwsYarp {
             self.rpc_port_name(),
             self.slot.clone(),
             answer,
+            // C++'s client reads `<local>/data:i`, calls from `<local>/rpc:o`
+            |rpc| Some(format!("{}/data:i", rpc.strip_suffix("/rpc:o")?)),
         )?;
         self.ports = Some(ports);
         Ok(())

@@ -143,6 +143,8 @@ impl DeviceDriver for Rangefinder2DNwsYarp {
             self.rpc_port_name(),
             self.slot.clone(),
             answer,
+            // C++'s client reads the scans on `<local>`, calls from `<local>/rpc:o`
+            |rpc| rpc.strip_suffix("/rpc:o").map(str::to_string),
         )?;
         self.ports = Some(ports);
         Ok(())

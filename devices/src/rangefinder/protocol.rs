@@ -343,7 +343,10 @@ mod tests {
         let b = Bottle::decode(&r).unwrap();
         assert_eq!(b.to_string(), "([ok]) 25.0");
         // the ReturnValue is a mixed list of one tagged vocab (a Bottle would compact it)
-        assert_eq!(r[..20], [0, 1, 0, 0, 2, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 9, 0, 0, 0]);
+        assert_eq!(
+            r[..20],
+            [0, 1, 0, 0, 2, 0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 9, 0, 0, 0]
+        );
     }
 
     #[test]

@@ -145,6 +145,7 @@ impl DeviceDriver for RgbdSensorNwsYarp {
             self.rpc_port_name(),
             self.slot.clone(),
             answer,
+            |_| None,
         )?;
         self.ports = Some(ports);
         Ok(())

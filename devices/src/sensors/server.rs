@@ -164,7 +164,21 @@ async fn close_port(port: Arc<Port>) {
 async fn serve_rpc(port: Arc<Port>, metadata: Arc<SensorRpcData>, peers: PeerGenerations) {
     while let Some(mut msg) = port.read().await {
         let reply = match msg.bottle() {
-            Ok(cmd) => handle_rpc(&cmd, &metadata, peers.of(&msg.from).await),
+            // its replies hold no floats: the same bytes for both generations but
+            // `getRemoteProtocolVersion`'s, which says the caller's YARP version (asked of
+            // the C++ client's `<local>/measures:i`: its `<local>/rpc:i` waits on us)
+            Ok(cmd) => {
+                let client = msg
+                    .from
+                    .strip_suffix("/rpc:i")
+                    .map(|local| format!("{local}/measures:i"))
+                    .filter(|_| crate::thrift::is_protocol_version_request(&cmd));
+                let generation = match client {
+                    Some(port) => peers.of(&port).await,
+                    None => yarp_proto::tags::Generation::V3,
+                };
+                handle_rpc(&cmd, &metadata, generation)
+            }
             Err(e) => {
                 tracing::warn!("{NAME}: undecodable request from {}: {e}", msg.from);
                 fail_reply()
