@@ -242,6 +242,260 @@ pub fn word(v: &Value) -> Option<String> {
     }
 }
 
+// ---------------------------------------------------------------------------------------
+// Values as 4.0's generated code writes and reads them
+// ---------------------------------------------------------------------------------------
+
+/// A value as 4.0's generated code writes it and reads it.
+pub trait Wire4: Sized {
+    /// The elements it adds to a call or reply: a thrift struct is written flat.
+    const COUNT: usize = 1;
+    fn put4(&self, w: &mut WireWriter);
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self>;
+    /// What C++ writes in a reply whose call failed.
+    fn zero() -> Self;
+    /// The return value a successful call with this reply carries.
+    fn ret(&self) -> ReturnValue {
+        ReturnValue::Ok
+    }
+    /// The reply a return value other than `ok` stands for, if it stands for one.
+    fn from_failure(_: ReturnValue) -> Option<Self> {
+        None
+    }
+}
+
+/// The values of a call or reply not read yet.
+pub struct Cursor4<'a>(std::slice::Iter<'a, Value>);
+
+impl<'a> Cursor4<'a> {
+    pub fn new(items: &'a [Value]) -> Self {
+        Cursor4(items.iter())
+    }
+    pub fn item(&mut self) -> Option<&'a Value> {
+        self.0.next()
+    }
+}
+
+impl Wire4 for () {
+    const COUNT: usize = 0;
+    fn put4(&self, _: &mut WireWriter) {}
+    fn take4(_: &mut Cursor4<'_>) -> Option<Self> {
+        Some(())
+    }
+    fn zero() -> Self {}
+}
+
+impl Wire4 for f64 {
+    fn put4(&self, w: &mut WireWriter) {
+        w.float64(*self);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        c.item()?.as_f64()
+    }
+    fn zero() -> Self {
+        0.0
+    }
+}
+
+impl Wire4 for i32 {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32(*self);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        c.item().filter(|v| v.is_int() || v.is_vocab())?.as_i32()
+    }
+    fn zero() -> Self {
+        0
+    }
+}
+
+/// Joints, motors and counts are i32 (i16 in some calls: C++ reads either).
+impl Wire4 for usize {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32(i32::try_from(*self).unwrap_or(i32::MAX));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        usize::try_from(i32::take4(c)?).ok()
+    }
+    fn zero() -> Self {
+        0
+    }
+}
+
+impl Wire4 for u32 {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32(i32::try_from(*self).unwrap_or(i32::MAX));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        u32::try_from(i32::take4(c)?).ok()
+    }
+    fn zero() -> Self {
+        0
+    }
+}
+
+/// `writeBool`: the vocab `ok` or `fail`; read true unless 0 or `fail`.
+impl Wire4 for bool {
+    fn put4(&self, w: &mut WireWriter) {
+        w.bool(*self);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        let v = c.item().filter(|v| v.is_int() || v.is_vocab())?.as_i32()?;
+        Some(v != 0 && v != Vocab32::new("fail").0)
+    }
+    fn zero() -> Self {
+        false
+    }
+}
+
+impl Wire4 for Option<bool> {
+    fn put4(&self, w: &mut WireWriter) {
+        w.bool(self.unwrap_or(false));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        bool::take4(c).map(Some)
+    }
+    fn zero() -> Self {
+        None
+    }
+}
+
+impl Wire4 for String {
+    fn put4(&self, w: &mut WireWriter) {
+        w.string(self);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        c.item()?.as_str().map(str::to_string)
+    }
+    fn zero() -> Self {
+        String::new()
+    }
+}
+
+/// Control modes, interaction modes, PID types and joint types are thrift enums whose
+/// values are vocabs, written with the int32 tag.
+impl Wire4 for Vocab32 {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32(self.0);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        i32::take4(c).map(Vocab32)
+    }
+    fn zero() -> Self {
+        Vocab32(0)
+    }
+}
+
+/// A list of items of one type: the compact form C++ writes (and requires).
+pub fn take_list<'a, T>(
+    c: &mut Cursor4<'a>,
+    item: impl Fn(&'a Value) -> Option<T>,
+) -> Option<Vec<T>> {
+    c.item()?.as_list()?.iter().map(item).collect()
+}
+
+impl Wire4 for Vec<f64> {
+    fn put4(&self, w: &mut WireWriter) {
+        w.float_vector(self);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        take_list(c, Value::as_f64)
+    }
+    fn zero() -> Self {
+        Vec::new()
+    }
+}
+
+impl Wire4 for Vec<i32> {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32_list(self.iter().copied());
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        take_list(c, Value::as_i32)
+    }
+    fn zero() -> Self {
+        Vec::new()
+    }
+}
+
+impl Wire4 for Vec<Vocab32> {
+    fn put4(&self, w: &mut WireWriter) {
+        w.int32_list(self.iter().map(|v| v.0));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        take_list(c, |v| v.as_i32().map(Vocab32))
+    }
+    fn zero() -> Self {
+        Vec::new()
+    }
+}
+
+impl<A: Wire4, B: Wire4> Wire4 for (A, B) {
+    const COUNT: usize = A::COUNT + B::COUNT;
+    fn put4(&self, w: &mut WireWriter) {
+        self.0.put4(w);
+        self.1.put4(w);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        Some((A::take4(c)?, B::take4(c)?))
+    }
+    fn zero() -> Self {
+        (A::zero(), B::zero())
+    }
+}
+
+impl<A: Wire4, B: Wire4, C: Wire4> Wire4 for (A, B, C) {
+    const COUNT: usize = A::COUNT + B::COUNT + C::COUNT;
+    fn put4(&self, w: &mut WireWriter) {
+        self.0.put4(w);
+        self.1.put4(w);
+        self.2.put4(w);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        Some((A::take4(c)?, B::take4(c)?, C::take4(c)?))
+    }
+    fn zero() -> Self {
+        (A::zero(), B::zero(), C::zero())
+    }
+}
+
+/// The reply of a 4.0 method returning `R` that gave `result`: the bare `ReturnValue`
+/// when `R` has no fields, otherwise a list of the return value and the fields, flat.
+pub fn reply4<R: Wire4>(result: crate::error::DevResult<R>, method: &str) -> Vec<u8> {
+    let mut w = WireWriter::for_generation(Generation::V4);
+    let (ret, value) = match result {
+        Ok(v) => (v.ret(), v),
+        Err(e) => {
+            tracing::warn!("{method} failed: {e}");
+            (ReturnValue::of(&e), R::zero())
+        }
+    };
+    if R::COUNT == 0 {
+        ret.put(&mut w);
+    } else {
+        w.list_header(1 + R::COUNT);
+        ret.put(&mut w);
+        value.put4(&mut w);
+    }
+    w.into_bytes()
+}
+
+/// What a 4.0 reply of `R` says: its return value, and the value when it is `ok`.
+pub fn answer4<R: Wire4>(reply: &Bottle) -> Option<(ReturnValue, Option<R>)> {
+    if R::COUNT == 0 {
+        // the bare ReturnValue: its one vocab is the Bottle's
+        let code = ReturnValue::from_vocab(reply.get(0)?.as_vocab()?);
+        let value = match code {
+            ReturnValue::Ok => R::take4(&mut Cursor4::new(&[])),
+            failed => R::from_failure(failed),
+        };
+        return Some((code, value));
+    }
+    let code = ReturnValue::from_value(reply.get(0)?)?;
+    let value = R::take4(&mut Cursor4::new(&reply.items()[1..]));
+    Some((code, value.filter(|_| code == ReturnValue::Ok)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

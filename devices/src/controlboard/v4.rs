@@ -16,84 +16,9 @@ use crate::sensors::wire::WireWriter;
 use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value, Vocab32};
 
-pub use crate::thrift::ReturnValue;
+use crate::thrift::{answer4, reply4, take_list};
 use crate::thrift::{fail_reply, protocol_version_reply};
-
-/// A value as 4.0's generated code writes it and reads it.
-pub trait Wire4: Sized {
-    /// The elements it adds to a call or reply: a thrift struct is written flat.
-    const COUNT: usize = 1;
-    fn put4(&self, w: &mut WireWriter);
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self>;
-    /// What C++ writes in a reply whose call failed.
-    fn zero() -> Self;
-    /// The return value a successful call with this reply carries.
-    fn ret(&self) -> ReturnValue {
-        ReturnValue::Ok
-    }
-    /// The reply a return value other than `ok` stands for, if it stands for one.
-    fn from_failure(_: ReturnValue) -> Option<Self> {
-        None
-    }
-}
-
-/// The values of a call or reply not read yet.
-pub struct Cursor4<'a>(std::slice::Iter<'a, Value>);
-
-impl<'a> Cursor4<'a> {
-    pub fn new(items: &'a [Value]) -> Self {
-        Cursor4(items.iter())
-    }
-    fn next(&mut self) -> Option<&'a Value> {
-        self.0.next()
-    }
-}
-
-impl Wire4 for () {
-    const COUNT: usize = 0;
-    fn put4(&self, _: &mut WireWriter) {}
-    fn take4(_: &mut Cursor4<'_>) -> Option<Self> {
-        Some(())
-    }
-    fn zero() -> Self {}
-}
-
-impl Wire4 for f64 {
-    fn put4(&self, w: &mut WireWriter) {
-        w.float64(*self);
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        c.next()?.as_f64()
-    }
-    fn zero() -> Self {
-        0.0
-    }
-}
-
-impl Wire4 for i32 {
-    fn put4(&self, w: &mut WireWriter) {
-        w.int32(*self);
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        c.next().filter(|v| v.is_int() || v.is_vocab())?.as_i32()
-    }
-    fn zero() -> Self {
-        0
-    }
-}
-
-/// Joints, motors and counts are i32 (i16 in some calls: C++ reads either).
-impl Wire4 for usize {
-    fn put4(&self, w: &mut WireWriter) {
-        w.int32(i32::try_from(*self).unwrap_or(i32::MAX));
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        usize::try_from(i32::take4(c)?).ok()
-    }
-    fn zero() -> Self {
-        0
-    }
-}
+pub use crate::thrift::{Cursor4, ReturnValue, Wire4};
 
 /// 4.0's `i16` joints: tag INT16 and two bytes (read from any integer, as C++ does).
 impl Wire4 for J16 {
@@ -105,111 +30,6 @@ impl Wire4 for J16 {
     }
     fn zero() -> Self {
         J16(0)
-    }
-}
-
-impl Wire4 for u32 {
-    fn put4(&self, w: &mut WireWriter) {
-        w.int32(i32::try_from(*self).unwrap_or(i32::MAX));
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        u32::try_from(i32::take4(c)?).ok()
-    }
-    fn zero() -> Self {
-        0
-    }
-}
-
-/// `writeBool`: the vocab `ok` or `fail`; read true unless 0 or `fail`.
-impl Wire4 for bool {
-    fn put4(&self, w: &mut WireWriter) {
-        w.bool(*self);
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        let v = c.next().filter(|v| v.is_int() || v.is_vocab())?.as_i32()?;
-        Some(v != 0 && v != Vocab32::new("fail").0)
-    }
-    fn zero() -> Self {
-        false
-    }
-}
-
-impl Wire4 for Option<bool> {
-    fn put4(&self, w: &mut WireWriter) {
-        w.bool(self.unwrap_or(false));
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        bool::take4(c).map(Some)
-    }
-    fn zero() -> Self {
-        None
-    }
-}
-
-impl Wire4 for String {
-    fn put4(&self, w: &mut WireWriter) {
-        w.string(self);
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        c.next()?.as_str().map(str::to_string)
-    }
-    fn zero() -> Self {
-        String::new()
-    }
-}
-
-/// Control modes, interaction modes, PID types and joint types are thrift enums whose
-/// values are vocabs, written with the int32 tag.
-impl Wire4 for Vocab32 {
-    fn put4(&self, w: &mut WireWriter) {
-        w.int32(self.0);
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        i32::take4(c).map(Vocab32)
-    }
-    fn zero() -> Self {
-        Vocab32(0)
-    }
-}
-
-/// A list of items of one type: the compact form C++ writes (and requires).
-fn take_list<'a, T>(c: &mut Cursor4<'a>, item: impl Fn(&'a Value) -> Option<T>) -> Option<Vec<T>> {
-    c.next()?.as_list()?.iter().map(item).collect()
-}
-
-impl Wire4 for Vec<f64> {
-    fn put4(&self, w: &mut WireWriter) {
-        w.float_vector(self);
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        take_list(c, Value::as_f64)
-    }
-    fn zero() -> Self {
-        Vec::new()
-    }
-}
-
-impl Wire4 for Vec<i32> {
-    fn put4(&self, w: &mut WireWriter) {
-        w.int32_list(self.iter().copied());
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        take_list(c, Value::as_i32)
-    }
-    fn zero() -> Self {
-        Vec::new()
-    }
-}
-
-impl Wire4 for Vec<Vocab32> {
-    fn put4(&self, w: &mut WireWriter) {
-        w.int32_list(self.iter().map(|v| v.0));
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        take_list(c, |v| v.as_i32().map(Vocab32))
-    }
-    fn zero() -> Self {
-        Vec::new()
     }
 }
 
@@ -318,7 +138,7 @@ impl Wire4 for Vec<Pid> {
         }
     }
     fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        let list = c.next()?.as_list()?;
+        let list = c.item()?.as_list()?;
         let mut inner = Cursor4::new(list.items());
         (0..list.len()).map(|_| Pid::take4(&mut inner)).collect()
     }
@@ -327,56 +147,9 @@ impl Wire4 for Vec<Pid> {
     }
 }
 
-impl<A: Wire4, B: Wire4> Wire4 for (A, B) {
-    const COUNT: usize = A::COUNT + B::COUNT;
-    fn put4(&self, w: &mut WireWriter) {
-        self.0.put4(w);
-        self.1.put4(w);
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        Some((A::take4(c)?, B::take4(c)?))
-    }
-    fn zero() -> Self {
-        (A::zero(), B::zero())
-    }
-}
-
-impl<A: Wire4, B: Wire4, C: Wire4> Wire4 for (A, B, C) {
-    const COUNT: usize = A::COUNT + B::COUNT + C::COUNT;
-    fn put4(&self, w: &mut WireWriter) {
-        self.0.put4(w);
-        self.1.put4(w);
-        self.2.put4(w);
-    }
-    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        Some((A::take4(c)?, B::take4(c)?, C::take4(c)?))
-    }
-    fn zero() -> Self {
-        (A::zero(), B::zero(), C::zero())
-    }
-}
-
 /// The reply to a call of `M` that gave `result`.
 pub fn reply<M: Method>(result: DevResult<M::Reply>) -> Vec<u8> {
-    let mut w = WireWriter::for_generation(Generation::V4);
-    let (ret, value) = match result {
-        Ok(v) => (v.ret(), v),
-        Err(e) => {
-            tracing::warn!(
-                "controlBoard_nws_yarp (4.0): {} failed: {e}",
-                M::V4.unwrap_or("?")
-            );
-            (ReturnValue::of(&e), M::Reply::zero())
-        }
-    };
-    if M::Reply::COUNT == 0 {
-        ret.put(&mut w);
-    } else {
-        w.list_header(1 + M::Reply::COUNT);
-        ret.put(&mut w);
-        value.put4(&mut w);
-    }
-    w.into_bytes()
+    reply4(result, M::V4.unwrap_or("controlBoard_nws_yarp (4.0)"))
 }
 
 /// `m`'s arguments from a call's values after its name, if they are all there.
@@ -395,22 +168,7 @@ pub fn request<M: Method>(m: &M) -> Vec<u8> {
 
 /// What a 4.0 reply to `M` says: its return value, and the value asked when it is `ok`.
 pub fn answer<M: Method>(reply: &Bottle) -> Option<(ReturnValue, Option<M::Reply>)> {
-    let ret = |v: &Value| -> Option<ReturnValue> {
-        let l = v.as_list()?;
-        Some(ReturnValue::from_vocab(l.get(0)?.as_vocab()?))
-    };
-    if M::Reply::COUNT == 0 {
-        // the bare ReturnValue: its one vocab is the Bottle's
-        let code = ReturnValue::from_vocab(reply.get(0)?.as_vocab()?);
-        let value = match code {
-            ReturnValue::Ok => M::Reply::take4(&mut Cursor4::new(&[])),
-            failed => M::Reply::from_failure(failed),
-        };
-        return Some((code, value));
-    }
-    let code = ret(reply.get(0)?)?;
-    let value = M::Reply::take4(&mut Cursor4::new(&reply.items()[1..]));
-    Some((code, value.filter(|_| code == ReturnValue::Ok)))
+    answer4::<M::Reply>(reply)
 }
 
 /// The `getDeviceInterfacesRPC` call.
