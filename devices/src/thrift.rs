@@ -274,6 +274,10 @@ impl<'a> Cursor4<'a> {
     pub fn item(&mut self) -> Option<&'a Value> {
         self.0.next()
     }
+    /// Whether every value was read.
+    pub fn is_done(&self) -> bool {
+        self.0.len() == 0
+    }
 }
 
 impl Wire4 for () {
@@ -494,6 +498,132 @@ pub fn answer4<R: Wire4>(reply: &Bottle) -> Option<(ReturnValue, Option<R>)> {
     let code = ReturnValue::from_value(reply.get(0)?)?;
     let value = R::take4(&mut Cursor4::new(&reply.items()[1..]));
     Some((code, value.filter(|_| code == ReturnValue::Ok)))
+}
+
+/// Declares a YARP 4.0 thrift service once, as its `.thrift` file does: each method's
+/// name, arguments and reply type, and how a device (named after `for`) serves it
+/// (interfaces missing are
+/// `DeviceError::NoInterface`, which C++'s servers answer `not ready`). Generates, in
+/// module `$module`:
+/// - `enum Call`, a variant per method with its arguments, and `METHODS`;
+/// - `Call::decode` (a request as the generated `read` accepts it, `__direct__` allowed),
+///   `Call::encode` (as C++'s client writes it), `Call::name`;
+/// - `Call::serve(self, device)`: the reply bytes;
+/// - a function per method building a typed [`Request`] for clients.
+#[macro_export]
+macro_rules! thrift_service {
+    (
+        $(#[$doc:meta])*
+        $vis:vis mod $module:ident for $d:ident {
+            $(
+                $(#[$mdoc:meta])*
+                $name:ident ( $($arg:ident : $aty:ty),* ) -> $rty:ty = $body:expr;
+            )*
+        }
+    ) => {
+        $(#[$doc])*
+        #[allow(non_snake_case, non_camel_case_types, unused_variables, unused_mut)]
+        $vis mod $module {
+            use super::*;
+            use $crate::thrift::{Cursor4, Request, Wire4};
+
+            /// A call of the service.
+            #[derive(Debug, Clone, PartialEq)]
+            pub enum Call {
+                $( $(#[$mdoc])* $name { $($arg: $aty),* }, )*
+            }
+
+            /// The methods, by name.
+            pub const METHODS: &[&str] = &[$(stringify!($name)),*];
+
+            impl Call {
+                pub fn name(&self) -> &'static str {
+                    match self {
+                        $( Call::$name { .. } => stringify!($name), )*
+                    }
+                }
+
+                /// A request, if it is a call of this service with all its arguments.
+                pub fn decode(cmd: &yarp_proto::Bottle) -> Option<Call> {
+                    let mut items = cmd.items();
+                    if items.first().and_then($crate::thrift::word).as_deref() == Some("__direct__") {
+                        items = &items[1..];
+                    }
+                    let name = $crate::thrift::word(items.first()?)?;
+                    let mut c = Cursor4::new(&items[1..]);
+                    let call = match name.as_str() {
+                        $( stringify!($name) => {
+                            $( let $arg = <$aty as Wire4>::take4(&mut c)?; )*
+                            Call::$name { $($arg),* }
+                        } )*
+                        _ => return None,
+                    };
+                    c.is_done().then_some(call)
+                }
+
+                /// The call's bytes, as C++'s client writes them.
+                pub fn encode(&self) -> Vec<u8> {
+                    let mut w = $crate::sensors::wire::WireWriter::for_generation(
+                        yarp_proto::tags::Generation::V4,
+                    );
+                    match self {
+                        $( Call::$name { $($arg),* } => {
+                            w.list_header(1 $(+ <$aty as Wire4>::COUNT)*).string(stringify!($name));
+                            $( $arg.put4(&mut w); )*
+                        } )*
+                    }
+                    w.into_bytes()
+                }
+
+                /// Serves the call on `device`: the reply's bytes.
+                #[allow(clippy::redundant_closure_call)]
+                pub fn serve(self, $d: &mut dyn $crate::driver::DeviceDriver) -> Vec<u8> {
+                    match self {
+                        $( Call::$name { $($arg),* } => {
+                            let result: $crate::error::DevResult<$rty> = (|| $body)();
+                            $crate::thrift::reply4(result, stringify!($name))
+                        } )*
+                    }
+                }
+            }
+
+            $(
+                $(#[$mdoc])*
+                pub fn $name($($arg: $aty),*) -> Request<$rty> {
+                    Request::new(Call::$name { $($arg),* }.encode(), stringify!($name))
+                }
+            )*
+        }
+    };
+}
+
+/// A call whose reply is an `R`, ready to send.
+pub struct Request<R> {
+    pub bytes: Vec<u8>,
+    pub name: &'static str,
+    reply: std::marker::PhantomData<fn() -> R>,
+}
+
+impl<R: Wire4> Request<R> {
+    pub fn new(bytes: Vec<u8>, name: &'static str) -> Self {
+        Request {
+            bytes,
+            name,
+            reply: std::marker::PhantomData,
+        }
+    }
+
+    /// What its reply says, as a client reports it (`device` names the client).
+    pub fn answer(&self, reply: &Bottle, device: &str) -> Result<R, DeviceError> {
+        match answer4::<R>(reply) {
+            Some((ReturnValue::Ok, Some(v))) => Ok(v),
+            Some((ReturnValue::Ok, None)) | None => Err(DeviceError::failed(
+                device,
+                format!("{}: malformed reply {reply}", self.name),
+            )),
+            Some((ret, _)) => Err(ret.error(device, self.name)),
+        }
+    }
 }
 
 #[cfg(test)]

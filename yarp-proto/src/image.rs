@@ -11,7 +11,12 @@
 //! i.e. a fixed 60-byte header (C++ `ImageNetworkHeader`, fifteen little-endian int32,
 //! the fifth int of the inner list packing two int16) followed by the raw rows, padding
 //! included. `encode_image` / `decode_image` are pure functions over those bytes.
+//!
+//! YARP 4.0 dropped `topIsLow`: its third int is the quantum alone, where 3.x packs a
+//! 1 above it, which a 4.0 reader would take for part of the quantum (and then find the
+//! rows' size wrong). Readers of either generation read the quantum from the low half.
 
+use crate::tags::Generation;
 use crate::{Bottle, Value, Vocab32};
 use thiserror::Error;
 
@@ -280,8 +285,13 @@ impl Image {
     /// The image as the Bottle it travels as (what C++ `copyPortable(image, bottle)`
     /// gives, e.g. inside an `[fgi] [imgr]` reply).
     pub fn to_bottle(&self) -> Bottle {
+        self.to_bottle_as(Generation::V3)
+    }
+
+    /// [`Image::to_bottle`] for a reader of `generation`.
+    pub fn to_bottle_as(&self, generation: Generation) -> Bottle {
         let mut params = Bottle::with_capacity(5);
-        let [d, s, q, w, h] = self.header_ints();
+        let [d, s, q, w, h] = self.header_ints(generation);
         params.push(d).push(s).push(q).push(w).push(h);
         let mut b = Bottle::with_capacity(4);
         b.push(Vocab32(VOCAB_MAT))
@@ -326,10 +336,13 @@ impl Image {
         h.build(blob)
     }
 
-    /// The inner int list: depth, size, quantum|top_is_low<<16, width, height.
-    fn header_ints(&self) -> [i32; 5] {
-        // the wire field is 0 for "top is low" (YARP 3.4 compatibility)
-        let til: i32 = if self.top_is_low { 0 } else { 1 };
+    /// The inner int list: depth, size, quantum (|top_is_low<<16 in 3.x), width, height.
+    fn header_ints(&self, generation: Generation) -> [i32; 5] {
+        // the wire field is 0 for "top is low" (YARP 3.4 compatibility); 4.0 has none
+        let til: i32 = match (generation, self.top_is_low) {
+            (Generation::V3, false) => 1,
+            _ => 0,
+        };
         let q = (self.quantum as i32) & 0xffff;
         [
             self.pixel_size() as i32,
@@ -347,8 +360,13 @@ fn unknown_code(code: i32) -> ImageError {
 
 /// Encodes an image exactly as C++ `Image::write` puts it on the wire (header + rows).
 pub fn encode_image(img: &Image) -> Vec<u8> {
+    encode_image_as(img, Generation::V3)
+}
+
+/// [`encode_image`] as C++ YARP of `generation` writes it.
+pub fn encode_image_as(img: &Image, generation: Generation) -> Vec<u8> {
     let mut out = Vec::with_capacity(HEADER_LEN + img.data.len());
-    let [d, s, q, w, h] = img.header_ints();
+    let [d, s, q, w, h] = img.header_ints(generation);
     for v in [
         TAG_LIST,
         4,

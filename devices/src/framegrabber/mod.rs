@@ -15,6 +15,7 @@ pub use yarp_proto::image;
 pub mod nwc;
 pub mod nws;
 pub mod protocol;
+pub mod v4;
 
 use crate::driver::Factory;
 pub use image::{decode_image, encode_image, Image, ImageError, PixelCode};

@@ -7,7 +7,9 @@
 //!
 //! Ports: `<name>` streams images (with the device's stamp as envelope, only while
 //! something is connected, as C++ skips `getImage` otherwise); `<name>/rpc` answers the
-//! frame-grabber RPC protocol ([`super::protocol::handle_rpc`]).
+//! frame-grabber RPC protocol of 3.12 ([`super::protocol::handle_rpc`]) and of YARP 4.0
+//! ([`super::v4`]), told apart by the request. Each reader gets images in its own
+//! generation's header (4.0 dropped `topIsLow`).
 
 use super::protocol::handle_rpc;
 use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
@@ -20,7 +22,9 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use yarp_net::nameserver::NameClient;
+use yarp_net::peer_generation::PeerGenerations;
 use yarp_net::port::{Port, PortError};
+use yarp_proto::tags::Generation;
 use yarp_proto::{Property, Stamp, Value};
 
 const NAME: &str = "frameGrabber_nws_yarp";
@@ -86,11 +90,14 @@ struct Server {
     rpc_port: Arc<Port>,
     rpc_task: tokio::task::JoinHandle<()>,
     target: Target,
+    /// The generations of the image readers.
+    readers: PeerGenerations,
 }
 
 impl Server {
     async fn open(name: &str, ns: NameClient, target: Target) -> Result<Server, PortError> {
         let rpc_port = Arc::new(Port::open(&format!("{name}/rpc"), ns.clone()).await?);
+        let readers = PeerGenerations::new(ns.clone());
         let image_port = match Port::open(name, ns).await {
             Ok(p) => Arc::new(p),
             Err(e) => {
@@ -106,6 +113,7 @@ impl Server {
             rpc_port,
             rpc_task,
             target,
+            readers,
         })
     }
 
@@ -138,15 +146,27 @@ async fn serve_rpc(port: Arc<Port>, target: Target) {
             }
         };
         let dev = target.lock().clone();
+        let four = super::v4::is_call(&cmd);
+        let serve = |d: &mut dyn DeviceDriver| {
+            if four {
+                Err(super::v4::handle_rpc(&cmd, d))
+            } else {
+                Ok(handle_rpc(&cmd, d))
+            }
+        };
         let reply = match dev {
             Some(dev) => {
                 let mut pd = dev.lock();
-                handle_rpc(&cmd, pd.device())
+                serve(pd.device())
             }
-            None => handle_rpc(&cmd, &mut Nothing),
+            None => serve(&mut Nothing),
         };
         if msg.wants_reply() {
-            msg.reply(reply);
+            match reply {
+                Ok(bottle) => msg.reply(bottle),
+                // a 4.0 thrift reply, in the generated writer's own bytes
+                Err(bytes) => msg.reply_encoded(bytes),
+            }
         }
     }
 }
@@ -161,6 +181,7 @@ use yarp_proto::stamp::now;
 
 fn stream(
     port: Arc<Port>,
+    readers: PeerGenerations,
     dev: SharedDevice,
     period: Duration,
     no_drop: bool,
@@ -204,16 +225,33 @@ fn stream(
             own_count = own_count.wrapping_add(1);
             s
         });
-        let bottle = img.to_bottle();
+        // 3.x and 4.0 headers differ; a reader not asked yet misses images meanwhile
         if no_drop {
-            let port = port.clone();
+            let forms = [
+                (Arc::new(img.to_bottle()), Generation::V3),
+                (Arc::new(img.to_bottle_as(Generation::V4)), Generation::V4),
+            ];
+            let (port, readers) = (port.clone(), readers.clone());
             runtime::block_on(async move {
-                port.write_shared(Arc::new(bottle), Some(stamp)).await;
+                port.write_shared_each(&forms, |to| form_of(&readers, to), Some(stamp))
+                    .await;
             });
         } else {
-            port.write_nowait(&bottle, Some(stamp));
+            let forms = [
+                (img.to_bottle(), Generation::V3),
+                (img.to_bottle_as(Generation::V4), Generation::V4),
+            ];
+            port.write_nowait_each(&forms, |to| form_of(&readers, to), Some(stamp));
         }
     }
+}
+
+/// Which of a message's forms (3.x's, 4.0's) the reader `to` takes, once known.
+fn form_of(readers: &PeerGenerations, to: &str) -> Option<usize> {
+    readers.known(to).map(|g| match g {
+        Generation::V3 => 0,
+        Generation::V4 => 1,
+    })
 }
 
 /// The `frameGrabber_nws_yarp` device.
@@ -307,11 +345,12 @@ impl IWrapper for FrameGrabberNws {
         *server.target.lock() = Some(device.clone());
         let (stop, rx) = mpsc::channel();
         let port = server.image_port.clone();
+        let readers = server.readers.clone();
         let period = Duration::from_secs_f64(self.period);
         let no_drop = self.no_drop;
         let thread = std::thread::Builder::new()
             .name("frameGrabber_nws".into())
-            .spawn(move || stream(port, device, period, no_drop, rx))
+            .spawn(move || stream(port, readers, device, period, no_drop, rx))
             .map_err(|_| DeviceError::Unsupported("cannot start the streaming thread"))?;
         self.streamer = Some(Streamer { stop, thread });
         Ok(())

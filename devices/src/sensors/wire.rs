@@ -78,6 +78,12 @@ impl WireWriter {
         }
     }
 
+    /// Bytes already in wire form (a nested Portable that writes itself).
+    pub fn raw(&mut self, bytes: &[u8]) -> &mut Self {
+        self.out.extend_from_slice(bytes);
+        self
+    }
+
     /// The generation whose tags it writes.
     pub fn generation(&self) -> tags::Generation {
         self.generation

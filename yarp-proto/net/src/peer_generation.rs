@@ -46,14 +46,19 @@ pub struct PeerGenerations {
     ns: NameClient,
     known: Arc<Mutex<HashMap<String, (Contact, Generation)>>>,
     asking: Arc<Mutex<HashSet<String>>>,
+    /// Where background probes run: the runtime it was made on (callers of
+    /// [`PeerGenerations::known`] may be plain threads).
+    rt: Option<tokio::runtime::Handle>,
 }
 
 impl PeerGenerations {
+    /// Made on a tokio runtime, where its background probes will run.
     pub fn new(ns: NameClient) -> PeerGenerations {
         PeerGenerations {
             ns,
             known: Arc::default(),
             asking: Arc::default(),
+            rt: tokio::runtime::Handle::try_current().ok(),
         }
     }
 
@@ -83,7 +88,11 @@ impl PeerGenerations {
             return Some(*g);
         }
         if self.asking.lock().insert(port.to_string()) {
-            if let Ok(rt) = tokio::runtime::Handle::try_current() {
+            if let Some(rt) = self
+                .rt
+                .clone()
+                .or_else(|| tokio::runtime::Handle::try_current().ok())
+            {
                 let this = self.clone();
                 let port = port.to_string();
                 rt.spawn(async move {

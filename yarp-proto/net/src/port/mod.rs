@@ -537,17 +537,37 @@ impl Port {
         stamp: Option<Stamp>,
         generation: Generation,
     ) -> usize {
-        let msg = Arc::new(output::Outgoing::new_as(b, stamp, generation));
+        self.write_shared_each(&[(b, generation)], |_| Some(0), stamp)
+            .await
+    }
+
+    /// As [`Port::write_nowait_each`], waiting (at most ACK_TIMEOUT per output) for room
+    /// in each output's queue instead of skipping a full one.
+    pub async fn write_shared_each(
+        &self,
+        forms: &[(Arc<Bottle>, Generation)],
+        pick: impl Fn(&str) -> Option<usize>,
+        stamp: Option<Stamp>,
+    ) -> usize {
         let outs: Vec<_> = self
             .shared
             .lock()
             .outputs
             .values()
-            .map(|o| o.sender())
+            .filter_map(|o| Some((pick(&o.route.to)?, o.sender())))
             .collect();
+        let mut msgs: Vec<Option<Arc<output::Outgoing>>> = vec![None; forms.len()];
         let mut n = 0;
-        for tx in outs {
-            let sent = tokio::time::timeout(ACK_TIMEOUT, tx.send(output::Job::Data(msg.clone())));
+        for (k, tx) in outs {
+            let Some((b, generation)) = forms.get(k) else {
+                continue;
+            };
+            let msg = msgs[k]
+                .get_or_insert_with(|| {
+                    Arc::new(output::Outgoing::new_as(b.clone(), stamp, *generation))
+                })
+                .clone();
+            let sent = tokio::time::timeout(ACK_TIMEOUT, tx.send(output::Job::Data(msg)));
             if matches!(sent.await, Ok(Ok(()))) {
                 n += 1;
             }
