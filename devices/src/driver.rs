@@ -6,7 +6,9 @@
 
 use crate::battery::IBattery;
 use crate::error::{DevResult, DeviceError};
-use crate::framegrabber::interfaces::{IFrameGrabberControls, IFrameGrabberImage};
+use crate::framegrabber::interfaces::{
+    IFrameGrabberControls, IFrameGrabberControlsDC1394, IFrameGrabberImage,
+};
 use crate::frames::{IFrameTransformStorageGet, IFrameTransformStorageSet};
 use crate::interfaces::*;
 use crate::kind::{kind_of, suggest, Kind};
@@ -165,6 +167,7 @@ crate::device_interfaces! {
     // Frame grabbers.
     as_frame_grabber_image: IFrameGrabberImage => "IFrameGrabberImage" (Camera),
     as_frame_grabber_controls: IFrameGrabberControls => "IFrameGrabberControls" (Other),
+    as_frame_grabber_controls_dc1394: IFrameGrabberControlsDC1394 => "IFrameGrabberControlsDC1394" (Other),
     // Sensors.
     as_three_axis_gyroscopes: IThreeAxisGyroscopes => "IThreeAxisGyroscopes" (Sensor),
     as_three_axis_linear_accelerometers: IThreeAxisLinearAccelerometers => "IThreeAxisLinearAccelerometers" (Sensor),

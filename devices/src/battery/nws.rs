@@ -123,11 +123,8 @@ async fn stream_battery(
         match read {
             Ok(d) => {
                 failing = false;
-                port.write_nowait_by_generation(
-                    &d.to_bottle(),
-                    &peers,
-                    Some(Stamp::new(count, now())),
-                );
+                port.write_by_generation(&d.to_bottle(), &peers, Some(Stamp::new(count, now())))
+                    .await;
                 count = count.wrapping_add(1);
                 if d.status != BatteryStatus::OkStandby as i32 {
                     if let Some(msg) = warnings.check(d.charge) {

@@ -12,6 +12,7 @@
 //! state (`Patterns`) is pure, so a test can step it frame by frame.
 
 use super::image::{Image, PixelCode};
+use super::IFrameGrabberControlsDC1394;
 use super::{CameraConfig, CameraDescriptor, IFrameGrabberControls, IFrameGrabberImage};
 use super::{IRgbVisualParams, MODE_UNKNOWN};
 use crate::driver::DeviceDriver;
@@ -341,6 +342,39 @@ fn wall_clock() -> f64 {
         .unwrap_or(0.0)
 }
 
+/// The DC1394 settings the fake remembers, with C++ 4.0's starting values (its
+/// `m_controlsDC1394`; the Format 7 windows it leaves unset read as zeros).
+#[derive(Debug, Clone)]
+struct Dc1394 {
+    video_mode_mask: u32,
+    video_mode: u32,
+    fps_mask: u32,
+    fps: u32,
+    iso: u32,
+    color_coding: u32,
+    color_coding_mask: u32,
+    operation: bool,
+    transmission: bool,
+    bpp: u32,
+}
+
+impl Default for Dc1394 {
+    fn default() -> Self {
+        Dc1394 {
+            video_mode_mask: 10,
+            video_mode: 11,
+            fps_mask: 12,
+            fps: 13,
+            iso: 14,
+            color_coding: 15,
+            color_coding_mask: 16,
+            operation: false,
+            transmission: false,
+            bpp: 100,
+        }
+    }
+}
+
 /// The feature values the fake remembers (C++ 3.12 `m_controls`).
 #[derive(Debug, Default, Clone)]
 struct Controls {
@@ -374,6 +408,7 @@ pub struct FakeFrameGrabber {
     stamp_count: i32,
     last_stamp: Option<Stamp>,
     controls: Controls,
+    dc1394: Dc1394,
 }
 
 impl Default for FakeFrameGrabber {
@@ -405,6 +440,7 @@ impl FakeFrameGrabber {
             stamp_count: 0,
             last_stamp: None,
             controls: Controls::default(),
+            dc1394: Dc1394::default(),
         }
     }
 
@@ -537,7 +573,11 @@ impl DeviceDriver for FakeFrameGrabber {
         Ok(())
     }
 
-    crate::views!(as_frame_grabber_image, as_frame_grabber_controls);
+    crate::views!(
+        as_frame_grabber_image,
+        as_frame_grabber_controls,
+        as_frame_grabber_controls_dc1394
+    );
 }
 
 impl IFrameGrabberImage for FakeFrameGrabber {
@@ -673,6 +713,92 @@ impl IFrameGrabberControls for FakeFrameGrabber {
     }
     fn set_one_push(&mut self, _feature: i32) -> DevResult<()> {
         self.controls.one_push = true;
+        Ok(())
+    }
+}
+
+/// C++ 4.0's fake: every call succeeds; getters give what the setters left.
+impl IFrameGrabberControlsDC1394 for FakeFrameGrabber {
+    fn video_mode_mask(&mut self) -> DevResult<u32> {
+        Ok(self.dc1394.video_mode_mask)
+    }
+    fn video_mode(&mut self) -> DevResult<u32> {
+        Ok(self.dc1394.video_mode)
+    }
+    fn set_video_mode(&mut self, mode: i32) -> DevResult<()> {
+        self.dc1394.video_mode = mode as u32;
+        Ok(())
+    }
+    fn fps_mask(&mut self) -> DevResult<u32> {
+        Ok(self.dc1394.fps_mask)
+    }
+    fn fps(&mut self) -> DevResult<u32> {
+        Ok(self.dc1394.fps)
+    }
+    fn set_fps(&mut self, fps: i32) -> DevResult<()> {
+        self.dc1394.fps = fps as u32;
+        Ok(())
+    }
+    fn iso_speed(&mut self) -> DevResult<u32> {
+        Ok(self.dc1394.iso)
+    }
+    fn set_iso_speed(&mut self, speed: i32) -> DevResult<()> {
+        self.dc1394.iso = speed as u32;
+        Ok(())
+    }
+    fn color_coding_mask(&mut self, _video_mode: u32) -> DevResult<u32> {
+        Ok(self.dc1394.color_coding_mask)
+    }
+    fn color_coding(&mut self) -> DevResult<u32> {
+        Ok(self.dc1394.color_coding)
+    }
+    fn set_color_coding(&mut self, coding: i32) -> DevResult<()> {
+        self.dc1394.color_coding = coding as u32;
+        Ok(())
+    }
+    fn format7_max_window(&mut self) -> DevResult<[u32; 6]> {
+        Ok([0; 6])
+    }
+    fn format7_window(&mut self) -> DevResult<(u32, u32, i32, i32)> {
+        Ok((0, 0, 0, 0))
+    }
+    fn set_format7_window(&mut self, _: u32, _: u32, _: i32, _: i32) -> DevResult<()> {
+        Ok(())
+    }
+    fn operation_mode(&mut self) -> DevResult<bool> {
+        Ok(self.dc1394.operation)
+    }
+    fn set_operation_mode(&mut self, b1394b: bool) -> DevResult<()> {
+        self.dc1394.operation = b1394b;
+        Ok(())
+    }
+    fn transmission(&mut self) -> DevResult<bool> {
+        Ok(self.dc1394.transmission)
+    }
+    fn set_transmission(&mut self, on: bool) -> DevResult<()> {
+        self.dc1394.transmission = on;
+        Ok(())
+    }
+    fn set_broadcast(&mut self, _: bool) -> DevResult<()> {
+        Ok(())
+    }
+    fn set_defaults(&mut self) -> DevResult<()> {
+        Ok(())
+    }
+    fn set_reset(&mut self) -> DevResult<()> {
+        Ok(())
+    }
+    fn set_power(&mut self, _: bool) -> DevResult<()> {
+        Ok(())
+    }
+    fn set_capture(&mut self, _: bool) -> DevResult<()> {
+        Ok(())
+    }
+    fn bytes_per_packet(&mut self) -> DevResult<u32> {
+        Ok(self.dc1394.bpp)
+    }
+    fn set_bytes_per_packet(&mut self, bpp: u32) -> DevResult<()> {
+        self.dc1394.bpp = bpp;
         Ok(())
     }
 }

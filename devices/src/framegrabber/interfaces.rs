@@ -102,3 +102,35 @@ pub trait IRgbVisualParams {
     fn rgb_mirroring(&mut self) -> DevResult<bool>;
     fn set_rgb_mirroring(&mut self, mirror: bool) -> DevResult<()>;
 }
+
+/// IEEE 1394 (FireWire) camera settings (C++ `IFrameGrabberControlsDC1394`), as the
+/// iCub's Dragonfly2 cameras offer them. Masks and modes are the DC1394 library's
+/// numbers; Format 7 windows are (xdim, ydim, x0, y0).
+pub trait IFrameGrabberControlsDC1394 {
+    fn video_mode_mask(&mut self) -> DevResult<u32>;
+    fn video_mode(&mut self) -> DevResult<u32>;
+    fn set_video_mode(&mut self, mode: i32) -> DevResult<()>;
+    fn fps_mask(&mut self) -> DevResult<u32>;
+    fn fps(&mut self) -> DevResult<u32>;
+    fn set_fps(&mut self, fps: i32) -> DevResult<()>;
+    fn iso_speed(&mut self) -> DevResult<u32>;
+    fn set_iso_speed(&mut self, speed: i32) -> DevResult<()>;
+    fn color_coding_mask(&mut self, video_mode: u32) -> DevResult<u32>;
+    fn color_coding(&mut self) -> DevResult<u32>;
+    fn set_color_coding(&mut self, coding: i32) -> DevResult<()>;
+    /// (xdim, ydim, xstep, ystep, xoffstep, yoffstep).
+    fn format7_max_window(&mut self) -> DevResult<[u32; 6]>;
+    fn format7_window(&mut self) -> DevResult<(u32, u32, i32, i32)>;
+    fn set_format7_window(&mut self, xdim: u32, ydim: u32, x0: i32, y0: i32) -> DevResult<()>;
+    fn operation_mode(&mut self) -> DevResult<bool>;
+    fn set_operation_mode(&mut self, b1394b: bool) -> DevResult<()>;
+    fn transmission(&mut self) -> DevResult<bool>;
+    fn set_transmission(&mut self, on: bool) -> DevResult<()>;
+    fn set_broadcast(&mut self, on: bool) -> DevResult<()>;
+    fn set_defaults(&mut self) -> DevResult<()>;
+    fn set_reset(&mut self) -> DevResult<()>;
+    fn set_power(&mut self, on: bool) -> DevResult<()>;
+    fn set_capture(&mut self, on: bool) -> DevResult<()>;
+    fn bytes_per_packet(&mut self) -> DevResult<u32>;
+    fn set_bytes_per_packet(&mut self, bpp: u32) -> DevResult<()>;
+}

@@ -225,7 +225,11 @@ fn stream(
             own_count = own_count.wrapping_add(1);
             s
         });
-        // 3.x and 4.0 headers differ; a reader not asked yet misses images meanwhile
+        // 3.x and 4.0 headers differ: a new reader is asked its generation first
+        {
+            let (port, readers) = (port.clone(), readers.clone());
+            runtime::block_on(async move { readers.learn(&port.outputs()).await });
+        }
         if no_drop {
             let forms = [
                 (Arc::new(img.to_bottle()), Generation::V3),

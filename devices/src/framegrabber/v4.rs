@@ -148,10 +148,16 @@ fn controls(
         .ok_or(DeviceError::NoInterface("IFrameGrabberControls"))
 }
 
-/// No device of ours has `IFrameGrabberControlsDC1394`: C++ answers such a device's
-/// callers `not ready`.
-fn dc1394<T>() -> DevResult<T> {
-    Err(DeviceError::NoInterface("IFrameGrabberControlsDC1394"))
+fn dc1394(
+    dev: &mut dyn DeviceDriver,
+) -> DevResult<&mut dyn super::interfaces::IFrameGrabberControlsDC1394> {
+    dev.as_frame_grabber_controls_dc1394()
+        .ok_or(DeviceError::NoInterface("IFrameGrabberControlsDC1394"))
+}
+
+/// DC1394's unsigned values travel as i32.
+fn int(x: u32) -> i32 {
+    x as i32
 }
 
 fn refused(command: impl Into<String>) -> DeviceError {
@@ -224,31 +230,36 @@ crate::thrift_service! {
         getModeRPC(feature: i32) -> i32 = controls(dev)?.get_mode(feature);
         setOnePushRPC(feature: i32) -> () = controls(dev)?.set_one_push(feature);
 
-        getVideoModeMaskDC1394RPC() -> i32 = dc1394();
-        getVideoModeDC1394RPC() -> i32 = dc1394();
-        setVideoModeDC1394RPC(videomode: i32) -> () = dc1394();
-        getFPSMaskDC1394RPC() -> i32 = dc1394();
-        getFPSDC1394RPC() -> i32 = dc1394();
-        setFPSDC1394RPC(fps: i32) -> () = dc1394();
-        getISOSpeedDC1394RPC() -> i32 = dc1394();
-        setISOSpeedDC1394RPC(speed: i32) -> () = dc1394();
-        getColorCodingMaskDC1394RPC(videomode: i32) -> i32 = dc1394();
-        getColorCodingDC1394RPC() -> i32 = dc1394();
-        setColorCodingDC1394RPC(coding: i32) -> () = dc1394();
-        getFormat7MaxWindowDC1394RPC() -> [i32; 6] = dc1394();
-        getFormat7WindowDC1394RPC() -> [i32; 4] = dc1394();
-        setFormat7WindowDC1394RPC(xdim: i32, ydim: i32, x0: i32, y0: i32) -> () = dc1394();
-        setOperationModeDC1394RPC(b1394b: bool) -> () = dc1394();
-        getOperationModeDC1394RPC() -> bool = dc1394();
-        setTransmissionDC1394RPC(tx_on: bool) -> () = dc1394();
-        getTransmissionDC1394RPC() -> bool = dc1394();
-        setBroadcastDC1394RPC(onoff: bool) -> () = dc1394();
-        setDefaultsDC1394RPC() -> () = dc1394();
-        setResetDC1394RPC() -> () = dc1394();
-        setPowerDC1394RPC(onoff: bool) -> () = dc1394();
-        setCaptureDC1394RPC(on: bool) -> () = dc1394();
-        getBytesPerPacketDC1394RPC() -> i32 = dc1394();
-        setBytesPerPacketDC1394RPC(bpp: i32) -> () = dc1394();
+        getVideoModeMaskDC1394RPC() -> i32 = dc1394(dev)?.video_mode_mask().map(int);
+        getVideoModeDC1394RPC() -> i32 = dc1394(dev)?.video_mode().map(int);
+        setVideoModeDC1394RPC(videomode: i32) -> () = dc1394(dev)?.set_video_mode(videomode);
+        getFPSMaskDC1394RPC() -> i32 = dc1394(dev)?.fps_mask().map(int);
+        getFPSDC1394RPC() -> i32 = dc1394(dev)?.fps().map(int);
+        setFPSDC1394RPC(fps: i32) -> () = dc1394(dev)?.set_fps(fps);
+        getISOSpeedDC1394RPC() -> i32 = dc1394(dev)?.iso_speed().map(int);
+        setISOSpeedDC1394RPC(speed: i32) -> () = dc1394(dev)?.set_iso_speed(speed);
+        getColorCodingMaskDC1394RPC(videomode: i32) -> i32 =
+            dc1394(dev)?.color_coding_mask(videomode as u32).map(int);
+        getColorCodingDC1394RPC() -> i32 = dc1394(dev)?.color_coding().map(int);
+        setColorCodingDC1394RPC(coding: i32) -> () = dc1394(dev)?.set_color_coding(coding);
+        getFormat7MaxWindowDC1394RPC() -> [i32; 6] =
+            dc1394(dev)?.format7_max_window().map(|w| w.map(int));
+        getFormat7WindowDC1394RPC() -> [i32; 4] = dc1394(dev)?
+            .format7_window()
+            .map(|(xd, yd, x0, y0)| [int(xd), int(yd), x0, y0]);
+        setFormat7WindowDC1394RPC(xdim: i32, ydim: i32, x0: i32, y0: i32) -> () =
+            dc1394(dev)?.set_format7_window(xdim as u32, ydim as u32, x0, y0);
+        setOperationModeDC1394RPC(b1394b: bool) -> () = dc1394(dev)?.set_operation_mode(b1394b);
+        getOperationModeDC1394RPC() -> bool = dc1394(dev)?.operation_mode();
+        setTransmissionDC1394RPC(tx_on: bool) -> () = dc1394(dev)?.set_transmission(tx_on);
+        getTransmissionDC1394RPC() -> bool = dc1394(dev)?.transmission();
+        setBroadcastDC1394RPC(onoff: bool) -> () = dc1394(dev)?.set_broadcast(onoff);
+        setDefaultsDC1394RPC() -> () = dc1394(dev)?.set_defaults();
+        setResetDC1394RPC() -> () = dc1394(dev)?.set_reset();
+        setPowerDC1394RPC(onoff: bool) -> () = dc1394(dev)?.set_power(onoff);
+        setCaptureDC1394RPC(on: bool) -> () = dc1394(dev)?.set_capture(on);
+        getBytesPerPacketDC1394RPC() -> i32 = dc1394(dev)?.bytes_per_packet().map(int);
+        setBytesPerPacketDC1394RPC(bpp: i32) -> () = dc1394(dev)?.set_bytes_per_packet(bpp as u32);
     }
 }
 
@@ -345,10 +356,21 @@ mod tests {
         let req = service::getImageCropRPC(0, vec![Vertex(0, 0), Vertex(9, 4)]);
         let img = req.answer(&ask(&mut g, req.bytes.clone()), "test").unwrap();
         assert_eq!((img.width(), img.height()), (10, 5));
-        // no DC1394 here: C++ answers "not ready"
+        // C++ 4.0's fake's DC1394 values
         let req = service::getFPSDC1394RPC();
+        assert_eq!(
+            req.answer(&ask(&mut g, req.bytes.clone()), "test").unwrap(),
+            13
+        );
+        // a device without the interface: C++ answers "not ready"
+        struct Bare;
+        impl DeviceDriver for Bare {
+            fn open(&mut self, _: &Property) -> DevResult<()> {
+                Ok(())
+            }
+        }
         let err = req
-            .answer(&ask(&mut g, req.bytes.clone()), "test")
+            .answer(&ask(&mut Bare, req.bytes.clone()), "test")
             .unwrap_err();
         assert!(matches!(err, DeviceError::NotReady(_)), "{err}");
         let bare = handle_rpc(

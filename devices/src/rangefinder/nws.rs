@@ -102,11 +102,8 @@ async fn stream_scans(
         match read_scan(&device) {
             Ok((scan, t)) => {
                 failing = false;
-                port.write_nowait_by_generation(
-                    &scan.to_bottle(),
-                    &peers,
-                    Some(Stamp::new(count, t)),
-                );
+                port.write_by_generation(&scan.to_bottle(), &peers, Some(Stamp::new(count, t)))
+                    .await;
                 count = count.wrapping_add(1);
             }
             Err(e) => {

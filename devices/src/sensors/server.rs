@@ -217,7 +217,8 @@ async fn stream_measurements(
                 failing = false;
                 let stamp = Stamp::new(count, now());
                 count = count.wrapping_add(1);
-                port.write_nowait_by_generation(&data.to_bottle(), &peers, Some(stamp));
+                port.write_by_generation(&data.to_bottle(), &peers, Some(stamp))
+                    .await;
             }
             Err(e) => {
                 // log once per failure streak, not every period

@@ -106,6 +106,17 @@ impl PeerGenerations {
         None
     }
 
+    /// Asks about those of `ports` not known yet, so that a new reader gets even the
+    /// first message in its own form (a silent one is taken for 3.x after
+    /// [`PROBE_TIMEOUT`], once).
+    pub async fn learn(&self, ports: &[String]) {
+        for port in ports {
+            if !self.known.lock().contains_key(port) {
+                self.of(port).await;
+            }
+        }
+    }
+
     /// Forgets `port` (its reader went away): the next one of that name is asked again.
     pub fn forget(&self, port: &str) {
         self.known.lock().remove(port);

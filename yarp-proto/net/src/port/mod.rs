@@ -611,6 +611,18 @@ impl Port {
         n
     }
 
+    /// Sends `b`, without waiting for its readers, to each in its own YARP generation's
+    /// bytes, as `peers` tells them (asking first about readers new to it).
+    pub async fn write_by_generation(
+        &self,
+        b: &Bottle,
+        peers: &crate::peer_generation::PeerGenerations,
+        stamp: Option<Stamp>,
+    ) -> usize {
+        peers.learn(&self.outputs()).await;
+        self.write_nowait_by_generation(b, peers, stamp)
+    }
+
     /// Sends `b`, without waiting, to each reader in its own YARP generation's bytes
     /// (told by `peers`); a reader whose generation is not known yet is asked, and misses
     /// the messages sent meanwhile rather than get bytes it would misread.
