@@ -167,3 +167,73 @@ fn cpp_4_frame_grabber_client_reads_ours() {
     eprintln!("interop: C++ 4.0 frameGrabber_nwc_yarp -> our frameGrabber_nws_yarp OK");
     ours.close().unwrap();
 }
+
+/// Our `frameGrabber_nwc_yarp` reads C++ 4.0's `frameGrabber_nws_yarp` +
+/// `fakeFrameGrabber`: it finds a 4.0 server, streams its images (4.0's header) and
+/// calls its `FrameGrabberMsgs`, DC1394 included; with `no_stream`, images over RPC.
+#[test]
+fn our_frame_grabber_client_reads_cpp_4() {
+    let test = "our_frame_grabber_client_reads_cpp_4";
+    let Some(bin) = cpp4_devices(test, &["frameGrabber_nws_yarp", "fakeFrameGrabber"]) else {
+        return;
+    };
+    name_client();
+    let _cpp = cpp_yarpdev(
+        &bin,
+        &[
+            "--device",
+            "frameGrabber_nws_yarp",
+            "--subdevice",
+            "fakeFrameGrabber",
+            "--name",
+            "/fg4r_cpp",
+            "--width",
+            "8",
+            "--height",
+            "6",
+            "--period",
+            "0.05",
+        ],
+        "/fg4r_cpp/rpc",
+    );
+    for (local, no_stream) in [("/fg4r_ours", false), ("/fg4r_rpc", true)] {
+        let mut client = PolyDriver::open(
+            &Property::from_config_text(format!(
+                "device frameGrabber_nwc_yarp\nremote /fg4r_cpp\nlocal {local}\nno_stream {no_stream}\n"
+            ))
+            .unwrap(),
+        )
+        .expect("our client opens against C++ 4.0");
+        let d = client.device();
+        let fg = d.as_frame_grabber_image().expect("IFrameGrabberImage");
+        let start = Instant::now();
+        let img = loop {
+            if let Ok(img) = fg.get_image() {
+                if img.width() > 0 {
+                    break img;
+                }
+            }
+            assert!(start.elapsed() < WAIT, "no image from C++ 4.0 ({local})");
+            std::thread::sleep(Duration::from_millis(20));
+        };
+        assert_eq!((img.width(), img.height()), (8, 6), "{local}");
+        assert_eq!((fg.width(), fg.height()), (8, 6), "{local}");
+        let vp = fg.rgb_visual_params().expect("IRgbVisualParams");
+        assert_eq!(vp.rgb_resolution().unwrap(), (8, 6));
+        assert_eq!((vp.rgb_width(), vp.rgb_height()), (8, 6));
+        vp.set_rgb_mirroring(true).unwrap();
+        assert!(vp.rgb_mirroring().unwrap());
+        vp.set_rgb_mirroring(false).unwrap();
+        let c = client.device().as_frame_grabber_controls().unwrap();
+        assert_eq!(c.camera_description().unwrap().bus_type, 0);
+        c.set_feature(1, 0.25).unwrap();
+        assert_eq!(c.get_feature(1).unwrap(), 0.25);
+        let dc = client.device().as_frame_grabber_controls_dc1394().unwrap();
+        assert_eq!(dc.bytes_per_packet().unwrap(), 100);
+        dc.set_fps(17).unwrap();
+        assert_eq!(dc.fps().unwrap(), 17);
+        dc.set_fps(13).unwrap();
+        client.close().unwrap();
+    }
+    eprintln!("interop: our frameGrabber_nwc_yarp -> C++ 4.0 frameGrabber_nws_yarp OK");
+}
