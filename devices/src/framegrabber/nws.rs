@@ -11,6 +11,7 @@
 //! ([`super::v4`]), told apart by the request. Each reader gets images in its own
 //! generation's header (4.0 dropped `topIsLow`).
 
+use super::image::Image;
 use super::protocol::handle_rpc;
 use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
@@ -225,12 +226,8 @@ fn stream(
             own_count = own_count.wrapping_add(1);
             s
         });
-        // 3.x and 4.0 headers differ: a new reader is asked its generation first
-        {
-            let (port, readers) = (port.clone(), readers.clone());
-            runtime::block_on(async move { readers.learn(&port.outputs()).await });
-        }
         if no_drop {
+            learn_readers(&port, &readers);
             let forms = [
                 (Arc::new(img.to_bottle()), Generation::V3),
                 (Arc::new(img.to_bottle_as(Generation::V4)), Generation::V4),
@@ -241,13 +238,32 @@ fn stream(
                     .await;
             });
         } else {
-            let forms = [
-                (img.to_bottle(), Generation::V3),
-                (img.to_bottle_as(Generation::V4), Generation::V4),
-            ];
-            port.write_nowait_each(&forms, |to| form_of(&readers, to), Some(stamp));
+            send_image_nowait(&port, &readers, &img, stamp);
         }
     }
+}
+
+/// Asks the generation of the readers of `port` new to `readers` (3.x and 4.0 image
+/// headers differ), from a plain thread.
+fn learn_readers(port: &Arc<Port>, readers: &PeerGenerations) {
+    let (port, readers) = (port.clone(), readers.clone());
+    runtime::block_on(async move { readers.learn(&port.outputs()).await });
+}
+
+/// Sends `img` to each reader of `port` in its generation's header, without waiting
+/// for them (from a plain thread; readers new to `readers` are asked first).
+pub(crate) fn send_image_nowait(
+    port: &Arc<Port>,
+    readers: &PeerGenerations,
+    img: &Image,
+    stamp: Stamp,
+) {
+    learn_readers(port, readers);
+    let forms = [
+        (img.to_bottle(), Generation::V3),
+        (img.to_bottle_as(Generation::V4), Generation::V4),
+    ];
+    port.write_nowait_each(&forms, |to| form_of(readers, to), Some(stamp));
 }
 
 /// Which of a message's forms (3.x's, 4.0's) the reader `to` takes, once known.

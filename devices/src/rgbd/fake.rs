@@ -181,6 +181,24 @@ impl IRGBDSensor for FakeDepthCamera {
     fn depth_clip_planes(&mut self) -> DevResult<(f64, f64)> {
         Ok(self.clip)
     }
+    // C++ 3.12's fake keeps fields of view, accuracy and clip planes, and refuses new
+    // resolutions and mirroring
+    fn set_rgb_fov(&mut self, horizontal: f64, vertical: f64) -> DevResult<()> {
+        self.rgb_fov = (horizontal, vertical);
+        Ok(())
+    }
+    fn set_depth_fov(&mut self, horizontal: f64, vertical: f64) -> DevResult<()> {
+        self.dep_fov = (horizontal, vertical);
+        Ok(())
+    }
+    fn set_depth_accuracy(&mut self, accuracy: f64) -> DevResult<()> {
+        self.accuracy = accuracy;
+        Ok(())
+    }
+    fn set_depth_clip_planes(&mut self, near: f64, far: f64) -> DevResult<()> {
+        self.clip = (near, far);
+        Ok(())
+    }
     fn extrinsic_param(&mut self) -> DevResult<[f64; 16]> {
         let mut m = [0.0; 16];
         for i in 0..4 {

@@ -6,9 +6,11 @@ pub mod fake;
 pub mod nwc;
 pub mod nws;
 pub mod protocol;
+pub mod v4;
 
 use crate::driver::Factory;
-use crate::error::DevResult;
+use crate::error::{DevResult, DeviceError};
+use crate::framegrabber::CameraConfig;
 use yarp_proto::image::Image;
 use yarp_proto::{Property, Stamp};
 
@@ -18,8 +20,21 @@ pub enum RgbdStatus {
     NotReady = 0,
     OkStandby = 1,
     OkInUse = 2,
-    GeneralError = 3,
-    Timeout = 4,
+    GeneralError = 5,
+    Timeout = 6,
+}
+
+impl RgbdStatus {
+    /// The status C++'s number stands for (an unknown one is a general error).
+    pub fn from_code(code: i32) -> RgbdStatus {
+        match code {
+            0 => RgbdStatus::NotReady,
+            1 => RgbdStatus::OkStandby,
+            2 => RgbdStatus::OkInUse,
+            6 => RgbdStatus::Timeout,
+            _ => RgbdStatus::GeneralError,
+        }
+    }
 }
 
 /// A colour + depth camera (C++ `IRGBDSensor`). Depth images are `PixelCode::MONO_FLOAT`
@@ -51,6 +66,47 @@ pub trait IRGBDSensor {
     fn last_error_msg(&mut self) -> String {
         String::new()
     }
+
+    // What the C++ interface also has, with the answer of a camera that cannot.
+    fn rgb_resolution(&mut self) -> DevResult<(i32, i32)> {
+        Ok((self.rgb_width(), self.rgb_height()))
+    }
+    fn depth_resolution(&mut self) -> DevResult<(i32, i32)> {
+        Ok((self.depth_width(), self.depth_height()))
+    }
+    fn rgb_supported_configurations(&mut self) -> DevResult<Vec<CameraConfig>> {
+        Ok(Vec::new())
+    }
+    fn set_rgb_resolution(&mut self, _width: i32, _height: i32) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setting the colour resolution"))
+    }
+    fn set_depth_resolution(&mut self, _width: i32, _height: i32) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setting the depth resolution"))
+    }
+    fn set_rgb_fov(&mut self, _horizontal: f64, _vertical: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setting the colour field of view"))
+    }
+    fn set_depth_fov(&mut self, _horizontal: f64, _vertical: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setting the depth field of view"))
+    }
+    fn set_depth_accuracy(&mut self, _accuracy: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setting the depth accuracy"))
+    }
+    fn set_depth_clip_planes(&mut self, _near: f64, _far: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setting the clip planes"))
+    }
+    fn rgb_mirroring(&mut self) -> DevResult<bool> {
+        Ok(false)
+    }
+    fn set_rgb_mirroring(&mut self, _mirror: bool) -> DevResult<()> {
+        Err(DeviceError::Unsupported("mirroring the colour image"))
+    }
+    fn depth_mirroring(&mut self) -> DevResult<bool> {
+        Ok(false)
+    }
+    fn set_depth_mirroring(&mut self, _mirror: bool) -> DevResult<()> {
+        Err(DeviceError::Unsupported("mirroring the depth image"))
+    }
 }
 
 /// Drivers of this family, by C++ name.
@@ -58,6 +114,16 @@ pub(crate) const DRIVERS: &[(&str, Factory)] = &[
     ("fakeDepthCamera", || Box::new(fake::FakeDepthCamera::new())),
     ("rgbdSensor_nws_yarp", || {
         Box::new(nws::RgbdSensorNwsYarp::new())
+    }),
+    // YARP 4.0's names (the 3.12 ones are its deprecated aliases)
+    ("RGBDSensor_nws_yarp", || {
+        Box::new(nws::RgbdSensorNwsYarp::new())
+    }),
+    ("RGBDSensor_nwc_yarp", || {
+        Box::new(nwc::RgbdSensorClient::new())
+    }),
+    ("rgbdSensor_nwc_yarp", || {
+        Box::new(nwc::RgbdSensorClient::new())
     }),
     (nwc::NAME, || Box::new(nwc::RgbdSensorClient::new())),
 ];

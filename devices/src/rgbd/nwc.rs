@@ -10,21 +10,29 @@
 //!
 //! Images are the latest streamed ones (with their envelopes); sizes, fields of view,
 //! intrinsics, depth accuracy and clip planes, extrinsics, status and the last error are
-//! asked over RPC (`[visr]`, `[visd]`, `[rgdb]`, see [`super::protocol`]).
+//! asked over RPC (`[visr]`, `[visd]`, `[rgdb]`, see [`super::protocol`]), or, with a
+//! YARP 4.0 server (which answers the thrift `getRemoteProtocolVersion` that is asked
+//! first, as 4.0's client does), through its `RGBDSensorMsgs` ([`super::v4`]), which
+//! also sets resolutions, fields of view, accuracy, clip planes and mirroring. The
+//! device answers to 4.0's names `RGBDSensor_nwc_yarp` and `rgbdSensor_nwc_yarp` too.
 
 use super::protocol::{
     ACCURACY, CLIP_PLANES, DEPTH_VISUAL_PARAMS, ERROR_MSG, EXTRINSIC_PARAM, PROTOCOL_VERSION,
     RGBD_PROTOCOL_VERSION, RGBD_SENSOR, STATUS,
 };
+use super::v4::service as rgbd4;
 use super::{IRGBDSensor, RgbdStatus};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use crate::framegrabber::nwc::{reply_float, reply_int, request, ImageStream};
 use crate::framegrabber::protocol::{FOV, GET, HEIGHT, INTRINSIC_PARAM, RGB_VISUAL_PARAMS, WIDTH};
+use crate::framegrabber::CameraConfig;
 use crate::runtime;
+use crate::thrift::{Request, Wire4};
 use std::sync::Arc;
 use yarp_net::port::Port;
 use yarp_proto::image::Image;
+use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Property, Stamp, Value};
 
 pub(crate) const NAME: &str = "RGBDSensorClient";
@@ -58,6 +66,8 @@ struct Client {
     rgb: ImageStream,
     depth: ImageStream,
     rpc: Arc<Port>,
+    /// The server's generation of YARP: which protocol its RPC port speaks.
+    generation: Generation,
 }
 
 impl Client {
@@ -127,10 +137,25 @@ async fn open_client(n: Names) -> Result<Client, String> {
             n.local_rpc, n.remote_rpc
         ));
     }
+    // 4.0's server does not answer 3.12's `[rgdb] [get] [prot]`: ask 4.0's way first
+    let asked = tokio::time::timeout(
+        crate::nwc_ports::RPC_TIMEOUT,
+        rpc.rpc_encoded(crate::thrift::protocol_version_request()),
+    )
+    .await;
+    let generation = match asked {
+        Ok(Err(yarp_net::port::PortError::BadReply { bytes, .. })) => {
+            crate::thrift::protocol_version_of(&bytes).map_or(Generation::V3, |(_, v)| {
+                crate::thrift::generation_of_version(v)
+            })
+        }
+        _ => Generation::V3,
+    };
     Ok(Client {
         rgb,
         depth,
         rpc: Arc::new(rpc),
+        generation,
     })
 }
 
@@ -147,6 +172,31 @@ impl RgbdSensorClient {
 
     fn client(&self) -> DevResult<&Client> {
         self.client.as_ref().ok_or(DeviceError::NotOpen)
+    }
+    /// Whether the server speaks YARP 4.0's `RGBDSensorMsgs`.
+    fn four(&self) -> bool {
+        self.client
+            .as_ref()
+            .is_some_and(|c| c.generation == Generation::V4)
+    }
+    /// A 4.0 call and what its reply says.
+    fn ask<R: Wire4>(&self, req: Request<R>) -> DevResult<R> {
+        let reply = crate::nwc_ports::call_encoded_within(
+            NAME,
+            &self.client()?.rpc,
+            req.bytes.clone(),
+            req.name,
+            crate::nwc_ports::RPC_TIMEOUT,
+        )?;
+        req.answer(&reply, NAME)
+    }
+    /// A setter: 4.0's servers take it; 3.12's protocol has no answer worth the name.
+    fn set4(&self, req: Request<()>, what: &'static str) -> DevResult<()> {
+        if self.four() {
+            self.ask(req)
+        } else {
+            Err(DeviceError::Unsupported(what))
+        }
     }
 
     fn call(&self, iface: i32, what: i32) -> DevResult<Bottle> {
@@ -202,6 +252,9 @@ impl DeviceDriver for RgbdSensorClient {
             })?;
         self.close()?;
         self.client = Some(client);
+        if self.four() {
+            return Ok(());
+        }
         let version = self.call(RGBD_SENSOR, RGBD_PROTOCOL_VERSION);
         let (major, minor) = match &version {
             Ok(r) => (reply_int(r, 3).unwrap_or(-1), reply_int(r, 4).unwrap_or(-1)),
@@ -242,37 +295,70 @@ impl Drop for RgbdSensorClient {
 
 impl IRGBDSensor for RgbdSensorClient {
     fn rgb_height(&mut self) -> i32 {
+        if self.four() {
+            return self.ask(rgbd4::getRgbHeightRPC()).unwrap_or(0);
+        }
         self.int(RGB_VISUAL_PARAMS, HEIGHT).unwrap_or(0)
     }
     fn rgb_width(&mut self) -> i32 {
+        if self.four() {
+            return self.ask(rgbd4::getRgbWidthRPC()).unwrap_or(0);
+        }
         self.int(RGB_VISUAL_PARAMS, WIDTH).unwrap_or(0)
     }
     fn depth_height(&mut self) -> i32 {
+        if self.four() {
+            return self.ask(rgbd4::getDepthHeightRPC()).unwrap_or(0);
+        }
         self.int(DEPTH_VISUAL_PARAMS, HEIGHT).unwrap_or(0)
     }
     fn depth_width(&mut self) -> i32 {
+        if self.four() {
+            return self.ask(rgbd4::getDepthWidthRPC()).unwrap_or(0);
+        }
         self.int(DEPTH_VISUAL_PARAMS, WIDTH).unwrap_or(0)
     }
     fn rgb_fov(&mut self) -> DevResult<(f64, f64)> {
+        if self.four() {
+            return self.ask(rgbd4::getRgbFOVRPC());
+        }
         self.pair(RGB_VISUAL_PARAMS, FOV)
     }
     fn depth_fov(&mut self) -> DevResult<(f64, f64)> {
+        if self.four() {
+            return self.ask(rgbd4::getDepthFOVRPC());
+        }
         self.pair(DEPTH_VISUAL_PARAMS, FOV)
     }
     fn rgb_intrinsic_param(&mut self) -> DevResult<Property> {
+        if self.four() {
+            return self.ask(rgbd4::getRgbIntrinsicParamRPC());
+        }
         self.intrinsics(RGB_VISUAL_PARAMS)
     }
     fn depth_intrinsic_param(&mut self) -> DevResult<Property> {
+        if self.four() {
+            return self.ask(rgbd4::getDepthIntrinsicParamRPC());
+        }
         self.intrinsics(DEPTH_VISUAL_PARAMS)
     }
     fn depth_accuracy(&mut self) -> DevResult<f64> {
+        if self.four() {
+            return self.ask(rgbd4::getDepthAccuracyRPC());
+        }
         reply_float(&self.call(DEPTH_VISUAL_PARAMS, ACCURACY)?, 3)
     }
     fn depth_clip_planes(&mut self) -> DevResult<(f64, f64)> {
+        if self.four() {
+            return self.ask(rgbd4::getDepthClipPlanesRPC());
+        }
         self.pair(DEPTH_VISUAL_PARAMS, CLIP_PLANES)
     }
     /// The server appends the matrix as rows, columns and the data list.
     fn extrinsic_param(&mut self) -> DevResult<[f64; 16]> {
+        if self.four() {
+            return self.ask(rgbd4::getExtrinsicParamRPC()).map(|m| m.0);
+        }
         let r = self.call(RGBD_SENSOR, EXTRINSIC_PARAM)?;
         let (rows, cols) = (reply_int(&r, 3)?, reply_int(&r, 4)?);
         let data = r
@@ -295,18 +381,104 @@ impl IRGBDSensor for RgbdSensorClient {
         self.image(true)
     }
     fn sensor_status(&mut self) -> RgbdStatus {
+        if self.four() {
+            return self
+                .ask(rgbd4::getSensorStatusRPC())
+                .map_or(RgbdStatus::GeneralError, RgbdStatus::from_code);
+        }
         match self.int(RGBD_SENSOR, STATUS) {
-            Ok(0) => RgbdStatus::NotReady,
-            Ok(1) => RgbdStatus::OkStandby,
-            Ok(2) => RgbdStatus::OkInUse,
-            Ok(4) => RgbdStatus::Timeout,
-            _ => RgbdStatus::GeneralError,
+            Ok(code) => RgbdStatus::from_code(code),
+            Err(_) => RgbdStatus::GeneralError,
         }
     }
     fn last_error_msg(&mut self) -> String {
+        if self.four() {
+            return self
+                .ask(rgbd4::getLastErrorMsgRPC())
+                .map(|(m, _)| m)
+                .unwrap_or_default();
+        }
         self.call(RGBD_SENSOR, ERROR_MSG)
             .ok()
             .and_then(|r| r.get(3).and_then(Value::as_str).map(str::to_string))
             .unwrap_or_default()
+    }
+    fn rgb_resolution(&mut self) -> DevResult<(i32, i32)> {
+        if self.four() {
+            return self.ask(rgbd4::getRgbResolutionRPC());
+        }
+        Ok((self.rgb_width(), self.rgb_height()))
+    }
+    fn depth_resolution(&mut self) -> DevResult<(i32, i32)> {
+        if self.four() {
+            return self.ask(rgbd4::getDepthResolutionRPC());
+        }
+        Ok((self.depth_width(), self.depth_height()))
+    }
+    fn rgb_supported_configurations(&mut self) -> DevResult<Vec<CameraConfig>> {
+        if self.four() {
+            return self.ask(rgbd4::getRgbSupportedConfigurationsRPC());
+        }
+        Ok(Vec::new())
+    }
+    fn set_rgb_resolution(&mut self, width: i32, height: i32) -> DevResult<()> {
+        self.set4(
+            rgbd4::setRgbResolutionRPC(width, height),
+            "setting the colour resolution",
+        )
+    }
+    fn set_depth_resolution(&mut self, width: i32, height: i32) -> DevResult<()> {
+        self.set4(
+            rgbd4::setDepthResolutionRPC(width, height),
+            "setting the depth resolution",
+        )
+    }
+    fn set_rgb_fov(&mut self, horizontal: f64, vertical: f64) -> DevResult<()> {
+        self.set4(
+            rgbd4::setRgbFOVRPC(horizontal, vertical),
+            "setting the colour field of view",
+        )
+    }
+    fn set_depth_fov(&mut self, horizontal: f64, vertical: f64) -> DevResult<()> {
+        self.set4(
+            rgbd4::setDepthFOVRPC(horizontal, vertical),
+            "setting the depth field of view",
+        )
+    }
+    fn set_depth_accuracy(&mut self, accuracy: f64) -> DevResult<()> {
+        self.set4(
+            rgbd4::setDepthAccuracyRPC(accuracy),
+            "setting the depth accuracy",
+        )
+    }
+    fn set_depth_clip_planes(&mut self, near: f64, far: f64) -> DevResult<()> {
+        self.set4(
+            rgbd4::setDepthClipPlanesRPC(near, far),
+            "setting the clip planes",
+        )
+    }
+    fn rgb_mirroring(&mut self) -> DevResult<bool> {
+        if self.four() {
+            return self.ask(rgbd4::getRgbMirroringRPC());
+        }
+        Ok(false)
+    }
+    fn set_rgb_mirroring(&mut self, mirror: bool) -> DevResult<()> {
+        self.set4(
+            rgbd4::setRgbMirroringRPC(mirror),
+            "mirroring the colour image",
+        )
+    }
+    fn depth_mirroring(&mut self) -> DevResult<bool> {
+        if self.four() {
+            return self.ask(rgbd4::getDepthMirroringRPC());
+        }
+        Ok(false)
+    }
+    fn set_depth_mirroring(&mut self, mirror: bool) -> DevResult<()> {
+        self.set4(
+            rgbd4::setDepthMirroringRPC(mirror),
+            "mirroring the depth image",
+        )
     }
 }

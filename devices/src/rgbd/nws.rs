@@ -4,7 +4,10 @@
 //! Parameters as C++: `name` (required port prefix) and `period` (s, default 0.02). The
 //! ports open with the device: `<name>/rgbImage:o` (the colour image, with its
 //! envelope), `<name>/depthImage:o` (the depth image, `PixelFloat` in meters) and
-//! `<name>/rpc:i` (see [`super::protocol`]). Images stream from attach on, while the
+//! `<name>/rpc:i` (3.12's vocabs, [`super::protocol`], and YARP 4.0's `RGBDSensorMsgs`,
+//! [`super::v4`], told apart by the request; 4.0 names the device `RGBDSensor_nws_yarp`,
+//! keeping this name as an alias). Each image reader gets its generation's header.
+//! Images stream from attach on, while the
 //! sensor is `OK_IN_USE`, each only when its time stamp moved forward, as C++ does.
 //! The images come from a thread of their own: a camera's `getImages` may block.
 
@@ -12,9 +15,11 @@ use super::protocol::handle_rpc;
 use super::RgbdStatus;
 use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
+use crate::framegrabber::nws::send_image_nowait;
 use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
 use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
+use yarp_net::peer_generation::PeerGenerations;
 use yarp_net::port::Port;
 use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Property};
@@ -66,7 +71,12 @@ impl RgbdSensorNwsYarp {
 
 /// Writes the images of one period (C++ `writeData`); `last` holds the times of the
 /// images sent before.
-fn write_images(device: &SharedDevice, rgb: &Port, depth: &Port, last: &mut (f64, f64)) {
+fn write_images(
+    device: &SharedDevice,
+    (rgb, depth): (&Arc<Port>, &Arc<Port>),
+    readers: &PeerGenerations,
+    last: &mut (f64, f64),
+) {
     let got = {
         let mut pd = device.lock();
         let Some(dev) = pd.device().as_rgbd_sensor() else {
@@ -86,13 +96,13 @@ fn write_images(device: &SharedDevice, rgb: &Port, depth: &Port, last: &mut (f64
             if cs.time > last.0 {
                 last.0 = cs.time;
                 if rgb.has_outputs() {
-                    rgb.write_nowait(&color.to_bottle(), Some(cs));
+                    send_image_nowait(rgb, readers, &color, cs);
                 }
             }
             if ds.time > last.1 {
                 last.1 = ds.time;
                 if depth.has_outputs() {
-                    depth.write_nowait(&dimg.to_bottle(), Some(ds));
+                    send_image_nowait(depth, readers, &dimg, ds);
                 }
             }
         }
@@ -102,8 +112,8 @@ fn write_images(device: &SharedDevice, rgb: &Port, depth: &Port, last: &mut (f64
 
 fn stream_images(
     device: SharedDevice,
-    rgb: Arc<Port>,
-    depth: Arc<Port>,
+    (rgb, depth): (Arc<Port>, Arc<Port>),
+    readers: PeerGenerations,
     period: Duration,
     stop: mpsc::Receiver<()>,
 ) {
@@ -120,13 +130,16 @@ fn stream_images(
             next = Instant::now();
         }
         if rgb.has_outputs() || depth.has_outputs() {
-            write_images(&device, &rgb, &depth, &mut last);
+            write_images(&device, (&rgb, &depth), &readers, &mut last);
         }
     }
 }
 
-/// (3.12's vocab protocol: YARP 4.0's clients speak another, `RGBDSensorMsgs`.)
+/// 3.12's vocab protocol, or 4.0's thrift service (each its own request form).
 fn answer(cmd: &Bottle, dev: Option<&mut dyn DeviceDriver>, _: Generation) -> Reply {
+    if super::v4::is_call(cmd) {
+        return Reply::Encoded(super::v4::handle_rpc(cmd, dev));
+    }
     Reply::Bottle(handle_rpc(cmd, dev.and_then(|d| d.as_rgbd_sensor())))
 }
 
@@ -182,10 +195,11 @@ impl IWrapper for RgbdSensorNwsYarp {
             ports.streams[1].clone(),
             self.period,
         );
+        let readers = ports.peers.clone();
         let (stop, rx) = mpsc::channel();
         let thread = std::thread::Builder::new()
             .name(NAME.into())
-            .spawn(move || stream_images(device, rgb, depth, period, rx))
+            .spawn(move || stream_images(device, (rgb, depth), readers, period, rx))
             .map_err(|e| DeviceError::BadParam {
                 device: NAME.into(),
                 param: "period".into(),

@@ -66,6 +66,11 @@ impl PeerGenerations {
     /// port, a dead or silent admin).
     pub async fn of(&self, port: &str) -> Generation {
         let Ok(Some(contact)) = self.ns.query(port).await else {
+            // not registered (an anonymous or in-process reader): taken for 3.x, and
+            // asked again if it registers
+            self.known
+                .lock()
+                .insert(port.to_string(), (Contact::default(), Generation::V3));
             return Generation::V3;
         };
         if let Some((c, g)) = self.known.lock().get(port) {
