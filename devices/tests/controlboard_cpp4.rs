@@ -620,3 +620,35 @@ fn cpp_4_recorded_vectors() {
     println!("C++ 4.0 client calls: {typed} typed and written byte for byte, {special} handshake");
     assert!(typed >= 30, "{typed}");
 }
+
+/// C++ 4.0's `yarp read` at our `stateExt:o` and `state:o` (and C++ 3.12's beside it):
+/// each reads its own generation's form, told by its port's admin — 4.0's `jointData`
+/// with its 24 fields and the positions with 4.0's float tags, 3.12's 22 fields.
+#[test]
+fn cpp_4_and_3_12_yarp_read_our_state_each_in_its_form() {
+    let test = "cpp_4_and_3_12_yarp_read_our_state_each_in_its_form";
+    let (Some(yarp4), Some(yarp3)) = (
+        cpp4_program(test, "yarp"),
+        yarp_interop_tests::cpp_program(test, "yarp"),
+    ) else {
+        return;
+    };
+    let mut board = our_board("/cbr4");
+    let fields = |yarp: &Path, reader: &str| {
+        yarp_interop_tests::cpp_read_until(yarp, reader, "/cbr4/stateExt:o", |l| {
+            let b = yarp_proto::Bottle::from_text(l);
+            // the positions (first field) are 4 doubles in both forms
+            let positions = b.get(0)?.as_list()?;
+            (positions.len() == 4 && positions.iter().all(|v| v.as_f64().is_some()))
+                .then_some(b.len())
+        })
+    };
+    assert_eq!(fields(&yarp4, "/cbr4_rd4"), 24, "4.0's jointData");
+    assert_eq!(fields(&yarp3, "/cbr4_rd3"), 22, "3.12's jointData");
+    let positions = yarp_interop_tests::cpp_read_until(&yarp4, "/cbr4_st4", "/cbr4/state:o", |l| {
+        let b = yarp_proto::Bottle::from_text(l);
+        (b.len() == 4).then(|| b.iter().filter_map(|v| v.as_f64()).count())
+    });
+    assert_eq!(positions, 4, "4.0 reads the positions as doubles");
+    board.close().unwrap();
+}

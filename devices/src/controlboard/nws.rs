@@ -35,6 +35,7 @@ use std::time::Duration;
 use tokio::runtime::Handle;
 use tokio::task::JoinHandle;
 use yarp_net::nameserver::NameClient;
+use yarp_net::peer_generation::PeerGenerations;
 use yarp_net::port::{Port, PortError};
 use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Contact, Stamp, Vocab32};
@@ -66,35 +67,6 @@ struct Attached {
 
 type Slot = Arc<Mutex<Option<Attached>>>;
 
-/// The local prefixes of the YARP 4.0 clients that called `/nws/rpc:i` (from
-/// `<local>/nwc/rpc:o`): their `<local>/stateExt:i` gets 4.0's `jointData`. A 3.12
-/// client calling `/rpc:i` from `<local>/rpc:o` takes its prefix back to 3.12's form.
-#[derive(Clone, Default)]
-struct Clients4(Arc<Mutex<std::collections::BTreeSet<String>>>);
-
-impl Clients4 {
-    fn note(&self, from: &str) {
-        if let Some(prefix) = from.strip_suffix("/nwc/rpc:o") {
-            if !lock(&self.0).contains(prefix) {
-                lock(&self.0).insert(prefix.to_string());
-            }
-        }
-    }
-    fn forget(&self, from: &str) {
-        if let Some(prefix) = from.strip_suffix("/rpc:o") {
-            lock(&self.0).remove(prefix);
-        }
-    }
-    /// Whether the reader port `to` is a 4.0 client's.
-    fn reads(&self, to: &str) -> bool {
-        to.strip_suffix("/stateExt:i")
-            .is_some_and(|prefix| lock(&self.0).contains(prefix))
-    }
-    fn any(&self) -> bool {
-        !lock(&self.0).is_empty()
-    }
-}
-
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // the guarded data stays consistent even if a holder panicked
     m.lock()
@@ -122,7 +94,8 @@ pub struct ControlBoardNws {
     state: usize,
     state_ext: Option<usize>,
     slot: Slot,
-    clients4: Clients4,
+    /// The generations of the state readers (4.0's `jointData` differs).
+    readers: PeerGenerations,
     period: Duration,
     tasks: Vec<JoinHandle<()>>,
     publisher: Option<Publisher>,
@@ -137,7 +110,7 @@ struct Publisher {
 impl Publisher {
     fn start(
         slot: Slot,
-        clients4: Clients4,
+        readers: PeerGenerations,
         state: &Arc<Port>,
         state_ext: Option<&Arc<Port>>,
         period: Duration,
@@ -150,7 +123,7 @@ impl Publisher {
         );
         match std::thread::Builder::new()
             .name("cb_nws state:o".into())
-            .spawn(move || publish(&slot, &clients4, &st, ext.as_ref(), period, &s))
+            .spawn(move || publish(&slot, &readers, &st, ext.as_ref(), period, &s))
         {
             Ok(thread) => Some(Publisher { stop, thread }),
             Err(e) => {
@@ -198,13 +171,13 @@ impl ControlBoardNws {
         let state = Arc::new(Port::open(&format!("{prefix}/state:o"), ns.clone()).await?);
         let state_ext = Arc::new(Port::open(&format!("{prefix}/stateExt:o"), ns.clone()).await?);
         // YARP 4.0's clients ask here, in its thrift form
-        let rpc4 = Arc::new(Port::open(&format!("{prefix}/nws/rpc:i"), ns).await?);
+        let rpc4 = Arc::new(Port::open(&format!("{prefix}/nws/rpc:i"), ns.clone()).await?);
         let slot: Slot = Arc::new(Mutex::new(None));
-        let clients4 = Clients4::default();
+        let readers = PeerGenerations::new(ns.clone());
         let tasks = vec![
-            tokio::spawn(serve_rpc(rpc.clone(), slot.clone(), clients4.clone())),
+            tokio::spawn(serve_rpc(rpc.clone(), slot.clone())),
             tokio::spawn(serve_commands(command.clone(), slot.clone())),
-            tokio::spawn(serve_rpc4(rpc4.clone(), slot.clone(), clients4.clone())),
+            tokio::spawn(serve_rpc4(rpc4.clone(), slot.clone())),
         ];
         Ok(ControlBoardNws {
             rpc_contact: rpc.contact().clone(),
@@ -214,7 +187,7 @@ impl ControlBoardNws {
             state: 2,
             state_ext: Some(3),
             slot,
-            clients4,
+            readers,
             period,
             tasks,
             publisher: None,
@@ -230,7 +203,7 @@ impl ControlBoardNws {
         period: Duration,
     ) -> Result<ControlBoardNws, PortError> {
         let prefix = port_prefix(name);
-        let port = Arc::new(Port::open(&prefix, ns).await?);
+        let port = Arc::new(Port::open(&prefix, ns.clone()).await?);
         let slot: Slot = Arc::new(Mutex::new(None));
         let tasks = vec![tokio::spawn(serve_single_port(port.clone(), slot.clone()))];
         Ok(ControlBoardNws {
@@ -241,7 +214,7 @@ impl ControlBoardNws {
             state: 0,
             state_ext: None,
             slot,
-            clients4: Clients4::default(),
+            readers: PeerGenerations::new(ns),
             period,
             tasks,
             publisher: None,
@@ -283,7 +256,7 @@ impl ControlBoardNws {
         *lock(&self.slot) = Some(Attached { device, axes });
         self.publisher = Publisher::start(
             self.slot.clone(),
-            self.clients4.clone(),
+            self.readers.clone(),
             &self.ports[self.state],
             self.state_ext.map(|i| &self.ports[i]),
             self.period,
@@ -370,10 +343,9 @@ fn attached(slot: &Slot) -> Option<Attached> {
     lock(slot).clone()
 }
 
-async fn serve_rpc(port: Arc<Port>, slot: Slot, clients4: Clients4) {
+async fn serve_rpc(port: Arc<Port>, slot: Slot) {
     let mut stamp = RpcStamp::new();
     while let Some(mut msg) = port.read().await {
-        clients4.forget(&msg.from);
         let reply = match msg.bottle() {
             Err(e) => {
                 tracing::warn!(
@@ -410,9 +382,8 @@ async fn serve_rpc(port: Arc<Port>, slot: Slot, clients4: Clients4) {
 }
 
 /// YARP 4.0's RPC (`<name>/nws/rpc:i`): thrift calls, answered as C++ 4.0 answers them.
-async fn serve_rpc4(port: Arc<Port>, slot: Slot, clients4: Clients4) {
+async fn serve_rpc4(port: Arc<Port>, slot: Slot) {
     while let Some(mut msg) = port.read().await {
-        clients4.note(&msg.from);
         let reply = match (msg.bottle(), attached(&slot)) {
             (Ok(cmd), Some(a)) => {
                 device_call(|| super::v4::handle_rpc(&cmd, lock(&a.device).device()))
@@ -531,7 +502,7 @@ async fn serve_commands(port: Arc<Port>, slot: Slot) {
 /// out on the single port and there is no `stateExt:o`.
 fn publish(
     slot: &Slot,
-    clients4: &Clients4,
+    readers: &PeerGenerations,
     state: &Weak<Port>,
     state_ext: Option<&Weak<Port>>,
     period: Duration,
@@ -578,23 +549,25 @@ fn publish(
         };
         let stamp = Stamp::new(count, time);
         count = if count == i32::MAX { 0 } else { count + 1 };
+        // each reader in its generation (4.0's jointData has temperatures and float
+        // PWMs; its doubles are tagged anew), asked first when new
+        {
+            let mut outs = state.outputs();
+            outs.extend(to_ext.iter().flat_map(|p| p.outputs()));
+            let readers = readers.clone();
+            crate::runtime::block_on(async move { readers.learn(&outs).await });
+        }
         if let Some(state_ext) = to_ext {
-            if clients4.any() {
-                let forms = [
-                    (data.to_bottle(), Generation::V3),
-                    (data.to_bottle_as(Generation::V4), Generation::V4),
-                ];
-                state_ext.write_nowait_each(
-                    &forms,
-                    |to| Some(usize::from(clients4.reads(to))),
-                    Some(stamp),
-                );
-            } else {
-                state_ext.write_nowait(&data.to_bottle(), Some(stamp));
-            }
+            state_ext.write_nowait_forms(
+                readers,
+                || data.to_bottle(),
+                || data.to_bottle_as(Generation::V4),
+                Some(stamp),
+            );
         }
         if to_state {
-            state.write_nowait(&positions_bottle(&data.joint_position.values), Some(stamp));
+            let positions = positions_bottle(&data.joint_position.values);
+            state.write_nowait_by_generation(&positions, readers, Some(stamp));
         }
     }
 }

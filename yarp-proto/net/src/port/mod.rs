@@ -632,7 +632,27 @@ impl Port {
         peers: &crate::peer_generation::PeerGenerations,
         stamp: Option<Stamp>,
     ) -> usize {
-        let forms = [(b.clone(), Generation::V3), (b.clone(), Generation::V4)];
+        self.write_nowait_forms(peers, || b.clone(), || b.clone(), stamp)
+    }
+
+    /// As [`Port::write_nowait_by_generation`] for a message whose two generations'
+    /// forms differ beyond their tags (4.0's `jointData` has more fields): each is built
+    /// only if a reader takes it.
+    pub fn write_nowait_forms(
+        &self,
+        peers: &crate::peer_generation::PeerGenerations,
+        v3: impl FnOnce() -> Bottle,
+        v4: impl FnOnce() -> Bottle,
+        stamp: Option<Stamp>,
+    ) -> usize {
+        let outs = self.outputs();
+        let takes = |g: Generation| outs.iter().any(|o| peers.known(o) == Some(g));
+        let (want3, want4) = (takes(Generation::V3), takes(Generation::V4));
+        // a form nobody takes is not built: an empty placeholder stands in
+        let forms = [
+            (if want3 { v3() } else { Bottle::new() }, Generation::V3),
+            (if want4 { v4() } else { Bottle::new() }, Generation::V4),
+        ];
         self.write_nowait_each(
             &forms,
             |to| {
