@@ -150,3 +150,40 @@ fn peer_generations_of_cpp_3_12_cpp_4_and_our_ports() {
     });
     rt.block_on(ours.close());
 }
+
+/// Our port writing to C++ 4.0's `yarp read`: the connection asked the reader's admin
+/// and sends 4.0's float tags, so 4.0 prints the values written (3.12's bytes would
+/// misalign it); a C++ 3.12 reader of the same port gets 3.12's bytes.
+#[test]
+fn cpp_4_and_3_12_readers_each_get_their_floats_from_our_writer() {
+    let test = "cpp_4_and_3_12_readers_each_get_their_floats_from_our_writer";
+    let (Some(yarp3), Some(yarp4)) = (cpp_program(test, "yarp"), cpp4_program(test, "yarp")) else {
+        return;
+    };
+    let rt = runtime();
+    let port = std::sync::Arc::new(
+        rt.block_on(Port::open("/gen/w", name_client()))
+            .expect("open /gen/w"),
+    );
+    // write the line over and over while the readers connect
+    let writer = {
+        let port = port.clone();
+        rt.spawn(async move {
+            let b = Bottle::from_text(LINES[2]);
+            loop {
+                port.write_nowait(&b, None);
+                tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+            }
+        })
+    };
+    let want = Bottle::from_text(LINES[2]);
+    for (yarp, reader) in [(&yarp4, "/gen/rd4"), (&yarp3, "/gen/rd3")] {
+        let got = cpp_read_until(yarp, reader, "/gen/w", |l| {
+            let b = Bottle::from_text(l);
+            (b.len() == want.len() && b.get(0) == want.get(0)).then_some(b)
+        });
+        assert_eq!(got, want, "read by {reader}");
+    }
+    writer.abort();
+    drop(port);
+}

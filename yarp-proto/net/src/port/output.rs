@@ -74,13 +74,18 @@ pub(crate) struct Outgoing {
     stamp: Option<Stamp>,
     /// The numbering of tags the reader expects (YARP 4.0 renumbered the floats).
     generation: Generation,
+    /// Whether the writer left the generation to each connection (its reader's).
+    open_generation: bool,
     /// Given encoded (a thrift call), whose reply may be no Bottle.
     encoded: bool,
 }
 
 impl Outgoing {
+    /// A message in each reader's generation (3.x's until a connection knows better).
     pub(crate) fn new(bottle: Arc<Bottle>, stamp: Option<Stamp>) -> Outgoing {
-        Outgoing::new_as(bottle, stamp, Generation::V3)
+        let mut msg = Outgoing::new_as(bottle, stamp, Generation::V3);
+        msg.open_generation = true;
+        msg
     }
 
     /// A message for readers of `generation`.
@@ -95,8 +100,22 @@ impl Outgoing {
             text: OnceLock::new(),
             stamp,
             generation,
+            open_generation: false,
             encoded: false,
         }
+    }
+
+    /// This message as a reader of `generation` takes it: itself, unless the writer left
+    /// the generation open and the reader's is another.
+    pub(crate) fn for_reader(self: &Arc<Self>, generation: Generation) -> Arc<Outgoing> {
+        if !self.open_generation || self.generation == generation {
+            return self.clone();
+        }
+        Arc::new(Outgoing::new_as(
+            self.bottle.clone(),
+            self.stamp,
+            generation,
+        ))
     }
 
     /// A message already encoded (a thrift call): binary carriers send `bytes` as they
@@ -375,8 +394,22 @@ pub(crate) async fn connect(
             what: format!("{ev:?}"),
         });
     }
+    // a binary reader of YARP 4.0 takes 4.0's float tags: ask its admin which it is
+    let generation = match spec.framing {
+        Framing::Stream => crate::peer_generation::probe(contact)
+            .await
+            .unwrap_or(Generation::V3),
+        _ => Generation::V3,
+    };
     let route = Route::new(&shared.name, target, &name.to_string());
-    Ok(spawn(shared, route, stream, decoder, spec, monitor))
+    Ok(spawn(
+        shared,
+        route,
+        stream,
+        decoder,
+        (spec, generation),
+        monitor,
+    ))
 }
 
 /// A TCP connection to `target` at `contact`, within [`CONNECT_TIMEOUT`].
@@ -411,7 +444,7 @@ pub(crate) fn from_reversed(
     // what the peer sends from now on are acks and replies to our messages
     let decoder = Decoder::responses(spec, DecoderConfig::default());
     let route = Route::new(&shared.name, peer, spec.carrier.name());
-    spawn(shared, route, stream, decoder, spec, None)
+    spawn(shared, route, stream, decoder, (spec, Generation::V3), None)
 }
 
 fn spawn(
@@ -419,7 +452,7 @@ fn spawn(
     route: Route,
     stream: TcpStream,
     decoder: Decoder,
-    spec: CarrierSpec,
+    (spec, generation): (CarrierSpec, Generation),
     monitor: Option<Monitor>,
 ) -> OutputHandle {
     let (tx, rx) = mpsc::channel(OUTPUT_QUEUE);
@@ -428,7 +461,7 @@ fn spawn(
         route.to.clone(),
         stream,
         decoder,
-        (spec, monitor),
+        (spec, generation, monitor),
         rx,
     ));
     OutputHandle { route, tx, task }
@@ -439,10 +472,17 @@ async fn run(
     target: String,
     mut stream: TcpStream,
     mut decoder: Decoder,
-    (spec, monitor): (CarrierSpec, Option<Monitor>),
+    (spec, generation, monitor): (CarrierSpec, Generation, Option<Monitor>),
     mut rx: mpsc::Receiver<Job>,
 ) {
-    let result = serve(&target, &mut stream, &mut decoder, spec, monitor, &mut rx).await;
+    let result = serve(
+        &target,
+        &mut stream,
+        &mut decoder,
+        (spec, generation, monitor),
+        &mut rx,
+    )
+    .await;
     if let Err(e) = &result {
         tracing::debug!("output to {target} ended: {e}");
     }
@@ -459,8 +499,7 @@ async fn serve(
     target: &str,
     stream: &mut TcpStream,
     decoder: &mut Decoder,
-    spec: CarrierSpec,
-    monitor: Option<Monitor>,
+    (spec, generation, monitor): (CarrierSpec, Generation, Option<Monitor>),
     rx: &mut mpsc::Receiver<Job>,
 ) -> Result<(), OutputError> {
     let io_err = |source| OutputError::Io {
@@ -484,6 +523,12 @@ async fn serve(
         };
         let Some(job) = job else {
             return Ok(());
+        };
+        // in the reader's generation, unless the writer chose one
+        let job = match job {
+            Job::Data(msg) => Job::Data(msg.for_reader(generation)),
+            Job::Rpc(msg, reply_tx) => Job::Rpc(msg.for_reader(generation), reply_tx),
+            job => job,
         };
         let job = match (&monitor, job) {
             (Some(m), Job::Data(msg)) => match monitored(m, &msg, target) {
