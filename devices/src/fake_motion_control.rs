@@ -99,6 +99,8 @@ struct Joint {
     /// YARP 4.0's brake (`IJointBrake`): engaged, and engaged automatically.
     braked: bool,
     auto_brake: bool,
+    /// The last hardware fault (`IJointFault`): code (0: none) and message.
+    fault: (i32, String),
     mode: Vocab32,
     interaction: Vocab32,
     name: String,
@@ -161,6 +163,7 @@ impl FakeMotionControl {
     fn setup(&mut self, n: usize) {
         self.joints = (0..n)
             .map(|i| Joint {
+                fault: (0, String::new()),
                 pos: 0.0,
                 speed: 0.0,
                 acc: 0.0,
@@ -325,7 +328,7 @@ impl DeviceDriver for FakeMotionControl {
     }
 
     crate::motor_control_views!();
-    crate::views!(as_velocity_direct, as_joint_brake);
+    crate::views!(as_velocity_direct, as_joint_brake, as_joint_fault);
 }
 
 impl IEncoders for FakeMotionControl {
@@ -416,6 +419,13 @@ impl IVelocityDirect for FakeMotionControl {
     }
     fn get_ref_velocity_direct(&mut self, j: usize) -> DevResult<f64> {
         Ok(self.joint(j)?.ref_vel_direct)
+    }
+}
+
+/// As C++'s fake: the fault a high torque reference caused.
+impl IJointFault for FakeMotionControl {
+    fn get_last_joint_fault(&mut self, j: usize) -> DevResult<(i32, String)> {
+        Ok(self.joint(j)?.fault.clone())
     }
 }
 
@@ -519,6 +529,7 @@ impl ITorqueControl for FakeMotionControl {
                 "{NAME}: joint {j} received a high torque command ({t}): hardware fault"
             );
             jt.mode = CM_HW_FAULT;
+            jt.fault = (1, format!("test{j} torque"));
         }
         Ok(())
     }

@@ -241,6 +241,12 @@ pub trait IVelocityDirect {
     }
 }
 
+/// The last fault of a joint (C++ `IJointFault`): a device-specific code (0: none) and
+/// its description.
+pub trait IJointFault {
+    fn get_last_joint_fault(&mut self, j: usize) -> DevResult<(i32, String)>;
+}
+
 /// YARP 4.0's `IJointBrake`: a joint's brake, engaged by hand or automatically.
 pub trait IJointBrake {
     fn is_joint_braked(&mut self, j: usize) -> DevResult<bool>;

@@ -380,7 +380,12 @@ impl DeviceDriver for ControlBoardRemapper {
 
     crate::motor_control_views!();
 
-    crate::views!(as_remote_calibrator, as_velocity_direct, as_joint_brake);
+    crate::views!(
+        as_remote_calibrator,
+        as_velocity_direct,
+        as_joint_brake,
+        as_joint_fault
+    );
 }
 
 /// What the layout needs to know about an attached device.
@@ -537,6 +542,12 @@ impl IVelocityDirect for ControlBoardRemapper {
     fn get_ref_velocity_direct(&mut self, j: usize) -> DevResult<f64> {
         on!(self, j, as_velocity_direct, |d, l| d
             .get_ref_velocity_direct(l))
+    }
+}
+
+impl IJointFault for ControlBoardRemapper {
+    fn get_last_joint_fault(&mut self, j: usize) -> DevResult<(i32, String)> {
+        on!(self, j, as_joint_fault, |f, l| f.get_last_joint_fault(l))
     }
 }
 

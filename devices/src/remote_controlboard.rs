@@ -760,7 +760,12 @@ impl DeviceDriver for RemoteControlBoard {
 
     crate::motor_control_views!();
 
-    crate::views!(as_remote_calibrator, as_velocity_direct, as_joint_brake);
+    crate::views!(
+        as_remote_calibrator,
+        as_velocity_direct,
+        as_joint_brake,
+        as_joint_fault
+    );
 }
 
 impl Drop for RemoteControlBoard {
@@ -983,6 +988,12 @@ impl IVelocityDirect for RemoteControlBoard {
         self.ask(m::GetRefVelocitiesDirectGroup {
             joints: group(joints),
         })
+    }
+}
+
+impl IJointFault for RemoteControlBoard {
+    fn get_last_joint_fault(&mut self, j: usize) -> DevResult<(i32, String)> {
+        self.ask(m::GetLastJointFault { j })
     }
 }
 

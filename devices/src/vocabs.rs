@@ -17,6 +17,10 @@ pub const NAK: i32 = v("nak");
 pub const TIMESTAMP: i32 = v("tsta");
 pub const PROTOCOL_VERSION: i32 = v("prot");
 
+// joint faults (IJointFault)
+pub const JOINT_FAULT_IFACE: i32 = v("ijfl");
+pub const GET_JOINT_FAULT: i32 = v("jhfl");
+
 // encoders
 pub const AXES: i32 = v("axes");
 pub const ENCODER: i32 = v("enc");

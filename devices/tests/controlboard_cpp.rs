@@ -402,6 +402,10 @@ const METHODS: &[Row] = &[
         "[set] [icmd] [cmds] ([pos] [pos] [pos] [pos])",
     ),
     row("getControlModes (end)", "[get] [icmd] [cmds]"),
+    // IJointFault: none yet; a high torque reference makes one (both fakes)
+    row("getLastJointFault", "[get] [ijfl] [jhfl] 1"),
+    row("setRefTorque (high)", "[set] [torq] [ref] 2 5.0"),
+    row("getLastJointFault (after)", "[get] [ijfl] [jhfl] 2"),
 ];
 
 /// A reply without what differs between runs: the `[tsta] n t` stamps.

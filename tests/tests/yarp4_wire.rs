@@ -187,3 +187,61 @@ fn cpp_4_and_3_12_readers_each_get_their_floats_from_our_writer() {
     writer.abort();
     drop(port);
 }
+
+/// YARP 4.0's vocab64 (a bracketed word of 5 to 8 characters, as 4.0's text parser makes
+/// it) reaches our port as one, in 4.0's bytes; written back by our port to C++ 4.0's
+/// reader it prints as typed.
+#[test]
+fn vocab64_from_cpp_4_and_back() {
+    let test = "vocab64_from_cpp_4_and_back";
+    let Some(yarp) = cpp4_program(test, "yarp") else {
+        return;
+    };
+    let rt = runtime();
+    let port = rt
+        .block_on(Port::open("/v64/in", name_client()))
+        .expect("open /v64/in");
+    let mut writer = cpp_command(&yarp)
+        .args(["write", "/v64/w", "/v64/in"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn C++ 4.0 yarp write");
+    let mut stdin = writer.stdin.take().unwrap();
+    let _writer = Reaped(writer);
+    writeln!(stdin, "[velocity] [ok] 3").unwrap();
+    stdin.flush().unwrap();
+    let msg = rt
+        .block_on(async { tokio::time::timeout(3 * T, port.read()).await })
+        .expect("nothing from C++ 4.0 yarp write")
+        .expect("port open");
+    let want = Bottle::new()
+        .with(yarp_proto::Value::vocab64("velocity"))
+        .with(yarp_proto::Vocab32::new("ok"))
+        .with(3);
+    assert_eq!(msg.bottle().unwrap(), want);
+    assert_eq!(msg.payload, want.encode_as(Generation::V4));
+    drop(stdin);
+    rt.block_on(port.close());
+
+    let out = std::sync::Arc::new(
+        rt.block_on(Port::open("/v64/out", name_client()))
+            .expect("open /v64/out"),
+    );
+    let writing = {
+        let out = out.clone();
+        let want = want.clone();
+        rt.spawn(async move {
+            loop {
+                out.write_nowait(&want, None);
+                tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+            }
+        })
+    };
+    let line = cpp_read_until(&yarp, "/v64/rd", "/v64/out", |l| {
+        l.starts_with("[velocity]").then(|| l.to_string())
+    });
+    assert_eq!(line, "[velocity] [ok] 3");
+    writing.abort();
+}

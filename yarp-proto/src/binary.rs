@@ -64,6 +64,7 @@ impl Writer {
             Value::Float32(x) => out.extend_from_slice(&x.to_le_bytes()),
             Value::Float64(x) => out.extend_from_slice(&x.to_le_bytes()),
             Value::Vocab32(x) => put_i32(out, x.0),
+            Value::Vocab64(x) => out.extend_from_slice(&x.to_le_bytes()),
             Value::String(s) | Value::Blob(s) => {
                 put_i32(out, s.len() as i32);
                 out.extend_from_slice(s);
@@ -325,6 +326,9 @@ impl<'a> Reader<'a> {
             tags::INT32 => Value::Int32(self.i32("int32")?),
             tags::INT64 => Value::Int64(i64::from_le_bytes(self.array("int64")?)),
             tags::VOCAB32 => Value::Vocab32(Vocab32(self.i32("vocab")?)),
+            t if g == Generation::V4 && t == tags::v4::VOCAB64 => {
+                Value::Vocab64(u64::from_le_bytes(self.array("vocab64")?))
+            }
             tags::STRING => Value::String(self.sized("string")?),
             tags::BLOB => Value::Blob(self.sized("blob")?),
             t if t & tags::GROUP_MASK != 0 => {

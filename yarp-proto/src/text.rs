@@ -308,6 +308,20 @@ fn write_value(v: &Value, nested: bool, out: &mut Vec<u8>) {
                 }
             }
         }
+        // C++ 4.0's `StoreVocab64`: `[chars]`, 0 and '1' as false and true
+        Value::Vocab64(x) => match *x {
+            0 => out.extend_from_slice(b"false"),
+            0x31 => out.extend_from_slice(b"true"),
+            code => {
+                if nested {
+                    out.push(b'[');
+                }
+                out.extend(crate::value::vocab64_decode(code));
+                if nested {
+                    out.push(b']');
+                }
+            }
+        },
         Value::String(s) => {
             if nested {
                 quote_string(s, out)

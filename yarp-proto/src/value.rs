@@ -17,6 +17,9 @@ pub enum Value {
     Float32(f32),
     Float64(f64),
     Vocab32(Vocab32),
+    /// YARP 4.0's eight-character vocab (little-endian characters, as C++
+    /// `Vocab64::encode64`).
+    Vocab64(u64),
     String(Vec<u8>),
     Blob(Vec<u8>),
     List(Bottle),
@@ -29,6 +32,11 @@ impl Value {
     /// Builds a string value.
     pub fn string(s: impl Into<Vec<u8>>) -> Value {
         Value::String(s.into())
+    }
+
+    /// Builds a YARP 4.0 vocab64 value from up to eight characters.
+    pub fn vocab64(s: &str) -> Value {
+        Value::Vocab64(vocab64_encode(s.as_bytes()))
     }
 
     /// Builds a vocab value from up to four characters.
@@ -51,6 +59,11 @@ impl Value {
             Value::Float32(_) => generation.float32(),
             Value::Float64(_) => generation.float64(),
             Value::Vocab32(_) => tags::VOCAB32,
+            // 3.x has no vocab64: its readers get the same eight bytes as an int64
+            Value::Vocab64(_) => match generation {
+                tags::Generation::V3 => tags::INT64,
+                tags::Generation::V4 => tags::v4::VOCAB64,
+            },
             Value::String(_) => tags::STRING,
             Value::Blob(_) => tags::BLOB,
             Value::List(b) => tags::LIST | b.homogeneous_tag_in(generation),
@@ -186,6 +199,7 @@ impl PartialEq for Value {
             (String(a), String(b)) => a == b,
             (Blob(a), Blob(b)) => a == b,
             (List(a), List(b)) => a == b,
+            (Vocab64(a), Vocab64(b)) => a == b,
             (Dict(a), Dict(b)) => a == b,
             _ => false,
         }
@@ -202,6 +216,11 @@ impl fmt::Debug for Value {
             Value::Float32(v) => write!(f, "Float32({v:?})"),
             Value::Float64(v) => write!(f, "Float64({v:?})"),
             Value::Vocab32(v) => write!(f, "{v:?}"),
+            Value::Vocab64(v) => write!(
+                f,
+                "Vocab64([{}])",
+                String::from_utf8_lossy(&vocab64_decode(*v))
+            ),
             Value::String(s) => write!(f, "String({:?})", String::from_utf8_lossy(s)),
             Value::Blob(b) => write!(f, "Blob({b:?})"),
             Value::List(b) => write!(f, "List({b})"),
@@ -509,5 +528,42 @@ mod tests {
         assert!(Value::Float64(0.0) != Value::Float64(-0.0));
         let collected: Bottle = [1, 2, 3].into_iter().collect();
         assert_eq!(collected.homogeneous_tag(), crate::tags::INT32);
+    }
+}
+
+/// C++ `Vocab64::encode64`: up to eight characters, the first in the lowest byte.
+pub fn vocab64_encode(chars: &[u8]) -> u64 {
+    chars
+        .iter()
+        .take(8)
+        .enumerate()
+        .fold(0, |code, (i, &c)| code | (u64::from(c) << (8 * i)))
+}
+
+/// C++ `Vocab64::decode64`: the characters, zero bytes skipped.
+pub fn vocab64_decode(code: u64) -> Vec<u8> {
+    code.to_le_bytes().into_iter().filter(|&c| c != 0).collect()
+}
+
+#[cfg(test)]
+mod vocab64_tests {
+    use super::*;
+    use crate::tags::Generation;
+
+    #[test]
+    fn vocab64_in_each_generation_and_as_text() {
+        let b = Bottle::new().with(Value::vocab64("velocity")).with(7);
+        let v4 = b.encode_as(Generation::V4);
+        // list, 2 elements, tag 18 and the characters, lowest first
+        assert_eq!(&v4[8..12], &18i32.to_le_bytes());
+        assert_eq!(&v4[12..20], b"velocity");
+        assert_eq!(crate::binary::decode_as(&v4, Generation::V4).unwrap().0, b);
+        assert_eq!(Bottle::decode(&v4).unwrap(), b, "told apart by its tag");
+        // 3.x has no vocab64: the same bytes as an int64
+        let v3 = b.encode();
+        assert_eq!(&v3[8..12], &crate::tags::INT64.to_le_bytes());
+        assert_eq!(b.to_string(), "[velocity] 7");
+        assert_eq!(Value::vocab64("ok").to_string(), "[ok]");
+        assert_eq!(Value::Vocab64(0).to_string(), "false");
     }
 }

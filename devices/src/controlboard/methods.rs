@@ -560,6 +560,10 @@ control_board_methods! {
         |d| via!(d.as_velocity_direct).get_ref_velocities_direct();
     GetRefVelocitiesDirectGroup { joints: Group } -> Vec<f64>, Get [], v4 "getRefVelocityGroupRPC" =>
         |d| via!(d.as_velocity_direct).get_ref_velocities_direct_group(&joints);
+    // IJointFault: `[get] [ijfl] [jhfl] j` -> `[is] code "message" [ok]`
+    GetLastJointFault { j: usize } -> (i32, String), Is [GET, JOINT_FAULT_IFACE, GET_JOINT_FAULT], v4 "getLastJointFaultRPC" =>
+        |d| via!(d.as_joint_fault).get_last_joint_fault(j);
+
     // 4.0's IJointBrake
     IsJointBraked { j: usize } -> bool, Get [], v4 "isJointBrakedRPC" =>
         |d| via!(d.as_joint_brake).is_joint_braked(j);

@@ -28,6 +28,8 @@ pub enum Style {
     GetPlain,
     /// `<cmd[1]> value [ok]` (`[get] [prot]`).
     Echo,
+    /// `[is] value [ok]`: no echo, no timestamp (`IJointFault`).
+    Is,
 }
 
 impl Style {
@@ -35,7 +37,7 @@ impl Style {
     fn value_at(self) -> usize {
         match self {
             Style::Set | Style::Check | Style::GetPlain => 0,
-            Style::Echo => 1,
+            Style::Echo | Style::Is => 1,
             Style::Get | Style::GetBare | Style::GetMode => 2,
         }
     }
@@ -379,6 +381,9 @@ pub fn reply<M: Method>(cmd: &Bottle, result: DevResult<M::Reply>, stamp: &mut R
             };
         }
         Style::GetPlain => {}
+        Style::Is => {
+            b.push(Vocab32(IS));
+        }
         Style::Echo => {
             b.push(cmd.get(1).cloned().unwrap_or(Value::Vocab32(Vocab32(0))));
         }

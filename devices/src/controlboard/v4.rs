@@ -205,7 +205,7 @@ fn interfaces(dev: &mut dyn DeviceDriver) -> Vec<(&'static str, bool)> {
         ("iInteractionMode", dev.as_interaction_mode().is_some()),
         ("iJointBrake", dev.as_joint_brake().is_some()),
         // 4.0's IJointFault: not in our framework yet
-        ("iJointFault", false),
+        ("iJointFault", dev.as_joint_fault().is_some()),
         ("iMotor", dev.as_motor().is_some()),
         ("iMotorEncoders", dev.as_motor_encoders().is_some()),
         ("iPidControl", dev.as_pid_control().is_some()),

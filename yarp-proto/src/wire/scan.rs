@@ -121,6 +121,7 @@ impl BottleScanner {
                         tags::INT16 => Some(2),
                         tags::INT32 | tags::VOCAB32 => Some(4),
                         tags::INT64 => Some(8),
+                        t if g == Generation::V4 && t == tags::v4::VOCAB64 => Some(8),
                         t if t == g.float32() => Some(4),
                         t if t == g.float64() => Some(8),
                         _ => None,
