@@ -223,6 +223,10 @@ fn render_value(v: &Value) -> String {
         Value::Float32(x) => py_repr(*x as f64),
         Value::Float64(x) => py_repr(*x),
         Value::Vocab32(x) => format!("[{}]", String::from_utf8_lossy(&x.decode())),
+        Value::Vocab64(x) => format!(
+            "[{}]",
+            String::from_utf8_lossy(&yarp_proto::value::vocab64_decode(*x))
+        ),
         Value::String(s) => format!("\"{}\"", String::from_utf8_lossy(s)),
         Value::Blob(b) => format!(
             "{{{}}}",
