@@ -2,6 +2,7 @@
 //! decode(encode(x)) == x, and the re-encoding is canonical (encoding it again gives the
 //! same bytes). The input bytes themselves may legitimately differ from the re-encoding
 //! (trailing bytes, a non-compacted list that could be compacted, negative counts...).
+//! The round trip is in the input's generation (YARP 4.0's vocab64 has no 3.x form).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -11,13 +12,14 @@ fuzz_target!(|data: &[u8]| {
     let Ok(b) = Bottle::decode(data) else {
         return;
     };
-    let bytes = b.encode();
+    let generation = yarp_proto::binary::generation_of(data);
+    let bytes = b.encode_as(generation);
     let back = match Bottle::decode(&bytes) {
         Ok(back) => back,
         Err(e) => panic!("re-encoding of a decoded bottle does not decode: {e}\n{b:?}"),
     };
     assert_eq!(back, b, "decode(encode(x)) != x");
-    assert_eq!(back.encode(), bytes, "re-encoding is not canonical");
+    assert_eq!(back.encode_as(generation), bytes, "re-encoding is not canonical");
     // the text printer must cope with anything the decoder accepts
     let _ = b.to_text();
 });
