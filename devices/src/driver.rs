@@ -150,6 +150,7 @@ crate::device_interfaces! {
     as_velocity_direct: IVelocityDirect => "IVelocityDirect" (Motor),
     as_joint_brake: IJointBrake => "IJointBrake" (Other),
     as_joint_fault: IJointFault => "IJointFault" (Other),
+    as_remote_variables: IRemoteVariables => "IRemoteVariables" (Other),
     as_control_mode: IControlMode => "IControlMode" (Motor),
     as_axis_info: IAxisInfo => "IAxisInfo" (Other),
     as_control_limits: IControlLimits => "IControlLimits" (Other),

@@ -241,6 +241,15 @@ pub trait IVelocityDirect {
     }
 }
 
+/// Named settings a board offers beyond the interfaces (C++ `IRemoteVariables`, e.g.
+/// embObjMotionControl's `kinematic_mj`): each value a Bottle.
+pub trait IRemoteVariables {
+    fn get_remote_variable(&mut self, key: &str) -> DevResult<yarp_proto::Bottle>;
+    fn set_remote_variable(&mut self, key: &str, value: &yarp_proto::Bottle) -> DevResult<()>;
+    /// The keys, as a Bottle.
+    fn get_remote_variables_list(&mut self) -> DevResult<yarp_proto::Bottle>;
+}
+
 /// The last fault of a joint (C++ `IJointFault`): a device-specific code (0: none) and
 /// its description.
 pub trait IJointFault {

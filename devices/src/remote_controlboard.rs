@@ -764,7 +764,8 @@ impl DeviceDriver for RemoteControlBoard {
         as_remote_calibrator,
         as_velocity_direct,
         as_joint_brake,
-        as_joint_fault
+        as_joint_fault,
+        as_remote_variables
     );
 }
 
@@ -988,6 +989,23 @@ impl IVelocityDirect for RemoteControlBoard {
         self.ask(m::GetRefVelocitiesDirectGroup {
             joints: group(joints),
         })
+    }
+}
+
+impl IRemoteVariables for RemoteControlBoard {
+    fn get_remote_variable(&mut self, key: &str) -> DevResult<Bottle> {
+        self.ask(m::GetRemoteVariable {
+            key: key.to_string(),
+        })
+    }
+    fn set_remote_variable(&mut self, key: &str, value: &Bottle) -> DevResult<()> {
+        self.ask(m::SetRemoteVariable {
+            key: key.to_string(),
+            value: crate::controlboard::v3::Flat(value.clone()),
+        })
+    }
+    fn get_remote_variables_list(&mut self) -> DevResult<Bottle> {
+        self.ask(m::GetRemoteVariablesList {}).map(|k| k.0)
     }
 }
 

@@ -17,6 +17,11 @@ pub const NAK: i32 = v("nak");
 pub const TIMESTAMP: i32 = v("tsta");
 pub const PROTOCOL_VERSION: i32 = v("prot");
 
+// remote variables (IRemoteVariables)
+pub const REMOTE_VARIABLE_IFACE: i32 = v("ivar");
+pub const VARIABLE: i32 = v("mvar");
+pub const VARIABLE_LIST: i32 = v("lvar");
+
 // joint faults (IJointFault)
 pub const JOINT_FAULT_IFACE: i32 = v("ijfl");
 pub const GET_JOINT_FAULT: i32 = v("jhfl");

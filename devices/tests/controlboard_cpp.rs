@@ -402,6 +402,13 @@ const METHODS: &[Row] = &[
         "[set] [icmd] [cmds] ([pos] [pos] [pos] [pos])",
     ),
     row("getControlModes (end)", "[get] [icmd] [cmds]"),
+    // IRemoteVariables: neither fake has them
+    row("getRemoteVariable", "[get] [ivar] [mvar] \"kinematic_mj\""),
+    row("getRemoteVariablesList", "[get] [ivar] [lvar]"),
+    row(
+        "setRemoteVariable",
+        "[set] [ivar] [mvar] \"kinematic_mj\" 1 2 3",
+    ),
     // IJointFault: none yet; a high torque reference makes one (both fakes)
     row("getLastJointFault", "[get] [ijfl] [jhfl] 1"),
     row("setRefTorque (high)", "[set] [torq] [ref] 2 5.0"),

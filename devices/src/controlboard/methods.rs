@@ -5,7 +5,7 @@
 //! handled wherever [`Request`] is matched.
 
 use super::rpc::RpcStamp;
-use super::v3::{self, Done, Form, Group, Listed, PidType, Style, Wire3, J16};
+use super::v3::{self, Done, Flat, Form, Group, Listed, PidType, Style, Wire3, J16};
 use super::v4::{self, Wire4};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
@@ -560,6 +560,15 @@ control_board_methods! {
         |d| via!(d.as_velocity_direct).get_ref_velocities_direct();
     GetRefVelocitiesDirectGroup { joints: Group } -> Vec<f64>, Get [], v4 "getRefVelocityGroupRPC" =>
         |d| via!(d.as_velocity_direct).get_ref_velocities_direct_group(&joints);
+    // IRemoteVariables: `[get] [ivar] [mvar] "key"` -> `[is] [ivar] (value) [ok]`; a set
+    // carries the value's elements after the key
+    GetRemoteVariable { key: String } -> Bottle, GetBare [GET, REMOTE_VARIABLE_IFACE, VARIABLE], v4 "getRemoteVariableRPC" =>
+        |d| via!(d.as_remote_variables).get_remote_variable(&key);
+    SetRemoteVariable { key: String, value: Flat } -> (), Set [SET, REMOTE_VARIABLE_IFACE, VARIABLE], v4 "setRemoteVariableRPC" =>
+        |d| via!(d.as_remote_variables).set_remote_variable(&key, &value.0);
+    GetRemoteVariablesList {} -> v4::Keys, GetBare [GET, REMOTE_VARIABLE_IFACE, VARIABLE_LIST], v4 "getRemoteVariablesListRPC" =>
+        |d| via!(d.as_remote_variables).get_remote_variables_list().map(v4::Keys);
+
     // IJointFault: `[get] [ijfl] [jhfl] j` -> `[is] code "message" [ok]`
     GetLastJointFault { j: usize } -> (i32, String), Is [GET, JOINT_FAULT_IFACE, GET_JOINT_FAULT], v4 "getLastJointFaultRPC" =>
         |d| via!(d.as_joint_fault).get_last_joint_fault(j);
@@ -670,5 +679,77 @@ mod tests {
     fn group_counts_must_match() {
         let b = Bottle::from_text("[set] [pmg] 3 (0 1) (1.0 2.0)");
         assert_eq!(Request::from_v3(&b), None);
+    }
+
+    /// A device whose only interface is IRemoteVariables.
+    #[derive(Default)]
+    struct Vars(std::collections::BTreeMap<String, Bottle>);
+    impl DeviceDriver for Vars {
+        fn open(&mut self, _: &yarp_proto::Property) -> DevResult<()> {
+            Ok(())
+        }
+        crate::views!(as_remote_variables);
+    }
+    impl crate::interfaces::IRemoteVariables for Vars {
+        fn get_remote_variable(&mut self, key: &str) -> DevResult<Bottle> {
+            self.0
+                .get(key)
+                .cloned()
+                .ok_or(DeviceError::Unsupported("no such key"))
+        }
+        fn set_remote_variable(&mut self, key: &str, value: &Bottle) -> DevResult<()> {
+            self.0.insert(key.to_string(), value.clone());
+            Ok(())
+        }
+        fn get_remote_variables_list(&mut self) -> DevResult<Bottle> {
+            Ok(self.0.keys().fold(Bottle::new(), |b, k| b.with(k.as_str())))
+        }
+    }
+
+    #[test]
+    fn remote_variables_in_both_forms() {
+        let mut dev = Vars::default();
+        let mut stamp = RpcStamp::new();
+        let mut ask3 = |text: &str, dev: &mut Vars| {
+            super::super::rpc::handle_rpc(&Bottle::from_text(text), dev, &mut stamp).to_string()
+        };
+        // 3.12: the value's elements follow the key; read back nested
+        assert_eq!(
+            ask3("[set] [ivar] [mvar] \"kin\" 1 2.5 x", &mut dev),
+            "[ok]"
+        );
+        assert_eq!(
+            ask3("[get] [ivar] [mvar] \"kin\"", &mut dev),
+            "[is] [ivar] (1 2.5 x) [ok]"
+        );
+        assert_eq!(
+            ask3("[get] [ivar] [lvar]", &mut dev),
+            "[is] [ivar] (kin) [ok]"
+        );
+        // 4.0: the value nested in the call and the reply
+        let set = v4::request(&SetRemoteVariable {
+            key: "other".into(),
+            value: Flat(Bottle::from_text("7 8")),
+        });
+        let reply = v4::handle_rpc(&Bottle::decode(&set).unwrap(), &mut dev);
+        assert_eq!(Bottle::decode(&reply).unwrap().to_string(), "[ok]");
+        let get = v4::request(&GetRemoteVariable {
+            key: "other".into(),
+        });
+        let reply =
+            Bottle::decode(&v4::handle_rpc(&Bottle::decode(&get).unwrap(), &mut dev)).unwrap();
+        let (ret, value) = v4::answer::<GetRemoteVariable>(&reply).unwrap();
+        assert_eq!(
+            (ret, value),
+            (v4::ReturnValue::Ok, Some(Bottle::from_text("7 8")))
+        );
+        let list = v4::request(&GetRemoteVariablesList {});
+        let reply =
+            Bottle::decode(&v4::handle_rpc(&Bottle::decode(&list).unwrap(), &mut dev)).unwrap();
+        let keys = v4::answer::<GetRemoteVariablesList>(&reply)
+            .unwrap()
+            .1
+            .unwrap();
+        assert_eq!(keys.0.to_string(), "kin other");
     }
 }

@@ -238,6 +238,36 @@ impl<A: Wire3, B: Wire3, C: Wire3> Wire3 for (A, B, C) {
     }
 }
 
+/// A Bottle as one nested list.
+impl Wire3 for Bottle {
+    fn put(&self, b: &mut Bottle) {
+        b.push(Value::List(self.clone()));
+    }
+    fn take(c: &mut Cursor<'_>) -> Option<Self> {
+        c.next()?.as_list().cloned()
+    }
+}
+
+/// A remote variable's value: 3.12 sends its elements flat after the key (C++
+/// `cmd.append(val)`, read back as the command's tail), 4.0 the Bottle nested.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Flat(pub Bottle);
+
+impl Wire3 for Flat {
+    fn put(&self, b: &mut Bottle) {
+        for v in self.0.iter() {
+            b.push(v.clone());
+        }
+    }
+    fn take(c: &mut Cursor<'_>) -> Option<Self> {
+        let mut rest = Bottle::new();
+        while let Some(v) = c.next() {
+            rest.push(v.clone());
+        }
+        Some(Flat(rest))
+    }
+}
+
 /// A PID's ten gains as one list.
 impl Wire3 for Pid {
     fn put(&self, b: &mut Bottle) {

@@ -8,7 +8,7 @@
 //! [`Wire4`] impl.
 
 use super::methods::{Method, Request};
-use super::v3::{Done, Group, Listed, PidType, J16};
+use super::v3::{Done, Flat, Group, Listed, PidType, Wire3, J16};
 use crate::driver::DeviceDriver;
 use crate::error::DevResult;
 use crate::interfaces::Pid;
@@ -87,6 +87,69 @@ impl<const N: usize> Wire4 for Listed<N> {
     }
     fn zero() -> Self {
         Listed(vec![0.0; N])
+    }
+}
+
+/// A `yarp::os::Bottle`: nested, in its own encoding.
+impl Wire4 for Bottle {
+    fn put4(&self, w: &mut WireWriter) {
+        w.raw(&self.encode_as(Generation::V4));
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        c.item()?.as_list().cloned()
+    }
+    fn zero() -> Self {
+        Bottle::new()
+    }
+}
+
+impl Wire4 for Flat {
+    fn put4(&self, w: &mut WireWriter) {
+        self.0.put4(w);
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        Bottle::take4(c).map(Flat)
+    }
+    fn zero() -> Self {
+        Flat::default()
+    }
+}
+
+/// The keys of `getRemoteVariablesList`: 3.12's one nested Bottle; 4.0's
+/// `list<yBottle>`, of which C++'s server fills the first.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Keys(pub Bottle);
+
+impl Wire3 for Keys {
+    fn put(&self, b: &mut Bottle) {
+        self.0.put(b);
+    }
+    fn take(c: &mut super::v3::Cursor<'_>) -> Option<Self> {
+        Bottle::take(c).map(Keys)
+    }
+}
+
+impl Wire4 for Keys {
+    fn put4(&self, w: &mut WireWriter) {
+        // no keys (a failed call) is C++'s empty vector
+        if self.0.is_empty() {
+            w.list_header(0);
+        } else {
+            w.list_header(1);
+            self.0.put4(w);
+        }
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        let list = c.item()?.as_list()?;
+        Some(Keys(
+            list.get(0)
+                .and_then(Value::as_list)
+                .cloned()
+                .unwrap_or_default(),
+        ))
+    }
+    fn zero() -> Self {
+        Keys::default()
     }
 }
 
@@ -215,7 +278,7 @@ fn interfaces(dev: &mut dyn DeviceDriver) -> Vec<(&'static str, bool)> {
         ("iPreciselyTimed", false),
         ("iPWMControl", dev.as_pwm_control().is_some()),
         ("iRemoteCalibrator", dev.as_remote_calibrator().is_some()),
-        ("iRemoteVariables", false),
+        ("iRemoteVariables", dev.as_remote_variables().is_some()),
         ("iTorqueControl", dev.as_torque_control().is_some()),
         ("iVelocityControl", dev.as_velocity_control().is_some()),
         ("iVelocityDirect", dev.as_velocity_direct().is_some()),
