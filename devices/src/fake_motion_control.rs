@@ -101,6 +101,8 @@ struct Joint {
     auto_brake: bool,
     /// The last hardware fault (`IJointFault`): code (0: none) and message.
     fault: (i32, String),
+    /// The motor torque parameters last set (C++ `MotorTorqueParameters`, zeros at first).
+    torque_params: [f64; 9],
     mode: Vocab32,
     interaction: Vocab32,
     name: String,
@@ -164,6 +166,7 @@ impl FakeMotionControl {
         self.joints = (0..n)
             .map(|i| Joint {
                 fault: (0, String::new()),
+                torque_params: [0.0; 9],
                 pos: 0.0,
                 speed: 0.0,
                 acc: 0.0,
@@ -509,9 +512,11 @@ impl IInteractionMode for FakeMotionControl {
 
 impl ITorqueControl for FakeMotionControl {
     fn get_motor_torque_params(&mut self, j: usize) -> DevResult<[f64; 9]> {
-        // the C++ fake keeps none: zeros
-        self.joint(j)?;
-        Ok([0.0; 9])
+        Ok(self.joint(j)?.torque_params)
+    }
+    fn set_motor_torque_params(&mut self, j: usize, params: [f64; 9]) -> DevResult<()> {
+        self.joint(j)?.torque_params = params;
+        Ok(())
     }
     fn get_axes(&mut self) -> DevResult<usize> {
         Ok(self.joints.len())
@@ -554,6 +559,15 @@ impl IMotorEncoders for FakeMotionControl {
     }
     fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
         Ok(self.joints.len())
+    }
+    // C++'s NOT_YET_IMPLEMENTED: accepted, nothing done
+    fn set_motor_encoder(&mut self, m: usize, _v: f64) -> DevResult<()> {
+        self.joint(m)?;
+        Ok(())
+    }
+    fn reset_motor_encoder(&mut self, m: usize) -> DevResult<()> {
+        self.joint(m)?;
+        Ok(())
     }
     fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
         Ok(self.updated(m)?.pos * GEARBOX)

@@ -367,6 +367,11 @@ pub trait ITorqueControl {
     fn get_motor_torque_params(&mut self, _j: usize) -> DevResult<[f64; 9]> {
         Err(DeviceError::Unsupported("getMotorTorqueParams"))
     }
+    /// bemf, bemf_scale, ktau, ktau_scale, viscousPos, viscousNeg, coulombPos,
+    /// coulombNeg, velocityThres (C++ `MotorTorqueParameters`).
+    fn set_motor_torque_params(&mut self, _j: usize, _params: [f64; 9]) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setMotorTorqueParams"))
+    }
 }
 
 /// `IMotorEncoders` (subset).
@@ -390,6 +395,22 @@ pub trait IMotorEncoders {
     }
     fn get_motor_encoder_speed(&mut self, _m: usize) -> DevResult<f64> {
         Err(DeviceError::Unsupported("getMotorEncoderSpeed"))
+    }
+    /// What C++'s fake says to the setters: not implemented.
+    fn set_motor_encoder(&mut self, _m: usize, _v: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setMotorEncoder"))
+    }
+    fn set_motor_encoders(&mut self, values: &[f64]) -> DevResult<()> {
+        values
+            .iter()
+            .enumerate()
+            .try_for_each(|(m, v)| self.set_motor_encoder(m, *v))
+    }
+    fn reset_motor_encoder(&mut self, _m: usize) -> DevResult<()> {
+        Err(DeviceError::Unsupported("resetMotorEncoder"))
+    }
+    fn reset_motor_encoders(&mut self) -> DevResult<()> {
+        (0..self.get_num_of_motor_encoders()?).try_for_each(|m| self.reset_motor_encoder(m))
     }
     fn get_motor_encoder_acceleration(&mut self, _m: usize) -> DevResult<f64> {
         Err(DeviceError::Unsupported("getMotorEncoderAcceleration"))

@@ -623,6 +623,14 @@ impl ITorqueControl for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    fn get_motor_torque_params(&mut self, j: usize) -> DevResult<[f64; 9]> {
+        on!(self, j, as_torque_control, |t, l| t
+            .get_motor_torque_params(l))
+    }
+    fn set_motor_torque_params(&mut self, j: usize, p: [f64; 9]) -> DevResult<()> {
+        on!(self, j, as_torque_control, |t, l| t
+            .set_motor_torque_params(l, p))
+    }
     fn get_torque(&mut self, j: usize) -> DevResult<f64> {
         on!(self, j, as_torque_control, |t, l| t.get_torque(l))
     }
@@ -640,6 +648,12 @@ impl ITorqueControl for ControlBoardRemapper {
 impl IMotorEncoders for ControlBoardRemapper {
     fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
         self.axes()
+    }
+    fn set_motor_encoder(&mut self, m: usize, v: f64) -> DevResult<()> {
+        on!(self, m, as_motor_encoders, |e, l| e.set_motor_encoder(l, v))
+    }
+    fn reset_motor_encoder(&mut self, m: usize) -> DevResult<()> {
+        on!(self, m, as_motor_encoders, |e, l| e.reset_motor_encoder(l))
     }
     fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
         on!(self, m, as_motor_encoders, |e, l| e.get_motor_encoder(l))

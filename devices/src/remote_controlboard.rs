@@ -1134,6 +1134,12 @@ impl ITorqueControl for RemoteControlBoard {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    fn set_motor_torque_params(&mut self, j: usize, p: [f64; 9]) -> DevResult<()> {
+        self.ask(m::SetMotorTorqueParams {
+            j,
+            params: crate::controlboard::v3::Listed(p.to_vec()),
+        })
+    }
     fn get_torque(&mut self, j: usize) -> DevResult<f64> {
         self.state_one(j, |d| &d.torque)
     }
@@ -1155,6 +1161,20 @@ impl ITorqueControl for RemoteControlBoard {
 impl IMotorEncoders for RemoteControlBoard {
     fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
         self.ask(m::GetNumOfMotorEncoders {})
+    }
+    fn set_motor_encoder(&mut self, m: usize, value: f64) -> DevResult<()> {
+        self.ask(m::SetMotorEncoder { m, value })
+    }
+    fn set_motor_encoders(&mut self, values: &[f64]) -> DevResult<()> {
+        self.ask(m::SetMotorEncoders {
+            values: values.to_vec(),
+        })
+    }
+    fn reset_motor_encoder(&mut self, m: usize) -> DevResult<()> {
+        self.ask(m::ResetMotorEncoder { m })
+    }
+    fn reset_motor_encoders(&mut self) -> DevResult<()> {
+        self.ask(m::ResetMotorEncoders {})
     }
     fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
         self.state_one(m, |d| &d.motor_position)

@@ -209,8 +209,11 @@ const METHODS: &[Row] = &[
         "setMotorEncoderCountsPerRevolution",
         "[set] [mcpr] 1 1000.0",
     ),
-    row("resetMotorEncoder", "[set] [mere] 1"),
-    row("resetMotorEncoders", "[set] [meres]"),
+    // the motor-encoder setters: C++'s fake has none (NOT_YET_IMPLEMENTED)
+    row("resetMotorEncoder", "[set] [mre] 1"),
+    row("resetMotorEncoders", "[set] [mres]"),
+    row("setMotorEncoder", "[set] [mnc] 1 5.0"),
+    row("setMotorEncoders", "[set] [mncs] (1.0 2.0 3.0 4.0)"),
     // IEncoders setters (after the motor encoders)
     row("setEncoder", "[set] [enc] 1 5.0"),
     row("setEncoders", "[set] [encs] (0.0 5.0 0.0 0.0)"),
@@ -320,6 +323,17 @@ const METHODS: &[Row] = &[
     row("getPid (velocity)", "[get] [pid] [pid] [vel] 1"),
     row("getPid (torque)", "[get] [pid] [pid] [trq] 1"),
     row("getPid (current)", "[get] [pid] [pid] [cur] 1"),
+    // the group setters: one per joint, or [fail]
+    row(
+        "setPids",
+        "[set] [pid] [pids] [pos] ((1.0 2.0 3.0 4.0 5.0 6.0 7.0 8.0 9.0 10.0) (1.0 2.0 3.0 4.0 5.0 6.0 7.0 8.0 9.0 10.0) (1.0 2.0 3.0 4.0 5.0 6.0 7.0 8.0 9.0 10.0) (1.0 2.0 3.0 4.0 5.0 6.0 7.0 8.0 9.0 10.0))",
+    ),
+    row("getPids (set)", "[get] [pid] [pids] [pos]"),
+    row("setPids (short)", "[set] [pid] [pids] [pos] ((1.0 2.0 3.0 4.0 5.0 6.0 7.0 8.0 9.0 10.0))"),
+    row("setPidReferences", "[set] [pid] [refs] [pos] (1.0 2.0 3.0 4.0)"),
+    row("getPidReferences (set)", "[get] [pid] [refs] [pos]"),
+    row("setPidErrorLimits", "[set] [pid] [lims] [pos] (5.0 6.0 7.0 8.0)"),
+    row("getPidErrorLimits (set)", "[get] [pid] [lims] [pos]"),
     // IControlLimits
     row("setLimits", "[set] [llim] 1 -10.0 10.0"),
     row("getLimits", "[get] [llim] 1"),
@@ -384,6 +398,11 @@ const METHODS: &[Row] = &[
         "setMotorTorqueParams",
         "[set] [torq] [mtps] 1 1.0 2.0 3.0 4.0",
     ),
+    row(
+        "setMotorTorqueParams (9)",
+        "[set] [torq] [mtps] 1 (1.0 2.0 3.0 4.0 5.0 6.0 7.0 8.0 9.0)",
+    ),
+    row("getMotorTorqueParams (set)", "[get] [torq] [mtps] 1"),
     // IImpedanceControl
     row("setImpedance", "[set] [iimp] [ipr] 1 (1.0 0.5)"),
     row("getImpedance", "[get] [iimp] [ipr] 1"),

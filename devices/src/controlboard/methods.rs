@@ -279,6 +279,15 @@ control_board_methods! {
         |d| via!(d.as_motor_encoders).get_motor_encoder_acceleration(m);
     GetMotorEncoderAccelerations {} -> Vec<f64>, Get [GET, MOTOR_ENCODER_ACCELERATIONS], v4 "getMotorEncoderAccelerationAllRPC" =>
         |d| via!(d.as_motor_encoders).get_motor_encoder_accelerations();
+    SetMotorEncoder { m: usize, value: f64 } -> (), Set [SET, MOTOR_ENCODER], v4 "setMotorEncoderRPC" =>
+        |d| via!(d.as_motor_encoders).set_motor_encoder(m, value);
+    /// One value per motor (C++ checks the count against the joints).
+    SetMotorEncoders { values: Vec<f64> } -> (), Set [SET, MOTOR_ENCODERS], v4 "setMotorEncodersAllRPC" =>
+        |d| { let n = axes(d)?; sized(&(0..n).collect::<Vec<_>>(), &values)?; via!(d.as_motor_encoders).set_motor_encoders(&values) };
+    ResetMotorEncoder { m: usize } -> (), Set [SET, MOTOR_E_RESET], v4 "resetMotorEncoderRPC" =>
+        |d| via!(d.as_motor_encoders).reset_motor_encoder(m);
+    ResetMotorEncoders {} -> (), Set [SET, MOTOR_E_RESETS], v4 "resetMotorEncodersRPC" =>
+        |d| via!(d.as_motor_encoders).reset_motor_encoders();
     GetMotorEncoderCpr { m: usize } -> f64, Get [GET, MOTOR_CPR], v4 "getMotorEncoderCountsPerRevolutionRPC" =>
         |d| via!(d.as_motor_encoders).get_motor_encoder_counts_per_revolution(m);
     SetMotorEncoderCpr { m: usize, cpr: f64 } -> (), Set [SET, MOTOR_CPR], v4 "setMotorEncoderCountsPerRevolutionRPC" =>
@@ -397,6 +406,9 @@ control_board_methods! {
         |d| via!(d.as_torque_control).get_torque_range(j);
     GetTorqueRanges {} -> (Vec<f64>, Vec<f64>), Get [GET, TORQUE, RANGES], v4 "getTorqueRangeAllRPC" =>
         |d| { let t = via!(d.as_torque_control); let n = t.get_axes()?; Ok(each(n, |j| t.get_torque_range(j))?.into_iter().unzip()) };
+    /// 3.12's form only: 4.0's nests a `yMotorTorqueParameters` we have not checked.
+    SetMotorTorqueParams { j: usize, params: Listed<9> } -> (), Set [SET, TORQUE, MOTOR_PARAMS] =>
+        |d| { let p: [f64; 9] = params.0.as_slice().try_into().map_err(|_| DeviceError::WrongSize { expected: 9, got: params.0.len() })?; via!(d.as_torque_control).set_motor_torque_params(j, p) };
     GetMotorTorqueParams { j: usize } -> Vec<f64>, Get [GET, TORQUE, MOTOR_PARAMS], v4 "getMotorTorqueParamsRPC" =>
         |d| via!(d.as_torque_control).get_motor_torque_params(j).map(|p| p.to_vec());
 
@@ -445,6 +457,13 @@ control_board_methods! {
         |d| via!(d.as_pid_control).get_pid_output(ty.0, j.0);
     GetPidErrorLimit { ty: PidType, j: J16 } -> f64, GetBare [GET, PID, PID_ERROR_LIMIT], v4 "getPidErrorLimitRPC" =>
         |d| via!(d.as_pid_control).get_pid_error_limit(ty.0, j.0);
+    /// A PID per joint (C++ checks the count against the joints).
+    SetPids { ty: PidType, pids: Vec<Pid> } -> (), Set [SET, PID, PIDS], v4 "setPidsRPC" =>
+        |d| { let n = axes(d)?; sized(&(0..n).collect::<Vec<_>>(), &pids)?; let p = via!(d.as_pid_control); pids.into_iter().enumerate().try_for_each(|(j, pid)| p.set_pid(ty.0, j, pid)) };
+    SetPidReferences { ty: PidType, refs: Vec<f64> } -> (), Set [SET, PID, REFS], v4 "setPidReferencesRPC" =>
+        |d| { let n = axes(d)?; sized(&(0..n).collect::<Vec<_>>(), &refs)?; let p = via!(d.as_pid_control); refs.into_iter().enumerate().try_for_each(|(j, r)| p.set_pid_reference(ty.0, j, r)) };
+    SetPidErrorLimits { ty: PidType, limits: Vec<f64> } -> (), Set [SET, PID, PID_ERROR_LIMITS], v4 "setPidErrorLimitsRPC" =>
+        |d| { let n = axes(d)?; sized(&(0..n).collect::<Vec<_>>(), &limits)?; let p = via!(d.as_pid_control); limits.into_iter().enumerate().try_for_each(|(j, l)| p.set_pid_error_limit(ty.0, j, l)) };
     GetPids { ty: PidType } -> Vec<Pid>, GetBare [GET, PID, PIDS], v4 "getPidsRPC" =>
         |d| { let n = axes(d)?; let p = via!(d.as_pid_control); each(n, |j| p.get_pid(ty.0, j)) };
     GetPidReferences { ty: PidType } -> Vec<f64>, GetBare [GET, PID, REFS], v4 "getPidReferencesRPC" =>
