@@ -228,6 +228,21 @@ pub fn is_protocol_version_request(cmd: &Bottle) -> bool {
     words.next() == Some(Some(GET_PROTOCOL_VERSION.to_string())) && words.next().is_none()
 }
 
+/// Whether `cmd` calls one of `methods` (or `getRemoteProtocolVersion`), optionally
+/// behind `__direct__`: a thrift call, not a vocab command sharing its port.
+pub fn is_call_of(cmd: &Bottle, methods: &[&str]) -> bool {
+    let mut items = cmd.items();
+    if items.first().and_then(word).as_deref() == Some("__direct__") {
+        items = &items[1..];
+    }
+    match items.first() {
+        Some(first @ Value::String(_)) => {
+            word(first).is_some_and(|w| methods.contains(&w.as_str()) || w == GET_PROTOCOL_VERSION)
+        }
+        _ => false,
+    }
+}
+
 /// The `[fail]` reply (a plain Bottle, compact vocab list, as C++ writes it).
 pub fn fail_reply() -> Vec<u8> {
     Bottle::new().with(Vocab32::new("fail")).encode()

@@ -5,11 +5,9 @@
 //! `yarp read` gets its images), and our `frameGrabber_nwc_yarp` reads C++ 4.0's server.
 //! Run under ../shared/netns-run (C++ 4.0: tests/peers/install-cpp-peers.sh yarp4).
 
-use std::io::{BufRead, BufReader};
-use std::process::Stdio;
 use std::time::{Duration, Instant};
 use yarp_devices::PolyDriver;
-use yarp_interop_tests::{cpp4_devices, cpp_command, cpp_rpc_output, cpp_yarpdev, name_client};
+use yarp_interop_tests::{assert_same_rpc_session, cpp4_devices, cpp_yarpdev, name_client};
 use yarp_proto::Property;
 
 const WAIT: Duration = Duration::from_secs(10);
@@ -43,14 +41,6 @@ fn grabber(name: &str) -> PolyDriver {
     PolyDriver::open(&Property::from_config_text(cfg).unwrap()).expect("server")
 }
 
-/// The `Response: ...` lines of a `yarp rpc` session.
-fn responses(out: &str) -> Vec<String> {
-    out.lines()
-        .filter_map(|l| l.strip_prefix("Response: "))
-        .map(str::to_string)
-        .collect()
-}
-
 #[test]
 fn cpp_4_frame_grabber_client_reads_ours() {
     let test = "cpp_4_frame_grabber_client_reads_ours";
@@ -64,7 +54,6 @@ fn cpp_4_frame_grabber_client_reads_ours() {
     ) else {
         return;
     };
-    let input: String = SESSION.iter().map(|t| format!("{t}\n")).collect();
     let chain = |name: &str, remote: &str| {
         cpp_yarpdev(
             &bin,
@@ -88,7 +77,6 @@ fn cpp_4_frame_grabber_client_reads_ours() {
     let mut ours = grabber("/fg4_ours");
     let _chain_ours = chain("/fg4_chain_ours", "/fg4_ours");
     let yarp = bin.join("yarp");
-    let over_ours = responses(&cpp_rpc_output(&yarp, "/fg4_chain_ours/rpc", &input));
     let _cpp = cpp_yarpdev(
         &bin,
         &[
@@ -108,62 +96,13 @@ fn cpp_4_frame_grabber_client_reads_ours() {
         "/fg4_cpp/rpc",
     );
     let _chain_cpp = chain("/fg4_chain_cpp", "/fg4_cpp");
-    let over_cpp = responses(&cpp_rpc_output(&yarp, "/fg4_chain_cpp/rpc", &input));
-    assert_eq!(
-        over_cpp.len(),
-        SESSION.len(),
-        "C++ reference: {over_cpp:#?}"
-    );
-    let mut bad = Vec::new();
-    for ((text, o), c) in SESSION.iter().zip(&over_ours).zip(&over_cpp) {
-        let verdict = if o == c { "ok" } else { "DIFFERS" };
-        eprintln!("{verdict:7} {text:32} {o}   | C++: {c}");
-        if o != c {
-            bad.push(format!("`{text}`: over ours {o:?}, over C++ {c:?}"));
-        }
-    }
-    assert_eq!(
-        over_cpp.len(),
-        SESSION.len(),
-        "C++ reference: {over_cpp:#?}"
-    );
-    assert_eq!(over_ours.len(), SESSION.len(), "over ours: {over_ours:#?}");
-    assert!(
-        bad.is_empty(),
-        "{} rows differ:\n{}",
-        bad.len(),
-        bad.join("\n")
-    );
+    assert_same_rpc_session(&yarp, SESSION, "/fg4_chain_ours/rpc", "/fg4_chain_cpp/rpc");
 
     // the C++ 4.0 client's images, republished by C++'s wrapper, are ours (8x6 RGB), in
     // 4.0's header: the quantum alone
-    let mut reader = yarp_interop_tests::Reaped(
-        cpp_command(&yarp)
-            .args(["read", "/fg4_rd", "/fg4_chain_ours"])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("C++ yarp read"),
-    );
-    let stdout = reader.0.stdout.take().unwrap();
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            if tx.send(line).is_err() {
-                break;
-            }
-        }
+    yarp_interop_tests::cpp_read_until(&yarp, "/fg4_rd", "/fg4_chain_ours", |l| {
+        l.starts_with("[mat] [rgb] (3 144 8 8 6) {").then_some(())
     });
-    let start = Instant::now();
-    loop {
-        assert!(start.elapsed() < WAIT, "no image from the C++ 4.0 chain");
-        let Ok(line) = rx.recv_timeout(WAIT) else {
-            continue;
-        };
-        if line.starts_with("[mat] [rgb] (3 144 8 8 6) {") {
-            break;
-        }
-    }
     eprintln!("interop: C++ 4.0 frameGrabber_nwc_yarp -> our frameGrabber_nws_yarp OK");
     ours.close().unwrap();
 }

@@ -8,7 +8,7 @@
 use std::time::{Duration, Instant};
 use yarp_devices::rgbd::RgbdStatus;
 use yarp_devices::PolyDriver;
-use yarp_interop_tests::{cpp4_devices, cpp_rpc_output, cpp_yarpdev, name_client};
+use yarp_interop_tests::{assert_same_rpc_session, cpp4_devices, cpp_yarpdev, name_client};
 use yarp_proto::Property;
 
 const WAIT: Duration = Duration::from_secs(10);
@@ -60,13 +60,6 @@ fn fake_args(name: &str) -> Vec<String> {
     .collect()
 }
 
-fn responses(out: &str) -> Vec<String> {
-    out.lines()
-        .filter_map(|l| l.strip_prefix("Response: "))
-        .map(str::to_string)
-        .collect()
-}
-
 /// `RGBDSensor_nwc_yarp`'s parameters for `local` reading the server `server`.
 fn client_params(local: &str, server: &str) -> Vec<String> {
     [
@@ -114,38 +107,21 @@ fn cpp_4_rgbd_client_reads_ours() {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         cpp_yarpdev(&bin, &args, &format!("{name}/rpc:i"))
     };
-    let input: String = SESSION.iter().map(|t| format!("{t}\n")).collect();
     let ours_cfg = "device RGBDSensor_nws_yarp\nsubdevice fakeDepthCamera\nname /rg4_ours\n\
                     rgb_w 32\nrgb_h 24\ndep_w 32\ndep_h 24\nwidth 32\nheight 24\n";
     let mut ours = PolyDriver::open(&Property::from_config_text(ours_cfg).unwrap())
         .expect("our RGBDSensor_nws_yarp");
     let _chain_ours = chain("/rg4_chain_ours", "/rg4_ours");
     let yarp = bin.join("yarp");
-    let over_ours = responses(&cpp_rpc_output(&yarp, "/rg4_chain_ours/rpc:i", &input));
     let args = fake_args("/rg4_cpp");
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let _cpp = cpp_yarpdev(&bin, &args, "/rg4_cpp/rpc:i");
     let _chain_cpp = chain("/rg4_chain_cpp", "/rg4_cpp");
-    let over_cpp = responses(&cpp_rpc_output(&yarp, "/rg4_chain_cpp/rpc:i", &input));
-    let mut bad = Vec::new();
-    for ((text, o), c) in SESSION.iter().zip(&over_ours).zip(&over_cpp) {
-        let verdict = if o == c { "ok" } else { "DIFFERS" };
-        eprintln!("{verdict:7} {text:32} {o}   | C++: {c}");
-        if o != c {
-            bad.push(format!("`{text}`: over ours {o:?}, over C++ {c:?}"));
-        }
-    }
-    assert_eq!(
-        over_cpp.len(),
-        SESSION.len(),
-        "C++ reference: {over_cpp:#?}"
-    );
-    assert_eq!(over_ours.len(), SESSION.len(), "over ours: {over_ours:#?}");
-    assert!(
-        bad.is_empty(),
-        "{} rows differ:\n{}",
-        bad.len(),
-        bad.join("\n")
+    assert_same_rpc_session(
+        &yarp,
+        SESSION,
+        "/rg4_chain_ours/rpc:i",
+        "/rg4_chain_cpp/rpc:i",
     );
     // the images the C++ 4.0 client read from ours, republished: 4.0's header (the
     // quantum alone), a float depth image

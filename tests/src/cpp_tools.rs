@@ -40,6 +40,39 @@ pub fn cpp_rpc_output(yarp: &Path, port: &str, input: &str) -> String {
     reader.join().unwrap_or_default()
 }
 
+/// The `Response: ...` lines of a C++ `yarp rpc` session, one per call answered.
+pub fn rpc_responses(out: &str) -> Vec<String> {
+    out.lines()
+        .filter_map(|l| l.strip_prefix("Response: "))
+        .map(str::to_string)
+        .collect()
+}
+
+/// The same `yarp rpc` session (`calls`, one per line) at `ours` and at C++'s `theirs`
+/// answers alike, row by row (the table goes to stderr; panics naming the rows that
+/// differ).
+pub fn assert_same_rpc_session(yarp: &Path, calls: &[&str], ours: &str, theirs: &str) {
+    let input: String = calls.iter().map(|t| format!("{t}\n")).collect();
+    let over_ours = rpc_responses(&cpp_rpc_output(yarp, ours, &input));
+    let over_cpp = rpc_responses(&cpp_rpc_output(yarp, theirs, &input));
+    let mut bad = Vec::new();
+    for ((call, o), c) in calls.iter().zip(&over_ours).zip(&over_cpp) {
+        let verdict = if o == c { "ok" } else { "DIFFERS" };
+        eprintln!("{verdict:7} {call:32} {o}   | C++: {c}");
+        if o != c {
+            bad.push(format!("`{call}`: over ours {o:?}, over C++ {c:?}"));
+        }
+    }
+    assert_eq!(over_cpp.len(), calls.len(), "C++ reference: {over_cpp:#?}");
+    assert_eq!(over_ours.len(), calls.len(), "over ours: {over_ours:#?}");
+    assert!(
+        bad.is_empty(),
+        "{} rows differ:\n{}",
+        bad.len(),
+        bad.join("\n")
+    );
+}
+
 /// C++ `yarp read <reader> <port>`: the first printed line that `parse` accepts, within
 /// 3 [`T`] (panics otherwise); the reader is killed and reaped before this returns.
 pub fn cpp_read_until<R>(

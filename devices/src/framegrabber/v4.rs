@@ -12,7 +12,7 @@ use crate::sensors::wire::WireWriter;
 use crate::thrift::{take_list, Cursor4, Wire4};
 use yarp_proto::image::{encode_image_as, Image, PixelCode};
 use yarp_proto::tags::Generation;
-use yarp_proto::{Property, Value};
+use yarp_proto::Property;
 
 /// A `FlexImage`: nested, in its own wire form (4.0's header).
 impl Wire4 for Image {
@@ -266,16 +266,7 @@ crate::thrift_service! {
 /// Whether `cmd` is a call of this service (its first word one of its methods, or
 /// `getRemoteProtocolVersion`), rather than a 3.12 vocab command.
 pub fn is_call(cmd: &yarp_proto::Bottle) -> bool {
-    let mut items = cmd.items();
-    if items.first().and_then(crate::thrift::word).as_deref() == Some("__direct__") {
-        items = &items[1..];
-    }
-    match items.first() {
-        Some(Value::String(_)) => crate::thrift::word(&items[0]).is_some_and(|w| {
-            service::METHODS.contains(&w.as_str()) || w == crate::thrift::GET_PROTOCOL_VERSION
-        }),
-        _ => false,
-    }
+    crate::thrift::is_call_of(cmd, service::METHODS)
 }
 
 /// Answers a 4.0 call on `dev`: the reply bytes (`[fail]` for what the generated reader

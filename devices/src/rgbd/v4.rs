@@ -172,16 +172,7 @@ crate::thrift_service! {
 /// Whether `cmd` is a call of this service (or `getRemoteProtocolVersion`) rather than
 /// a 3.12 vocab command.
 pub fn is_call(cmd: &yarp_proto::Bottle) -> bool {
-    let mut items = cmd.items();
-    if items.first().and_then(crate::thrift::word).as_deref() == Some("__direct__") {
-        items = &items[1..];
-    }
-    match items.first() {
-        Some(Value::String(_)) => crate::thrift::word(&items[0]).is_some_and(|w| {
-            service::METHODS.contains(&w.as_str()) || w == crate::thrift::GET_PROTOCOL_VERSION
-        }),
-        _ => false,
-    }
+    crate::thrift::is_call_of(cmd, service::METHODS)
 }
 
 /// Answers a 4.0 call on `dev` (`None`: nothing attached, every method `not ready`).
