@@ -454,6 +454,16 @@ impl IControlMode for FakeMotionControl {
     fn get_axes(&mut self) -> DevResult<usize> {
         Ok(self.joints.len())
     }
+    /// C++ 4.0's fake: the same ten modes for every joint.
+    fn get_available_control_modes(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
+        self.joint(j)?;
+        Ok([
+            "idl", "torq", "pos", "posd", "vel", "veld", "icur", "ipwm", "mix", "fidl",
+        ]
+        .into_iter()
+        .map(Vocab32::new)
+        .collect())
+    }
     fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
         Ok(self.joint(j)?.mode)
     }

@@ -268,6 +268,10 @@ pub trait IJointBrake {
 pub trait IControlMode {
     fn get_axes(&mut self) -> DevResult<usize>;
     fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32>;
+    /// The modes joint `j` can be put in (YARP 4.0's `getAvailableControlModes`).
+    fn get_available_control_modes(&mut self, _j: usize) -> DevResult<Vec<Vocab32>> {
+        Err(DeviceError::Unsupported("getAvailableControlModes"))
+    }
     fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()>;
     fn get_control_modes(&mut self) -> DevResult<Vec<Vocab32>> {
         (0..self.get_axes()?)

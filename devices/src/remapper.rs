@@ -572,6 +572,10 @@ impl IControlMode for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    fn get_available_control_modes(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
+        on!(self, j, as_control_mode, |c, l| c
+            .get_available_control_modes(l))
+    }
     fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
         on!(self, j, as_control_mode, |c, l| c.get_control_mode(l))
     }

@@ -1034,6 +1034,9 @@ impl IControlMode for RemoteControlBoard {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    fn get_available_control_modes(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
+        self.ask(m::GetAvailableControlModes { j: J16(j) })
+    }
     fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
         let j = self.joint(j)?;
         self.state(|d, _| {

@@ -60,6 +60,9 @@ const CALLS: &[&str] = &[
     "setAutoBrakeEnabledRPC 0 [ok]",
     "getAutoBrakeEnabledRPC 0",
     "getAutoBrakeEnabledRPC 1",
+    "getAvailableControlModesRPC 1",
+    "setPidOffsetOneRPC 829648752 1 2.0",
+    "getPidOffsetRPC 829648752 1",
     "setMotorEncoderRPC 1 5.0",
     "resetMotorEncoderRPC 1",
     "setPidReferencesRPC 829648752 (1.0 2.0 3.0 4.0)",
@@ -360,6 +363,11 @@ fn our_clients_drive_cpp_4_fake_motion_control() {
         let pos_pid = yarp_proto::Vocab32::new("pos");
         let pid = d.as_pid_control().unwrap().get_pid(pos_pid, 0);
         assert!(pid.is_ok(), "{device}: getPid of a position PID: {pid:?}");
+        // 4.0's new calls: the modes a joint takes, the last fault
+        let modes = d.as_control_mode().unwrap().get_available_control_modes(1);
+        assert_eq!(modes.map(|m| m.len()).ok(), Some(10), "{device}");
+        let fault = d.as_joint_fault().unwrap().get_last_joint_fault(1).unwrap();
+        assert_eq!(fault, (0, String::new()), "{device}");
         let names: Vec<String> = (0..4)
             .map(|j| d.as_axis_info().unwrap().get_axis_name(j).unwrap())
             .collect();

@@ -588,6 +588,12 @@ control_board_methods! {
     GetRemoteVariablesList {} -> v4::Keys, GetBare [GET, REMOTE_VARIABLE_IFACE, VARIABLE_LIST], v4 "getRemoteVariablesListRPC" =>
         |d| via!(d.as_remote_variables).get_remote_variables_list().map(v4::Keys);
 
+    // 4.0 only: the modes a joint takes, a PID's offset
+    GetAvailableControlModes { j: J16 } -> Vec<Vocab32>, Get [], v4 "getAvailableControlModesRPC" =>
+        |d| via!(d.as_control_mode).get_available_control_modes(j.0);
+    GetPidOffset { ty: PidType, j: J16 } -> f64, GetBare [], v4 "getPidOffsetRPC" =>
+        |d| via!(d.as_pid_control).get_pid(ty.0, j.0).map(|p| p.offset);
+
     // IJointFault: `[get] [ijfl] [jhfl] j` -> `[is] code "message" [ok]`
     GetLastJointFault { j: usize } -> (i32, String), Is [GET, JOINT_FAULT_IFACE, GET_JOINT_FAULT], v4 "getLastJointFaultRPC" =>
         |d| via!(d.as_joint_fault).get_last_joint_fault(j);
