@@ -132,6 +132,8 @@ struct Joint {
 pub struct FakeMotionControl {
     joints: Vec<Joint>,
     pids: HashMap<(i32, usize), (Pid, bool, f64)>,
+    /// YARP 4.0's PID feedforward terms, by (type, joint): 0 until set, as C++ 4.0's.
+    feedforwards: HashMap<(i32, usize), f64>,
     pid_error_limits: HashMap<(i32, usize), f64>,
     last: Instant,
 }
@@ -150,6 +152,7 @@ impl FakeMotionControl {
         FakeMotionControl {
             joints: Vec::new(),
             pids: HashMap::new(),
+            feedforwards: HashMap::new(),
             pid_error_limits: HashMap::new(),
             last: Instant::now(),
         }
@@ -745,6 +748,19 @@ impl IPidControl for FakeMotionControl {
         self.joint(j)?;
         self.pids.entry((pid_type.0, j)).or_default().0.offset = v;
         Ok(())
+    }
+    fn set_pid_feedforward(&mut self, pid_type: Vocab32, j: usize, v: f64) -> DevResult<()> {
+        self.joint(j)?;
+        self.feedforwards.insert((pid_type.0, j), v);
+        Ok(())
+    }
+    fn get_pid_feedforward(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
+        self.joint(j)?;
+        Ok(self
+            .feedforwards
+            .get(&(pid_type.0, j))
+            .copied()
+            .unwrap_or(0.0))
     }
 }
 

@@ -577,6 +577,13 @@ pub trait IPidControl {
     fn set_pid_offset(&mut self, _pid_type: Vocab32, _j: usize, _v: f64) -> DevResult<()> {
         Err(DeviceError::Unsupported("setPidOffset"))
     }
+    /// YARP 4.0's feedforward term of a PID.
+    fn set_pid_feedforward(&mut self, _pid_type: Vocab32, _j: usize, _v: f64) -> DevResult<()> {
+        Err(DeviceError::Unsupported("setPidFeedforward"))
+    }
+    fn get_pid_feedforward(&mut self, _pid_type: Vocab32, _j: usize) -> DevResult<f64> {
+        Err(DeviceError::Unsupported("getPidFeedforward"))
+    }
 }
 
 /// `ICurrentControl` (subset).

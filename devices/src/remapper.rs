@@ -761,6 +761,13 @@ impl IPidControl for ControlBoardRemapper {
     fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
         on!(self, j, as_pid_control, |p, l| p.get_pid(ty, l))
     }
+    fn set_pid_feedforward(&mut self, ty: Vocab32, j: usize, v: f64) -> DevResult<()> {
+        on!(self, j, as_pid_control, |p, l| p
+            .set_pid_feedforward(ty, l, v))
+    }
+    fn get_pid_feedforward(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
+        on!(self, j, as_pid_control, |p, l| p.get_pid_feedforward(ty, l))
+    }
     fn set_pid(&mut self, ty: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
         on!(self, j, as_pid_control, |p, l| p.set_pid(ty, l, pid))
     }

@@ -607,7 +607,7 @@ impl RemoteControlBoard {
         let stream = Stream { kind, joints };
         if !stream.has_form(generation) {
             return Err(DeviceError::Unsupported(
-                "a YARP 3.12 control board has no IVelocityDirect",
+                "a YARP 3.12 control board has no IVelocityDirect nor PID feedforward",
             ));
         }
         let head = stream.head(generation);
@@ -632,11 +632,25 @@ impl RemoteControlBoard {
             _ => Group(Vec::new()),
         };
         let one = |j: &Joints, v: &[f64]| match j {
-            Joints::One(j) => (*j, v.first().copied().unwrap_or(0.0)),
+            Joints::One(j) | Joints::Pid(_, j) => (*j, v.first().copied().unwrap_or(0.0)),
             _ => (0, 0.0),
         };
         let (j, value) = one(&joints, &values);
+        let pid = |j: &Joints| match j {
+            Joints::Pid(ty, _) => PidType(*ty),
+            _ => PidType(Vocab32(0)),
+        };
         match kind {
+            Kind::PidOffset => self.ask(m::SetPidOffset {
+                ty: pid(&joints),
+                j: J16(j),
+                value,
+            }),
+            Kind::PidFeedforward => self.ask(m::SetPidFeedforward {
+                ty: pid(&joints),
+                j: J16(j),
+                value,
+            }),
             Kind::PositionMoves => self.ask(m::PositionMoves { targets: values }),
             Kind::VelocityMove => self.ask(m::VelocityMove { j, value }),
             Kind::VelocityMoves => self.ask(m::VelocityMoves { speeds: values }),
@@ -1268,7 +1282,24 @@ impl IMotor for RemoteControlBoard {
     }
 }
 
+impl RemoteControlBoard {
+    fn pid_feedforward(&self, ty: Vocab32, j: usize) -> DevResult<f64> {
+        self.ask(m::GetPidFeedforward {
+            ty: PidType(ty),
+            j: J16(j),
+        })
+    }
+}
+
 impl IPidControl for RemoteControlBoard {
+    /// Streamed, as 4.0's client does, when streaming (4.0 only: 3.12 has no feedforward).
+    fn set_pid_feedforward(&mut self, ty: Vocab32, j: usize, v: f64) -> DevResult<()> {
+        let j = self.joint(j)?;
+        self.stream(Kind::PidFeedforward, Joints::Pid(ty, j), vec![v])
+    }
+    fn get_pid_feedforward(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
+        self.pid_feedforward(ty, j)
+    }
     fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
         self.ask(m::GetPid {
             ty: PidType(ty),

@@ -593,6 +593,10 @@ control_board_methods! {
         |d| via!(d.as_control_mode).get_available_control_modes(j.0);
     GetPidOffset { ty: PidType, j: J16 } -> f64, GetBare [], v4 "getPidOffsetRPC" =>
         |d| via!(d.as_pid_control).get_pid(ty.0, j.0).map(|p| p.offset);
+    SetPidFeedforward { ty: PidType, j: J16, value: f64 } -> (), Set [], v4 "setPidFeedforwardOneRPC" =>
+        |d| via!(d.as_pid_control).set_pid_feedforward(ty.0, j.0, value);
+    GetPidFeedforward { ty: PidType, j: J16 } -> f64, GetBare [], v4 "getPidFeedforwardRPC" =>
+        |d| via!(d.as_pid_control).get_pid_feedforward(ty.0, j.0);
 
     // IJointFault: `[get] [ijfl] [jhfl] j` -> `[is] code "message" [ok]`
     GetLastJointFault { j: usize } -> (i32, String), Is [GET, JOINT_FAULT_IFACE, GET_JOINT_FAULT], v4 "getLastJointFaultRPC" =>

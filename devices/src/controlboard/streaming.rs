@@ -35,6 +35,10 @@ const IVED: i32 = v("ived");
 const VDSO: i32 = v("vdso");
 const VDSA: i32 = v("vdsa");
 const VDSG: i32 = v("vdsg");
+// YARP 4.0 streams a PID's offset and feedforward: `[ipid] [poff] <type> j`
+const IPID: i32 = v("ipid");
+const POFF: i32 = v("poff");
+const PFFD: i32 = v("pffd");
 
 /// What a streaming command sets. Each has one shape of joints ([`Shape`]) and a head in
 /// each generation ([`Kind::heads`]).
@@ -59,6 +63,10 @@ pub enum Kind {
     VelocityDirect,
     VelocitiesDirect,
     VelocitiesDirectGroup,
+    /// 4.0's streamed PID offset and feedforward (no 3.12 form; 3.12 sets the offset by
+    /// RPC).
+    PidOffset,
+    PidFeedforward,
 }
 
 /// Which joints a command addresses, after its head's vocabs.
@@ -70,10 +78,12 @@ pub enum Joints {
     All,
     /// `n (j1 j2 ...)`: these joints, one value each.
     Group(Vec<usize>),
+    /// `<type> j`: joint `j`'s PID of this type (3.12's names; 4.0's on the wire).
+    Pid(Vocab32, usize),
 }
 
 impl Kind {
-    const ALL: [Kind; 18] = [
+    const ALL: [Kind; 20] = [
         Kind::PositionMoves,
         Kind::VelocityMove,
         Kind::VelocityMoves,
@@ -92,6 +102,8 @@ impl Kind {
         Kind::VelocityDirect,
         Kind::VelocitiesDirect,
         Kind::VelocitiesDirectGroup,
+        Kind::PidOffset,
+        Kind::PidFeedforward,
     ];
 
     /// The head's vocabs in YARP 3.12 and in 4.0.
@@ -115,6 +127,8 @@ impl Kind {
             Kind::VelocityDirect => (&[], &[IVED, VDSO]),
             Kind::VelocitiesDirect => (&[], &[IVED, VDSA]),
             Kind::VelocitiesDirectGroup => (&[], &[IVED, VDSG]),
+            Kind::PidOffset => (&[], &[IPID, POFF]),
+            Kind::PidFeedforward => (&[], &[IPID, PFFD]),
         }
     }
 
@@ -152,6 +166,10 @@ impl Stream {
             Joints::One(j) => j.put(&mut b),
             Joints::All => {}
             Joints::Group(js) => Group(js.clone()).put(&mut b),
+            Joints::Pid(ty, j) => {
+                b.push(super::v3::PidType(*ty).to_v4());
+                j.put(&mut b);
+            }
         }
         b
     }
@@ -196,6 +214,10 @@ impl Stream {
             | Kind::RefDutyCycle
             | Kind::RefCurrent
             | Kind::VelocityDirect => Joints::One(joint(at)?),
+            Kind::PidOffset | Kind::PidFeedforward => {
+                let ty = items.get(at).and_then(Value::as_vocab).ok_or_else(bad)?;
+                Joints::Pid(super::v3::PidType::from_v4(ty).0, joint(at + 1)?)
+            }
             Kind::VelocityMoveGroup
             | Kind::RefTorqueGroup
             | Kind::PositionGroup
@@ -301,7 +323,9 @@ pub fn handle_command(
     let too_few = || CommandError::MissingValues(head.to_string());
     // the one value, or the group's values (one per joint)
     let (one, group) = match &joints {
-        Joints::One(j) => (Some((*j, *body.first().ok_or_else(too_few)?)), &[][..]),
+        Joints::One(j) | Joints::Pid(_, j) => {
+            (Some((*j, *body.first().ok_or_else(too_few)?)), &[][..])
+        }
         Joints::Group(js) if js.len() != body.len() => return Err(too_few()),
         Joints::Group(js) => (None, js.as_slice()),
         Joints::All => (None, &[][..]),
@@ -356,6 +380,17 @@ pub fn handle_command(
         Kind::VelocitiesDirectGroup => {
             via!(as_velocity_direct, "IVelocityDirect").set_ref_velocities_direct_group(group, body)
         }
+        Kind::PidOffset | Kind::PidFeedforward => {
+            let Joints::Pid(ty, _) = joints else {
+                return Err(CommandError::BadHead(head.to_string()));
+            };
+            let p = via!(as_pid_control, "IPidControl");
+            if kind == Kind::PidOffset {
+                p.set_pid_offset(ty, j, x)
+            } else {
+                p.set_pid_feedforward(ty, j, x)
+            }
+        }
     }
     .map_err(|source| CommandError::Device {
         command: command(),
@@ -405,6 +440,29 @@ mod tests {
         assert_eq!(dev.get_duty_cycle(0).unwrap(), 10.0);
         handle_command(&msg("([ipwm] [refs]) (1.0 2.0 3.0 4.0)"), &mut dev, 4).unwrap();
         assert_eq!(dev.get_duty_cycle(3).unwrap(), 4.0);
+    }
+
+    #[test]
+    fn four_streams_pid_offsets_and_feedforwards() {
+        use crate::interfaces::IPidControl;
+        let mut dev = FakeMotionControl::with_joints(4);
+        let pos = Vocab32::new("pos");
+        // 4.0's numbered type on the wire, 3.12's name in the device
+        handle_command(&msg("([ipid] [poff] [pos1] 2) (1.5)"), &mut dev, 4).unwrap();
+        assert_eq!(dev.get_pid(pos, 2).unwrap().offset, 1.5);
+        handle_command(&msg("([ipid] [pffd] [pos1] 1) (0.5)"), &mut dev, 4).unwrap();
+        assert_eq!(dev.get_pid_feedforward(pos, 1).unwrap(), 0.5);
+        let s = Stream {
+            kind: Kind::PidOffset,
+            joints: Joints::Pid(pos, 2),
+        };
+        assert_eq!(s.head(Generation::V4).to_string(), "[ipid] [poff] [pos1] 2");
+        assert!(!s.has_form(Generation::V3));
+        assert_eq!(
+            Stream::decode(&s.head(Generation::V4)),
+            Ok((s, Generation::V4))
+        );
+        assert!(handle_command(&msg("([ipid] [poff] 2) (1.5)"), &mut dev, 4).is_err());
     }
 
     #[test]

@@ -309,6 +309,25 @@ impl Wire3 for J16 {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PidType(pub Vocab32);
 
+impl PidType {
+    /// 4.0's name: the first of each of 3.12's four types is numbered 1 (`pos1`).
+    pub fn to_v4(self) -> Vocab32 {
+        let name = self.0.as_string();
+        match name.as_str() {
+            "pos" | "vel" | "trq" | "cur" => Vocab32::new(&format!("{name}1")),
+            _ => self.0,
+        }
+    }
+    /// The type 4.0's name `v` stands for, in 3.12's names where 3.12 has it.
+    pub fn from_v4(v: Vocab32) -> PidType {
+        let name = v.as_string();
+        PidType(match name.as_str() {
+            "pos1" | "vel1" | "trq1" | "cur1" => Vocab32::new(&name[..3]),
+            _ => v,
+        })
+    }
+}
+
 impl Wire3 for PidType {
     fn put(&self, b: &mut Bottle) {
         self.0.put(b);

@@ -50,20 +50,10 @@ impl Wire4 for Group {
 /// first of each of 3.12's four is 3.12's (`pos1` is `pos`).
 impl Wire4 for PidType {
     fn put4(&self, w: &mut WireWriter) {
-        let name = self.0.as_string();
-        let numbered = match name.as_str() {
-            "pos" | "vel" | "trq" | "cur" => Vocab32::new(&format!("{name}1")),
-            _ => self.0,
-        };
-        w.int32(numbered.0);
+        w.int32(self.to_v4().0);
     }
     fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        let v = Vocab32::take4(c)?;
-        let name = v.as_string();
-        Some(PidType(match name.as_str() {
-            "pos1" | "vel1" | "trq1" | "cur1" => Vocab32::new(&name[..3]),
-            _ => v,
-        }))
+        Vocab32::take4(c).map(PidType::from_v4)
     }
     fn zero() -> Self {
         PidType(Vocab32(0))
