@@ -754,6 +754,20 @@ impl IPidControl for FakeMotionControl {
         self.feedforwards.insert((pid_type.0, j), v);
         Ok(())
     }
+    /// C++ 4.0's fake: three of each kind, for every joint.
+    fn get_available_pids(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
+        self.joint(j)?;
+        Ok(["pos", "pod", "vel", "ved", "mix", "cur", "trq"]
+            .iter()
+            .flat_map(|k| {
+                (1..=3).map(move |n| match (*k, n) {
+                    // 3.12's names for the first of its four
+                    ("pos" | "vel" | "cur" | "trq", 1) => Vocab32::new(k),
+                    _ => Vocab32::new(&format!("{k}{n}")),
+                })
+            })
+            .collect())
+    }
     fn get_pid_feedforward(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
         self.joint(j)?;
         Ok(self

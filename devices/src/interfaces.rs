@@ -577,6 +577,10 @@ pub trait IPidControl {
     fn set_pid_offset(&mut self, _pid_type: Vocab32, _j: usize, _v: f64) -> DevResult<()> {
         Err(DeviceError::Unsupported("setPidOffset"))
     }
+    /// The PID types joint `j` has (YARP 4.0; 3.12's names where 3.12 has them).
+    fn get_available_pids(&mut self, _j: usize) -> DevResult<Vec<Vocab32>> {
+        Err(DeviceError::Unsupported("getAvailablePids"))
+    }
     /// YARP 4.0's feedforward term of a PID.
     fn set_pid_feedforward(&mut self, _pid_type: Vocab32, _j: usize, _v: f64) -> DevResult<()> {
         Err(DeviceError::Unsupported("setPidFeedforward"))

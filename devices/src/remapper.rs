@@ -761,6 +761,9 @@ impl IPidControl for ControlBoardRemapper {
     fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
         on!(self, j, as_pid_control, |p, l| p.get_pid(ty, l))
     }
+    fn get_available_pids(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
+        on!(self, j, as_pid_control, |p, l| p.get_available_pids(l))
+    }
     fn set_pid_feedforward(&mut self, ty: Vocab32, j: usize, v: f64) -> DevResult<()> {
         on!(self, j, as_pid_control, |p, l| p
             .set_pid_feedforward(ty, l, v))

@@ -1300,6 +1300,13 @@ impl IPidControl for RemoteControlBoard {
     fn get_pid_feedforward(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
         self.pid_feedforward(ty, j)
     }
+    fn get_available_pids(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
+        let numbered = self.ask(m::GetAvailablePids { j: J16(j) })?;
+        Ok(numbered
+            .into_iter()
+            .map(|v| PidType::from_v4(v).0)
+            .collect())
+    }
     fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
         self.ask(m::GetPid {
             ty: PidType(ty),

@@ -61,6 +61,7 @@ const CALLS: &[&str] = &[
     "getAutoBrakeEnabledRPC 0",
     "getAutoBrakeEnabledRPC 1",
     "getAvailableControlModesRPC 1",
+    "getAvailablePidsRPC 1",
     "setPidFeedforwardOneRPC 829648752 1 0.25",
     "getPidFeedforwardRPC 829648752 1",
     "setPidOffsetOneRPC 829648752 1 2.0",
@@ -374,6 +375,8 @@ fn our_clients_drive_cpp_4_fake_motion_control() {
         // 4.0's new calls: the modes a joint takes, the last fault
         let modes = d.as_control_mode().unwrap().get_available_control_modes(1);
         assert_eq!(modes.map(|m| m.len()).ok(), Some(10), "{device}");
+        let pids = d.as_pid_control().unwrap().get_available_pids(1).unwrap();
+        assert_eq!((pids.len(), pids[0]), (21, pos_pid), "{device}");
         let fault = d.as_joint_fault().unwrap().get_last_joint_fault(1).unwrap();
         assert_eq!(fault, (0, String::new()), "{device}");
         let names: Vec<String> = (0..4)

@@ -593,6 +593,9 @@ control_board_methods! {
         |d| via!(d.as_control_mode).get_available_control_modes(j.0);
     GetPidOffset { ty: PidType, j: J16 } -> f64, GetBare [], v4 "getPidOffsetRPC" =>
         |d| via!(d.as_pid_control).get_pid(ty.0, j.0).map(|p| p.offset);
+    /// 4.0's numbered names on the wire.
+    GetAvailablePids { j: J16 } -> Vec<Vocab32>, GetBare [], v4 "getAvailablePidsRPC" =>
+        |d| via!(d.as_pid_control).get_available_pids(j.0).map(|ts| ts.into_iter().map(|t| PidType(t).to_v4()).collect());
     SetPidFeedforward { ty: PidType, j: J16, value: f64 } -> (), Set [], v4 "setPidFeedforwardOneRPC" =>
         |d| via!(d.as_pid_control).set_pid_feedforward(ty.0, j.0, value);
     GetPidFeedforward { ty: PidType, j: J16 } -> f64, GetBare [], v4 "getPidFeedforwardRPC" =>
