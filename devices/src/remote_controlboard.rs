@@ -1151,6 +1151,16 @@ impl ITorqueControl for RemoteControlBoard {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    fn get_motor_torque_params(&mut self, j: usize) -> DevResult<[f64; 9]> {
+        let got = self.ask(m::GetMotorTorqueParams { j })?;
+        got.0
+            .as_slice()
+            .try_into()
+            .map_err(|_| DeviceError::WrongSize {
+                expected: 9,
+                got: got.0.len(),
+            })
+    }
     fn set_motor_torque_params(&mut self, j: usize, p: [f64; 9]) -> DevResult<()> {
         self.ask(m::SetMotorTorqueParams {
             j,

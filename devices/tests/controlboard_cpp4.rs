@@ -60,6 +60,8 @@ const CALLS: &[&str] = &[
     "setAutoBrakeEnabledRPC 0 [ok]",
     "getAutoBrakeEnabledRPC 0",
     "getAutoBrakeEnabledRPC 1",
+    "setMotorTorqueParamsRPC 1 1.0 2.0 3.0 4.0 5.0 6.0 7.0 8.0 9.0",
+    "getMotorTorqueParamsRPC 1",
     "getAvailableControlModesRPC 1",
     "getAvailablePidsRPC 1",
     "setPidFeedforwardOneRPC 829648752 1 0.25",
@@ -176,6 +178,8 @@ const CLIENT_CALLS: &[&str] = &[
     "getPidReferenceRPC 829648752 0",
     "setPidReferenceRPC 829648752 1 2.5",
     "getPidReferenceRPC 829648752 1",
+    "setMotorTorqueParamsRPC 2 1.0 2.0 3.0 4.0 5.0 6.0 7.0 8.0 9.0",
+    "getMotorTorqueParamsRPC 2",
     // streamed by 4.0's client: `[ipid] [poff]` / `[pffd]` on command:i
     "setPidOffsetOneRPC 829648752 2 1.5",
     "setPidFeedforwardOneRPC 829648752 2 0.5",

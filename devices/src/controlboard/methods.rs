@@ -406,11 +406,13 @@ control_board_methods! {
         |d| via!(d.as_torque_control).get_torque_range(j);
     GetTorqueRanges {} -> (Vec<f64>, Vec<f64>), Get [GET, TORQUE, RANGES], v4 "getTorqueRangeAllRPC" =>
         |d| { let t = via!(d.as_torque_control); let n = t.get_axes()?; Ok(each(n, |j| t.get_torque_range(j))?.into_iter().unzip()) };
-    /// 3.12's form only: 4.0's nests a `yMotorTorqueParameters` we have not checked.
-    SetMotorTorqueParams { j: usize, params: Listed<9> } -> (), Set [SET, TORQUE, MOTOR_PARAMS] =>
+    /// 3.12: one list of the nine; 4.0: the nine flat (`yMotorTorqueParameters` written
+    /// field by field, its call 11 elements long).
+    SetMotorTorqueParams { j: usize, params: Listed<9> } -> (), Set [SET, TORQUE, MOTOR_PARAMS], v4 "setMotorTorqueParamsRPC" =>
         |d| { let p: [f64; 9] = params.0.as_slice().try_into().map_err(|_| DeviceError::WrongSize { expected: 9, got: params.0.len() })?; via!(d.as_torque_control).set_motor_torque_params(j, p) };
-    GetMotorTorqueParams { j: usize } -> Vec<f64>, Get [GET, TORQUE, MOTOR_PARAMS], v4 "getMotorTorqueParamsRPC" =>
-        |d| via!(d.as_torque_control).get_motor_torque_params(j).map(|p| p.to_vec());
+    /// The same nine: 4.0's reply is ten elements, the return value and the nine flat.
+    GetMotorTorqueParams { j: usize } -> Listed<9>, Get [GET, TORQUE, MOTOR_PARAMS], v4 "getMotorTorqueParamsRPC" =>
+        |d| via!(d.as_torque_control).get_motor_torque_params(j).map(|p| Listed(p.to_vec()));
 
     // ICurrentControl, IPwmControl readings (references are set on command:i only)
     GetCurrentRange { j: usize } -> (f64, f64), GetBare [GET, CURRENT_IFACE, RANGE], v4 "getCurrentRangeOneRPC" =>
