@@ -419,6 +419,10 @@ pub trait IMotorEncoders {
     fn get_motor_encoder_acceleration(&mut self, _m: usize) -> DevResult<f64> {
         Err(DeviceError::Unsupported("getMotorEncoderAcceleration"))
     }
+    /// A motor's position and the time it was read (by default, now).
+    fn get_motor_encoder_timed(&mut self, m: usize) -> DevResult<(f64, f64)> {
+        Ok((self.get_motor_encoder(m)?, yarp_proto::stamp::now()))
+    }
     fn get_motor_encoder_speeds(&mut self) -> DevResult<Vec<f64>> {
         (0..self.get_num_of_motor_encoders()?)
             .map(|m| self.get_motor_encoder_speed(m))

@@ -653,6 +653,10 @@ impl IMotorEncoders for ControlBoardRemapper {
     fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
         self.axes()
     }
+    fn get_motor_encoder_timed(&mut self, m: usize) -> DevResult<(f64, f64)> {
+        on!(self, m, as_motor_encoders, |e, l| e
+            .get_motor_encoder_timed(l))
+    }
     fn set_motor_encoder(&mut self, m: usize, v: f64) -> DevResult<()> {
         on!(self, m, as_motor_encoders, |e, l| e.set_motor_encoder(l, v))
     }

@@ -64,6 +64,7 @@ const CALLS: &[&str] = &[
     "getMotorTorqueParamsRPC 1",
     "getAvailableControlModesRPC 1",
     "getAvailablePidsRPC 1",
+    "getMotorEncoderTimedOneRPC 1",
     "setPidFeedforwardOneRPC 829648752 1 0.25",
     "getPidFeedforwardRPC 829648752 1",
     "setPidOffsetOneRPC 829648752 1 2.0",
@@ -98,10 +99,36 @@ fn cpp_4_yarp_rpc_gets_cpp_4_answers_from_our_wrapper() {
     // for it, from either. The fakes differ on the motor-encoder setters: C++ 4.0's says
     // not implemented (err2) where 3.12's (and ours, which follows it) accepts them
     let fakes_differ = ["setMotorEncoderRPC 1 5.0", "resetMotorEncoderRPC 1"];
+    // the timed encoders' times are the moment of each call: compared as `T`
+    let untimed = |l: &str| -> String {
+        l.split(' ')
+            .map(|w| {
+                let bare = w.trim_matches(|c| c == '(' || c == ')');
+                match bare.parse::<f64>() {
+                    Ok(t) if t > 1.0e9 => w.replace(bare, "T"),
+                    _ => w.to_string(),
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let timed = |l: &str, call: &str| {
+        if call.contains("Timed") {
+            untimed(l)
+        } else {
+            l.to_string()
+        }
+    };
+    let ours: Vec<String> = ours
+        .iter()
+        .zip(&CALLS[1..])
+        .map(|(l, call)| timed(l, call))
+        .collect();
     let theirs: Vec<String> = theirs
         .into_iter()
         .zip(&CALLS[1..])
         .map(|(l, call)| {
+            let l = timed(&l, call);
             if fakes_differ.contains(call) {
                 l.replace("[err2]", "[ok]")
             } else {

@@ -616,6 +616,8 @@ control_board_methods! {
         |d| via!(d.as_joint_brake).set_auto_brake_enabled(j, enabled);
     GetAutoBrakeEnabled { j: usize } -> bool, Get [], v4 "getAutoBrakeEnabledRPC" =>
         |d| via!(d.as_joint_brake).get_auto_brake_enabled(j);
+    GetMotorEncoderTimed { m: usize } -> (f64, f64), Get [], v4 "getMotorEncoderTimedOneRPC" =>
+        |d| via!(d.as_motor_encoders).get_motor_encoder_timed(m);
     GetEncoderTimed { j: usize } -> (f64, f64), Get [], v4 "getEncoderTimedOneRPC" =>
         |d| via!(d.as_encoders).get_encoder_timed(j);
     GetEncodersTimed {} -> (Vec<f64>, Vec<f64>), Get [], v4 "getEncoderTimedAllRPC" =>
