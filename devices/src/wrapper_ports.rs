@@ -142,6 +142,17 @@ async fn serve_rpc(
     }
 }
 
+/// Asks the generation of those of a port's readers (`outputs`) that `readers` does
+/// not know yet, from a plain thread (a periodic publisher's); nothing to ask, as on
+/// every period but a new reader's first, costs no trip into the runtime.
+pub(crate) fn learn_readers(outputs: Vec<String>, readers: &PeerGenerations) {
+    if readers.knows_all(&outputs) {
+        return;
+    }
+    let readers = readers.clone();
+    runtime::block_on(async move { readers.learn(&outputs).await });
+}
+
 /// Closes a port once the tasks that shared it are gone.
 async fn close_port(port: Arc<Port>) {
     if let Ok(p) = Arc::try_unwrap(port) {

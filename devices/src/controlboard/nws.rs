@@ -551,12 +551,9 @@ fn publish(
         count = if count == i32::MAX { 0 } else { count + 1 };
         // each reader in its generation (4.0's jointData has temperatures and float
         // PWMs; its doubles are tagged anew), asked first when new
-        {
-            let mut outs = state.outputs();
-            outs.extend(to_ext.iter().flat_map(|p| p.outputs()));
-            let readers = readers.clone();
-            crate::runtime::block_on(async move { readers.learn(&outs).await });
-        }
+        let mut outs = state.outputs();
+        outs.extend(to_ext.iter().flat_map(|p| p.outputs()));
+        crate::wrapper_ports::learn_readers(outs, readers);
         if let Some(state_ext) = to_ext {
             state_ext.write_nowait_forms(
                 readers,

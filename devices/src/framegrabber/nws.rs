@@ -227,7 +227,7 @@ fn stream(
             s
         });
         if no_drop {
-            learn_readers(&port, &readers);
+            crate::wrapper_ports::learn_readers(port.outputs(), &readers);
             let forms = [
                 (Arc::new(img.to_bottle()), Generation::V3),
                 (Arc::new(img.to_bottle_as(Generation::V4)), Generation::V4),
@@ -243,13 +243,6 @@ fn stream(
     }
 }
 
-/// Asks the generation of the readers of `port` new to `readers` (3.x and 4.0 image
-/// headers differ), from a plain thread.
-fn learn_readers(port: &Arc<Port>, readers: &PeerGenerations) {
-    let (port, readers) = (port.clone(), readers.clone());
-    runtime::block_on(async move { readers.learn(&port.outputs()).await });
-}
-
 /// Sends `img` to each reader of `port` in its generation's header, without waiting
 /// for them (from a plain thread; readers new to `readers` are asked first).
 pub(crate) fn send_image_nowait(
@@ -258,7 +251,7 @@ pub(crate) fn send_image_nowait(
     img: &Image,
     stamp: Stamp,
 ) {
-    learn_readers(port, readers);
+    crate::wrapper_ports::learn_readers(port.outputs(), readers);
     let forms = [
         (img.to_bottle(), Generation::V3),
         (img.to_bottle_as(Generation::V4), Generation::V4),

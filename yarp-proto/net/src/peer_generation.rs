@@ -116,15 +116,20 @@ impl PeerGenerations {
     /// [`PROBE_TIMEOUT`], once).
     pub async fn learn(&self, ports: &[String]) {
         for port in ports {
-            if !self.known.lock().contains_key(port) {
+            if !self.knows(port) {
                 self.of(port).await;
             }
         }
     }
 
-    /// Forgets `port` (its reader went away): the next one of that name is asked again.
-    pub fn forget(&self, port: &str) {
-        self.known.lock().remove(port);
+    /// Whether every one of `ports` is known: a periodic writer outside the runtime
+    /// checks this before it enters the runtime to [`PeerGenerations::learn`].
+    pub fn knows_all(&self, ports: &[String]) -> bool {
+        ports.iter().all(|p| self.knows(p))
+    }
+
+    fn knows(&self, port: &str) -> bool {
+        self.known.lock().contains_key(port)
     }
 }
 
