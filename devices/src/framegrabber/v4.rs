@@ -141,7 +141,7 @@ fn visual(dev: &mut dyn DeviceDriver) -> DevResult<&mut dyn IRgbVisualParams> {
         .ok_or(DeviceError::NoInterface("IRgbVisualParams"))
 }
 
-fn controls(
+pub(crate) fn controls(
     dev: &mut dyn DeviceDriver,
 ) -> DevResult<&mut dyn super::interfaces::IFrameGrabberControls> {
     dev.as_frame_grabber_controls()
@@ -160,20 +160,25 @@ fn int(x: u32) -> i32 {
     x as i32
 }
 
+const WRAPPER: &str = "frameGrabber_nws_yarp";
+
 fn refused(command: impl Into<String>) -> DeviceError {
     DeviceError::Refused {
-        device: "frameGrabber_nws_yarp".into(),
+        device: WRAPPER.into(),
         command: command.into(),
     }
 }
 
 /// A size of 0 or less is a failure (C++'s `return_value_error_generic`; ours says
 /// `method failed`, the one code a refusal maps to).
-fn positive(n: i32, what: &'static str) -> DevResult<i32> {
+pub(crate) fn positive(wrapper: &str, n: i32, what: &str) -> DevResult<i32> {
     if n > 0 {
         Ok(n)
     } else {
-        Err(refused(format!("{what} (the device reports {n})")))
+        Err(DeviceError::Refused {
+            device: wrapper.into(),
+            command: format!("{what} (the device reports {n})"),
+        })
     }
 }
 
@@ -199,8 +204,8 @@ crate::thrift_service! {
                 _ => Err(DeviceError::Unsupported("crop types other than a rectangle")),
             }
         };
-        getRgbWidthRPC() -> i32 = positive(visual(dev)?.rgb_width(), "getRgbWidth");
-        getRgbHeightRPC() -> i32 = positive(visual(dev)?.rgb_height(), "getRgbHeight");
+        getRgbWidthRPC() -> i32 = positive(WRAPPER, visual(dev)?.rgb_width(), "getRgbWidth");
+        getRgbHeightRPC() -> i32 = positive(WRAPPER, visual(dev)?.rgb_height(), "getRgbHeight");
         getRgbSupportedConfigurationsRPC() -> Vec<CameraConfig> =
             visual(dev)?.rgb_supported_configurations();
         getRgbResolutionRPC() -> (i32, i32) = visual(dev)?.rgb_resolution();

@@ -6,7 +6,8 @@
 use super::IRGBDSensor;
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
-use crate::framegrabber::interfaces::{CameraConfig, CameraDescriptor, IFrameGrabberControls};
+use crate::framegrabber::interfaces::{CameraConfig, CameraDescriptor};
+use crate::framegrabber::v4::{controls, positive};
 use crate::sensors::wire::WireWriter;
 use crate::thrift::{Cursor4, Wire4};
 use yarp_proto::image::Image;
@@ -87,23 +88,7 @@ fn sensor(dev: &mut dyn DeviceDriver) -> DevResult<&mut dyn IRGBDSensor> {
         .ok_or(DeviceError::NoInterface("IRGBDSensor"))
 }
 
-fn controls(dev: &mut dyn DeviceDriver) -> DevResult<&mut dyn IFrameGrabberControls> {
-    dev.as_frame_grabber_controls()
-        .ok_or(DeviceError::NoInterface("IFrameGrabberControls"))
-}
-
-/// A size of 0 or less is a failure (C++: `generic` for colour, `method failed` for
-/// depth; ours says `method failed`).
-fn positive(n: i32, what: &'static str) -> DevResult<i32> {
-    if n > 0 {
-        Ok(n)
-    } else {
-        Err(DeviceError::Refused {
-            device: "RGBDSensor_nws_yarp".into(),
-            command: format!("{what} (the device reports {n})"),
-        })
-    }
-}
+const WRAPPER: &str = "RGBDSensor_nws_yarp";
 
 crate::thrift_service! {
     /// `service RGBDSensorMsgs`.
@@ -119,8 +104,8 @@ crate::thrift_service! {
             .map(|(rgb, depth)| Images { depth: (depth.0, rgb.1), rgb });
         getSensorStatusRPC() -> i32 = Ok(sensor(dev)?.sensor_status() as i32);
 
-        getRgbWidthRPC() -> i32 = positive(sensor(dev)?.rgb_width(), "getRgbWidth");
-        getRgbHeightRPC() -> i32 = positive(sensor(dev)?.rgb_height(), "getRgbHeight");
+        getRgbWidthRPC() -> i32 = positive(WRAPPER, sensor(dev)?.rgb_width(), "getRgbWidth");
+        getRgbHeightRPC() -> i32 = positive(WRAPPER, sensor(dev)?.rgb_height(), "getRgbHeight");
         getRgbSupportedConfigurationsRPC() -> Vec<CameraConfig> =
             sensor(dev)?.rgb_supported_configurations();
         getRgbResolutionRPC() -> (i32, i32) = sensor(dev)?.rgb_resolution();
@@ -133,8 +118,8 @@ crate::thrift_service! {
         getRgbMirroringRPC() -> bool = sensor(dev)?.rgb_mirroring();
         setRgbMirroringRPC(mirror: bool) -> () = sensor(dev)?.set_rgb_mirroring(mirror);
 
-        getDepthWidthRPC() -> i32 = positive(sensor(dev)?.depth_width(), "getDepthWidth");
-        getDepthHeightRPC() -> i32 = positive(sensor(dev)?.depth_height(), "getDepthHeight");
+        getDepthWidthRPC() -> i32 = positive(WRAPPER, sensor(dev)?.depth_width(), "getDepthWidth");
+        getDepthHeightRPC() -> i32 = positive(WRAPPER, sensor(dev)?.depth_height(), "getDepthHeight");
         getDepthResolutionRPC() -> (i32, i32) = sensor(dev)?.depth_resolution();
         setDepthResolutionRPC(width: i32, height: i32) -> () =
             sensor(dev)?.set_depth_resolution(width, height);
