@@ -4,6 +4,9 @@
 //! image stream. Without a C++ YARP the tests say SKIPPED loudly (in CI: fail). Run under
 //! netns-run.
 
+mod framegrabber_common;
+
+use framegrabber_common::{cpp_client_chain, cpp_grabber, grabber};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
@@ -31,15 +34,6 @@ impl Drop for Reaped {
 /// The test process's name server (the shared one, which the C++ programs also use).
 fn name_client() -> NameClient {
     yarp_interop_tests::name_client().with_timeout(WAIT)
-}
-
-fn grabber(name: &str) -> PolyDriver {
-    name_client();
-    let cfg = format!(
-        "device frameGrabber_nws_yarp\nsubdevice fakeFrameGrabber\nname {name}\n\
-         width 8\nheight 6\nperiod 0.1\n"
-    );
-    PolyDriver::open(&Property::from_config_text(cfg).unwrap()).expect("server")
 }
 
 /// (text typed, lines printed) of every recorded `yarp rpc` case.
@@ -241,53 +235,16 @@ fn cpp_frame_grabber_client_reads_ours() {
     };
     let cases = recorded_rpc().expect("../shared/yarp-vectors/framegrabber.jsonl");
     let input: String = cases.iter().map(|(t, _)| format!("{t}\n")).collect();
-    let chain = |name: &str, remote: &str| {
-        yarp_interop_tests::cpp_yarpdev(
-            &bin,
-            &[
-                "--device",
-                "frameGrabber_nws_yarp",
-                "--subdevice",
-                "frameGrabber_nwc_yarp",
-                "--remote",
-                remote,
-                "--local",
-                &format!("{name}/client"),
-                "--name",
-                name,
-                "--period",
-                "0.1",
-            ],
-            &format!("{name}/rpc"),
-        )
-    };
     let mut ours = grabber("/fg_ours");
-    let _chain_ours = chain("/fg_chain_ours", "/fg_ours");
+    let _chain_ours = cpp_client_chain(&bin, "/fg_chain_ours", "/fg_ours");
     let yarp = bin.join("yarp");
     let over_ours = responses(&yarp_interop_tests::cpp_rpc_output(
         &yarp,
         "/fg_chain_ours/rpc",
         &input,
     ));
-    let _cpp = yarp_interop_tests::cpp_yarpdev(
-        &bin,
-        &[
-            "--device",
-            "frameGrabber_nws_yarp",
-            "--subdevice",
-            "fakeFrameGrabber",
-            "--name",
-            "/fg_cpp",
-            "--width",
-            "8",
-            "--height",
-            "6",
-            "--period",
-            "0.1",
-        ],
-        "/fg_cpp/rpc",
-    );
-    let _chain_cpp = chain("/fg_chain_cpp", "/fg_cpp");
+    let _cpp = cpp_grabber(&bin, "/fg_cpp", "0.1");
+    let _chain_cpp = cpp_client_chain(&bin, "/fg_chain_cpp", "/fg_cpp");
     let over_cpp = responses(&yarp_interop_tests::cpp_rpc_output(
         &yarp,
         "/fg_chain_cpp/rpc",
@@ -352,24 +309,7 @@ fn our_frame_grabber_client_reads_cpp() {
         return;
     };
     name_client();
-    let _cpp = yarp_interop_tests::cpp_yarpdev(
-        &bin,
-        &[
-            "--device",
-            "frameGrabber_nws_yarp",
-            "--subdevice",
-            "fakeFrameGrabber",
-            "--name",
-            "/fgr_cpp",
-            "--width",
-            "8",
-            "--height",
-            "6",
-            "--period",
-            "0.05",
-        ],
-        "/fgr_cpp/rpc",
-    );
+    let _cpp = cpp_grabber(&bin, "/fgr_cpp", "0.05");
     let mut client = PolyDriver::open(
         &Property::from_config_text(
             "device frameGrabber_nwc_yarp\nremote /fgr_cpp\nlocal /fgr_ours\n",

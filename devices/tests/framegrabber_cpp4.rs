@@ -7,7 +7,10 @@
 
 use std::time::{Duration, Instant};
 use yarp_devices::PolyDriver;
-use yarp_interop_tests::{assert_same_rpc_session, cpp4_devices, cpp_yarpdev, name_client};
+mod framegrabber_common;
+
+use framegrabber_common::{cpp_client_chain, cpp_grabber, grabber};
+use yarp_interop_tests::{assert_same_rpc_session, cpp4_devices, name_client};
 use yarp_proto::Property;
 
 const WAIT: Duration = Duration::from_secs(10);
@@ -32,15 +35,6 @@ const SESSION: &[&str] = &[
     "getFormat7WindowDC1394RPC",
 ];
 
-fn grabber(name: &str) -> PolyDriver {
-    name_client();
-    let cfg = format!(
-        "device frameGrabber_nws_yarp\nsubdevice fakeFrameGrabber\nname {name}\n\
-         width 8\nheight 6\nperiod 0.1\n"
-    );
-    PolyDriver::open(&Property::from_config_text(cfg).unwrap()).expect("server")
-}
-
 #[test]
 fn cpp_4_frame_grabber_client_reads_ours() {
     let test = "cpp_4_frame_grabber_client_reads_ours";
@@ -54,48 +48,11 @@ fn cpp_4_frame_grabber_client_reads_ours() {
     ) else {
         return;
     };
-    let chain = |name: &str, remote: &str| {
-        cpp_yarpdev(
-            &bin,
-            &[
-                "--device",
-                "frameGrabber_nws_yarp",
-                "--subdevice",
-                "frameGrabber_nwc_yarp",
-                "--remote",
-                remote,
-                "--local",
-                &format!("{name}/client"),
-                "--name",
-                name,
-                "--period",
-                "0.1",
-            ],
-            &format!("{name}/rpc"),
-        )
-    };
     let mut ours = grabber("/fg4_ours");
-    let _chain_ours = chain("/fg4_chain_ours", "/fg4_ours");
+    let _chain_ours = cpp_client_chain(&bin, "/fg4_chain_ours", "/fg4_ours");
     let yarp = bin.join("yarp");
-    let _cpp = cpp_yarpdev(
-        &bin,
-        &[
-            "--device",
-            "frameGrabber_nws_yarp",
-            "--subdevice",
-            "fakeFrameGrabber",
-            "--name",
-            "/fg4_cpp",
-            "--width",
-            "8",
-            "--height",
-            "6",
-            "--period",
-            "0.1",
-        ],
-        "/fg4_cpp/rpc",
-    );
-    let _chain_cpp = chain("/fg4_chain_cpp", "/fg4_cpp");
+    let _cpp = cpp_grabber(&bin, "/fg4_cpp", "0.1");
+    let _chain_cpp = cpp_client_chain(&bin, "/fg4_chain_cpp", "/fg4_cpp");
     assert_same_rpc_session(&yarp, SESSION, "/fg4_chain_ours/rpc", "/fg4_chain_cpp/rpc");
 
     // the C++ 4.0 client's images, republished by C++'s wrapper, are ours (8x6 RGB), in
@@ -117,24 +74,7 @@ fn our_frame_grabber_client_reads_cpp_4() {
         return;
     };
     name_client();
-    let _cpp = cpp_yarpdev(
-        &bin,
-        &[
-            "--device",
-            "frameGrabber_nws_yarp",
-            "--subdevice",
-            "fakeFrameGrabber",
-            "--name",
-            "/fg4r_cpp",
-            "--width",
-            "8",
-            "--height",
-            "6",
-            "--period",
-            "0.05",
-        ],
-        "/fg4r_cpp/rpc",
-    );
+    let _cpp = cpp_grabber(&bin, "/fg4r_cpp", "0.05");
     for (local, no_stream) in [("/fg4r_ours", false), ("/fg4r_rpc", true)] {
         let mut client = PolyDriver::open(
             &Property::from_config_text(format!(
