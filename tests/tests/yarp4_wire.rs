@@ -37,15 +37,7 @@ fn what_cpp_4_writes_reads_here_with_its_floats_and_our_4_0_bytes() {
     let port = rt
         .block_on(Port::open("/y4/in", name_client()))
         .expect("open /y4/in");
-    let mut writer = cpp_command(&yarp)
-        .args(["write", "/y4/w", "/y4/in"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn C++ 4.0 yarp write");
-    let mut stdin = writer.stdin.take().unwrap();
-    let _writer = Reaped(writer);
+    let (_writer, mut stdin) = cpp_writer(&yarp, "/y4/w", "/y4/in");
     for line in LINES {
         writeln!(stdin, "{line}").unwrap();
     }
@@ -106,6 +98,38 @@ fn cpp_4_rpc_gets_its_reply_numbered_as_it_asked() {
     }
 }
 
+/// Our port `name`, writing `b` every 20 ms (while C++ readers connect) until the task
+/// is aborted.
+fn keep_writing(
+    rt: &tokio::runtime::Runtime,
+    name: &str,
+    b: Bottle,
+) -> tokio::task::JoinHandle<()> {
+    let port = rt
+        .block_on(Port::open(name, name_client()))
+        .unwrap_or_else(|e| panic!("open {name}: {e}"));
+    rt.spawn(async move {
+        loop {
+            port.write_nowait(&b, None);
+            tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+        }
+    })
+}
+
+/// C++ `yarp write <from> <to>` of the `yarp` program given: what is written to the
+/// returned stdin, a line at a time, goes out as Bottles.
+fn cpp_writer(yarp: &std::path::Path, from: &str, to: &str) -> (Reaped, std::process::ChildStdin) {
+    let mut writer = cpp_command(yarp)
+        .args(["write", from, to])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn C++ yarp write");
+    let stdin = writer.stdin.take().unwrap();
+    (Reaped(writer), stdin)
+}
+
 /// Starts `yarp read <port>` of the C++ `yarp` program given and waits for its port.
 fn cpp_reader(yarp: &std::path::Path, port: &str) -> Reaped {
     name_client();
@@ -161,21 +185,7 @@ fn cpp_4_and_3_12_readers_each_get_their_floats_from_our_writer() {
         return;
     };
     let rt = runtime();
-    let port = std::sync::Arc::new(
-        rt.block_on(Port::open("/gen/w", name_client()))
-            .expect("open /gen/w"),
-    );
-    // write the line over and over while the readers connect
-    let writer = {
-        let port = port.clone();
-        rt.spawn(async move {
-            let b = Bottle::from_text(LINES[2]);
-            loop {
-                port.write_nowait(&b, None);
-                tokio::time::sleep(std::time::Duration::from_millis(20)).await;
-            }
-        })
-    };
+    let writer = keep_writing(&rt, "/gen/w", Bottle::from_text(LINES[2]));
     let want = Bottle::from_text(LINES[2]);
     for (yarp, reader) in [(&yarp4, "/gen/rd4"), (&yarp3, "/gen/rd3")] {
         let got = cpp_read_until(yarp, reader, "/gen/w", |l| {
@@ -185,7 +195,6 @@ fn cpp_4_and_3_12_readers_each_get_their_floats_from_our_writer() {
         assert_eq!(got, want, "read by {reader}");
     }
     writer.abort();
-    drop(port);
 }
 
 /// YARP 4.0's vocab64 (a bracketed word of 5 to 8 characters, as 4.0's text parser makes
@@ -201,15 +210,7 @@ fn vocab64_from_cpp_4_and_back() {
     let port = rt
         .block_on(Port::open("/v64/in", name_client()))
         .expect("open /v64/in");
-    let mut writer = cpp_command(&yarp)
-        .args(["write", "/v64/w", "/v64/in"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("spawn C++ 4.0 yarp write");
-    let mut stdin = writer.stdin.take().unwrap();
-    let _writer = Reaped(writer);
+    let (_writer, mut stdin) = cpp_writer(&yarp, "/v64/w", "/v64/in");
     writeln!(stdin, "[velocity] [ok] 3").unwrap();
     stdin.flush().unwrap();
     let msg = rt
@@ -225,20 +226,7 @@ fn vocab64_from_cpp_4_and_back() {
     drop(stdin);
     rt.block_on(port.close());
 
-    let out = std::sync::Arc::new(
-        rt.block_on(Port::open("/v64/out", name_client()))
-            .expect("open /v64/out"),
-    );
-    let writing = {
-        let out = out.clone();
-        let want = want.clone();
-        rt.spawn(async move {
-            loop {
-                out.write_nowait(&want, None);
-                tokio::time::sleep(std::time::Duration::from_millis(20)).await;
-            }
-        })
-    };
+    let writing = keep_writing(&rt, "/v64/out", want.clone());
     let line = cpp_read_until(&yarp, "/v64/rd", "/v64/out", |l| {
         l.starts_with("[velocity]").then(|| l.to_string())
     });
