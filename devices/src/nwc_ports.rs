@@ -5,7 +5,6 @@
 //! check the protocol), says how calls are written; replies of either are read.
 
 use crate::error::{DevResult, DeviceError};
-use crate::rangefinder::protocol::parse_reply;
 use crate::runtime;
 use crate::thrift::{self, ReturnValue};
 use parking_lot::{Mutex, MutexGuard};
@@ -258,14 +257,7 @@ impl<T: Send + 'static> NwcPorts<T> {
         })?;
         let parsed = match &reply {
             Err(bare) => Some((*bare, Vec::new())),
-            // 3.12's bare `ok` (a tag and 0) reads as an empty compact list
-            Ok(b) if b.is_empty() => Some((ReturnValue::Ok, Vec::new())),
-            // 4.0's bare ReturnValue decodes as a Bottle of its one vocab
-            Ok(b) if b.len() == 1 => b
-                .get(0)
-                .and_then(|v| v.as_vocab())
-                .map(|v| (ReturnValue::from_vocab(v), Vec::new())),
-            Ok(b) => parse_reply(b),
+            Ok(b) => thrift::parse_reply(b),
         };
         match parsed {
             Some((ReturnValue::Ok, fields)) => Ok(fields),

@@ -166,6 +166,18 @@ impl ReturnValue {
     }
 }
 
+/// A decoded reply of either generation: its return value and the fields after it. A
+/// bare `ReturnValue` decodes as a Bottle too: 4.0's as its one vocab, 3.12's `ok` (a tag
+/// and 0) as an empty compact list; 3.12's other codes are no Bottle
+/// ([`ReturnValue::from_bare`] reads those bytes).
+pub fn parse_reply(reply: &Bottle) -> Option<(ReturnValue, Vec<Value>)> {
+    match reply.items() {
+        [] => Some((ReturnValue::Ok, Vec::new())),
+        [Value::Vocab32(v)] => Some((ReturnValue::from_vocab(*v), Vec::new())),
+        [first, rest @ ..] => Some((ReturnValue::from_value(first)?, rest.to_vec())),
+    }
+}
+
 /// The protocol number C++'s generated services compare (no `.thrift` of ours declares
 /// one: 0 in both generations).
 pub const PROTOCOL: i16 = 0;

@@ -4,7 +4,8 @@
 //! tests/peers/install-cpp-peers.sh icub, when installed; in CI required)
 //! get the `IRangefinder2DMsgs` answers and the stream. Every wait is bounded.
 
-use yarp_devices::rangefinder::protocol::{parse_reply, LaserScan2D};
+use yarp_devices::rangefinder::protocol::LaserScan2D;
+use yarp_devices::thrift::parse_reply;
 use yarp_devices::{runtime, PolyDriver};
 use yarp_interop_tests::{name_client, T};
 use yarp_net::buffered::BufferedPort;

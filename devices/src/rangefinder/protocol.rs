@@ -249,12 +249,6 @@ fn default_fields(w: &mut WireWriter, method: &str) {
     }
 }
 
-/// A decoded reply of either generation: its return value and the fields after it.
-pub fn parse_reply(reply: &Bottle) -> Option<(ReturnValue, Vec<Value>)> {
-    let ret = ReturnValue::from_value(reply.get(0)?)?;
-    Some((ret, reply.iter().skip(1).cloned().collect()))
-}
-
 /// The status a `getDeviceStatus_RPC` reply or a scan carries.
 pub fn status_of(code: i32) -> Option<LaserStatus> {
     Some(match code {
