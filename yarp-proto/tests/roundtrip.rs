@@ -415,10 +415,13 @@ proptest! {
     }
 }
 
+/// What decodes survives a round trip in its own generation (YARP 4.0's vocab64 has no
+/// 3.x form, and a 4.0 float32 carries 3.x's float64 tag).
 fn check_decoded(bytes: &[u8]) -> Result<(), TestCaseError> {
     if let Ok(b) = Bottle::decode(bytes) {
-        let again = b.encode();
-        let back = Bottle::decode(&again)
+        let generation = yarp_proto::binary::generation_of(bytes);
+        let again = b.encode_as(generation);
+        let (back, _) = yarp_proto::binary::decode_as(&again, generation)
             .map_err(|e| TestCaseError::fail(format!("re-decode failed: {e}")))?;
         prop_assert_eq!(back, b);
     }
