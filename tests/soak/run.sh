@@ -8,6 +8,8 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
+# --help needs none of the installs below.
+case ${1:-} in -h | --help) exec python3 "$here/soak.py" --help ;; esac
 netns="$root/../shared/netns-run"
 export CARGO_TARGET_DIR=${CARGO_TARGET_DIR:-$HOME/.cache/yarp-rs/target}
 venv=${SOAK_VENV:-$HOME/.cache/yarp-rs/venv-soak}

@@ -5,6 +5,7 @@
 #![forbid(unsafe_code)]
 
 mod cpp_tools;
+pub mod docs;
 mod netns;
 mod peer;
 mod procs;

@@ -13,6 +13,21 @@
 //! assert_eq!(Bottle::decode(&bytes).unwrap(), b);
 //! assert_eq!(b.to_string(), "set pos 0 100.0");
 //! ```
+//!
+//! The README's example (the docs test checks the two stay the same):
+//!
+//! ```
+//! use yarp_proto::{bottle, Bottle, Value, Vocab32};
+//!
+//! let cmd = bottle![Vocab32::new("set"), Vocab32::new("pos"), 0, 100.0];
+//! assert_eq!(cmd.to_string(), "[set] [pos] 0 100.0");
+//! let wire = cmd.encode();                      // bytes exactly as C++ YARP writes them
+//! let back = Bottle::decode(&wire).unwrap();    // typed error (with byte offset) on bad input
+//! assert_eq!(back, cmd);
+//!
+//! let reply = Bottle::from_text("[is] [axes] 4 [ok]");   // C++ Bottle::fromString rules
+//! assert_eq!(reply.get(2), Some(&Value::Int32(4)));
+//! ```
 
 pub mod binary;
 pub mod contact;
