@@ -350,6 +350,9 @@ impl Runner<'_> {
                     Err(format!("{} failed", self.jobs[j].describe()))
                 } else if ready.is_some()
                     && !ready.is_some_and(|p| p.found_in(&self.jobs[j].output()))
+                    // In `lines`, the block's `ready:` is for the lines that stay up; a
+                    // line that succeeds and ends (a build, `--check`) is done.
+                    && line.is_none_or(|n| self.d.ready.contains_key(&Some(n)))
                 {
                     Err(format!(
                         "{} ended before it was up (its output never held {})",

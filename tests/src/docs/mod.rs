@@ -133,8 +133,8 @@ mod tests {
 
     #[test]
     fn a_program_that_never_comes_up_or_never_stops_fails() {
-        let up = "<!-- docs-test: lines\nready: up\ntimeout: 20\n-->\n\n    bash -c 'echo up; sleep 100'\n";
-        check(up).expect("up, then stopped by Ctrl-C");
+        let up = "<!-- docs-test: lines\nready: up\ntimeout: 20\n-->\n\n    true\n    bash -c 'echo up; sleep 100'\n";
+        check(up).expect("a line that ends, then one up and stopped by Ctrl-C");
         let never = up
             .replace("ready: up", "ready: down")
             .replace("timeout: 20", "timeout: 2");
