@@ -29,6 +29,7 @@
 //! assert_eq!(reply.get(2), Some(&Value::Int32(4)));
 //! ```
 
+pub mod auth;
 pub mod binary;
 pub mod contact;
 pub mod error;

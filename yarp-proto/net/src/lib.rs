@@ -1,5 +1,6 @@
 //! YARP networking on tokio: the thin I/O layer above the sans-I/O `yarp-proto` core.
 
+pub mod auth;
 pub mod blocking;
 pub mod buffered;
 pub mod dgram;

@@ -7,7 +7,6 @@ use std::net::{SocketAddr, ToSocketAddrs};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::TcpStream;
 use tokio::time::timeout;
 use yarp_proto::nameserver::{config_file_name, format_conf, parse_conf, ConfAddress};
 use yarp_proto::{Bottle, Contact, PortRef};
@@ -142,7 +141,7 @@ async fn session(contact: &Contact, req: &[u8], until: &[u8]) -> Result<Vec<u8>,
         source,
     };
     let work = async {
-        let mut s = TcpStream::connect((contact.host.as_str(), contact.port))
+        let mut s = crate::auth::connect((contact.host.as_str(), contact.port))
             .await
             .map_err(io)?;
         s.write_all(req).await.map_err(io)?;
@@ -296,7 +295,7 @@ pub async fn exists(ns: &NameClient, port: &str) -> Result<bool, NetworkError> {
     };
     let reachable = timeout(
         Duration::from_secs(3),
-        TcpStream::connect((c.host.as_str(), c.port)),
+        crate::auth::connect((c.host.as_str(), c.port)),
     )
     .await;
     Ok(matches!(reachable, Ok(Ok(_))))

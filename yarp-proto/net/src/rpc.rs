@@ -37,7 +37,7 @@ impl RpcClient {
             target: target.clone(),
             source,
         };
-        let mut stream = timeout(CONNECT_TIMEOUT, TcpStream::connect(&addr))
+        let mut stream = timeout(CONNECT_TIMEOUT, crate::auth::connect(&addr))
             .await
             .map_err(|_| OutputError::HandshakeTimeout {
                 target: target.clone(),

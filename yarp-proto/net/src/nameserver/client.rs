@@ -7,7 +7,6 @@ use std::net::SocketAddr;
 use std::time::Duration;
 
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio::net::TcpStream;
 use tokio::time::timeout;
 
 use yarp_proto::nameserver::{
@@ -72,7 +71,7 @@ impl NameClient {
     /// Sends raw request bytes on a fresh connection and returns the reply text.
     pub async fn request(&self, bytes: &[u8]) -> Result<String, NameClientError> {
         let t = self.timeout;
-        let mut stream = timeout(t, TcpStream::connect(self.server))
+        let mut stream = timeout(t, crate::auth::connect(self.server))
             .await
             .map_err(|_| NameClientError::Timeout(t))??;
         let _ = stream.set_nodelay(true);

@@ -317,8 +317,10 @@ fn run_command(ctx: &Ctx, cmd: &Bottle, remote: &str) -> Bottle {
     reg.apply(cmd, Some(remote))
 }
 
-async fn handle(stream: TcpStream, peer: SocketAddr, ctx: &Ctx) -> io::Result<()> {
+async fn handle(mut stream: TcpStream, peer: SocketAddr, ctx: &Ctx) -> io::Result<()> {
     let _ = stream.set_nodelay(true);
+    // auth.conf: C++'s name server is a port; its connections authenticate first too.
+    crate::auth::accepted(&mut stream).await?;
     let remote = remote_host(&peer);
     let idle = ctx.config.idle_timeout;
     let (rd, mut wr) = stream.into_split();

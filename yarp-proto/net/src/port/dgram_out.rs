@@ -8,7 +8,6 @@ use super::{Shared, CONNECT_TIMEOUT, OUTPUT_QUEUE};
 use crate::dgram::{self, McastSender, UdpSender};
 use std::net::{Ipv4Addr, SocketAddrV4};
 use std::sync::Arc;
-use tokio::net::TcpStream;
 use tokio::sync::mpsc;
 use tokio::time::timeout;
 use yarp_proto::nameserver::RegisterRequest;
@@ -31,7 +30,7 @@ pub(crate) async fn connect(
     carrier: Carrier,
 ) -> Result<OutputHandle, OutputError> {
     let addr = format!("{}:{}", contact.host, contact.port);
-    let tcp = timeout(CONNECT_TIMEOUT, TcpStream::connect(&addr))
+    let tcp = timeout(CONNECT_TIMEOUT, crate::auth::connect(&addr))
         .await
         .map_err(|_| OutputError::HandshakeTimeout {
             target: target.to_string(),

@@ -84,6 +84,10 @@ enum End {
 }
 
 async fn serve_connection(shared: Arc<Shared>, mut stream: TcpStream) {
+    // auth.conf: the peer proves it holds the key before anything else (C++ TcpFace::read).
+    if crate::auth::accepted(&mut stream).await.is_err() {
+        return;
+    }
     // The two TCP ports name a unix_stream connection's socket. Taken now: once the
     // sender drops the TCP stream after its handshake, the peer's address may be gone.
     let tcp_ports = (

@@ -415,7 +415,7 @@ pub(crate) async fn connect(
 /// A TCP connection to `target` at `contact`, within [`CONNECT_TIMEOUT`].
 pub(crate) async fn dial(target: &str, contact: &Contact) -> Result<TcpStream, OutputError> {
     let addr = format!("{}:{}", contact.host, contact.port);
-    match timeout(CONNECT_TIMEOUT, TcpStream::connect(&addr)).await {
+    match timeout(CONNECT_TIMEOUT, crate::auth::connect(&addr)).await {
         Ok(Ok(s)) => Ok(s),
         Ok(Err(source)) => Err(OutputError::Connect {
             target: target.to_string(),
