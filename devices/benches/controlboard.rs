@@ -42,7 +42,8 @@ fn start_name_server(dir: &std::path::Path) -> NameClient {
         let addr = ns.local_addr();
         tokio::spawn(ns.serve());
         addr
-    });
+    })
+    .expect("the device runtime");
     yarp_net::network::write_conf("127.0.0.1", addr.port()).expect("yarp.conf");
     NameClient::new(addr)
 }
@@ -106,7 +107,8 @@ fn cpu_case(ns: &NameClient, label: &str, board: SharedDevice, streams: &[&str])
         let mut nws = ControlBoardNws::open_ports(&p1, ns1, PERIOD).await.unwrap();
         nws.attach(board).unwrap();
         nws
-    });
+    })
+    .expect("the device runtime");
     let received = Arc::new(AtomicU64::new(0));
     let mut readers = Vec::new();
     for s in streams {
@@ -123,7 +125,8 @@ fn cpu_case(ns: &NameClient, label: &str, board: SharedDevice, streams: &[&str])
                 .unwrap();
             assert!(ok, "{msg}");
             port
-        });
+        })
+        .expect("the device runtime");
         readers.push(runtime::handle().spawn(async move {
             while port.read().await.is_some() {
                 got.fetch_add(1, Ordering::Relaxed);
@@ -154,7 +157,7 @@ fn cpu_case(ns: &NameClient, label: &str, board: SharedDevice, streams: &[&str])
     for r in readers {
         r.abort();
     }
-    runtime::block_on(nws.close());
+    runtime::block_on(nws.close()).expect("the device runtime");
 }
 
 /// The CPU figures (printed; criterion has no CPU-time measurement).
@@ -213,7 +216,8 @@ fn remote_get_encoders(c: &mut Criterion) {
             .unwrap();
         nws.attach(fake_board(AXES)).unwrap();
         nws
-    });
+    })
+    .expect("the device runtime");
     let mut remote = RemoteControlBoard::new();
     remote
         .open(&Property::from_config_text("remote /bench/rt\nlocal /bench/rtcli\n").unwrap())
@@ -233,7 +237,7 @@ fn remote_get_encoders(c: &mut Criterion) {
     });
     g.finish();
     drop(remote);
-    runtime::block_on(nws.close());
+    runtime::block_on(nws.close()).expect("the device runtime");
 }
 
 criterion_group! {

@@ -57,7 +57,8 @@ fn end_to_end() {
         let addr = ns.local_addr();
         tokio::spawn(ns.serve());
         addr
-    });
+    })
+    .expect("the device runtime");
     yarp_net::network::write_conf("127.0.0.1", addr.port()).unwrap();
     let open = |t: &str| PolyDriver::open(&Property::from_config_text(t).unwrap()).unwrap();
     let mut server = open(

@@ -110,16 +110,20 @@ fn within<R: Send + 'static>(
     timeout: Duration,
     call: impl std::future::Future<Output = Result<R, PortError>> + Send + 'static,
 ) -> DevResult<R> {
-    match runtime::block_on(async move { tokio::time::timeout(timeout, call).await }) {
-        Ok(Ok(reply)) => Ok(reply),
-        Ok(Err(e)) => {
+    // A stall of the runtime itself (its bound is longer) shows as this call's timeout.
+    let outcome = runtime::block_on(async move { tokio::time::timeout(timeout, call).await })
+        .ok()
+        .and_then(Result::ok);
+    match outcome {
+        Some(Ok(reply)) => Ok(reply),
+        Some(Err(e)) => {
             tracing::warn!("{device}: `{command}`: {e}");
             Err(DeviceError::PeerLost {
                 device: device.to_string(),
                 reason: e.to_string(),
             })
         }
-        Err(_) => {
+        None => {
             tracing::warn!("{device}: `{command}`: no reply within {timeout:?}");
             Err(DeviceError::Timeout {
                 device: device.to_string(),
@@ -291,12 +295,12 @@ impl<T: Send + 'static> NwcPorts<T> {
             got,
         };
         let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
-        runtime::block_on(Self::open(device, ns, names, parse)).map_err(network)
+        runtime::block_on_result(Self::open(device, ns, names, parse)).map_err(network)
     }
 
     /// Closes the ports from a device's `close` (blocking).
     pub fn close_for_device(self) {
-        runtime::block_on(self.close());
+        runtime::block_on_logged("nwc_ports: closing", self.close());
     }
 
     pub async fn close(self) {

@@ -614,7 +614,8 @@ impl RemoteControlBoard {
         let msg = Arc::new(CommandMessage::new(head, body).to_bottle());
         let port = link.command.clone();
         if link.write_strict {
-            runtime::block_on(async move { port.write_shared_as(msg, None, generation).await });
+            let _ =
+                runtime::block_on(async move { port.write_shared_as(msg, None, generation).await });
         } else {
             port.write_nowait_each(
                 &[(Arc::unwrap_or_clone(msg), generation)],
@@ -755,7 +756,7 @@ impl DeviceDriver for RemoteControlBoard {
             got: format!("{remote}: {e}"),
         };
         let ns = yarp_net::network::name_client().map_err(|e| unreachable(e.to_string()))?;
-        let link = runtime::block_on(connect(s, ns)).map_err(unreachable)?;
+        let link = runtime::block_on_result(connect(s, ns)).map_err(unreachable)?;
         self.close()?;
         self.link = Some(link);
         Ok(())
@@ -764,7 +765,7 @@ impl DeviceDriver for RemoteControlBoard {
     fn close(&mut self) -> DevResult<()> {
         if let Some(link) = self.link.take() {
             link.reader.abort();
-            runtime::block_on(async move {
+            runtime::block_on_logged("remote_controlboard: closing", async move {
                 let _ = link.reader.await;
                 close_ports(vec![link.rpc, link.command, link.state]).await;
             });

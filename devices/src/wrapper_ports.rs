@@ -63,7 +63,7 @@ impl WrapperPorts {
         };
         let ns =
             yarp_net::network::name_client().map_err(|e| refused(format!("name server: {e}")))?;
-        runtime::block_on(async move {
+        runtime::block_on_result(async move {
             let mut opened = Vec::new();
             for name in streams.iter().chain(std::iter::once(&rpc)) {
                 match Port::open(name, ns.clone()).await {
@@ -96,7 +96,7 @@ impl WrapperPorts {
 
     /// Stops answering and closes every port (unregistering them).
     pub fn close(self) {
-        runtime::block_on(async move {
+        runtime::block_on_logged("wrapper_ports: closing", async move {
             self.rpc_task.abort();
             let _ = self.rpc_task.await;
             close_port(self.rpc).await;
@@ -127,10 +127,8 @@ async fn serve_rpc(
         };
         let device = slot.lock().clone();
         let reply = match device {
-            Some(d) => {
-                let mut pd = d.lock();
-                answer(&cmd, Some(pd.device()), generation)
-            }
+            // the device may itself wait on the network: not on a held worker
+            Some(d) => runtime::device_call(|| answer(&cmd, Some(d.lock().device()), generation)),
             None => answer(&cmd, None, generation),
         };
         if msg.wants_reply() {
@@ -150,7 +148,9 @@ pub(crate) fn learn_readers(outputs: Vec<String>, readers: &PeerGenerations) {
         return;
     }
     let readers = readers.clone();
-    runtime::block_on(async move { readers.learn(&outputs).await });
+    runtime::block_on_logged("wrapper_ports: closing", async move {
+        readers.learn(&outputs).await
+    });
 }
 
 /// Closes a port once the tasks that shared it are gone.

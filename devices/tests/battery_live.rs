@@ -19,6 +19,7 @@ where
     F::Output: Send + 'static,
 {
     runtime::block_on(async move { tokio::time::timeout(T, fut).await.expect("timed out") })
+        .expect("the device runtime")
 }
 
 /// The wrapper over a fakeBattery (30 V, 3 A out, 20 C, 50 % draining), 50 ms period.

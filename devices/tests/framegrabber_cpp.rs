@@ -140,7 +140,8 @@ fn cpp_yarp_read_reads_our_images() {
     let start = Instant::now();
     loop {
         let ns = ns.clone();
-        let found = runtime::block_on(async move { ns.query("/rd").await.ok().flatten() });
+        let found = runtime::block_on(async move { ns.query("/rd").await.ok().flatten() })
+            .expect("the device runtime");
         if found.is_some() {
             break;
         }
@@ -154,6 +155,7 @@ fn cpp_yarp_read_reads_our_images() {
             runtime::block_on(
                 async move { yarp_net::network::connect(&ns, "/cam", "/rd", None).await },
             )
+            .expect("the device runtime")
             .expect("connect");
         if ok {
             break;

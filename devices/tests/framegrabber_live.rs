@@ -53,7 +53,8 @@ fn nwc_gets_intact_640x480_frames_and_remote_controls() {
     let ns = name_client();
     let carrier = runtime::block_on(async move {
         yarp_net::network::connection_carrier(&ns, "/cam", "/camclient").await
-    });
+    })
+    .expect("the device runtime");
     assert_eq!(carrier.unwrap().as_deref(), Some("fast_tcp"));
     assert_eq!((img.width(), img.height()), (640, 480));
     assert_eq!(img.pixel_code(), PixelCode::RGB);
@@ -136,14 +137,15 @@ fn nwc_without_stream_uses_rpc_and_ignores_garbage() {
         p.connect("/cam2s", None).await.unwrap();
         p.write(&bottle!["not", "an", "image", 42]).await;
         p
-    });
+    })
+    .expect("the device runtime");
     wait_for("the junk to be rejected", || {
         (nwc.rejected_messages() > 0).then_some(())
     });
     let fg = nwc.as_frame_grabber_image().unwrap();
     let img = wait_for("an image after the junk", || fg.get_image().ok());
     assert_eq!(img.width(), 16);
-    runtime::block_on(junk.close());
+    runtime::block_on(junk.close()).expect("the device runtime");
     nwc.close().unwrap();
     server.close().unwrap();
 }
@@ -224,7 +226,8 @@ fn raw_receiver_sees_the_cpp_framing() {
             payloads.push(p);
         }
         (cmds, payloads, hello)
-    });
+    })
+    .expect("the device runtime");
     assert_eq!(
         hex::encode(&hello),
         "5941e41e00005250090000002f6772616262657200"
@@ -272,7 +275,8 @@ fn text_rpc_session() {
         .await
         .expect("timed out");
         String::from_utf8_lossy(&got).into_owned()
-    });
+    })
+    .expect("the device runtime");
     assert!(got.contains("[visr] [h] [is] 6\r\n"), "{got}");
     server.close().unwrap();
 }

@@ -19,6 +19,7 @@ where
     F::Output: Send + 'static,
 {
     runtime::block_on(async move { tokio::time::timeout(T, fut).await.expect("timed out") })
+        .expect("the device runtime")
 }
 
 /// The wrapper over a fakeLaser seeing 2.5 m everywhere, 0.5 degree steps.

@@ -21,6 +21,7 @@ where
     F::Output: Send + 'static,
 {
     runtime::block_on(async move { tokio::time::timeout(T, fut).await.expect("timed out") })
+        .expect("the device runtime")
 }
 
 fn camera(name: &str) -> PolyDriver {

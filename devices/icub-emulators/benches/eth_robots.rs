@@ -42,7 +42,8 @@ fn run(robot: &str, xml: &str, part: &str, joint: usize, seconds: u64) {
         let addr = ns.local_addr();
         tokio::spawn(ns.serve());
         addr
-    });
+    })
+    .expect("the device runtime");
     yarp_net::network::write_conf("127.0.0.1", addr.port()).unwrap();
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../../shared/robots-configuration")

@@ -253,8 +253,10 @@ impl DeviceDriver for CartesianControllerServer {
         };
         let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
         let name = port_name.clone();
-        let port = runtime::block_on(async move { Port::open(&name, ns).await })
-            .map_err(|e| network(e.to_string()))?;
+        let port = runtime::block_on_result(async move {
+            Port::open(&name, ns).await.map_err(|e| e.to_string())
+        })
+        .map_err(|e| network(e.to_string()))?;
         self.close()?;
         self.state_port = Some(Arc::new(port));
         self.config = Some(cfg);
@@ -265,13 +267,13 @@ impl DeviceDriver for CartesianControllerServer {
         if let Some(task) = self.publisher.take() {
             task.abort();
             // the task holds the port: wait until it is gone so that the port can close
-            runtime::block_on(async move {
+            runtime::block_on_logged("cartesiancontrollerserver: closing", async move {
                 let _ = task.await;
             });
         }
         if let Some(port) = self.state_port.take() {
             if let Ok(port) = Arc::try_unwrap(port) {
-                runtime::block_on(port.close());
+                runtime::block_on_logged("cartesiancontrollerserver: closing", port.close());
             }
         }
         Ok(())

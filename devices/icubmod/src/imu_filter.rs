@@ -494,8 +494,10 @@ impl DeviceDriver for ImuFilter {
         };
         let ns = yarp_net::network::name_client().map_err(|e| port_err(e.to_string()))?;
         let pn = port_name.clone();
-        let port = runtime::block_on(async move { Port::open(&pn, ns).await })
-            .map_err(|e| port_err(e.to_string()))?;
+        let port = runtime::block_on_result(async move {
+            Port::open(&pn, ns).await.map_err(|e| e.to_string())
+        })
+        .map_err(|e| port_err(e.to_string()))?;
         *lock(&self.shared) = Shared {
             estimator: BiasEstimator::new(params.clone()),
             gyro: None,
@@ -512,7 +514,7 @@ impl DeviceDriver for ImuFilter {
     fn close(&mut self) -> DevResult<()> {
         let _ = self.detach_all();
         if let Some(port) = self.bias_port.take() {
-            runtime::block_on(async move {
+            runtime::block_on_logged("imuFilter: closing", async move {
                 if let Ok(p) = Arc::try_unwrap(port) {
                     p.close().await;
                 }

@@ -15,6 +15,7 @@ where
     yarp_devices::runtime::block_on(async move {
         tokio::time::timeout(T, fut).await.expect("timed out")
     })
+    .expect("the device runtime")
 }
 
 fn open(text: &str) -> PolyDriver {

@@ -178,7 +178,8 @@ fn torques_written_to_the_port_reach_the_can_bus() {
     let ns = name_client();
     let gone = yarp_devices::runtime::block_on(async move {
         ns.query("/vasit/joint_vsens/left_arm:i").await.unwrap()
-    });
+    })
+    .expect("the device runtime");
     assert!(gone.is_none());
     // closing the CAN device stops the "board" (SET_TXMODE 1 to 0x0C)
     sensor.lock().close().unwrap();

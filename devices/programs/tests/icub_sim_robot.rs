@@ -44,7 +44,8 @@ fn start_name_server() -> tempfile::TempDir {
         let addr = ns.local_addr();
         tokio::spawn(ns.serve());
         addr
-    });
+    })
+    .expect("the device runtime");
     yarp_net::network::write_conf("127.0.0.1", addr.port()).expect("write yarp.conf");
     dir
 }

@@ -212,7 +212,7 @@ impl IWrapper for BatteryNwsYarp {
     fn detach(&mut self) -> DevResult<()> {
         if let Some(t) = self.stream_task.take() {
             t.abort();
-            runtime::block_on(async move {
+            runtime::block_on_logged("nws: closing", async move {
                 let _ = t.await;
             });
         }

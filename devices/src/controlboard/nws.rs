@@ -32,7 +32,6 @@ use parking_lot::{Mutex, MutexGuard};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Weak};
 use std::time::Duration;
-use tokio::runtime::Handle;
 use tokio::task::JoinHandle;
 use yarp_net::nameserver::NameClient;
 use yarp_net::peer_generation::PeerGenerations;
@@ -326,19 +325,6 @@ fn axes_of(dev: &mut dyn DeviceDriver) -> DevResult<usize> {
     Ok(n)
 }
 
-/// Runs a device call from a serving task. Device calls may block (a
-/// `remote_controlboard` attached here waits for its own RPC on the device runtime), so
-/// on a multi-thread runtime the worker is handed over to other tasks meanwhile.
-fn device_call<R>(f: impl FnOnce() -> R) -> R {
-    let multi = Handle::try_current()
-        .is_ok_and(|h| h.runtime_flavor() == tokio::runtime::RuntimeFlavor::MultiThread);
-    if multi {
-        tokio::task::block_in_place(f)
-    } else {
-        f()
-    }
-}
-
 fn attached(slot: &Slot) -> Option<Attached> {
     lock(slot).clone()
 }
@@ -356,20 +342,22 @@ async fn serve_rpc(port: Arc<Port>, slot: Slot) {
                 fail()
             }
             Ok(cmd) => match attached(&slot) {
-                Some(a) => device_call(|| match remote_calibrator_target(&cmd, &a.device) {
-                    Some(calibrator) => match calibrator.try_lock() {
-                        Some(mut c) => handle_rpc(&cmd, c.device(), &mut stamp),
-                        // busy with a procedure: only a quit can reach it
-                        None if is_quit(&cmd) => match quit_signal(&a.device) {
-                            Some(_) => ok(),
-                            None => fail(),
+                Some(a) => crate::runtime::device_call(|| {
+                    match remote_calibrator_target(&cmd, &a.device) {
+                        Some(calibrator) => match calibrator.try_lock() {
+                            Some(mut c) => handle_rpc(&cmd, c.device(), &mut stamp),
+                            // busy with a procedure: only a quit can reach it
+                            None if is_quit(&cmd) => match quit_signal(&a.device) {
+                                Some(_) => ok(),
+                                None => fail(),
+                            },
+                            None => {
+                                tracing::warn!("{}: `{cmd}`: the calibrator is busy", port.name());
+                                fail()
+                            }
                         },
-                        None => {
-                            tracing::warn!("{}: `{cmd}`: the calibrator is busy", port.name());
-                            fail()
-                        }
-                    },
-                    None => handle_rpc(&cmd, lock(&a.device).device(), &mut stamp),
+                        None => handle_rpc(&cmd, lock(&a.device).device(), &mut stamp),
+                    }
                 }),
                 None => {
                     tracing::warn!("{}: `{cmd}` but no device is attached", port.name());
@@ -385,9 +373,9 @@ async fn serve_rpc(port: Arc<Port>, slot: Slot) {
 async fn serve_rpc4(port: Arc<Port>, slot: Slot) {
     while let Some(mut msg) = port.read().await {
         let reply = match (msg.bottle(), attached(&slot)) {
-            (Ok(cmd), Some(a)) => {
-                device_call(|| super::v4::handle_rpc(&cmd, lock(&a.device).device()))
-            }
+            (Ok(cmd), Some(a)) => crate::runtime::device_call(|| {
+                super::v4::handle_rpc(&cmd, lock(&a.device).device())
+            }),
             (Err(e), _) => {
                 tracing::warn!("{}: undecodable call from {}: {e}", port.name(), msg.from);
                 crate::thrift::fail_reply()
@@ -460,7 +448,7 @@ async fn serve_single_port(port: Arc<Port>, slot: Slot) {
                 fail()
             }
             Ok(cmd) => match attached(&slot) {
-                Some(a) => device_call(|| {
+                Some(a) => crate::runtime::device_call(|| {
                     handle_single_port(&cmd, lock(&a.device).device(), &mut stamp, a.axes)
                 }),
                 None => {
@@ -482,10 +470,10 @@ async fn serve_commands(port: Arc<Port>, slot: Slot) {
         let result = match (cmd, attached(&slot)) {
             (Err(e), _) => Err(e),
             (Ok(_), None) => Err("no device is attached".to_string()),
-            (Ok(cmd), Some(a)) => {
-                device_call(|| handle_command(&cmd, lock(&a.device).device(), a.axes))
-                    .map_err(|e| e.to_string())
-            }
+            (Ok(cmd), Some(a)) => crate::runtime::device_call(|| {
+                handle_command(&cmd, lock(&a.device).device(), a.axes)
+            })
+            .map_err(|e| e.to_string()),
         };
         if let Err(e) = result {
             tracing::warn!(
@@ -612,7 +600,7 @@ impl DeviceDriver for ControlBoardNwsDevice {
         let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
         let prefix = name.clone();
         let single = p.single_port;
-        let server = runtime::block_on(async move {
+        let server = runtime::block_on_result(async move {
             if single {
                 ControlBoardNws::open_single_port(&prefix, ns, period).await
             } else {
@@ -622,14 +610,14 @@ impl DeviceDriver for ControlBoardNwsDevice {
         })
         .map_err(network)?;
         if let Some(old) = self.server.replace(server) {
-            runtime::block_on(old.close());
+            runtime::block_on_logged("nws: closing", old.close());
         }
         Ok(())
     }
 
     fn close(&mut self) -> DevResult<()> {
         if let Some(s) = self.server.take() {
-            runtime::block_on(s.close());
+            runtime::block_on_logged("nws: closing", s.close());
         }
         Ok(())
     }

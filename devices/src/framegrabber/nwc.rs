@@ -427,7 +427,7 @@ impl DeviceDriver for FrameGrabberNwc {
             got: e,
         };
         let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
-        let client = runtime::block_on(Client::open(ns, local, remote, carrier, no_stream))
+        let client = runtime::block_on_result(Client::open(ns, local, remote, carrier, no_stream))
             .map_err(network)?;
         self.close()?;
         self.client = Some(client);
@@ -436,7 +436,7 @@ impl DeviceDriver for FrameGrabberNwc {
 
     fn close(&mut self) -> DevResult<()> {
         if let Some(c) = self.client.take() {
-            runtime::block_on(c.close());
+            runtime::block_on_logged("nwc: closing", c.close());
         }
         Ok(())
     }

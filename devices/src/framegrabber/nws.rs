@@ -156,10 +156,7 @@ async fn serve_rpc(port: Arc<Port>, target: Target) {
             }
         };
         let reply = match dev {
-            Some(dev) => {
-                let mut pd = dev.lock();
-                serve(pd.device())
-            }
+            Some(dev) => crate::runtime::device_call(|| serve(dev.lock().device())),
             None => serve(&mut Nothing),
         };
         if msg.wants_reply() {
@@ -204,12 +201,12 @@ fn stream(
         if !port.has_outputs() {
             continue;
         }
-        let got = {
+        let got = crate::runtime::device_call(|| {
             let mut pd = dev.lock();
             pd.device()
                 .as_frame_grabber_image()
                 .map(|fg| (fg.get_image(), fg.last_input_stamp()))
-        };
+        });
         let (img, stamp) = match got {
             Some((Ok(img), stamp)) => (img, stamp),
             Some((Err(e), _)) => {
@@ -233,7 +230,7 @@ fn stream(
                 (Arc::new(img.to_bottle_as(Generation::V4)), Generation::V4),
             ];
             let (port, readers) = (port.clone(), readers.clone());
-            runtime::block_on(async move {
+            runtime::block_on_logged("nws: closing", async move {
                 port.write_shared_each(&forms, |to| form_of(&readers, to), Some(stamp))
                     .await;
             });
@@ -318,7 +315,7 @@ impl DeviceDriver for FrameGrabberNws {
         };
         let ns = yarp_net::network::name_client().map_err(|e| network(e.to_string()))?;
         let name = self.name.clone();
-        let server = runtime::block_on(async move {
+        let server = runtime::block_on_result(async move {
             Server::open(&name, ns, Target::default())
                 .await
                 .map_err(|e| format!("{name}: {e}"))
@@ -332,7 +329,7 @@ impl DeviceDriver for FrameGrabberNws {
     fn close(&mut self) -> DevResult<()> {
         self.stop_streaming();
         if let Some(s) = self.server.take() {
-            runtime::block_on(s.close());
+            runtime::block_on_logged("nws: closing", s.close());
         }
         Ok(())
     }

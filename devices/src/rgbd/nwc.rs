@@ -243,7 +243,7 @@ impl DeviceDriver for RgbdSensorClient {
         let names = Names::of(RgbdSensorNwcYarpParams::read(config)?);
         let remote = names.remote_rpc.clone();
         let client =
-            runtime::block_on(open_client(names)).map_err(|got| DeviceError::BadParam {
+            runtime::block_on_result(open_client(names)).map_err(|got| DeviceError::BadParam {
                 device: NAME.into(),
                 param: "remoteRpcPort".into(),
                 expected:
@@ -279,7 +279,7 @@ impl DeviceDriver for RgbdSensorClient {
 
     fn close(&mut self) -> DevResult<()> {
         if let Some(c) = self.client.take() {
-            runtime::block_on(c.close());
+            runtime::block_on_logged("nwc: closing", c.close());
         }
         Ok(())
     }

@@ -161,7 +161,7 @@ impl DeviceDriver for AnalogSensorClient {
         let ns = yarp_net::network::name_client()
             .map_err(|e| network_error("local", format!("name server: {e}")))?;
         let latest = self.latest.clone();
-        let ports = runtime::block_on(async move {
+        let ports = runtime::block_on_result(async move {
             let input = Arc::new(
                 Port::open(&local, ns.clone())
                     .await
@@ -204,7 +204,7 @@ impl DeviceDriver for AnalogSensorClient {
 
     fn close(&mut self) -> DevResult<()> {
         if let Some(p) = self.ports.take() {
-            runtime::block_on(p.close());
+            runtime::block_on_logged("analog_client: closing", p.close());
         }
         Ok(())
     }

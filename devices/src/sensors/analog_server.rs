@@ -183,10 +183,9 @@ async fn serve_rpc(port: Arc<Port>, attached: Attached) {
             Ok(cmd) => {
                 let dev = attached.lock().clone();
                 match dev {
-                    Some(dev) => {
-                        let mut pd = dev.lock();
-                        handle_analog_rpc(&cmd, pd.device().as_analog_sensor())
-                    }
+                    Some(dev) => crate::runtime::device_call(|| {
+                        handle_analog_rpc(&cmd, dev.lock().device().as_analog_sensor())
+                    }),
                     None => handle_analog_rpc(&cmd, None),
                 }
             }
@@ -221,13 +220,13 @@ async fn stream(
             count = count.wrapping_add(1);
             continue;
         }
-        let status = {
+        let status = crate::runtime::device_call(|| {
             let mut pd = dev.lock();
             match pd.device().as_analog_sensor() {
                 Some(s) => s.read(&mut values),
                 None => AnalogStatus::Error,
             }
-        };
+        });
         if status != AnalogStatus::Ok || values.is_empty() {
             tracing::debug!("{NAME}: sensor read gave {status:?}");
             continue;
@@ -333,8 +332,10 @@ impl DeviceDriver for AnalogServer {
         self.close()?;
         let ns = yarp_net::network::name_client().map_err(|e| network_error(&name, e))?;
         let (e2, ns2) = (entries.clone(), ns.clone());
-        let rpc_ports = runtime::block_on(async move { open_ports(&e2, &ns2, true).await })
-            .map_err(|e| network_error(&name, e))?;
+        let rpc_ports = runtime::block_on_result(async move {
+            open_ports(&e2, &ns2, true).await.map_err(|e| e.to_string())
+        })
+        .map_err(|e| network_error(&name, e))?;
         let handle = runtime::handle();
         self.rpc = rpc_ports
             .into_iter()
@@ -355,7 +356,7 @@ impl DeviceDriver for AnalogServer {
         *self.attached.lock() = None;
         let rpc = std::mem::take(&mut self.rpc);
         if !rpc.is_empty() {
-            runtime::block_on(async move {
+            runtime::block_on_logged("analog_server: closing", async move {
                 for (port, task) in rpc {
                     task.abort();
                     let _ = task.await;
@@ -394,9 +395,11 @@ impl IWrapper for AnalogServer {
             .first()
             .map(|e| e.port_name.clone())
             .unwrap_or_default();
-        let data_ports = runtime::block_on(async move {
-            let ports = open_ports(&entries, &ns, false).await?;
-            Ok::<_, PortError>(entries.into_iter().zip(ports).collect::<Vec<_>>())
+        let data_ports = runtime::block_on_result(async move {
+            let ports = open_ports(&entries, &ns, false)
+                .await
+                .map_err(|e| e.to_string())?;
+            Ok::<_, String>(entries.into_iter().zip(ports).collect::<Vec<_>>())
         })
         .map_err(|e| network_error(&first, e))?;
         *self.attached.lock() = Some(device);

@@ -300,7 +300,7 @@ impl DeviceDriver for MultipleAnalogSensorsClient {
         let received = self.received.clone();
         let external = settings.external;
         let (conn, metadata) =
-            runtime::block_on(async move { connect(ns, &settings, received).await })?;
+            runtime::block_on_result(async move { connect(ns, &settings, received).await })?;
         self.connection = Some(conn);
         self.metadata = metadata;
         self.external = external;
@@ -309,7 +309,7 @@ impl DeviceDriver for MultipleAnalogSensorsClient {
 
     fn close(&mut self) -> DevResult<()> {
         if let Some(c) = self.connection.take() {
-            runtime::block_on(c.close());
+            runtime::block_on_logged("client: closing", c.close());
         }
         Ok(())
     }

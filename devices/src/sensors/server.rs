@@ -208,10 +208,10 @@ async fn stream_measurements(
             count = count.wrapping_add(1);
             continue;
         }
-        let data = {
+        let data = crate::runtime::device_call(|| {
             let mut pd = device.lock();
             collect_measurements(pd.device(), &metadata)
-        };
+        });
         match data {
             Ok(data) => {
                 failing = false;
@@ -295,7 +295,7 @@ impl IWrapper for MultipleAnalogSensorsServer {
         };
         let ns = yarp_net::network::name_client().map_err(|e| self.network_error(e))?;
         let (prefix, period) = (self.name.clone(), self.period);
-        let serving = runtime::block_on(async move {
+        let serving = runtime::block_on_result(async move {
             Serving::start(&prefix, period, ns, device, metadata)
                 .await
                 .map_err(|e| e.to_string())
@@ -307,7 +307,7 @@ impl IWrapper for MultipleAnalogSensorsServer {
 
     fn detach(&mut self) -> DevResult<()> {
         if let Some(s) = self.serving.take() {
-            runtime::block_on(s.stop());
+            runtime::block_on_logged("server: closing", s.stop());
         }
         Ok(())
     }

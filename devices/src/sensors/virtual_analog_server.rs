@@ -357,7 +357,8 @@ async fn serve(port: Arc<Port>, core: SharedCore) {
                     continue; // not attached: C++ reads nothing before attachAll
                 }
                 match msg.bottle() {
-                    Ok(b) => c.on_bottle(&b),
+                    // the boards' devices may wait on the network: not on a held worker
+                    Ok(b) => crate::runtime::device_call(|| c.on_bottle(&b)),
                     Err(e) => {
                         c.ignored += 1;
                         let port = c.port_name.clone();
@@ -367,7 +368,7 @@ async fn serve(port: Arc<Port>, core: SharedCore) {
                 }
             }
             Ok(None) => break,
-            Err(_) => lock(&core).on_idle(),
+            Err(_) => crate::runtime::device_call(|| lock(&core).on_idle()),
         }
     }
 }
@@ -412,7 +413,10 @@ impl DeviceDriver for VirtualAnalogServer {
         }
         let ns = yarp_net::network::name_client().map_err(|e| port_error(&name, e))?;
         let n = name.clone();
-        let port = runtime::block_on(async move { Port::open(&n, ns).await })
+        let port =
+            runtime::block_on_result(
+                async move { Port::open(&n, ns).await.map_err(|e| e.to_string()) },
+            )
             .map_err(|e| port_error(&name, e))?;
         let port = Arc::new(port);
         let core = Arc::new(Mutex::new(Core {
@@ -435,7 +439,7 @@ impl DeviceDriver for VirtualAnalogServer {
     fn close(&mut self) -> DevResult<()> {
         let _ = self.detach_all();
         if let Some((port, task)) = self.port.take() {
-            runtime::block_on(async move {
+            runtime::block_on_logged("virtual_analog_server: closing", async move {
                 task.abort();
                 let _ = task.await;
                 if let Ok(p) = Arc::try_unwrap(port) {

@@ -17,6 +17,7 @@ where
     yarp_devices::runtime::block_on(async move {
         tokio::time::timeout(T, fut).await.expect("timed out")
     })
+    .expect("the device runtime")
 }
 
 /// Reads one tcp-family message (index + blocks) and returns the concatenated blocks.

@@ -113,7 +113,8 @@ fn main() {
         let addr = ns.local_addr();
         tokio::spawn(ns.serve());
         addr
-    });
+    })
+    .expect("the device runtime");
     yarp_net::network::write_conf("127.0.0.1", addr.port()).unwrap();
     let dir = robot_dir();
     let top = top_file(&dir, conf.path(), false);

@@ -311,11 +311,6 @@ fn apply(board: &Board, topic: Topic, msg: &Ros) -> Result<(), String> {
     }
 }
 
-/// Runs a blocking device call from a task of the (multi-thread) device runtime.
-fn device_call<R>(f: impl FnOnce() -> R) -> R {
-    tokio::task::block_in_place(f)
-}
-
 async fn serve_topic(sub: ros2_client::Subscription<Ros>, topic: Topic, slot: Slot, name: String) {
     let Some(seed) = MsgSeed::new(topic.ros_type()) else {
         return;
@@ -333,7 +328,7 @@ async fn serve_topic(sub: ros2_client::Subscription<Ros>, topic: Topic, slot: Sl
         let board = lock(&slot).clone();
         let result = match board {
             None => Err("no board is attached".to_string()),
-            Some(b) => device_call(|| apply(&b, topic, &msg)),
+            Some(b) => yarp_devices::runtime::device_call(|| apply(&b, topic, &msg)),
         };
         if let Err(e) = result {
             tracing::warn!("{name}: {} ignored: {e}", topic.ros_type());
@@ -359,7 +354,7 @@ async fn serve<Req, Resp>(
             }
         };
         let board = lock(&slot).clone();
-        let resp = device_call(|| handle(board.as_deref(), req));
+        let resp = yarp_devices::runtime::device_call(|| handle(board.as_deref(), req));
         // A client's first request can come before our writer matched its reader.
         let _ = tokio::time::timeout(CLIENT_MATCH_TIMEOUT, server.wait_for_client(&node, id)).await;
         if let Err(e) = server.async_send_response(id, resp).await {

@@ -203,7 +203,9 @@ fn check_network() -> Result<yarp_net::nameserver::NameClient, String> {
         .map_err(|e| e.to_string())?
         .with_timeout(Duration::from_secs(5));
     let probe = client.clone();
-    runtime::block_on(async move { probe.query("/yarpdev").await }).map_err(|e| e.to_string())?;
+    runtime::block_on_result(
+        async move { probe.query("/yarpdev").await.map_err(|e| e.to_string()) },
+    )?;
     Ok(client)
 }
 
@@ -319,6 +321,8 @@ fn run() -> i32 {
             });
             Some((stop, task))
         })
+        .ok()
+        .flatten()
     };
 
     info("device active in background...");
@@ -329,7 +333,7 @@ fn run() -> i32 {
     }
     if let Some((stop, task)) = quit_port {
         let _ = stop.send(());
-        runtime::block_on(async move {
+        runtime::block_on_logged("yarpdev: closing the quit port", async move {
             let _ = tokio::time::timeout(Duration::from_secs(2), task).await;
         });
     }

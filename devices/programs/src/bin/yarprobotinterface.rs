@@ -140,8 +140,12 @@ fn check_network() -> Result<NameClient, String> {
         .map_err(|e| e.to_string())?
         .with_timeout(Duration::from_secs(5));
     let probe = client.clone();
-    runtime::block_on(async move { probe.query("/yarprobotinterface").await })
-        .map_err(|e| e.to_string())?;
+    runtime::block_on_result(async move {
+        probe
+            .query("/yarprobotinterface")
+            .await
+            .map_err(|e| e.to_string())
+    })?;
     Ok(client)
 }
 
@@ -155,7 +159,7 @@ impl ServedPort {
     fn stop(self) {
         let _ = self.stop.send(());
         let task = self.task;
-        runtime::block_on(async move {
+        runtime::block_on_logged("yarprobotinterface: closing its port", async move {
             let _ = tokio::time::timeout(Duration::from_secs(2), task).await;
         });
     }
@@ -169,9 +173,9 @@ fn open_rpc_port(
     interrupts: Interrupts,
 ) -> Option<ServedPort> {
     let name = format!("/{}/yarprobotinterface", prefix.trim_start_matches('/'));
-    let port = match runtime::block_on({
+    let port = match runtime::block_on_result({
         let name = name.clone();
-        async move { Port::open(&name, ns).await }
+        async move { Port::open(&name, ns).await.map_err(|e| e.to_string()) }
     }) {
         Ok(p) => p,
         Err(e) => {
