@@ -28,5 +28,6 @@ pub mod pattern;
 pub mod robot;
 pub mod robot_state;
 pub mod ros;
+pub mod ros_args;
 pub mod service;
 pub mod types;

@@ -33,8 +33,10 @@ struct Args {
     /// ROS domain id (default: $ROS_DOMAIN_ID, else 0).
     #[arg(long)]
     domain_id: Option<u16>,
-    /// Interface addresses DDS may use (repeatable; default: all). Use 127.0.0.1 to stay
-    /// on this machine.
+    /// Interface addresses DDS may use (repeatable; default: all, or loopback only when
+    /// ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST or ROS_LOCALHOST_ONLY=1). Use 127.0.0.1 to
+    /// stay on this machine. ROS arguments (`--ros-args -r __node:=NAME -r __ns:=/NS -r
+    /// from:=to -p name:=value --params-file FILE --log-level LEVEL`) may follow.
     #[arg(long = "network")]
     networks: Vec<IpAddr>,
     /// The YARP name server (default: the one in yarp.conf).
@@ -113,7 +115,53 @@ fn show_type(name: &str) -> anyhow::Result<()> {
 }
 
 fn main() -> std::process::ExitCode {
-    let args = Args::parse();
+    // `ros2 run`/`ros2 launch` append `--ros-args ...`: ours before, rcl's after.
+    let (ours, ros) = yarp_ros2_gateway::ros_args::split(std::env::args_os());
+    let mut args = Args::parse_from(ours);
+    let ros_args = match yarp_ros2_gateway::ros_args::parse(&ros) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("yarp-ros2-gateway: {e}");
+            return std::process::ExitCode::from(2);
+        }
+    };
+    if let Some(n) = &ros_args.node_name {
+        args.node_name = n.clone();
+    }
+    if let Some(ns) = &ros_args.namespace {
+        args.namespace = ns.clone();
+    }
+    let mut params = Vec::new();
+    let fqn = format!(
+        "{}/{}",
+        args.namespace.trim_end_matches('/'),
+        args.node_name
+    );
+    for f in &ros_args.params_files {
+        let text = match std::fs::read_to_string(f) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("yarp-ros2-gateway: --params-file {}: {e}", f.display());
+                return std::process::ExitCode::from(2);
+            }
+        };
+        match yarp_ros2_gateway::ros_args::params_from_file(&text, &fqn, &f.display().to_string()) {
+            Ok(p) => params.extend(p),
+            Err(e) => {
+                eprintln!("yarp-ros2-gateway: {e}");
+                return std::process::ExitCode::from(2);
+            }
+        }
+    }
+    // `-p` comes after the files: it wins, as in rcl.
+    params.extend(ros_args.params.iter().cloned());
+    let log_level = ros_args
+        .log_levels
+        .iter()
+        .rev()
+        .find(|(l, _)| l.is_none())
+        .map(|(_, level)| level.to_lowercase());
+    yarp_ros2_gateway::ros::set_ros_args(ros_args, &args.namespace, &args.node_name, params);
     for d in &args.interfaces {
         if yarp_ros2_gateway::interfaces::add_dir(d) == 0 {
             eprintln!(
@@ -134,11 +182,18 @@ fn main() -> std::process::ExitCode {
     // RustDDS and ros2-client log many harmless warnings (and errors while a node shuts
     // down); show them only when RUST_LOG asks, e.g. RUST_LOG=info,rustdds=warn. The
     // errors of RustDDS's two threads stay visible: they are the ones that end DDS.
+    // `--log-level LEVEL` sets our default level (rcl's names; fatal is error here).
+    let level = match log_level.as_deref() {
+        Some("debug") => "debug",
+        Some("warn") => "warn",
+        Some("error") | Some("fatal") => "error",
+        _ => "info",
+    };
     let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
-        tracing_subscriber::EnvFilter::new(
-            "info,rustdds=off,rustdds::rtps::dp_event_loop=error,\
-             rustdds::discovery::discovery=error,ros2_client=off",
-        )
+        tracing_subscriber::EnvFilter::new(format!(
+            "{level},rustdds=off,rustdds::rtps::dp_event_loop=error,\
+             rustdds::discovery::discovery=error,ros2_client=off"
+        ))
     });
     tracing_subscriber::fmt()
         .with_env_filter(filter)
@@ -171,7 +226,7 @@ async fn run(args: Args) -> anyhow::Result<()> {
                 "topic   {:<20} {:<10} {}",
                 t.name,
                 t.direction.to_string(),
-                t.ros_topic
+                yarp_ros2_gateway::ros::remapped(&t.ros_topic)
             );
         }
         for s in &mappings.services {
@@ -179,7 +234,7 @@ async fn run(args: Args) -> anyhow::Result<()> {
                 "service {:<20} {:<10} {}",
                 s.name,
                 s.direction.to_string(),
-                s.ros_service
+                yarp_ros2_gateway::ros::remapped(&s.ros_service)
             );
         }
         for r in &mappings.robots {
@@ -212,7 +267,12 @@ async fn run(args: Args) -> anyhow::Result<()> {
     let (ns, _embedded) = name_server(&args).await?;
     let opt = Options {
         domain_id,
-        networks: args.networks.clone(),
+        // --network, else the ROS environment (ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_LOCALHOST_ONLY)
+        networks: if args.networks.is_empty() {
+            yarp_ros2_gateway::ros::networks_from_env()
+        } else {
+            args.networks.clone()
+        },
         namespace: args.namespace.clone(),
         node_name: args.node_name.clone(),
         diagnostics_period: (args.diagnostics_period > 0.0)

@@ -77,12 +77,54 @@ pub fn domain_from_env() -> Result<u16, RosError> {
 }
 
 /// The interfaces discovery may use, as rmw reads `$ROS_AUTOMATIC_DISCOVERY_RANGE`:
-/// `LOCALHOST` keeps to the loopback interface, anything else (or unset) uses all.
+/// `LOCALHOST` keeps to the loopback interface, anything else (or unset) uses all; the
+/// older `ROS_LOCALHOST_ONLY=1` (which Jazzy still honours) does the same.
 pub fn networks_from_env() -> Vec<IpAddr> {
-    match std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE").as_deref() {
-        Ok("LOCALHOST") => vec![IpAddr::from([127, 0, 0, 1])],
-        _ => Vec::new(),
+    let localhost = matches!(
+        std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE").as_deref(),
+        Ok("LOCALHOST")
+    ) || matches!(std::env::var("ROS_LOCALHOST_ONLY").as_deref(), Ok("1"));
+    if localhost {
+        vec![IpAddr::from([127, 0, 0, 1])]
+    } else {
+        Vec::new()
     }
+}
+
+/// What `--ros-args` said, for the process's main node: its remaps apply to every topic and
+/// service name made with [`name`], its parameters are declared on the main node.
+struct ProcessRosArgs {
+    args: crate::ros_args::RosArgs,
+    namespace: String,
+    node_name: String,
+    params: Vec<(String, ros2_client::ParameterValue)>,
+}
+
+static ROS_ARGS: std::sync::OnceLock<ProcessRosArgs> = std::sync::OnceLock::new();
+
+/// A topic or service name after this process's `--ros-args` remaps.
+pub fn remapped(n: &str) -> String {
+    match ROS_ARGS.get() {
+        Some(r) => r.args.remap(&r.namespace, &r.node_name, n),
+        None => n.to_string(),
+    }
+}
+
+/// Sets this process's `--ros-args` (once, before any node or name is made) for the main
+/// node `namespace`/`node_name`; `params` are the parameters to declare on it (`-p` and
+/// `--params-file`, already merged).
+pub fn set_ros_args(
+    args: crate::ros_args::RosArgs,
+    namespace: &str,
+    node_name: &str,
+    params: Vec<(String, ros2_client::ParameterValue)>,
+) {
+    let _ = ROS_ARGS.set(ProcessRosArgs {
+        args,
+        namespace: namespace.to_string(),
+        node_name: node_name.to_string(),
+        params,
+    });
 }
 
 /// Another node on the same participant (dynamic mode creates endpoints at run time on
@@ -93,8 +135,16 @@ pub fn new_node(ctx: &Context, namespace: &str, node_name: &str) -> Result<Node,
         message: format!("{e:?}"),
     };
     let name = NodeName::new(namespace, node_name).map_err(|e| err(&e))?;
-    ctx.new_node(name, NodeOptions::new().enable_rosout(false))
-        .map_err(|e| err(&e))
+    let mut options = NodeOptions::new().enable_rosout(false);
+    if let Some(r) = ROS_ARGS
+        .get()
+        .filter(|r| r.node_name == node_name && r.namespace == namespace)
+    {
+        for (k, v) in &r.params {
+            options = options.declare_parameter(k, v.clone());
+        }
+    }
+    ctx.new_node(name, options).map_err(|e| err(&e))
 }
 
 /// A publisher of dynamic messages of `ros_type` on `topic`.
@@ -203,6 +253,7 @@ pub fn announce_type_hash(dp: &ros2_client::dds::rustdds::DomainParticipant, ros
 
 /// A ROS topic or service name (`/a/b`, or relative `b`).
 pub fn name(n: &str) -> Result<Name, RosError> {
+    let n = &remapped(n);
     Name::parse(n).map_err(|e| RosError::Name {
         name: n.to_string(),
         message: format!("{e:?}"),

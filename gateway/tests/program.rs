@@ -183,3 +183,93 @@ fn check_mode_reports_mapping_errors_with_file_entry_and_key() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `launch_ros`'s `Node(...)` appends `--ros-args`: the node name, namespace, a topic remap
+/// and a parameter as rclpy then sees them (domain index 30).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ros_args_rename_remap_and_set_parameters() {
+    for d in common::distros("ros_args_rename_remap_and_set_parameters") {
+        ros_args_on(&d).await;
+    }
+}
+
+async fn ros_args_on(venv: &common::Distro) {
+    let domain = venv.domain(30);
+    let dir = tempfile_dir("ros-args");
+    let file = dir.join("m.toml");
+    std::fs::write(
+        &file,
+        MAPPING.replace("ros_topic = \"/count\"", "ros_topic = \"/chatter\""),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("params.yaml"),
+        "/**:\n  ros__parameters:\n    robot: icub\n/lab/lab_gateway:\n  ros__parameters:\n    rate: 2.5\n",
+    )
+    .unwrap();
+    let ns_port = {
+        let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        l.local_addr().unwrap().port()
+    };
+    let ns_addr = format!("127.0.0.1:{ns_port}");
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_yarp-ros2-gateway"));
+    cmd.args(["--mappings", file.to_str().unwrap()])
+        .args(["--domain-id", &domain.to_string()])
+        .args(["--network", "127.0.0.1"])
+        .args([
+            "--name-server",
+            &ns_addr,
+            "--embedded-name-server",
+            &ns_addr,
+        ])
+        .args([
+            "--ros-args",
+            "-r",
+            "__node:=lab_gateway",
+            "-r",
+            "__ns:=/lab",
+        ])
+        .args(["-r", "/chatter:=/talk", "-p", "answer:=42"])
+        .args(["--params-file", dir.join("params.yaml").to_str().unwrap()])
+        .args(["--log-level", "info"])
+        .env("YARP_CONFIG_HOME", &dir);
+    let gw = Peer::spawn(cmd, "yarp-ros2-gateway");
+    gw.expect_async("yarp-ros2-gateway: ROS domain", T).await;
+
+    let info = Peer::start(venv, domain, &["info", "/talk", "--pubs", "1", "--named"]);
+    let line = info.expect_async("INFO", T).await;
+    let v: serde_json::Value = serde_json::from_str(&line).unwrap();
+    let pubs = v["pubs"].as_array().expect("pubs");
+    assert_eq!(pubs.len(), 1, "{line}");
+    assert_eq!(pubs[0]["node"], "lab_gateway", "{line}");
+    assert_eq!(pubs[0]["namespace"], "/lab", "{line}");
+    let old = Peer::start(venv, domain, &["info", "/chatter", "--timeout", "2"]);
+    let line = old.expect_async("INFO", T).await;
+    assert!(
+        line.contains(r#""pubs": []"#),
+        "the remapped-away name is unused: {line}"
+    );
+
+    let call = Peer::start(
+        venv,
+        domain,
+        &[
+            "call",
+            "rcl_interfaces/srv/GetParameters",
+            "/lab/lab_gateway/get_parameters",
+            r#"{"names": ["answer", "rate", "robot"]}"#,
+        ],
+    );
+    let resp = call.expect_async("RESP", T).await;
+    let v: serde_json::Value = serde_json::from_str(&resp).unwrap();
+    let values = v["values"].as_array().expect("values");
+    assert_eq!(values[0]["integer_value"], 42, "{resp}");
+    assert_eq!(values[1]["double_value"], 2.5, "{resp}");
+    assert_eq!(values[2]["string_value"], "icub", "{resp}");
+}
+
+fn tempfile_dir(what: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("yarp-ros2-gateway-{what}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}

@@ -574,9 +574,13 @@ impl Runner<'_> {
         }
         if self.s.private_net {
             // Background jobs: Ctrl-C as their terminals would get it, then SIGKILL.
-            signal_namespace("INT");
-            std::thread::sleep(Duration::from_secs(3));
-            signal_namespace("KILL");
+            if signal_namespace("INT") > 0 {
+                let limit = Instant::now() + Duration::from_secs(3);
+                while Instant::now() < limit && !namespace_pids().is_empty() {
+                    std::thread::sleep(POLL);
+                }
+                signal_namespace("KILL");
+            }
         }
     }
 
@@ -640,21 +644,25 @@ fn strip_background(line: &str) -> String {
     }
 }
 
-/// `signal` to every other process of this network namespace.
-fn signal_namespace(signal: &str) {
+/// The other processes of this network namespace.
+fn namespace_pids() -> Vec<String> {
     let Ok(own) = std::fs::read_link("/proc/self/ns/net") else {
-        return;
+        return Vec::new();
     };
     let me = std::process::id();
     let Ok(dir) = std::fs::read_dir("/proc") else {
-        return;
+        return Vec::new();
     };
-    let pids: Vec<String> = dir
-        .flatten()
+    dir.flatten()
         .filter_map(|e| e.file_name().to_str().map(str::to_string))
         .filter(|p| p.parse::<u32>().is_ok_and(|p| p != me))
         .filter(|p| std::fs::read_link(format!("/proc/{p}/ns/net")).is_ok_and(|ns| ns == own))
-        .collect();
+        .collect()
+}
+
+/// `signal` to every other process of this network namespace; how many there were.
+fn signal_namespace(signal: &str) -> usize {
+    let pids = namespace_pids();
     if !pids.is_empty() {
         let _ = Command::new("kill")
             .arg(format!("-{signal}"))
@@ -662,6 +670,7 @@ fn signal_namespace(signal: &str) {
             .stderr(Stdio::null())
             .status();
     }
+    pids.len()
 }
 
 #[cfg(test)]
