@@ -221,6 +221,82 @@ fn eth_board_emulator_killed_and_restarted() {
     );
 }
 
+/// A storm of garbage at the host's UDP port (random lengths and bytes, a truncated
+/// ropframe header, from an address that is no board and from a board's own address)
+/// while the left arm runs: the host drops what is no board's, counts what does not parse,
+/// stays up, and the part's encoders read again once the storm ends.
+#[test]
+fn eth_host_survives_a_datagram_storm() {
+    let Some(rc) = robots_configuration() else {
+        eprintln!("SKIPPED: ../shared/robots-configuration not found");
+        return;
+    };
+    let net = YarpNet::new();
+    let _server = net.server();
+    let robot_dir = rc.join("iCubGenova02");
+    let file = robot_xml(
+        net.dir.path(),
+        "iCubGenova02-storm",
+        Some(&robot_dir.join("hardware/electronics/pc104.xml")),
+        &[robot_dir.join("hardware/motorControl/left_arm-eb1-j0_3-mc.xml")],
+        "left_arm-eb1-j0_3-mc",
+    );
+    let net_byte = 2 + (std::process::id() + 101) % 200;
+    let map = format!("10.0.1.0/24=127.{net_byte}.1.0/24");
+    let mut emu = Proc::spawn("icub-eth-emulator", {
+        let mut c = net.cmd("icub-eth-emulator", "icub-emulators");
+        c.arg(&robot_dir)
+            .args(["--config", file.to_str().expect("utf-8 path")])
+            .args(["--address-map", &map]);
+        c
+    });
+    emu.wait_line("left_arm-eb1-j0_3", STEP);
+    let mut robot = robot_interface(&net, &file, &[("YARP_ICUB_ETH_ADDRESS_MAP", map.clone())]);
+    assert!(encoders(&net).is_some(), "encoders before the storm");
+
+    // pc104.xml: the host is 10.0.1.104, port 12345; the board 10.0.1.1
+    let host = format!("127.{net_byte}.1.104:12345");
+    let strangers = std::net::UdpSocket::bind("127.0.0.1:0").expect("socket");
+    let impostor =
+        std::net::UdpSocket::bind(format!("127.{net_byte}.1.1:0")).expect("a board's address");
+    let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    };
+    let start = Instant::now();
+    let mut sent = 0u64;
+    while start.elapsed() < Duration::from_secs(2) {
+        let len = (next() % 1500) as usize;
+        let mut d: Vec<u8> = (0..len).map(|_| next() as u8).collect();
+        if sent % 3 == 0 && d.len() >= 24 {
+            // a ropframe's start marker, then nonsense
+            d[..4].copy_from_slice(&0x1234_5678u32.to_le_bytes());
+        }
+        let from = if sent % 2 == 0 { &strangers } else { &impostor };
+        let _ = from.send_to(&d, &host);
+        sent += 1;
+    }
+    println!("sent {sent} garbage datagrams in 2 s");
+    assert!(
+        robot.child.try_wait().ok().flatten().is_none(),
+        "yarprobotinterface died in the storm:\n{}",
+        robot.seen.join("\n")
+    );
+    assert!(
+        encoders_become(&net, true, STEP),
+        "the left arm's encoders after the storm"
+    );
+    let _ = robot.drain();
+    assert!(
+        !robot.seen.iter().any(|l| l.contains("panicked")),
+        "{}",
+        robot.seen.join("\n")
+    );
+}
+
 /// A UDP port `p` with `p + 1` free too (the hub of network 1 is `base + 1`).
 fn free_udp_pair() -> u16 {
     for base in (30_000..60_000).step_by(97) {
