@@ -271,11 +271,15 @@ fn eth_host_survives_a_datagram_storm() {
     while start.elapsed() < Duration::from_secs(2) {
         let len = (next() % 1500) as usize;
         let mut d: Vec<u8> = (0..len).map(|_| next() as u8).collect();
-        if sent % 3 == 0 && d.len() >= 24 {
+        if sent.is_multiple_of(3) && d.len() >= 24 {
             // a ropframe's start marker, then nonsense
             d[..4].copy_from_slice(&0x1234_5678u32.to_le_bytes());
         }
-        let from = if sent % 2 == 0 { &strangers } else { &impostor };
+        let from = if sent.is_multiple_of(2) {
+            &strangers
+        } else {
+            &impostor
+        };
         let _ = from.send_to(&d, &host);
         sent += 1;
     }
