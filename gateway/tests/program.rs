@@ -273,3 +273,31 @@ fn tempfile_dir(what: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// A graph that enforces SROS2 gets no unsecured participant from us: the program says
+/// why and exits (this build has no DDS security).
+#[test]
+fn an_enforced_secure_graph_is_refused() {
+    let dir = tempfile_dir("sros2");
+    let file = dir.join("m.toml");
+    std::fs::write(&file, MAPPING).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_yarp-ros2-gateway"))
+        .args([
+            "--mappings",
+            file.to_str().unwrap(),
+            "--network",
+            "127.0.0.1",
+        ])
+        .args(["--embedded-name-server", "127.0.0.1:0"])
+        .env("YARP_CONFIG_HOME", &dir)
+        .env("ROS_SECURITY_ENABLE", "true")
+        .env("ROS_SECURITY_STRATEGY", "Enforce")
+        .output()
+        .expect("run the gateway");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "it ran: {err}");
+    assert!(
+        err.contains("refusing to join the graph unsecured"),
+        "{err}"
+    );
+}
