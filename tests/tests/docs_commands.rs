@@ -3,7 +3,9 @@
 //! before it says (`yarp_interop_tests::docs`). Each block runs in a private network
 //! namespace of its own (`../shared/netns-run`), so the fixed ports the documents use
 //! (10000, 8080, the robots' 10.0.1.x) never meet another test's, and whatever a block
-//! leaves running is killed with its namespace; and with a /tmp of its own.
+//! leaves running is killed with its namespace. The documents also name fixed paths in
+//! /tmp (the emulated Xsens' pseudo-terminal link), so the trials run one at a time, in
+//! the nextest group of the other tests that use them (`.config/nextest.toml`).
 
 use libtest_mimic::{Arguments, Failed, Trial};
 use std::path::{Path, PathBuf};
@@ -60,20 +62,7 @@ fn in_namespace(spec: &str, limit: Duration) -> Result<(), Failed> {
         .into());
     }
     let exe = std::env::current_exe().map_err(|e| e.to_string())?;
-    // A private /tmp too (a mount namespace with a tmpfs there): the documents name fixed
-    // paths in it (the emulated Xsens' pseudo-terminal links), which other blocks and
-    // tests running at the same time use as well.
     let mut child = Command::new(&netns)
-        .args([
-            "unshare",
-            "--mount",
-            "--propagation",
-            "private",
-            "--",
-            "sh",
-            "-c",
-        ])
-        .arg("mount -t tmpfs -o mode=1777 tmpfs /tmp && exec \"$0\"")
         .arg(&exe)
         .env(BLOCK_VAR, spec)
         .env_remove("NETNS_RUN_INSIDE") // a namespace of its own, even inside the suite's
