@@ -22,7 +22,5 @@ echo "== doc tests"
 cargo test --workspace --doc --quiet
 echo "== programs (yarp, yarpserver, yarpdev, yarprobotinterface, gateway, emulator, launcher)"
 cargo build --workspace --bins --quiet
-echo "== optimised programs (the README's main job, the soak and the benchmarks run them; the docs test runs those commands)"
-cargo build --workspace --bins --release --quiet
 echo "== tests (under netns-run)"
 "$netns_run" cargo nextest run --workspace --no-fail-fast

@@ -29,7 +29,7 @@
 //! `before: COMMAND` (run to completion first: what the surrounding prose has the reader
 //! start), `follows: previous` (the block before this one in the file runs first, until
 //! it is up, and stays up: this block is the next step of the same session).
-//! TEXT takes `\n`; `/.../` is a regular expression.
+//! TEXT takes `\n`; `/.../` is a regular expression. Lines starting with `#` are comments.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -118,7 +118,11 @@ impl Directives {
     /// Parses the comment's text after `docs-test:`.
     pub fn parse(body: &str) -> Result<Directives, DirectivesError> {
         let err = |m: String| DirectivesError(m);
-        let mut lines = body.lines().map(str::trim).filter(|l| !l.is_empty());
+        // `# ...` lines are comments, for the reader of the Markdown source
+        let mut lines = body
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty() && !l.starts_with('#'));
         let first = lines.next().ok_or_else(|| err("no mode".into()))?;
         let (word, rest) = split_key(first);
         let rest = rest.unwrap_or("").to_string();
