@@ -32,22 +32,8 @@ async fn program_bridges_and_reports_diagnostics_on(venv: &common::Distro) {
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("m.toml");
     std::fs::write(&file, MAPPING).unwrap();
-    let ns_port = {
-        let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-        l.local_addr().unwrap().port()
-    };
-    let ns_addr = format!("127.0.0.1:{ns_port}");
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_yarp-ros2-gateway"));
-    cmd.args(["--mappings", file.to_str().unwrap()])
-        .args(["--domain-id", &domain.to_string()])
-        .args(["--network", "127.0.0.1"])
-        .args([
-            "--name-server",
-            &ns_addr,
-            "--embedded-name-server",
-            &ns_addr,
-        ])
-        .args(["--diagnostics-period", "0.2"])
+    let (mut cmd, ns_addr) = gateway(&file, domain);
+    cmd.args(["--diagnostics-period", "0.2"])
         .env("YARP_CONFIG_HOME", &dir)
         .env("ROS_DISTRO", "kilted");
     let gw = Peer::spawn(cmd, "yarp-ros2-gateway");
@@ -207,32 +193,18 @@ async fn ros_args_on(venv: &common::Distro) {
         "/**:\n  ros__parameters:\n    robot: icub\n/lab/lab_gateway:\n  ros__parameters:\n    rate: 2.5\n",
     )
     .unwrap();
-    let ns_port = {
-        let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-        l.local_addr().unwrap().port()
-    };
-    let ns_addr = format!("127.0.0.1:{ns_port}");
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_yarp-ros2-gateway"));
-    cmd.args(["--mappings", file.to_str().unwrap()])
-        .args(["--domain-id", &domain.to_string()])
-        .args(["--network", "127.0.0.1"])
-        .args([
-            "--name-server",
-            &ns_addr,
-            "--embedded-name-server",
-            &ns_addr,
-        ])
-        .args([
-            "--ros-args",
-            "-r",
-            "__node:=lab_gateway",
-            "-r",
-            "__ns:=/lab",
-        ])
-        .args(["-r", "/chatter:=/talk", "-p", "answer:=42"])
-        .args(["--params-file", dir.join("params.yaml").to_str().unwrap()])
-        .args(["--log-level", "info"])
-        .env("YARP_CONFIG_HOME", &dir);
+    let (mut cmd, _) = gateway(&file, domain);
+    cmd.args([
+        "--ros-args",
+        "-r",
+        "__node:=lab_gateway",
+        "-r",
+        "__ns:=/lab",
+    ])
+    .args(["-r", "/chatter:=/talk", "-p", "answer:=42"])
+    .args(["--params-file", dir.join("params.yaml").to_str().unwrap()])
+    .args(["--log-level", "info"])
+    .env("YARP_CONFIG_HOME", &dir);
     let gw = Peer::spawn(cmd, "yarp-ros2-gateway");
     gw.expect_async("yarp-ros2-gateway: ROS domain", T).await;
 
@@ -300,4 +272,25 @@ fn an_enforced_secure_graph_is_refused() {
         err.contains("refusing to join the graph unsecured"),
         "{err}"
     );
+}
+
+/// The gateway on mapping `file`, DDS on loopback in `domain`, with a name server of its own
+/// (embedded, on a free port: its address is the second value).
+fn gateway(file: &std::path::Path, domain: u16) -> (Command, String) {
+    let ns_port = {
+        let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        l.local_addr().unwrap().port()
+    };
+    let ns_addr = format!("127.0.0.1:{ns_port}");
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_yarp-ros2-gateway"));
+    cmd.args(["--mappings", file.to_str().unwrap()])
+        .args(["--domain-id", &domain.to_string()])
+        .args(["--network", "127.0.0.1"])
+        .args([
+            "--name-server",
+            &ns_addr,
+            "--embedded-name-server",
+            &ns_addr,
+        ]);
+    (cmd, ns_addr)
 }

@@ -162,43 +162,81 @@ fn can_board_emulator_killed_and_restarted() {
     assert_eq!(encoders(&net).map(|e| e.len()), Some(8));
 }
 
-#[test]
-fn eth_board_emulator_killed_and_restarted() {
-    let Some(rc) = robots_configuration() else {
-        eprintln!("SKIPPED: ../shared/robots-configuration not found");
-        return;
-    };
-    let net = YarpNet::new();
-    let _server = net.server();
-    let robot_dir = rc.join("iCubGenova02");
-    let file = robot_xml(
-        net.dir.path(),
-        "iCubGenova02",
-        Some(&robot_dir.join("hardware/electronics/pc104.xml")),
-        &[robot_dir.join("hardware/motorControl/left_arm-eb1-j0_3-mc.xml")],
-        "left_arm-eb1-j0_3-mc",
-    );
-    // the robot's 10.0.1.x boards and host on a 127.x net of their own (one per test
-    // process, so that concurrent tests do not share addresses)
-    let net_byte = 2 + std::process::id() % 200;
-    let map = format!("10.0.1.0/24=127.{net_byte}.1.0/24");
-    let emulator = || {
-        let mut c = net.cmd("icub-eth-emulator", "icub-emulators");
-        c.arg(&robot_dir)
-            .args(["--config", file.to_str().expect("utf-8 path")])
-            .args(["--address-map", &map]);
+/// iCubGenova02's left arm board (`left_arm-eb1-j0_3`) behind `/fault/left_arm`, with a
+/// name server; the robot's 10.0.1.x boards and host on a 127.x net of their own (per test
+/// process and `salt`, so that concurrent tests do not share addresses).
+struct EthArm {
+    net: YarpNet,
+    _server: Proc,
+    robot_dir: PathBuf,
+    file: PathBuf,
+    net_byte: u32,
+    map: String,
+}
+
+impl EthArm {
+    fn new(name: &str, salt: u32) -> Option<EthArm> {
+        let Some(rc) = robots_configuration() else {
+            eprintln!("SKIPPED: ../shared/robots-configuration not found");
+            return None;
+        };
+        let net = YarpNet::new();
+        let server = net.server();
+        let robot_dir = rc.join("iCubGenova02");
+        let file = robot_xml(
+            net.dir.path(),
+            name,
+            Some(&robot_dir.join("hardware/electronics/pc104.xml")),
+            &[robot_dir.join("hardware/motorControl/left_arm-eb1-j0_3-mc.xml")],
+            "left_arm-eb1-j0_3-mc",
+        );
+        let net_byte = 2 + (std::process::id() + salt) % 200;
+        let map = format!("10.0.1.0/24=127.{net_byte}.1.0/24");
+        Some(EthArm {
+            net,
+            _server: server,
+            robot_dir,
+            file,
+            net_byte,
+            map,
+        })
+    }
+
+    /// The board's emulator, once it serves the board.
+    fn emulator(&self) -> Proc {
+        let mut c = self.net.cmd("icub-eth-emulator", "icub-emulators");
+        c.arg(&self.robot_dir)
+            .args(["--config", self.file.to_str().expect("utf-8 path")])
+            .args(["--address-map", &self.map]);
         let mut p = Proc::spawn("icub-eth-emulator", c);
         p.wait_line("left_arm-eb1-j0_3", STEP);
         p
+    }
+
+    /// `yarprobotinterface` on the board, once `/fault/left_arm` is up.
+    fn robot(&self) -> Proc {
+        robot_interface(
+            &self.net,
+            &self.file,
+            &[("YARP_ICUB_ETH_ADDRESS_MAP", self.map.clone())],
+        )
+    }
+}
+
+#[test]
+fn eth_board_emulator_killed_and_restarted() {
+    let Some(arm) = EthArm::new("iCubGenova02", 0) else {
+        return;
     };
-    let mut emu = emulator();
-    let mut robot = robot_interface(&net, &file, &[("YARP_ICUB_ETH_ADDRESS_MAP", map.clone())]);
-    let before = encoders(&net).expect("encoders before the fault");
+    let net = &arm.net;
+    let mut emu = arm.emulator();
+    let mut robot = arm.robot();
+    let before = encoders(net).expect("encoders before the fault");
     assert_eq!(before.len(), 4);
 
     emu.kill();
     let t0 = Instant::now();
-    assert!(encoders_become(&net, false, STEP), "encoders still read");
+    assert!(encoders_become(net, false, STEP), "encoders still read");
     let report = robot.wait_line("refused until it talks again", STEP);
     let took = t0.elapsed();
     println!("Ethernet fault reported after {took:?}: {report}");
@@ -210,13 +248,13 @@ fn eth_board_emulator_killed_and_restarted() {
 
     // a restarted board waits to be configured: reads keep failing (no hang), the report
     // stays the same, and a new yarprobotinterface brings the part back
-    let _emu = emulator();
+    let _emu = arm.emulator();
     std::thread::sleep(Duration::from_secs(2));
-    assert_eq!(encoders(&net), None, "a reset board is not running");
+    assert_eq!(encoders(net), None, "a reset board is not running");
     robot.kill();
-    let _robot = robot_interface(&net, &file, &[("YARP_ICUB_ETH_ADDRESS_MAP", map)]);
+    let _robot = arm.robot();
     assert!(
-        encoders_become(&net, true, STEP),
+        encoders_become(net, true, STEP),
         "the restarted robot reads encoders"
     );
 }
@@ -227,32 +265,13 @@ fn eth_board_emulator_killed_and_restarted() {
 /// stays up, and the part's encoders read again once the storm ends.
 #[test]
 fn eth_host_survives_a_datagram_storm() {
-    let Some(rc) = robots_configuration() else {
-        eprintln!("SKIPPED: ../shared/robots-configuration not found");
+    let Some(arm) = EthArm::new("iCubGenova02-storm", 101) else {
         return;
     };
-    let net = YarpNet::new();
-    let _server = net.server();
-    let robot_dir = rc.join("iCubGenova02");
-    let file = robot_xml(
-        net.dir.path(),
-        "iCubGenova02-storm",
-        Some(&robot_dir.join("hardware/electronics/pc104.xml")),
-        &[robot_dir.join("hardware/motorControl/left_arm-eb1-j0_3-mc.xml")],
-        "left_arm-eb1-j0_3-mc",
-    );
-    let net_byte = 2 + (std::process::id() + 101) % 200;
-    let map = format!("10.0.1.0/24=127.{net_byte}.1.0/24");
-    let mut emu = Proc::spawn("icub-eth-emulator", {
-        let mut c = net.cmd("icub-eth-emulator", "icub-emulators");
-        c.arg(&robot_dir)
-            .args(["--config", file.to_str().expect("utf-8 path")])
-            .args(["--address-map", &map]);
-        c
-    });
-    emu.wait_line("left_arm-eb1-j0_3", STEP);
-    let mut robot = robot_interface(&net, &file, &[("YARP_ICUB_ETH_ADDRESS_MAP", map.clone())]);
-    assert!(encoders(&net).is_some(), "encoders before the storm");
+    let (net, net_byte) = (&arm.net, arm.net_byte);
+    let _emu = arm.emulator();
+    let mut robot = arm.robot();
+    assert!(encoders(net).is_some(), "encoders before the storm");
 
     // pc104.xml: the host is 10.0.1.104, port 12345; the board 10.0.1.1
     let host = format!("127.{net_byte}.1.104:12345");
@@ -290,7 +309,7 @@ fn eth_host_survives_a_datagram_storm() {
         robot.seen.join("\n")
     );
     assert!(
-        encoders_become(&net, true, STEP),
+        encoders_become(net, true, STEP),
         "the left arm's encoders after the storm"
     );
     let _ = robot.drain();

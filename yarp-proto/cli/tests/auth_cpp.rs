@@ -65,6 +65,13 @@ fn cpp_server(bin: &Path, n: &YarpNet) -> Proc {
     p
 }
 
+/// Our `yarp read PORT` on network `n`.
+fn our_reader(n: &YarpNet, port: &str) -> Proc {
+    let mut c = n.yarp();
+    c.args(["read", port]);
+    Proc::spawn("our yarp read", c)
+}
+
 fn succeeds(mut c: Command) -> bool {
     c.output().is_ok_and(|o| o.status.success())
 }
@@ -85,11 +92,7 @@ fn one_key_connects_cpp_and_ours_another_or_none_is_refused() {
     let _server = cpp_server(&bin, &n);
 
     // Ours registers with the authenticated C++ name server, and C++ writes to it.
-    let mut reader = Proc::spawn("our yarp read", {
-        let mut c = n.yarp();
-        c.args(["read", "/auth/r"]);
-        c
-    });
+    let mut reader = our_reader(&n, "/auth/r");
     assert!(n.wait_registered("/auth/r") > 0);
     let mut c = cpp(&bin, &n, "yarp");
     c.args(["write", "/auth/w", "/auth/r"]);
@@ -143,11 +146,7 @@ fn our_authenticated_server_and_port_refuse_cpp_without_the_key_and_telnet() {
     let bin = yarp.parent().expect("bin").to_path_buf();
     let n = net(Some(KEY));
     let _server = n.server();
-    let mut reader = Proc::spawn("our yarp read", {
-        let mut c = n.yarp();
-        c.args(["read", "/auth2/r"]);
-        c
-    });
+    let mut reader = our_reader(&n, "/auth2/r");
     let port = n.wait_registered("/auth2/r");
 
     // C++ with the key uses our name server and port; without it, neither.
