@@ -106,16 +106,9 @@ where
             .ok()
             .flatten()
     };
-    // On a worker of a multi-thread runtime (ours, when a wrapper's device is itself a
-    // client), hand the worker's other tasks over while this thread waits.
-    let on_worker =
-        Handle::try_current().is_ok_and(|h| h.runtime_flavor() == RuntimeFlavor::MultiThread);
-    let out = if on_worker {
-        tokio::task::block_in_place(wait)
-    } else {
-        wait()
-    };
-    out.ok_or(Stalled { limit })
+    // On a worker (ours, when a wrapper's device is itself a client), the worker's other
+    // tasks are handed over while this thread waits.
+    device_call(wait).ok_or(Stalled { limit })
 }
 
 /// Runs a blocking call into a device from a task of the device runtime without holding
