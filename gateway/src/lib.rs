@@ -29,5 +29,6 @@ pub mod robot;
 pub mod robot_state;
 pub mod ros;
 pub mod ros_args;
+pub mod security;
 pub mod service;
 pub mod types;

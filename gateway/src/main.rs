@@ -161,6 +161,9 @@ fn main() -> std::process::ExitCode {
         .rev()
         .find(|(l, _)| l.is_none())
         .map(|(_, level)| level.to_lowercase());
+    if let Some(e) = &ros_args.enclave {
+        yarp_ros2_gateway::security::set_enclave(e);
+    }
     yarp_ros2_gateway::ros::set_ros_args(ros_args, &args.namespace, &args.node_name, params);
     for d in &args.interfaces {
         if yarp_ros2_gateway::interfaces::add_dir(d) == 0 {

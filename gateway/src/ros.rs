@@ -2,7 +2,7 @@
 //! helpers turning mapping data into ros2-client names and QoS.
 
 use crate::mapping;
-use ros2_client::dds::rustdds::DomainParticipantBuilder;
+use ros2_client::dds::rustdds::{DomainParticipantBuilder, DomainParticipantSecurityConfigFiles};
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::{
     Context, MessageTypeName, Name, Node, NodeName, NodeOptions, QosProfile, ServiceTypeName,
@@ -25,31 +25,9 @@ pub enum RosError {
         name: String,
         message: String,
     },
-    /// SROS2 asked for with `ROS_SECURITY_STRATEGY=Enforce`: this build has no DDS
-    /// security, and an enforced graph must not get an unsecured participant.
-    #[error(
-        "ROS_SECURITY_ENABLE=true with ROS_SECURITY_STRATEGY=Enforce, but this build has no \
-         DDS security: refusing to join the graph unsecured (unset ROS_SECURITY_ENABLE, or use \
-         ROS_SECURITY_STRATEGY=Permissive to run unsecured)"
-    )]
-    SecurityEnforced,
-}
-
-/// What rmw does with `ROS_SECURITY_ENABLE`/`ROS_SECURITY_STRATEGY` when a participant
-/// cannot be secured (here: always, this build has no DDS security): `Enforce` refuses,
-/// `Permissive` (rmw's default) goes on unsecured, saying so.
-pub fn security_check(env: &dyn Fn(&str) -> Option<String>) -> Result<(), RosError> {
-    if env("ROS_SECURITY_ENABLE").as_deref() != Some("true") {
-        return Ok(());
-    }
-    if env("ROS_SECURITY_STRATEGY").as_deref() == Some("Enforce") {
-        return Err(RosError::SecurityEnforced);
-    }
-    tracing::warn!(
-        "ROS_SECURITY_ENABLE=true, but this build has no DDS security: running unsecured \
-         (ROS_SECURITY_STRATEGY is not Enforce)"
-    );
-    Ok(())
+    /// SROS2 asked for with `ROS_SECURITY_STRATEGY=Enforce` and the enclave unusable.
+    #[error(transparent)]
+    Security(#[from] crate::security::SecurityError),
 }
 
 /// Starts the gateway's single DDS participant (as a ros2-client context) and its node.
@@ -71,10 +49,17 @@ pub fn start_node(
 /// type; nodes are added with [`new_node`]. Only one node of a participant may spin: the
 /// spinners of several would share (split) the participant's discovery events.
 pub fn start_context(domain: u16, networks: &[IpAddr]) -> Result<Context, RosError> {
-    security_check(&|k| std::env::var(k).ok())?;
+    let security =
+        crate::security::from_env(&|k| std::env::var(k).ok(), crate::security::enclave())?;
     let mut b = DomainParticipantBuilder::new(domain);
     if !networks.is_empty() {
         b = b.with_only_networks(networks.iter().copied());
+    }
+    if let crate::security::Security::Enclave(dir) = security {
+        // SROS2 writes unencrypted PKCS#8 keys: no password.
+        b = b.builtin_security(
+            DomainParticipantSecurityConfigFiles::with_ros_default_names(dir, String::new()),
+        );
     }
     let dp = b.build().map_err(|e| RosError::Participant {
         domain,
@@ -320,40 +305,4 @@ pub fn qos(q: &mapping::Qos) -> QosProfile {
 /// QoS of service endpoints (reliable, volatile, depth 10: rclpy's service default).
 pub fn service_qos() -> QosProfile {
     qos(&mapping::Qos::default())
-}
-
-#[cfg(test)]
-mod security_tests {
-    use super::*;
-
-    #[test]
-    fn an_enforced_secure_graph_is_refused_a_permissive_one_runs_unsecured() {
-        let env = |pairs: &'static [(&'static str, &'static str)]| {
-            move |k: &str| {
-                pairs
-                    .iter()
-                    .find(|(n, _)| *n == k)
-                    .map(|(_, v)| v.to_string())
-            }
-        };
-        assert!(security_check(&env(&[])).is_ok());
-        assert!(security_check(&env(&[("ROS_SECURITY_ENABLE", "true")])).is_ok());
-        assert!(security_check(&env(&[
-            ("ROS_SECURITY_ENABLE", "true"),
-            ("ROS_SECURITY_STRATEGY", "Permissive")
-        ]))
-        .is_ok());
-        assert!(matches!(
-            security_check(&env(&[
-                ("ROS_SECURITY_ENABLE", "true"),
-                ("ROS_SECURITY_STRATEGY", "Enforce")
-            ])),
-            Err(RosError::SecurityEnforced)
-        ));
-        assert!(security_check(&env(&[
-            ("ROS_SECURITY_ENABLE", "false"),
-            ("ROS_SECURITY_STRATEGY", "Enforce")
-        ]))
-        .is_ok());
-    }
 }

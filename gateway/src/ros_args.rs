@@ -1,9 +1,9 @@
 //! ROS 2's command-line arguments (`--ros-args ... [--]`), as rcl reads them, so that
 //! `ros2 run`/`ros2 launch` can start the gateway like any ROS node: `-r __node:=NAME`,
 //! `-r __ns:=/NS`, name remaps (`-r from:=to`, `-r node:from:=to`), parameters (`-p
-//! name:=value`, `--params-file FILE`), `--log-level [name:=]LEVEL`, and the flags rcl takes
-//! that change nothing here (`-e`/`--enclave`, `--disable-*`/`--enable-*` logging) are
-//! accepted.
+//! name:=value`, `--params-file FILE`), `--log-level [name:=]LEVEL`, the SROS2 enclave
+//! (`-e`/`--enclave`, [`crate::security`]), and the flags rcl takes that change nothing
+//! here (`--disable-*`/`--enable-*` logging) are accepted.
 
 use ros2_client::ParameterValue;
 use std::ffi::OsString;
@@ -28,6 +28,8 @@ pub struct RosArgs {
     pub params_files: Vec<PathBuf>,
     /// `--log-level`: `(logger, level)`; `None` is the default logger.
     pub log_levels: Vec<(Option<String>, String)>,
+    /// `-e`/`--enclave`: the SROS2 enclave of the process ([`crate::security`]).
+    pub enclave: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -112,7 +114,8 @@ pub fn parse(ros: &[String]) -> Result<RosArgs, RosArgsError> {
                     None => out.log_levels.push((None, v)),
                 }
             }
-            "-e" | "--enclave" | "--log-config-file" | "--log-file-name" => {
+            "-e" | "--enclave" => out.enclave = Some(value()?),
+            "--log-config-file" | "--log-file-name" => {
                 value()?;
             }
             f if f.starts_with("--enable-") || f.starts_with("--disable-") => {}
@@ -279,6 +282,8 @@ mod tests {
             "__node:=gw2",
             "-r",
             "__ns:=/lab",
+            "--enclave",
+            "/lab/gw",
             "--",
             "--check",
         ];
@@ -292,6 +297,7 @@ mod tests {
         let a = parse(&ros).unwrap();
         assert_eq!(a.node_name.as_deref(), Some("gw2"));
         assert_eq!(a.namespace.as_deref(), Some("/lab"));
+        assert_eq!(a.enclave.as_deref(), Some("/lab/gw"));
         let a = parse(&args("-r chatter:=talk -r other:x:=y -p rate:=2.5 -p on:=true -p n:=3 -p s:=hi -p l:=[1,2] --log-level debug -e /e --disable-rosout-logs")).unwrap();
         assert_eq!(a.remaps.len(), 2);
         assert_eq!(a.params[0], ("rate".into(), ParameterValue::Double(2.5)));

@@ -246,8 +246,8 @@ fn tempfile_dir(what: &str) -> std::path::PathBuf {
     dir
 }
 
-/// A graph that enforces SROS2 gets no unsecured participant from us: the program says
-/// why and exits (this build has no DDS security).
+/// A graph that enforces SROS2 gets no unsecured participant from us: without a keystore
+/// the program says why and exits (`security.rs` runs it secured).
 #[test]
 fn an_enforced_secure_graph_is_refused() {
     let dir = tempfile_dir("sros2");

@@ -146,6 +146,11 @@ impl CryptoTransform for CryptographicBuiltin {
       }
       BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES128_GMAC
       | BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES256_GMAC => {
+        // yarp-rs: signed only, the payload has no length of its own and the decoder
+        // finds the footer at the end; pad it to 4 bytes here (as CDR allows) so that
+        // the DATA submessage adds no padding after the footer.
+        let mut plain_buffer = plain_buffer;
+        plain_buffer.resize(plain_buffer.len().next_multiple_of(4), 0);
         let mac = compute_mac(&session_key, initialization_vector, &plain_buffer)?;
         (plain_buffer, BuiltinCryptoFooter::only_common_mac(mac))
       }
@@ -785,8 +790,6 @@ impl CryptoTransform for CryptographicBuiltin {
       return Err(security_error("Encoded payload smaller than minimum size"));
     }
     let (header_bytes, content_and_footer_bytes) = encoded_buffer.split_at(head_len);
-    let (content_bytes, footer_bytes) =
-      content_and_footer_bytes.split_at(content_and_footer_bytes.len() - foot_len);
 
     // Deserialize crypto header and footer
 
@@ -802,6 +805,24 @@ impl CryptoTransform for CryptographicBuiltin {
         },
       builtin_crypto_header_extra: BuiltinCryptoHeaderExtra(initialization_vector),
     } = crypto_header.try_into()?;
+
+    // yarp-rs: a DATA submessage pads its serialized payload to a multiple of 4 bytes
+    // (`Data::write_to`), so the footer is not always at the very end of the buffer: when
+    // encrypted, it follows the CryptoContent, whose length prefix says where that ends
+    // (0.15.1 took the last bytes, and every payload whose length was not a multiple of 4
+    // failed its MAC check).
+    let content_len = match transformation_kind {
+      BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES128_GCM
+      | BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_AES256_GCM => {
+        4 + CryptoContent::read_from_buffer(content_and_footer_bytes)?.data.len()
+      }
+      _ => content_and_footer_bytes.len() - foot_len,
+    };
+    if content_and_footer_bytes.len() < content_len + foot_len {
+      return Err(security_error("Encoded payload shorter than its CryptoContent"));
+    }
+    let (content_bytes, footer_and_padding) = content_and_footer_bytes.split_at(content_len);
+    let footer_bytes = &footer_and_padding[..foot_len];
 
     let BuiltinCryptoFooter { common_mac, .. } = BuiltinCryptoFooter::try_from(footer_bytes)?;
 
