@@ -51,6 +51,15 @@ pub fn start_node(
 pub fn start_context(domain: u16, networks: &[IpAddr]) -> Result<Context, RosError> {
     let security =
         crate::security::from_env(&|k| std::env::var(k).ok(), crate::security::enclave())?;
+    start_context_with(domain, networks, security)
+}
+
+/// [`start_context`] secured as `security` says rather than as the environment says.
+pub fn start_context_with(
+    domain: u16,
+    networks: &[IpAddr],
+    security: crate::security::Security,
+) -> Result<Context, RosError> {
     let mut b = DomainParticipantBuilder::new(domain);
     if !networks.is_empty() {
         b = b.with_only_networks(networks.iter().copied());

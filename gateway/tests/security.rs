@@ -4,10 +4,13 @@
 //!
 //! PyPI's rclpy cannot join a secured graph: its Fast DDS is built without security, and
 //! rmw_fastrtps refuses to create a secured node (the first test shows it). So the secured
-//! peers are our own: a robot-side gateway (enclave `/robot`) driving a real
+//! peers are our own and Debian's Fast DDS: a robot-side gateway (enclave `/robot`) driving a real
 //! `controlBoard_nws_yarp` + `fakeMotionControl`, and an operator's gateway (enclave
 //! `/operator`) commanding it over ROS 2. Intruders: unsecured rclpy nodes, a gateway
 //! whose identity another CA signed, and one whose permissions deny the command topic.
+//! Then Fast DDS with security (Debian's libfastrtps, configured as rmw_fastrtps does it:
+//! `tests/peers/fastdds_secure_peer.cpp`), a real ROS 2 install's middleware, talks with
+//! the gateways both ways.
 //! Nothing of the secured exchange is readable on the wire (captured with tcpdump before
 //! the intruders, whose own traffic is plain).
 
@@ -331,6 +334,8 @@ async fn secured_graph_on(venv: &Distro) {
         domain,
         &["create_enclave", k, "/observer", "/arm/position_command"],
     );
+    sros2(domain, &["create_enclave", k, "/listener"]);
+    sros2(domain, &["create_enclave", k, "/talker"]);
     // Another lab's CA, with an enclave of the same name.
     sros2(domain, &["create_keystore", foreign.to_str().unwrap()]);
     sros2(
@@ -418,7 +423,7 @@ async fn secured_graph_on(venv: &Distro) {
         .unwrap();
     eprintln!("joint states at the operator: {}", js.bottle);
     let _ = stop.send(true);
-    let (_cmd, _say) = (cmd.await.unwrap(), say.await.unwrap());
+    let (_cmd, say_port) = (cmd.await.unwrap(), say.await.unwrap());
     if let Some(c) = capture {
         let wire = c.finish();
         assert!(
@@ -528,6 +533,81 @@ async fn secured_graph_on(venv: &Distro) {
         foreign_states.try_read().is_none(),
         "another CA's identity read the joint states"
     );
-    drop((spy, rogue, foreign_gw, robot, op));
+    drop((spy, rogue, foreign_gw));
+
+    // Fast DDS with DDS Security (Debian's, as rmw_fastrtps configures it): a ROS 2 node
+    // of a real install hears the operator and is heard by the robot.
+    let peer = fastdds_peer();
+    let listener = Peer::spawn(
+        fastdds(
+            &peer,
+            &[
+                "sub",
+                &domain.to_string(),
+                "/robot/say",
+                &enclave(&ks, "listener"),
+                "15",
+            ],
+        ),
+        "Fast DDS listener",
+    );
+    listener.expect_async("READY", T).await;
+    let (stop, stopped) = tokio::sync::watch::channel(false);
+    let say = keep_writing(say_port, format!("{secret} again"), stopped);
+    let got = listener.expect_async("MSG", T).await;
+    assert_eq!(got, format!("{secret} again"));
+    let _ = stop.send(true);
+    say.await.unwrap();
+    let talker = Peer::spawn(
+        fastdds(
+            &peer,
+            &[
+                "pub",
+                &domain.to_string(),
+                "/robot/say",
+                &enclave(&ks, "talker"),
+                "hello from Fast DDS",
+                "15",
+            ],
+        ),
+        "Fast DDS talker",
+    );
+    let heard = loop {
+        let m = tokio::time::timeout(T, said.read())
+            .await
+            .expect("Fast DDS's words at the robot")
+            .unwrap();
+        if m.bottle.to_string().contains("Fast") {
+            break m.bottle;
+        }
+    };
+    assert_eq!(heard.to_string(), "hello from Fast DDS");
+    drop((talker, listener, robot, op));
     blocking(move || drop(arm)).await;
+}
+
+/// `<keystore>/enclaves/<name>`.
+fn enclave(ks: &Path, name: &str) -> String {
+    ks.join("enclaves").join(name).to_str().unwrap().to_string()
+}
+
+/// The secured Fast DDS node (`tests/peers/fastdds_secure_peer.cpp`), built once by
+/// `install-fastdds-peer.sh` against Debian's libfastrtps-dev.
+fn fastdds_peer() -> PathBuf {
+    let out = Command::new("bash")
+        .arg(common::gateway_dir().join("tests/peers/install-fastdds-peer.sh"))
+        .output()
+        .expect("run install-fastdds-peer.sh");
+    assert!(
+        out.status.success(),
+        "the Fast DDS peer (a missing peer fails): {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    PathBuf::from(String::from_utf8_lossy(&out.stdout).trim())
+}
+
+fn fastdds(peer: &Path, args: &[&str]) -> Command {
+    let mut c = Command::new(peer);
+    c.args(args);
+    c
 }

@@ -10,7 +10,8 @@
 //! says to restart yarprobotinterface). An Ethernet board that falls silent is reported by
 //! `eth::EthMonitorPresence`; a restarted one waits in its configuration state for a host
 //! start-up sequence that (as in C++) only a new open sends, so the report names what to
-//! do: restart yarprobotinterface.
+//! do: restart yarprobotinterface. A board that reboots under a running host restarts its
+//! sequence numbers, which the host reports as icub-main's does.
 //!
 //! Needs the workspace programs in the same target directory (`cargo build --workspace
 //! --bins`; `tests/run.sh` does) and `../shared/robots-configuration`.
@@ -256,6 +257,58 @@ fn eth_board_emulator_killed_and_restarted() {
     assert!(
         encoders_become(net, true, STEP),
         "the restarted robot reads encoders"
+    );
+}
+
+/// A board that reboots mid-run (its emulator killed and started again at once): its
+/// sequence numbers restart, which the host reports as icub-main's `hostTransceiver`
+/// does (`detected an ERROR in sequence number from IP = ... Expected: N - Received: 1`)
+/// when the board next talks, here its answer to an ask (`get llim 0`). The rebooted board
+/// lost its configuration and sends no regulars, so the part's reads stay refused with the
+/// presence report naming the cure; as in C++, a new yarprobotinterface brings it back.
+#[test]
+fn eth_board_rebooted_mid_run() {
+    let Some(arm) = EthArm::new("iCubGenova02-reboot", 202) else {
+        return;
+    };
+    let net = &arm.net;
+    let mut emu = arm.emulator();
+    let mut robot = arm.robot();
+    assert!(encoders(net).is_some(), "encoders before the reboot");
+
+    emu.kill();
+    let _emu = arm.emulator();
+    let asked = net.rpc("/fault/left_arm/rpc:i", "get llim 0\n");
+    let report = robot.wait_line("detected an ERROR in sequence number", STEP);
+    println!("after the reboot, `get llim 0`: {asked}\nhost: {report}");
+    let number = |key: &str| -> u64 {
+        let rest = report.split(key).nth(1).unwrap_or("");
+        let digits: String = rest
+            .trim_start()
+            .chars()
+            .take_while(char::is_ascii_digit)
+            .collect();
+        digits
+            .parse()
+            .unwrap_or_else(|_| panic!("no `{key}` number in: {report}"))
+    };
+    let (expected, received) = (number("Expected:"), number("Received:"));
+    assert!(
+        report.contains("IP = 10.0.1.1") && received < expected && received <= 2,
+        "a restarted sequence from the board: {report}"
+    );
+    assert_eq!(encoders(net), None, "a rebooted board is not running");
+    assert!(
+        robot.child.try_wait().ok().flatten().is_none(),
+        "yarprobotinterface died:\n{}",
+        robot.seen.join("\n")
+    );
+
+    robot.kill();
+    let _robot = arm.robot();
+    assert!(
+        encoders_become(net, true, STEP),
+        "a new yarprobotinterface reads the rebooted board"
     );
 }
 
