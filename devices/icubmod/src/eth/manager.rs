@@ -577,6 +577,9 @@ impl Board {
                         tracing::debug!("{}", ev.describe(cfg));
                     }
                 }
+                // hostTransceiver's `yError()`: a lost frame, or a board that rebooted
+                // (its sequence numbers restart).
+                HostEvent::SequenceGap { .. } => tracing::error!("{}", ev.describe(cfg)),
                 HostEvent::Signal(_) => {}
                 _ => tracing::debug!("{}", ev.describe(cfg)),
             }
