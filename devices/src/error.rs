@@ -59,6 +59,10 @@ pub enum DeviceError {
     /// The connection to a remote peer broke while a command waited for its reply.
     #[error("`{device}`: connection lost ({reason})")]
     PeerLost { device: String, reason: String },
+    /// A method C++ YARP 4.0.0's wrapper declares but leaves unserved: it answers with the
+    /// return value never set (`[miss]`), and so do we.
+    #[error("{0}: not served by C++ YARP 4.0.0's wrapper either")]
+    UnservedByCpp(&'static str),
 }
 
 impl DeviceError {

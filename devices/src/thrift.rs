@@ -48,6 +48,7 @@ impl ReturnValue {
                 ReturnValue::NotReady
             }
             DeviceError::Unsupported(_) => ReturnValue::NotImplemented,
+            DeviceError::UnservedByCpp(_) => ReturnValue::Uninitialized,
             DeviceError::Timeout { .. } | DeviceError::PeerLost { .. } => {
                 ReturnValue::Communication
             }

@@ -550,6 +550,10 @@ control_board_methods! {
         |d| via!(d.as_pwm_control).set_ref_duty_cycle(j, value);
     SetRefDutyCycles { values: Vec<f64> } -> (), Set [], v4 "setRefDutyCycleAllRPC" =>
         |d| via!(d.as_pwm_control).set_ref_duty_cycles(&values);
+    /// C++ 4.0.0's wrapper leaves it unserved (`[miss]`; its client sends duty cycles on
+    /// `command:i`), and so do we: `yarp rpc` users of either get the same answer.
+    SetRefDutyCycleGroup { joints: Group, values: Vec<f64> } -> (), Set [], v4 "setRefDutyCycleGroupRPC" =>
+        |_d| { let _ = (joints, values); Err(DeviceError::UnservedByCpp("setRefDutyCycleGroupRPC")) };
     VelocityMove { j: usize, value: f64 } -> (), Set [], v4 "velocityMoveOneRPC" =>
         |d| via!(d.as_velocity_control).velocity_move(j, value);
     VelocityMoveGroup { joints: Group, values: Vec<f64> } -> (), Set [], v4 "velocityMoveGroupRPC" =>
@@ -618,6 +622,10 @@ control_board_methods! {
         |d| via!(d.as_joint_brake).get_auto_brake_enabled(j);
     GetMotorEncoderTimed { m: usize } -> (f64, f64), Get [], v4 "getMotorEncoderTimedOneRPC" =>
         |d| via!(d.as_motor_encoders).get_motor_encoder_timed(m);
+    /// Unserved by C++ 4.0.0's wrapper (`[miss] () ()`; its client reads the motor
+    /// encoders from `stateExt:o`), and so by ours.
+    GetMotorEncodersTimed {} -> (Vec<f64>, Vec<f64>), Get [], v4 "getMotorEncodersTimedAllRPC" =>
+        |_d| Err(DeviceError::UnservedByCpp("getMotorEncodersTimedAllRPC"));
     GetEncoderTimed { j: usize } -> (f64, f64), Get [], v4 "getEncoderTimedOneRPC" =>
         |d| via!(d.as_encoders).get_encoder_timed(j);
     GetEncodersTimed {} -> (Vec<f64>, Vec<f64>), Get [], v4 "getEncoderTimedAllRPC" =>
