@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
-"""Regenerates the committed seed corpora under fuzz/seeds/ from the recorded C++ YARP
-vectors (shared/yarp-vectors/bottles.jsonl): its `binary` fields seed bottle_decode and
-its `text_in` fields seed text_parse. The ini_parse seeds are hand-written files kept in
-seeds/ini_parse/ and are not touched here.
+"""Writes the seeds under fuzz/seeds/ that come from the recorded C++ YARP vectors
+(shared/yarp-vectors/bottles.jsonl): its `binary` fields seed bottle_decode and its
+`text_in` fields seed text_parse (`<vector id>.bin`/`.txt`, rewritten in place). The other
+seeds are kept: those `long.sh` merged in (named by their hash) and the hand-written
+ini_parse ones.
 
 Usage: python3 fuzz/gen_seeds.py [path/to/bottles.jsonl]
 """
@@ -20,8 +21,6 @@ binary = here / "seeds" / "bottle_decode"
 text = here / "seeds" / "text_parse"
 for d in (binary, text):
     d.mkdir(parents=True, exist_ok=True)
-    for f in d.iterdir():
-        f.unlink()
 
 # A handful of diverse vectors (every type, compaction, dicts, odd tags, quirky text).
 BINARY_IDS = {
