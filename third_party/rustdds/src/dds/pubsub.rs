@@ -568,9 +568,14 @@ impl InnerPublisher {
     if let Some(sec_handle) = self.security_plugins_handle.as_ref() {
       // Security is enabled.
       // Check are we allowed to create the DataWriter from Access control
+      // yarp-rs: the domain id (the participant's lock) before the plugins' lock, the
+      // order `DomainParticipant::create_topic` takes them in; 0.15.1 took the plugins
+      // first, and a topic created on one thread while an endpoint was created on
+      // another deadlocked the participant.
+      let domain_id = dp.domain_id();
       let check_res = sec_handle.get_plugins().check_create_datawriter(
         guid.prefix,
-        dp.domain_id(),
+        domain_id,
         topic.name(),
         &writer_qos,
       );
@@ -1185,9 +1190,11 @@ impl InnerSubscriber {
     if let Some(sec_handle) = self.security_plugins_handle.as_ref() {
       // Security is enabled.
       // Check are we allowed to create the DataReader from Access control
+      // yarp-rs: the domain id before the plugins' lock (see create_datawriter).
+      let domain_id = dp.domain_id();
       let check_res = sec_handle.get_plugins().check_create_datareader(
         reader_guid.prefix,
-        dp.domain_id(),
+        domain_id,
         topic.name(),
         &qos,
       );
