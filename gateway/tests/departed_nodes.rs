@@ -4,7 +4,9 @@
 //! disposal) in the SEDP topic caches up to 4096 samples each, and the disposed
 //! instances' metadata for ever. Each node's messages must all arrive too: a reliable
 //! publisher that matched the gateway first and left soon lost its first messages to it
-//! (RustDDS asked for them only at the writer's next HEARTBEAT). Domain index used here: 20.
+//! (RustDDS asked for them only at the writer's next HEARTBEAT); and a hundred nodes that
+//! each publish one message and leave 0.5 s later all get it through. Domain index used
+//! here: 20.
 
 mod common;
 
@@ -14,10 +16,22 @@ use std::time::Duration;
 const NODES: usize = 6;
 /// Messages each node publishes.
 const COUNT: u64 = 5;
+/// Short-lived publishers of one message each, one after the other.
+const SHORT_LIVED: u64 = 100;
+
+// One test per distro (each in its own domain): together they would near nextest's limit.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn discovery_forgets_rclpy_nodes_that_left_kilted() {
+    on_distro("discovery_forgets_rclpy_nodes_that_left_kilted", "kilted").await;
+}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn discovery_forgets_rclpy_nodes_that_left() {
-    for d in common::first_distro("discovery_forgets_rclpy_nodes_that_left") {
+async fn discovery_forgets_rclpy_nodes_that_left_jazzy() {
+    on_distro("discovery_forgets_rclpy_nodes_that_left_jazzy", "jazzy").await;
+}
+
+async fn on_distro(test: &str, name: &str) {
+    for d in common::distros(test).into_iter().filter(|d| d.name == name) {
         discovery_forgets_rclpy_nodes_that_left_on(&d).await;
     }
 }
@@ -102,6 +116,51 @@ ros_type = "std_msgs/msg/String"
         .await;
         assert_eq!(got, want, "messages from {} nodes of {COUNT}", i + 1);
     }
+
+    // A hundred short-lived nodes, one after the other (each its own participant): each
+    // publishes one message once its writer has matched the gateway's reader and leaves
+    // 0.5 s later. Every message arrives, once.
+    let before = gw.bridges()[0].counters.snapshot().messages;
+    let shots = common::blocking({
+        let venv = venv.clone();
+        move || {
+            let peer = Peer::start(
+                &venv,
+                domain,
+                &[
+                    "oneshot",
+                    "std_msgs/msg/String",
+                    "/departed/text",
+                    r#"{"data": "shot {i}"}"#,
+                    "--count",
+                    &SHORT_LIVED.to_string(),
+                    "--linger",
+                    "0.5",
+                    "--timeout",
+                    "300",
+                ],
+            );
+            peer.finish(Duration::from_secs(300))
+        }
+    })
+    .await;
+    assert!(shots, "the short-lived rclpy nodes published and left");
+    let want = before + SHORT_LIVED;
+    let got = common::repeat_until(
+        "the short-lived nodes' messages to reach the gateway",
+        Duration::from_millis(100),
+        async || {},
+        || {
+            let n = gw.bridges()[0].counters.snapshot().messages;
+            (n >= want).then_some(n)
+        },
+    )
+    .await;
+    assert_eq!(
+        got - before,
+        SHORT_LIVED,
+        "messages from {SHORT_LIVED} short-lived publishers"
+    );
 
     // Every announcement has been processed once the nodes were matched and gone; what
     // is left in the caches is what discovery has not taken yet.

@@ -174,6 +174,32 @@ def run(node, args, deadline):
             say("SENT", i)
             rclpy.spin_once(node, timeout_sec=1.0 / args.rate)
         spin_until(node, lambda: False, min(deadline, time.monotonic() + args.linger))
+    elif mode == "oneshot":
+        # --count short-lived nodes one after the other, each on a context (a DDS
+        # participant) of its own: it waits until its writer has matched a subscriber,
+        # publishes one message (a[2] with {i} replaced by its number), stays --linger
+        # seconds and leaves.
+        from rclpy.executors import SingleThreadedExecutor
+        cls = load_type(a[0])
+        say("READY")
+        for i in range(args.count):
+            ctx = rclpy.context.Context()
+            rclpy.init(context=ctx)
+            n = rclpy.create_node(f"gw_test_oneshot_{i}", context=ctx)
+            ex = SingleThreadedExecutor(context=ctx)
+            ex.add_node(n)
+            pub = n.create_publisher(cls, a[1], qos(args))
+            end = min(deadline, time.monotonic() + 10.0)
+            while pub.get_subscription_count() == 0 and time.monotonic() < end:
+                ex.spin_once(timeout_sec=0.05)
+            pub.publish(from_json(cls, json.loads(a[2].replace("{i}", str(i)))))
+            say("SENT", i)
+            end = time.monotonic() + args.linger
+            while time.monotonic() < end:
+                ex.spin_once(timeout_sec=0.05)
+            ex.shutdown()
+            n.destroy_node()
+            rclpy.shutdown(context=ctx)
     elif mode == "echo":
         cls = load_type(a[0])
         pub = node.create_publisher(cls, a[2], qos(args))
