@@ -238,6 +238,33 @@ async fn ros_args_on(venv: &common::Distro) {
     assert_eq!(values[0]["integer_value"], 42, "{resp}");
     assert_eq!(values[1]["double_value"], 2.5, "{resp}");
     assert_eq!(values[2]["string_value"], "icub", "{resp}");
+
+    // `ros2 param list` from 20 fresh nodes in a row: each gets the list at once.
+    let fresh = Peer::start(
+        venv,
+        domain,
+        &[
+            "call_fresh",
+            "rcl_interfaces/srv/ListParameters",
+            "/lab/lab_gateway/list_parameters",
+            "{}",
+            "--count",
+            "20",
+            "--timeout",
+            "120",
+        ],
+    );
+    for i in 0..20 {
+        let resp = fresh.expect_async("RESP", T).await;
+        let v: serde_json::Value = serde_json::from_str(&resp).unwrap_or_default();
+        let names = v["result"]["names"].as_array().cloned().unwrap_or_default();
+        for want in ["answer", "rate", "robot"] {
+            assert!(
+                names.iter().any(|n| n == want),
+                "fresh node {i}: `{want}` not listed: {resp}"
+            );
+        }
+    }
 }
 
 fn tempfile_dir(what: &str) -> std::path::PathBuf {

@@ -274,6 +274,28 @@ def run(node, args, deadline):
         fut = cli.call_async(from_json(cls.Request, json.loads(a[2])))
         spin_until(node, fut.done, deadline)
         say("RESP", json.dumps(to_json(fut.result())) if fut.done() else "null")
+    elif mode == "call_fresh":
+        # `call`, --count times, each from a fresh node on a context (a DDS participant)
+        # of its own: how `ros2 param list` meets a server, once per command.
+        from rclpy.executors import SingleThreadedExecutor
+        cls = load_type(a[0])
+        for i in range(args.count):
+            ctx = rclpy.context.Context()
+            rclpy.init(context=ctx)
+            n = rclpy.create_node(f"gw_test_fresh_{i}", context=ctx)
+            ex = SingleThreadedExecutor(context=ctx)
+            ex.add_node(n)
+            cli = n.create_client(cls, a[1])
+            end = min(deadline, time.monotonic() + 10.0)
+            while not cli.service_is_ready() and time.monotonic() < end:
+                ex.spin_once(timeout_sec=0.05)
+            fut = cli.call_async(from_json(cls.Request, json.loads(a[2])))
+            while not fut.done() and time.monotonic() < end:
+                ex.spin_once(timeout_sec=0.05)
+            say("RESP", json.dumps(to_json(fut.result())) if fut.done() else "null")
+            ex.shutdown()
+            n.destroy_node()
+            rclpy.shutdown(context=ctx)
     elif mode == "info":
         topic = a[0]
         pubs, subs = [], []
