@@ -217,7 +217,7 @@ fn as_encoders(cmd: [f64; 3]) -> Vec<f64> {
     vec![cmd[0].to_degrees(), cmd[1].to_degrees(), cmd[2]]
 }
 
-/// A loopback capture for the whole test (tcpdump, inside this test's netns-run): the
+/// A loopback capture of the test's domain (tcpdump, inside the suite's netns-run): the
 /// secured exchange must never show its words or topic names on the wire.
 struct Capture {
     child: Child,
@@ -225,12 +225,15 @@ struct Capture {
 }
 
 impl Capture {
-    fn start(dir: &Path) -> Option<Capture> {
+    /// Captures the UDP ports of ROS `domain` (RTPS: 7400 + 250 × domain and the 250
+    /// after), not the other tests' traffic on the same loopback.
+    fn start(dir: &Path, domain: u16) -> Option<Capture> {
         let file = dir.join("lo.pcap");
+        let base = 7400 + 250 * u32::from(domain);
         let child = Command::new("tcpdump")
             .args(["-i", "lo", "-U", "-n", "-Z", "root", "-w"])
             .arg(&file)
-            .arg("udp")
+            .arg(format!("udp portrange {base}-{}", base + 249))
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn();
@@ -343,7 +346,7 @@ async fn secured_graph_on(venv: &Distro) {
         &["create_enclave", foreign.to_str().unwrap(), "/operator"],
     );
 
-    let capture = Capture::start(dir.path());
+    let capture = Capture::start(dir.path(), domain);
     let ns = common::device_name_server();
     let arm = blocking(board).await;
     let check = blocking(|| {
