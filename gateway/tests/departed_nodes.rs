@@ -45,6 +45,20 @@ fn sedp_samples(gw: &yarp_ros2_gateway::gateway::Gateway) -> usize {
         .sum()
 }
 
+/// Waits (bounded) until the gateway's bridge has counted `want` messages; the count then.
+async fn messages_reach(gw: &yarp_ros2_gateway::gateway::Gateway, what: &str, want: u64) -> u64 {
+    common::repeat_until(
+        &format!("{what} to reach the gateway"),
+        Duration::from_millis(100),
+        async || {},
+        || {
+            let n = gw.bridges()[0].counters.snapshot().messages;
+            (n >= want).then_some(n)
+        },
+    )
+    .await
+}
+
 /// Announcements of our own participant kept by its SPDP writer.
 fn spdp_writer_samples(gw: &yarp_ros2_gateway::gateway::Gateway) -> usize {
     let counts = gw.dds_writer_samples();
@@ -104,16 +118,7 @@ ros_type = "std_msgs/msg/String"
         // dropped and are repaired: it leaves 2 s later, before Fast DDS's periodic
         // HEARTBEAT (3 s) would have offered them again.
         let want = (i as u64 + 1) * COUNT;
-        let got = common::repeat_until(
-            "the node's messages to reach the gateway",
-            Duration::from_millis(100),
-            async || {},
-            || {
-                let n = gw.bridges()[0].counters.snapshot().messages;
-                (n >= want).then_some(n)
-            },
-        )
-        .await;
+        let got = messages_reach(&gw, "the node's messages", want).await;
         assert_eq!(got, want, "messages from {} nodes of {COUNT}", i + 1);
     }
 
@@ -145,17 +150,7 @@ ros_type = "std_msgs/msg/String"
     })
     .await;
     assert!(shots, "the short-lived rclpy nodes published and left");
-    let want = before + SHORT_LIVED;
-    let got = common::repeat_until(
-        "the short-lived nodes' messages to reach the gateway",
-        Duration::from_millis(100),
-        async || {},
-        || {
-            let n = gw.bridges()[0].counters.snapshot().messages;
-            (n >= want).then_some(n)
-        },
-    )
-    .await;
+    let got = messages_reach(&gw, "the short-lived nodes' messages", before + SHORT_LIVED).await;
     assert_eq!(
         got - before,
         SHORT_LIVED,

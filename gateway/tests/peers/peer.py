@@ -15,6 +15,7 @@ and exits on its own after --timeout seconds at the latest, shutting rclpy down 
   peer.py hash TYPE                             prints HASH <RIHS01 of rclpy's own endpoint>
 """
 import argparse
+import contextlib
 import importlib
 import json
 import sys
@@ -100,6 +101,24 @@ def qos(args):
     )
 
 
+@contextlib.contextmanager
+def fresh_node(name):
+    """A node on a context (a DDS participant) of its own, with its executor; shut down
+    on leaving."""
+    from rclpy.executors import SingleThreadedExecutor
+    ctx = rclpy.context.Context()
+    rclpy.init(context=ctx)
+    n = rclpy.create_node(name, context=ctx)
+    ex = SingleThreadedExecutor(context=ctx)
+    ex.add_node(n)
+    try:
+        yield n, ex
+    finally:
+        ex.shutdown()
+        n.destroy_node()
+        rclpy.shutdown(context=ctx)
+
+
 def spin_until(node, done, deadline):
     while not done() and time.monotonic() < deadline:
         rclpy.spin_once(node, timeout_sec=0.05)
@@ -179,27 +198,19 @@ def run(node, args, deadline):
         # participant) of its own: it waits until its writer has matched a subscriber,
         # publishes one message (a[2] with {i} replaced by its number), stays --linger
         # seconds and leaves.
-        from rclpy.executors import SingleThreadedExecutor
         cls = load_type(a[0])
         say("READY")
         for i in range(args.count):
-            ctx = rclpy.context.Context()
-            rclpy.init(context=ctx)
-            n = rclpy.create_node(f"gw_test_oneshot_{i}", context=ctx)
-            ex = SingleThreadedExecutor(context=ctx)
-            ex.add_node(n)
-            pub = n.create_publisher(cls, a[1], qos(args))
-            end = min(deadline, time.monotonic() + 10.0)
-            while pub.get_subscription_count() == 0 and time.monotonic() < end:
-                ex.spin_once(timeout_sec=0.05)
-            pub.publish(from_json(cls, json.loads(a[2].replace("{i}", str(i)))))
-            say("SENT", i)
-            end = time.monotonic() + args.linger
-            while time.monotonic() < end:
-                ex.spin_once(timeout_sec=0.05)
-            ex.shutdown()
-            n.destroy_node()
-            rclpy.shutdown(context=ctx)
+            with fresh_node(f"gw_test_oneshot_{i}") as (n, ex):
+                pub = n.create_publisher(cls, a[1], qos(args))
+                end = min(deadline, time.monotonic() + 10.0)
+                while pub.get_subscription_count() == 0 and time.monotonic() < end:
+                    ex.spin_once(timeout_sec=0.05)
+                pub.publish(from_json(cls, json.loads(a[2].replace("{i}", str(i)))))
+                say("SENT", i)
+                end = time.monotonic() + args.linger
+                while time.monotonic() < end:
+                    ex.spin_once(timeout_sec=0.05)
     elif mode == "echo":
         cls = load_type(a[0])
         pub = node.create_publisher(cls, a[2], qos(args))
@@ -277,25 +288,17 @@ def run(node, args, deadline):
     elif mode == "call_fresh":
         # `call`, --count times, each from a fresh node on a context (a DDS participant)
         # of its own: how `ros2 param list` meets a server, once per command.
-        from rclpy.executors import SingleThreadedExecutor
         cls = load_type(a[0])
         for i in range(args.count):
-            ctx = rclpy.context.Context()
-            rclpy.init(context=ctx)
-            n = rclpy.create_node(f"gw_test_fresh_{i}", context=ctx)
-            ex = SingleThreadedExecutor(context=ctx)
-            ex.add_node(n)
-            cli = n.create_client(cls, a[1])
-            end = min(deadline, time.monotonic() + 10.0)
-            while not cli.service_is_ready() and time.monotonic() < end:
-                ex.spin_once(timeout_sec=0.05)
-            fut = cli.call_async(from_json(cls.Request, json.loads(a[2])))
-            while not fut.done() and time.monotonic() < end:
-                ex.spin_once(timeout_sec=0.05)
-            say("RESP", json.dumps(to_json(fut.result())) if fut.done() else "null")
-            ex.shutdown()
-            n.destroy_node()
-            rclpy.shutdown(context=ctx)
+            with fresh_node(f"gw_test_fresh_{i}") as (n, ex):
+                cli = n.create_client(cls, a[1])
+                end = min(deadline, time.monotonic() + 10.0)
+                while not cli.service_is_ready() and time.monotonic() < end:
+                    ex.spin_once(timeout_sec=0.05)
+                fut = cli.call_async(from_json(cls.Request, json.loads(a[2])))
+                while not fut.done() and time.monotonic() < end:
+                    ex.spin_once(timeout_sec=0.05)
+                say("RESP", json.dumps(to_json(fut.result())) if fut.done() else "null")
     elif mode == "info":
         topic = a[0]
         pubs, subs = [], []
