@@ -206,6 +206,8 @@ def run(node, args, deadline):
                 end = min(deadline, time.monotonic() + 10.0)
                 while pub.get_subscription_count() == 0 and time.monotonic() < end:
                     ex.spin_once(timeout_sec=0.05)
+                if pub.get_subscription_count() == 0:
+                    say("UNMATCHED", i)
                 pub.publish(from_json(cls, json.loads(a[2].replace("{i}", str(i)))))
                 say("SENT", i)
                 end = time.monotonic() + args.linger

@@ -43,7 +43,7 @@ use crate::{
   polling::{ReadySender, SharedTimer, WakeReceiver},
   rtps::{
     fragment_assembler::FragmentAssembler, message_receiver::MessageReceiverState,
-    early_writers::EarlyWriters, rtps_writer_proxy::RtpsWriterProxy, timed_event::DpTimerEvent,
+    early_writers::{EarlySample, EarlyWriters}, rtps_writer_proxy::RtpsWriterProxy, timed_event::DpTimerEvent,
     Message,
   },
   structure::{
@@ -427,17 +427,34 @@ impl Reader {
           // yarp-rs: when it already sent us DATA or HEARTBEATs, the samples they named are
           // asked for at once (Fast DDS answers a preemptive ACKNACK with base 1 only at
           // its next periodic HEARTBEAT).
+          // yarp-rs: the DATA it sent before it matched were kept: delivered now, as
+          // they would have been had we known the writer (it may have left already).
           if self.reliability != policy::Reliability::BestEffort {
             let early = self.early_writers.take(writer);
-            if let Some(mut writer_proxy) = self.matched_writers.remove(&writer) {
-              match early {
-                Some(named) => {
-                  self.request_missing_from(&mut writer_proxy, named.first, named.last)
-                }
-                None => self.send_preemptive_acknack_to(&mut writer_proxy),
+            let named = early.as_ref().map(|e| e.named);
+            let mut delivered = false;
+            for s in early.map(|e| e.kept).unwrap_or_default() {
+              let fresh = self
+                .with_mutable_writer_proxy(writer, |_, wp| {
+                  let fresh = !wp.should_ignore_change(s.sn);
+                  if fresh {
+                    wp.received_changes_add(s.sn, s.received);
+                  }
+                  fresh
+                })
+                .unwrap_or(false);
+              if fresh {
+                self.make_cache_change(s.data, s.received, s.options, writer, s.sn);
+                delivered = true;
               }
-              self.matched_writers.insert(writer, writer_proxy);
             }
+            if delivered {
+              self.notify_cache_change();
+            }
+            self.with_mutable_writer_proxy(writer, |this, writer_proxy| match named {
+              Some(named) => this.request_missing_from(writer_proxy, named.first, named.last),
+              None => this.send_preemptive_acknack_to(writer_proxy),
+            });
           }
         }
       }
@@ -778,7 +795,15 @@ impl Reader {
         // ... unless it is Discovery traffic.
         if writer_guid.entity_id.entity_kind.is_user_defined() {
           if reliable {
-            self.early_writers.saw(writer_guid, writer_sn, writer_sn);
+            self.early_writers.keep(
+              writer_guid,
+              EarlySample {
+                sn: writer_sn,
+                data: dds_data,
+                received: receive_timestamp,
+                options: write_options,
+              },
+            );
           }
           return;
         }
