@@ -1,6 +1,6 @@
 //! The run-time type registry: interface definitions found in the ROS installation the
 //! gateway runs beside (`AMENT_PREFIX_PATH`: `<prefix>/share/<pkg>/msg/*.msg`,
-//! `srv/*.srv`) and in directories named on the command line (`--interfaces`) or in a
+//! `srv/*.srv`, `action/*.action`) and in directories named on the command line (`--interfaces`) or in a
 //! mapping file (`interfaces = [...]`). [`crate::types::lookup`] asks here first and falls
 //! back to the built-in catalog, which is all there is when no ROS is installed.
 //!
@@ -19,6 +19,7 @@ use std::sync::{OnceLock, RwLock};
 enum Source {
     Msg(PathBuf),
     Srv(PathBuf),
+    Action(PathBuf),
     /// An `.idl` without a `.msg`/`.srv` beside it.
     Idl(PathBuf),
 }
@@ -71,6 +72,12 @@ pub fn lookup(name: &str) -> Option<&'static MsgType> {
             let service = file_stem(p);
             read(p)
                 .and_then(|text| msgdef::parse_srv(pkg, &service, &text).map_err(|e| e.to_string()))
+        }
+        Source::Action(p) => {
+            let action = file_stem(p);
+            read(p).and_then(|text| {
+                msgdef::parse_action(pkg, &action, &text).map_err(|e| e.to_string())
+            })
         }
         Source::Idl(p) => read(p)
             .and_then(|text| crate::idl::parse(&text).map_err(|e| format!("{}: {e}", p.display()))),
@@ -161,12 +168,14 @@ fn index_dir(r: &mut Registry, dir: &Path) -> usize {
 }
 
 fn is_package(dir: &Path) -> bool {
-    dir.join("msg").is_dir() || dir.join("srv").is_dir()
+    ["msg", "srv", "action"]
+        .iter()
+        .any(|k| dir.join(k).is_dir())
 }
 
 fn index_package(r: &mut Registry, pkg: &str, dir: &Path) -> usize {
     let mut n = 0;
-    for kind in ["msg", "srv"] {
+    for kind in ["msg", "srv", "action"] {
         let Ok(entries) = std::fs::read_dir(dir.join(kind)) else {
             continue;
         };
@@ -177,15 +186,19 @@ fn index_package(r: &mut Registry, pkg: &str, dir: &Path) -> usize {
             let source = match ext.as_deref() {
                 Some("msg") if kind == "msg" => Source::Msg(p.clone()),
                 Some("srv") if kind == "srv" => Source::Srv(p.clone()),
-                // `.idl` only where the package has no `.msg`/`.srv` of that name
-                Some("idl") if !p.with_extension(kind).exists() => Source::Idl(p.clone()),
+                Some("action") if kind == "action" => Source::Action(p.clone()),
+                // `.idl` only where the package has no `.msg`/`.srv` of that name (an
+                // action's `.idl` lacks the services rosidl derives: `.action` only)
+                Some("idl") if kind != "action" && !p.with_extension(kind).exists() => {
+                    Source::Idl(p.clone())
+                }
                 _ => continue,
             };
             let stem = file_stem(p);
-            let suffixes: &[&str] = if kind == "msg" {
-                &[""]
-            } else {
-                &["", "_Request", "_Response", "_Event"]
+            let suffixes: &[&str] = match kind {
+                "msg" => &[""],
+                "srv" => &["", "_Request", "_Response", "_Event"],
+                _ => ACTION_SUFFIXES,
             };
             for suffix in suffixes {
                 r.files
@@ -196,6 +209,23 @@ fn index_package(r: &mut Registry, pkg: &str, dir: &Path) -> usize {
     }
     n
 }
+
+/// The structures rosidl derives from `pkg/action/Name` are `Name` + each of these.
+const ACTION_SUFFIXES: &[&str] = &[
+    "",
+    "_Goal",
+    "_Result",
+    "_Feedback",
+    "_SendGoal",
+    "_SendGoal_Request",
+    "_SendGoal_Response",
+    "_SendGoal_Event",
+    "_GetResult",
+    "_GetResult_Request",
+    "_GetResult_Response",
+    "_GetResult_Event",
+    "_FeedbackMessage",
+];
 
 /// Gives a parsed definition the `'static` form of the built-in catalog (once per type
 /// and process).
@@ -245,6 +275,13 @@ mod tests {
         let pkg = dir.join("gw_test_pkg");
         std::fs::create_dir_all(pkg.join("msg")).unwrap();
         std::fs::create_dir_all(pkg.join("srv")).unwrap();
+        std::fs::create_dir_all(pkg.join("action")).unwrap();
+        std::fs::write(
+            pkg.join("action/Count.action"),
+            "int32 to\n---\nPair last\n---\nint32 at\n",
+        )
+        .unwrap();
+        std::fs::write(pkg.join("action/Count.idl"), "not read").unwrap();
         std::fs::write(
             pkg.join("msg/Pair.msg"),
             "int32 A=1\nstd_msgs/String left\nfloat64 right 2.5\n",
@@ -263,7 +300,19 @@ mod tests {
             "module gw_test_pkg { module msg { struct Idl { sequence<Pair> p; }; }; };",
         )
         .unwrap();
-        assert_eq!(add_dir(&dir), 8);
+        assert_eq!(add_dir(&dir), 8 + ACTION_SUFFIXES.len());
+        let goal = lookup("gw_test_pkg/action/Count_SendGoal_Request").unwrap();
+        assert_eq!(
+            goal.fields[0].base,
+            Base::Nested("unique_identifier_msgs/msg/UUID")
+        );
+        assert_eq!(
+            goal.fields[1].base,
+            Base::Nested("gw_test_pkg/action/Count_Goal")
+        );
+        let result = lookup("gw_test_pkg/action/Count_Result").unwrap();
+        assert_eq!(result.fields[0].base, Base::Nested("gw_test_pkg/msg/Pair"));
+        assert!(lookup("gw_test_pkg/action/Count").is_some());
         let idl = lookup("gw_test_pkg/msg/Idl").unwrap();
         assert_eq!(idl.fields[0].base, Base::Nested("gw_test_pkg/msg/Pair"));
         let t = lookup("gw_test_pkg/msg/Pair").unwrap();
@@ -279,7 +328,7 @@ mod tests {
         assert!(problem("gw_test_pkg/msg/Broken").is_some());
         assert!(message_names().contains(&"gw_test_pkg/msg/Pair".to_string()));
         // the package directory itself works too
-        assert_eq!(add_dir(&pkg), 8);
+        assert_eq!(add_dir(&pkg), 8 + ACTION_SUFFIXES.len());
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

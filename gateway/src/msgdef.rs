@@ -1,4 +1,4 @@
-//! ROS 2 interface definitions (`.msg`, `.srv`) parsed into type descriptions (pure).
+//! ROS 2 interface definitions (`.msg`, `.srv`, `.action`) parsed into type descriptions (pure).
 //!
 //! The grammar is rosidl's (`rosidl_adapter`'s parser): one field `TYPE NAME [DEFAULT]` or
 //! constant `TYPE NAME=VALUE` per line, `#` starts a comment anywhere on a line, types are
@@ -6,7 +6,9 @@
 //! and `duration`), bounded strings `string<=N`, nested messages `pkg/Type` or `Type` (same
 //! package), each optionally an array `T[N]`, a bounded sequence `T[<=N]` or a sequence
 //! `T[]`. A `.srv` is a request and a response separated by `---`; as rosidl does, it
-//! also yields the `_Event` structure and the service description REP-2016 hashes.
+//! also yields the `_Event` structure and the service description REP-2016 hashes. An
+//! `.action` is a goal, a result and a feedback, from which rosidl derives two services,
+//! a feedback message and the action description.
 
 use crate::types::{Prim, Shape};
 
@@ -66,27 +68,129 @@ pub fn parse_msg(pkg: &str, name: &str, text: &str) -> Result<MsgDef, DefError> 
 /// `response_message`, `event_message`).
 pub fn parse_srv(pkg: &str, name: &str, text: &str) -> Result<Vec<MsgDef>, DefError> {
     let full = format!("{pkg}/srv/{name}");
-    let lines: Vec<&str> = text.lines().collect();
-    let Some(split) = lines.iter().position(|l| l.trim_end() == "---") else {
-        return Err(DefError {
-            type_name: full,
-            line: 0,
-            message: "a service needs `---` between request and response".into(),
-        });
-    };
-    let req = parse_body(
-        &format!("{full}_Request"),
-        pkg,
-        &lines[..split].join("\n"),
-        0,
-    )?;
-    let resp = parse_body(
-        &format!("{full}_Response"),
-        pkg,
-        &lines[split + 1..].join("\n"),
-        split + 1,
-    )?;
+    let [req, resp] = parse_parts(&full, pkg, text, ["_Request", "_Response"])?;
     Ok(service_structures(&full, req, resp))
+}
+
+/// Parses the `.action` text of `pkg/action/name` (goal, result and feedback separated by
+/// `---`) into the structures rosidl derives from it: `Name_Goal`, `_Result`, `_Feedback`,
+/// the `_SendGoal` and `_GetResult` services (each with its request, response and event),
+/// `_FeedbackMessage`, and `Name`, the action description of REP-2016.
+pub fn parse_action(pkg: &str, name: &str, text: &str) -> Result<Vec<MsgDef>, DefError> {
+    let full = format!("{pkg}/action/{name}");
+    let [goal, result, feedback] =
+        parse_parts(&full, pkg, text, ["_Goal", "_Result", "_Feedback"])?;
+    let field = |n: &str, base: BaseDef| FieldDef {
+        name: n.into(),
+        base,
+        shape: Shape::Single,
+        string_capacity: 0,
+        default: None,
+    };
+    let nested = |n: &str, t: &str| field(n, BaseDef::Nested(t.into()));
+    let structure = |suffix: &str, fields| MsgDef {
+        name: format!("{full}{suffix}"),
+        fields,
+        constants: Vec::new(),
+    };
+    let send_goal = service_structures(
+        &format!("{full}_SendGoal"),
+        structure(
+            "_SendGoal_Request",
+            vec![nested("goal_id", UUID), nested("goal", &goal.name)],
+        ),
+        structure(
+            "_SendGoal_Response",
+            vec![
+                field("accepted", BaseDef::Prim(Prim::Bool)),
+                nested("stamp", "builtin_interfaces/msg/Time"),
+            ],
+        ),
+    );
+    let get_result = service_structures(
+        &format!("{full}_GetResult"),
+        structure("_GetResult_Request", vec![nested("goal_id", UUID)]),
+        structure(
+            "_GetResult_Response",
+            vec![
+                field("status", BaseDef::Prim(Prim::I8)),
+                nested("result", &result.name),
+            ],
+        ),
+    );
+    let feedback_message = structure(
+        "_FeedbackMessage",
+        vec![nested("goal_id", UUID), nested("feedback", &feedback.name)],
+    );
+    let action = structure(
+        "",
+        vec![
+            nested("goal", &goal.name),
+            nested("result", &result.name),
+            nested("feedback", &feedback.name),
+            nested("send_goal_service", &format!("{full}_SendGoal")),
+            nested("get_result_service", &format!("{full}_GetResult")),
+            nested("feedback_message", &feedback_message.name),
+        ],
+    );
+    let mut all = vec![goal, result, feedback];
+    all.extend(send_goal);
+    all.extend(get_result);
+    all.extend([feedback_message, action]);
+    Ok(all)
+}
+
+/// A goal's identity in every action structure.
+const UUID: &str = "unique_identifier_msgs/msg/UUID";
+
+/// The structures of a `.srv` or `.action` text: its `---`-separated parts, each named
+/// `full` + its suffix (as many parts as suffixes, else an error).
+fn parse_parts<const N: usize>(
+    full: &str,
+    pkg: &str,
+    text: &str,
+    suffixes: [&str; N],
+) -> Result<[MsgDef; N], DefError> {
+    let lines: Vec<&str> = text.lines().collect();
+    let splits: Vec<usize> = lines
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l.trim_end() == "---")
+        .map(|(i, _)| i)
+        .collect();
+    if splits.len() != N - 1 {
+        return Err(DefError {
+            type_name: full.to_string(),
+            line: 0,
+            message: format!(
+                "{} needs {} `---` separator{} ({}), found {}",
+                if N == 2 { "a service" } else { "an action" },
+                N - 1,
+                if N == 2 { "" } else { "s" },
+                suffixes
+                    .iter()
+                    .map(|s| s.trim_start_matches('_').to_lowercase())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                splits.len()
+            ),
+        });
+    }
+    let mut parts = Vec::with_capacity(N);
+    let mut start = 0;
+    for (k, suffix) in suffixes.iter().enumerate() {
+        let end = splits.get(k).copied().unwrap_or(lines.len());
+        parts.push(parse_body(
+            &format!("{full}{suffix}"),
+            pkg,
+            &lines[start..end].join("\n"),
+            start,
+        )?);
+        start = end + 1;
+    }
+    Ok(parts
+        .try_into()
+        .unwrap_or_else(|_| unreachable!("one structure per suffix")))
 }
 
 /// A service's request and response with the `_Event` structure and the service
@@ -453,6 +557,60 @@ char c
         let empty = parse_srv("std_srvs", "Empty", "---\n").unwrap();
         assert_eq!(empty[0].fields[0].name, EMPTY_MEMBER);
         assert!(parse_srv("x", "Y", "int32 a\n").is_err());
+    }
+
+    #[test]
+    fn actions_give_rosidls_thirteen_structures() {
+        let text = "#goal\nint32 order\n---\nint32[] sequence\n---\n# feedback\nint32[] sequence\n";
+        let defs = parse_action("test_msgs", "Fibonacci", text).unwrap();
+        let names: Vec<&str> = defs.iter().map(|d| d.name.as_str()).collect();
+        let p = "test_msgs/action/Fibonacci";
+        let want: Vec<String> = [
+            "_Goal",
+            "_Result",
+            "_Feedback",
+            "_SendGoal_Request",
+            "_SendGoal_Response",
+            "_SendGoal_Event",
+            "_SendGoal",
+            "_GetResult_Request",
+            "_GetResult_Response",
+            "_GetResult_Event",
+            "_GetResult",
+            "_FeedbackMessage",
+            "",
+        ]
+        .iter()
+        .map(|s| format!("{p}{s}"))
+        .collect();
+        assert_eq!(names, want);
+        let f = |d: &MsgDef| {
+            d.fields
+                .iter()
+                .map(|f| (f.name.clone(), f.base.clone()))
+                .collect::<Vec<_>>()
+        };
+        let nested = |t: &str| BaseDef::Nested(t.into());
+        assert_eq!(
+            f(&defs[3]),
+            [
+                ("goal_id".into(), nested(UUID)),
+                ("goal".into(), nested(&format!("{p}_Goal")))
+            ]
+        );
+        assert_eq!(
+            f(&defs[8]),
+            [
+                ("status".into(), BaseDef::Prim(Prim::I8)),
+                ("result".into(), nested(&format!("{p}_Result")))
+            ]
+        );
+        assert_eq!(defs[12].fields.len(), 6);
+        // The feedback is the third part: its comment line counts.
+        let e = parse_action("p", "A", "---\n---\nint32 ok\nfloat65 bad\n").unwrap_err();
+        assert_eq!((e.type_name.as_str(), e.line), ("p/action/A_Feedback", 4));
+        let e = parse_action("p", "A", "int32 a\n---\n").unwrap_err();
+        assert!(e.message.contains("goal, result, feedback"), "{e}");
     }
 
     #[test]

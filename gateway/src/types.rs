@@ -214,12 +214,14 @@ pub static DEFINITIONS: &[(&str, &str, &str, &str)] = definitions![
     std_srvs/srv/Empty,
 ];
 
-/// Parses a built-in definition into its structures (a service gives four).
+/// Parses a built-in definition into its structures (a service gives four, an action
+/// thirteen).
 pub fn parse_definition(
     (pkg, kind, name, text): (&str, &str, &str, &str),
 ) -> Result<Vec<crate::msgdef::MsgDef>, crate::msgdef::DefError> {
     match kind {
         "srv" => crate::msgdef::parse_srv(pkg, name, text),
+        "action" => crate::msgdef::parse_action(pkg, name, text),
         _ => crate::msgdef::parse_msg(pkg, name, text).map(|d| vec![d]),
     }
 }
@@ -338,7 +340,12 @@ mod tests {
         for &d in DEFINITIONS {
             let defs =
                 parse_definition(d).unwrap_or_else(|e| panic!("{}/{}/{}: {e}", d.0, d.1, d.2));
-            assert_eq!(defs.len(), if d.1 == "srv" { 4 } else { 1 });
+            let structures = match d.1 {
+                "srv" => 4,
+                "action" => 13,
+                _ => 1,
+            };
+            assert_eq!(defs.len(), structures);
             for def in defs {
                 assert_eq!(MESSAGES[n].name, def.name);
                 assert_eq!(MESSAGES[n].fields.len(), def.fields.len(), "{}", def.name);

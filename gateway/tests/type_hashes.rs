@@ -101,9 +101,11 @@ fn every_built_in_definition_is_the_installed_one_on(venv: &common::Distro) {
     assert_eq!(same, DEFINITIONS.len() - 10);
 }
 
-/// Every message and service definition the wheels install (`share/<pkg>/msg/*.msg`,
-/// `srv/*.srv`; nav_msgs and visualization_msgs among them), read at run time, hashes as
-/// rosidl hashed it (the `type_hashes` of the `.json` beside each file).
+/// Every message, service and action definition the wheels install
+/// (`share/<pkg>/msg/*.msg`, `srv/*.srv`, `action/*.action`; nav_msgs, visualization_msgs
+/// and test_msgs' Fibonacci among them), read at run time, hashes as rosidl hashed it
+/// (the `type_hashes` of the `.json` beside each file), every structure rosidl derives
+/// from an action included.
 #[test]
 fn every_installed_definition_hashes_as_rosidl() {
     for d in common::distros("every_installed_definition_hashes_as_rosidl") {
@@ -113,10 +115,10 @@ fn every_installed_definition_hashes_as_rosidl() {
 
 fn every_installed_definition_hashes_as_rosidl_on(venv: &common::Distro) {
     assert!(interfaces::add_dir(venv) > 100, "{}", venv.display());
-    let (mut checked, mut mismatched) = (0, Vec::new());
+    let (mut checked, mut mismatched, mut actions) = (0, Vec::new(), 0);
     let share = venv.join("share");
     for pkg in std::fs::read_dir(&share).unwrap().flatten() {
-        for kind in ["msg", "srv"] {
+        for kind in ["msg", "srv", "action"] {
             let Ok(files) = std::fs::read_dir(pkg.path().join(kind)) else {
                 continue;
             };
@@ -141,6 +143,7 @@ fn every_installed_definition_hashes_as_rosidl_on(venv: &common::Distro) {
                         mismatched.push(format!("{name}: {got}"));
                     }
                     checked += 1;
+                    actions += usize::from(kind == "action");
                 }
             }
         }
@@ -153,8 +156,13 @@ fn every_installed_definition_hashes_as_rosidl_on(venv: &common::Distro) {
             venv.display()
         );
     }
-    eprintln!("[{}] {checked} installed types hash as rosidl", venv.name);
+    eprintln!(
+        "[{}] {checked} installed types hash as rosidl ({actions} of actions)",
+        venv.name
+    );
     assert!(checked > 150, "{checked}");
+    // test_msgs' Fibonacci and NestedMessage: 13 structures each.
+    assert!(actions >= 26, "{actions} action structures checked");
 }
 
 /// The `.idl` files rosidl generated from every installed `.msg`/`.srv` describe the same

@@ -14,10 +14,11 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 distro=${1:-kilted}
 # nav-msgs and visualization-msgs: types outside the gateway's built-in catalog, which it
-# reads from their definitions (share/<pkg>/msg in the venv) at run time.
+# reads from their definitions (share/<pkg>/msg in the venv) at run time. test-msgs: the
+# actions (Fibonacci) and services rosidl tests with, their definitions and hashes.
 names=(rclpy std-msgs sensor-msgs geometry-msgs std-srvs trajectory-msgs diagnostic-msgs
-       nav-msgs visualization-msgs rmw-fastrtps-cpp)
-probe='import rclpy, std_msgs.msg, sensor_msgs.msg, geometry_msgs.msg, std_srvs.srv, trajectory_msgs.msg, diagnostic_msgs.msg, nav_msgs.msg, visualization_msgs.msg'
+       nav-msgs visualization-msgs test-msgs rmw-fastrtps-cpp)
+probe='import rclpy, rclpy.action, std_msgs.msg, sensor_msgs.msg, geometry_msgs.msg, std_srvs.srv, trajectory_msgs.msg, diagnostic_msgs.msg, nav_msgs.msg, visualization_msgs.msg, test_msgs.action, test_msgs.srv'
 case $distro in
     kilted)
         venv=${ROS_VENV:-$PWD/.venv-ros}
