@@ -85,6 +85,17 @@ fn ros_topic_dds_name(topic: &str) -> String {
   }
 }
 
+/// How long a parameter response waits for the client's response reader to match.
+const RESPONSE_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// A parameter response held until the client can receive it.
+struct PendingResponse {
+  writer: GUID,
+  reader: GUID,
+  deadline: std::time::Instant,
+  send: Box<dyn FnOnce(&ParameterServers) + Send>,
+}
+
 struct ParameterServers {
   get_parameters_server:
     Server<rcl_interfaces::GetParametersRequest, rcl_interfaces::GetParametersResponse>,
@@ -196,12 +207,30 @@ impl Spinner {
       .as_ref()
       .map(|s| s.describe_parameters_server.receive_request_stream());
 
+    // yarp-rs: parameter responses wait (up to RESPONSE_WAIT) for the client's response
+    // reader to match, as rmw_fastrtps servers do; a ticker thread bounds the wait.
+    let mut pending: Vec<PendingResponse> = Vec::new();
+    let (tick_sender, tick_receiver) = async_channel::bounded::<()>(1);
+    std::thread::Builder::new()
+      .name("ros2-client response ticker".into())
+      .spawn(move || loop {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        if let Err(async_channel::TrySendError::Closed(_)) = tick_sender.try_send(()) {
+          break;
+        }
+      })
+      .map_err(CreateError::Io)?;
+
     info!("Spinner {} initialized", self.fully_qualified_node_name);
 
     loop {
       futures::select! {
         _ = self.stop_spin_receiver.recv().fuse() => {
           break;
+        }
+
+        _ = tick_receiver.recv().fuse() => {
+          self.flush_responses(&mut pending);
         }
 
         clock_msg = ros_clock_stream.select_next_some() => {
@@ -227,10 +256,7 @@ impl Spinner {
               info!("Get parameters response: {values:?}");
 
               // .unwrap() below should be safe, as we would not be here if the Server did not exist
-              self.parameter_servers.as_ref().unwrap().get_parameters_server
-                .async_send_response(req_id, rcl_interfaces::GetParametersResponse{ values })
-                .await
-                .unwrap_or_else(|e| warn!("GetParameter response error {e:?}"));
+              self.respond(&mut pending, |s| &s.get_parameters_server, req_id, rcl_interfaces::GetParametersResponse{ values }, "GetParameter");
             }
             Err(e) => warn!("GetParameter request error {e:?}"),
           }
@@ -243,10 +269,7 @@ impl Spinner {
               let values = self.parameters.get_types(&req.names);
               info!("Get parameter types response: {values:?}");
               // .unwrap() below should be safe, as we would not be here if the Server did not exist
-              self.parameter_servers.as_ref().unwrap().get_parameter_types_server
-                .async_send_response(req_id, rcl_interfaces::GetParameterTypesResponse{ values })
-                .await
-                .unwrap_or_else(|e| warn!("GetParameterTypes response error {e:?}"));
+              self.respond(&mut pending, |s| &s.get_parameter_types_server, req_id, rcl_interfaces::GetParameterTypesResponse{ values }, "GetParameterTypes");
             }
             Err(e) => warn!("GetParameterTypes request error {e:?}"),
           }
@@ -265,10 +288,7 @@ impl Spinner {
                   .collect();
               info!("Set parameters response: {results:?}");
               // .unwrap() below should be safe, as we would not be here if the Server did not exist
-              self.parameter_servers.as_ref().unwrap().set_parameters_server
-                .async_send_response(req_id, rcl_interfaces::SetParametersResponse{ results })
-                .await
-                .unwrap_or_else(|e| warn!("SetParameters response error {e:?}"));
+              self.respond(&mut pending, |s| &s.set_parameters_server, req_id, rcl_interfaces::SetParametersResponse{ results }, "SetParameters");
             }
             Err(e) => warn!("SetParameters request error {e:?}"),
           }
@@ -283,10 +303,7 @@ impl Spinner {
               let result: raw::SetParametersResult = self.set_parameters_atomically(params).into();
               info!("Set parameters atomically response: {result:?}");
               // .unwrap() below should be safe, as we would not be here if the Server did not exist
-              self.parameter_servers.as_ref().unwrap().set_parameters_atomically_server
-                .async_send_response(req_id, rcl_interfaces::SetParametersAtomicallyResponse{ result })
-                .await
-                .unwrap_or_else(|e| warn!("SetParametersAtomically response error {e:?}"));
+              self.respond(&mut pending, |s| &s.set_parameters_atomically_server, req_id, rcl_interfaces::SetParametersAtomicallyResponse{ result }, "SetParametersAtomically");
             }
             Err(e) => warn!("SetParametersAtomically request error {e:?}"),
           }
@@ -299,10 +316,7 @@ impl Spinner {
               let result = self.parameters.list(&req.prefixes, req.depth);
               // .unwrap() below should be safe, as we would not be here if the Server did not exist
               info!("List parameters response: {result:?}");
-              self.parameter_servers.as_ref().unwrap().list_parameters_server
-                .async_send_response(req_id, rcl_interfaces::ListParametersResponse{ result })
-                .await
-                .unwrap_or_else(|e| warn!("ListParameter response error {e:?}"));
+              self.respond(&mut pending, |s| &s.list_parameters_server, req_id, rcl_interfaces::ListParametersResponse{ result }, "ListParameter");
             }
             Err(e) => warn!("ListParameter request error {e:?}"),
           }
@@ -318,10 +332,7 @@ impl Spinner {
                 .collect();
               info!("Describe parameters response: {values:?}");
               // .unwrap() below should be safe, as we would not be here if the Server did not exist
-              self.parameter_servers.as_ref().unwrap().describe_parameters_server
-                .async_send_response(req_id, rcl_interfaces::DescribeParametersResponse{ values })
-                .await
-                .unwrap_or_else(|e| warn!("DescribeParameters response error {e:?}"));
+              self.respond(&mut pending, |s| &s.describe_parameters_server, req_id, rcl_interfaces::DescribeParametersResponse{ values }, "DescribeParameters");
             }
             Err(e) => warn!("DescribeParameters request error {e:?}"),
           }
@@ -402,6 +413,7 @@ impl Spinner {
           if let Some(graph_event) = graph_event {
             self.send_status_event( &NodeEvent::Graph(graph_event) );
           }
+          self.flush_responses(&mut pending);
         }
       }
     }
@@ -409,6 +421,69 @@ impl Spinner {
     Ok(())
     //}
   } // fn
+
+  // yarp-rs: a response written before the server's response writer has matched the
+  // client's response reader is lost (reliable, volatile). A client that has just
+  // discovered the server (`ros2 param list` makes a new node for each command) sends its
+  // request at once; our reader may deliver it before discovery has matched the reader.
+  /// Sends `response` to `req_id` on the parameter server `server` once the requesting
+  /// client's response reader (named by the request) is matched, or after RESPONSE_WAIT.
+  fn respond<Req, Resp>(
+    &self,
+    pending: &mut Vec<PendingResponse>,
+    server: fn(&ParameterServers) -> &Server<Req, Resp>,
+    req_id: crate::RmwRequestId,
+    response: Resp,
+    what: &'static str,
+  ) where
+    Req: Message + 'static,
+    Resp: Message + Send + 'static,
+  {
+    let Some(servers) = self.parameter_servers.as_ref() else {
+      return;
+    };
+    let writer = server(servers).response_writer_guid();
+    let reader = GUID::from(req_id.writer_gid);
+    let send: Box<dyn FnOnce(&ParameterServers) + Send> = Box::new(move |s: &ParameterServers| {
+      server(s)
+        .send_response(req_id, response)
+        .unwrap_or_else(|e| warn!("{what} response error {e:?}"))
+    });
+    if !reader.entity_id.entity_kind.is_reader() || self.reader_matched(writer, reader) {
+      send(servers);
+    } else {
+      pending.push(PendingResponse {
+        writer,
+        reader,
+        deadline: std::time::Instant::now() + RESPONSE_WAIT,
+        send,
+      });
+    }
+  }
+
+  fn reader_matched(&self, writer: GUID, reader: GUID) -> bool {
+    self
+      .writers_to_remote_readers
+      .lock()
+      .unwrap()
+      .get(&writer)
+      .is_some_and(|readers| readers.contains(&reader))
+  }
+
+  /// Sends the pending responses whose reader has matched or whose wait is over.
+  fn flush_responses(&self, pending: &mut Vec<PendingResponse>) {
+    let Some(servers) = self.parameter_servers.as_ref() else {
+      return;
+    };
+    let now = std::time::Instant::now();
+    let (ready, waiting): (Vec<_>, Vec<_>) = pending
+      .drain(..)
+      .partition(|p| now >= p.deadline || self.reader_matched(p.writer, p.reader));
+    *pending = waiting;
+    for p in ready {
+      (p.send)(servers);
+    }
+  }
 
   fn send_status_event(&self, event: &NodeEvent) {
     let mut closed = Vec::new();
