@@ -292,6 +292,19 @@ impl Serialize for Value {
     }
 }
 
+/// A [`Value`] has no type of its own to decode against: it is read with its type's
+/// [`MsgSeed`] (ros2-client's `*_seed` calls). This impl only lets it travel through
+/// ros2-client's typed services and publishers, and refuses.
+impl<'de> serde::Deserialize<'de> for Value {
+    fn deserialize<D: Deserializer<'de>>(_: D) -> Result<Value, D::Error> {
+        Err(de::Error::custom(
+            "a message of a run-time type is decoded with its MsgSeed",
+        ))
+    }
+}
+
+impl ros2_client::Message for Value {}
+
 /// Decodes one message of a catalog type (use with ros2-client's `async_stream_seed`).
 #[derive(Debug, Clone, Copy)]
 pub struct MsgSeed(pub &'static MsgType);

@@ -290,6 +290,10 @@ pub enum ServiceConversion {
     /// Generic text RPC: `<ros_service>/request` and `<ros_service>/reply` std_msgs/String
     /// topics carry Bottle text to and from a YARP RPC port.
     TextRpc,
+    /// Any `pkg/srv/Name`: the request and the response are Bottles in the generic layout
+    /// of their types ([`crate::generic`]); towards YARP the request follows the optional
+    /// `command` words.
+    Generic,
 }
 
 /// A `[[service]]` entry: a YARP RPC port bridged to a ROS service.
@@ -305,7 +309,8 @@ pub struct ServiceEntry {
     pub ros_service: String,
     pub ros_type: String,
     pub conversion: Option<ServiceConversion>,
-    /// Trigger/Empty, ros_to_yarp: the Bottle (text form) sent to YARP.
+    /// Trigger/Empty, ros_to_yarp: the Bottle (text form) sent to YARP; generic,
+    /// ros_to_yarp: words sent before the request's fields.
     pub command: Option<String>,
     /// SetBool, ros_to_yarp: the Bottles sent for `data = true` / `false`.
     pub command_true: Option<String>,
@@ -317,8 +322,10 @@ impl ServiceEntry {
         self.conversion
             .unwrap_or(if self.ros_type == "std_msgs/msg/String" {
                 ServiceConversion::TextRpc
-            } else {
+            } else if COMMAND_SERVICES.contains(&self.ros_type.as_str()) {
                 ServiceConversion::Command
+            } else {
+                ServiceConversion::Generic
             })
     }
 }
@@ -829,9 +836,9 @@ fn validate_service(s: &ServiceEntry) -> Result<(), Invalid> {
                 return Err((
                     "ros_type",
                     format!(
-                        "unknown service type `{}` (expected one of {})",
+                        "conversion `command` maps {}, not `{}` (any .srv: `generic`)",
+                        COMMAND_SERVICES.join(", "),
                         s.ros_type,
-                        COMMAND_SERVICES.join(", ")
                     ),
                 ));
             }
@@ -862,6 +869,40 @@ fn validate_service(s: &ServiceEntry) -> Result<(), Invalid> {
                     ))
                 }
                 _ => {}
+            }
+        }
+        ServiceConversion::Generic => {
+            if !matches!(crate::types::split_name(&s.ros_type), Some((_, "srv", _))) {
+                return Err((
+                    "ros_type",
+                    format!("`{}` is not a service type (pkg/srv/Name)", s.ros_type),
+                ));
+            }
+            let request = format!("{}_Request", s.ros_type);
+            if crate::types::lookup(&request).is_none() {
+                let why = crate::interfaces::problem(&request)
+                    .map(|p| format!(" (its definition: {p})"))
+                    .unwrap_or_else(|| {
+                        " (not built in, and no definition in AMENT_PREFIX_PATH, --interfaces \
+                         or the mapping's `interfaces`)"
+                            .into()
+                    });
+                return Err((
+                    "ros_type",
+                    format!("unknown service type `{}`{why}", s.ros_type),
+                ));
+            }
+            if s.command_true.is_some() || s.command_false.is_some() {
+                return Err((
+                    "command_true",
+                    "only SetBool's command conversion has command_true/command_false".into(),
+                ));
+            }
+            if s.command.is_some() && s.direction != Direction::RosToYarp {
+                return Err((
+                    "command",
+                    "yarp_to_ros forwards any Bottle to the ROS service; no command".into(),
+                ));
             }
         }
         ServiceConversion::TextRpc => {
@@ -1010,8 +1051,15 @@ command = "[home]"
         let (_, key, msg) = entry_error(&OK.replace("std_msgs/msg/Int32", "std_msgs/msg/Int33"));
         assert_eq!(key, "ros_type");
         assert!(msg.contains("Int33"));
-        let (_, key, _) = entry_error(&OK.replace("std_srvs/srv/Trigger", "std_srvs/srv/Nope"));
+        let (_, key, msg) = entry_error(&OK.replace("std_srvs/srv/Trigger", "std_srvs/srv/Nope"));
         assert_eq!(key, "ros_type");
+        assert!(
+            msg.contains("unknown service type `std_srvs/srv/Nope`"),
+            "{msg}"
+        );
+        let (_, key, msg) = entry_error(&OK.replace("std_srvs/srv/Trigger", "std_msgs/msg/Bool"));
+        assert_eq!(key, "ros_type");
+        assert!(msg.contains("not a service type"), "{msg}");
     }
 
     #[test]

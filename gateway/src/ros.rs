@@ -271,6 +271,24 @@ pub fn announce_type_hash(dp: &ros2_client::dds::rustdds::DomainParticipant, ros
     }
 }
 
+/// As [`announce_type_hash`] for the request and response topics of service (or action
+/// service) `srv_type`: both announce the service's hash, as rmw does.
+pub fn announce_service_type_hash(
+    dp: &ros2_client::dds::rustdds::DomainParticipant,
+    srv_type: &str,
+) {
+    let Ok(ud) = crate::hash::user_data(srv_type) else {
+        return;
+    };
+    for part in ["_Request", "_Response"] {
+        if let Some(dds) = crate::types::dds_type_name(&format!("{srv_type}{part}")) {
+            if dp.endpoint_user_data(&dds).is_empty() {
+                dp.set_endpoint_user_data(&dds, ud.clone().into_bytes());
+            }
+        }
+    }
+}
+
 /// A ROS topic or service name (`/a/b`, or relative `b`).
 pub fn name(n: &str) -> Result<Name, RosError> {
     let n = &remapped(n);

@@ -1,5 +1,6 @@
-//! Service bridges (std_srvs Trigger/SetBool/Empty and generic text RPC) against real
-//! rclpy peers and real YARP RPC ports. Domain indices used here: 6..=8.
+//! Service bridges (std_srvs Trigger/SetBool/Empty, any `.srv` through the generic Bottle
+//! layout, and generic text RPC) against real rclpy peers and real YARP RPC ports. Domain
+//! indices used here: 6..=8.
 
 mod common;
 
@@ -10,7 +11,7 @@ use std::time::Duration;
 use yarp_net::buffered::RpcServer;
 use yarp_net::rpc::RpcClient;
 use yarp_proto::wire::Carrier;
-use yarp_proto::Bottle;
+use yarp_proto::{Bottle, Value};
 
 fn json_line(s: &str) -> Json {
     serde_json::from_str(s).unwrap_or_else(|e| panic!("bad JSON from peer `{s}`: {e}"))
@@ -36,6 +37,18 @@ async fn ros_clients_call_yarp_rpc_ports_on(venv: &common::Distro) {
         server
             .serve(move |cmd| {
                 log.lock().unwrap().push(cmd.to_string());
+                // A generic request: `basic` and test_msgs/BasicTypes' request fields;
+                // the response (the same fields) is the request with int32_value + 1.
+                if cmd.get(0).and_then(|v| v.as_str()) == Some("basic") {
+                    let mut reply = Bottle::new();
+                    for (i, v) in cmd.iter().skip(1).enumerate() {
+                        match (i, v.as_i64()) {
+                            (9, Some(n)) => reply.push(Value::Int32(n as i32 + 1)),
+                            _ => reply.push(v.clone()),
+                        };
+                    }
+                    return reply;
+                }
                 match cmd.to_string().as_str() {
                     "[home]" => Bottle::from_text("[ok] \"homed\""),
                     "[on]" | "[off]" | "[park]" => Bottle::from_text("[ok]"),
@@ -45,7 +58,24 @@ async fn ros_clients_call_yarp_rpc_ports_on(venv: &common::Distro) {
             .await
     });
     let gw = common::gateway(
-        r#"
+        &(interfaces_line(venv)
+            + r#"
+[[service]]
+name = "basic"
+direction = "ros_to_yarp"
+yarp_port = "/test/arm/rpc:i"
+ros_service = "/arm/basic"
+ros_type = "test_msgs/srv/BasicTypes"
+command = "basic"
+
+[[service]]
+name = "refused"
+direction = "ros_to_yarp"
+yarp_port = "/test/arm/rpc:i"
+ros_service = "/arm/refused"
+ros_type = "test_msgs/srv/BasicTypes"
+command = "refuse"
+
 [[service]]
 name = "home"
 direction = "ros_to_yarp"
@@ -78,7 +108,7 @@ yarp_port = "/test/arm/rpc:i"
 ros_service = "/arm/stop"
 ros_type = "std_srvs/srv/Trigger"
 command = "[stop]"
-"#,
+"#),
         &ns,
         domain,
     )
@@ -93,6 +123,8 @@ command = "[stop]"
         ],
         ["call", "std_srvs/srv/Empty", "/arm/park", "{}"],
         ["call", "std_srvs/srv/Trigger", "/arm/stop", "{}"],
+        ["call", "test_msgs/srv/BasicTypes", "/arm/basic", BASIC],
+        ["call", "test_msgs/srv/BasicTypes", "/arm/refused", BASIC],
     ]
     // Four rclpy processes start at once: on a starved machine each may take many
     // seconds to discover the service, so they get a minute (they print RESP at once).
@@ -114,15 +146,39 @@ command = "[stop]"
         resp[3],
         json!({"success": false, "message": "[fail] unknown"})
     );
+    // Every field crossed YARP and came back (the YARP side added 1 to int32_value).
+    let mut want = json_line(BASIC);
+    want["int32_value"] = json!(-2147483647);
+    want["byte_value"] = json!([0]);
+    assert_eq!(resp[4], want, "{:?}", seen.lock().unwrap());
+    // A refused call answers the default response (a ROS service has no error reply).
+    assert_eq!(resp[5]["int64_value"], json!(0));
+    assert_eq!(resp[5]["string_value"], json!(""));
     let mut seen = seen.lock().unwrap().clone();
     seen.sort();
-    assert_eq!(seen, ["[home]", "[off]", "[park]", "[stop]"]);
+    assert_eq!(seen.len(), 6, "{seen:?}");
+    assert!(seen[0].starts_with("[home]"), "{seen:?}");
+    assert_eq!(&seen[1..4], ["[off]", "[park]", "[stop]"]);
+    assert!(seen[4].starts_with("basic true 0 65 "), "{seen:?}");
+    assert_eq!(seen[5], format!("refuse {BASIC_BOTTLE}"));
     for p in calls {
         assert!(p.finish(T));
     }
     gw.shutdown().await;
     serving.abort();
     stop.shutdown();
+}
+
+/// A test_msgs/BasicTypes request at the edges of every field's range (byte_value stays
+/// 0: rclpy takes bytes for it).
+const BASIC: &str = r#"{"bool_value": true, "char_value": 65, "float32_value": 1.5, "float64_value": -2.25, "int8_value": -128, "uint8_value": 255, "int16_value": -32768, "uint16_value": 65535, "int32_value": -2147483648, "uint32_value": 4294967295, "int64_value": -9223372036854775808, "uint64_value": 9223372036854775807, "string_value": "a \"quoted\" word"}"#;
+
+/// [`BASIC`] in the generic layout (a bool is YARP's bool, the string quoted).
+const BASIC_BOTTLE: &str = r#"true 0 65 1.5 -2.25 -128 255 -32768 65535 -2147483648 4294967295 -9223372036854775808 9223372036854775807 "a \"quoted\" word""#;
+
+/// `interfaces = [<venv>]`: the run-time definitions (test_msgs) of the distro's wheels.
+fn interfaces_line(venv: &common::Distro) -> String {
+    format!("interfaces = [{:?}]\n", venv.venv.display().to_string())
 }
 
 /// Calls `port` with `cmd` until the reply is not the "no server yet" failure.
@@ -193,12 +249,21 @@ async fn yarp_clients_call_ros_services_on(venv: &common::Distro) {
             r#"{"success": false, "message": "estop"}"#,
         ),
         serve("std_srvs/srv/Empty", "/ros/beep", "{}"),
+        serve("test_msgs/srv/BasicTypes", "/ros/basic", BASIC),
     ];
     for s in &servers {
         s.expect_async("READY", T).await;
     }
     let gw = common::gateway(
-        r#"
+        &(interfaces_line(venv)
+            + r#"
+[[service]]
+name = "basic"
+direction = "yarp_to_ros"
+yarp_port = "/gw/basic:rpc"
+ros_service = "/ros/basic"
+ros_type = "test_msgs/srv/BasicTypes"
+
 [[service]]
 name = "reset"
 direction = "yarp_to_ros"
@@ -219,11 +284,31 @@ direction = "yarp_to_ros"
 yarp_port = "/gw/beep:rpc"
 ros_service = "/ros/beep"
 ros_type = "std_srvs/srv/Empty"
-"#,
+"#),
         &ns,
         domain,
     )
     .await;
+    // Any .srv: the Bottle is the request's fields (trailing ones left out take their
+    // defaults), the reply the response's.
+    let r = rpc_until_answered(
+        &ns,
+        "/gw/basic:rpc",
+        "[ok] 0 66 0.5 1e300 -1 2 -3 4 -5 6 -7 8 \"yarp\"",
+    )
+    .await;
+    assert_eq!(r.to_string(), BASIC_BOTTLE);
+    assert_eq!(
+        json_line(&servers[3].expect_async("REQ", T).await),
+        json!({"bool_value": true, "byte_value": [0], "char_value": 66, "float32_value": 0.5,
+               "float64_value": 1e300, "int8_value": -1, "uint8_value": 2, "int16_value": -3,
+               "uint16_value": 4, "int32_value": -5, "uint32_value": 6, "int64_value": -7,
+               "uint64_value": 8, "string_value": "yarp"})
+    );
+    // A Bottle that is not a BasicTypes request is answered with why, not forwarded.
+    let r = rpc_until_answered(&ns, "/gw/basic:rpc", "[ok] 0 \"not a char\"").await;
+    assert!(r.to_string().starts_with("[fail]"), "{r}");
+    assert!(r.to_string().contains("char_value"), "{r}");
     let r = rpc_until_answered(&ns, "/gw/reset:rpc", "[reset]").await;
     assert_eq!(r.get(1).and_then(|v| v.as_str()), Some("done"), "{r}");
     assert_eq!(

@@ -12,17 +12,20 @@ mod topics;
 mod yarp_rpc;
 
 use self::demand::{Demand, Gate};
-use self::services::{call_ros, serve_ros, text_rpc};
+use self::services::{
+    call_ros, generic_command, generic_response, generic_service_types, serve_ros, text_rpc,
+};
 use self::topics::{keep_connected, ros_to_yarp, yarp_to_ros, JointNameSource};
 use self::yarp_rpc::YarpRpc;
 use crate::counters::{self, Counters, Row};
-use crate::dynmsg::Value as Ros;
+use crate::dynmsg::{MsgSeed, Value as Ros};
 use crate::mapping::{
     Conversion, Direction, Durability, Mappings, ServiceConversion, ServiceEntry, TopicEntry,
 };
 use crate::ros::{self, RosError};
 use crate::service::{self, EmptyMsg, OutcomeResponse, SetBoolRequest, StdSrv};
 use ros2_client::{Client, Context, Node, Publisher, Server, ServiceMapping, Subscription};
+use std::marker::PhantomData;
 use std::net::IpAddr;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -578,6 +581,53 @@ impl Builder {
                 )));
                 detail = format!("TextRpc {req_name} -> {rep_name}");
             }
+            (ServiceConversion::Generic, direction) => {
+                ros::announce_service_type_hash(&self.ctx.domain_participant(), &s.ros_type);
+                let (req_t, resp_t) = generic_service_types(&s.ros_type)?;
+                let c = counters.clone();
+                let deferred: Deferred = if direction == Direction::RosToYarp {
+                    let rpc =
+                        YarpRpc::new(self.ns.clone(), &s.yarp_port, &node.fully_qualified_name());
+                    let server: Server<Ros, Ros> = ros_server(node, s)?;
+                    let words = Bottle::from_text(s.command.as_deref().unwrap_or_default());
+                    let what = s.ros_service.clone();
+                    Box::new(move |node| {
+                        tokio::spawn(serve_ros(
+                            server,
+                            node,
+                            rpc,
+                            c,
+                            MsgSeed(req_t),
+                            move |r: &Ros| generic_command(&words, req_t, r),
+                            move |reply| generic_response(&what, resp_t, reply),
+                        ))
+                    })
+                } else {
+                    let port = self.open_port(&s.yarp_port).await?;
+                    let client: Client<Ros, Ros> = ros_client(node, s)?;
+                    let service_name = s.ros_service.clone();
+                    Box::new(move |node| {
+                        tokio::spawn(call_ros(
+                            port,
+                            client,
+                            node,
+                            c,
+                            service_name,
+                            MsgSeed(resp_t),
+                            move |b| {
+                                crate::generic::to_ros(req_t, b, now_ns())
+                                    .map_err(|e| e.to_string())
+                            },
+                            move |r| {
+                                crate::generic::to_yarp(resp_t, &r).unwrap_or_else(|e| {
+                                    service::fail_reply(&format!("the response: {e}"))
+                                })
+                            },
+                        ))
+                    })
+                };
+                self.deferred.push(deferred);
+            }
             (ServiceConversion::Command, Direction::RosToYarp) => {
                 let rpc = YarpRpc::new(self.ns.clone(), &s.yarp_port, &node.fully_qualified_name());
                 let c = counters.clone();
@@ -592,6 +642,7 @@ impl Builder {
                                 node,
                                 rpc,
                                 c,
+                                PhantomData,
                                 move |_| command.clone(),
                                 service::outcome_from_call,
                             ))
@@ -606,6 +657,7 @@ impl Builder {
                                 node,
                                 rpc,
                                 c,
+                                PhantomData,
                                 move |r: &SetBoolRequest| {
                                     if r.data {
                                         on.clone()
@@ -626,6 +678,7 @@ impl Builder {
                                 node,
                                 rpc,
                                 c,
+                                PhantomData,
                                 move |_| command.clone(),
                                 |_| EmptyMsg::default(),
                             ))
@@ -648,7 +701,8 @@ impl Builder {
                                 node,
                                 c,
                                 service_name,
-                                |_| Some(EmptyMsg::default()),
+                                PhantomData,
+                                |_| Ok(EmptyMsg::default()),
                                 |r| service::reply_from_outcome(&r),
                             ))
                         })
@@ -662,9 +716,11 @@ impl Builder {
                                 node,
                                 c,
                                 service_name,
+                                PhantomData,
                                 |b| {
                                     service::setbool_from_command(b)
                                         .map(|data| SetBoolRequest { data })
+                                        .ok_or_else(|| "SetBool takes a bool first".to_string())
                                 },
                                 |r| service::reply_from_outcome(&r),
                             ))
@@ -679,7 +735,8 @@ impl Builder {
                                 node,
                                 c,
                                 service_name,
-                                |_| Some(EmptyMsg::default()),
+                                PhantomData,
+                                |_| Ok(EmptyMsg::default()),
                                 |_| service::ok_reply(),
                             ))
                         })

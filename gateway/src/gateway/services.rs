@@ -5,15 +5,18 @@ use super::yarp_rpc::{RpcError, YarpRpc};
 use super::CALL_TIMEOUT;
 use crate::counters::Counters;
 use crate::dynmsg::{MsgSeed, Value as Ros};
+use crate::ros::RosError;
 use crate::service;
+use crate::types::MsgType;
 use futures::{pin_mut, StreamExt};
 use ros2_client::{Client, Message, Node, Publisher, Server, Subscription};
+use serde::de::DeserializeSeed;
 use std::sync::Arc;
 use std::time::Duration;
 use std::time::Instant;
 use tracing::{debug, warn};
 use yarp_net::port::Port;
-use yarp_proto::Bottle;
+use yarp_proto::{Bottle, Value};
 
 /// How long a service response waits for the requesting client's reader to be matched
 /// (rmw_fastrtps waits for the writer's max_blocking_time; ours waits without blocking).
@@ -21,19 +24,23 @@ const CLIENT_MATCH_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// ROS service server -> YARP RPC: each request sends `cmd(request)` to the YARP port and
 /// answers with `resp(reply or error)`.
-pub(super) async fn serve_ros<Req, Resp>(
+/// Requests are decoded by `seed` (`PhantomData` for a compiled type, a [`MsgSeed`] for
+/// one read at run time).
+pub(super) async fn serve_ros<Req, Resp, S>(
     server: Server<Req, Resp>,
     node: Arc<Node>,
     mut rpc: YarpRpc,
     c: Arc<Counters>,
+    seed: S,
     cmd: impl Fn(&Req) -> Bottle,
     resp: impl Fn(Result<Bottle, RpcError>) -> Resp,
 ) where
     Req: Message + Clone + 'static,
     Resp: Message + 'static,
+    S: for<'de> DeserializeSeed<'de, Value = Req> + Clone,
 {
     loop {
-        let (id, req) = match server.async_receive_request().await {
+        let (id, req) = match server.async_receive_request_seed(seed.clone()).await {
             Ok(x) => x,
             Err(e) => {
                 debug!("service request: {e:?}");
@@ -60,34 +67,45 @@ pub(super) async fn serve_ros<Req, Resp>(
     }
 }
 
-/// YARP RPC port -> ROS service client: each YARP request calls the ROS service.
-pub(super) async fn call_ros<Req, Resp>(
+/// YARP RPC port -> ROS service client: each YARP request calls the ROS service, whose
+/// responses `seed` decodes.
+#[allow(clippy::too_many_arguments)]
+pub(super) async fn call_ros<Req, Resp, S>(
     port: Arc<Port>,
     client: Client<Req, Resp>,
     node: Arc<Node>,
     c: Arc<Counters>,
     service_name: String,
-    req: impl Fn(&Bottle) -> Option<Req>,
+    seed: S,
+    req: impl Fn(&Bottle) -> Result<Req, String>,
     reply: impl Fn(Resp) -> Bottle,
 ) where
     Req: Message + Clone + 'static,
     Resp: Message + 'static,
+    S: for<'de> DeserializeSeed<'de, Value = Resp> + Clone,
 {
     while let Some(mut inc) = port.read().await {
         let t0 = Instant::now();
         let Some(replier) = inc.take_replier() else {
             continue; // a plain write: nobody waits for an answer
         };
-        let Some(r) = inc.bottle().ok().and_then(|b| req(&b)) else {
-            replier.send(service::fail_reply(
-                "cannot build the ROS request from this Bottle",
-            ));
-            c.dropped();
-            continue;
+        let request = match inc.bottle() {
+            Ok(b) => req(&b),
+            Err(e) => Err(e.to_string()),
+        };
+        let r = match request {
+            Ok(r) => r,
+            Err(why) => {
+                replier.send(service::fail_reply(&format!(
+                    "cannot build the {service_name} request from this Bottle: {why}"
+                )));
+                c.dropped();
+                continue;
+            }
         };
         let call = async {
             client.wait_for_service(&node).await;
-            client.async_call_service(r).await
+            client.async_call_service_seed(r, seed.clone()).await
         };
         match tokio::time::timeout(CALL_TIMEOUT, call).await {
             Ok(Ok(resp)) => {
@@ -161,4 +179,58 @@ pub(super) async fn text_rpc(
             Err(e) => c.refused(format!("reply not published: {e:?}")),
         }
     }
+}
+
+/// The request and response types of service `srv_type` (`pkg/srv/Name`), read at run time
+/// or built in.
+pub(super) fn generic_service_types(
+    srv_type: &str,
+) -> Result<(&'static MsgType, &'static MsgType), RosError> {
+    let part = |p: &str| {
+        crate::types::lookup(&format!("{srv_type}{p}")).ok_or_else(|| RosError::Entity {
+            what: "service type",
+            name: srv_type.to_string(),
+            message: format!("no definition of its {p} structure"),
+        })
+    };
+    Ok((part("_Request")?, part("_Response")?))
+}
+
+/// The Bottle a generic ROS request sends to YARP: the `words` configured, then the
+/// request's fields in the generic layout.
+pub(super) fn generic_command(words: &Bottle, t: &'static MsgType, req: &Ros) -> Bottle {
+    let mut b = words.clone();
+    match crate::generic::to_yarp(t, req) {
+        Ok(fields) => b.extend(fields.into_items()),
+        // The request was decoded against `t`: it always fits.
+        Err(e) => warn!("{}: {e}", t.name),
+    }
+    b
+}
+
+/// The ROS response of a generic service for YARP's reply, read in the response type's
+/// generic layout (fields left out take their defaults). A ROS service cannot answer with
+/// an error: a failed call or a reply that does not fit gets the default response, and
+/// the reason is logged.
+pub(super) fn generic_response(
+    service: &str,
+    t: &'static MsgType,
+    reply: Result<Bottle, RpcError>,
+) -> Ros {
+    let why = match reply {
+        // `[fail] ...`, `[err]`, `[nack]`: the generic layout has no vocabs but bools.
+        Ok(b)
+            if matches!(b.get(0), Some(Value::Vocab32(v))
+            if ["fail", "err", "nack"].contains(&v.as_string().as_str())) =>
+        {
+            format!("the YARP port refused: `{b}`")
+        }
+        Ok(b) => match crate::generic::to_ros(t, &b, super::now_ns()) {
+            Ok(r) => return r,
+            Err(e) => format!("the reply `{b}` is not a {}: {e}", t.name),
+        },
+        Err(e) => e.to_string(),
+    };
+    warn!("{service}: {why}; answering the default response");
+    Ros::zero(t.name).unwrap_or(Ros::Struct(Vec::new()))
 }

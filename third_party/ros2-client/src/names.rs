@@ -421,7 +421,9 @@ impl ActionTypeName {
     self.0.type_name()
   }
 
-  pub(crate) fn dds_action_topic(&self, topic: &str) -> MessageTypeName {
+  // yarp-rs: public, for actions whose types are known only at run time.
+  /// The type of the action's topic `topic` (`_FeedbackMessage`).
+  pub fn dds_action_topic(&self, topic: &str) -> MessageTypeName {
     MessageTypeName::new_prefix(
       self.package_name(),
       &(self.type_name().to_owned() + topic),
@@ -431,7 +433,8 @@ impl ActionTypeName {
     // &self.type_name())
   }
 
-  pub(crate) fn dds_action_service(&self, srv: &str) -> ServiceTypeName {
+  /// The type of the action's service `srv` (`_SendGoal`, `_GetResult`).
+  pub fn dds_action_service(&self, srv: &str) -> ServiceTypeName {
     ServiceTypeName::new_prefix(
       self.package_name(),
       &(self.type_name().to_owned() + srv),

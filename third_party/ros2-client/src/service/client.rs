@@ -204,6 +204,53 @@ where
     } // loop
   }
 
+  // yarp-rs: responses of a type known only at run time.
+  /// As [`Self::async_receive_response`], the response decoded by `seed`.
+  pub async fn async_receive_response_seed<S>(
+    &self,
+    request_id: RmwRequestId,
+    seed: S,
+  ) -> ReadResult<Resp>
+  where
+    S: for<'de> serde::de::DeserializeSeed<'de, Value = Resp> + Clone,
+  {
+    let dcc_stream = self.response_receiver.as_async_stream();
+    pin_mut!(dcc_stream);
+    let decode = decode_seed(seed);
+    loop {
+      match dcc_stream.next().await {
+        Some(Err(e)) => return Err(e.into()),
+        Some(Ok(dcc)) => {
+          let mi = MessageInfo::from(&dcc);
+          let (req_id, response) =
+            dcc
+              .into_value()
+              .unwrap_with(self.service_mapping, mi, self.client_guid, &decode)?;
+          if self.is_response_to(req_id, request_id) {
+            return Ok(response);
+          }
+        }
+        None => return read_error_internal!("SimpleDataReader value stream unexpectedly ended!"),
+      }
+    }
+  }
+
+  /// As [`Self::async_call_service`], the response decoded by `seed`.
+  pub async fn async_call_service_seed<S>(
+    &self,
+    request: Req,
+    seed: S,
+  ) -> Result<Resp, CallServiceError<()>>
+  where
+    S: for<'de> serde::de::DeserializeSeed<'de, Value = Resp> + Clone,
+  {
+    let req_id = self.async_send_request(request).await?;
+    self
+      .async_receive_response_seed(req_id, seed)
+      .await
+      .map_err(CallServiceError::from)
+  }
+
   pub async fn async_call_service(&self, request: Req) -> Result<Resp, CallServiceError<()>> {
     let req_id = self.async_send_request(request).await?;
     self

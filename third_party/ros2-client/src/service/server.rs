@@ -111,6 +111,11 @@ where
     }
   }
 
+  // yarp-rs: for the node's parameter servers, which wait for a client's reader themselves.
+  pub(crate) fn response_writer_guid(&self) -> GUID {
+    self.response_sender.guid()
+  }
+
   /// Send response to request by Client.
   /// rmw_req_id identifies request being responded.
   pub fn send_response(&self, rmw_req_id: RmwRequestId, response: Resp) -> WriteResult<(), ()> {
@@ -154,6 +159,27 @@ where
       // This should never occur, because topic do not "end".
       None => read_error_internal!("SimpleDataReader value stream unexpectedly ended!"),
     } // match
+  }
+
+  // yarp-rs: requests of a type known only at run time.
+  /// As [`Self::async_receive_request`], the request decoded by `seed`.
+  pub async fn async_receive_request_seed<S>(&self, seed: S) -> ReadResult<(RmwRequestId, Req)>
+  where
+    S: for<'de> serde::de::DeserializeSeed<'de, Value = Req> + Clone,
+  {
+    let dcc_stream = self.request_receiver.as_async_stream();
+    pin_mut!(dcc_stream);
+    let decode = decode_seed(seed);
+    match dcc_stream.next().await {
+      Some(Err(e)) => Err(e.into()),
+      Some(Ok(dcc)) => {
+        let mi = MessageInfo::from(&dcc);
+        dcc
+          .into_value()
+          .unwrap_with(self.service_mapping, &mi, &decode)
+      }
+      None => read_error_internal!("SimpleDataReader value stream unexpectedly ended!"),
+    }
   }
 
   /// Returns a never-ending stream of (request_id, request)

@@ -6,7 +6,7 @@ use log::{debug, error, info, warn};
 use rustdds::{
   bytes::{BufMut, Bytes, BytesMut},
   rpc::*,
-  serialization::deserialize_from_cdr_with_rep_id,
+  serialization::{deserialize_from_cdr_with_rep_id, CdrDeserializeSeedDecoder},
   *,
 };
 
@@ -16,6 +16,32 @@ use crate::{
   message_info::MessageInfo,
 };
 use super::{RmwRequestId, ServiceMapping};
+
+// yarp-rs: a request or response body is decoded by serde's `Deserialize` or, for types
+// known only at run time, by a `DeserializeSeed` (as `Subscription::async_stream_seed`).
+/// How the body of a request or response is decoded.
+pub(super) type Decode<'a, R> = &'a dyn Fn(&[u8], RepresentationIdentifier) -> ReadResult<R>;
+
+/// Decodes a body with `R`'s own `Deserialize`.
+pub(super) fn decode_owned<R: Message>(
+  bytes: &[u8],
+  encoding: RepresentationIdentifier,
+) -> ReadResult<R> {
+  Ok(deserialize_from_cdr_with_rep_id::<R>(bytes, encoding)?.0)
+}
+
+/// Decodes a body with `seed`.
+pub(super) fn decode_seed<R, S>(
+  seed: S,
+) -> impl Fn(&[u8], RepresentationIdentifier) -> ReadResult<R>
+where
+  S: for<'de> serde::de::DeserializeSeed<'de, Value = R> + Clone,
+{
+  move |bytes, encoding| {
+    let decoder = CdrDeserializeSeedDecoder::new(seed.clone(), PhantomData::<()>);
+    Ok(no_key::Decode::decode_bytes(decoder, bytes, encoding)?)
+  }
+}
 
 // trait Wrapper is for interfacing to Service-specific (De)SerializerAdapter.
 // These adapters are essentially pass-through, and do no actual serialization.
@@ -53,6 +79,16 @@ impl<R: Message> RequestWrapper<R> {
     service_mapping: ServiceMapping,
     message_info: &MessageInfo,
   ) -> ReadResult<(RmwRequestId, R)> {
+    self.unwrap_with(service_mapping, message_info, &decode_owned::<R>)
+  }
+
+  // yarp-rs: as `unwrap`, the body decoded by `decode`.
+  pub(super) fn unwrap_with(
+    &self,
+    service_mapping: ServiceMapping,
+    message_info: &MessageInfo,
+    decode: Decode<'_, R>,
+  ) -> ReadResult<(RmwRequestId, R)> {
     match service_mapping {
       ServiceMapping::Basic => {
         // 1. decode "RequestHeader" and
@@ -63,17 +99,15 @@ impl<R: Message> RequestWrapper<R> {
         if bytes.len() < header_size {
           read_error_deserialization!("Service request too short")
         } else {
-          let _header_bytes = bytes.split_off(header_size);
-          let (request, _request_bytes) =
-            deserialize_from_cdr_with_rep_id::<R>(&bytes, self.encoding)?;
+          let body = bytes.split_off(header_size);
+          let request = decode(&body, self.encoding)?;
           Ok((RmwRequestId::from(header.request_id), request))
         }
       }
       ServiceMapping::Enhanced => {
         // Enhanced mode does not use any header in the DDS payload.
         // Therefore, we use a wrapper that is identical to the payload.
-        let (request, _request_bytes) =
-          deserialize_from_cdr_with_rep_id::<R>(&self.serialized_message, self.encoding)?;
+        let request = decode(&self.serialized_message, self.encoding)?;
         let mut rmw_req_id = message_info.related_request_id()
             .unwrap_or_else(|| {
               // ServiceMapping::Enhanced is supposed to contain related sample identity as 
@@ -109,6 +143,7 @@ impl<R: Message> RequestWrapper<R> {
         self.serialized_message.clone(),
         GUID::from(message_info.publisher_gid()),
         self.encoding,
+        decode,
       ),
     }
   }
@@ -175,6 +210,17 @@ impl<R: Message> ResponseWrapper<R> {
     message_info: MessageInfo,
     client_guid: GUID,
   ) -> ReadResult<(RmwRequestId, R)> {
+    self.unwrap_with(service_mapping, message_info, client_guid, &decode_owned::<R>)
+  }
+
+  // yarp-rs: as `unwrap`, the body decoded by `decode`.
+  pub(super) fn unwrap_with(
+    &self,
+    service_mapping: ServiceMapping,
+    message_info: MessageInfo,
+    client_guid: GUID,
+    decode: Decode<'_, R>,
+  ) -> ReadResult<(RmwRequestId, R)> {
     match service_mapping {
       ServiceMapping::Basic => {
         let mut bytes = self.serialized_message.clone(); // ref copy only
@@ -183,16 +229,15 @@ impl<R: Message> ResponseWrapper<R> {
         if bytes.len() < header_size {
           read_error_deserialization!("Service response too short")
         } else {
-          let _header_bytes = bytes.split_off(header_size);
-          let (response, _bytes) = deserialize_from_cdr_with_rep_id::<R>(&bytes, self.encoding)?;
+          let body = bytes.split_off(header_size);
+          let response = decode(&body, self.encoding)?;
           Ok((RmwRequestId::from(header.related_request_id), response))
         }
       }
       ServiceMapping::Enhanced => {
         // Enhanced mode does not use any header in the DDS payload.
         // Therefore, we use a wrapper that is identical to the payload.
-        let (response, _response_bytes) =
-          deserialize_from_cdr_with_rep_id::<R>(&self.serialized_message, self.encoding)?;
+        let response = decode(&self.serialized_message, self.encoding)?;
         let related_sample_identity = match message_info.related_request_id() {
           Some(rsi) => rsi,
           None => {
@@ -207,7 +252,7 @@ impl<R: Message> ResponseWrapper<R> {
         // On the client, the upper half of the client GUID comes from local
         // client state (our own GUID); the lower half is carried in the Cyclone
         // header and reassembled inside cyclone_unwrap.
-        cyclone_unwrap::<R>(self.serialized_message.clone(), client_guid, self.encoding)
+        cyclone_unwrap::<R>(self.serialized_message.clone(), client_guid, self.encoding, decode)
       }
     }
   }
@@ -324,6 +369,7 @@ fn cyclone_unwrap<R: Message>(
   serialized_message: Bytes,
   guid_upper_half_source: GUID,
   encoding: RepresentationIdentifier,
+  decode: Decode<'_, R>,
 ) -> ReadResult<(RmwRequestId, R)> {
   // 1. decode "CycloneHeader" and
   // 2. decode Request/response
@@ -338,7 +384,7 @@ fn cyclone_unwrap<R: Message>(
     // of the payload is preserved when it is decoded from the start of this
     // slice.
     let payload = bytes.split_off(header_size);
-    let (response, _response_bytes) = deserialize_from_cdr_with_rep_id::<R>(&payload, encoding)?;
+    let response = decode(&payload, encoding)?;
 
     // Reassemble the full client GUID: upper 8 bytes from the supplied source,
     // lower 8 bytes from the Cyclone header.
