@@ -9,6 +9,7 @@
 //! runtime ([`gateway`], over one ros2-client node from [`ros`]) only moves messages.
 #![forbid(unsafe_code)]
 
+pub mod action;
 pub mod axis_info;
 pub mod camera_info;
 pub mod convert;

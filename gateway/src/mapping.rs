@@ -330,11 +330,35 @@ impl ServiceEntry {
     }
 }
 
+/// An `[[action]]` entry: a ROS 2 action served by a YARP RPC port (`ros_to_yarp`).
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ActionEntry {
+    pub name: String,
+    /// `ros_to_yarp`: ROS action clients send goals to the gateway's action server; each
+    /// goal is a call of the YARP RPC port `yarp_port`.
+    pub direction: Direction,
+    pub yarp_port: String,
+    pub ros_action: String,
+    /// `pkg/action/Name`, built in or read at run time.
+    pub ros_type: String,
+    /// Words sent before the goal's fields.
+    pub command: Option<String>,
+    /// The Bottle (text) that stops a goal, sent on another connection to `yarp_port`;
+    /// without it cancel requests are refused.
+    pub cancel: Option<String>,
+    /// A YARP port whose Bottles (in the feedback's generic layout) are the executing
+    /// goals' feedback.
+    pub yarp_feedback: Option<String>,
+}
+
 /// Everything loaded from one or more mapping files.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Mappings {
     pub topics: Vec<TopicEntry>,
     pub services: Vec<ServiceEntry>,
+    /// `[[action]]` entries (see [`crate::action`]).
+    pub actions: Vec<ActionEntry>,
     /// `[[robot]]` entries (see [`crate::robot`]).
     pub robots: Vec<RobotEntry>,
     /// `interfaces = [...]`: directories of interface definitions the files name (added
@@ -397,6 +421,10 @@ impl Mappings {
                 check_unique(&all, &r.name, f)?;
                 all.robots.push(r);
             }
+            for a in one.actions {
+                check_unique(&all, &a.name, f)?;
+                all.actions.push(a);
+            }
             all.interfaces.extend(one.interfaces);
         }
         all.check_robot_parts()?;
@@ -442,8 +470,8 @@ impl Mappings {
         }
         for (key, value) in table {
             let entries = match (key.as_str(), value) {
-                ("topic" | "service" | "robot", toml::Value::Array(a)) => a,
-                ("topic" | "service" | "robot", _) => {
+                ("topic" | "service" | "action" | "robot", toml::Value::Array(a)) => a,
+                ("topic" | "service" | "action" | "robot", _) => {
                     return Err(LoadError::Entry {
                         file: file.to_path_buf(),
                         entry: key.clone(),
@@ -473,6 +501,11 @@ impl Mappings {
                     t.qos.reliability = Some(t.qos.reliability.unwrap_or(default_reliability(&t)));
                     check_unique(&out, &t.name, file)?;
                     out.topics.push(t);
+                } else if key == "action" {
+                    let a: ActionEntry = deserialize(v).map_err(|(k, m)| err(&k, m))?;
+                    validate_action(&a).map_err(|(k, m)| err(k, m))?;
+                    check_unique(&out, &a.name, file)?;
+                    out.actions.push(a);
                 } else if key == "robot" {
                     let mut r: RobotEntry = deserialize(v).map_err(|(k, m)| err(&k, m))?;
                     robot::validate(&mut r, file).map_err(|(k, m)| err(k, m))?;
@@ -529,7 +562,8 @@ fn entry_label(section: &str, i: usize, v: &toml::Value) -> String {
 fn check_unique(m: &Mappings, name: &str, file: &Path) -> Result<(), LoadError> {
     let taken = m.topics.iter().any(|t| t.name == name)
         || m.services.iter().any(|s| s.name == name)
-        || m.robots.iter().any(|r| r.name == name);
+        || m.robots.iter().any(|r| r.name == name)
+        || m.actions.iter().any(|a| a.name == name);
     if taken {
         return Err(LoadError::Entry {
             file: file.to_path_buf(),
@@ -820,6 +854,44 @@ const COMMAND_SERVICES: [&str; 3] = [
     "std_srvs/srv/Empty",
 ];
 
+fn validate_action(a: &ActionEntry) -> Result<(), Invalid> {
+    check_ros_name("ros_action", &a.ros_action)?;
+    check_port("yarp_port", &a.yarp_port)?;
+    if let Some(p) = &a.yarp_feedback {
+        check_port("yarp_feedback", p)?;
+    }
+    if a.direction != Direction::RosToYarp {
+        return Err((
+            "direction",
+            "an action is served by a YARP RPC port: ros_to_yarp".into(),
+        ));
+    }
+    if !matches!(
+        crate::types::split_name(&a.ros_type),
+        Some((_, "action", _))
+    ) {
+        return Err((
+            "ros_type",
+            format!("`{}` is not an action type (pkg/action/Name)", a.ros_type),
+        ));
+    }
+    let goal = format!("{}_SendGoal_Request", a.ros_type);
+    if crate::types::lookup(&goal).is_none() {
+        let why = crate::interfaces::problem(&goal)
+            .map(|p| format!(" (its definition: {p})"))
+            .unwrap_or_else(|| {
+                " (no definition in AMENT_PREFIX_PATH, --interfaces or the mapping's \
+                 `interfaces`)"
+                    .into()
+            });
+        return Err((
+            "ros_type",
+            format!("unknown action type `{}`{why}", a.ros_type),
+        ));
+    }
+    Ok(())
+}
+
 fn validate_service(s: &ServiceEntry) -> Result<(), Invalid> {
     check_ros_name("ros_service", &s.ros_service)?;
     check_port("yarp_port", &s.yarp_port)?;
@@ -1073,6 +1145,35 @@ command = "[home]"
         let err = parse("[[topic]\n").unwrap_err();
         assert!(matches!(err, LoadError::Syntax { .. }));
         assert!(err.to_string().starts_with("m.toml: "));
+    }
+
+    #[test]
+    fn actions_are_checked_like_services() {
+        // The built-in catalog has no action: a definition on file is needed.
+        let dir = std::env::temp_dir().join(format!("gw-actions-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("gw_act_pkg/action")).unwrap();
+        std::fs::write(
+            dir.join("gw_act_pkg/action/Go.action"),
+            "int32 to\n---\nint32 at\n---\nint32 now\n",
+        )
+        .unwrap();
+        let file = format!(
+            "interfaces = [{:?}]\n[[action]]\nname = \"go\"\ndirection = \"ros_to_yarp\"\n\
+             yarp_port = \"/go:i\"\nros_action = \"/go\"\nros_type = \"gw_act_pkg/action/Go\"\n",
+            dir.display().to_string()
+        );
+        let m = parse(&file).unwrap();
+        assert_eq!(m.actions[0].ros_type, "gw_act_pkg/action/Go");
+        let (_, key, msg) = entry_error(&file.replace("action/Go", "action/Gone"));
+        assert_eq!(key, "ros_type");
+        assert!(msg.contains("unknown action type"), "{msg}");
+        let (_, key, _) = entry_error(&file.replace("ros_to_yarp", "yarp_to_ros"));
+        assert_eq!(key, "direction");
+        let (_, key, _) = entry_error(&file.replace("/go:i", "go"));
+        assert_eq!(key, "yarp_port");
+        let (_, key, _) = entry_error(&file.replace("\"/go\"", "\"bad name\""));
+        assert_eq!(key, "ros_action");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

@@ -2,6 +2,7 @@
 //! main ROS node, plus one node per dynamic-mode entry) and the YARP network. Conversions live in [`crate::convert`] and
 //! [`crate::service`]; this module only moves messages and counts them.
 
+mod actions;
 mod beside;
 mod commands;
 mod demand;
@@ -20,7 +21,8 @@ use self::yarp_rpc::YarpRpc;
 use crate::counters::{self, Counters, Row};
 use crate::dynmsg::{MsgSeed, Value as Ros};
 use crate::mapping::{
-    Conversion, Direction, Durability, Mappings, ServiceConversion, ServiceEntry, TopicEntry,
+    ActionEntry, Conversion, Direction, Durability, Mappings, ServiceConversion, ServiceEntry,
+    TopicEntry,
 };
 use crate::ros::{self, RosError};
 use crate::service::{self, EmptyMsg, OutcomeResponse, SetBoolRequest, StdSrv};
@@ -153,6 +155,9 @@ impl Gateway {
         }
         for s in &m.services {
             g.service(&mut node, s).await?;
+        }
+        for a in &m.actions {
+            g.action(&mut node, a)?;
         }
         let robots = std::mem::take(&mut g.robots);
         for r in &m.robots {
@@ -546,6 +551,25 @@ impl Builder {
             ros: format!("{}/<port>", t.ros_topic.trim_end_matches('/')),
             ros_type: t.ros_type.clone(),
             detail: format!("{:?} dynamic, ports {own_prefix}/...", t.conversion()),
+            counters,
+        });
+        Ok(())
+    }
+
+    fn action(&mut self, node: &mut Node, a: &ActionEntry) -> Result<(), StartError> {
+        let counters = Arc::new(Counters::default());
+        let server = actions::create(node, &self.ctx.domain_participant(), a)?;
+        let (ns, entry, c) = (self.ns.clone(), a.clone(), counters.clone());
+        self.deferred.push(Box::new(move |node| {
+            tokio::spawn(actions::serve(server, node, ns, entry, c))
+        }));
+        self.bridges.push(Bridge {
+            name: a.name.clone(),
+            direction: a.direction,
+            yarp: a.yarp_port.clone(),
+            ros: a.ros_action.clone(),
+            ros_type: a.ros_type.clone(),
+            detail: "action".into(),
             counters,
         });
         Ok(())

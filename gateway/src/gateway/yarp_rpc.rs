@@ -51,7 +51,16 @@ impl YarpRpc {
     /// Sends `cmd` and returns the reply; errors drop the connection (the next call
     /// reconnects, so a restarted server is picked up).
     pub(super) async fn call(&mut self, cmd: &Bottle) -> Result<Bottle, RpcError> {
-        let r = tokio::time::timeout(CALL_TIMEOUT, self.call_inner(cmd)).await;
+        self.call_within(cmd, CALL_TIMEOUT).await
+    }
+
+    /// As [`Self::call`], waiting up to `limit` (an action's goal runs as long as it takes).
+    pub(super) async fn call_within(
+        &mut self,
+        cmd: &Bottle,
+        limit: Duration,
+    ) -> Result<Bottle, RpcError> {
+        let r = tokio::time::timeout(limit, self.call_inner(cmd)).await;
         match r {
             Ok(Ok(b)) => Ok(b),
             Ok(Err(e)) => {
@@ -62,7 +71,7 @@ impl YarpRpc {
                 self.client = None;
                 Err(RpcError::Timeout {
                     port: self.target.clone(),
-                    after: CALL_TIMEOUT,
+                    after: limit,
                 })
             }
         }

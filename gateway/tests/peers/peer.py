@@ -152,6 +152,8 @@ def main():
     ap.add_argument("--subs", type=int, default=0)
     ap.add_argument("--named", action="store_true", help="info: wait for node names too")
     ap.add_argument("--summary", action="store_true", help="sub: print images as digests")
+    ap.add_argument("--cancel-after", type=float, default=None,
+                    help="action: cancel the goal this many seconds after it was accepted")
     args = ap.parse_args()
     deadline = time.monotonic() + args.timeout
     rclpy.init()
@@ -287,6 +289,40 @@ def run(node, args, deadline):
         fut = cli.call_async(from_json(cls.Request, json.loads(a[2])))
         spin_until(node, fut.done, deadline)
         say("RESP", json.dumps(to_json(fut.result())) if fut.done() else "null")
+    elif mode == "action":
+        # An rclpy ActionClient: sends the goal a[2] to action a[1] of type a[0], prints
+        # ACCEPTED or REJECTED, every FEEDBACK, CANCEL (with --cancel-after) and RESULT.
+        from rclpy.action import ActionClient
+        cls = load_type(a[0])
+        client = ActionClient(node, cls, a[1])
+        while not client.wait_for_server(timeout_sec=0.1):
+            if time.monotonic() > deadline:
+                say("NO_SERVER")
+                return
+        say("READY")
+        fut = client.send_goal_async(
+            from_json(cls.Goal, json.loads(a[2])),
+            feedback_callback=lambda fb: say("FEEDBACK", json.dumps(to_json(fb.feedback))))
+        spin_until(node, fut.done, deadline)
+        handle = fut.result() if fut.done() else None
+        if handle is None or not handle.accepted:
+            say("REJECTED")
+            return
+        say("ACCEPTED")
+        if args.cancel_after is not None:
+            spin_until(node, lambda: False, time.monotonic() + args.cancel_after)
+            cf = handle.cancel_goal_async()
+            spin_until(node, cf.done, deadline)
+            r = cf.result()
+            say("CANCEL", json.dumps({"return_code": r.return_code,
+                                      "canceling": len(r.goals_canceling)}))
+        rf = handle.get_result_async()
+        spin_until(node, rf.done, deadline)
+        if rf.done():
+            r = rf.result()
+            say("RESULT", json.dumps({"status": r.status, "result": to_json(r.result)}))
+        else:
+            say("RESULT", "null")
     elif mode == "call_fresh":
         # `call`, --count times, each from a fresh node on a context (a DDS participant)
         # of its own: how `ros2 param list` meets a server, once per command.

@@ -1,0 +1,506 @@
+//! Action bridges: a ROS 2 action served by a YARP RPC port (`[[action]]`, `ros_to_yarp`).
+//!
+//! Each accepted goal is one call of the YARP port (the `command` words, then the goal's
+//! fields in the generic layout) on a connection of its own; the reply, read in the
+//! result's layout, ends the goal SUCCEEDED (`[fail]`, `[err]`, `[nack]`, a reply that does
+//! not fit or no reply: ABORTED). A goal is rejected when the YARP port is not registered
+//! (nobody to run it). Feedback comes from `yarp_feedback`, a YARP port whose Bottles (in
+//! the feedback's layout) are published for every executing goal. A cancel request sends
+//! `cancel` to the YARP port on another connection; the goal ends CANCELED when its call
+//! returns. The goals' bookkeeping is [`crate::action`].
+
+use super::services::generic_service_types;
+use super::yarp_rpc::YarpRpc;
+use crate::action::{self, cancel_code, status, GoalId, Goals};
+use crate::counters::Counters;
+use crate::dynmsg::{MsgSeed, Value as Ros};
+use crate::mapping::ActionEntry;
+use crate::ros::{self, RosError};
+use crate::types::MsgType;
+use ros2_client::{
+    ActionTypeName, MessageTypeName, Node, Publisher, QosProfile, Server, ServiceMapping,
+    ServiceTypeName,
+};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+use tracing::{debug, info, warn};
+use yarp_net::buffered::BufferedPort;
+use yarp_net::nameserver::NameClient;
+use yarp_net::network;
+use yarp_proto::{Bottle, Value};
+
+/// A goal's YARP call may run this long (a dead peer ends it sooner: the connection breaks).
+const GOAL_TIMEOUT: Duration = Duration::from_secs(600);
+/// How long a response waits for the client's reply reader to match.
+const CLIENT_MATCH_TIMEOUT: Duration = Duration::from_secs(2);
+/// How often the feedback port's connection is checked.
+const RECONNECT_PERIOD: Duration = Duration::from_secs(1);
+
+/// The run-time types of one action.
+#[derive(Clone, Copy)]
+struct Types {
+    send_goal: (&'static MsgType, &'static MsgType),
+    get_result: (&'static MsgType, &'static MsgType),
+    cancel: (&'static MsgType, &'static MsgType),
+    goal: &'static MsgType,
+    result: &'static MsgType,
+    feedback: &'static MsgType,
+}
+
+impl Types {
+    fn of(action_type: &str) -> Result<Types, RosError> {
+        let one = |t: String| {
+            crate::types::lookup(&t).ok_or_else(|| RosError::Entity {
+                what: "action type",
+                name: action_type.to_string(),
+                message: format!("no definition of {t}"),
+            })
+        };
+        Ok(Types {
+            send_goal: generic_service_types(&format!("{action_type}_SendGoal"))?,
+            get_result: generic_service_types(&format!("{action_type}_GetResult"))?,
+            cancel: generic_service_types("action_msgs/srv/CancelGoal")?,
+            goal: one(format!("{action_type}_Goal"))?,
+            result: one(format!("{action_type}_Result"))?,
+            feedback: one(format!("{action_type}_Feedback"))?,
+        })
+    }
+}
+
+/// The ROS endpoints of one action server.
+pub(super) struct ActionServer {
+    send_goal: Server<Ros, Ros>,
+    cancel: Server<Ros, Ros>,
+    get_result: Server<Ros, Ros>,
+    feedback: Publisher<Ros>,
+    status: Publisher<Ros>,
+    types: Types,
+}
+
+/// Creates the action server of `a` on `node` (services and topics as rcl_action names
+/// them, QoS as its defaults: status transient local, depth 1).
+pub(super) fn create(
+    node: &mut Node,
+    dp: &ros2_client::dds::rustdds::DomainParticipant,
+    a: &ActionEntry,
+) -> Result<ActionServer, RosError> {
+    let types = Types::of(&a.ros_type)?;
+    for srv in ["_SendGoal", "_GetResult"] {
+        ros::announce_service_type_hash(dp, &format!("{}{srv}", a.ros_type));
+    }
+    ros::announce_type_hash(dp, &format!("{}_FeedbackMessage", a.ros_type));
+    let (pkg, _, name) = crate::types::split_name(&a.ros_type).unwrap_or_default();
+    let action_type = ActionTypeName::new(pkg, name);
+    let base = a.ros_action.trim_end_matches('/');
+    let q = ros::service_qos();
+    let entity = |what: &'static str, n: &str| {
+        let n = n.to_string();
+        move |e: ros2_client::CreateError| RosError::Entity {
+            what,
+            name: n,
+            message: format!("{e:?}"),
+        }
+    };
+    let server = |node: &mut Node, part: &str, t: &ServiceTypeName| {
+        let n = format!("{base}/_action/{part}");
+        node.create_server(
+            ServiceMapping::Enhanced,
+            &ros::name(&n)?,
+            t,
+            q.clone(),
+            q.clone(),
+        )
+        .map_err(entity("service", &n))
+    };
+    let send_goal = server(
+        node,
+        "send_goal",
+        &action_type.dds_action_service("_SendGoal"),
+    )?;
+    let cancel = server(
+        node,
+        "cancel_goal",
+        &ServiceTypeName::new("action_msgs", "CancelGoal"),
+    )?;
+    let get_result = server(
+        node,
+        "get_result",
+        &action_type.dds_action_service("_GetResult"),
+    )?;
+    let topic = |node: &mut Node, part: &str, t: MessageTypeName, q: &QosProfile| {
+        let n = format!("{base}/_action/{part}");
+        let topic = node
+            .create_topic(&ros::name(&n)?, t, q)
+            .map_err(entity("topic", &n))?;
+        node.create_publisher(&topic, Some(q.clone()))
+            .map_err(entity("publisher", &n))
+    };
+    let feedback = topic(
+        node,
+        "feedback",
+        action_type.dds_action_topic("_FeedbackMessage"),
+        &q,
+    )?;
+    let status_qos = ros::qos(&crate::mapping::Qos {
+        reliability: Some(crate::mapping::Reliability::Reliable),
+        durability: crate::mapping::Durability::TransientLocal,
+        depth: 1,
+    });
+    let status = topic(
+        node,
+        "status",
+        MessageTypeName::new("action_msgs", "GoalStatusArray"),
+        &status_qos,
+    )?;
+    Ok(ActionServer {
+        send_goal,
+        cancel,
+        get_result,
+        feedback,
+        status,
+        types,
+    })
+}
+
+/// What the three service loops share.
+struct State {
+    goals: Goals,
+    /// `get_result` requests waiting for their goal to end.
+    waiting: HashMap<GoalId, Vec<ros2_client::RmwRequestId>>,
+}
+
+struct Shared {
+    server: ActionServer,
+    node: Arc<Node>,
+    state: Mutex<State>,
+    ns: NameClient,
+    entry: ActionEntry,
+    me: String,
+    counters: Arc<Counters>,
+}
+
+impl Shared {
+    fn state(&self) -> std::sync::MutexGuard<'_, State> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    async fn publish_status(&self) {
+        let array = self.state().goals.status_array();
+        if let Err(e) = self.server.status.async_publish(array).await {
+            debug!("{}: status not published: {e:?}", self.entry.name);
+        }
+    }
+
+    /// Answers `id`'s request on `server` once its reply reader is matched (bounded).
+    async fn respond(&self, server: &Server<Ros, Ros>, id: ros2_client::RmwRequestId, r: Ros) {
+        let matched =
+            tokio::time::timeout(CLIENT_MATCH_TIMEOUT, server.wait_for_client(&self.node, id));
+        if matched.await.is_err() {
+            debug!(
+                "{}: the client's reader is not matched yet; answering anyway",
+                self.entry.name
+            );
+        }
+        if let Err(e) = server.async_send_response(id, r).await {
+            warn!("{}: response not sent: {e:?}", self.entry.name);
+        }
+    }
+
+    /// The `get_result` response of a goal.
+    fn result_response(&self, goal: Option<&action::Goal>) -> Ros {
+        let t = self.server.types;
+        let (st, result) = match goal {
+            Some(g) if g.is_terminal() => (g.status, g.result.clone()),
+            Some(g) => (g.status, None),
+            None => (status::UNKNOWN, None),
+        };
+        let result = result
+            .or_else(|| Ros::zero(t.result.name))
+            .unwrap_or(Ros::Struct(Vec::new()));
+        Ros::Struct(vec![Ros::I8(st), result])
+    }
+}
+
+/// Serves the action until the gateway stops (the task is aborted).
+pub(super) async fn serve(
+    server: ActionServer,
+    node: Arc<Node>,
+    ns: NameClient,
+    entry: ActionEntry,
+    counters: Arc<Counters>,
+) {
+    let me = format!("{}/{}", node.fully_qualified_name(), entry.name);
+    let shared = Arc::new(Shared {
+        server,
+        node,
+        state: Mutex::new(State {
+            goals: Goals::default(),
+            waiting: HashMap::new(),
+        }),
+        ns,
+        entry,
+        me,
+        counters,
+    });
+    tokio::join!(
+        goals(shared.clone()),
+        cancels(shared.clone()),
+        results(shared.clone()),
+        feedback(shared),
+    );
+}
+
+/// `send_goal`: accept (the YARP port is there) or reject, then run the goal.
+async fn goals(s: Arc<Shared>) {
+    let t = s.server.types;
+    loop {
+        let (id, req) = match s
+            .server
+            .send_goal
+            .async_receive_request_seed(MsgSeed(t.send_goal.0))
+            .await
+        {
+            Ok(x) => x,
+            Err(e) => {
+                debug!("{}: goal request: {e:?}", s.entry.name);
+                s.counters.dropped();
+                continue;
+            }
+        };
+        let Some([uuid, goal]) = req
+            .fields()
+            .map(|f| f.to_vec())
+            .and_then(|f| <[Ros; 2]>::try_from(f).ok())
+        else {
+            s.counters.dropped();
+            continue;
+        };
+        let Some(goal_id) = action::goal_id(&uuid) else {
+            s.counters.dropped();
+            continue;
+        };
+        let now = super::now_ns();
+        let runnable = matches!(s.ns.query(&s.entry.yarp_port).await, Ok(Some(_)));
+        let accepted = runnable && s.state().goals.accept(goal_id, now);
+        if !runnable {
+            s.counters.refused(format!(
+                "goal rejected: {} is not registered",
+                s.entry.yarp_port
+            ));
+        }
+        s.respond(
+            &s.server.send_goal,
+            id,
+            Ros::Struct(vec![Ros::Bool(accepted), action::time(now)]),
+        )
+        .await;
+        if accepted {
+            s.publish_status().await;
+            tokio::spawn(run_goal(s.clone(), goal_id, goal));
+        }
+    }
+}
+
+/// Runs one goal: one YARP call, its reply the result.
+async fn run_goal(s: Arc<Shared>, id: GoalId, goal: Ros) {
+    let t = s.server.types;
+    let t0 = Instant::now();
+    s.state().goals.set_status(&id, status::EXECUTING);
+    s.publish_status().await;
+    let mut cmd = Bottle::from_text(s.entry.command.as_deref().unwrap_or_default());
+    match crate::generic::to_yarp(t.goal, &goal) {
+        Ok(fields) => cmd.extend(fields.into_items()),
+        Err(e) => warn!("{}: {e}", t.goal.name),
+    }
+    let mut rpc = YarpRpc::new(s.ns.clone(), &s.entry.yarp_port, &format!("{}/goal", s.me));
+    let reply = rpc.call_within(&cmd, GOAL_TIMEOUT).await;
+    let (succeeded, result) = match reply {
+        Ok(b) if refused(&b) => {
+            s.counters
+                .refused(format!("{} answered `{b}`", s.entry.yarp_port));
+            (false, None)
+        }
+        Ok(b) => match crate::generic::to_ros(t.result, &b, super::now_ns()) {
+            Ok(r) => {
+                s.counters.forwarded(t0.elapsed());
+                (true, Some(r))
+            }
+            Err(e) => {
+                s.counters
+                    .refused(format!("the reply `{b}` is not a {}: {e}", t.result.name));
+                (false, None)
+            }
+        },
+        Err(e) => {
+            s.counters.refused(e.to_string());
+            (false, None)
+        }
+    };
+    let result = result
+        .or_else(|| Ros::zero(t.result.name))
+        .unwrap_or(Ros::Struct(Vec::new()));
+    let waiting = {
+        let mut st = s.state();
+        st.goals.finish(&id, succeeded, result);
+        st.waiting.remove(&id).unwrap_or_default()
+    };
+    s.publish_status().await;
+    let response = s.result_response(s.state().goals.get(&id));
+    for req in waiting {
+        s.respond(&s.server.get_result, req, response.clone()).await;
+    }
+}
+
+/// `[fail] ...`, `[err]`, `[nack]`: the YARP side refused (the generic layout has no
+/// vocabs but bools).
+fn refused(b: &Bottle) -> bool {
+    matches!(b.get(0), Some(Value::Vocab32(v))
+        if ["fail", "err", "nack"].contains(&v.as_string().as_str()))
+}
+
+/// `cancel_goal`: the goals named move to CANCELING and YARP gets `cancel`.
+async fn cancels(s: Arc<Shared>) {
+    let t = s.server.types;
+    let mut rpc = YarpRpc::new(
+        s.ns.clone(),
+        &s.entry.yarp_port,
+        &format!("{}/cancel", s.me),
+    );
+    loop {
+        let (id, req) = match s
+            .server
+            .cancel
+            .async_receive_request_seed(MsgSeed(t.cancel.0))
+            .await
+        {
+            Ok(x) => x,
+            Err(e) => {
+                debug!("{}: cancel request: {e:?}", s.entry.name);
+                continue;
+            }
+        };
+        let info = req
+            .fields()
+            .and_then(|f| f.first())
+            .and_then(|i| i.fields());
+        let (goal_id, stamp) = match info {
+            Some([uuid, stamp]) => (
+                action::goal_id(uuid).unwrap_or([0; 16]),
+                action::time_ns(stamp),
+            ),
+            _ => ([0; 16], 0),
+        };
+        let (code, canceling) = match &s.entry.cancel {
+            None => (cancel_code::REJECTED, Vec::new()),
+            Some(_) => s.state().goals.cancel(&goal_id, stamp),
+        };
+        if !canceling.is_empty() {
+            let cmd = Bottle::from_text(s.entry.cancel.as_deref().unwrap_or_default());
+            match rpc.call(&cmd).await {
+                Ok(b) => info!(
+                    "{}: cancel: {} answered `{b}`",
+                    s.entry.name, s.entry.yarp_port
+                ),
+                Err(e) => warn!("{}: cancel: {e}", s.entry.name),
+            }
+            s.publish_status().await;
+        }
+        let goals = canceling
+            .iter()
+            .map(|(g, stamp)| action::goal_info(g, *stamp))
+            .collect();
+        s.respond(
+            &s.server.cancel,
+            id,
+            Ros::Struct(vec![Ros::I8(code), Ros::List(goals)]),
+        )
+        .await;
+    }
+}
+
+/// `get_result`: answered when the goal has ended (at once if it has, or is unknown).
+async fn results(s: Arc<Shared>) {
+    let t = s.server.types;
+    loop {
+        let (id, req) = match s
+            .server
+            .get_result
+            .async_receive_request_seed(MsgSeed(t.get_result.0))
+            .await
+        {
+            Ok(x) => x,
+            Err(e) => {
+                debug!("{}: result request: {e:?}", s.entry.name);
+                continue;
+            }
+        };
+        let goal_id = req
+            .fields()
+            .and_then(|f| f.first())
+            .and_then(action::goal_id)
+            .unwrap_or([0; 16]);
+        let ready = {
+            let mut st = s.state();
+            match st.goals.get(&goal_id) {
+                Some(g) if !g.is_terminal() => {
+                    st.waiting.entry(goal_id).or_default().push(id);
+                    None
+                }
+                g => Some(s.result_response(g)),
+            }
+        };
+        if let Some(r) = ready {
+            s.respond(&s.server.get_result, id, r).await;
+        }
+    }
+}
+
+/// Publishes each Bottle of `yarp_feedback` as the feedback of every executing goal.
+async fn feedback(s: Arc<Shared>) {
+    let t = s.server.types;
+    let Some(source) = s.entry.yarp_feedback.clone() else {
+        return;
+    };
+    let name = format!("{}/feedback:i", s.me);
+    let port = match BufferedPort::open(&name, s.ns.clone()).await {
+        Ok(p) => p,
+        Err(e) => {
+            warn!("{}: feedback port {name}: {e}", s.entry.name);
+            return;
+        }
+    };
+    let mut tick = tokio::time::interval(RECONNECT_PERIOD);
+    loop {
+        let m = tokio::select! {
+            _ = tick.tick() => {
+                if !port.port().inputs().iter().any(|i| i == &source) {
+                    match network::connect(&s.ns, &source, &name, None).await {
+                        Ok((true, _)) => info!("connected {source} -> {name}"),
+                        Ok((false, why)) => debug!("connect {source} -> {name}: {why}"),
+                        Err(e) => debug!("connect {source} -> {name}: {e}"),
+                    }
+                }
+                continue;
+            }
+            m = port.read() => match m {
+                Some(m) => m,
+                None => return,
+            },
+        };
+        let fb = match crate::generic::to_ros(t.feedback, &m.bottle, super::now_ns()) {
+            Ok(f) => f,
+            Err(e) => {
+                s.counters.refused(format!("feedback `{}`: {e}", m.bottle));
+                continue;
+            }
+        };
+        let executing = s.state().goals.executing();
+        for g in executing {
+            let msg = Ros::Struct(vec![action::uuid(&g), fb.clone()]);
+            if let Err(e) = s.server.feedback.async_publish(msg).await {
+                debug!("{}: feedback not published: {e:?}", s.entry.name);
+            }
+        }
+    }
+}
