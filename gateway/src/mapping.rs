@@ -330,13 +330,16 @@ impl ServiceEntry {
     }
 }
 
-/// An `[[action]]` entry: a ROS 2 action served by a YARP RPC port (`ros_to_yarp`).
+/// An `[[action]]` entry: a ROS 2 action served by a YARP RPC port (`ros_to_yarp`), or a
+/// YARP RPC port whose callers reach a ROS 2 action server (`yarp_to_ros`).
 #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ActionEntry {
     pub name: String,
     /// `ros_to_yarp`: ROS action clients send goals to the gateway's action server; each
-    /// goal is a call of the YARP RPC port `yarp_port`.
+    /// goal is a call of the YARP RPC port `yarp_port`. `yarp_to_ros`: each Bottle sent to
+    /// the gateway's RPC port `yarp_port` is a goal of the ROS action; the reply is its
+    /// result.
     pub direction: Direction,
     pub yarp_port: String,
     pub ros_action: String,
@@ -347,8 +350,9 @@ pub struct ActionEntry {
     /// The Bottle (text) that stops a goal, sent on another connection to `yarp_port`;
     /// without it cancel requests are refused.
     pub cancel: Option<String>,
-    /// A YARP port whose Bottles (in the feedback's generic layout) are the executing
-    /// goals' feedback.
+    /// `ros_to_yarp`: a YARP port whose Bottles (in the feedback's generic layout) are the
+    /// executing goals' feedback; `yarp_to_ros`: the port the gateway opens and writes the
+    /// feedback of its goals to.
     pub yarp_feedback: Option<String>,
 }
 
@@ -860,11 +864,21 @@ fn validate_action(a: &ActionEntry) -> Result<(), Invalid> {
     if let Some(p) = &a.yarp_feedback {
         check_port("yarp_feedback", p)?;
     }
-    if a.direction != Direction::RosToYarp {
-        return Err((
-            "direction",
-            "an action is served by a YARP RPC port: ros_to_yarp".into(),
-        ));
+    match a.direction {
+        Direction::Both => {
+            return Err((
+                "direction",
+                "an action has one server: choose ros_to_yarp or yarp_to_ros".into(),
+            ))
+        }
+        Direction::YarpToRos if a.command.is_some() || a.cancel.is_some() => {
+            return Err((
+                "command",
+                "yarp_to_ros sends any Bottle as a goal ([stop] cancels): no command or cancel"
+                    .into(),
+            ))
+        }
+        _ => {}
     }
     if !matches!(
         crate::types::split_name(&a.ros_type),
@@ -1167,8 +1181,14 @@ command = "[home]"
         let (_, key, msg) = entry_error(&file.replace("action/Go", "action/Gone"));
         assert_eq!(key, "ros_type");
         assert!(msg.contains("unknown action type"), "{msg}");
-        let (_, key, _) = entry_error(&file.replace("ros_to_yarp", "yarp_to_ros"));
+        let (_, key, _) = entry_error(&file.replace("ros_to_yarp", "both"));
         assert_eq!(key, "direction");
+        let (_, key, _) = entry_error(
+            &file
+                .replace("ros_to_yarp", "yarp_to_ros")
+                .replace("ros_type", "command = \"go\"\nros_type"),
+        );
+        assert_eq!(key, "command");
         let (_, key, _) = entry_error(&file.replace("/go:i", "go"));
         assert_eq!(key, "yarp_port");
         let (_, key, _) = entry_error(&file.replace("\"/go\"", "\"bad name\""));

@@ -1,7 +1,8 @@
-//! `[[action]]`: a ROS 2 action served by a YARP RPC port, against rclpy's `ActionClient`
-//! on `test_msgs/action/Fibonacci` (run under netns-run): goal, feedback, result, cancel,
-//! a rejected goal and an aborted one. Domain index: 8 (shared with services.rs's text
-//! RPC test; the names differ).
+//! `[[action]]` both ways, against rclpy on `test_msgs/action/Fibonacci` (run under
+//! netns-run): a ROS 2 action served by a YARP RPC port for rclpy's `ActionClient`, and a
+//! YARP caller reaching rclpy's `ActionServer`: goal, feedback, result, cancel, a rejected
+//! goal and an aborted one. Domain index: 8 (shared with services.rs's text RPC test; the
+//! names differ).
 
 mod common;
 
@@ -11,7 +12,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::buffered::BufferedPort;
+use yarp_net::network;
 use yarp_net::port::Port;
+use yarp_net::rpc::RpcClient;
+use yarp_proto::wire::Carrier;
 use yarp_proto::{Bottle, Value};
 
 fn json_line(s: &str) -> Json {
@@ -171,5 +175,119 @@ ros_type = "test_msgs/action/Fibonacci"
 
     gw.shutdown().await;
     server.abort();
+    stop.shutdown();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn yarp_callers_reach_an_rclpy_action_server() {
+    for d in common::distros("yarp_callers_reach_an_rclpy_action_server") {
+        yarp_callers_reach_an_rclpy_action_server_on(&d).await;
+    }
+}
+
+/// Calls `/gw/fib:rpc` with `cmd` (on a connection of its own) until an action server
+/// answers (discovery may take a while on a loaded machine).
+async fn call_goal(ns: &yarp_net::nameserver::NameClient, me: &str, cmd: &str) -> Bottle {
+    let contact = ns
+        .query("/gw/fib:rpc")
+        .await
+        .unwrap()
+        .expect("gateway port registered");
+    let deadline = tokio::time::Instant::now() + 2 * T;
+    loop {
+        let mut c = RpcClient::connect(&contact, me, Carrier::Tcp)
+            .await
+            .unwrap();
+        let reply = tokio::time::timeout(2 * T, c.call(&Bottle::from_text(cmd)))
+            .await
+            .expect("reply in time")
+            .unwrap();
+        c.close().await;
+        let unmatched = reply.to_string().contains("no action server answered");
+        if !unmatched || tokio::time::Instant::now() > deadline {
+            return reply;
+        }
+    }
+}
+
+async fn yarp_callers_reach_an_rclpy_action_server_on(venv: &common::Distro) {
+    let domain = venv.domain(8);
+    let (ns, stop) = common::name_server().await;
+    let server = Peer::start(
+        venv,
+        domain,
+        &[
+            "action_serve",
+            "test_msgs/action/Fibonacci",
+            "/gw_test/served_fib",
+            "--count",
+            "2",
+            "--timeout",
+            "120",
+        ],
+    );
+    server.expect_async("READY", T).await;
+    let gw = common::gateway(
+        &format!(
+            r#"
+interfaces = [{:?}]
+
+[[action]]
+name = "fib"
+direction = "yarp_to_ros"
+yarp_port = "/gw/fib:rpc"
+ros_action = "/gw_test/served_fib"
+ros_type = "test_msgs/action/Fibonacci"
+yarp_feedback = "/gw/fib/feedback:o"
+"#,
+            venv.venv.display().to_string()
+        ),
+        &ns,
+        domain,
+    )
+    .await;
+    let feedback = BufferedPort::open("/test/fib/feedback:i", ns.clone())
+        .await
+        .unwrap();
+    feedback.set_strict(true);
+    network::connect(&ns, "/gw/fib/feedback:o", "/test/fib/feedback:i", None)
+        .await
+        .unwrap();
+
+    // A goal: the reply is the result; its feedback reached the YARP port.
+    let r = call_goal(&ns, "/test/a", "8").await;
+    assert_eq!(r.to_string(), "(0 1 1 2 3 5 8 13 21)");
+    assert_eq!(
+        json_line(&server.expect_async("GOAL", T).await),
+        json!({"order": 8})
+    );
+    let fb = tokio::time::timeout(T, feedback.read())
+        .await
+        .expect("feedback in time")
+        .expect("feedback port open");
+    assert!(fb.bottle.to_string().starts_with("(0 1 1"), "{}", fb.bottle);
+
+    // Rejected by the server.
+    let r = call_goal(&ns, "/test/b", "-1").await;
+    assert_eq!(r.to_string(), "[fail] rejected");
+
+    // A long goal, and `[stop]` from another caller 0.4 s later: canceled.
+    let long = tokio::spawn({
+        let ns = ns.clone();
+        async move { call_goal(&ns, "/test/c", "40").await }
+    });
+    tokio::time::sleep(Duration::from_millis(400)).await;
+    let contact = ns.query("/gw/fib:rpc").await.unwrap().unwrap();
+    let mut c = RpcClient::connect(&contact, "/test/d", Carrier::Tcp)
+        .await
+        .unwrap();
+    let r = c.call(&Bottle::from_text("[stop]")).await.unwrap();
+    assert_eq!(r.to_string(), "[ok] 1");
+    c.close().await;
+    let r = tokio::time::timeout(2 * T, long).await.unwrap().unwrap();
+    assert!(r.to_string().starts_with("[fail] canceled (0 1 1"), "{r}");
+
+    assert!(server.finish(T), "the action server ended its two goals");
+    gw.shutdown().await;
     stop.shutdown();
 }

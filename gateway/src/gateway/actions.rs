@@ -1,5 +1,7 @@
-//! Action bridges: a ROS 2 action served by a YARP RPC port (`[[action]]`, `ros_to_yarp`).
+//! Action bridges (`[[action]]`): a ROS 2 action served by a YARP RPC port (`ros_to_yarp`),
+//! and a YARP RPC port whose callers reach a ROS 2 action server (`yarp_to_ros`).
 //!
+//! `ros_to_yarp`:
 //! Each accepted goal is one call of the YARP port (the `command` words, then the goal's
 //! fields in the generic layout) on a connection of its own; the reply, read in the
 //! result's layout, ends the goal SUCCEEDED (`[fail]`, `[err]`, `[nack]`, a reply that does
@@ -16,10 +18,11 @@ use crate::counters::Counters;
 use crate::dynmsg::{MsgSeed, Value as Ros};
 use crate::mapping::ActionEntry;
 use crate::ros::{self, RosError};
+use crate::service;
 use crate::types::MsgType;
 use ros2_client::{
-    ActionTypeName, MessageTypeName, Node, Publisher, QosProfile, Server, ServiceMapping,
-    ServiceTypeName,
+    ActionTypeName, Client, MessageTypeName, Node, Publisher, QosProfile, Server, ServiceMapping,
+    ServiceTypeName, Subscription,
 };
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -28,6 +31,7 @@ use tracing::{debug, info, warn};
 use yarp_net::buffered::BufferedPort;
 use yarp_net::nameserver::NameClient;
 use yarp_net::network;
+use yarp_net::port::Port;
 use yarp_proto::{Bottle, Value};
 
 /// A goal's YARP call may run this long (a dead peer ends it sooner: the connection breaks).
@@ -501,6 +505,279 @@ async fn feedback(s: Arc<Shared>) {
             if let Err(e) = s.server.feedback.async_publish(msg).await {
                 debug!("{}: feedback not published: {e:?}", s.entry.name);
             }
+        }
+    }
+}
+
+/// The ROS endpoints of a client of one action (`yarp_to_ros`).
+pub(super) struct ActionClient {
+    send_goal: Client<Ros, Ros>,
+    cancel: Client<Ros, Ros>,
+    get_result: Client<Ros, Ros>,
+    feedback: Subscription<Ros>,
+    types: Types,
+}
+
+/// Creates the action client of `a` on `node`.
+pub(super) fn create_client(
+    node: &mut Node,
+    dp: &ros2_client::dds::rustdds::DomainParticipant,
+    a: &ActionEntry,
+) -> Result<ActionClient, RosError> {
+    let types = Types::of(&a.ros_type)?;
+    for srv in ["_SendGoal", "_GetResult"] {
+        ros::announce_service_type_hash(dp, &format!("{}{srv}", a.ros_type));
+    }
+    ros::announce_type_hash(dp, &format!("{}_FeedbackMessage", a.ros_type));
+    let (pkg, _, name) = crate::types::split_name(&a.ros_type).unwrap_or_default();
+    let action_type = ActionTypeName::new(pkg, name);
+    let base = a.ros_action.trim_end_matches('/');
+    let q = ros::service_qos();
+    let entity = |what: &'static str, n: &str| {
+        let n = n.to_string();
+        move |e: ros2_client::CreateError| RosError::Entity {
+            what,
+            name: n,
+            message: format!("{e:?}"),
+        }
+    };
+    let client = |node: &mut Node, part: &str, t: &ServiceTypeName| {
+        let n = format!("{base}/_action/{part}");
+        node.create_client(
+            ServiceMapping::Enhanced,
+            &ros::name(&n)?,
+            t,
+            q.clone(),
+            q.clone(),
+        )
+        .map_err(entity("client", &n))
+    };
+    let send_goal = client(
+        node,
+        "send_goal",
+        &action_type.dds_action_service("_SendGoal"),
+    )?;
+    let cancel = client(
+        node,
+        "cancel_goal",
+        &ServiceTypeName::new("action_msgs", "CancelGoal"),
+    )?;
+    let get_result = client(
+        node,
+        "get_result",
+        &action_type.dds_action_service("_GetResult"),
+    )?;
+    let n = format!("{base}/_action/feedback");
+    let topic = node
+        .create_topic(
+            &ros::name(&n)?,
+            action_type.dds_action_topic("_FeedbackMessage"),
+            &q,
+        )
+        .map_err(entity("topic", &n))?;
+    let feedback = node
+        .create_subscription(&topic, Some(q.clone()))
+        .map_err(entity("subscription", &n))?;
+    Ok(ActionClient {
+        send_goal,
+        cancel,
+        get_result,
+        feedback,
+        types,
+    })
+}
+
+/// What a client's tasks share.
+struct Caller {
+    client: ActionClient,
+    node: Arc<Node>,
+    entry: ActionEntry,
+    /// Goals sent and not ended (their feedback goes to `yarp_feedback`).
+    in_flight: Mutex<Vec<GoalId>>,
+    feedback_port: Option<Arc<Port>>,
+    counters: Arc<Counters>,
+}
+
+impl Caller {
+    fn in_flight(&self) -> std::sync::MutexGuard<'_, Vec<GoalId>> {
+        self.in_flight.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// Serves the RPC port `port` of a `yarp_to_ros` action: each Bottle is a goal of the ROS
+/// action (its reply the result), `[stop]` cancels the goals in flight; feedback is written
+/// to `feedback_port`.
+pub(super) async fn call(
+    client: ActionClient,
+    node: Arc<Node>,
+    port: Arc<Port>,
+    feedback_port: Option<Arc<Port>>,
+    entry: ActionEntry,
+    counters: Arc<Counters>,
+) {
+    let caller = Arc::new(Caller {
+        client,
+        node,
+        entry,
+        in_flight: Mutex::new(Vec::new()),
+        feedback_port,
+        counters,
+    });
+    let requests = async {
+        while let Some(mut inc) = port.read().await {
+            let Some(replier) = inc.take_replier() else {
+                continue; // a plain write: nobody waits for an answer
+            };
+            let b = match inc.bottle() {
+                Ok(b) => b,
+                Err(e) => {
+                    replier.send(service::fail_reply(&e.to_string()));
+                    continue;
+                }
+            };
+            let caller = caller.clone();
+            tokio::spawn(async move {
+                let reply = if is_stop(&b) {
+                    stop_goals(&caller).await
+                } else {
+                    run_remote_goal(&caller, &b).await
+                };
+                replier.send(reply);
+            });
+        }
+    };
+    tokio::join!(requests, forward_feedback(caller.clone()));
+}
+
+fn is_stop(b: &Bottle) -> bool {
+    b.len() == 1 && matches!(b.get(0), Some(Value::Vocab32(v)) if v.as_string() == "stop")
+}
+
+/// One goal: sent, then its result awaited; the reply is the result's fields (SUCCEEDED)
+/// or `[fail] "<how it ended>"` and the fields.
+async fn run_remote_goal(c: &Caller, b: &Bottle) -> Bottle {
+    let t = c.client.types;
+    let t0 = Instant::now();
+    let goal = match crate::generic::to_ros(t.goal, b, super::now_ns()) {
+        Ok(g) => g,
+        Err(e) => {
+            c.counters.dropped();
+            return service::fail_reply(&format!("not a {}: {e}", t.goal.name));
+        }
+    };
+    let id: GoalId = uuid::Uuid::new_v4().into_bytes();
+    let send = async {
+        c.client.send_goal.wait_for_service(&c.node).await;
+        c.client
+            .send_goal
+            .async_call_service_seed(
+                Ros::Struct(vec![action::uuid(&id), goal]),
+                MsgSeed(t.send_goal.1),
+            )
+            .await
+    };
+    let accepted = match tokio::time::timeout(super::CALL_TIMEOUT, send).await {
+        Ok(Ok(r)) => matches!(r.fields(), Some([Ros::Bool(true), ..])),
+        Ok(Err(e)) => {
+            c.counters.dropped();
+            return service::fail_reply(&format!("{}: {e:?}", c.entry.ros_action));
+        }
+        Err(_) => {
+            c.counters.dropped();
+            return service::fail_reply(&format!(
+                "{}: no action server answered within {:?}",
+                c.entry.ros_action,
+                super::CALL_TIMEOUT
+            ));
+        }
+    };
+    if !accepted {
+        c.counters
+            .refused(format!("{}: goal rejected", c.entry.ros_action));
+        return service::fail_reply("rejected");
+    }
+    c.in_flight().push(id);
+    let result = tokio::time::timeout(
+        GOAL_TIMEOUT,
+        c.client.get_result.async_call_service_seed(
+            Ros::Struct(vec![action::uuid(&id)]),
+            MsgSeed(t.get_result.1),
+        ),
+    )
+    .await;
+    c.in_flight().retain(|g| g != &id);
+    let (st, result) = match result {
+        Ok(Ok(r)) => match r.fields() {
+            Some([Ros::I8(st), result]) => (*st, result.clone()),
+            _ => return service::fail_reply("a result of another type"),
+        },
+        Ok(Err(e)) => return service::fail_reply(&format!("{}: {e:?}", c.entry.ros_action)),
+        Err(_) => return service::fail_reply("no result within the goal's time limit"),
+    };
+    let fields = crate::generic::to_yarp(t.result, &result).unwrap_or_default();
+    if st == status::SUCCEEDED {
+        c.counters.forwarded(t0.elapsed());
+        return fields;
+    }
+    let how = match st {
+        status::CANCELED => "canceled",
+        status::ABORTED => "aborted",
+        _ => "unknown",
+    };
+    c.counters
+        .refused(format!("{}: goal {how}", c.entry.ros_action));
+    let mut reply = service::fail_reply(how);
+    reply.extend(fields.into_items());
+    reply
+}
+
+/// `[stop]`: a cancel request for each goal in flight; `[ok] N` (N goals canceling).
+async fn stop_goals(c: &Caller) -> Bottle {
+    let t = c.client.types;
+    let goals = c.in_flight().clone();
+    let mut canceling = 0;
+    for id in goals {
+        let req = Ros::Struct(vec![action::goal_info(&id, 0)]);
+        let call = c
+            .client
+            .cancel
+            .async_call_service_seed(req, MsgSeed(t.cancel.1));
+        if let Ok(Ok(r)) = tokio::time::timeout(super::CALL_TIMEOUT, call).await {
+            if let Some([Ros::I8(_), Ros::List(g)]) = r.fields() {
+                canceling += g.len();
+            }
+        }
+    }
+    let mut reply = Bottle::from_text("[ok]");
+    reply.push(Value::Int32(canceling as i32));
+    reply
+}
+
+/// Writes the feedback of this entry's goals to `yarp_feedback`.
+async fn forward_feedback(c: Arc<Caller>) {
+    let t = c.client.types;
+    let Some(port) = c.feedback_port.clone() else {
+        return;
+    };
+    let Some(seed) = MsgSeed::new(&format!("{}_FeedbackMessage", c.entry.ros_type)) else {
+        return;
+    };
+    let stream = c.client.feedback.async_stream_seed(seed);
+    futures::pin_mut!(stream);
+    while let Some(r) = futures::StreamExt::next(&mut stream).await {
+        let Ok((m, _)) = r else { continue };
+        let Some([uuid, fb]) = m.fields() else {
+            continue;
+        };
+        let ours = action::goal_id(uuid).is_some_and(|id| c.in_flight().contains(&id));
+        if !ours {
+            continue;
+        }
+        match crate::generic::to_yarp(t.feedback, fb) {
+            Ok(b) => {
+                port.write(&b).await;
+            }
+            Err(e) => debug!("{}: feedback: {e}", c.entry.name),
         }
     }
 }

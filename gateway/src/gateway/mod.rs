@@ -157,7 +157,7 @@ impl Gateway {
             g.service(&mut node, s).await?;
         }
         for a in &m.actions {
-            g.action(&mut node, a)?;
+            g.action(&mut node, a).await?;
         }
         let robots = std::mem::take(&mut g.robots);
         for r in &m.robots {
@@ -556,13 +556,26 @@ impl Builder {
         Ok(())
     }
 
-    fn action(&mut self, node: &mut Node, a: &ActionEntry) -> Result<(), StartError> {
+    async fn action(&mut self, node: &mut Node, a: &ActionEntry) -> Result<(), StartError> {
         let counters = Arc::new(Counters::default());
-        let server = actions::create(node, &self.ctx.domain_participant(), a)?;
+        let dp = self.ctx.domain_participant();
         let (ns, entry, c) = (self.ns.clone(), a.clone(), counters.clone());
-        self.deferred.push(Box::new(move |node| {
-            tokio::spawn(actions::serve(server, node, ns, entry, c))
-        }));
+        if a.direction == Direction::RosToYarp {
+            let server = actions::create(node, &dp, a)?;
+            self.deferred.push(Box::new(move |node| {
+                tokio::spawn(actions::serve(server, node, ns, entry, c))
+            }));
+        } else {
+            let client = actions::create_client(node, &dp, a)?;
+            let port = self.open_port(&a.yarp_port).await?;
+            let feedback = match &a.yarp_feedback {
+                Some(p) => Some(self.open_port(p).await?),
+                None => None,
+            };
+            self.deferred.push(Box::new(move |node| {
+                tokio::spawn(actions::call(client, node, port, feedback, entry, c))
+            }));
+        }
         self.bridges.push(Bridge {
             name: a.name.clone(),
             direction: a.direction,

@@ -323,6 +323,47 @@ def run(node, args, deadline):
             say("RESULT", json.dumps({"status": r.status, "result": to_json(r.result)}))
         else:
             say("RESULT", "null")
+    elif mode == "action_serve":
+        # An rclpy ActionServer of Fibonacci (type a[0], name a[1]): one term every 50 ms,
+        # with feedback; a negative order is rejected; cancel requests are accepted. Prints
+        # GOAL for every goal offered; serves until --count goals have ended.
+        from rclpy.action import ActionServer, CancelResponse, GoalResponse
+        from rclpy.callback_groups import ReentrantCallbackGroup
+        from rclpy.executors import MultiThreadedExecutor
+        cls = load_type(a[0])
+        ended = [0]
+
+        def on_goal(goal):
+            say("GOAL", json.dumps(to_json(goal)))
+            return GoalResponse.REJECT if goal.order < 0 else GoalResponse.ACCEPT
+
+        def execute(handle):
+            seq = [0, 1]
+            for i in range(1, handle.request.order):
+                if handle.is_cancel_requested:
+                    handle.canceled()
+                    break
+                time.sleep(0.05)
+                seq.append(seq[i] + seq[i - 1])
+                fb = cls.Feedback()
+                fb.sequence = seq
+                handle.publish_feedback(fb)
+            else:
+                handle.succeed()
+            ended[0] += 1
+            r = cls.Result()
+            r.sequence = seq
+            return r
+
+        ActionServer(node, cls, a[1], execute_callback=execute, goal_callback=on_goal,
+                     cancel_callback=lambda _: CancelResponse.ACCEPT,
+                     callback_group=ReentrantCallbackGroup())
+        ex = MultiThreadedExecutor()
+        ex.add_node(node)
+        say("READY")
+        while ended[0] < args.count and time.monotonic() < deadline:
+            ex.spin_once(timeout_sec=0.05)
+        ex.shutdown()
     elif mode == "call_fresh":
         # `call`, --count times, each from a fresh node on a context (a DDS participant)
         # of its own: how `ros2 param list` meets a server, once per command.
