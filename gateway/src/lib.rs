@@ -32,4 +32,5 @@ pub mod ros;
 pub mod ros_args;
 pub mod security;
 pub mod service;
+pub mod tf;
 pub mod types;

@@ -25,6 +25,10 @@ pub struct RobotEntry {
     pub name: String,
     pub joint_states: Option<MergedJointStates>,
     pub robot_description: Option<RobotDescription>,
+    /// With a `robot_description`: publish `/tf_static` (fixed joints) and, with
+    /// `joint_states`, `/tf` (the others), as robot_state_publisher would.
+    #[serde(default = "yes")]
+    pub tf: bool,
     /// The mapping file it came from (errors; relative paths).
     #[serde(skip)]
     pub file: PathBuf,
@@ -66,6 +70,9 @@ fn joint_states_topic() -> String {
 }
 fn description_topic() -> String {
     DESCRIPTION_TOPIC.into()
+}
+fn yes() -> bool {
+    true
 }
 fn default_rate() -> f64 {
     DEFAULT_RATE_HZ

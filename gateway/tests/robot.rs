@@ -2,7 +2,8 @@
 //! control boards (`fakeMotionControl` behind `controlBoard_nws_yarp`) merged into one
 //! `/joint_states` that a default-QoS rclpy node receives, and `/robot_description` from
 //! a URDF named in the mapping, received by a transient-local subscriber that joins after
-//! the gateway published it. Domain indices: 33, 34.
+//! the gateway published it; `/tf` of the joints reported and `/tf_static` of the fixed
+//! ones (received late, as a tf2 static listener does). Domain indices: 33, 34.
 
 mod common;
 
@@ -10,6 +11,7 @@ use common::{blocking, Peer, T};
 use serde_json::Value as Json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use yarp_proto::Value;
 use yarp_ros2_gateway::gateway::{Gateway, Options};
 use yarp_ros2_gateway::mapping::Mappings;
 
@@ -55,7 +57,11 @@ const URDF: &str = r#"<?xml version="1.0"?>
   <joint name="shoulder" type="revolute"><parent link="base"/><child link="shoulder"/>
     <axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
   <joint name="elbow" type="revolute"><parent link="shoulder"/><child link="forearm"/>
+    <origin xyz="0 0 -0.3"/>
     <axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="1" velocity="1"/></joint>
+  <link name="camera"/>
+  <joint name="camera_mount" type="fixed"><parent link="head"/><child link="camera"/>
+    <origin xyz="0.1 0 0.2" rpy="0 0 1.5707963267948966"/></joint>
   <joint name="rail" type="prismatic"><parent link="forearm"/><child link="slider"/>
     <axis xyz="1 0 0"/><limit lower="0" upper="0.5" effort="1" velocity="1"/></joint>
 </robot>
@@ -235,6 +241,93 @@ robot_description = { urdf = "description/t10.urdf" }
     desc.expect_async("READY", T).await;
     let m: Json = serde_json::from_str(&desc.expect_async("MSG", T).await).unwrap();
     assert_eq!(m["data"], URDF);
+
+    // TF as robot_state_publisher gives it. PyPI has no tf2_msgs for rclpy: rclpy checks
+    // the endpoints (type, hash, durability), and a reader on our ROS layer that joins
+    // late reads the messages (transient local, depth 1: /tf_static as tf2 reads it).
+    let info = Peer::start(
+        venv,
+        domain,
+        &["info_many", "/tf_static", "/tf", "--timeout", "20"],
+    );
+    let found: Json = serde_json::from_str(&info.expect_async("INFO", T).await).unwrap();
+    let hash = yarp_ros2_gateway::hash::rihs01("tf2_msgs/msg/TFMessage").unwrap();
+    for (topic, durability) in [("/tf_static", "TRANSIENT_LOCAL"), ("/tf", "VOLATILE")] {
+        let e = &found[topic][0];
+        assert_eq!(e["type"], "tf2_msgs/msg/TFMessage", "{found}");
+        assert_eq!(e["hash"], hash, "{found}");
+        assert_eq!(e["durability"], durability, "{found}");
+        assert_eq!(e["kind"], "pub", "{found}");
+    }
+    let (_ctx, mut listener) = yarp_ros2_gateway::ros::start_node(
+        domain,
+        &["127.0.0.1".parse().unwrap()],
+        "/",
+        "t10_tf_listener",
+    )
+    .unwrap();
+    let latched = yarp_ros2_gateway::mapping::Qos {
+        reliability: Some(yarp_ros2_gateway::mapping::Reliability::Reliable),
+        durability: yarp_ros2_gateway::mapping::Durability::TransientLocal,
+        depth: 1,
+    };
+    let tf_type = "tf2_msgs/msg/TFMessage";
+    let statics =
+        yarp_ros2_gateway::ros::subscription(&mut listener, "/tf_static", tf_type, &latched)
+            .unwrap();
+    let moving =
+        yarp_ros2_gateway::ros::subscription(&mut listener, "/tf", tf_type, &Default::default())
+            .unwrap();
+    // A message, in the generic Bottle layout.
+    let read = async |sub: &ros2_client::Subscription<yarp_ros2_gateway::dynmsg::Value>| {
+        let seed = yarp_ros2_gateway::dynmsg::MsgSeed::new(tf_type).unwrap();
+        let stream = sub.async_stream_seed(seed);
+        futures::pin_mut!(stream);
+        let (m, _) = tokio::time::timeout(T, futures::StreamExt::next(&mut stream))
+            .await
+            .expect("a TF message in time")
+            .expect("a stream")
+            .expect("a TFMessage");
+        yarp_ros2_gateway::generic::to_yarp(seed.0, &m).unwrap()
+    };
+    let close = |v: &Value, want: &[f64]| {
+        let l = v.as_list().expect("a list");
+        l.len() == want.len()
+            && l.iter()
+                .zip(want)
+                .all(|(x, y)| (x.as_f64().unwrap() - y).abs() < 1e-9)
+    };
+    // (transforms): each ((stamp frame_id) child_frame_id ((x y z) (x y z w)))
+    let b = read(&statics).await;
+    let t = b.get(0).and_then(Value::as_list).expect("transforms");
+    assert_eq!(t.len(), 1, "{b}");
+    let cam = t.get(0).and_then(Value::as_list).unwrap();
+    let header = cam.get(0).and_then(Value::as_list).unwrap();
+    assert_eq!(header.get(1).and_then(Value::as_str), Some("head"), "{b}");
+    assert_eq!(cam.get(1).and_then(Value::as_str), Some("camera"), "{b}");
+    let tr = cam.get(2).and_then(Value::as_list).unwrap();
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    assert!(close(tr.get(0).unwrap(), &[0.1, 0.0, 0.2]), "{b}");
+    assert!(close(tr.get(1).unwrap(), &[0.0, 0.0, h, h]), "{b}");
+    // /tf: every moving joint, at the positions the boards report.
+    let b = read(&moving).await;
+    let t = b.get(0).and_then(Value::as_list).expect("transforms");
+    assert_eq!(t.len(), 5, "{b}");
+    let child = |c: &str| {
+        t.iter()
+            .filter_map(Value::as_list)
+            .find(|x| x.get(1).and_then(Value::as_str) == Some(c))
+            .unwrap_or_else(|| panic!("no transform of {c}: {b}"))
+    };
+    let elbow = child("forearm");
+    let parent = elbow.get(0).and_then(Value::as_list).and_then(|h| h.get(1));
+    assert_eq!(parent.and_then(Value::as_str), Some("shoulder"), "{b}");
+    let tr = elbow.get(2).and_then(Value::as_list).unwrap();
+    let (s, c) = (22.5f64.to_radians().sin(), 22.5f64.to_radians().cos());
+    assert!(close(tr.get(0).unwrap(), &[0.0, 0.0, -0.3]), "{b}");
+    assert!(close(tr.get(1).unwrap(), &[0.0, s, 0.0, c]), "{b}");
+    let rail = child("slider").get(2).and_then(Value::as_list).unwrap();
+    assert!(close(rail.get(0).unwrap(), &[0.25, 0.0, 0.0]), "{b}");
     gw.shutdown().await;
     drop(devices);
 }

@@ -19,6 +19,10 @@ use tracing::{debug, info, warn};
 
 type Shared = Arc<Mutex<Merger>>;
 
+/// Where robot_state_publisher publishes TF.
+const TF_TOPIC: &str = "/tf";
+const TF_STATIC_TOPIC: &str = "/tf_static";
+
 /// Where a part's JointState bridge copies each message it publishes: the mergers of the
 /// robots it is a part of, with its index there.
 #[derive(Clone, Default)]
@@ -82,6 +86,20 @@ impl Builder {
         robots: &Robots,
     ) -> Result<(), StartError> {
         let urdf_joints = r.robot_description.as_ref().map(|d| d.joints.clone());
+        // TF as robot_state_publisher gives it: fixed joints once, the others per state.
+        let tf = match (&r.robot_description, r.tf) {
+            (Some(d), true) => match crate::tf::tf_joints(&d.text) {
+                Ok(j) => {
+                    self.publish_static_tf(node, &r.name, &j)?;
+                    Some(j)
+                }
+                Err(e) => {
+                    warn!("{}: no TF from {}: {e}", r.name, d.urdf.display());
+                    None
+                }
+            },
+            _ => None,
+        };
         if let (Some(js), Some(merger)) = (&r.joint_states, robots.mergers.get(&r.name)) {
             let publisher = Arc::new(ros::publisher(
                 node,
@@ -99,12 +117,25 @@ impl Builder {
             }
             let counters = Arc::new(Counters::default());
             let period = Duration::from_secs_f64(1.0 / js.rate_hz);
+            let tf = match tf {
+                Some(j) => Some((
+                    Arc::new(ros::publisher(
+                        node,
+                        TF_TOPIC,
+                        "tf2_msgs/msg/TFMessage",
+                        &Qos::default(),
+                    )?),
+                    j,
+                )),
+                None => None,
+            };
             self.tasks.push(tokio::spawn(publish_joint_states(
                 publisher,
                 merger.clone(),
                 period,
                 js.parts.clone(),
                 urdf_joints,
+                tf,
                 counters.clone(),
             )));
             self.bridges.push(Bridge {
@@ -135,6 +166,37 @@ impl Builder {
                 counters,
             });
         }
+        Ok(())
+    }
+
+    /// Publishes the fixed joints' transforms once on `/tf_static`, reliable and transient
+    /// local (depth 1), as tf2's static broadcaster does: a listener that starts later
+    /// still gets them (nothing when the URDF has no fixed joint).
+    fn publish_static_tf(
+        &mut self,
+        node: &mut Node,
+        robot: &str,
+        joints: &[crate::tf::TfJoint],
+    ) -> Result<(), StartError> {
+        let msg = crate::tf::static_message(joints, super::now_ns());
+        if !joints.iter().any(|j| j.motion == crate::tf::Motion::Fixed) {
+            return Ok(());
+        }
+        let q = Qos {
+            reliability: Some(Reliability::Reliable),
+            durability: Durability::TransientLocal,
+            depth: 1,
+        };
+        let publisher: Publisher<Ros> =
+            ros::publisher(node, TF_STATIC_TOPIC, "tf2_msgs/msg/TFMessage", &q)?;
+        let robot = robot.to_string();
+        self.tasks.push(tokio::spawn(async move {
+            if let Err(e) = publisher.async_publish(msg).await {
+                warn!("{robot}: {TF_STATIC_TOPIC}: publish: {e:?}");
+            }
+            // The writer holds the latched sample: keep it alive with the gateway.
+            std::future::pending::<()>().await;
+        }));
         Ok(())
     }
 
@@ -178,6 +240,7 @@ async fn publish_joint_states(
     period: Duration,
     parts: Vec<String>,
     urdf_joints: Option<Vec<String>>,
+    tf: Option<(Arc<Publisher<Ros>>, Vec<crate::tf::TfJoint>)>,
     c: Arc<Counters>,
 ) {
     let mut tick = tokio::time::interval(period);
@@ -207,6 +270,13 @@ async fn publish_joint_states(
             }
         }
         let Some(msg) = msg else { continue };
+        if let Some((tf_publisher, joints)) = &tf {
+            if let Some(m) = tf_of(joints, &msg) {
+                if let Err(e) = tf_publisher.async_publish(m).await {
+                    debug!("{TF_TOPIC}: publish: {e:?}");
+                }
+            }
+        }
         match publisher.async_publish(msg).await {
             Ok(()) => c.forwarded(t0.elapsed()),
             Err(e) => {
@@ -215,6 +285,23 @@ async fn publish_joint_states(
             }
         }
     }
+}
+
+/// `/tf` for a merged `sensor_msgs/JointState`, stamped as it is.
+fn tf_of(joints: &[crate::tf::TfJoint], js: &Ros) -> Option<Ros> {
+    let [header, Ros::List(names), Ros::List(positions), ..] = js.fields()? else {
+        return None;
+    };
+    let stamp = header.fields()?.first()?;
+    let names: Vec<&str> = names
+        .iter()
+        .map(|n| match n {
+            Ros::Str(s) => s.as_str(),
+            _ => "",
+        })
+        .collect();
+    let positions: Vec<f64> = positions.iter().filter_map(Ros::as_f64).collect();
+    crate::tf::moving_message(joints, &names, &positions, stamp)
 }
 
 /// robot_state_publisher ignores joints its URDF lacks and leaves out the links of those
