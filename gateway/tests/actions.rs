@@ -222,6 +222,8 @@ async fn yarp_callers_reach_an_rclpy_action_server_on(venv: &common::Distro) {
             "/gw_test/served_fib",
             "--count",
             "2",
+            "--linger",
+            "2",
             "--timeout",
             "120",
         ],

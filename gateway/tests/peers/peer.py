@@ -326,7 +326,8 @@ def run(node, args, deadline):
     elif mode == "action_serve":
         # An rclpy ActionServer of Fibonacci (type a[0], name a[1]): one term every 50 ms,
         # with feedback; a negative order is rejected; cancel requests are accepted. Prints
-        # GOAL for every goal offered; serves until --count goals have ended.
+        # GOAL for every goal offered; serves until --count goals have ended (and
+        # --linger seconds more, to answer the last result).
         from rclpy.action import ActionServer, CancelResponse, GoalResponse
         from rclpy.callback_groups import ReentrantCallbackGroup
         from rclpy.executors import MultiThreadedExecutor
@@ -362,6 +363,10 @@ def run(node, args, deadline):
         ex.add_node(node)
         say("READY")
         while ended[0] < args.count and time.monotonic() < deadline:
+            ex.spin_once(timeout_sec=0.05)
+        # The last result is answered after its execute callback returned: stay a while.
+        end = min(deadline, time.monotonic() + args.linger)
+        while time.monotonic() < end:
             ex.spin_once(timeout_sec=0.05)
         ex.shutdown()
     elif mode == "call_fresh":
