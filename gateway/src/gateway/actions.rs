@@ -11,7 +11,7 @@
 //! `cancel` to the YARP port on another connection; the goal ends CANCELED when its call
 //! returns. The goals' bookkeeping is [`crate::action`].
 
-use super::services::generic_service_types;
+use super::services::{generic_service_types, refused};
 use super::yarp_rpc::YarpRpc;
 use crate::action::{self, cancel_code, status, GoalId, Goals};
 use crate::counters::Counters;
@@ -72,6 +72,42 @@ impl Types {
     }
 }
 
+/// What both ends of an action need: its types (their hashes announced, as rmw does),
+/// its DDS type names and the base of its endpoints' names.
+struct Ends {
+    types: Types,
+    action_type: ActionTypeName,
+    /// `<ros_action>` (endpoints under `<ros_action>/_action/`).
+    base: String,
+}
+
+fn ends(
+    dp: &ros2_client::dds::rustdds::DomainParticipant,
+    a: &ActionEntry,
+) -> Result<Ends, RosError> {
+    let types = Types::of(&a.ros_type)?;
+    for srv in ["_SendGoal", "_GetResult"] {
+        ros::announce_service_type_hash(dp, &format!("{}{srv}", a.ros_type));
+    }
+    ros::announce_type_hash(dp, &format!("{}_FeedbackMessage", a.ros_type));
+    let (pkg, _, name) = crate::types::split_name(&a.ros_type).unwrap_or_default();
+    Ok(Ends {
+        types,
+        action_type: ActionTypeName::new(pkg, name),
+        base: a.ros_action.trim_end_matches('/').to_string(),
+    })
+}
+
+/// The error of creating endpoint `n`.
+fn entity(what: &'static str, n: &str) -> impl FnOnce(ros2_client::CreateError) -> RosError {
+    let n = n.to_string();
+    move |e| RosError::Entity {
+        what,
+        name: n,
+        message: format!("{e:?}"),
+    }
+}
+
 /// The ROS endpoints of one action server.
 pub(super) struct ActionServer {
     send_goal: Server<Ros, Ros>,
@@ -89,23 +125,12 @@ pub(super) fn create(
     dp: &ros2_client::dds::rustdds::DomainParticipant,
     a: &ActionEntry,
 ) -> Result<ActionServer, RosError> {
-    let types = Types::of(&a.ros_type)?;
-    for srv in ["_SendGoal", "_GetResult"] {
-        ros::announce_service_type_hash(dp, &format!("{}{srv}", a.ros_type));
-    }
-    ros::announce_type_hash(dp, &format!("{}_FeedbackMessage", a.ros_type));
-    let (pkg, _, name) = crate::types::split_name(&a.ros_type).unwrap_or_default();
-    let action_type = ActionTypeName::new(pkg, name);
-    let base = a.ros_action.trim_end_matches('/');
+    let Ends {
+        types,
+        action_type,
+        base,
+    } = ends(dp, a)?;
     let q = ros::service_qos();
-    let entity = |what: &'static str, n: &str| {
-        let n = n.to_string();
-        move |e: ros2_client::CreateError| RosError::Entity {
-            what,
-            name: n,
-            message: format!("{e:?}"),
-        }
-    };
     let server = |node: &mut Node, part: &str, t: &ServiceTypeName| {
         let n = format!("{base}/_action/{part}");
         node.create_server(
@@ -356,13 +381,6 @@ async fn run_goal(s: Arc<Shared>, id: GoalId, goal: Ros) {
     }
 }
 
-/// `[fail] ...`, `[err]`, `[nack]`: the YARP side refused (the generic layout has no
-/// vocabs but bools).
-fn refused(b: &Bottle) -> bool {
-    matches!(b.get(0), Some(Value::Vocab32(v))
-        if ["fail", "err", "nack"].contains(&v.as_string().as_str()))
-}
-
 /// `cancel_goal`: the goals named move to CANCELING and YARP gets `cancel`.
 async fn cancels(s: Arc<Shared>) {
     let t = s.server.types;
@@ -524,23 +542,12 @@ pub(super) fn create_client(
     dp: &ros2_client::dds::rustdds::DomainParticipant,
     a: &ActionEntry,
 ) -> Result<ActionClient, RosError> {
-    let types = Types::of(&a.ros_type)?;
-    for srv in ["_SendGoal", "_GetResult"] {
-        ros::announce_service_type_hash(dp, &format!("{}{srv}", a.ros_type));
-    }
-    ros::announce_type_hash(dp, &format!("{}_FeedbackMessage", a.ros_type));
-    let (pkg, _, name) = crate::types::split_name(&a.ros_type).unwrap_or_default();
-    let action_type = ActionTypeName::new(pkg, name);
-    let base = a.ros_action.trim_end_matches('/');
+    let Ends {
+        types,
+        action_type,
+        base,
+    } = ends(dp, a)?;
     let q = ros::service_qos();
-    let entity = |what: &'static str, n: &str| {
-        let n = n.to_string();
-        move |e: ros2_client::CreateError| RosError::Entity {
-            what,
-            name: n,
-            message: format!("{e:?}"),
-        }
-    };
     let client = |node: &mut Node, part: &str, t: &ServiceTypeName| {
         let n = format!("{base}/_action/{part}");
         node.create_client(

@@ -208,6 +208,13 @@ pub(super) fn generic_command(words: &Bottle, t: &'static MsgType, req: &Ros) ->
     b
 }
 
+/// Whether a YARP reply in place of a generic message refuses: `[fail] ...`, `[err]`,
+/// `[nack]` (the generic layout has no vocabs but bools, so no message reads so).
+pub(super) fn refused(b: &Bottle) -> bool {
+    matches!(b.get(0), Some(Value::Vocab32(v))
+        if ["fail", "err", "nack"].contains(&v.as_string().as_str()))
+}
+
 /// The ROS response of a generic service for YARP's reply, read in the response type's
 /// generic layout (fields left out take their defaults). A ROS service cannot answer with
 /// an error: a failed call or a reply that does not fit gets the default response, and
@@ -218,13 +225,7 @@ pub(super) fn generic_response(
     reply: Result<Bottle, RpcError>,
 ) -> Ros {
     let why = match reply {
-        // `[fail] ...`, `[err]`, `[nack]`: the generic layout has no vocabs but bools.
-        Ok(b)
-            if matches!(b.get(0), Some(Value::Vocab32(v))
-            if ["fail", "err", "nack"].contains(&v.as_string().as_str())) =>
-        {
-            format!("the YARP port refused: `{b}`")
-        }
+        Ok(b) if refused(&b) => format!("the YARP port refused: `{b}`"),
         Ok(b) => match crate::generic::to_ros(t, &b, super::now_ns()) {
             Ok(r) => return r,
             Err(e) => format!("the reply `{b}` is not a {}: {e}", t.name),
