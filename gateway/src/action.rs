@@ -193,12 +193,16 @@ pub fn goal_id(v: &Ros) -> Option<GoalId> {
     Some(id)
 }
 
-/// `builtin_interfaces/Time` of `ns` since the epoch.
-pub fn time(ns: u64) -> Ros {
-    Ros::Struct(vec![
-        Ros::I32((ns / 1_000_000_000) as i32),
-        Ros::U32((ns % 1_000_000_000) as u32),
-    ])
+/// The goal's id and the goal of a `_SendGoal_Request` value (`goal_id`, `goal`).
+pub fn goal_request(req: Ros) -> Option<(GoalId, Ros)> {
+    let Ros::Struct(mut f) = req else {
+        return None;
+    };
+    if f.len() != 2 {
+        return None;
+    }
+    let goal = f.pop()?;
+    Some((goal_id(&f[0])?, goal))
 }
 
 /// ns since the epoch of a `builtin_interfaces/Time` value (0 if it is not one).
@@ -211,7 +215,7 @@ pub fn time_ns(v: &Ros) -> u64 {
 
 /// `action_msgs/GoalInfo`.
 pub fn goal_info(id: &GoalId, stamp_ns: u64) -> Ros {
-    Ros::Struct(vec![uuid(id), time(stamp_ns)])
+    Ros::Struct(vec![uuid(id), Ros::time(stamp_ns)])
 }
 
 #[cfg(test)]
@@ -272,7 +276,13 @@ mod tests {
         let mut raw = [0u8; 16];
         raw[3] = 7;
         assert_eq!(goal_id(&uuid(&raw)), Some(raw));
-        assert_eq!(time_ns(&time(12_345_678_901)), 12_345_678_901);
+        assert_eq!(time_ns(&Ros::time(12_345_678_901)), 12_345_678_901);
         assert_eq!(goal_id(&Ros::Struct(vec![])), None);
+        let goal = Ros::Struct(vec![Ros::I32(5)]);
+        assert_eq!(
+            goal_request(Ros::Struct(vec![uuid(&raw), goal.clone()])),
+            Some((raw, goal))
+        );
+        assert_eq!(goal_request(Ros::Struct(vec![uuid(&raw)])), None);
     }
 }

@@ -150,13 +150,7 @@ pub fn diagnostic_array(stamp_ns: u64, hardware_id: &str, rows: &[Row]) -> Ros {
 
 /// A `std_msgs/msg/Header` value.
 pub fn header(stamp_ns: u64, frame_id: &str) -> Ros {
-    Ros::Struct(vec![
-        Ros::Struct(vec![
-            Ros::I32((stamp_ns / 1_000_000_000) as i32),
-            Ros::U32((stamp_ns % 1_000_000_000) as u32),
-        ]),
-        Ros::Str(frame_id.into()),
-    ])
+    Ros::Struct(vec![Ros::time(stamp_ns), Ros::Str(frame_id.into())])
 }
 
 #[cfg(test)]

@@ -67,6 +67,14 @@ impl Value {
         })
     }
 
+    /// A `builtin_interfaces/msg/Time` of `ns` nanoseconds since the epoch.
+    pub fn time(ns: u64) -> Value {
+        Value::Struct(vec![
+            Value::I32((ns / 1_000_000_000) as i32),
+            Value::U32((ns % 1_000_000_000) as u32),
+        ])
+    }
+
     /// Fields of a struct value.
     pub fn fields(&self) -> Option<&[Value]> {
         match self {

@@ -37,10 +37,7 @@ pub fn to_ros_owned(t: &'static MsgType, b: Bottle, stamp_ns: u64) -> Result<Ros
     if let (Some(i), Ros::Struct(fields)) = (header_index(t), &mut m) {
         if let Some(Ros::Struct(h)) = fields.get_mut(i) {
             if matches!(h.first(), Some(Ros::Struct(s)) if s.iter().all(is_zero)) {
-                h[0] = Ros::Struct(vec![
-                    Ros::I32((stamp_ns / 1_000_000_000) as i32),
-                    Ros::U32((stamp_ns % 1_000_000_000) as u32),
-                ]);
+                h[0] = Ros::time(stamp_ns);
             }
         }
     }

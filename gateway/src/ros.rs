@@ -298,16 +298,28 @@ pub fn name(n: &str) -> Result<Name, RosError> {
     })
 }
 
-/// `pkg/msg/Name` as ros2-client's message type name.
+/// `pkg/msg/Name` as ros2-client's message type name; `pkg/action/Name_FeedbackMessage`
+/// (an action's topic) keeps its `action` part (`pkg::action::dds_::…_`).
 pub fn message_type(ros_type: &str) -> MessageTypeName {
-    let (pkg, _, name) = crate::types::split_name(ros_type).unwrap_or(("", "", ros_type));
-    MessageTypeName::new(pkg, name)
+    match crate::types::split_name(ros_type) {
+        Some((pkg, "action", name)) => {
+            ros2_client::ActionTypeName::new(pkg, name).dds_action_topic("")
+        }
+        Some((pkg, _, name)) => MessageTypeName::new(pkg, name),
+        None => MessageTypeName::new("", ros_type),
+    }
 }
 
-/// `pkg/srv/Name` as ros2-client's service type name.
+/// `pkg/srv/Name` as ros2-client's service type name; `pkg/action/Name_SendGoal` (an
+/// action's service) keeps its `action` part.
 pub fn service_type(ros_type: &str) -> ServiceTypeName {
-    let (pkg, _, name) = crate::types::split_name(ros_type).unwrap_or(("", "", ros_type));
-    ServiceTypeName::new(pkg, name)
+    match crate::types::split_name(ros_type) {
+        Some((pkg, "action", name)) => {
+            ros2_client::ActionTypeName::new(pkg, name).dds_action_service("")
+        }
+        Some((pkg, _, name)) => ServiceTypeName::new(pkg, name),
+        None => ServiceTypeName::new("", ros_type),
+    }
 }
 
 /// The mapping's QoS as a ros2-client profile. A full reliable send window waits at most
@@ -332,4 +344,31 @@ pub fn qos(q: &mapping::Qos) -> QosProfile {
 /// QoS of service endpoints (reliable, volatile, depth 10: rclpy's service default).
 pub fn service_qos() -> QosProfile {
     qos(&mapping::Qos::default())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dds_type_names_keep_the_interface_kind() {
+        assert_eq!(
+            message_type("std_msgs/msg/String").dds_msg_type(),
+            "std_msgs::msg::dds_::String_"
+        );
+        assert_eq!(
+            message_type("test_msgs/action/Fibonacci_FeedbackMessage").dds_msg_type(),
+            "test_msgs::action::dds_::Fibonacci_FeedbackMessage_"
+        );
+        // The same names as ros2-client's own action endpoints.
+        let a = ros2_client::ActionTypeName::new("test_msgs", "Fibonacci");
+        assert_eq!(
+            format!("{:?}", service_type("test_msgs/action/Fibonacci_SendGoal")),
+            format!("{:?}", a.dds_action_service("_SendGoal"))
+        );
+        assert_eq!(
+            format!("{:?}", service_type("std_srvs/srv/Trigger")),
+            format!("{:?}", ServiceTypeName::new("std_srvs", "Trigger"))
+        );
+    }
 }

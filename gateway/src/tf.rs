@@ -123,7 +123,7 @@ pub fn tf_joints(urdf: &str) -> Result<Vec<TfJoint>, String> {
 
 /// `tf2_msgs/TFMessage` of the fixed joints, stamped `stamp_ns`.
 pub fn static_message(joints: &[TfJoint], stamp_ns: u64) -> Ros {
-    let stamp = time(stamp_ns);
+    let stamp = Ros::time(stamp_ns);
     tf_message(
         joints
             .iter()
@@ -185,13 +185,6 @@ fn transform_stamped(stamp: &Ros, j: &TfJoint, iso: &Isometry3<f64>) -> Ros {
     ])
 }
 
-fn time(ns: u64) -> Ros {
-    Ros::Struct(vec![
-        Ros::I32((ns / 1_000_000_000) as i32),
-        Ros::U32((ns % 1_000_000_000) as u32),
-    ])
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -225,7 +218,7 @@ mod tests {
             "{p}"
         );
         assert_eq!(j[2].mimic, Some(("rev".into(), -2.0, 0.1)));
-        let m = moving_message(&j, &["rev"], &[0.5], &time(7)).unwrap();
+        let m = moving_message(&j, &["rev"], &[0.5], &Ros::time(7)).unwrap();
         let Ros::Struct(f) = m else { panic!() };
         let Ros::List(t) = &f[0] else { panic!() };
         assert_eq!(t.len(), 2, "rev and its mimic");
@@ -233,7 +226,7 @@ mod tests {
         let Ros::Struct(f) = s else { panic!() };
         let Ros::List(t) = &f[0] else { panic!() };
         assert_eq!(t.len(), 1);
-        assert!(moving_message(&j, &["other"], &[0.5], &time(7)).is_none());
+        assert!(moving_message(&j, &["other"], &[0.5], &Ros::time(7)).is_none());
     }
 
     #[test]

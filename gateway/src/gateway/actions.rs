@@ -11,7 +11,7 @@
 //! `cancel` to the YARP port on another connection; the goal ends CANCELED when its call
 //! returns. The goals' bookkeeping is [`crate::action`].
 
-use super::services::{generic_service_types, refused};
+use super::services::{default_of, generic_reply, generic_service_types};
 use super::yarp_rpc::YarpRpc;
 use crate::action::{self, cancel_code, status, GoalId, Goals};
 use crate::counters::Counters;
@@ -20,10 +20,7 @@ use crate::mapping::ActionEntry;
 use crate::ros::{self, RosError};
 use crate::service;
 use crate::types::MsgType;
-use ros2_client::{
-    ActionTypeName, Client, MessageTypeName, Node, Publisher, QosProfile, Server, ServiceMapping,
-    ServiceTypeName, Subscription,
-};
+use ros2_client::{Client, Node, Publisher, Server, Subscription};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -53,7 +50,15 @@ struct Types {
 }
 
 impl Types {
-    fn of(action_type: &str) -> Result<Types, RosError> {
+    /// The types of `action_type`; their hashes are announced on `dp`, as rmw does.
+    fn of(
+        dp: &ros2_client::dds::rustdds::DomainParticipant,
+        action_type: &str,
+    ) -> Result<Types, RosError> {
+        for srv in ["_SendGoal", "_GetResult"] {
+            ros::announce_service_type_hash(dp, &format!("{action_type}{srv}"));
+        }
+        ros::announce_type_hash(dp, &format!("{action_type}_FeedbackMessage"));
         let one = |t: String| {
             crate::types::lookup(&t).ok_or_else(|| RosError::Entity {
                 what: "action type",
@@ -64,47 +69,11 @@ impl Types {
         Ok(Types {
             send_goal: generic_service_types(&format!("{action_type}_SendGoal"))?,
             get_result: generic_service_types(&format!("{action_type}_GetResult"))?,
-            cancel: generic_service_types("action_msgs/srv/CancelGoal")?,
+            cancel: generic_service_types(CANCEL_GOAL)?,
             goal: one(format!("{action_type}_Goal"))?,
             result: one(format!("{action_type}_Result"))?,
             feedback: one(format!("{action_type}_Feedback"))?,
         })
-    }
-}
-
-/// What both ends of an action need: its types (their hashes announced, as rmw does),
-/// its DDS type names and the base of its endpoints' names.
-struct Ends {
-    types: Types,
-    action_type: ActionTypeName,
-    /// `<ros_action>` (endpoints under `<ros_action>/_action/`).
-    base: String,
-}
-
-fn ends(
-    dp: &ros2_client::dds::rustdds::DomainParticipant,
-    a: &ActionEntry,
-) -> Result<Ends, RosError> {
-    let types = Types::of(&a.ros_type)?;
-    for srv in ["_SendGoal", "_GetResult"] {
-        ros::announce_service_type_hash(dp, &format!("{}{srv}", a.ros_type));
-    }
-    ros::announce_type_hash(dp, &format!("{}_FeedbackMessage", a.ros_type));
-    let (pkg, _, name) = crate::types::split_name(&a.ros_type).unwrap_or_default();
-    Ok(Ends {
-        types,
-        action_type: ActionTypeName::new(pkg, name),
-        base: a.ros_action.trim_end_matches('/').to_string(),
-    })
-}
-
-/// The error of creating endpoint `n`.
-fn entity(what: &'static str, n: &str) -> impl FnOnce(ros2_client::CreateError) -> RosError {
-    let n = n.to_string();
-    move |e| RosError::Entity {
-        what,
-        name: n,
-        message: format!("{e:?}"),
     }
 }
 
@@ -125,71 +94,35 @@ pub(super) fn create(
     dp: &ros2_client::dds::rustdds::DomainParticipant,
     a: &ActionEntry,
 ) -> Result<ActionServer, RosError> {
-    let Ends {
-        types,
-        action_type,
-        base,
-    } = ends(dp, a)?;
-    let q = ros::service_qos();
-    let server = |node: &mut Node, part: &str, t: &ServiceTypeName| {
-        let n = format!("{base}/_action/{part}");
-        node.create_server(
-            ServiceMapping::Enhanced,
-            &ros::name(&n)?,
-            t,
-            q.clone(),
-            q.clone(),
-        )
-        .map_err(entity("service", &n))
-    };
-    let send_goal = server(
-        node,
-        "send_goal",
-        &action_type.dds_action_service("_SendGoal"),
-    )?;
-    let cancel = server(
-        node,
-        "cancel_goal",
-        &ServiceTypeName::new("action_msgs", "CancelGoal"),
-    )?;
-    let get_result = server(
-        node,
-        "get_result",
-        &action_type.dds_action_service("_GetResult"),
-    )?;
-    let topic = |node: &mut Node, part: &str, t: MessageTypeName, q: &QosProfile| {
-        let n = format!("{base}/_action/{part}");
-        let topic = node
-            .create_topic(&ros::name(&n)?, t, q)
-            .map_err(entity("topic", &n))?;
-        node.create_publisher(&topic, Some(q.clone()))
-            .map_err(entity("publisher", &n))
-    };
-    let feedback = topic(
-        node,
-        "feedback",
-        action_type.dds_action_topic("_FeedbackMessage"),
-        &q,
-    )?;
-    let status_qos = ros::qos(&crate::mapping::Qos {
+    let types = Types::of(dp, &a.ros_type)?;
+    let (name, ty) = (endpoint(a), |part: &str| format!("{}{part}", a.ros_type));
+    let status_qos = crate::mapping::Qos {
         reliability: Some(crate::mapping::Reliability::Reliable),
         durability: crate::mapping::Durability::TransientLocal,
         depth: 1,
-    });
-    let status = topic(
-        node,
-        "status",
-        MessageTypeName::new("action_msgs", "GoalStatusArray"),
-        &status_qos,
-    )?;
+    };
     Ok(ActionServer {
-        send_goal,
-        cancel,
-        get_result,
-        feedback,
-        status,
+        send_goal: ros::server(node, &name("send_goal"), &ty("_SendGoal"))?,
+        cancel: ros::server(node, &name("cancel_goal"), CANCEL_GOAL)?,
+        get_result: ros::server(node, &name("get_result"), &ty("_GetResult"))?,
+        feedback: ros::publisher(
+            node,
+            &name("feedback"),
+            &ty("_FeedbackMessage"),
+            &Default::default(),
+        )?,
+        status: ros::publisher(node, &name("status"), GOAL_STATUS_ARRAY, &status_qos)?,
         types,
     })
+}
+
+/// The service every action's `cancel_goal` is, and the type of its `status` topic.
+const CANCEL_GOAL: &str = "action_msgs/srv/CancelGoal";
+const GOAL_STATUS_ARRAY: &str = "action_msgs/msg/GoalStatusArray";
+
+/// The names of an action's endpoints: `<ros_action>/_action/<part>`.
+fn endpoint(a: &ActionEntry) -> impl Fn(&str) -> String + '_ {
+    move |part| format!("{}/_action/{part}", a.ros_action.trim_end_matches('/'))
 }
 
 /// What the three service loops share.
@@ -244,10 +177,10 @@ impl Shared {
             Some(g) => (g.status, None),
             None => (status::UNKNOWN, None),
         };
-        let result = result
-            .or_else(|| Ros::zero(t.result.name))
-            .unwrap_or(Ros::Struct(Vec::new()));
-        Ros::Struct(vec![Ros::I8(st), result])
+        Ros::Struct(vec![
+            Ros::I8(st),
+            result.unwrap_or_else(|| default_of(t.result)),
+        ])
     }
 }
 
@@ -297,15 +230,7 @@ async fn goals(s: Arc<Shared>) {
                 continue;
             }
         };
-        let Some([uuid, goal]) = req
-            .fields()
-            .map(|f| f.to_vec())
-            .and_then(|f| <[Ros; 2]>::try_from(f).ok())
-        else {
-            s.counters.dropped();
-            continue;
-        };
-        let Some(goal_id) = action::goal_id(&uuid) else {
+        let Some((goal_id, goal)) = action::goal_request(req) else {
             s.counters.dropped();
             continue;
         };
@@ -321,7 +246,7 @@ async fn goals(s: Arc<Shared>) {
         s.respond(
             &s.server.send_goal,
             id,
-            Ros::Struct(vec![Ros::Bool(accepted), action::time(now)]),
+            Ros::Struct(vec![Ros::Bool(accepted), Ros::time(now)]),
         )
         .await;
         if accepted {
@@ -344,31 +269,16 @@ async fn run_goal(s: Arc<Shared>, id: GoalId, goal: Ros) {
     }
     let mut rpc = YarpRpc::new(s.ns.clone(), &s.entry.yarp_port, &format!("{}/goal", s.me));
     let reply = rpc.call_within(&cmd, GOAL_TIMEOUT).await;
-    let (succeeded, result) = match reply {
-        Ok(b) if refused(&b) => {
-            s.counters
-                .refused(format!("{} answered `{b}`", s.entry.yarp_port));
-            (false, None)
+    let (succeeded, result) = match generic_reply(t.result, reply) {
+        Ok(r) => {
+            s.counters.forwarded(t0.elapsed());
+            (true, r)
         }
-        Ok(b) => match crate::generic::to_ros(t.result, &b, super::now_ns()) {
-            Ok(r) => {
-                s.counters.forwarded(t0.elapsed());
-                (true, Some(r))
-            }
-            Err(e) => {
-                s.counters
-                    .refused(format!("the reply `{b}` is not a {}: {e}", t.result.name));
-                (false, None)
-            }
-        },
-        Err(e) => {
-            s.counters.refused(e.to_string());
-            (false, None)
+        Err(why) => {
+            s.counters.refused(format!("{}: {why}", s.entry.yarp_port));
+            (false, default_of(t.result))
         }
     };
-    let result = result
-        .or_else(|| Ros::zero(t.result.name))
-        .unwrap_or(Ros::Struct(Vec::new()));
     let waiting = {
         let mut st = s.state();
         st.goals.finish(&id, succeeded, result);
@@ -542,54 +452,18 @@ pub(super) fn create_client(
     dp: &ros2_client::dds::rustdds::DomainParticipant,
     a: &ActionEntry,
 ) -> Result<ActionClient, RosError> {
-    let Ends {
-        types,
-        action_type,
-        base,
-    } = ends(dp, a)?;
-    let q = ros::service_qos();
-    let client = |node: &mut Node, part: &str, t: &ServiceTypeName| {
-        let n = format!("{base}/_action/{part}");
-        node.create_client(
-            ServiceMapping::Enhanced,
-            &ros::name(&n)?,
-            t,
-            q.clone(),
-            q.clone(),
-        )
-        .map_err(entity("client", &n))
-    };
-    let send_goal = client(
-        node,
-        "send_goal",
-        &action_type.dds_action_service("_SendGoal"),
-    )?;
-    let cancel = client(
-        node,
-        "cancel_goal",
-        &ServiceTypeName::new("action_msgs", "CancelGoal"),
-    )?;
-    let get_result = client(
-        node,
-        "get_result",
-        &action_type.dds_action_service("_GetResult"),
-    )?;
-    let n = format!("{base}/_action/feedback");
-    let topic = node
-        .create_topic(
-            &ros::name(&n)?,
-            action_type.dds_action_topic("_FeedbackMessage"),
-            &q,
-        )
-        .map_err(entity("topic", &n))?;
-    let feedback = node
-        .create_subscription(&topic, Some(q.clone()))
-        .map_err(entity("subscription", &n))?;
+    let types = Types::of(dp, &a.ros_type)?;
+    let (name, ty) = (endpoint(a), |part: &str| format!("{}{part}", a.ros_type));
     Ok(ActionClient {
-        send_goal,
-        cancel,
-        get_result,
-        feedback,
+        send_goal: ros::client(node, &name("send_goal"), &ty("_SendGoal"))?,
+        cancel: ros::client(node, &name("cancel_goal"), CANCEL_GOAL)?,
+        get_result: ros::client(node, &name("get_result"), &ty("_GetResult"))?,
+        feedback: ros::subscription(
+            node,
+            &name("feedback"),
+            &ty("_FeedbackMessage"),
+            &Default::default(),
+        )?,
         types,
     })
 }

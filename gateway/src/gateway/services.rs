@@ -215,23 +215,35 @@ pub(super) fn refused(b: &Bottle) -> bool {
         if ["fail", "err", "nack"].contains(&v.as_string().as_str()))
 }
 
-/// The ROS response of a generic service for YARP's reply, read in the response type's
-/// generic layout (fields left out take their defaults). A ROS service cannot answer with
-/// an error: a failed call or a reply that does not fit gets the default response, and
-/// the reason is logged.
+/// A YARP reply read as a message of `t` in its generic layout (fields left out take
+/// their defaults), or why it is none: refused, not such a message, or no reply.
+pub(super) fn generic_reply(
+    t: &'static MsgType,
+    reply: Result<Bottle, RpcError>,
+) -> Result<Ros, String> {
+    match reply {
+        Ok(b) if refused(&b) => Err(format!("the YARP port refused: `{b}`")),
+        Ok(b) => crate::generic::to_ros(t, &b, super::now_ns())
+            .map_err(|e| format!("the reply `{b}` is not a {}: {e}", t.name)),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// `t`'s default value, as rosidl's default constructor gives it.
+pub(super) fn default_of(t: &'static MsgType) -> Ros {
+    Ros::zero(t.name).unwrap_or(Ros::Struct(Vec::new()))
+}
+
+/// The ROS response of a generic service for YARP's reply ([`generic_reply`]). A ROS
+/// service cannot answer with an error: a failed call or a reply that does not fit gets
+/// the default response, and the reason is logged.
 pub(super) fn generic_response(
     service: &str,
     t: &'static MsgType,
     reply: Result<Bottle, RpcError>,
 ) -> Ros {
-    let why = match reply {
-        Ok(b) if refused(&b) => format!("the YARP port refused: `{b}`"),
-        Ok(b) => match crate::generic::to_ros(t, &b, super::now_ns()) {
-            Ok(r) => return r,
-            Err(e) => format!("the reply `{b}` is not a {}: {e}", t.name),
-        },
-        Err(e) => e.to_string(),
-    };
-    warn!("{service}: {why}; answering the default response");
-    Ros::zero(t.name).unwrap_or(Ros::Struct(Vec::new()))
+    generic_reply(t, reply).unwrap_or_else(|why| {
+        warn!("{service}: {why}; answering the default response");
+        default_of(t)
+    })
 }
