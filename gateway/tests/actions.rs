@@ -87,10 +87,8 @@ async fn rclpy_action_clients_reach_a_yarp_rpc_port_on(venv: &common::Distro) {
     let (ns, stop) = common::name_server().await;
     let server = fibonacci_server(ns.clone()).await;
     let gw = common::gateway(
-        &format!(
-            r#"
-interfaces = [{:?}]
-
+        &(venv.interfaces_line()
+            + r#"
 [[action]]
 name = "fib"
 direction = "ros_to_yarp"
@@ -107,9 +105,7 @@ direction = "ros_to_yarp"
 yarp_port = "/test/nobody:i"
 ros_action = "/gw_test/nobody"
 ros_type = "test_msgs/action/Fibonacci"
-"#,
-            venv.venv.display().to_string()
-        ),
+"#),
         &ns,
         domain,
     )
@@ -188,26 +184,8 @@ async fn yarp_callers_reach_an_rclpy_action_server() {
 /// Calls `/gw/fib:rpc` with `cmd` (on a connection of its own) until an action server
 /// answers (discovery may take a while on a loaded machine).
 async fn call_goal(ns: &yarp_net::nameserver::NameClient, me: &str, cmd: &str) -> Bottle {
-    let contact = ns
-        .query("/gw/fib:rpc")
-        .await
-        .unwrap()
-        .expect("gateway port registered");
-    let deadline = tokio::time::Instant::now() + 2 * T;
-    loop {
-        let mut c = RpcClient::connect(&contact, me, Carrier::Tcp)
-            .await
-            .unwrap();
-        let reply = tokio::time::timeout(2 * T, c.call(&Bottle::from_text(cmd)))
-            .await
-            .expect("reply in time")
-            .unwrap();
-        c.close().await;
-        let unmatched = reply.to_string().contains("no action server answered");
-        if !unmatched || tokio::time::Instant::now() > deadline {
-            return reply;
-        }
-    }
+    let unanswered = "no action server answered";
+    common::rpc_until_answered(ns, "/gw/fib:rpc", me, cmd, unanswered, 2 * T).await
 }
 
 async fn yarp_callers_reach_an_rclpy_action_server_on(venv: &common::Distro) {
@@ -230,10 +208,8 @@ async fn yarp_callers_reach_an_rclpy_action_server_on(venv: &common::Distro) {
     );
     server.expect_async("READY", T).await;
     let gw = common::gateway(
-        &format!(
-            r#"
-interfaces = [{:?}]
-
+        &(venv.interfaces_line()
+            + r#"
 [[action]]
 name = "fib"
 direction = "yarp_to_ros"
@@ -241,9 +217,7 @@ yarp_port = "/gw/fib:rpc"
 ros_action = "/gw_test/served_fib"
 ros_type = "test_msgs/action/Fibonacci"
 yarp_feedback = "/gw/fib/feedback:o"
-"#,
-            venv.venv.display().to_string()
-        ),
+"#),
         &ns,
         domain,
     )

@@ -15,11 +15,6 @@ use std::time::{Duration, Instant};
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Value};
 
-/// The mapping line that makes the gateway read the venv's interface definitions.
-fn interfaces_line(venv: &common::Distro) -> String {
-    format!("interfaces = [{:?}]\n", venv.venv.display().to_string())
-}
-
 /// The workspace's `yarp` program (same target directory), or `None` after a notice.
 fn our_yarp() -> Option<PathBuf> {
     let p = std::env::current_exe()
@@ -114,7 +109,7 @@ yarp_sink = "/t26/ours"
 ros_topic = "/odom"
 ros_type = "nav_msgs/msg/Odometry"
 "#,
-            interfaces_line(venv)
+            venv.interfaces_line()
         ),
         &ns,
         domain,
@@ -202,7 +197,7 @@ ros_topic = "/marker"
 ros_type = "visualization_msgs/msg/Marker"
 frame_id = "map"
 "#,
-            interfaces_line(venv)
+            venv.interfaces_line()
         ),
         &ns,
         domain,
@@ -301,7 +296,7 @@ direction = "ros_to_yarp"
 yarp_port = "/mirror"
 ros_topic = "/mixed/*"
 "#,
-            interfaces_line(venv)
+            venv.interfaces_line()
         ),
         &ns,
         domain,
@@ -422,7 +417,7 @@ ros_topic = "/yarp"
 ros_type = "geometry_msgs/msg/PoseStamped"
 frame_id = "map"
 "#,
-            interfaces_line(venv)
+            venv.interfaces_line()
         ),
         &ns,
         domain,

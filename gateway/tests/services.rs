@@ -9,8 +9,6 @@ use serde_json::{json, Value as Json};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use yarp_net::buffered::RpcServer;
-use yarp_net::rpc::RpcClient;
-use yarp_proto::wire::Carrier;
 use yarp_proto::{Bottle, Value};
 
 fn json_line(s: &str) -> Json {
@@ -58,7 +56,7 @@ async fn ros_clients_call_yarp_rpc_ports_on(venv: &common::Distro) {
             .await
     });
     let gw = common::gateway(
-        &(interfaces_line(venv)
+        &(venv.interfaces_line()
             + r#"
 [[service]]
 name = "basic"
@@ -176,40 +174,14 @@ const BASIC: &str = r#"{"bool_value": true, "char_value": 65, "float32_value": 1
 /// [`BASIC`] in the generic layout (a bool is YARP's bool, the string quoted).
 const BASIC_BOTTLE: &str = r#"true 0 65 1.5 -2.25 -128 255 -32768 65535 -2147483648 4294967295 -9223372036854775808 9223372036854775807 "a \"quoted\" word""#;
 
-/// `interfaces = [<venv>]`: the run-time definitions (test_msgs) of the distro's wheels.
-fn interfaces_line(venv: &common::Distro) -> String {
-    format!("interfaces = [{:?}]\n", venv.venv.display().to_string())
-}
-
-/// Calls `port` with `cmd` until the reply is not the "no server yet" failure.
+/// Calls `port` with `cmd` until the reply is not the "no server yet" failure (the
+/// gateway answers `[fail] "...: no answer within ..."` until discovery matched).
 async fn rpc_until_answered(
     ns: &yarp_net::nameserver::NameClient,
     port: &str,
     cmd: &str,
 ) -> Bottle {
-    let contact = ns
-        .query(port)
-        .await
-        .unwrap()
-        .expect("gateway port registered");
-    // DDS discovery of each ROS service can take a while on a loaded machine: the gateway
-    // answers `[fail] "...: no answer within ..."` until it matched; ask again until then.
-    let deadline = tokio::time::Instant::now() + 2 * T;
-    loop {
-        let mut c = RpcClient::connect(&contact, "/test/client", Carrier::Tcp)
-            .await
-            .unwrap();
-        let reply = tokio::time::timeout(T, c.call(&Bottle::from_text(cmd)))
-            .await
-            .expect("reply in time")
-            .unwrap();
-        c.close().await;
-        let unmatched = reply.to_string().contains("no answer within");
-        if !unmatched || tokio::time::Instant::now() > deadline {
-            return reply;
-        }
-        eprintln!("{port}: {reply}; asking again");
-    }
+    common::rpc_until_answered(ns, port, "/test/client", cmd, "no answer within", T).await
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -255,7 +227,7 @@ async fn yarp_clients_call_ros_services_on(venv: &common::Distro) {
         s.expect_async("READY", T).await;
     }
     let gw = common::gateway(
-        &(interfaces_line(venv)
+        &(venv.interfaces_line()
             + r#"
 [[service]]
 name = "basic"

@@ -32,6 +32,12 @@ impl std::ops::Deref for Distro {
 }
 
 impl Distro {
+    /// The mapping line that makes the gateway read the venv's interface definitions
+    /// (`interfaces = ["<venv>"]`: nav_msgs, test_msgs, ... of the distro's wheels).
+    pub fn interfaces_line(&self) -> String {
+        format!("interfaces = [{:?}]\n", self.venv.display().to_string())
+    }
+
     /// The ROS domain of test `index` for this distro (see [`domain_id`]).
     pub fn domain(&self, index: u16) -> u16 {
         domain_slot(index) + PER_DISTRO * self.slot
@@ -352,4 +358,38 @@ pub fn open_device(text: &str) -> yarp_devices::PolyDriver {
 /// Runs blocking device calls off the async runtime.
 pub async fn blocking<R: Send + 'static>(f: impl FnOnce() -> R + Send + 'static) -> R {
     tokio::task::spawn_blocking(f).await.expect("blocking task")
+}
+
+/// Calls the YARP RPC port `port` as `me` with `cmd` (a connection per call, each reply
+/// awaited up to `within`) until the reply does not say `unanswered`: the gateway answers
+/// so until DDS discovery has matched the ROS side, which can take a while on a loaded
+/// machine. After 2 T the last reply is returned as it is.
+pub async fn rpc_until_answered(
+    ns: &yarp_net::nameserver::NameClient,
+    port: &str,
+    me: &str,
+    cmd: &str,
+    unanswered: &str,
+    within: Duration,
+) -> yarp_proto::Bottle {
+    let contact = ns
+        .query(port)
+        .await
+        .unwrap()
+        .expect("gateway port registered");
+    let deadline = tokio::time::Instant::now() + 2 * T;
+    loop {
+        let mut c = yarp_net::rpc::RpcClient::connect(&contact, me, yarp_proto::wire::Carrier::Tcp)
+            .await
+            .unwrap();
+        let reply = tokio::time::timeout(within, c.call(&yarp_proto::Bottle::from_text(cmd)))
+            .await
+            .expect("reply in time")
+            .unwrap();
+        c.close().await;
+        if !reply.to_string().contains(unanswered) || tokio::time::Instant::now() > deadline {
+            return reply;
+        }
+        eprintln!("{port}: {reply}; asking again");
+    }
 }
