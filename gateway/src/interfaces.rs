@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{OnceLock, RwLock};
 
 /// Where a type's definition is.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 enum Source {
     Msg(PathBuf),
     Srv(PathBuf),
@@ -201,8 +201,14 @@ fn index_package(r: &mut Registry, pkg: &str, dir: &Path) -> usize {
                 _ => ACTION_SUFFIXES,
             };
             for suffix in suffixes {
-                r.files
-                    .insert(format!("{pkg}/{kind}/{stem}{suffix}"), source.clone());
+                let name = format!("{pkg}/{kind}/{stem}{suffix}");
+                // A definition from another file replaces one already read (Jazzy's
+                // control_msgs after Kilted's): it is parsed again when next looked up.
+                if r.files.get(&name).is_some_and(|old| old != &source) {
+                    r.loaded.remove(&name);
+                    r.failed.remove(&name);
+                }
+                r.files.insert(name, source.clone());
                 n += 1;
             }
         }

@@ -212,6 +212,19 @@ pub static DEFINITIONS: &[(&str, &str, &str, &str)] = definitions![
     std_srvs/srv/Trigger,
     std_srvs/srv/SetBool,
     std_srvs/srv/Empty,
+    // Action plumbing (every action's goal ids, status topic and cancel service).
+    unique_identifier_msgs/msg/UUID,
+    action_msgs/msg/GoalInfo,
+    action_msgs/msg/GoalStatus,
+    action_msgs/msg/GoalStatusArray,
+    action_msgs/srv/CancelGoal,
+    // MoveIt's controller interface (control_msgs 6.8.0, as Kilted ships it; Jazzy's 5.8.0
+    // is in msg/jazzy, see msg/README.md).
+    trajectory_msgs/msg/MultiDOFJointTrajectoryPoint,
+    trajectory_msgs/msg/MultiDOFJointTrajectory,
+    control_msgs/msg/JointTolerance,
+    control_msgs/msg/JointComponentTolerance,
+    control_msgs/action/FollowJointTrajectory,
 ];
 
 /// Parses a built-in definition into its structures (a service gives four, an action

@@ -53,6 +53,20 @@ extra_interfaces() {
             rm -rf "$out"
         done
     done
+    # control_msgs (FollowJointTrajectory; not on PyPI either): the gateway's copy of the
+    # release this distro ships, installed as a package installs it (definitions and their
+    # rosidl JSON), so tests read it at run time as a sourced ROS gives it.
+    local files=(gateway/msg/control_msgs/msg/*.msg)
+    if [[ $distro == jazzy ]]; then
+        files+=(gateway/msg/jazzy/control_msgs/action/*.action)
+    else
+        files+=(gateway/msg/control_msgs/action/*.action)
+    fi
+    "$venv/bin/python" gateway/tools/rosidl_hashes.py control_msgs "${files[@]}" \
+        --json-dir "$venv/share/control_msgs" >/dev/null 2>&1
+    for f in "${files[@]}"; do
+        cp "$f" "$venv/share/control_msgs/$(basename "$(dirname "$f")")/"
+    done
 }
 extra_done() {
     local idl rel
@@ -60,6 +74,9 @@ extra_done() {
         rel=${idl#tests/peers/interfaces/}
         [[ -f $venv/share/${rel%.idl}.json ]] || return 1
     done
+    [[ -f $venv/share/control_msgs/action/FollowJointTrajectory.json ]] &&
+        cmp -s "$venv/share/control_msgs/action/FollowJointTrajectory.action" \
+            "gateway/msg/$([[ $distro == jazzy ]] && echo jazzy/)control_msgs/action/FollowJointTrajectory.action"
 }
 if [[ -x $venv/bin/python ]] && "$venv/bin/python" -c "$probe" 2>/dev/null; then
     extra_done || extra_interfaces

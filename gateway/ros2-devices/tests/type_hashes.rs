@@ -3,7 +3,7 @@
 //!
 //! yarp_control_msgs: the hashes rosidl computes from the package's published
 //! `.msg`/`.srv` files (robotology/yarp-devices-ros2 `ros2_interfaces_ws/src/yarp_control_msgs`,
-//! commit 6317707), printed by `tools/type_hashes.py` with the Kilted venv's
+//! commit 6317707), printed by `gateway/tools/rosidl_hashes.py` with the Kilted venv's
 //! rosidl_adapter and rosidl_generator_type_description (the steps of
 //! `rosidl_generate_interfaces`). The standard types: the `type_hashes` of the Kilted
 //! wheels' `share/**/*.json`.
