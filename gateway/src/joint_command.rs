@@ -39,6 +39,15 @@ impl BoardInfo {
         }
     }
 
+    /// A YARP value (degrees, meters, ...) of axis `j` in ROS units.
+    pub fn to_si(&self, j: usize, yarp: f64) -> f64 {
+        if self.prismatic.get(j).copied().unwrap_or(false) {
+            yarp
+        } else {
+            yarp.to_radians()
+        }
+    }
+
     /// The axis called `name`.
     fn axis(&self, name: &str) -> Result<usize, CommandError> {
         self.names

@@ -33,4 +33,5 @@ pub mod ros_args;
 pub mod security;
 pub mod service;
 pub mod tf;
+pub mod trajectory;
 pub mod types;
