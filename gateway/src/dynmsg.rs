@@ -83,6 +83,19 @@ impl Value {
         }
     }
 
+    /// Sets field `name` of a struct value of type `ty` (false if it has none: a field
+    /// that only some releases of a type have).
+    pub fn set(&mut self, ty: &MsgType, name: &str, v: Value) -> bool {
+        let i = ty.fields.iter().position(|f| f.name == name);
+        match (self, i) {
+            (Value::Struct(f), Some(i)) if i < f.len() => {
+                f[i] = v;
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// Whether this value has exactly the shape of catalog type `type_name`.
     pub fn conforms_to(&self, type_name: &str) -> bool {
         match (lookup(type_name), self) {

@@ -332,7 +332,7 @@ impl ServiceEntry {
 
 /// An `[[action]]` entry: a ROS 2 action served by a YARP RPC port (`ros_to_yarp`), or a
 /// YARP RPC port whose callers reach a ROS 2 action server (`yarp_to_ros`).
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ActionEntry {
     pub name: String,
@@ -354,7 +354,72 @@ pub struct ActionEntry {
     /// executing goals' feedback; `yarp_to_ros`: the port the gateway opens and writes the
     /// feedback of its goals to.
     pub yarp_feedback: Option<String>,
+    /// A FollowJointTrajectory action served by the gateway's own trajectory controller
+    /// on a group of control boards (no YARP RPC port runs the goals: `yarp_port` is the
+    /// prefix of the boards' client ports).
+    pub controller: Option<TrajectoryController>,
 }
+
+/// A joint trajectory controller as MoveIt's `moveit_controllers.yaml` names one: the
+/// boards of one part or a group of parts, its joints and joint_trajectory_controller's
+/// default `constraints` (SI units; 0 is not checked).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrajectoryController {
+    /// The boards' port prefixes (`controlBoard_nws_yarp`'s `name`), e.g.
+    /// `["/icub/torso", "/icub/left_arm"]`; their axes are the controller's, in order.
+    pub boards: Vec<String>,
+    /// `position` (IPositionControl, one move per trajectory segment) or
+    /// `position_direct` (the desired positions streamed every period).
+    #[serde(default = "TrajectoryController::default_mode")]
+    pub mode: Mode,
+    /// The joints it may move (by name); default every axis of the boards.
+    #[serde(default)]
+    pub joints: Vec<String>,
+    /// Default goal tolerance per joint (rad or m).
+    #[serde(default = "TrajectoryController::default_goal_tolerance")]
+    pub goal_tolerance: f64,
+    /// Default path tolerance per joint (rad or m).
+    #[serde(default)]
+    pub path_tolerance: f64,
+    /// Velocity under which a joint counts as stopped at the goal (rad/s or m/s).
+    #[serde(default)]
+    pub stopped_velocity_tolerance: f64,
+    /// How long after the trajectory's end the goal tolerance may take to be met (s).
+    #[serde(default = "TrajectoryController::default_goal_time")]
+    pub goal_time: f64,
+    /// How often feedback is published and, in position_direct, setpoints sent (Hz).
+    #[serde(default = "TrajectoryController::default_rate")]
+    pub rate_hz: f64,
+}
+
+impl TrajectoryController {
+    fn default_mode() -> Mode {
+        Mode::Position
+    }
+    fn default_goal_tolerance() -> f64 {
+        0.02
+    }
+    fn default_goal_time() -> f64 {
+        1.0
+    }
+    fn default_rate() -> f64 {
+        50.0
+    }
+
+    /// The defaults a goal's tolerances fall back to.
+    pub fn defaults(&self) -> crate::trajectory::Defaults {
+        crate::trajectory::Defaults {
+            goal_position: self.goal_tolerance,
+            path_position: self.path_tolerance,
+            stopped_velocity: self.stopped_velocity_tolerance,
+            goal_time: self.goal_time,
+        }
+    }
+}
+
+/// The action type a [`TrajectoryController`] serves.
+pub const FOLLOW_JOINT_TRAJECTORY: &str = "control_msgs/action/FollowJointTrajectory";
 
 /// Everything loaded from one or more mapping files.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -858,9 +923,55 @@ const COMMAND_SERVICES: [&str; 3] = [
     "std_srvs/srv/Empty",
 ];
 
+fn validate_controller(a: &ActionEntry, c: &TrajectoryController) -> Result<(), Invalid> {
+    if a.direction != Direction::RosToYarp || a.ros_type != FOLLOW_JOINT_TRAJECTORY {
+        return Err((
+            "controller",
+            format!("a controller serves {FOLLOW_JOINT_TRAJECTORY} ros_to_yarp"),
+        ));
+    }
+    if a.command.is_some() || a.cancel.is_some() || a.yarp_feedback.is_some() {
+        return Err((
+            "controller",
+            "the controller runs the goals itself: no command, cancel or yarp_feedback".into(),
+        ));
+    }
+    if c.boards.is_empty() {
+        return Err(("controller", "`boards` names no control board".into()));
+    }
+    for b in &c.boards {
+        check_port("controller", b)?;
+    }
+    if c.mode == Mode::Velocity {
+        return Err((
+            "controller",
+            "mode: a trajectory is followed in position or position_direct".into(),
+        ));
+    }
+    let tolerances = [
+        c.goal_tolerance,
+        c.path_tolerance,
+        c.stopped_velocity_tolerance,
+        c.goal_time,
+    ];
+    if tolerances.iter().any(|x| !x.is_finite() || *x < 0.0) {
+        return Err((
+            "controller",
+            "tolerances and goal_time are numbers >= 0 (0: not checked)".into(),
+        ));
+    }
+    if !(c.rate_hz.is_finite() && c.rate_hz > 0.0 && c.rate_hz <= 1000.0) {
+        return Err(("controller", "rate_hz must be in (0, 1000]".into()));
+    }
+    Ok(())
+}
+
 fn validate_action(a: &ActionEntry) -> Result<(), Invalid> {
     check_ros_name("ros_action", &a.ros_action)?;
     check_port("yarp_port", &a.yarp_port)?;
+    if let Some(c) = &a.controller {
+        validate_controller(a, c)?;
+    }
     if let Some(p) = &a.yarp_feedback {
         check_port("yarp_feedback", p)?;
     }

@@ -74,10 +74,8 @@ fn every_built_in_definition_is_the_installed_one_on(venv: &common::Distro) {
         // A distro that ships another release of the package (Jazzy's control_msgs): the
         // installed file is the project's copy of that release; its hashes are checked
         // with every installed definition's.
-        let variant = common::gateway_dir().join(format!(
-            "msg/{}/{pkg}/{kind}/{name}.{kind}",
-            venv.name
-        ));
+        let variant =
+            common::gateway_dir().join(format!("msg/{}/{pkg}/{kind}/{name}.{kind}", venv.name));
         if let Ok(ours) = std::fs::read_to_string(&variant) {
             let text = std::fs::read_to_string(&file).unwrap();
             assert_eq!(

@@ -11,6 +11,7 @@
 //! `cancel` to the YARP port on another connection; the goal ends CANCELED when its call
 //! returns. The goals' bookkeeping is [`crate::action`].
 
+use super::follow;
 use super::services::{default_of, generic_reply, generic_service_types};
 use super::yarp_rpc::YarpRpc;
 use crate::action::{self, cancel_code, status, GoalId, Goals};
@@ -134,6 +135,8 @@ struct State {
 
 struct Shared {
     server: ActionServer,
+    /// The gateway's trajectory controller, when it runs the goals (`controller`).
+    controller: Option<follow::Controller>,
     node: Arc<Node>,
     state: Mutex<State>,
     ns: NameClient,
@@ -193,8 +196,22 @@ pub(super) async fn serve(
     counters: Arc<Counters>,
 ) {
     let me = format!("{}/{}", node.fully_qualified_name(), entry.name);
+    let controller = match &entry.controller {
+        Some(c) => {
+            match follow::Controller::spawn(&entry.name, &entry.yarp_port, c, server.types.feedback)
+            {
+                Ok(c) => Some(c),
+                Err(e) => {
+                    warn!("{}: trajectory controller not started: {e}", entry.name);
+                    return;
+                }
+            }
+        }
+        None => None,
+    };
     let shared = Arc::new(Shared {
         server,
+        controller,
         node,
         state: Mutex::new(State {
             goals: Goals::default(),
@@ -235,13 +252,16 @@ async fn goals(s: Arc<Shared>) {
             continue;
         };
         let now = super::now_ns();
-        let runnable = matches!(s.ns.query(&s.entry.yarp_port).await, Ok(Some(_)));
+        let runnable = match &s.controller {
+            Some(c) => c.ready(),
+            None => matches!(s.ns.query(&s.entry.yarp_port).await, Ok(Some(_))),
+        };
         let accepted = runnable && s.state().goals.accept(goal_id, now);
         if !runnable {
-            s.counters.refused(format!(
-                "goal rejected: {} is not registered",
-                s.entry.yarp_port
-            ));
+            s.counters.refused(match &s.entry.controller {
+                Some(c) => format!("goal rejected: control boards {:?} not open", c.boards),
+                None => format!("goal rejected: {} is not registered", s.entry.yarp_port),
+            });
         }
         s.respond(
             &s.server.send_goal,
@@ -256,28 +276,13 @@ async fn goals(s: Arc<Shared>) {
     }
 }
 
-/// Runs one goal: one YARP call, its reply the result.
+/// Runs one goal (a YARP call, or the trajectory controller) and answers its result.
 async fn run_goal(s: Arc<Shared>, id: GoalId, goal: Ros) {
-    let t = s.server.types;
-    let t0 = Instant::now();
     s.state().goals.set_status(&id, status::EXECUTING);
     s.publish_status().await;
-    let mut cmd = Bottle::from_text(s.entry.command.as_deref().unwrap_or_default());
-    match crate::generic::to_yarp(t.goal, &goal) {
-        Ok(fields) => cmd.extend(fields.into_items()),
-        Err(e) => warn!("{}: {e}", t.goal.name),
-    }
-    let mut rpc = YarpRpc::new(s.ns.clone(), &s.entry.yarp_port, &format!("{}/goal", s.me));
-    let reply = rpc.call_within(&cmd, GOAL_TIMEOUT).await;
-    let (succeeded, result) = match generic_reply(t.result, reply) {
-        Ok(r) => {
-            s.counters.forwarded(t0.elapsed());
-            (true, r)
-        }
-        Err(why) => {
-            s.counters.refused(format!("{}: {why}", s.entry.yarp_port));
-            (false, default_of(t.result))
-        }
+    let (succeeded, result) = match &s.controller {
+        Some(c) => follow_goal(&s, c, id, goal).await,
+        None => call_goal(&s, goal).await,
     };
     let waiting = {
         let mut st = s.state();
@@ -288,6 +293,59 @@ async fn run_goal(s: Arc<Shared>, id: GoalId, goal: Ros) {
     let response = s.result_response(s.state().goals.get(&id));
     for req in waiting {
         s.respond(&s.server.get_result, req, response.clone()).await;
+    }
+}
+
+/// A goal run by the trajectory controller, its feedback published as it comes.
+async fn follow_goal(s: &Shared, c: &follow::Controller, id: GoalId, goal: Ros) -> (bool, Ros) {
+    let t0 = Instant::now();
+    let (tx, mut rx) = tokio::sync::mpsc::channel(4);
+    let run = c.run(id, goal, tx);
+    tokio::pin!(run);
+    let ended = loop {
+        tokio::select! {
+            ended = &mut run => break ended,
+            Some(fb) = rx.recv() => {
+                let msg = Ros::Struct(vec![action::uuid(&id), fb]);
+                if let Err(e) = s.server.feedback.async_publish(msg).await {
+                    debug!("{}: feedback not published: {e:?}", s.entry.name);
+                }
+            }
+        }
+    };
+    match ended.outcome {
+        follow::Outcome::Succeeded => s.counters.forwarded(t0.elapsed()),
+        // A preempted goal ends CANCELED, as a canceled one.
+        follow::Outcome::Canceled => s.state().goals.set_status(&id, status::CANCELING),
+        follow::Outcome::Aborted => s.counters.refused(format!(
+            "{}: goal aborted: {:?}",
+            s.entry.name,
+            ended.result.fields().and_then(|f| f.get(1))
+        )),
+    }
+    (ended.outcome == follow::Outcome::Succeeded, ended.result)
+}
+
+/// A goal run by one YARP call, its reply the result.
+async fn call_goal(s: &Shared, goal: Ros) -> (bool, Ros) {
+    let t = s.server.types;
+    let t0 = Instant::now();
+    let mut cmd = Bottle::from_text(s.entry.command.as_deref().unwrap_or_default());
+    match crate::generic::to_yarp(t.goal, &goal) {
+        Ok(fields) => cmd.extend(fields.into_items()),
+        Err(e) => warn!("{}: {e}", t.goal.name),
+    }
+    let mut rpc = YarpRpc::new(s.ns.clone(), &s.entry.yarp_port, &format!("{}/goal", s.me));
+    let reply = rpc.call_within(&cmd, GOAL_TIMEOUT).await;
+    match generic_reply(t.result, reply) {
+        Ok(r) => {
+            s.counters.forwarded(t0.elapsed());
+            (true, r)
+        }
+        Err(why) => {
+            s.counters.refused(format!("{}: {why}", s.entry.yarp_port));
+            (false, default_of(t.result))
+        }
     }
 }
 
@@ -323,11 +381,18 @@ async fn cancels(s: Arc<Shared>) {
             ),
             _ => ([0; 16], 0),
         };
-        let (code, canceling) = match &s.entry.cancel {
-            None => (cancel_code::REJECTED, Vec::new()),
-            Some(_) => s.state().goals.cancel(&goal_id, stamp),
+        let (code, canceling) = match (&s.entry.cancel, &s.controller) {
+            (None, None) => (cancel_code::REJECTED, Vec::new()),
+            _ => s.state().goals.cancel(&goal_id, stamp),
         };
-        if !canceling.is_empty() {
+        if let Some(c) = &s.controller {
+            for (g, _) in &canceling {
+                c.cancel(*g);
+            }
+            if !canceling.is_empty() {
+                s.publish_status().await;
+            }
+        } else if !canceling.is_empty() {
             let cmd = Bottle::from_text(s.entry.cancel.as_deref().unwrap_or_default());
             match rpc.call(&cmd).await {
                 Ok(b) => info!(

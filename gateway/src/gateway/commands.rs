@@ -97,9 +97,9 @@ pub(super) async fn ros_to_board(
 }
 
 /// An open board and what the gateway learned about it.
-struct Board {
-    dev: PolyDriver,
-    info: BoardInfo,
+pub(super) struct Board {
+    pub(super) dev: PolyDriver,
+    pub(super) info: BoardInfo,
     /// Axes an unnamed message addresses.
     default_axes: Vec<usize>,
     /// Axes already switched to the entry's control mode.
@@ -107,7 +107,7 @@ struct Board {
 }
 
 /// Why a command was not applied.
-enum Failure {
+pub(super) enum Failure {
     /// The board is fine: the message does not fit it, or it refused the command.
     Message(String),
     /// The board did not answer or its connection broke (it is reopened).
@@ -116,7 +116,7 @@ enum Failure {
 
 /// A board's error: only a board that is unreachable is reopened; a refusal (a joint in
 /// fault, a mode it does not take) is reported and counted.
-fn board_err(e: DeviceError) -> Failure {
+pub(super) fn board_err(e: DeviceError) -> Failure {
     if e.is_lost_peer() {
         Failure::Board(e.to_string())
     } else {
@@ -124,12 +124,12 @@ fn board_err(e: DeviceError) -> Failure {
     }
 }
 
-fn missing(what: &str) -> Failure {
+pub(super) fn missing(what: &str) -> Failure {
     Failure::Board(format!("remote_controlboard lacks {what}"))
 }
 
 impl Board {
-    fn open(local: &str, cb: &ControlBoard) -> Result<Board, String> {
+    pub(super) fn open(local: &str, cb: &ControlBoard) -> Result<Board, String> {
         let text = format!(
             "device remote_controlboard\nremote {}\nlocal {local}\ncarrier tcp\n",
             cb.remote
@@ -187,7 +187,12 @@ impl Board {
     }
 
     /// Sends one setpoint; `speeds` (position mode) first sets reference speeds.
-    fn apply(&mut self, mode: Mode, t: &Target, speeds: &[Option<f64>]) -> Result<(), Failure> {
+    pub(super) fn apply(
+        &mut self,
+        mode: Mode,
+        t: &Target,
+        speeds: &[Option<f64>],
+    ) -> Result<(), Failure> {
         self.ensure_mode(mode, &t.joints)?;
         let d = self.dev.device();
         match mode {

@@ -7,6 +7,7 @@ mod beside;
 mod commands;
 mod demand;
 mod dynamic;
+mod follow;
 mod robot;
 mod services;
 mod topics;

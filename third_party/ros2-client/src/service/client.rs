@@ -32,7 +32,33 @@ where
   response_receiver: SimpleDataReaderR<ResponseWrapper<Resp>>,
   sequence_number_gen: atomic::AtomicI64, // used by basic and cyclone
   client_guid: GUID,                      // used by the Cyclone ServiceMapping
+  // yarp-rs: concurrent calls share one response reader. One waiter at a time reads it
+  // (`reading`); a response for another call is kept in `others` for its caller, who
+  // finds it there once it gets the reader (bounded: calls that gave up leave theirs).
+  reading: futures::lock::Mutex<()>,
+  waiting: std::sync::Mutex<Vec<(RmwRequestId, futures::channel::oneshot::Sender<Resp>)>>,
+  others: std::sync::Mutex<std::collections::VecDeque<(RmwRequestId, Resp)>>,
 }
+
+/// yarp-rs: a call's registration, removed when the call ends (answered or dropped).
+struct Registered<'a, Req: Message, Resp: Message> {
+  client: &'a Client<Req, Resp>,
+  request_id: RmwRequestId,
+}
+
+impl<Req: Message, Resp: Message> Drop for Registered<'_, Req, Resp> {
+  fn drop(&mut self) {
+    self
+      .client
+      .waiting
+      .lock()
+      .unwrap_or_else(|e| e.into_inner())
+      .retain(|(id, _)| *id != self.request_id);
+  }
+}
+
+/// yarp-rs: how many responses of other calls a client keeps.
+const OTHERS_KEPT: usize = 64;
 
 impl<Req, Resp> Client<Req, Resp>
 where
@@ -69,6 +95,9 @@ where
       response_receiver,
       sequence_number_gen: atomic::AtomicI64::new(SequenceNumber::default().into()),
       client_guid,
+      reading: futures::lock::Mutex::new(()),
+      waiting: std::sync::Mutex::new(Vec::new()),
+      others: std::sync::Mutex::new(std::collections::VecDeque::new()),
     })
   }
 
@@ -177,31 +206,109 @@ where
   /// The returned Future does not complete until the response has been
   /// received.
   pub async fn async_receive_response(&self, request_id: RmwRequestId) -> ReadResult<Resp> {
-    let dcc_stream = self.response_receiver.as_async_stream();
-    pin_mut!(dcc_stream);
-
-    loop {
-      match dcc_stream.next().await {
-        Some(Err(e)) => return Err(e.into()),
-        Some(Ok(dcc)) => {
-          let mi = MessageInfo::from(&dcc);
-          let (req_id, response) =
+    self
+      .receive_with(request_id, || async {
+        let dcc_stream = self.response_receiver.as_async_stream();
+        pin_mut!(dcc_stream);
+        match dcc_stream.next().await {
+          Some(Err(e)) => Err(e.into()),
+          Some(Ok(dcc)) => {
+            let mi = MessageInfo::from(&dcc);
             dcc
               .into_value()
-              .unwrap(self.service_mapping, mi, self.client_guid)?;
-          if self.is_response_to(req_id, request_id) {
-            return Ok(response);
-          } else {
-            debug!(
-              "Received response for someone else. expected={request_id:?}  received={req_id:?}"
-            );
-            continue; //
+              .unwrap(self.service_mapping, mi, self.client_guid)
           }
+          // This should never occur, because topic do not "end".
+          None => read_error_internal!("SimpleDataReader value stream unexpectedly ended!"),
         }
-        // This should never occur, because topic do not "end".
-        None => return read_error_internal!("SimpleDataReader value stream unexpectedly ended!"),
+      })
+      .await
+  }
+
+  // yarp-rs: concurrent calls on one client. A call registers itself; one call at a time
+  // reads the response reader, and hands each response that is not its own to the call
+  // it answers (or keeps it, bounded, for a call that registers later).
+  async fn receive_with<F, Fut>(&self, request_id: RmwRequestId, read_one: F) -> ReadResult<Resp>
+  where
+    F: Fn() -> Fut,
+    Fut: std::future::Future<Output = ReadResult<(RmwRequestId, Resp)>>,
+  {
+    use futures::FutureExt;
+    if let Some(r) = self.take_other(request_id) {
+      return Ok(r);
+    }
+    let (tx, rx) = futures::channel::oneshot::channel();
+    self.waiters().push((request_id, tx));
+    let _registered = Registered {
+      client: self,
+      request_id,
+    };
+    if let Some(r) = self.take_other(request_id) {
+      return Ok(r);
+    }
+    let read = async {
+      loop {
+        let _reader = self.reading.lock().await;
+        let (req_id, response) = read_one().await?;
+        if self.is_response_to(req_id, request_id) {
+          return Ok(response);
+        }
+        debug!("Received response for someone else. expected={request_id:?}  received={req_id:?}");
+        self.deliver(req_id, response);
       }
-    } // loop
+    };
+    let handed = async {
+      match rx.await {
+        Ok(r) => Ok(r),
+        // never dropped unsent while registered
+        Err(_) => futures::future::pending().await,
+      }
+    };
+    let (handed, read) = (handed.fuse(), read.fuse());
+    pin_mut!(handed, read);
+    futures::select! {
+      r = handed => r,
+      r = read => r,
+    }
+  }
+
+  fn waiters(
+    &self,
+  ) -> std::sync::MutexGuard<'_, Vec<(RmwRequestId, futures::channel::oneshot::Sender<Resp>)>> {
+    self.waiting.lock().unwrap_or_else(|e| e.into_inner())
+  }
+
+  fn deliver(&self, id: RmwRequestId, response: Resp) {
+    let waiter = {
+      let mut w = self.waiters();
+      w.iter()
+        .position(|(want, _)| self.is_response_to(id, *want))
+        .map(|i| w.swap_remove(i).1)
+    };
+    let unsent = match waiter {
+      Some(tx) => tx.send(response).err(),
+      None => Some(response),
+    };
+    if let Some(r) = unsent {
+      self.keep_other(id, r);
+    }
+  }
+
+  // yarp-rs: a response another call read for this one.
+  fn take_other(&self, request_id: RmwRequestId) -> Option<Resp> {
+    let mut others = self.others.lock().unwrap_or_else(|e| e.into_inner());
+    let i = others
+      .iter()
+      .position(|(id, _)| self.is_response_to(*id, request_id))?;
+    others.remove(i).map(|(_, r)| r)
+  }
+
+  fn keep_other(&self, id: RmwRequestId, response: Resp) {
+    let mut others = self.others.lock().unwrap_or_else(|e| e.into_inner());
+    if others.len() >= OTHERS_KEPT {
+      others.pop_front();
+    }
+    others.push_back((id, response));
   }
 
   // yarp-rs: responses of a type known only at run time.
@@ -214,25 +321,23 @@ where
   where
     S: for<'de> serde::de::DeserializeSeed<'de, Value = Resp> + Clone,
   {
-    let dcc_stream = self.response_receiver.as_async_stream();
-    pin_mut!(dcc_stream);
     let decode = decode_seed(seed);
-    loop {
-      match dcc_stream.next().await {
-        Some(Err(e)) => return Err(e.into()),
-        Some(Ok(dcc)) => {
-          let mi = MessageInfo::from(&dcc);
-          let (req_id, response) =
+    self
+      .receive_with(request_id, || async {
+        let dcc_stream = self.response_receiver.as_async_stream();
+        pin_mut!(dcc_stream);
+        match dcc_stream.next().await {
+          Some(Err(e)) => Err(e.into()),
+          Some(Ok(dcc)) => {
+            let mi = MessageInfo::from(&dcc);
             dcc
               .into_value()
-              .unwrap_with(self.service_mapping, mi, self.client_guid, &decode)?;
-          if self.is_response_to(req_id, request_id) {
-            return Ok(response);
+              .unwrap_with(self.service_mapping, mi, self.client_guid, &decode)
           }
+          None => read_error_internal!("SimpleDataReader value stream unexpectedly ended!"),
         }
-        None => return read_error_internal!("SimpleDataReader value stream unexpectedly ended!"),
-      }
-    }
+      })
+      .await
   }
 
   /// As [`Self::async_call_service`], the response decoded by `seed`.
