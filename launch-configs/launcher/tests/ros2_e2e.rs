@@ -116,6 +116,9 @@ struct Scenario<'a> {
     /// The whole robot as ROS tools read it: the joints of the merged `/joint_states`
     /// (with `/robot_description` latched) and a CameraInfo topic.
     whole_robot: Option<(usize, &'a str)>,
+    /// The left arm's FollowJointTrajectory action (the gateway's trajectory controller),
+    /// reached by our ROS layer: a second gateway's `yarp_to_ros` entry called by `yarp rpc`.
+    trajectory: Option<&'a str>,
 }
 
 /// Runs the scenario's config and checks the whole chain, for every ROS 2 distro at once
@@ -348,6 +351,10 @@ fn checks(l: &mut Launch, nodes: &[Nodes], s: &Scenario, t0: Instant, ros_env: &
     );
     drop(reader);
 
+    if let Some(action) = s.trajectory {
+        follow_trajectory(action, &conf_home, ros_env, s.prefix);
+    }
+
     // The dashboard, in headless Chromium, shows this robot's ports and the joint plot.
     if let Some(browser) = common::browser::chromium() {
         let work = tempfile::tempdir().unwrap();
@@ -388,6 +395,7 @@ fn fake_devices_to_rclpy_and_back() {
         domain_offset: 0,
         imu_topic: None,
         whole_robot: None,
+        trajectory: None,
     });
 }
 
@@ -417,6 +425,7 @@ fn icub_sim_to_rclpy_and_back() {
         domain_offset: 1,
         imu_topic: Some("/icub/head/imu"),
         whole_robot: Some((53, "/icub/cam/left/camera_info")),
+        trajectory: Some("/left_arm_controller/follow_joint_trajectory"),
     });
 }
 
@@ -438,6 +447,7 @@ fn icub_genova02_to_rclpy_and_back() {
         domain_offset: 2,
         imu_topic: None,
         whole_robot: None,
+        trajectory: None,
     });
 }
 
@@ -466,5 +476,113 @@ fn ergocub_to_rclpy_and_back() {
         domain_offset: 3,
         imu_topic: Some("/ergocub/left_arm/imu"),
         whole_robot: None,
+        trajectory: None,
     });
+}
+
+/// A FollowJointTrajectory goal from our ROS layer (a second gateway turns `yarp rpc` calls
+/// into goals of `action`): the left elbow through three points, SUCCESSFUL, then on the
+/// last one; a point beyond the elbow's limits gets INVALID_GOAL and moves nothing.
+fn follow_trajectory(
+    action: &str,
+    conf_home: &std::path::Path,
+    ros_env: &[(&str, &str)],
+    prefix: &str,
+) {
+    use std::io::Write;
+    let work = tempfile::tempdir().unwrap();
+    let mapping = work.path().join("caller.toml");
+    std::fs::write(
+        &mapping,
+        format!(
+            "[[action]]\nname = \"fjt_caller\"\ndirection = \"yarp_to_ros\"\n\
+             yarp_port = \"/e2e/fjt:rpc\"\nros_action = \"{action}\"\n\
+             ros_type = \"control_msgs/action/FollowJointTrajectory\"\n"
+        ),
+    )
+    .unwrap();
+    let mut gw = Command::new(program("yarp-ros2-gateway", "yarp-ros2-gateway"));
+    gw.arg("--mappings")
+        .arg(&mapping)
+        .args(["--network", "127.0.0.1", "--node-name", "e2e_fjt_caller"])
+        .args([
+            "--diagnostics-port",
+            "/e2e/fjt/diagnostics:o",
+            "--no-embedded-name-server",
+        ])
+        .env("YARP_CONFIG_HOME", conf_home)
+        .envs(ros_env.iter().copied());
+    let _caller = Lines::spawn(gw);
+    // trajectory multi_dof path component_path goal component_goal goal_time: the
+    // trajectory (header joint_names points), each point (positions velocities
+    // accelerations effort time_from_start), in the goal's generic layout.
+    let goal = |points: &[(f64, u32)]| {
+        let pts: Vec<String> = points
+            .iter()
+            .map(|(q, s)| format!("(({q}) () () () ({s} 0))"))
+            .collect();
+        format!(
+            "(((0 0) \"\") (\"l_elbow\") ({})) (((0 0) \"\") () ()) () () () () (0 0)",
+            pts.join(" ")
+        )
+    };
+    let mut rpc = Command::new(program("yarp", "yarp-cli"));
+    rpc.args(["rpc", "/e2e/fjt:rpc"])
+        .env("YARP_CONFIG_HOME", conf_home)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit());
+    let mut call = |cmd: &str| -> String {
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            let mut child = rpc.spawn().expect("yarp rpc");
+            let mut stdin = child.stdin.take().unwrap();
+            writeln!(stdin, "{cmd}").unwrap();
+            drop(stdin);
+            let out = child.wait_with_output().expect("yarp rpc output");
+            let text = String::from_utf8_lossy(&out.stdout).to_string();
+            let answered =
+                text.contains("Response:") && !text.contains("no action server answered");
+            if answered || Instant::now() > deadline {
+                return text;
+            }
+            std::thread::sleep(Duration::from_millis(500));
+        }
+    };
+    let t0 = Instant::now();
+    let reply = call(&goal(&[(0.8, 2), (1.2, 4), (1.0, 6)]));
+    assert!(
+        reply.contains("Goal successfully reached!") && !reply.contains("[fail]"),
+        "FollowJointTrajectory: {reply}"
+    );
+    eprintln!(
+        "FollowJointTrajectory of the left elbow: {} in {:.2} s",
+        reply.trim(),
+        t0.elapsed().as_secs_f64()
+    );
+    let mut read_cmd = Command::new(program("yarp", "yarp-cli"));
+    read_cmd
+        .args([
+            "read",
+            "/e2e/fjt_reader",
+            &format!("{prefix}/left_arm/state:o"),
+        ])
+        .env("YARP_CONFIG_HOME", conf_home);
+    let reader = Lines::spawn(read_cmd);
+    let line = reader.expect("", Duration::from_secs(20));
+    let elbow: f64 = line
+        .split_whitespace()
+        .nth(3)
+        .and_then(|v| v.parse().ok())
+        .unwrap();
+    assert!(
+        (elbow - 1f64.to_degrees()).abs() < 0.02f64.to_degrees(),
+        "elbow at {elbow}"
+    );
+    drop(reader);
+    let reply = call(&goal(&[(2.5, 2)]));
+    assert!(
+        reply.contains("[fail] aborted -1") && reply.contains("outside its limits"),
+        "a point beyond the elbow's limits: {reply}"
+    );
 }
