@@ -497,7 +497,8 @@ fn follow_trajectory(
         format!(
             "[[action]]\nname = \"fjt_caller\"\ndirection = \"yarp_to_ros\"\n\
              yarp_port = \"/e2e/fjt:rpc\"\nros_action = \"{action}\"\n\
-             ros_type = \"control_msgs/action/FollowJointTrajectory\"\n"
+             ros_type = \"control_msgs/action/FollowJointTrajectory\"\n\
+             yarp_feedback = \"/e2e/fjt/feedback:o\"\n"
         ),
     )
     .unwrap();
@@ -549,6 +550,26 @@ fn follow_trajectory(
             std::thread::sleep(Duration::from_millis(500));
         }
     };
+    // The feedback of the goals, as our `yarp read` prints it (once the caller's port is
+    // there: `yarp exists`).
+    let registered = eventually(Duration::from_secs(30), || {
+        let st = Command::new(program("yarp", "yarp-cli"))
+            .args(["exists", "/e2e/fjt/feedback:o"])
+            .env("YARP_CONFIG_HOME", conf_home)
+            .stdout(Stdio::null())
+            .status()
+            .ok()?;
+        st.success().then_some(())
+    });
+    assert!(
+        registered.is_some(),
+        "the caller gateway never opened its feedback port"
+    );
+    let mut fb_cmd = Command::new(program("yarp", "yarp-cli"));
+    fb_cmd
+        .args(["read", "/e2e/fjt_feedback", "/e2e/fjt/feedback:o"])
+        .env("YARP_CONFIG_HOME", conf_home);
+    let feedback = Lines::spawn(fb_cmd);
     let t0 = Instant::now();
     let reply = call(&goal(&[(0.8, 2), (1.2, 4), (1.0, 6)]));
     assert!(
@@ -570,19 +591,77 @@ fn follow_trajectory(
         .env("YARP_CONFIG_HOME", conf_home);
     let reader = Lines::spawn(read_cmd);
     let line = reader.expect("", Duration::from_secs(20));
-    let elbow: f64 = line
-        .split_whitespace()
-        .nth(3)
-        .and_then(|v| v.parse().ok())
-        .unwrap();
+    let elbow = elbow_of(&line);
     assert!(
         (elbow - 1f64.to_degrees()).abs() < 0.02f64.to_degrees(),
         "elbow at {elbow}"
     );
     drop(reader);
+    // (header joint_names desired actual error index ...): the elbow's, on the way.
+    let mut seen = 0;
+    while let Ok(line) = feedback.rx.recv_timeout(Duration::from_millis(500)) {
+        if line.contains("l_elbow") {
+            seen += 1;
+        }
+    }
+    assert!(seen >= 10, "{seen} feedback messages of a 6 s goal");
+    drop(feedback);
+    // A cancel (`[stop]` from another caller) stops the elbow on its way.
+    let long = std::thread::spawn({
+        let g = goal(&[(0.5, 8)]);
+        let mut rpc = Command::new(program("yarp", "yarp-cli"));
+        rpc.args(["rpc", "/e2e/fjt:rpc"])
+            .env("YARP_CONFIG_HOME", conf_home);
+        move || {
+            let mut child = rpc
+                .stdin(Stdio::piped())
+                .stdout(Stdio::piped())
+                .spawn()
+                .unwrap();
+            writeln!(child.stdin.take().unwrap(), "{g}").unwrap();
+            String::from_utf8_lossy(&child.wait_with_output().unwrap().stdout).to_string()
+        }
+    });
+    std::thread::sleep(Duration::from_secs(3));
+    let stop = call("[stop]");
+    assert!(stop.contains("[ok] 1"), "[stop]: {stop}");
+    let reply = long.join().unwrap();
+    assert!(
+        reply.contains("[fail] canceled"),
+        "the canceled goal: {reply}"
+    );
+    let mut read_cmd = Command::new(program("yarp", "yarp-cli"));
+    read_cmd
+        .args([
+            "read",
+            "/e2e/fjt_reader2",
+            &format!("{prefix}/left_arm/state:o"),
+        ])
+        .env("YARP_CONFIG_HOME", conf_home);
+    let reader = Lines::spawn(read_cmd);
+    let first: f64 = elbow_of(&reader.expect("", Duration::from_secs(20)));
+    std::thread::sleep(Duration::from_millis(800));
+    let mut last = first;
+    while let Ok(l) = reader.rx.try_recv() {
+        last = elbow_of(&l);
+    }
+    drop(reader);
+    assert!(
+        first > 0.5f64.to_degrees() + 5.0 && first < 1f64.to_degrees() - 5.0,
+        "stopped on the way: {first}"
+    );
+    assert!((last - first).abs() < 0.5, "still: {first} then {last}");
     let reply = call(&goal(&[(2.5, 2)]));
     assert!(
         reply.contains("[fail] aborted -1") && reply.contains("outside its limits"),
         "a point beyond the elbow's limits: {reply}"
     );
+}
+
+/// The left elbow (joint 3) in a `yarp read` line of the arm's `state:o`.
+fn elbow_of(line: &str) -> f64 {
+    line.split_whitespace()
+        .nth(3)
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("yarp read printed {line:?}"))
 }
