@@ -95,8 +95,13 @@ pub fn tf_joints(urdf: &str) -> Result<Vec<TfJoint>, String> {
             "prismatic" => Motion::Prismatic,
             _ => Motion::Other,
         };
-        let axis = Unit::try_new(Vector3::from(axis), 1e-12)
-            .ok_or_else(|| format!("joint `{name}`: its axis is zero"))?;
+        // urdfdom reads the axis of movable joints only: fixed ones may have a zero axis
+        // (the iCubs' URDFs do).
+        let axis = match Unit::try_new(Vector3::from(axis), 1e-12) {
+            Some(a) => a,
+            None if matches!(motion, Motion::Fixed | Motion::Other) => Vector3::x_axis(),
+            None => return Err(format!("joint `{name}`: its axis is zero")),
+        };
         let mimic = j.children().find(|c| c.has_tag_name("mimic")).map(|m| {
             let num = |a: &str, d: f64| m.attribute(a).and_then(|v| v.parse().ok()).unwrap_or(d);
             (

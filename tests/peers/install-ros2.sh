@@ -18,7 +18,9 @@ distro=${1:-kilted}
 # actions (Fibonacci) and services rosidl tests with, their definitions and hashes.
 names=(rclpy std-msgs sensor-msgs geometry-msgs std-srvs trajectory-msgs diagnostic-msgs
        nav-msgs visualization-msgs test-msgs rmw-fastrtps-cpp)
-probe='import rclpy, rclpy.action, std_msgs.msg, sensor_msgs.msg, geometry_msgs.msg, std_srvs.srv, trajectory_msgs.msg, diagnostic_msgs.msg, nav_msgs.msg, visualization_msgs.msg, test_msgs.action, test_msgs.srv'
+# icub-models: the iCubs' URDFs (share/iCub/robots/<robot>/model.urdf), for TF checks.
+data=(icub-models)
+probe='import icub_models, rclpy, rclpy.action, std_msgs.msg, sensor_msgs.msg, geometry_msgs.msg, std_srvs.srv, trajectory_msgs.msg, diagnostic_msgs.msg, nav_msgs.msg, visualization_msgs.msg, test_msgs.action, test_msgs.srv'
 case $distro in
     kilted)
         venv=${ROS_VENV:-$PWD/.venv-ros}
@@ -100,7 +102,7 @@ if [[ $distro == jazzy && -z $python ]]; then
     fi
 fi
 "$python" -m venv "$venv" >&2
-"$venv/bin/pip" install -q "${names[@]/#/$prefix}" >&2
+"$venv/bin/pip" install -q "${names[@]/#/$prefix}" "${data[@]}" >&2
 "$venv/bin/python" -c "$probe" >&2
 extra_interfaces
 echo "$venv"
