@@ -289,6 +289,33 @@ pub fn announce_service_type_hash(
     }
 }
 
+/// The node whose clock is this process's ROS time ([`now_ns`]).
+static CLOCK_NODE: std::sync::Mutex<Option<std::sync::Weak<Node>>> = std::sync::Mutex::new(None);
+
+/// Makes `node`'s clock this process's ROS time: with its `use_sim_time` parameter true
+/// (`--ros-args -p use_sim_time:=true`, or set at run time) the time of the last `/clock`
+/// message (0 before the first, as rclcpp), else the system clock.
+pub fn use_clock_of(node: &std::sync::Arc<Node>) {
+    *CLOCK_NODE.lock().unwrap_or_else(|e| e.into_inner()) = Some(std::sync::Arc::downgrade(node));
+}
+
+/// This process's ROS time in ns since the epoch: the stamps the gateway gives messages
+/// whose YARP data carries none (see [`use_clock_of`]).
+pub fn now_ns() -> u64 {
+    let node = CLOCK_NODE
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .as_ref()
+        .and_then(std::sync::Weak::upgrade);
+    match node {
+        Some(n) => u64::try_from(n.time_now().to_nanos()).unwrap_or(0),
+        None => std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_nanos() as u64)
+            .unwrap_or(0),
+    }
+}
+
 /// A ROS topic or service name (`/a/b`, or relative `b`).
 pub fn name(n: &str) -> Result<Name, RosError> {
     let n = &remapped(n);

@@ -212,6 +212,8 @@ pub static DEFINITIONS: &[(&str, &str, &str, &str)] = definitions![
     std_srvs/srv/Trigger,
     std_srvs/srv/SetBool,
     std_srvs/srv/Empty,
+    // Simulated time (`use_sim_time`: the node's /clock reader).
+    rosgraph_msgs/msg/Clock,
     // Action plumbing (every action's goal ids, status topic and cancel service).
     unique_identifier_msgs/msg/UUID,
     action_msgs/msg/GoalInfo,

@@ -267,6 +267,110 @@ async fn ros_args_on(venv: &common::Distro) {
     }
 }
 
+/// `--ros-args -p use_sim_time:=true`: the stamps the gateway gives YARP data that carries
+/// none come from `/clock` (rosgraph_msgs/Clock, best effort as rosbag2 and Gazebo's bridge
+/// publish it), 0 before the first, as rclcpp's; `use_sim_time` reads true. Domain index: 0.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn use_sim_time_stamps_with_the_clock() {
+    for d in common::distros("use_sim_time_stamps_with_the_clock") {
+        use_sim_time_on(&d).await;
+    }
+}
+
+async fn use_sim_time_on(venv: &common::Distro) {
+    let domain = venv.domain(0);
+    let dir = tempfile_dir("sim-time");
+    let file = dir.join("m.toml");
+    std::fs::write(
+        &file,
+        r#"
+[[topic]]
+name = "twist"
+direction = "yarp_to_ros"
+yarp_port = "/gw/twist:i"
+ros_topic = "/twist"
+ros_type = "geometry_msgs/msg/TwistStamped"
+conversion = "generic"
+"#,
+    )
+    .unwrap();
+    let (mut cmd, ns_addr) = gateway(&file, domain);
+    cmd.args(["--ros-args", "-p", "use_sim_time:=true"])
+        .env("YARP_CONFIG_HOME", &dir);
+    let gw = Peer::spawn(cmd, "yarp-ros2-gateway");
+    gw.expect_async("yarp-ros2-gateway: ROS domain", T).await;
+    let sub = Peer::start(
+        venv,
+        domain,
+        &[
+            "sub",
+            "geometry_msgs/msg/TwistStamped",
+            "/twist",
+            "--count",
+            "10000",
+        ],
+    );
+    sub.expect_async("READY", T).await;
+    let clock = Peer::start(
+        venv,
+        domain,
+        &[
+            "pub",
+            "rosgraph_msgs/msg/Clock",
+            "/clock",
+            r#"{"clock": {"sec": 1234, "nanosec": 5}}"#,
+            "--count",
+            "1000",
+            "--rate",
+            "10",
+            "--best-effort",
+        ],
+    );
+    let ns = NameClient::new(ns_addr.parse().unwrap()).with_timeout(T);
+    let w = Port::open("/test/twist:o", ns.clone()).await.unwrap();
+    w.connect("/gw/twist:i", None).await.unwrap();
+    // A header of (0 0): the gateway stamps it (this port writes no envelope).
+    let twist = Bottle::from_text("((0 0) base) ((1 2 3) (4 5 6))");
+    let stamp = |line: &str| {
+        let m: serde_json::Value = serde_json::from_str(line).unwrap();
+        (
+            m["header"]["stamp"]["sec"].as_i64().unwrap(),
+            m["header"]["stamp"]["nanosec"].as_i64().unwrap(),
+        )
+    };
+    let end = std::time::Instant::now() + 2 * T;
+    let mut seen = Vec::new();
+    loop {
+        w.write(&twist).await;
+        tokio::time::sleep(Duration::from_millis(50)).await;
+        while let Some(line) = sub.try_line("MSG") {
+            seen.push(stamp(&line));
+        }
+        if seen.last() == Some(&(1234, 5)) {
+            break;
+        }
+        assert!(std::time::Instant::now() < end, "no /clock stamp: {seen:?}");
+    }
+    assert!(
+        seen.iter().all(|s| *s == (0, 0) || *s == (1234, 5)),
+        "stamps are the simulated time (0 before the first /clock): {seen:?}"
+    );
+    drop(clock);
+    let call = Peer::start(
+        venv,
+        domain,
+        &[
+            "call",
+            "rcl_interfaces/srv/GetParameters",
+            "/yarp_ros2_gateway/get_parameters",
+            r#"{"names": ["use_sim_time"]}"#,
+        ],
+    );
+    let resp = call.expect_async("RESP", T).await;
+    let v: serde_json::Value = serde_json::from_str(&resp).unwrap();
+    assert_eq!(v["values"][0]["bool_value"], true, "{resp}");
+}
+
 fn tempfile_dir(what: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("yarp-ros2-gateway-{what}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -32,7 +32,7 @@ use std::marker::PhantomData;
 use std::net::IpAddr;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::Duration;
 use tokio::task::JoinHandle;
 use tracing::{debug, warn};
 use yarp_net::nameserver::NameClient;
@@ -166,6 +166,7 @@ impl Gateway {
         }
         g.diagnostics(&mut node, &opt).await?;
         let node = Arc::new(node);
+        ros::use_clock_of(&node);
         let mut tasks = std::mem::take(&mut g.tasks);
         tasks.extend(g.deferred.drain(..).map(|d| d(node.clone())));
         Ok(Gateway {
@@ -851,8 +852,5 @@ pub fn diagnostics_bottle(rows: &[Row]) -> Bottle {
 }
 
 pub(crate) fn now_ns() -> u64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_nanos() as u64)
-        .unwrap_or(0)
+    ros::now_ns()
 }

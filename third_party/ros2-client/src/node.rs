@@ -800,9 +800,11 @@ impl Node {
       None // No parameter services
     };
 
+    // yarp-rs: /clock is rosgraph_msgs/Clock (one builtin_interfaces/Time, so the same
+    // CDR); under the Time type name no rmw publisher of /clock matched.
     let clock_topic = self.create_topic(
       &Name::new("/", "clock").unwrap(),
-      MessageTypeName::new("builtin_interfaces", "Time"),
+      MessageTypeName::new("rosgraph_msgs", "Clock"),
       &DEFAULT_SUBSCRIPTION_QOS,
     )?;
 
