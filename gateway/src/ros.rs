@@ -64,6 +64,10 @@ pub fn start_context_with(
     if !networks.is_empty() {
         b = b.with_only_networks(networks.iter().copied());
     }
+    let peers = static_peers_from_env();
+    if !peers.is_empty() {
+        b = b.static_peers(peers);
+    }
     if let crate::security::Security::Enclave(dir) = security {
         // SROS2 writes unencrypted PKCS#8 keys: no password.
         b = b.builtin_security(
@@ -94,6 +98,40 @@ pub fn domain_from_env() -> Result<u16, RosError> {
         }),
         _ => Ok(0),
     }
+}
+
+/// The hosts of `$ROS_STATIC_PEERS` (addresses or names separated by `;`, as rmw reads
+/// them): discovery announces this process to each by unicast too, so a host that
+/// multicast does not reach (another subnet, a VPN) finds the gateway. A name that does
+/// not resolve is reported and left out.
+pub fn static_peers_from_env() -> Vec<IpAddr> {
+    parse_static_peers(&std::env::var("ROS_STATIC_PEERS").unwrap_or_default())
+}
+
+fn parse_static_peers(list: &str) -> Vec<IpAddr> {
+    use std::net::ToSocketAddrs;
+    let mut out = Vec::new();
+    for host in list.split(';').map(str::trim).filter(|h| !h.is_empty()) {
+        let ip = host.parse::<IpAddr>().ok().or_else(|| {
+            let addrs = (host, 0)
+                .to_socket_addrs()
+                .ok()?
+                .map(|a| a.ip())
+                .collect::<Vec<_>>();
+            // IPv4 first: RustDDS discovers over IPv4
+            addrs
+                .iter()
+                .find(|a| a.is_ipv4())
+                .or(addrs.first())
+                .copied()
+        });
+        match ip {
+            Some(ip) if !out.contains(&ip) => out.push(ip),
+            Some(_) => {}
+            None => tracing::warn!("ROS_STATIC_PEERS: `{host}` does not resolve; left out"),
+        }
+    }
+    out
 }
 
 /// The interfaces discovery may use, as rmw reads `$ROS_AUTOMATIC_DISCOVERY_RANGE`:
@@ -375,6 +413,21 @@ pub fn service_qos() -> QosProfile {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    #[test]
+    fn static_peers_read_as_rmw_lists_them() {
+        assert_eq!(
+            parse_static_peers(" 10.0.1.5; localhost;;10.0.1.5 ;::1"),
+            [
+                IpAddr::from([10, 0, 1, 5]),
+                IpAddr::from([127, 0, 0, 1]),
+                "::1".parse::<IpAddr>().unwrap()
+            ]
+        );
+        assert!(parse_static_peers("").is_empty());
+        assert!(parse_static_peers("no-such-host.invalid").is_empty());
+    }
     use super::*;
 
     #[test]

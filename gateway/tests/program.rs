@@ -371,6 +371,43 @@ conversion = "generic"
     assert_eq!(v["values"][0]["bool_value"], true, "{resp}");
 }
 
+/// `ROS_STATIC_PEERS`: the gateway announces itself (SPDP) by unicast to each host listed,
+/// at the well-known discovery ports of the domain's first participants, as Fast DDS's
+/// initial peers do; 127.0.0.5 stands for a host multicast does not reach. Domain index: 1.
+#[test]
+fn ros_static_peers_get_the_announcements() {
+    let domain = common::domain_id(1);
+    let dir = tempfile_dir("static-peers");
+    let file = dir.join("m.toml");
+    std::fs::write(&file, MAPPING).unwrap();
+    // participant 1's port: the gateway is not the only participant a host may run
+    let port = 7400 + 250 * domain + 10 + 2;
+    let peer = std::net::UdpSocket::bind(("127.0.0.5", port)).unwrap();
+    peer.set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    let (mut cmd, _) = gateway(&file, domain);
+    cmd.env("YARP_CONFIG_HOME", &dir)
+        .env("ROS_STATIC_PEERS", "192.0.2.1;127.0.0.5");
+    let _gw = Peer::spawn(cmd, "yarp-ros2-gateway");
+    let end = std::time::Instant::now() + T;
+    let mut buf = [0u8; 65536];
+    loop {
+        if let Ok((n, from)) = peer.recv_from(&mut buf) {
+            let d = &buf[..n];
+            // RTPS header, then a DATA of the SPDP participant writer (entity 0x000100c2)
+            let spdp = d.starts_with(b"RTPS") && d.windows(4).any(|w| w == [0, 1, 0, 0xc2]);
+            if spdp {
+                eprintln!("SPDP from {from}: {n} bytes");
+                break;
+            }
+        }
+        assert!(
+            std::time::Instant::now() < end,
+            "no SPDP announcement at 127.0.0.5:{port}"
+        );
+    }
+}
+
 fn tempfile_dir(what: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("yarp-ros2-gateway-{what}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -77,6 +77,8 @@ pub struct DomainParticipantBuilder {
                                        * and multicast setup */
 
   same_host_loopback: bool, // prefer loopback for same-host peers + localhost SPDP discovery peers
+  // yarp-rs: hosts SPDP also announces to by unicast (ROS_STATIC_PEERS)
+  static_peers: Vec<IpAddr>,
 
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
@@ -93,6 +95,7 @@ impl DomainParticipantBuilder {
       domain_id,
       only_networks: None,
       same_host_loopback: true,
+      static_peers: Vec::new(),
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
       #[cfg(feature = "security")]
@@ -126,6 +129,14 @@ impl DomainParticipantBuilder {
   /// `src/rtps/loopback_same_host_design.md`.
   pub fn same_host_loopback(mut self, enabled: bool) -> Self {
     self.same_host_loopback = enabled;
+    self
+  }
+
+  /// yarp-rs: hosts to announce this participant to by unicast, besides multicast, as
+  /// rmw's `ROS_STATIC_PEERS` (Fast DDS's initial peers): SPDP goes to each host's
+  /// well-known unicast ports of the first participant ids of the domain.
+  pub fn static_peers(mut self, peers: Vec<IpAddr>) -> Self {
+    self.static_peers = peers;
     self
   }
 
@@ -344,6 +355,7 @@ impl DomainParticipantBuilder {
       self.socket_send_buffer_size,
       self.only_networks,
       self.same_host_loopback,
+      self.static_peers,
       dp_waker,
       discovery_sample_sender,
     )?;
@@ -1021,6 +1033,7 @@ impl DomainParticipantDisc {
     socket_send_buffer_size: usize,
     only_networks: Option<Vec<IpAddr>>,
     same_host_loopback: bool,
+    static_peers: Vec<IpAddr>,
     dp_waker: LoopWaker,
     discovery_sample_sender: ReadySender<mio1::Token>,
   ) -> CreateResult<Self> {
@@ -1038,6 +1051,7 @@ impl DomainParticipantDisc {
       socket_send_buffer_size,
       only_networks,
       same_host_loopback,
+      static_peers,
       dp_waker,
       discovery_sample_sender,
     )?;
@@ -1281,6 +1295,7 @@ impl DomainParticipantInner {
     socket_send_buffer_size: usize,
     only_networks: Option<Vec<IpAddr>>,
     same_host_loopback: bool,
+    static_peers: Vec<IpAddr>,
     dp_waker: LoopWaker,
     discovery_sample_sender: ReadySender<mio1::Token>,
   ) -> CreateResult<Self> {
@@ -1457,6 +1472,7 @@ impl DomainParticipantInner {
           only_networks_for_ev_loop,
           socket_send_buffer_size,
           same_host_loopback,
+          static_peers,
           reader_ready_rx,
           writer_ready_rx,
           dp_waker,
