@@ -428,7 +428,6 @@ mod tests {
         assert!(parse_static_peers("").is_empty());
         assert!(parse_static_peers("no-such-host.invalid").is_empty());
     }
-    use super::*;
 
     #[test]
     fn dds_type_names_keep_the_interface_kind() {
