@@ -240,6 +240,14 @@ async fn run(args: Args) -> anyhow::Result<()> {
                 yarp_ros2_gateway::ros::remapped(&s.ros_service)
             );
         }
+        for a in &mappings.actions {
+            println!(
+                "action  {:<20} {:<10} {}",
+                a.name,
+                a.direction.to_string(),
+                yarp_ros2_gateway::ros::remapped(&a.ros_action)
+            );
+        }
         for r in &mappings.robots {
             let mut topics = Vec::new();
             if let Some(js) = &r.joint_states {
@@ -268,6 +276,7 @@ async fn run(args: Args) -> anyhow::Result<()> {
         },
     };
     let (ns, _embedded) = name_server(&args).await?;
+    yarp_ros2_gateway::ros::set_read_only_parameters(settings(&args, domain_id, &ns));
     let opt = Options {
         domain_id,
         // --network, else the ROS environment (ROS_AUTOMATIC_DISCOVERY_RANGE, ROS_LOCALHOST_ONLY)
@@ -293,6 +302,37 @@ async fn run(args: Args) -> anyhow::Result<()> {
     println!("yarp-ros2-gateway: shutting down");
     gw.shutdown().await;
     Ok(())
+}
+
+/// The gateway's settings as read-only ROS parameters of its node.
+fn settings(
+    args: &Args,
+    domain_id: u16,
+    ns: &yarp_net::nameserver::NameClient,
+) -> Vec<(String, ros2_client::ParameterValue)> {
+    use ros2_client::ParameterValue as P;
+    let paths = |v: &[PathBuf]| P::StringArray(v.iter().map(|p| p.display().to_string()).collect());
+    vec![
+        ("mappings".into(), paths(&args.mappings)),
+        ("interfaces".into(), paths(&args.interfaces)),
+        ("domain_id".into(), P::Integer(domain_id.into())),
+        (
+            "network".into(),
+            P::StringArray(args.networks.iter().map(|n| n.to_string()).collect()),
+        ),
+        (
+            "yarp_name_server".into(),
+            P::String(ns.server().to_string()),
+        ),
+        (
+            "diagnostics_period".into(),
+            P::Double(args.diagnostics_period),
+        ),
+        (
+            "diagnostics_port".into(),
+            P::String(args.diagnostics_port.clone()),
+        ),
+    ]
 }
 
 fn resolve(s: &str) -> anyhow::Result<SocketAddr> {

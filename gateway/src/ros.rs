@@ -185,6 +185,17 @@ pub fn set_ros_args(
     });
 }
 
+/// The main node's read-only parameters: the gateway's settings, for `ros2 param list/get`.
+static READ_ONLY: std::sync::OnceLock<Vec<(String, ros2_client::ParameterValue)>> =
+    std::sync::OnceLock::new();
+
+/// Declares `settings` on the main node (the one [`set_ros_args`] names) as read-only
+/// parameters: `ros2 param get` reads them, `ros2 param set` is refused (once, before the
+/// node is made).
+pub fn set_read_only_parameters(settings: Vec<(String, ros2_client::ParameterValue)>) {
+    let _ = READ_ONLY.set(settings);
+}
+
 /// Another node on the same participant (dynamic mode creates endpoints at run time on
 /// its own node, so the main node can be shared read-only).
 pub fn new_node(ctx: &Context, namespace: &str, node_name: &str) -> Result<Node, RosError> {
@@ -200,6 +211,23 @@ pub fn new_node(ctx: &Context, namespace: &str, node_name: &str) -> Result<Node,
     {
         for (k, v) in &r.params {
             options = options.declare_parameter(k, v.clone());
+        }
+        if let Some(fixed) = READ_ONLY.get() {
+            for (k, v) in fixed {
+                options = options.declare_parameter(k, v.clone());
+            }
+            // The validator also sees the declared values: those pass, changes do not.
+            options = options.parameter_validator(Box::new(|name, value| {
+                match READ_ONLY
+                    .get()
+                    .and_then(|f| f.iter().find(|(k, _)| k == name))
+                {
+                    Some((_, v)) if v != value => Err(format!(
+                        "parameter '{name}' cannot be set because it is read-only"
+                    )),
+                    _ => Ok(()),
+                }
+            }));
         }
     }
     ctx.new_node(name, options).map_err(|e| err(&e))

@@ -239,6 +239,46 @@ async fn ros_args_on(venv: &common::Distro) {
     assert_eq!(values[1]["double_value"], 2.5, "{resp}");
     assert_eq!(values[2]["string_value"], "icub", "{resp}");
 
+    // The gateway's settings, read-only.
+    let call = Peer::start(
+        venv,
+        domain,
+        &[
+            "call",
+            "rcl_interfaces/srv/GetParameters",
+            "/lab/lab_gateway/get_parameters",
+            r#"{"names": ["mappings", "domain_id"]}"#,
+        ],
+    );
+    let resp = call.expect_async("RESP", T).await;
+    let v: serde_json::Value = serde_json::from_str(&resp).unwrap();
+    assert_eq!(
+        v["values"][0]["string_array_value"][0],
+        file.display().to_string(),
+        "{resp}"
+    );
+    assert_eq!(v["values"][1]["integer_value"], domain, "{resp}");
+    let set = Peer::start(
+        venv,
+        domain,
+        &[
+            "call",
+            "rcl_interfaces/srv/SetParameters",
+            "/lab/lab_gateway/set_parameters",
+            r#"{"parameters": [{"name": "domain_id", "value": {"type": 2, "integer_value": 3}}]}"#,
+        ],
+    );
+    let resp = set.expect_async("RESP", T).await;
+    let v: serde_json::Value = serde_json::from_str(&resp).unwrap();
+    assert_eq!(v["results"][0]["successful"], false, "{resp}");
+    assert!(
+        v["results"][0]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("read-only"),
+        "{resp}"
+    );
+
     // `ros2 param list` from 20 fresh nodes in a row: each gets the list at once.
     let fresh = Peer::start(
         venv,
@@ -258,7 +298,7 @@ async fn ros_args_on(venv: &common::Distro) {
         let resp = fresh.expect_async("RESP", T).await;
         let v: serde_json::Value = serde_json::from_str(&resp).unwrap_or_default();
         let names = v["result"]["names"].as_array().cloned().unwrap_or_default();
-        for want in ["answer", "rate", "robot"] {
+        for want in ["answer", "rate", "robot", "mappings", "use_sim_time"] {
             assert!(
                 names.iter().any(|n| n == want),
                 "fresh node {i}: `{want}` not listed: {resp}"
