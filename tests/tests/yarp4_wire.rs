@@ -233,3 +233,102 @@ fn vocab64_from_cpp_4_and_back() {
     assert_eq!(line, "[velocity] [ok] 3");
     writing.abort();
 }
+
+/// YARP 4.0's `throttleDown` monitor and its chains (`file1`/`type1`), our writer to C++
+/// 4.0's `yarp read`: our sender-side chain lets one message through every 300 ms and
+/// compresses it (`bottle_compression_zlib`), C++ 4.0's receiver expands it, and it prints
+/// the counter values we wrote, about 15 apart (one every 20 ms written).
+#[test]
+fn our_throttled_compressed_chain_to_cpp_4() {
+    let test = "our_throttled_compressed_chain_to_cpp_4";
+    let Some(yarp) = cpp4_program(test, "yarp") else {
+        return;
+    };
+    let rt = runtime();
+    let port = rt
+        .block_on(Port::open("/pm4/w", name_client()))
+        .expect("open /pm4/w");
+    let writing = rt.spawn(async move {
+        for n in 0i32.. {
+            // (C++'s `yarp read` prints an (int string) pair as a text message)
+            port.write_nowait(&Bottle::new().with("counter").with(n), None);
+            tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+        }
+    });
+    let chain = "tcp+send.portmonitor+type.dll+file.throttleDown+type1.dll\
+                 +file1.bottle_compression_zlib+period_ms.300\
+                 +recv.portmonitor+type.dll+file.bottle_compression_zlib";
+    let mut seen: Vec<i64> = Vec::new();
+    let seen = cpp_read_over(&yarp, "/pm4/r", "/pm4/w", chain, |l| {
+        let b = Bottle::from_text(l);
+        if b.get(0).and_then(|v| v.as_str()) == Some("counter") {
+            seen.push(b.get(1).and_then(|v| v.as_i64()).unwrap());
+        }
+        (seen.len() == 5).then(|| seen.clone())
+    });
+    writing.abort();
+    let gaps: Vec<i64> = seen.windows(2).map(|w| w[1] - w[0]).collect();
+    eprintln!("C++ 4.0 read {seen:?} (gaps {gaps:?})");
+    assert!(gaps.iter().all(|g| *g >= 10 && *g <= 30), "{seen:?}");
+}
+
+/// C++ 4.0's `yarp write` compresses (`bottle_compression_zlib` on its side), our reader
+/// throttles then expands (`+recv.portmonitor+...+file.throttleDown+...+file1.
+/// bottle_compression_zlib+period_ms.300`): of the 60 lines written 20 ms apart a few
+/// arrive, whole, about 15 apart.
+#[test]
+fn cpp_4_compressed_to_our_throttled_chain() {
+    let test = "cpp_4_compressed_to_our_throttled_chain";
+    let Some(yarp) = cpp4_program(test, "yarp") else {
+        return;
+    };
+    let rt = runtime();
+    let port = rt
+        .block_on(Port::open("/pm4/in", name_client()))
+        .expect("open /pm4/in");
+    let mut writer = cpp_command(&yarp)
+        .args(["write", "/pm4/cw"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn C++ yarp write");
+    let mut stdin = writer.stdin.take().unwrap();
+    let _writer = Reaped(writer);
+    let start = std::time::Instant::now();
+    while !registered("/pm4/cw") {
+        assert!(start.elapsed() < T, "/pm4/cw never registered");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let chain = "tcp+send.portmonitor+type.dll+file.bottle_compression_zlib\
+                 +recv.portmonitor+type.dll+file.throttleDown+type1.dll\
+                 +file1.bottle_compression_zlib+period_ms.300";
+    let (ok, why) = rt
+        .block_on(yarp_net::network::connect(
+            &name_client(),
+            "/pm4/cw",
+            "/pm4/in",
+            Some(chain),
+        ))
+        .expect("connect");
+    assert!(ok, "{why}");
+    for n in 0..60 {
+        writeln!(stdin, "{n} line").unwrap();
+        stdin.flush().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let mut seen = Vec::new();
+    while let Ok(Some(msg)) = rt.block_on(async {
+        tokio::time::timeout(std::time::Duration::from_millis(600), port.read()).await
+    }) {
+        let b = msg.bottle().expect("an expanded Bottle");
+        assert_eq!(b.get(1).and_then(|v| v.as_str()), Some("line"), "{b}");
+        seen.push(b.get(0).and_then(|v| v.as_i64()).unwrap());
+    }
+    drop(stdin);
+    rt.block_on(port.close());
+    let gaps: Vec<i64> = seen.windows(2).map(|w| w[1] - w[0]).collect();
+    eprintln!("ours read {seen:?} (gaps {gaps:?})");
+    assert!((2..=6).contains(&seen.len()), "{seen:?}");
+    assert!(gaps.iter().all(|g| *g >= 10), "{seen:?}");
+}

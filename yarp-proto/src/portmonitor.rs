@@ -1,21 +1,32 @@
 //! Port monitors: the `portmonitor` carrier modifier that transforms every message of a
 //! connection, on the sending side (`+send.portmonitor`) or the receiving one
 //! (`+recv.portmonitor`). C++ loads the monitor named by `+file.NAME` as a plug-in
-//! (`+type.dll`) or a Lua script (`+type.lua`, the default); here the dll monitors
+//! (`+type.dll`) or a Lua script (`+type.lua`, 3.12's default); here the dll monitors
 //! robots' files name are built in:
 //!
 //! - `depthimage_compression_zlib` (YARP's `src/portmonitors/depthimage_compression_zlib`):
 //!   a float depth image travels as the Bottle `width height compressed_size raw_size
 //!   {zlib of the raw rows}`;
 //! - `bottle_compression_zlib` (YARP 3.12's `src/portmonitors/bottle_compression_zlib`):
-//!   any message travels as `raw_size {zlib of its Bottle encoding}`.
+//!   any message travels as `raw_size {zlib of its Bottle encoding}`;
+//! - `throttleDown` (YARP 4.0): lets a message through only when more than `period_ms`
+//!   (default 1000) have passed since the last one it let through (or since the
+//!   connection was made); on the sender the others are not sent, on the receiver they
+//!   are read and dropped.
 //!
-//! ergoCub's `sensors/ros2_repeaters/*.xml` name both. Sans-I/O: Bottles in, Bottles out.
+//! Monitors chain as in YARP 4.0: `file`/`type`, then `file1`/`type1`, `file2`/`type2`...,
+//! each passing its output to the next; only the first may drop a message (4.0 asks the
+//! first monitor's `accept` only). Each side reads its own qualifiers, as 4.0 does (the
+//! sender's follow `+send.portmonitor`, up to `+recv.portmonitor`; the receiver's follow
+//! `+recv.portmonitor`), and what its part lacks from the whole name, as 3.12 does (3.12
+//! mixed both sides: robots' files such as ergoCub's name `type.dll` once, at the end).
+//! Sans-I/O: Bottles in, Bottles out.
 
 use crate::image::{Image, PixelCode};
 use crate::wire::modifiers::CarrierName;
 use crate::Bottle;
 use std::io::{Read, Write};
+use std::time::{Duration, Instant};
 
 /// Which end of the connection a monitor runs at.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -27,7 +38,11 @@ pub enum Side {
 }
 
 /// The monitors built into this crate.
-pub const BUILT_IN: &[&str] = &["depthimage_compression_zlib", "bottle_compression_zlib"];
+pub const BUILT_IN: &[&str] = &[
+    "depthimage_compression_zlib",
+    "bottle_compression_zlib",
+    "throttleDown",
+];
 
 /// Why a monitor cannot be set up, or refused a message.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -51,13 +66,29 @@ pub enum MonitorError {
 enum Kind {
     DepthImageZlib,
     BottleZlib,
+    ThrottleDown,
 }
 
-/// A configured monitor of one connection end.
+impl Kind {
+    fn name(self) -> &'static str {
+        match self {
+            Kind::DepthImageZlib => "depthimage_compression_zlib",
+            Kind::BottleZlib => "bottle_compression_zlib",
+            Kind::ThrottleDown => "throttleDown",
+        }
+    }
+}
+
+/// A configured monitor chain of one connection end.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Monitor {
-    kind: Kind,
+    /// In order: `file`, `file1`, `file2`...
+    chain: Vec<Kind>,
     side: Side,
+    /// throttleDown's period (when it is first in the chain) and the time it last let a
+    /// message through (the connection's start at first).
+    period: Duration,
+    last: Instant,
 }
 
 impl Monitor {
@@ -75,24 +106,72 @@ impl Monitor {
         if modifier != "portmonitor" {
             return Err(MonitorError::UnknownModifier(modifier.to_string()));
         }
-        // C++ PortMonitor::configureFromProperty: type defaults to lua, file to "modifier"
-        let kind = carrier.find("type").unwrap_or("lua");
-        if kind != "dll" {
-            return Err(MonitorError::UnsupportedType(kind.to_string()));
-        }
-        let file = carrier.find("file").unwrap_or("modifier");
-        let kind = match file {
-            "depthimage_compression_zlib" => Kind::DepthImageZlib,
-            "bottle_compression_zlib" => Kind::BottleZlib,
-            other => return Err(MonitorError::UnknownMonitor(other.to_string())),
+        let part = side_part(carrier, side);
+        // this side's own qualifier (4.0), else the first in the whole name (3.12)
+        let find = |k: &str| {
+            part.iter()
+                .find(|(q, _)| q == k)
+                .map(|(_, v)| v.as_str())
+                .or_else(|| carrier.find(k))
         };
-        Ok(Some(Monitor { kind, side }))
+        // chains are 4.0's: their keys only from this side's part
+        let own = |k: &str| part.iter().find(|(q, _)| q == k).map(|(_, v)| v.as_str());
+        let mut chain = Vec::new();
+        for i in 0.. {
+            let (ty, file) = if i == 0 {
+                (find("type"), find("file"))
+            } else {
+                (own(&format!("type{i}")), own(&format!("file{i}")))
+            };
+            if i > 0 && ty.is_none() {
+                break;
+            }
+            // 3.12's defaults for the first: a Lua script called `modifier`
+            let ty = ty.unwrap_or("lua");
+            if ty != "dll" {
+                return Err(MonitorError::UnsupportedType(ty.to_string()));
+            }
+            chain.push(match file.unwrap_or("modifier") {
+                "depthimage_compression_zlib" => Kind::DepthImageZlib,
+                "bottle_compression_zlib" => Kind::BottleZlib,
+                "throttleDown" => Kind::ThrottleDown,
+                other => return Err(MonitorError::UnknownMonitor(other.to_string())),
+            });
+        }
+        // every monitor sees every parameter (C++ copies them all into each one's info)
+        let period = find("period_ms")
+            .and_then(|v| v.parse::<f64>().ok())
+            .filter(|ms| ms.is_finite() && *ms >= 0.0)
+            .map_or(Duration::from_secs(1), |ms| {
+                Duration::from_secs_f64(ms.trunc() / 1000.0)
+            });
+        Ok(Some(Monitor {
+            chain,
+            side,
+            period,
+            last: Instant::now(),
+        }))
     }
 
+    /// The first monitor's name (the one that may drop messages).
     pub fn name(&self) -> &'static str {
-        match self.kind {
-            Kind::DepthImageZlib => "depthimage_compression_zlib",
-            Kind::BottleZlib => "bottle_compression_zlib",
+        self.chain.first().map_or("", |k| k.name())
+    }
+
+    /// Whether the message arriving (or leaving) `now` goes on: only the first monitor is
+    /// asked, as YARP 4.0 asks; throttleDown lets one through when more than its period
+    /// has passed since the last it let through.
+    pub fn accept(&mut self, now: Instant) -> bool {
+        match self.chain.first() {
+            Some(Kind::ThrottleDown) => {
+                if now.saturating_duration_since(self.last) > self.period {
+                    self.last = now;
+                    true
+                } else {
+                    false
+                }
+            }
+            _ => true,
         }
     }
 
@@ -100,10 +179,25 @@ impl Monitor {
         self.side
     }
 
-    /// The message as the monitor passes it on; an error when it does not accept it
+    /// The message as the chain passes it on; an error when a monitor cannot take it
     /// (C++ then drops the message).
     pub fn update(&self, msg: &Bottle) -> Result<Bottle, MonitorError> {
-        match (self.kind, self.side) {
+        let mut out = msg.clone();
+        for &k in &self.chain {
+            out = self.update_one(k, &out).map_err(|e| match e {
+                MonitorError::Refused { reason, .. } => MonitorError::Refused {
+                    monitor: k.name(),
+                    reason,
+                },
+                e => e,
+            })?;
+        }
+        Ok(out)
+    }
+
+    fn update_one(&self, kind: Kind, msg: &Bottle) -> Result<Bottle, MonitorError> {
+        match (kind, self.side) {
+            (Kind::ThrottleDown, _) => Ok(msg.clone()),
             (Kind::DepthImageZlib, Side::Sender) => self.compress_depth(msg),
             (Kind::DepthImageZlib, Side::Receiver) => self.decompress_depth(msg),
             (Kind::BottleZlib, Side::Sender) => {
@@ -206,6 +300,20 @@ impl Monitor {
     }
 }
 
+/// The qualifiers of one side's part of the carrier name, as YARP 4.0 splits it
+/// (`PortMonitor::parseBlocks`): the sender's follow `send.portmonitor` up to a later
+/// `recv.portmonitor`; the receiver's, everything after `recv.portmonitor`.
+fn side_part(carrier: &CarrierName, side: Side) -> &[(String, String)] {
+    let q = &carrier.qualifiers;
+    let at = |key: &str| q.iter().position(|(k, v)| k == key && v == "portmonitor");
+    match (side, at("send"), at("recv")) {
+        (Side::Sender, Some(s), Some(r)) if r > s => &q[s + 1..r],
+        (Side::Sender, Some(s), _) => &q[s + 1..],
+        (Side::Receiver, _, Some(r)) => &q[r + 1..],
+        _ => &[],
+    }
+}
+
 fn blob(v: &crate::Value) -> Option<&[u8]> {
     match v {
         crate::Value::Blob(b) => Some(b),
@@ -285,6 +393,63 @@ mod tests {
         // no modifier for this side: no monitor
         let c = CarrierName::parse("tcp+recv.portmonitor+file.bottle_compression_zlib+type.dll");
         assert_eq!(Monitor::for_side(&c, Side::Sender), Ok(None));
+    }
+
+    #[test]
+    fn throttle_down_lets_one_message_through_per_period() {
+        let c = CarrierName::parse("tcp+send.portmonitor+type.dll+file.throttleDown+period_ms.500");
+        let mut m = Monitor::for_side(&c, Side::Sender).unwrap().unwrap();
+        assert_eq!(m.name(), "throttleDown");
+        let t0 = m.last;
+        let at = |ms: u64| t0 + Duration::from_millis(ms);
+        // not before a period has passed since the connection; strictly more than it
+        assert!(!m.accept(at(100)));
+        assert!(!m.accept(at(500)));
+        assert!(m.accept(at(501)));
+        // drops do not move the reference
+        assert!(!m.accept(at(900)));
+        assert!(m.accept(at(1002)));
+        assert_eq!(m.update(&bottle![1, "a"]).unwrap(), bottle![1, "a"]);
+        // default period: 1 s
+        let c = CarrierName::parse("tcp+recv.portmonitor+type.dll+file.throttleDown");
+        let m = Monitor::for_side(&c, Side::Receiver).unwrap().unwrap();
+        assert_eq!(m.period, Duration::from_secs(1));
+    }
+
+    #[test]
+    fn monitors_chain_as_in_yarp_4() {
+        // throttle, then compress: the first decides what goes, each passes to the next
+        let (mut tx, rx) = monitors(
+            "tcp+send.portmonitor+type.dll+file.throttleDown+type1.dll+file1.bottle_compression_zlib+period_ms.0+recv.portmonitor+type.dll+file.bottle_compression_zlib",
+        );
+        assert_eq!(tx.chain, [Kind::ThrottleDown, Kind::BottleZlib]);
+        assert_eq!(
+            rx.chain,
+            [Kind::BottleZlib],
+            "the receiver reads its own part"
+        );
+        assert!(tx.accept(tx.last + Duration::from_millis(1)));
+        let msg = bottle![7, "seven"];
+        let sent = tx.update(&msg).unwrap();
+        assert_ne!(sent, msg);
+        assert_eq!(rx.update(&sent).unwrap(), msg);
+        // a later monitor that cannot be had, or a type1 that is not a dll, refuses
+        let c = CarrierName::parse(
+            "tcp+send.portmonitor+type.dll+file.throttleDown+type1.dll+file1.nope",
+        );
+        assert!(Monitor::for_side(&c, Side::Sender).is_err());
+        let c =
+            CarrierName::parse("tcp+send.portmonitor+type.dll+file.throttleDown+type1.lua+file1.x");
+        assert!(Monitor::for_side(&c, Side::Sender).is_err());
+        // a failure names the monitor that failed
+        let (tx, _) = monitors(
+            "tcp+send.portmonitor+type.dll+file.throttleDown+type1.dll+file1.depthimage_compression_zlib+recv.portmonitor+type.dll+file.throttleDown",
+        );
+        let e = tx.update(&bottle!["not an image"]).unwrap_err();
+        assert!(
+            e.to_string().starts_with("depthimage_compression_zlib"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -400,6 +400,15 @@ impl Conn<'_> {
                     (None, None)
                 };
                 let stamp = m.stamp();
+                // read, then dropped (throttleDown), as C++ skips the incoming data
+                let accepted = self
+                    .monitor
+                    .as_mut()
+                    .is_none_or(|m| m.accept(std::time::Instant::now()));
+                if !accepted {
+                    self.ack(stream).await?;
+                    return Ok(None);
+                }
                 let (payload, is_text) = match &self.monitor {
                     Some(monitor) => {
                         let b = if text {

@@ -499,7 +499,7 @@ async fn serve(
     target: &str,
     stream: &mut TcpStream,
     decoder: &mut Decoder,
-    (spec, generation, monitor): (CarrierSpec, Generation, Option<Monitor>),
+    (spec, generation, mut monitor): (CarrierSpec, Generation, Option<Monitor>),
     rx: &mut mpsc::Receiver<Job>,
 ) -> Result<(), OutputError> {
     let io_err = |source| OutputError::Io {
@@ -530,7 +530,7 @@ async fn serve(
             Job::Rpc(msg, reply_tx) => Job::Rpc(msg.for_reader(generation), reply_tx),
             job => job,
         };
-        let job = match (&monitor, job) {
+        let job = match (monitor.as_mut(), job) {
             (Some(m), Job::Data(msg)) => match monitored(m, &msg, target) {
                 Some(msg) => Job::Data(msg),
                 None => continue,
@@ -602,7 +602,11 @@ async fn serve(
 
 /// The message as the connection's sender-side monitor passes it on; `None` (the message
 /// is dropped, as C++ drops it) when the monitor refuses it.
-fn monitored(m: &Monitor, msg: &Outgoing, target: &str) -> Option<Arc<Outgoing>> {
+fn monitored(m: &mut Monitor, msg: &Outgoing, target: &str) -> Option<Arc<Outgoing>> {
+    // not sent at all (throttleDown), as C++'s output unit skips it
+    if !m.accept(std::time::Instant::now()) {
+        return None;
+    }
     match m.update(msg.bottle()) {
         Ok(b) => Some(Arc::new(Outgoing::new(Arc::new(b), msg.stamp()))),
         Err(e) => {
