@@ -147,6 +147,14 @@ impl Default for FakeMotionControl {
 use yarp_proto::stamp::now;
 
 impl FakeMotionControl {
+    /// A PID type the fake has no words for (C++ 4.0: `method failed`).
+    fn no_such_pid(&self, pid_type: Vocab32) -> DeviceError {
+        DeviceError::Failed {
+            device: NAME.into(),
+            reason: format!("no PID of type {}", pid_type.as_string()),
+        }
+    }
+
     /// An unopened device with no joints.
     pub fn new() -> Self {
         FakeMotionControl {
@@ -767,6 +775,44 @@ impl IPidControl for FakeMotionControl {
                 })
             })
             .collect())
+    }
+    /// C++ 4.0's fake's words, the same for every joint (its units are left empty).
+    fn get_pid_extra_info(&mut self, pid_type: Vocab32, j: usize) -> DevResult<PidExtraInfo> {
+        self.joint(j)?;
+        let name = pid_type.as_string();
+        // 3.12's names are the first of their kind (`pos` is 4.0's `pos1`)
+        let (kind, index) = match name.as_bytes() {
+            [a, b, c] => ([*a, *b, *c], 0),
+            [a, b, c, d @ b'1'..=b'3'] => ([*a, *b, *c], usize::from(d - b'1')),
+            _ => return Err(self.no_such_pid(pid_type)),
+        };
+        let outputs = ["PWM", "Velocity", "Current"];
+        let (what, input, output) = match &kind {
+            b"pos" => ("Position", "Encoder Value", outputs[index]),
+            b"pod" => ("Position Direct", "Encoder Value", outputs[index]),
+            b"trq" => ("Torque", "Torque", outputs[index]),
+            b"vel" => (
+                "Velocity",
+                "Velocity Value",
+                ["PWM", "PWM", "Current"][index],
+            ),
+            b"ved" => (
+                "Velocity Direct",
+                "Velocity Value",
+                ["PWM", "PWM", "Current"][index],
+            ),
+            b"cur" => ("Current", "Current Value", "PWM"),
+            // C++ 4.0 calls the third mixed PID "Current PID 2"
+            b"mix" if index == 2 => ("Current", "Encoder Value", "PWM"),
+            b"mix" => ("Mixed", "Encoder Value", "PWM"),
+            _ => return Err(self.no_such_pid(pid_type)),
+        };
+        Ok(PidExtraInfo {
+            pid_description: format!("{what} PID {index}"),
+            input_data_description: input.into(),
+            output_data_description: output.into(),
+            units: Default::default(),
+        })
     }
     fn get_pid_feedforward(&mut self, pid_type: Vocab32, j: usize) -> DevResult<f64> {
         self.joint(j)?;

@@ -500,6 +500,18 @@ pub trait IMotor {
     }
 }
 
+/// YARP 4.0's `PidExtraInfo` (`PidDataExtraInfo`): what a PID controls, in words, and the
+/// units of its gains, as a tuning GUI shows them.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct PidExtraInfo {
+    pub pid_description: String,
+    pub input_data_description: String,
+    pub output_data_description: String,
+    /// The units of kp, kd, ki, max_int, scale, max_output, offset, stiction_up_val,
+    /// stiction_down_val and kff, in that order.
+    pub units: [String; 10],
+}
+
 /// `yarp::dev::Pid`: the 10 gains.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Pid {
@@ -591,6 +603,10 @@ pub trait IPidControl {
     }
     fn get_pid_feedforward(&mut self, _pid_type: Vocab32, _j: usize) -> DevResult<f64> {
         Err(DeviceError::Unsupported("getPidFeedforward"))
+    }
+    /// YARP 4.0's description and units of a PID.
+    fn get_pid_extra_info(&mut self, _pid_type: Vocab32, _j: usize) -> DevResult<PidExtraInfo> {
+        Err(DeviceError::Unsupported("getPidExtraInfo"))
     }
 }
 

@@ -1311,6 +1311,12 @@ impl IPidControl for RemoteControlBoard {
     fn get_pid_feedforward(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
         self.pid_feedforward(ty, j)
     }
+    fn get_pid_extra_info(&mut self, ty: Vocab32, j: usize) -> DevResult<PidExtraInfo> {
+        self.ask(m::GetPidExtraInfo {
+            ty: PidType(ty),
+            j: J16(j),
+        })
+    }
     fn get_available_pids(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
         let numbered = self.ask(m::GetAvailablePids { j: J16(j) })?;
         Ok(numbered

@@ -72,6 +72,11 @@ const CALLS: &[&str] = &[
     "getPidFeedforwardRPC 829648752 1",
     "setPidOffsetOneRPC 829648752 1 2.0",
     "getPidOffsetRPC 829648752 1",
+    "getPidExtraInfoRPC 829648752 1",
+    "getPidExtraInfoRPC 845442928 0",
+    "getPidExtraInfoRPC 863529325 3",
+    "getPidExtraInfosRPC 845964662",
+    "getPidExtraInfoRPC 829978744 1",
     "setMotorEncoderRPC 1 5.0",
     "resetMotorEncoderRPC 1",
     "setPidReferencesRPC 829648752 (1.0 2.0 3.0 4.0)",
@@ -216,6 +221,8 @@ const CLIENT_CALLS: &[&str] = &[
     "getAxesRPC",
     "getPidOffsetRPC 829648752 2",
     "getPidFeedforwardRPC 829648752 2",
+    "getPidExtraInfoRPC 863529325 2",
+    "getPidExtraInfosRPC 829584739",
     "setImpedanceRPC 2 0.5 0.25",
     "getImpedanceRPC 2",
     "calibrationDoneRPC 0",
@@ -411,6 +418,21 @@ fn our_clients_drive_cpp_4_fake_motion_control() {
         assert_eq!(modes.map(|m| m.len()).ok(), Some(10), "{device}");
         let pids = d.as_pid_control().unwrap().get_available_pids(1).unwrap();
         assert_eq!((pids.len(), pids[0]), (21, pos_pid), "{device}");
+        // 4.0's words for a PID (the third velocity PID: "Velocity PID 2", on current)
+        let info = d
+            .as_pid_control()
+            .unwrap()
+            .get_pid_extra_info(yarp_proto::Vocab32::new("vel3"), 2)
+            .unwrap();
+        assert_eq!(
+            (
+                info.pid_description.as_str(),
+                info.input_data_description.as_str(),
+                info.output_data_description.as_str()
+            ),
+            ("Velocity PID 2", "Velocity Value", "Current"),
+            "{device}"
+        );
         let fault = d.as_joint_fault().unwrap().get_last_joint_fault(1).unwrap();
         assert_eq!(fault, (0, String::new()), "{device}");
         let names: Vec<String> = (0..4)

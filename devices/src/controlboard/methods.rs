@@ -9,7 +9,7 @@ use super::v3::{self, Done, Flat, Form, Group, Listed, PidType, Style, Wire3, J1
 use super::v4::{self, Wire4};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
-use crate::interfaces::{CalibrationParameters, Pid};
+use crate::interfaces::{CalibrationParameters, Pid, PidExtraInfo};
 use crate::sensors::wire::WireWriter;
 use crate::vocabs::*;
 use yarp_proto::{Bottle, Vocab32};
@@ -606,6 +606,14 @@ control_board_methods! {
         |d| via!(d.as_pid_control).set_pid_feedforward(ty.0, j.0, value);
     GetPidFeedforward { ty: PidType, j: J16 } -> f64, GetBare [], v4 "getPidFeedforwardRPC" =>
         |d| via!(d.as_pid_control).get_pid_feedforward(ty.0, j.0);
+    GetPidExtraInfo { ty: PidType, j: J16 } -> PidExtraInfo, GetBare [], v4 "getPidExtraInfoRPC" =>
+        |d| via!(d.as_pid_control).get_pid_extra_info(ty.0, j.0);
+    GetPidExtraInfos { ty: PidType } -> Vec<PidExtraInfo>, GetBare [], v4 "getPidExtraInfosRPC" =>
+        |d| {
+            let n = axes(d)?;
+            let p = via!(d.as_pid_control);
+            each(n, |j| p.get_pid_extra_info(ty.0, j))
+        };
 
     // IJointFault: `[get] [ijfl] [jhfl] j` -> `[is] code "message" [ok]`
     GetLastJointFault { j: usize } -> (i32, String), Is [GET, JOINT_FAULT_IFACE, GET_JOINT_FAULT], v4 "getLastJointFaultRPC" =>

@@ -11,7 +11,7 @@ use super::methods::{Method, Request};
 use super::v3::{Done, Flat, Group, Listed, PidType, Wire3, J16};
 use crate::driver::DeviceDriver;
 use crate::error::DevResult;
-use crate::interfaces::Pid;
+use crate::interfaces::{Pid, PidExtraInfo};
 use crate::sensors::wire::WireWriter;
 use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value, Vocab32};
@@ -194,6 +194,85 @@ impl Wire4 for Vec<Pid> {
         let list = c.item()?.as_list()?;
         let mut inner = Cursor4::new(list.items());
         (0..list.len()).map(|_| Pid::take4(&mut inner)).collect()
+    }
+    fn zero() -> Self {
+        Vec::new()
+    }
+}
+
+impl PidExtraInfo {
+    /// The 13 strings in thrift's order: the three descriptions, then the ten units.
+    fn strings(&self) -> impl Iterator<Item = &str> {
+        [
+            &self.pid_description,
+            &self.input_data_description,
+            &self.output_data_description,
+        ]
+        .into_iter()
+        .chain(&self.units)
+        .map(String::as_str)
+    }
+
+    fn from_strings(v: &[Value]) -> Option<PidExtraInfo> {
+        let s: Vec<String> = v
+            .iter()
+            .map(|x| x.as_str().map(str::to_string))
+            .collect::<Option<_>>()?;
+        let [d, i, o, units @ ..] = <[String; 13]>::try_from(s).ok()?;
+        Some(PidExtraInfo {
+            pid_description: d,
+            input_data_description: i,
+            output_data_description: o,
+            units,
+        })
+    }
+}
+
+/// `yInfoPid` (`PidDataExtraInfo`): one list of its 13 strings (description and units
+/// written flat).
+impl Wire4 for PidExtraInfo {
+    fn put4(&self, w: &mut WireWriter) {
+        w.list_header(13);
+        for s in self.strings() {
+            w.string(s);
+        }
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        PidExtraInfo::from_strings(c.item()?.as_list()?.items())
+    }
+    fn zero() -> Self {
+        PidExtraInfo::default()
+    }
+}
+
+/// 3.12 has no such call; its form is the same list (for the table's sake).
+impl Wire3 for PidExtraInfo {
+    fn put(&self, b: &mut Bottle) {
+        let mut l = Bottle::with_capacity(13);
+        for s in self.strings() {
+            l.push(s);
+        }
+        b.push(Value::List(l));
+    }
+    fn take(c: &mut super::v3::Cursor<'_>) -> Option<Self> {
+        PidExtraInfo::from_strings(Bottle::take(c)?.items())
+    }
+}
+
+/// `list<yInfoPid>`.
+impl Wire4 for Vec<PidExtraInfo> {
+    fn put4(&self, w: &mut WireWriter) {
+        w.list_header(self.len());
+        for p in self {
+            p.put4(w);
+        }
+    }
+    fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
+        let list = c.item()?.as_list()?;
+        let mut inner = Cursor4::new(list.items());
+        (0..list.len())
+            .map(|_| PidExtraInfo::take4(&mut inner))
+            .collect()
     }
     fn zero() -> Self {
         Vec::new()
