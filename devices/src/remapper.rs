@@ -384,9 +384,62 @@ impl DeviceDriver for ControlBoardRemapper {
         as_remote_calibrator,
         as_velocity_direct,
         as_joint_brake,
-        as_joint_fault
+        as_joint_fault,
+        as_remote_variables
     );
 }
+
+/// As C++'s remapper (3.12 and 4.0, which warns "not properly implemented"): a variable is
+/// every board's values one after the other, set with one list per board; the keys are
+/// those of the board owning joint 0. A board without the interface fails the call.
+impl IRemoteVariables for ControlBoardRemapper {
+    fn get_remote_variable(&mut self, key: &str) -> DevResult<Bottle> {
+        self.axes()?;
+        let mut all = Bottle::new();
+        let mut failed = None;
+        for b in &self.boards {
+            let mut pd = lock(b);
+            let vars = pd.device().as_remote_variables().ok_or(NO_VARIABLES)?;
+            match vars.get_remote_variable(key) {
+                Ok(v) => all.extend(v.into_items()),
+                Err(e) => failed = failed.or(Some(e)),
+            }
+        }
+        failed.map_or(Ok(all), Err)
+    }
+    fn set_remote_variable(&mut self, key: &str, value: &Bottle) -> DevResult<()> {
+        self.axes()?;
+        if value.len() != self.boards.len() {
+            return Err(DeviceError::WrongSize {
+                expected: self.boards.len(),
+                got: value.len(),
+            });
+        }
+        let mut failed = None;
+        for (b, v) in self.boards.iter().zip(value.iter()) {
+            let part = v.as_list().ok_or_else(|| DeviceError::Failed {
+                device: NAME.into(),
+                reason: format!("setRemoteVariable {key}: one list per board, got `{v}`"),
+            })?;
+            let mut pd = lock(b);
+            let vars = pd.device().as_remote_variables().ok_or(NO_VARIABLES)?;
+            if let Err(e) = vars.set_remote_variable(key, part) {
+                failed = failed.or(Some(e));
+            }
+        }
+        failed.map_or(Ok(()), Err)
+    }
+    fn get_remote_variables_list(&mut self) -> DevResult<Bottle> {
+        self.on(0, |d, _| {
+            d.as_remote_variables()
+                .ok_or(NO_VARIABLES)?
+                .get_remote_variables_list()
+        })
+    }
+}
+
+const NO_VARIABLES: DeviceError =
+    DeviceError::Unsupported("a board of the remapper lacks IRemoteVariables");
 
 /// What the layout needs to know about an attached device.
 fn board_info(key: &str, dev: &SharedDevice, with_names: bool) -> DevResult<BoardInfo> {
@@ -774,6 +827,9 @@ impl IPidControl for ControlBoardRemapper {
     }
     fn get_pid_feedforward(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
         on!(self, j, as_pid_control, |p, l| p.get_pid_feedforward(ty, l))
+    }
+    fn get_pid_extra_info(&mut self, ty: Vocab32, j: usize) -> DevResult<PidExtraInfo> {
+        on!(self, j, as_pid_control, |p, l| p.get_pid_extra_info(ty, l))
     }
     fn set_pid(&mut self, ty: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
         on!(self, j, as_pid_control, |p, l| p.set_pid(ty, l, pid))

@@ -198,3 +198,121 @@ fn remapper_forwards_position_direct_pid_motor_and_pwm_calls() {
     assert_eq!(me.get_motor_encoder_speeds().unwrap(), [0.0, 0.0]);
     assert_eq!(me.get_motor_encoder_accelerations().unwrap(), [0.0, 0.0]);
 }
+
+/// A board with joints and remote variables only: `gain` holds one value per joint.
+struct VariableBoard {
+    gains: Vec<f64>,
+}
+
+impl yarp_devices::DeviceDriver for VariableBoard {
+    fn open(&mut self, _: &Property) -> yarp_devices::DevResult<()> {
+        Ok(())
+    }
+    yarp_devices::views!(as_encoders, as_remote_variables);
+}
+
+impl yarp_devices::interfaces::IEncoders for VariableBoard {
+    fn get_axes(&mut self) -> yarp_devices::DevResult<usize> {
+        Ok(self.gains.len())
+    }
+    fn get_encoder(&mut self, _: usize) -> yarp_devices::DevResult<f64> {
+        Ok(0.0)
+    }
+    fn get_encoder_speed(&mut self, _: usize) -> yarp_devices::DevResult<f64> {
+        Ok(0.0)
+    }
+    fn get_encoder_acceleration(&mut self, _: usize) -> yarp_devices::DevResult<f64> {
+        Ok(0.0)
+    }
+    fn get_encoder_timed(&mut self, _: usize) -> yarp_devices::DevResult<(f64, f64)> {
+        Ok((0.0, 0.0))
+    }
+    fn set_encoder(&mut self, _: usize, _: f64) -> yarp_devices::DevResult<()> {
+        Ok(())
+    }
+}
+
+impl yarp_devices::interfaces::IRemoteVariables for VariableBoard {
+    fn get_remote_variable(&mut self, key: &str) -> yarp_devices::DevResult<yarp_proto::Bottle> {
+        match key {
+            "gain" => Ok(self.gains.iter().copied().collect()),
+            _ => Err(DeviceError::Unsupported("no such variable")),
+        }
+    }
+    fn set_remote_variable(
+        &mut self,
+        key: &str,
+        value: &yarp_proto::Bottle,
+    ) -> yarp_devices::DevResult<()> {
+        match key {
+            "gain" => {
+                self.gains = value.iter().filter_map(|v| v.as_f64()).collect();
+                Ok(())
+            }
+            _ => Err(DeviceError::Unsupported("no such variable")),
+        }
+    }
+    fn get_remote_variables_list(&mut self) -> yarp_devices::DevResult<yarp_proto::Bottle> {
+        Ok(yarp_proto::Bottle::from_text(format!(
+            "gain n{}",
+            self.gains.len()
+        )))
+    }
+}
+
+/// IRemoteVariables through the remapper, as C++'s (3.12 and 4.0): a variable is every
+/// board's values one after the other; it is set with one list per board; the keys are
+/// those of the board owning joint 0; a board without the interface fails the call.
+#[test]
+fn remote_variables_join_the_boards_as_cpp_joins_them() {
+    let board = |gains: &[f64]| {
+        shared(PolyDriver::from_driver(
+            "variableBoard",
+            Box::new(VariableBoard {
+                gains: gains.to_vec(),
+            }),
+        ))
+    };
+    let (a, b) = (board(&[1.0, 2.0]), board(&[3.0]));
+    let mut part =
+        open("device controlboardremapper\nnetworks (A B)\njoints 3\nA 0 1 0 1\nB 2 2 0 0\n");
+    let d = part.device();
+    d.as_multiple_wrapper()
+        .unwrap()
+        .attach_all(&[("A".into(), a.clone()), ("B".into(), b.clone())])
+        .unwrap();
+    let v = d.as_remote_variables().unwrap();
+    assert_eq!(
+        v.get_remote_variable("gain").unwrap().to_string(),
+        "1.0 2.0 3.0"
+    );
+    assert_eq!(
+        v.get_remote_variables_list().unwrap().to_string(),
+        "gain n2"
+    );
+    v.set_remote_variable("gain", &yarp_proto::Bottle::from_text("(5.0 6.0) (7.0)"))
+        .unwrap();
+    assert_eq!(
+        v.get_remote_variable("gain").unwrap().to_string(),
+        "5.0 6.0 7.0"
+    );
+    // one list per board, or the call fails and nothing is set
+    assert!(v
+        .set_remote_variable("gain", &yarp_proto::Bottle::from_text("1.0 2.0 3.0"))
+        .is_err());
+    assert!(v.get_remote_variable("other").is_err());
+    // a board without the interface fails the call
+    let plain = fake(&["p0"]);
+    let mut part =
+        open("device controlboardremapper\nnetworks (A P)\njoints 3\nA 0 1 0 1\nP 2 2 0 0\n");
+    let d = part.device();
+    d.as_multiple_wrapper()
+        .unwrap()
+        .attach_all(&[("A".into(), a), ("P".into(), plain)])
+        .unwrap();
+    assert!(d
+        .as_remote_variables()
+        .unwrap()
+        .get_remote_variable("gain")
+        .is_err());
+}
