@@ -332,3 +332,101 @@ fn cpp_4_compressed_to_our_throttled_chain() {
     assert!((2..=6).contains(&seen.len()), "{seen:?}");
     assert!(gaps.iter().all(|g| *g >= 10), "{seen:?}");
 }
+
+/// YARP 4.0's `YARP_CONNECTIONS_STATS_ENABLE=1`: our `yarp connect` gives the connection a
+/// `stats_monitor` (the C++ 4.0 reader takes it), whose ports C++ 4.0's own
+/// `yarpconnectionsstats` finds and reads: our writer's 50 messages a second, with their
+/// bytes; the ports go when the connection goes.
+#[test]
+fn cpp_4_yarpconnectionsstats_reads_our_stats_monitor() {
+    use std::io::BufRead;
+    let test = "cpp_4_yarpconnectionsstats_reads_our_stats_monitor";
+    let (Some(yarp), Some(stats_tool)) = (
+        cpp4_program(test, "yarp"),
+        cpp4_program(test, "yarpconnectionsstats"),
+    ) else {
+        return;
+    };
+    let rt = runtime();
+    let port = std::sync::Arc::new(
+        rt.block_on(Port::open("/st4/w", name_client()))
+            .expect("open /st4/w"),
+    );
+    let writer = port.clone();
+    let writing = rt.spawn(async move {
+        for n in 0i32.. {
+            writer.write_nowait(&Bottle::new().with("counter").with(n), None);
+            tokio::time::sleep(std::time::Duration::from_millis(20)).await;
+        }
+    });
+    let _reader = cpp_reader(&yarp, "/st4/r");
+    std::env::set_var("YARP_CONNECTIONS_STATS_ENABLE", "1");
+    let (ok, why) = rt
+        .block_on(yarp_net::network::connect(
+            &name_client(),
+            "/st4/w",
+            "/st4/r",
+            None,
+        ))
+        .expect("connect");
+    std::env::remove_var("YARP_CONNECTIONS_STATS_ENABLE");
+    assert!(ok, "{why}");
+    assert!(why.contains("stats_monitor"), "{why}");
+    let forward = "/stats_monitor/st4/w/st4/r/stats:o";
+    let start = std::time::Instant::now();
+    while !registered(forward) || !registered("/stats_monitor/st4/r/st4/w/stats:o") {
+        assert!(start.elapsed() < T, "{forward} never registered");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let mut tool = cpp_command(&stats_tool)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("spawn yarpconnectionsstats");
+    let out = tool.stdout.take().unwrap();
+    let _tool = Reaped(tool);
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for l in std::io::BufReader::new(out).lines().map_while(Result::ok) {
+            if tx.send(l).is_err() {
+                break;
+            }
+        }
+    });
+    // `/st4/w -> /st4/r | N B/s | N pkt/s | tcp | time`
+    let line = loop {
+        let l = rx
+            .recv_timeout(3 * T)
+            .expect("yarpconnectionsstats printed our connection");
+        if l.contains("/st4/w") && l.contains("/st4/r") && l.contains("pkt/s") {
+            let fields: Vec<&str> = l.split('|').map(str::trim).collect();
+            let pkt: f64 = fields[2]
+                .trim_end_matches("pkt/s")
+                .trim()
+                .parse()
+                .unwrap_or(0.0);
+            if pkt > 0.0 {
+                break l;
+            }
+        }
+    };
+    eprintln!("C++ 4.0 yarpconnectionsstats: {line}");
+    let fields: Vec<&str> = line.split('|').map(str::trim).collect();
+    let bps: f64 = fields[1].trim_end_matches("B/s").trim().parse().unwrap();
+    let pkt: f64 = fields[2].trim_end_matches("pkt/s").trim().parse().unwrap();
+    assert!((35.0..=55.0).contains(&pkt), "{line}");
+    assert!(bps > pkt * 10.0, "{line}");
+    assert_eq!(fields[3], "tcp", "{line}");
+    writing.abort();
+    rt.block_on(yarp_net::network::disconnect(
+        &name_client(),
+        "/st4/w",
+        "/st4/r",
+    ))
+    .expect("disconnect");
+    let start = std::time::Instant::now();
+    while registered(forward) {
+        assert!(start.elapsed() < T, "{forward} stayed after the connection");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}

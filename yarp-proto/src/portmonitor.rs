@@ -12,7 +12,12 @@
 //! - `throttleDown` (YARP 4.0): lets a message through only when more than `period_ms`
 //!   (default 1000) have passed since the last one it let through (or since the
 //!   connection was made); on the sender the others are not sent, on the receiver they
-//!   are read and dropped.
+//!   are read and dropped;
+//! - `stats_monitor` (YARP 4.0, sender side only): counts what the connection sends; the
+//!   port layer publishes it every second as `yarp::stats::ConnectionStats` on
+//!   `/stats_monitor<source><destination>/stats:o` (and the reverse name for replies),
+//!   where 4.0's `yarpconnectionsstats` finds it. [`with_stats_monitor`] is what
+//!   `YARP_CONNECTIONS_STATS_ENABLE=1` does to a connection's carrier.
 //!
 //! Monitors chain as in YARP 4.0: `file`/`type`, then `file1`/`type1`, `file2`/`type2`...,
 //! each passing its output to the next; only the first may drop a message (4.0 asks the
@@ -42,6 +47,7 @@ pub const BUILT_IN: &[&str] = &[
     "depthimage_compression_zlib",
     "bottle_compression_zlib",
     "throttleDown",
+    "stats_monitor",
 ];
 
 /// Why a monitor cannot be set up, or refused a message.
@@ -67,6 +73,7 @@ enum Kind {
     DepthImageZlib,
     BottleZlib,
     ThrottleDown,
+    Stats,
 }
 
 impl Kind {
@@ -75,7 +82,77 @@ impl Kind {
             Kind::DepthImageZlib => "depthimage_compression_zlib",
             Kind::BottleZlib => "bottle_compression_zlib",
             Kind::ThrottleDown => "throttleDown",
+            Kind::Stats => "stats_monitor",
         }
+    }
+}
+
+/// What a `stats_monitor` counted since it was last read (messages and their bytes).
+#[derive(Debug, Default)]
+pub struct StatsCounter {
+    count: std::sync::atomic::AtomicU64,
+    bytes: std::sync::atomic::AtomicU64,
+}
+
+impl StatsCounter {
+    fn add(&self, bytes: usize) {
+        use std::sync::atomic::Ordering::Relaxed;
+        self.count.fetch_add(1, Relaxed);
+        self.bytes.fetch_add(bytes as u64, Relaxed);
+    }
+
+    /// The messages and bytes counted since the last call.
+    pub fn take(&self) -> (u64, u64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        (self.count.swap(0, Relaxed), self.bytes.swap(0, Relaxed))
+    }
+}
+
+/// `yarp::stats::ConnectionStats` (YARP 4.0's `YarpStatsMsgs.thrift`) as the monitor
+/// writes it each `period` seconds: `timestamp source destination carrier [ok|fail]
+/// bytes_per_second frequency` (`[ok]`: the forward direction).
+pub fn connection_stats(
+    timestamp: f64,
+    (source, destination, carrier): (&str, &str, &str),
+    forward: bool,
+    (count, bytes): (u64, u64),
+    period: f64,
+) -> Bottle {
+    let mut b = Bottle::with_capacity(7);
+    b.push(timestamp)
+        .push(source)
+        .push(destination)
+        .push(carrier)
+        .push(crate::Vocab32::new(if forward { "ok" } else { "fail" }))
+        .push(bytes as f64 / period)
+        .push(count as f64 / period);
+    b
+}
+
+/// The carrier YARP 4.0's `YARP_CONNECTIONS_STATS_ENABLE=1` gives a connection `source`
+/// -> `destination` (C++ `addStatsMonitorIfNeeded`): a `stats_monitor` on the sender,
+/// chained after an existing monitor (`+fileN.stats_monitor+typeN.dll`) or as the first
+/// (`+send.portmonitor+file.stats_monitor+type.dll`); logger and stats connections are
+/// left as they are.
+pub fn with_stats_monitor(source: &str, destination: &str, carrier: &str) -> String {
+    let both = |a: &str, b: &str| {
+        [source, destination]
+            .iter()
+            .all(|p| p.contains(a) && p.contains(b))
+    };
+    if carrier.is_empty()
+        || both("/log", "/logger")
+        || both("/stats_monitor", "/yarpConnectionsStats")
+    {
+        return carrier.to_string();
+    }
+    if carrier.contains("portmonitor") {
+        let n = (1..)
+            .find(|i| !carrier.contains(&format!("file{i}.")))
+            .unwrap_or(1);
+        format!("{carrier}+file{n}.stats_monitor+type{n}.dll")
+    } else {
+        format!("{carrier}+send.portmonitor+file.stats_monitor+type.dll")
     }
 }
 
@@ -89,7 +166,17 @@ pub struct Monitor {
     /// message through (the connection's start at first).
     period: Duration,
     last: Instant,
+    /// A `stats_monitor`'s counts, for the port layer to publish.
+    stats: Option<std::sync::Arc<StatsCounter>>,
 }
+
+impl PartialEq for StatsCounter {
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::eq(self, other)
+    }
+}
+
+impl Eq for StatsCounter {}
 
 impl Monitor {
     /// The monitor a carrier's qualifiers ask for at `side` (`send.X` for the sender,
@@ -135,6 +222,14 @@ impl Monitor {
                 "depthimage_compression_zlib" => Kind::DepthImageZlib,
                 "bottle_compression_zlib" => Kind::BottleZlib,
                 "throttleDown" => Kind::ThrottleDown,
+                // as C++ 4.0: "Attaching on receiver side is not supported yet."
+                "stats_monitor" if side == Side::Receiver => {
+                    return Err(MonitorError::Refused {
+                        monitor: "stats_monitor",
+                        reason: "attaching on the receiver side is not supported".into(),
+                    })
+                }
+                "stats_monitor" => Kind::Stats,
                 other => return Err(MonitorError::UnknownMonitor(other.to_string())),
             });
         }
@@ -145,12 +240,21 @@ impl Monitor {
             .map_or(Duration::from_secs(1), |ms| {
                 Duration::from_secs_f64(ms.trunc() / 1000.0)
             });
+        let stats = chain
+            .contains(&Kind::Stats)
+            .then(|| std::sync::Arc::new(StatsCounter::default()));
         Ok(Some(Monitor {
             chain,
             side,
             period,
             last: Instant::now(),
+            stats,
         }))
+    }
+
+    /// The counts of the chain's `stats_monitor`, if it has one.
+    pub fn stats(&self) -> Option<std::sync::Arc<StatsCounter>> {
+        self.stats.clone()
     }
 
     /// The first monitor's name (the one that may drop messages).
@@ -198,6 +302,12 @@ impl Monitor {
     fn update_one(&self, kind: Kind, msg: &Bottle) -> Result<Bottle, MonitorError> {
         match (kind, self.side) {
             (Kind::ThrottleDown, _) => Ok(msg.clone()),
+            (Kind::Stats, _) => {
+                if let Some(s) = &self.stats {
+                    s.add(msg.encode().len());
+                }
+                Ok(msg.clone())
+            }
             (Kind::DepthImageZlib, Side::Sender) => self.compress_depth(msg),
             (Kind::DepthImageZlib, Side::Receiver) => self.decompress_depth(msg),
             (Kind::BottleZlib, Side::Sender) => {
@@ -450,6 +560,37 @@ mod tests {
             e.to_string().starts_with("depthimage_compression_zlib"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn stats_monitor_counts_and_is_added_as_4_0_adds_it() {
+        assert_eq!(
+            with_stats_monitor("/a", "/b", "tcp"),
+            "tcp+send.portmonitor+file.stats_monitor+type.dll"
+        );
+        assert_eq!(
+            with_stats_monitor("/a", "/b", "tcp+send.portmonitor+type.dll+file.throttleDown+file1.x+type1.dll"),
+            "tcp+send.portmonitor+type.dll+file.throttleDown+file1.x+type1.dll+file2.stats_monitor+type2.dll"
+        );
+        assert_eq!(with_stats_monitor("/a", "/b", ""), "");
+        let log = "/logger/log/x";
+        assert_eq!(with_stats_monitor(log, log, "tcp"), "tcp");
+        let c = CarrierName::parse(&with_stats_monitor("/a", "/b", "tcp"));
+        let m = Monitor::for_side(&c, Side::Sender).unwrap().unwrap();
+        let counts = m.stats().unwrap();
+        let msg = bottle![1, "two"];
+        assert_eq!(m.update(&msg).unwrap(), msg);
+        m.update(&msg).unwrap();
+        assert_eq!(counts.take(), (2, 2 * msg.encode().len() as u64));
+        assert_eq!(counts.take(), (0, 0));
+        // as C++ 4.0, not on the receiver
+        assert!(Monitor::for_side(&c.clone(), Side::Receiver)
+            .unwrap_or(None)
+            .is_none());
+        let c = CarrierName::parse("tcp+recv.portmonitor+file.stats_monitor+type.dll");
+        assert!(Monitor::for_side(&c, Side::Receiver).is_err());
+        let s = connection_stats(5.0, ("/a", "/b", "tcp"), true, (10, 400), 1.0);
+        assert_eq!(s.to_string(), "5.0 \"/a\" \"/b\" tcp [ok] 400.0 10.0");
     }
 
     #[test]

@@ -200,6 +200,17 @@ pub async fn connect(
             return Ok(reply_outcome(&reply));
         }
     }
+    // YARP 4.0: with YARP_CONNECTIONS_STATS_ENABLE=1 every connection made here gets a
+    // stats_monitor (on the carrier asked for, else the destination's)
+    let carrier = if std::env::var("YARP_CONNECTIONS_STATS_ENABLE").as_deref() == Ok("1") {
+        let c = carrier.unwrap_or_else(|| dst.carrier.clone());
+        Some(yarp_proto::portmonitor::with_stats_monitor(
+            &source, &dest.name, &c,
+        ))
+        .filter(|c| !c.is_empty())
+    } else {
+        carrier
+    };
     let target = match carrier {
         Some(c) => PortRef {
             carrier: Some(c),

@@ -287,11 +287,18 @@ pub(crate) struct OutputHandle {
     pub(crate) route: Route,
     tx: mpsc::Sender<Job>,
     task: JoinHandle<()>,
+    /// The connection's `stats_monitor` ports, closed with it.
+    stats: Option<StatsPublisher>,
 }
 
 impl OutputHandle {
     pub(crate) fn new(route: Route, tx: mpsc::Sender<Job>, task: JoinHandle<()>) -> OutputHandle {
-        OutputHandle { route, tx, task }
+        OutputHandle {
+            route,
+            tx,
+            task,
+            stats: None,
+        }
     }
 
     pub(crate) fn sender(&self) -> mpsc::Sender<Job> {
@@ -401,15 +408,101 @@ pub(crate) async fn connect(
             .unwrap_or(Generation::V3),
         _ => Generation::V3,
     };
+    // a stats_monitor publishes what it counts on ports of its own, as C++ 4.0's does;
+    // without them the connection is refused, as C++ refuses it
+    let stats = match monitor.as_ref().and_then(Monitor::stats) {
+        Some(counts) => Some(
+            StatsPublisher::start(shared, target, carrier, counts)
+                .await
+                .map_err(|reason| OutputError::Monitor {
+                    target: target.to_string(),
+                    carrier: name.to_string(),
+                    source: yarp_proto::portmonitor::MonitorError::Refused {
+                        monitor: "stats_monitor",
+                        reason,
+                    },
+                })?,
+        ),
+        None => None,
+    };
     let route = Route::new(&shared.name, target, &name.to_string());
-    Ok(spawn(
-        shared,
-        route,
-        stream,
-        decoder,
-        (spec, generation),
-        monitor,
-    ))
+    let mut out = spawn(shared, route, stream, decoder, (spec, generation), monitor);
+    out.stats = stats;
+    Ok(out)
+}
+
+/// A `stats_monitor`'s publisher: every second, the forward counts on
+/// `/stats_monitor<src><dst>/stats:o` and the backward ones (replies; none counted here,
+/// as C++ 4.0 counts none) on `/stats_monitor<dst><src>/stats:o`, as
+/// `yarp::stats::ConnectionStats`. Dropping it closes both ports.
+pub(crate) struct StatsPublisher {
+    _stop: oneshot::Sender<()>,
+}
+
+impl StatsPublisher {
+    /// Period of the statistics (C++ 4.0's is fixed).
+    const PERIOD: Duration = Duration::from_secs(1);
+
+    async fn start(
+        shared: &Arc<Shared>,
+        target: &str,
+        carrier: &str,
+        counts: Arc<yarp_proto::portmonitor::StatsCounter>,
+    ) -> Result<StatsPublisher, String> {
+        let ns = shared
+            .ns
+            .clone()
+            .ok_or("the port has no name server to register its statistics ports with")?;
+        let (src, dst) = (shared.name.clone(), target.to_string());
+        let open = |name: String| {
+            let ns = ns.clone();
+            async move {
+                super::Port::open(&name, ns)
+                    .await
+                    .map_err(|e| format!("cannot open {name}: {e}"))
+            }
+        };
+        let forward = open(format!("/stats_monitor{src}{dst}/stats:o")).await?;
+        let backward = match open(format!("/stats_monitor{dst}{src}/stats:o")).await {
+            Ok(p) => p,
+            Err(e) => {
+                forward.close().await;
+                return Err(e);
+            }
+        };
+        let (stop, mut stopped) = oneshot::channel::<()>();
+        let carrier = carrier.to_string();
+        tokio::spawn(async move {
+            let mut tick = tokio::time::interval(Self::PERIOD);
+            tick.tick().await;
+            let period = Self::PERIOD.as_secs_f64();
+            loop {
+                tokio::select! {
+                    _ = &mut stopped => break,
+                    _ = tick.tick() => {}
+                }
+                let now = std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map_or(0.0, |d| d.as_secs_f64());
+                let names = (src.as_str(), dst.as_str(), carrier.as_str());
+                let b = yarp_proto::portmonitor::connection_stats(
+                    now,
+                    names,
+                    true,
+                    counts.take(),
+                    period,
+                );
+                forward.write_nowait(&b, None);
+                let names = (dst.as_str(), src.as_str(), carrier.as_str());
+                let b =
+                    yarp_proto::portmonitor::connection_stats(now, names, false, (0, 0), period);
+                backward.write_nowait(&b, None);
+            }
+            forward.close().await;
+            backward.close().await;
+        });
+        Ok(StatsPublisher { _stop: stop })
+    }
 }
 
 /// A TCP connection to `target` at `contact`, within [`CONNECT_TIMEOUT`].
@@ -464,7 +557,12 @@ fn spawn(
         (spec, generation, monitor),
         rx,
     ));
-    OutputHandle { route, tx, task }
+    OutputHandle {
+        route,
+        tx,
+        task,
+        stats: None,
+    }
 }
 
 async fn run(
