@@ -1,8 +1,8 @@
 //! What a peer sends the readers of the ergoCub repeaters' carriers: an mjpeg stream (the
 //! writer's HTTP answer and multipart JPEG parts, split where the input chooses) with
 //! each part decoded as a JPEG, and the Bottles the port monitors' receiving side takes
-//! (`depthimage_compression_zlib`, `bottle_compression_zlib`), also as sender names
-//! with carrier qualifiers.
+//! (`depthimage_compression_zlib`, `bottle_compression_zlib`, `throttleDown`), and any
+//! monitor chain a sender's name with carrier qualifiers asks for, applied to the data.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -46,7 +46,11 @@ fuzz_target!(|data: &[u8]| {
         }
         _ => {
             let b = Bottle::decode(rest).unwrap_or_else(|_| Bottle::from_text(rest));
-            for file in ["depthimage_compression_zlib", "bottle_compression_zlib"] {
+            for file in [
+                "depthimage_compression_zlib",
+                "bottle_compression_zlib",
+                "throttleDown",
+            ] {
                 let c = CarrierName::parse(&format!(
                     "fast_tcp+recv.portmonitor+file.{file}+type.dll"
                 ));
@@ -56,8 +60,15 @@ fuzz_target!(|data: &[u8]| {
             }
             let text = String::from_utf8_lossy(rest);
             let (_, c) = CarrierName::from_sender_specifier("tcp", &text);
-            let _ = Monitor::for_side(&c, Side::Receiver);
-            let _ = c.to_string();
+            // whatever chain the sender's name asks for, applied to the data
+            for side in [Side::Receiver, Side::Sender] {
+                if let Ok(Some(mut m)) = Monitor::for_side(&c, side) {
+                    if m.accept(std::time::Instant::now()) {
+                        let _ = m.update(&b);
+                    }
+                }
+            }
+            let _ = yarp_proto::portmonitor::with_stats_monitor("/a", "/b", &c.to_string());
         }
     }
 });
