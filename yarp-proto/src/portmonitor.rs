@@ -166,8 +166,10 @@ pub struct Monitor {
     /// message through (the connection's start at first).
     period: Duration,
     last: Instant,
-    /// A `stats_monitor`'s counts, for the port layer to publish.
+    /// A `stats_monitor`'s counts (what is sent, and the replies), for the port layer to
+    /// publish.
     stats: Option<std::sync::Arc<StatsCounter>>,
+    replies: Option<std::sync::Arc<StatsCounter>>,
 }
 
 impl PartialEq for StatsCounter {
@@ -240,21 +242,34 @@ impl Monitor {
             .map_or(Duration::from_secs(1), |ms| {
                 Duration::from_secs_f64(ms.trunc() / 1000.0)
             });
-        let stats = chain
-            .contains(&Kind::Stats)
-            .then(|| std::sync::Arc::new(StatsCounter::default()));
+        let counter = || {
+            chain
+                .contains(&Kind::Stats)
+                .then(|| std::sync::Arc::new(StatsCounter::default()))
+        };
+        let (stats, replies) = (counter(), counter());
         Ok(Some(Monitor {
             chain,
             side,
             period,
             last: Instant::now(),
             stats,
+            replies,
         }))
     }
 
-    /// The counts of the chain's `stats_monitor`, if it has one.
-    pub fn stats(&self) -> Option<std::sync::Arc<StatsCounter>> {
-        self.stats.clone()
+    /// The counts of the chain's `stats_monitor`, if it has one: what is sent, and the
+    /// replies.
+    pub fn stats(&self) -> Option<(std::sync::Arc<StatsCounter>, std::sync::Arc<StatsCounter>)> {
+        Some((self.stats.clone()?, self.replies.clone()?))
+    }
+
+    /// A reply came back on the connection: counted (with no bytes, as C++ 4.0's
+    /// `updateReply` counts it: the reply it is given serialises to nothing).
+    pub fn reply_seen(&self) {
+        if let Some(r) = &self.replies {
+            r.add(0);
+        }
     }
 
     /// The first monitor's name (the one that may drop messages).
@@ -577,7 +592,9 @@ mod tests {
         assert_eq!(with_stats_monitor(log, log, "tcp"), "tcp");
         let c = CarrierName::parse(&with_stats_monitor("/a", "/b", "tcp"));
         let m = Monitor::for_side(&c, Side::Sender).unwrap().unwrap();
-        let counts = m.stats().unwrap();
+        let (counts, replies) = m.stats().unwrap();
+        m.reply_seen();
+        assert_eq!(replies.take(), (1, 0));
         let msg = bottle![1, "two"];
         assert_eq!(m.update(&msg).unwrap(), msg);
         m.update(&msg).unwrap();

@@ -432,8 +432,8 @@ pub(crate) async fn connect(
 }
 
 /// A `stats_monitor`'s publisher: every second, the forward counts on
-/// `/stats_monitor<src><dst>/stats:o` and the backward ones (replies; none counted here,
-/// as C++ 4.0 counts none) on `/stats_monitor<dst><src>/stats:o`, as
+/// `/stats_monitor<src><dst>/stats:o` and the backward ones (the replies, counted with no
+/// bytes as C++ 4.0 counts them) on `/stats_monitor<dst><src>/stats:o`, as
 /// `yarp::stats::ConnectionStats`. Dropping it closes both ports.
 pub(crate) struct StatsPublisher {
     _stop: oneshot::Sender<()>,
@@ -447,7 +447,10 @@ impl StatsPublisher {
         shared: &Arc<Shared>,
         target: &str,
         carrier: &str,
-        counts: Arc<yarp_proto::portmonitor::StatsCounter>,
+        (counts, replies): (
+            Arc<yarp_proto::portmonitor::StatsCounter>,
+            Arc<yarp_proto::portmonitor::StatsCounter>,
+        ),
     ) -> Result<StatsPublisher, String> {
         let ns = shared
             .ns
@@ -494,8 +497,13 @@ impl StatsPublisher {
                 );
                 forward.write_nowait(&b, None);
                 let names = (dst.as_str(), src.as_str(), carrier.as_str());
-                let b =
-                    yarp_proto::portmonitor::connection_stats(now, names, false, (0, 0), period);
+                let b = yarp_proto::portmonitor::connection_stats(
+                    now,
+                    names,
+                    false,
+                    replies.take(),
+                    period,
+                );
                 backward.write_nowait(&b, None);
             }
             forward.close().await;
@@ -664,6 +672,9 @@ async fn serve(
                     decoder.expect_response(&cmd);
                 }
                 let reply = await_reply(stream, decoder, target, spec).await;
+                if let (Some(m), Ok(_)) = (monitor.as_ref(), &reply) {
+                    m.reply_seen();
+                }
                 // the connection is still good after a reply that is no Bottle
                 let failed = reply
                     .as_ref()
