@@ -11,6 +11,10 @@ use serde::ser::{SerializeSeq, SerializeTuple};
 use serde::{Deserializer, Serialize, Serializer};
 use std::fmt;
 
+/// A `builtin_interfaces/Duration` below zero, where a time from now is needed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NegativeDuration;
+
 /// One value of a ROS message (a whole message is a [`Value::Struct`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Value {
@@ -73,6 +77,42 @@ impl Value {
             Value::I32((ns / 1_000_000_000) as i32),
             Value::U32((ns % 1_000_000_000) as u32),
         ])
+    }
+
+    /// The elements of a sequence.
+    pub fn as_list(&self) -> Option<&[Value]> {
+        match self {
+            Value::List(l) => Some(l),
+            _ => None,
+        }
+    }
+
+    /// A sequence of numbers as f64s.
+    pub fn as_f64s(&self) -> Option<Vec<f64>> {
+        self.as_list()?.iter().map(Value::as_f64).collect()
+    }
+
+    /// A sequence of strings.
+    pub fn as_strings(&self) -> Option<Vec<String>> {
+        self.as_list()?
+            .iter()
+            .map(|x| match x {
+                Value::Str(s) => Some(s.clone()),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// A `builtin_interfaces/Duration`: `Err` when it is negative.
+    pub fn as_duration(&self) -> Option<Result<std::time::Duration, NegativeDuration>> {
+        match self.fields()? {
+            [Value::I32(s), Value::U32(ns)] => Some(match u64::try_from(*s) {
+                Ok(s) => Ok(std::time::Duration::new(s, 0)
+                    + std::time::Duration::from_nanos(u64::from(*ns))),
+                Err(_) => Err(NegativeDuration),
+            }),
+            _ => None,
+        }
     }
 
     /// Fields of a struct value.

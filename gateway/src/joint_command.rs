@@ -110,26 +110,11 @@ pub enum CommandError {
 }
 
 fn floats(v: &Ros, what: &'static str) -> Result<Vec<f64>, CommandError> {
-    match v {
-        Ros::List(l) => l
-            .iter()
-            .map(|x| x.as_f64().ok_or(CommandError::Layout(what)))
-            .collect(),
-        _ => Err(CommandError::Layout(what)),
-    }
+    v.as_f64s().ok_or(CommandError::Layout(what))
 }
 
 fn strings(v: &Ros, what: &'static str) -> Result<Vec<String>, CommandError> {
-    match v {
-        Ros::List(l) => l
-            .iter()
-            .map(|x| match x {
-                Ros::Str(s) => Ok(s.clone()),
-                _ => Err(CommandError::Layout(what)),
-            })
-            .collect(),
-        _ => Err(CommandError::Layout(what)),
-    }
+    v.as_strings().ok_or(CommandError::Layout(what))
 }
 
 /// Pairs names (or, without names, the default axes) with SI values -> a [`Target`].
@@ -217,12 +202,10 @@ pub fn decode(
             for (i, p) in points.iter().enumerate() {
                 let pf = p.fields().ok_or(CommandError::Layout(T))?;
                 let positions = floats(pf.first().ok_or(CommandError::Layout(T))?, T)?;
-                let at = match pf.get(4).and_then(Ros::fields) {
-                    Some([Ros::I32(s), Ros::U32(ns)]) if *s >= 0 => {
-                        Duration::new(*s as u64, 0) + Duration::from_nanos(u64::from(*ns))
-                    }
-                    Some([Ros::I32(_), Ros::U32(_)]) => return Err(CommandError::Time(i)),
-                    _ => return Err(CommandError::Layout(T)),
+                let at = match pf.get(4).and_then(Ros::as_duration) {
+                    Some(Ok(d)) => d,
+                    Some(Err(_)) => return Err(CommandError::Time(i)),
+                    None => return Err(CommandError::Layout(T)),
                 };
                 if out.last().is_some_and(|prev| prev.at > at) {
                     return Err(CommandError::Time(i));
@@ -240,11 +223,21 @@ pub fn decode(
 /// `to.values` in `dt`; `None` for an axis that need not move. With no time left the
 /// move is as fast as the board allows (speed `None` keeps the board's own).
 pub fn segment_speeds(from: &[f64], to: &Target, dt: Duration) -> Vec<Option<f64>> {
-    to.joints
+    let starts = to
+        .joints
         .iter()
         .zip(&to.values)
-        .map(|(&j, &x)| {
-            let d = (x - from.get(j).copied().unwrap_or(x)).abs();
+        .map(|(&j, &x)| from.get(j).copied().unwrap_or(x));
+    speeds(starts, &to.values, dt)
+}
+
+/// The speed that takes each of `from` to its value in `to` in `dt` (`None`: no move, or
+/// no time).
+pub fn speeds(from: impl IntoIterator<Item = f64>, to: &[f64], dt: Duration) -> Vec<Option<f64>> {
+    from.into_iter()
+        .zip(to)
+        .map(|(x, &y)| {
+            let d = (y - x).abs();
             (d > 0.0 && !dt.is_zero()).then(|| d / dt.as_secs_f64())
         })
         .collect()

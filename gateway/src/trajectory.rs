@@ -101,38 +101,6 @@ pub struct Sample {
     pub index: usize,
 }
 
-fn duration(v: Option<&Ros>) -> Option<Result<Duration, ()>> {
-    match v.and_then(Ros::fields) {
-        Some([Ros::I32(s), Ros::U32(ns)]) => Some(if *s >= 0 {
-            Ok(Duration::new(*s as u64, 0) + Duration::from_nanos(u64::from(*ns)))
-        } else {
-            Err(())
-        }),
-        _ => None,
-    }
-}
-
-fn list(v: Option<&Ros>) -> Option<&[Ros]> {
-    match v {
-        Some(Ros::List(l)) => Some(l),
-        _ => None,
-    }
-}
-
-fn floats(v: Option<&Ros>) -> Option<Vec<f64>> {
-    list(v)?.iter().map(Ros::as_f64).collect()
-}
-
-fn strings(v: Option<&Ros>) -> Option<Vec<String>> {
-    list(v)?
-        .iter()
-        .map(|x| match x {
-            Ros::Str(s) => Some(s.clone()),
-            _ => None,
-        })
-        .collect()
-}
-
 fn layout() -> Verdict {
     Verdict::new(
         error_code::INVALID_GOAL,
@@ -154,15 +122,21 @@ pub fn plan(
     let f = goal.fields().ok_or_else(layout)?;
     let traj = f.first().and_then(Ros::fields).ok_or_else(layout)?;
     let multi = f.get(1).and_then(Ros::fields).ok_or_else(layout)?;
-    if strings(multi.get(1)).is_some_and(|n| !n.is_empty())
-        || list(multi.get(2)).is_some_and(|p| !p.is_empty())
+    if multi
+        .get(1)
+        .and_then(Ros::as_strings)
+        .is_some_and(|n| !n.is_empty())
+        || multi
+            .get(2)
+            .and_then(Ros::as_list)
+            .is_some_and(|p| !p.is_empty())
     {
         return Err(Verdict::new(
             error_code::INVALID_JOINTS,
             "multi_dof_trajectory: this controller has no multi-DOF joints",
         ));
     }
-    let names = strings(traj.get(1)).ok_or_else(layout)?;
+    let names = traj.get(1).and_then(Ros::as_strings).ok_or_else(layout)?;
     if names.is_empty() {
         return Err(Verdict::new(
             error_code::INVALID_JOINTS,
@@ -190,7 +164,7 @@ pub fn plan(
         }
         joints.push(j);
     }
-    let raw = list(traj.get(2)).ok_or_else(layout)?;
+    let raw = traj.get(2).and_then(Ros::as_list).ok_or_else(layout)?;
     if raw.is_empty() {
         return Err(Verdict::new(
             error_code::INVALID_GOAL,
@@ -200,11 +174,11 @@ pub fn plan(
     let mut points: Vec<Point> = Vec::with_capacity(raw.len());
     for (i, p) in raw.iter().enumerate() {
         let pf = p.fields().ok_or_else(layout)?;
-        let positions = floats(pf.first()).ok_or_else(layout)?;
-        let velocities = floats(pf.get(1)).ok_or_else(layout)?;
-        let at = match duration(pf.get(4)) {
+        let positions = pf.first().and_then(Ros::as_f64s).ok_or_else(layout)?;
+        let velocities = pf.get(1).and_then(Ros::as_f64s).ok_or_else(layout)?;
+        let at = match pf.get(4).and_then(Ros::as_duration) {
             Some(Ok(d)) => d,
-            Some(Err(())) => {
+            Some(Err(_)) => {
                 return Err(Verdict::new(
                     error_code::INVALID_GOAL,
                     format!("point {i}: time_from_start is negative"),
@@ -286,10 +260,7 @@ pub fn plan(
     // The header stamp: zero is "start now"; a stamp in the future delays the start; one
     // so old that the whole trajectory is over is refused.
     let stamp = traj.first().and_then(Ros::fields).and_then(|h| h.first());
-    let stamp_ns = match stamp.and_then(Ros::fields) {
-        Some([Ros::I32(s), Ros::U32(ns)]) if *s >= 0 => *s as u64 * 1_000_000_000 + u64::from(*ns),
-        _ => 0,
-    };
+    let stamp_ns = stamp.map_or(0, crate::action::time_ns);
     let end = points.last().map(|p| p.at).unwrap_or_default();
     let delay = if stamp_ns == 0 {
         Duration::ZERO
@@ -309,7 +280,7 @@ pub fn plan(
                 velocity: info.to_yarp_units(j, default.velocity),
             })
             .collect();
-        for t in list(f.get(field)).ok_or_else(layout)? {
+        for t in f.get(field).and_then(Ros::as_list).ok_or_else(layout)? {
             let tf = t.fields().ok_or_else(layout)?;
             let (Some(Ros::Str(name)), Some(p), Some(v)) = (
                 tf.first(),
@@ -351,7 +322,7 @@ pub fn plan(
             velocity: defaults.stopped_velocity,
         },
     )?;
-    let goal_time = match duration(f.get(6)) {
+    let goal_time = match f.get(6).and_then(Ros::as_duration) {
         Some(Ok(d)) if !d.is_zero() => d.as_secs_f64(),
         Some(_) => defaults.goal_time,
         None => return Err(layout()),

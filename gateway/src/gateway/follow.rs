@@ -14,7 +14,7 @@
 use super::commands::{board_err, missing, Board, Failure};
 use crate::action::GoalId;
 use crate::dynmsg::Value as Ros;
-use crate::joint_command::{BoardInfo, Mode, Target};
+use crate::joint_command::{self, BoardInfo, Mode, Target};
 use crate::mapping::{ControlBoard, TrajectoryController};
 use crate::trajectory::{self, error_code, Plan, Sample, Verdict};
 use crate::types::MsgType;
@@ -487,15 +487,8 @@ impl Thread {
                         break;
                     }
                     let to = &p.points[a.sent];
-                    let dt = (to.at - since).as_secs_f64();
-                    let speeds: Vec<Option<f64>> = from
-                        .iter()
-                        .zip(&to.positions)
-                        .map(|(x, y)| {
-                            let d = (y - x).abs();
-                            (d > 0.0 && dt > 0.0).then(|| d / dt)
-                        })
-                        .collect();
+                    let speeds =
+                        joint_command::speeds(from.iter().copied(), &to.positions, to.at - since);
                     g.apply(
                         Mode::Position,
                         &Target {
