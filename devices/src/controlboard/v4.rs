@@ -182,18 +182,27 @@ impl Wire4 for Pid {
     }
 }
 
+/// `list<T>` of a thrift struct: a list of the nested structs.
+fn put_nested<T: Wire4>(items: &[T], w: &mut WireWriter) {
+    w.list_header(items.len());
+    for p in items {
+        p.put4(w);
+    }
+}
+
+fn take_nested<T: Wire4>(c: &mut Cursor4<'_>) -> Option<Vec<T>> {
+    let list = c.item()?.as_list()?;
+    let mut inner = Cursor4::new(list.items());
+    (0..list.len()).map(|_| T::take4(&mut inner)).collect()
+}
+
 /// `list<yPid>`: a list of nested PIDs.
 impl Wire4 for Vec<Pid> {
     fn put4(&self, w: &mut WireWriter) {
-        w.list_header(self.len());
-        for p in self {
-            p.put4(w);
-        }
+        put_nested(self, w);
     }
     fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        let list = c.item()?.as_list()?;
-        let mut inner = Cursor4::new(list.items());
-        (0..list.len()).map(|_| Pid::take4(&mut inner)).collect()
+        take_nested(c)
     }
     fn zero() -> Self {
         Vec::new()
@@ -262,17 +271,10 @@ impl Wire3 for PidExtraInfo {
 /// `list<yInfoPid>`.
 impl Wire4 for Vec<PidExtraInfo> {
     fn put4(&self, w: &mut WireWriter) {
-        w.list_header(self.len());
-        for p in self {
-            p.put4(w);
-        }
+        put_nested(self, w);
     }
     fn take4(c: &mut Cursor4<'_>) -> Option<Self> {
-        let list = c.item()?.as_list()?;
-        let mut inner = Cursor4::new(list.items());
-        (0..list.len())
-            .map(|_| PidExtraInfo::take4(&mut inner))
-            .collect()
+        take_nested(c)
     }
     fn zero() -> Self {
         Vec::new()
