@@ -196,15 +196,10 @@ impl Monitor {
             return Err(MonitorError::UnknownModifier(modifier.to_string()));
         }
         let part = side_part(carrier, side);
-        // this side's own qualifier (4.0), else the first in the whole name (3.12)
-        let find = |k: &str| {
-            part.iter()
-                .find(|(q, _)| q == k)
-                .map(|(_, v)| v.as_str())
-                .or_else(|| carrier.find(k))
-        };
-        // chains are 4.0's: their keys only from this side's part
+        // this side's own qualifier (4.0), else the first in the whole name (3.12); chains
+        // are 4.0's: their keys only from this side's part
         let own = |k: &str| part.iter().find(|(q, _)| q == k).map(|(_, v)| v.as_str());
+        let find = |k: &str| own(k).or_else(|| carrier.find(k));
         let mut chain = Vec::new();
         for i in 0.. {
             let (ty, file) = if i == 0 {

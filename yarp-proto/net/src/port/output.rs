@@ -484,9 +484,7 @@ impl StatsPublisher {
                     _ = &mut stopped => break,
                     _ = tick.tick() => {}
                 }
-                let now = std::time::SystemTime::now()
-                    .duration_since(std::time::UNIX_EPOCH)
-                    .map_or(0.0, |d| d.as_secs_f64());
+                let now = yarp_proto::stamp::now();
                 let names = (src.as_str(), dst.as_str(), carrier.as_str());
                 let b = yarp_proto::portmonitor::connection_stats(
                     now,
