@@ -222,36 +222,26 @@ async fn ros_args_on(venv: &common::Distro) {
         "the remapped-away name is unused: {line}"
     );
 
-    let call = Peer::start(
+    let (resp, v) = get_parameters(
         venv,
         domain,
-        &[
-            "call",
-            "rcl_interfaces/srv/GetParameters",
-            "/lab/lab_gateway/get_parameters",
-            r#"{"names": ["answer", "rate", "robot"]}"#,
-        ],
-    );
-    let resp = call.expect_async("RESP", T).await;
-    let v: serde_json::Value = serde_json::from_str(&resp).unwrap();
+        "/lab/lab_gateway",
+        r#"{"names": ["answer", "rate", "robot"]}"#,
+    )
+    .await;
     let values = v["values"].as_array().expect("values");
     assert_eq!(values[0]["integer_value"], 42, "{resp}");
     assert_eq!(values[1]["double_value"], 2.5, "{resp}");
     assert_eq!(values[2]["string_value"], "icub", "{resp}");
 
     // The gateway's settings, read-only.
-    let call = Peer::start(
+    let (resp, v) = get_parameters(
         venv,
         domain,
-        &[
-            "call",
-            "rcl_interfaces/srv/GetParameters",
-            "/lab/lab_gateway/get_parameters",
-            r#"{"names": ["mappings", "domain_id"]}"#,
-        ],
-    );
-    let resp = call.expect_async("RESP", T).await;
-    let v: serde_json::Value = serde_json::from_str(&resp).unwrap();
+        "/lab/lab_gateway",
+        r#"{"names": ["mappings", "domain_id"]}"#,
+    )
+    .await;
     assert_eq!(
         v["values"][0]["string_array_value"][0],
         file.display().to_string(),
@@ -396,18 +386,13 @@ conversion = "generic"
         "stamps are the simulated time (0 before the first /clock): {seen:?}"
     );
     drop(clock);
-    let call = Peer::start(
+    let (resp, v) = get_parameters(
         venv,
         domain,
-        &[
-            "call",
-            "rcl_interfaces/srv/GetParameters",
-            "/yarp_ros2_gateway/get_parameters",
-            r#"{"names": ["use_sim_time"]}"#,
-        ],
-    );
-    let resp = call.expect_async("RESP", T).await;
-    let v: serde_json::Value = serde_json::from_str(&resp).unwrap();
+        "/yarp_ros2_gateway",
+        r#"{"names": ["use_sim_time"]}"#,
+    )
+    .await;
     assert_eq!(v["values"][0]["bool_value"], true, "{resp}");
 }
 
@@ -446,6 +431,29 @@ fn ros_static_peers_get_the_announcements() {
             "no SPDP announcement at 127.0.0.5:{port}"
         );
     }
+}
+
+/// `GetParameters` of `node` from a fresh rclpy node: the response line and its JSON.
+async fn get_parameters(
+    venv: &common::Distro,
+    domain: u16,
+    node: &str,
+    request: &str,
+) -> (String, serde_json::Value) {
+    let service = format!("{node}/get_parameters");
+    let call = Peer::start(
+        venv,
+        domain,
+        &[
+            "call",
+            "rcl_interfaces/srv/GetParameters",
+            &service,
+            request,
+        ],
+    );
+    let resp = call.expect_async("RESP", T).await;
+    let v = serde_json::from_str(&resp).unwrap();
+    (resp, v)
 }
 
 fn tempfile_dir(what: &str) -> std::path::PathBuf {

@@ -6,6 +6,12 @@ mod common;
 
 use yarp_ros2_gateway::{hash::rihs01, interfaces, types::MESSAGES};
 
+/// The project's copy of a definition as `venv`'s distro ships it, where that release
+/// differs from the built-in one (`gateway/msg/<distro>/`: Jazzy's control_msgs).
+fn distro_release(venv: &common::Distro, pkg: &str, kind: &str, name: &str) -> std::path::PathBuf {
+    common::gateway_dir().join(format!("msg/{}/{pkg}/{kind}/{name}.{kind}", venv.name))
+}
+
 #[test]
 fn every_catalog_type_matches_the_installed_type_descriptions() {
     for d in common::distros("every_catalog_type_matches_the_installed_type_descriptions") {
@@ -26,8 +32,7 @@ fn every_catalog_type_matches_the_installed_type_descriptions_on(venv: &common::
         let file_stem = name.split('_').next().unwrap();
         // Another release in this distro (Jazzy's control_msgs): checked with every
         // installed definition.
-        let variant = format!("msg/{}/{pkg}/{kind}/{file_stem}.{kind}", venv.name);
-        if common::gateway_dir().join(variant).exists() {
+        if distro_release(venv, pkg, kind, file_stem).exists() {
             continue;
         }
         let path = venv.join(format!("share/{pkg}/{kind}/{file_stem}.json"));
@@ -74,8 +79,7 @@ fn every_built_in_definition_is_the_installed_one_on(venv: &common::Distro) {
         // A distro that ships another release of the package (Jazzy's control_msgs): the
         // installed file is the project's copy of that release; its hashes are checked
         // with every installed definition's.
-        let variant =
-            common::gateway_dir().join(format!("msg/{}/{pkg}/{kind}/{name}.{kind}", venv.name));
+        let variant = distro_release(venv, pkg, kind, name);
         if let Ok(ours) = std::fs::read_to_string(&variant) {
             let text = std::fs::read_to_string(&file).unwrap();
             assert_eq!(

@@ -295,11 +295,10 @@ fn cpp_4_compressed_to_our_throttled_chain() {
         .expect("spawn C++ yarp write");
     let mut stdin = writer.stdin.take().unwrap();
     let _writer = Reaped(writer);
-    let start = std::time::Instant::now();
-    while !registered("/pm4/cw") {
-        assert!(start.elapsed() < T, "/pm4/cw never registered");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
+    assert!(
+        eventually(T, || registered("/pm4/cw")),
+        "/pm4/cw never registered"
+    );
     let chain = "tcp+send.portmonitor+type.dll+file.bottle_compression_zlib\
                  +recv.portmonitor+type.dll+file.throttleDown+type1.dll\
                  +file1.bottle_compression_zlib+period_ms.300";
@@ -373,11 +372,11 @@ fn cpp_4_yarpconnectionsstats_reads_our_stats_monitor() {
     assert!(ok, "{why}");
     assert!(why.contains("stats_monitor"), "{why}");
     let forward = "/stats_monitor/st4/w/st4/r/stats:o";
-    let start = std::time::Instant::now();
-    while !registered(forward) || !registered("/stats_monitor/st4/r/st4/w/stats:o") {
-        assert!(start.elapsed() < T, "{forward} never registered");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
+    assert!(
+        eventually(T, || registered(forward)
+            && registered("/stats_monitor/st4/r/st4/w/stats:o")),
+        "{forward} never registered"
+    );
     let mut tool = cpp_command(&stats_tool)
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
@@ -424,9 +423,8 @@ fn cpp_4_yarpconnectionsstats_reads_our_stats_monitor() {
         "/st4/r",
     ))
     .expect("disconnect");
-    let start = std::time::Instant::now();
-    while registered(forward) {
-        assert!(start.elapsed() < T, "{forward} stayed after the connection");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
+    assert!(
+        eventually(T, || !registered(forward)),
+        "{forward} stayed after the connection"
+    );
 }

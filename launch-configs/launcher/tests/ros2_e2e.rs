@@ -329,15 +329,8 @@ fn checks(l: &mut Launch, nodes: &[Nodes], s: &Scenario, t0: Instant, ros_env: &
 
     // Our `yarp read` sees the same joint on the YARP side.
     let conf_home = l.conf_home.path().to_path_buf();
-    let mut read_cmd = Command::new(program("yarp", "yarp-cli"));
-    read_cmd
-        .args([
-            "read",
-            "/e2e/reader",
-            &format!("{}/left_arm/state:o", s.prefix),
-        ])
-        .env("YARP_CONFIG_HOME", &conf_home);
-    let reader = Lines::spawn(read_cmd);
+    let state = format!("{}/left_arm/state:o", s.prefix);
+    let reader = Lines::spawn(our_yarp(&conf_home, &["read", "/e2e/reader", &state]));
     let line = reader.expect("", Duration::from_secs(20));
     let j: usize = joint.parse().unwrap();
     let value: f64 = line
@@ -489,7 +482,6 @@ fn follow_trajectory(
     ros_env: &[(&str, &str)],
     prefix: &str,
 ) {
-    use std::io::Write;
     let work = tempfile::tempdir().unwrap();
     let mapping = work.path().join("caller.toml");
     std::fs::write(
@@ -527,21 +519,11 @@ fn follow_trajectory(
             pts.join(" ")
         )
     };
-    let mut rpc = Command::new(program("yarp", "yarp-cli"));
-    rpc.args(["rpc", "/e2e/fjt:rpc"])
-        .env("YARP_CONFIG_HOME", conf_home)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit());
-    let mut call = |cmd: &str| -> String {
+    // until the caller gateway's ROS client has found the action server
+    let call = |cmd: &str| -> String {
         let deadline = Instant::now() + Duration::from_secs(60);
         loop {
-            let mut child = rpc.spawn().expect("yarp rpc");
-            let mut stdin = child.stdin.take().unwrap();
-            writeln!(stdin, "{cmd}").unwrap();
-            drop(stdin);
-            let out = child.wait_with_output().expect("yarp rpc output");
-            let text = String::from_utf8_lossy(&out.stdout).to_string();
+            let text = fjt_call(conf_home, cmd);
             let answered =
                 text.contains("Response:") && !text.contains("no action server answered");
             if answered || Instant::now() > deadline {
@@ -553,9 +535,7 @@ fn follow_trajectory(
     // The feedback of the goals, as our `yarp read` prints it (once the caller's port is
     // there: `yarp exists`).
     let registered = eventually(Duration::from_secs(30), || {
-        let st = Command::new(program("yarp", "yarp-cli"))
-            .args(["exists", "/e2e/fjt/feedback:o"])
-            .env("YARP_CONFIG_HOME", conf_home)
+        let st = our_yarp(conf_home, &["exists", "/e2e/fjt/feedback:o"])
             .stdout(Stdio::null())
             .status()
             .ok()?;
@@ -565,11 +545,10 @@ fn follow_trajectory(
         registered.is_some(),
         "the caller gateway never opened its feedback port"
     );
-    let mut fb_cmd = Command::new(program("yarp", "yarp-cli"));
-    fb_cmd
-        .args(["read", "/e2e/fjt_feedback", "/e2e/fjt/feedback:o"])
-        .env("YARP_CONFIG_HOME", conf_home);
-    let feedback = Lines::spawn(fb_cmd);
+    let feedback = Lines::spawn(our_yarp(
+        conf_home,
+        &["read", "/e2e/fjt_feedback", "/e2e/fjt/feedback:o"],
+    ));
     let t0 = Instant::now();
     let reply = call(&goal(&[(0.8, 2), (1.2, 4), (1.0, 6)]));
     assert!(
@@ -581,15 +560,8 @@ fn follow_trajectory(
         reply.trim(),
         t0.elapsed().as_secs_f64()
     );
-    let mut read_cmd = Command::new(program("yarp", "yarp-cli"));
-    read_cmd
-        .args([
-            "read",
-            "/e2e/fjt_reader",
-            &format!("{prefix}/left_arm/state:o"),
-        ])
-        .env("YARP_CONFIG_HOME", conf_home);
-    let reader = Lines::spawn(read_cmd);
+    let state = format!("{prefix}/left_arm/state:o");
+    let reader = Lines::spawn(our_yarp(conf_home, &["read", "/e2e/fjt_reader", &state]));
     let line = reader.expect("", Duration::from_secs(20));
     let elbow = elbow_of(&line);
     assert!(
@@ -608,19 +580,8 @@ fn follow_trajectory(
     drop(feedback);
     // A cancel (`[stop]` from another caller) stops the elbow on its way.
     let long = std::thread::spawn({
-        let g = goal(&[(0.5, 8)]);
-        let mut rpc = Command::new(program("yarp", "yarp-cli"));
-        rpc.args(["rpc", "/e2e/fjt:rpc"])
-            .env("YARP_CONFIG_HOME", conf_home);
-        move || {
-            let mut child = rpc
-                .stdin(Stdio::piped())
-                .stdout(Stdio::piped())
-                .spawn()
-                .unwrap();
-            writeln!(child.stdin.take().unwrap(), "{g}").unwrap();
-            String::from_utf8_lossy(&child.wait_with_output().unwrap().stdout).to_string()
-        }
+        let (g, home) = (goal(&[(0.5, 8)]), conf_home.to_path_buf());
+        move || fjt_call(&home, &g)
     });
     std::thread::sleep(Duration::from_secs(3));
     let stop = call("[stop]");
@@ -630,15 +591,8 @@ fn follow_trajectory(
         reply.contains("[fail] canceled"),
         "the canceled goal: {reply}"
     );
-    let mut read_cmd = Command::new(program("yarp", "yarp-cli"));
-    read_cmd
-        .args([
-            "read",
-            "/e2e/fjt_reader2",
-            &format!("{prefix}/left_arm/state:o"),
-        ])
-        .env("YARP_CONFIG_HOME", conf_home);
-    let reader = Lines::spawn(read_cmd);
+    let state = format!("{prefix}/left_arm/state:o");
+    let reader = Lines::spawn(our_yarp(conf_home, &["read", "/e2e/fjt_reader2", &state]));
     let first: f64 = elbow_of(&reader.expect("", Duration::from_secs(20)));
     std::thread::sleep(Duration::from_millis(800));
     let mut last = first;
@@ -656,6 +610,30 @@ fn follow_trajectory(
         reply.contains("[fail] aborted -1") && reply.contains("outside its limits"),
         "a point beyond the elbow's limits: {reply}"
     );
+}
+
+/// Our `yarp` program with `args`, under the launch's name server (`conf_home`).
+fn our_yarp(conf_home: &std::path::Path, args: &[&str]) -> Command {
+    let mut cmd = Command::new(program("yarp", "yarp-cli"));
+    cmd.args(args).env("YARP_CONFIG_HOME", conf_home);
+    cmd
+}
+
+/// One `yarp rpc /e2e/fjt:rpc` of `cmd` (a FollowJointTrajectory goal, or `[stop]`): what
+/// it printed.
+fn fjt_call(conf_home: &std::path::Path, cmd: &str) -> String {
+    use std::io::Write;
+    let mut child = our_yarp(conf_home, &["rpc", "/e2e/fjt:rpc"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("yarp rpc");
+    let mut stdin = child.stdin.take().unwrap();
+    writeln!(stdin, "{cmd}").unwrap();
+    drop(stdin);
+    let out = child.wait_with_output().expect("yarp rpc output");
+    String::from_utf8_lossy(&out.stdout).to_string()
 }
 
 /// The left elbow (joint 3) in a `yarp read` line of the arm's `state:o`.
