@@ -26,10 +26,12 @@ peers=${CPP_PEERS_SRC:-$(cd "$here/../../.." && pwd)/shared/peers}
     { echo "install-cpp-peers: no $peers/build.sh (expected ../shared/peers beside the repository)" >&2; exit 1; }
 
 apt_packages=(cmake g++ make ninja-build pkg-config libace-dev libsqlite3-dev libeigen3-dev
-    libjpeg-dev zlib1g-dev libtinyxml-dev libedit-dev ccache)
+    libjpeg-dev zlib1g-dev libtinyxml-dev libedit-dev ccache libi2c-dev)
 # Devices of YARP kept on top of build.sh's list: the fakes our live tests serve from C++,
-# and deviceBundler, through which a real yarpdev serves a device that has a wrapper.
-extra_yarp_3="fakeAnalogSensor deviceBundler"
+# deviceBundler, through which a real yarpdev serves a device that has a wrapper, and devices
+# robots' files name: the head IMU of several iCubs (imuBosch_BNO055: YARP builds it only
+# with libi2c's headers) and R1's odometry wrapper with its client and fake.
+extra_yarp_3="fakeAnalogSensor deviceBundler imuBosch_BNO055 odometry2D_nws_yarp odometry2D_nwc_yarp fakeOdometry2D"
 extra_yarp_4=""
 # icub-main devices robots' files name that build.sh leaves off. (fineCalibrationChecker is
 # not among them: it draws its report with OpenCV, which build.sh turns off, and no robot of
@@ -101,6 +103,12 @@ if [[ $which == icub ]]; then
     # configures icub-main with its own, so ours are reset first and set again after it.
     cache_file=$build_dir/icub-main/CMakeCache.txt
     [[ ! -f $cache_file ]] || sed -i 's/^\(ENABLE_icubmod_\(rawValuesPublisher[A-Za-z]*\|fineCalibrationChecker\):BOOL=\)ON$/\1OFF/' "$cache_file"
+    # A kept YARP device that an earlier configure turned off (YARP_SLIM, or a dependency
+    # then missing, as libi2c for imuBosch_BNO055) is turned on again before build.sh runs.
+    yarp_cache=$build_dir/$yarp_src/CMakeCache.txt
+    for d in $extra_yarp_3; do
+        [[ ! -f $yarp_cache ]] || sed -i "s/^ENABLE_yarpmod_$d:BOOL=OFF$/ENABLE_yarpmod_$d:BOOL=ON/" "$yarp_cache"
+    done
     bash "$peers/build.sh" "$prefix" "$build_dir" >&2
     # The icub-main devices build.sh leaves off, on the configured build.
     opts=()
@@ -121,7 +129,8 @@ fi
 listed=$( . "$prefix/$env_file"; export YARP_CONFIG_HOME=$(mktemp -d); yarpdev --list 2>&1; rm -rf "$YARP_CONFIG_HOME")
 want=(controlBoard_nws_yarp multipleanalogsensorsserver fakeMotionControl)
 [[ $which == icub ]] && want+=(embObjMotionControl embObjFTsensor embObjMultipleFTsensors embObjIMU
-    embObjMais embObjSkin embObjPOS embObjBattery parametricCalibratorEth "${extra_icub[@]}")
+    embObjMais embObjSkin embObjPOS embObjBattery parametricCalibratorEth "${extra_icub[@]}"
+    imuBosch_BNO055 odometry2D_nws_yarp odometry2D_nwc_yarp)
 for d in "${want[@]}"; do
     grep -q "\"$d\"" <<<"$listed" || { log "yarpdev --list lacks $d:"; echo "$listed" >&2; exit 1; }
 done

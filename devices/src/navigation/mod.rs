@@ -1,8 +1,12 @@
 //! Mobile bases: the `IOdometry2D` and `INavigation2DVelocityActions` interfaces (C++
-//! `yarp::dev::Nav2D`), `fakeOdometry2D` and `fakeNavigation`.
+//! `yarp::dev::Nav2D`), `fakeOdometry2D` and `fakeNavigation`, and the odometry's YARP
+//! wrapper and client (`odometry2D_nws_yarp`, `odometry2D_nwc_yarp`).
 
 pub mod fake_navigation;
 pub mod fake_odometry;
+pub mod nwc;
+pub mod nws;
+pub mod protocol;
 
 use crate::driver::Factory;
 use crate::error::DevResult;
@@ -50,5 +54,11 @@ pub(crate) const DRIVERS: &[(&str, Factory)] = &[
     }),
     ("fakeNavigation", || {
         Box::new(fake_navigation::FakeNavigation::new())
+    }),
+    ("odometry2D_nws_yarp", || {
+        Box::new(nws::Odometry2DNwsYarp::new())
+    }),
+    ("odometry2D_nwc_yarp", || {
+        Box::new(nwc::Odometry2DNwcYarp::new())
     }),
 ];

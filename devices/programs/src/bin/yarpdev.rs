@@ -102,6 +102,8 @@ fn cxx_info(name: &str) -> (&'static str, Option<&'static str>) {
         "fakeDepthCamera" => ("FakeDepthCameraDriver", Some("rgbdSensor_nws_yarp")),
         "fakeBattery" => ("FakeBattery", Some("battery_nws_yarp")),
         "fakeOdometry2D" => ("FakeOdometry2D", Some("odometry2D_nws_yarp")),
+        "odometry2D_nws_yarp" => ("Odometry2D_nws_yarp", Some("odometry2D_nws_yarp")),
+        "odometry2D_nwc_yarp" => ("Odometry2D_nwc_yarp", None),
         "fakeNavigation" => ("FakeNavigation", Some("navigation2D_nws_yarp")),
         // yarp-devices-ros2's plugins (their manifests name each its own wrapper)
         "controlBoard_nws_ros2" => ("ControlBoard_nws_ros2", Some("controlBoard_nws_ros2")),
