@@ -5,7 +5,9 @@
 //!
 //! - [`can_robot`]: the CAN boards (`icub-board-emulator`, over crate `icub_can`'s
 //!   emulated boards);
-//! - [`eth`]: the Ethernet boards (`icub-eth-emulator`).
+//! - [`eth`]: the Ethernet boards (`icub-eth-emulator`);
+//! - [`bno055`]: the Bosch BNO055 head IMU on a pseudo-terminal (`--bno055 PATH` of both).
 
+pub mod bno055;
 pub mod can_robot;
 pub mod eth;

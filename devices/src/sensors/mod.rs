@@ -18,6 +18,7 @@ use crate::driver::Factory;
 
 pub mod analog_client;
 pub mod analog_server;
+pub mod bno055;
 pub mod client;
 pub mod fake_analog;
 pub mod fake_fts;
@@ -51,6 +52,7 @@ pub use wire::{SensorMetadata, SensorRpcData, SensorStreamingData};
 /// Drivers of this family, by C++ name.
 pub(crate) const DRIVERS: &[(&str, Factory)] = &[
     ("fakeIMU", || Box::new(FakeImu::new())),
+    ("imuBosch_BNO055", || Box::new(bno055::BoschImu::new())),
     ("fakeFTs", || Box::new(FakeFts::new())),
     ("fakeAnalogSensor", || Box::new(FakeAnalogSensor::new())),
     ("analogServer", || Box::new(AnalogServer::new())),

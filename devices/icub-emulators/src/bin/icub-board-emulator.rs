@@ -6,6 +6,7 @@
 //! icub-board-emulator --preset icub --bus udp-hub://127.0.0.1:20000+n   # launch-configs/icub-sim/robot
 //! icub-board-emulator --config boards.txt
 //! icub-board-emulator --xsens /tmp/ttyXSENS      # the head's Xsens MTx on a pseudo-terminal
+//! icub-board-emulator --bno055 /tmp/ttyBNO       # the head's Bosch BNO055 on a pseudo-terminal
 //! ```
 //!
 //! With `--preset icub` the boards are those of the robot directory's CAN devices, read
@@ -13,7 +14,7 @@
 //! `--robot-dir` it is the simulated iCub shipped in `launch-configs/icub-sim/robot`.
 //!
 //! On start it prints one `bus <name> <local address>` line per bus, then `ready`.
-//! SIGINT or SIGTERM stops it cleanly (exit 0; its `--xsens` link is removed).
+//! SIGINT or SIGTERM stops it cleanly (exit 0; its `--xsens` and `--bno055` links are removed).
 
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -74,6 +75,10 @@ struct Args {
     /// path (a symbolic link; name it as `serial`, or in YARP_ICUB_XSENS_SERIAL).
     #[arg(long, value_name = "PATH")]
     xsens: Option<std::path::PathBuf>,
+    /// Also emulate the head's Bosch BNO055 (imuBosch_BNO055) on a pseudo-terminal reachable
+    /// at this path (a symbolic link; name it as `comport`, or in YARP_BNO055_COMPORT).
+    #[arg(long, value_name = "PATH")]
+    bno055: Option<std::path::PathBuf>,
     /// Print frame counters to stderr every this many seconds (0 = never).
     #[arg(long, default_value_t = 0.0)]
     stats_every_s: f64,
@@ -146,9 +151,10 @@ fn run(args: Args) -> Result<(), String> {
             plan.push((bus, local, boards));
         }
     }
-    if plan.is_empty() && args.xsens.is_none() {
+    if plan.is_empty() && args.xsens.is_none() && args.bno055.is_none() {
         return Err(
-            "nothing to emulate: give --board, --preset, --config or --xsens (see --help)".into(),
+            "nothing to emulate: give --board, --preset, --config, --xsens or --bno055 (see --help)"
+                .into(),
         );
     }
     if !(0.1..=100.0).contains(&args.tick_ms) {
@@ -185,6 +191,15 @@ fn run(args: Args) -> Result<(), String> {
                 .map_err(|e| format!("--xsens {}: {e}", link.display()))?;
             say(&format!("xsens {} {}", link.display(), pts.display()));
             Some(mtx)
+        }
+        None => None,
+    };
+    let _bno055 = match &args.bno055 {
+        Some(link) => {
+            let (chip, pts) = icub_emulators::bno055::pty_link(link)
+                .map_err(|e| format!("--bno055 {}: {e}", link.display()))?;
+            say(&format!("bno055 {} {}", link.display(), pts.display()));
+            Some(chip)
         }
         None => None,
     };
