@@ -16,6 +16,7 @@ use crate::navigation::{INavigation2DVelocityActions, IOdometry2D};
 use crate::params::as_string as value_text;
 pub use crate::params::Params;
 use crate::rangefinder::IRangefinder2D;
+use crate::raw_values::IRawValuesPublisher;
 use crate::rgbd::IRGBDSensor;
 use crate::sensors::interfaces::*;
 use crate::sensors::virtual_analog::IVirtualAnalogSensor;
@@ -166,6 +167,7 @@ crate::device_interfaces! {
     as_impedance_control: IImpedanceControl => "IImpedanceControl" (Other),
     as_control_calibration: IControlCalibration => "IControlCalibration" (Other),
     as_remote_calibrator: IRemoteCalibrator => "IRemoteCalibrator" (Other),
+    as_raw_values_publisher: IRawValuesPublisher => "IRawValuesPublisher" (Other),
     // Frame grabbers.
     as_frame_grabber_image: IFrameGrabberImage => "IFrameGrabberImage" (Camera),
     as_frame_grabber_controls: IFrameGrabberControls => "IFrameGrabberControls" (Other),

@@ -18,9 +18,10 @@ pub mod frames;
 pub mod interfaces;
 pub mod kind;
 pub mod navigation;
-mod nwc_ports;
+pub mod nwc_ports;
 pub mod params;
 pub mod rangefinder;
+pub mod raw_values;
 pub mod remapper;
 pub mod remote_controlboard;
 pub mod rgbd;
@@ -30,7 +31,7 @@ pub mod sensors;
 pub mod test_motor;
 pub mod thrift;
 pub mod vocabs;
-mod wrapper_ports;
+pub mod wrapper_ports;
 
 pub use driver::{
     shared, DeviceDriver, ICalibrator, IMultipleWrapper, IWrapper, Params, PolyDriver, Registry,

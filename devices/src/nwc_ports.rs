@@ -16,14 +16,14 @@ use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value};
 
 /// How long an RPC call waits for the server's reply.
-pub(crate) const RPC_TIMEOUT: Duration = Duration::from_secs(5);
+pub const RPC_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// The latest stream message and its envelope time (0 without an envelope).
 type Latest<T> = Arc<Mutex<Option<(T, f64)>>>;
 
 /// The port names of one client: `stream` receives from `remote_stream`, `rpc` calls
 /// `remote_rpc`.
-pub(crate) struct NwcNames {
+pub struct NwcNames {
     pub stream: String,
     pub remote_stream: String,
     /// Carrier of the stream connection.
@@ -33,7 +33,7 @@ pub(crate) struct NwcNames {
 }
 
 /// Open client ports (closed by [`NwcPorts::close`]).
-pub(crate) struct NwcPorts<T> {
+pub struct NwcPorts<T> {
     device: &'static str,
     stream: Arc<Port>,
     task: tokio::task::JoinHandle<()>,
@@ -66,13 +66,13 @@ async fn receive<T>(
 
 /// Calls the server at the other end of `rpc` (blocking the caller, at most
 /// [`RPC_TIMEOUT`]); a failure names `device` and the request.
-pub(crate) fn call(device: &str, rpc: &Arc<Port>, cmd: Bottle) -> DevResult<Bottle> {
+pub fn call(device: &str, rpc: &Arc<Port>, cmd: Bottle) -> DevResult<Bottle> {
     call_within(device, rpc, cmd, RPC_TIMEOUT)
 }
 
 /// Sends `cmd` to `device`'s server on `rpc` and waits for its reply at most `timeout`
 /// (blocking the caller): no reply is a `Timeout`, a broken connection `PeerLost`.
-pub(crate) fn call_within(
+pub fn call_within(
     device: &str,
     rpc: &Arc<Port>,
     cmd: Bottle,
@@ -90,7 +90,7 @@ pub(crate) fn call_within(
 
 /// [`call_within`] for a call already encoded (a thrift call, as YARP 4.0's generated
 /// code writes it); `command` names it in errors.
-pub(crate) fn call_encoded_within(
+pub fn call_encoded_within(
     device: &str,
     rpc: &Arc<Port>,
     bytes: Vec<u8>,
@@ -278,6 +278,12 @@ impl<T: Send + 'static> NwcPorts<T> {
                 format!("{command} answered {reply:?}"),
             )),
         }
+    }
+
+    /// Calls the server with a call already encoded (a thrift call as C++'s generated code
+    /// writes it); its reply, whatever it holds. `command` names it in errors.
+    pub fn call_encoded(&self, bytes: Vec<u8>, command: &str) -> DevResult<Bottle> {
+        call_encoded_within(self.device, &self.rpc, bytes, command, RPC_TIMEOUT)
     }
 
     /// Opens the ports from a device's `open` (blocking): a failure is a `BadParam` on

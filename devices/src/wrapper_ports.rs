@@ -16,10 +16,10 @@ use yarp_proto::tags::Generation;
 use yarp_proto::Bottle;
 
 /// The device a wrapper serves, shared with its RPC task (`None` while detached).
-pub(crate) type Slot = Arc<Mutex<Option<SharedDevice>>>;
+pub type Slot = Arc<Mutex<Option<SharedDevice>>>;
 
 /// A reply as the wrapper's protocol builds it.
-pub(crate) enum Reply {
+pub enum Reply {
     Bottle(Bottle),
     /// Already-encoded bytes (thrift replies with element-tagged lists).
     Encoded(Vec<u8>),
@@ -27,15 +27,15 @@ pub(crate) enum Reply {
 
 /// Answers one request: the decoded command (empty when undecodable), the attached
 /// device, if any, and the generation of YARP the client runs.
-pub(crate) type Answer = fn(&Bottle, Option<&mut dyn DeviceDriver>, Generation) -> Reply;
+pub type Answer = fn(&Bottle, Option<&mut dyn DeviceDriver>, Generation) -> Reply;
 
 /// The port that tells a client's generation, from the name of its RPC port: a port of
 /// the same client other than that one, whose C++ `PortCore` is locked for as long as
 /// the call waits for our reply (its admin would not answer before we do). `None`: do
 /// not ask (the protocol is the same in both generations, or the client is unknown).
-pub(crate) type ClientPort = fn(&str) -> Option<String>;
+pub type ClientPort = fn(&str) -> Option<String>;
 
-pub(crate) struct WrapperPorts {
+pub struct WrapperPorts {
     /// The stream ports, in the order given to [`WrapperPorts::open`].
     pub streams: Vec<Arc<Port>>,
     /// The generations of the clients and readers.
@@ -143,7 +143,7 @@ async fn serve_rpc(
 /// Asks the generation of those of a port's readers (`outputs`) that `readers` does
 /// not know yet, from a plain thread (a periodic publisher's); nothing to ask, as on
 /// every period but a new reader's first, costs no trip into the runtime.
-pub(crate) fn learn_readers(outputs: Vec<String>, readers: &PeerGenerations) {
+pub fn learn_readers(outputs: Vec<String>, readers: &PeerGenerations) {
     if readers.knows_all(&outputs) {
         return;
     }

@@ -35,6 +35,7 @@ pub mod imu_filter;
 pub mod inertial;
 pub mod motion_control;
 pub mod presence;
+pub mod raw_values;
 pub mod skin;
 pub mod skin_wrapper;
 pub mod virtual_analog;
@@ -74,6 +75,18 @@ pub const DRIVERS: &[(&str, Factory)] = &[
     (xsens::MTX_NAME, || Box::new(XsensImu::mtx())),
     (xsens::MT_NAME, || Box::new(XsensImu::mt())),
     ("imuFilter", || Box::new(ImuFilter::new())),
+    (raw_values::server::NAME, || {
+        Box::new(raw_values::server::RawValuesPublisherServer::new())
+    }),
+    (raw_values::client::NAME, || {
+        Box::new(raw_values::client::RawValuesPublisherClient::new())
+    }),
+    (raw_values::remapper::NAME, || {
+        Box::new(raw_values::remapper::RawValuesPublisherRemapper::new())
+    }),
+    (raw_values::fake::NAME, || {
+        Box::new(raw_values::fake::FakeRawValuesPublisher::new())
+    }),
     ("skinWrapper", || Box::new(SkinWrapper::new())),
     (cartesian::NAME, || {
         Box::new(CartesianControllerServer::new())

@@ -614,7 +614,55 @@ impl DeviceDriver for EmbObjMotionControl {
     }
 
     yarp_devices::motor_control_views!();
-    yarp_devices::views!(as_virtual_analog_sensor);
+    yarp_devices::views!(as_virtual_analog_sensor, as_raw_values_publisher);
+}
+
+/// The one key of icub-main's embObjMotionControl as `IRawValuesPublisher`: the name of
+/// the ROP tag its values come from.
+pub const RAW_VALUES_KEY: &str = "eoprot_tag_mc_joint_status_addinfo_multienc";
+/// What each joint's three raw values are, after its name.
+const RAW_VALUE_SUFFIXES: [&str; 3] = [
+    "_primary_encoder_raw_value",
+    "_secondary_encoder_raw_value",
+    "_primary_encoder_diagnostic",
+];
+
+/// C++ `embObjMotionControl` as `IRawValuesPublisher`: per joint, the three words of its
+/// `status addinfo multienc` (a regular), raw as the board sends them, joint after joint.
+impl yarp_devices::raw_values::IRawValuesPublisher for EmbObjMotionControl {
+    fn get_raw_data_map(&mut self) -> DevResult<std::collections::BTreeMap<String, Vec<i32>>> {
+        let mut values = Vec::new();
+        for j in 0..self.axes()? {
+            let id = self.joint_id(j, tag::MC_JOINT_STATUS_ADDINFO_MULTIENC)?;
+            let m: icub_eth::entities::mc::MultiEncoders =
+                self.b()?.read(id).map_err(|e| self.fail(e))?;
+            values.extend(m.0);
+        }
+        Ok(std::collections::BTreeMap::from([(
+            RAW_VALUES_KEY.to_string(),
+            values,
+        )]))
+    }
+
+    fn get_metadata_map(
+        &mut self,
+    ) -> DevResult<std::collections::BTreeMap<String, yarp_devices::raw_values::RawValuesKeyMetadata>>
+    {
+        let names = &self.p()?.axis_names;
+        let raw_value_names = names
+            .iter()
+            .flat_map(|n| RAW_VALUE_SUFFIXES.map(|s| format!("{n}{s}")))
+            .collect();
+        let m = yarp_devices::raw_values::RawValuesKeyMetadata {
+            raw_value_names,
+            axes_names: names.clone(),
+            size: i32::try_from(3 * names.len()).unwrap_or(i32::MAX),
+        };
+        Ok(std::collections::BTreeMap::from([(
+            RAW_VALUES_KEY.to_string(),
+            m,
+        )]))
+    }
 }
 
 /// C++ `embObjMotionControl` as `IVirtualAnalogSensor`: the joint torques estimated by

@@ -681,6 +681,19 @@ impl Port {
     }
 
     fn send(&self, b: &Bottle, stamp: Option<Stamp>) -> usize {
+        self.offer_all(|| output::Outgoing::new(Arc::new(b.clone()), stamp))
+    }
+
+    /// Sends, without waiting, a message already encoded (a thrift struct exactly as C++'s
+    /// generated code writes it, which no Bottle encodes to: untagged strings without their
+    /// NUL) with an optional envelope to every output. Text readers get the Bottle the bytes
+    /// decode to. Returns how many outputs took it.
+    pub fn write_encoded_nowait(&self, bytes: Vec<u8>, stamp: Option<Stamp>) -> usize {
+        self.offer_all(|| output::Outgoing::encoded_stamped(bytes, stamp))
+    }
+
+    /// Offers the message `make` builds (only if some output would take it) to every output.
+    fn offer_all(&self, make: impl FnOnce() -> output::Outgoing) -> usize {
         let outs: Vec<_> = self
             .shared
             .lock()
@@ -689,9 +702,9 @@ impl Port {
             .map(|o| o.sender())
             .collect();
         if outs.is_empty() {
-            return 0; // no copy of the Bottle for nobody
+            return 0; // no copy of the message for nobody
         }
-        let msg = Arc::new(output::Outgoing::new(Arc::new(b.clone()), stamp));
+        let msg = Arc::new(make());
         let size = msg.encoded_len();
         outs.iter().filter(|tx| Self::offer(tx, &msg, size)).count()
     }

@@ -121,9 +121,14 @@ impl Outgoing {
     /// A message already encoded (a thrift call): binary carriers send `bytes` as they
     /// are; text and local ones the Bottle they decode to.
     pub(crate) fn encoded(bytes: Vec<u8>) -> Outgoing {
+        Outgoing::encoded_stamped(bytes, None)
+    }
+
+    /// [`Outgoing::encoded`] with an envelope (a stream message).
+    pub(crate) fn encoded_stamped(bytes: Vec<u8>, stamp: Option<Stamp>) -> Outgoing {
         let bottle = Bottle::decode(&bytes).unwrap_or_default();
         let generation = yarp_proto::binary::generation_of(&bytes);
-        let mut msg = Outgoing::new_as(Arc::new(bottle), None, generation);
+        let mut msg = Outgoing::new_as(Arc::new(bottle), stamp, generation);
         msg.encoded = true;
         let _ = msg.binary.set(bytes);
         msg
