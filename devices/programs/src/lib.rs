@@ -1,7 +1,7 @@
 //! What `yarpdev` and `yarprobotinterface` serve: the YARP device framework
 //! (`yarp-devices`, which registers its own drivers) and every device crate of the
-//! workspace (the iCub drivers of `icubmod`, yarp-devices-ros2's ROS 2 wrappers), each
-//! added here with its `register` function.
+//! workspace (the iCub drivers of `icubmod`, R1's of `cermod`, yarp-devices-ros2's ROS 2
+//! wrappers), each added here with its `register` function.
 #![forbid(unsafe_code)]
 
 use yarp_devices::Registry;
@@ -9,5 +9,6 @@ use yarp_devices::Registry;
 /// Registers the drivers of every linked device crate (idempotent).
 pub fn register_all() {
     Registry::install(icubmod::register);
+    Registry::install(cermod::register);
     Registry::install(yarp_devices_ros2::register);
 }

@@ -11,6 +11,7 @@
 //! Scans follow the clock: the one returned is the one due at the time of the call,
 //! counted in periods since `open` (C++ makes one per period on its thread).
 
+use super::geometry::{LaserGeometry, Lidar2DParams};
 use super::{IRangefinder2D, LaserStatus};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
@@ -21,7 +22,7 @@ const NAME: &str = "fakeLaser";
 
 crate::device_params! {
     /// What `fakeLaser` reads: C++'s table (`FakeLaser_params.md`) without the map and
-    /// localization modes, and the `SENSOR`/`SKIP` groups of C++'s `Lidar2DDeviceBase`.
+    /// localization modes (with the `SENSOR`/`SKIP` groups of [`Lidar2DParams`]).
     pub struct FakeLaserParams for "fakeLaser" {
         /// Choose the modality: no_obstacles, use_pattern or use_constant
         test: String = "use_pattern",
@@ -31,22 +32,6 @@ crate::device_params! {
         "period" period_top_level: f64 = optional; "s"; check crate::params::positive,
         /// Default const distance for mode use_constant
         "CONSTANT_MODE::const_distance" const_distance: f64 = 1.0; "m",
-        /// Start of the field of view
-        "SENSOR::min_angle" min_angle: f64 = optional; "deg",
-        /// End of the field of view
-        "SENSOR::max_angle" max_angle: f64 = optional; "deg",
-        /// Angle between two measurements
-        "SENSOR::resolution" resolution: f64 = optional; "deg",
-        /// Distances below are clipped
-        "SENSOR::min_distance" min_distance: f64 = optional; "m",
-        /// Distances above are clipped
-        "SENSOR::max_distance" max_distance: f64 = optional; "m",
-        /// 1: a clipped distance reads as infinity
-        "SENSOR::allow_infinity" allow_infinity: i64 = optional,
-        /// Starts of the angular ranges not measured
-        "SKIP::min" skip_min: Vec<f64> = optional; "deg",
-        /// Ends of the angular ranges not measured
-        "SKIP::max" skip_max: Vec<f64> = optional; "deg",
     }
 }
 
@@ -59,52 +44,6 @@ pub enum TestMode {
     Pattern,
     /// The same distance everywhere.
     Constant(f64),
-}
-
-/// The scan geometry and clipping (C++ `Lidar2DDeviceBase`'s parameters).
-#[derive(Debug, Clone, PartialEq)]
-pub struct LaserGeometry {
-    pub min_angle: f64,
-    pub max_angle: f64,
-    pub resolution: f64,
-    pub min_distance: f64,
-    pub max_distance: f64,
-    pub clip_min: bool,
-    pub clip_max: bool,
-    pub allow_infinity: bool,
-    /// Angle ranges (degrees from the first step) left as measured.
-    pub skip: Vec<(f64, f64)>,
-}
-
-impl LaserGeometry {
-    /// Number of steps in a scan (C++ `(int)(fov / resolution)`).
-    pub fn samples(&self) -> usize {
-        ((self.max_angle - self.min_angle) / self.resolution) as usize
-    }
-
-    /// C++ `applyLimitsOnLaserData`.
-    pub fn apply_limits(&self, data: &mut [f64]) {
-        for (i, d) in data.iter_mut().enumerate() {
-            let angle = i as f64 * self.resolution;
-            if d.is_nan() || self.skip.iter().any(|&(lo, hi)| angle > lo && angle < hi) {
-                continue;
-            }
-            if self.clip_min && *d < self.min_distance {
-                *d = if self.allow_infinity {
-                    f64::INFINITY
-                } else {
-                    self.min_distance
-                };
-            }
-            if self.clip_max && *d > self.max_distance {
-                *d = if self.allow_infinity {
-                    f64::INFINITY
-                } else {
-                    self.max_distance
-                };
-            }
-        }
-    }
 }
 
 /// One scan of `mode` (pure): `index` counts scans since open, `elapsed` is the time in
@@ -182,7 +121,7 @@ fn now_s() -> f64 {
 
 impl DeviceDriver for FakeLaser {
     fn parameters(&self) -> Vec<crate::params::ParamSpec> {
-        FakeLaserParams::PARAMS.to_vec()
+        [FakeLaserParams::PARAMS, Lidar2DParams::PARAMS].concat()
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {
@@ -208,48 +147,8 @@ impl DeviceDriver for FakeLaser {
         if let Some(period) = p.period.or(p.period_top_level) {
             self.period = period;
         }
-        let g = &mut self.geometry;
-        g.min_angle = p.min_angle.unwrap_or(g.min_angle);
-        g.max_angle = p.max_angle.unwrap_or(g.max_angle);
-        g.resolution = p.resolution.unwrap_or(g.resolution);
-        if let Some(v) = p.min_distance {
-            (g.min_distance, g.clip_min) = (v, true);
-        }
-        if let Some(v) = p.max_distance {
-            (g.max_distance, g.clip_max) = (v, true);
-        }
-        g.allow_infinity = p.allow_infinity == Some(1);
-        {
-            let skips = p.skip_min.unwrap_or_default();
-            for (lo, hi) in skips.into_iter().zip(p.skip_max.unwrap_or_default()) {
-                if !(0.0..=360.0).contains(&lo) || !(0.0..=360.0).contains(&hi) || hi <= lo {
-                    return Err(Self::bad(
-                        "SKIP",
-                        "ranges within 0..360",
-                        format!("{lo} {hi}"),
-                    ));
-                }
-                g.skip.push((lo, hi));
-            }
-        }
-        if g.max_distance - g.min_distance <= 0.0 {
-            return Err(Self::bad(
-                "SENSOR::max_distance",
-                "more than min_distance",
-                g.max_distance,
-            ));
-        }
-        let fov = g.max_angle - g.min_angle;
-        if fov <= 0.0 || fov > 360.0 {
-            return Err(Self::bad(
-                "SENSOR::max_angle",
-                "above min_angle by at most 360",
-                g.max_angle,
-            ));
-        }
-        if g.resolution <= 0.0 {
-            return Err(Self::bad("SENSOR::resolution", "> 0", g.resolution));
-        }
+        self.geometry
+            .configure(Lidar2DParams::read(config)?, NAME)?;
         self.opened = Some(Instant::now());
         self.status = LaserStatus::OkInUse;
         Ok(())

@@ -3,6 +3,7 @@
 //! `rangefinder2D_nwc_yarp`.
 
 pub mod fake;
+pub mod geometry;
 pub mod nwc;
 pub mod nws;
 pub mod protocol;
