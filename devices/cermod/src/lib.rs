@@ -3,13 +3,16 @@
 //! - [`odometry`]: `cerOdometry`, the mobile base's odometry from its two wheels'
 //!   encoders (served by `odometry2D_nws_yarp`);
 //! - [`double_lidar`]: `cerDoubleLidar`, the front and back lidars as one 360° scan of the
-//!   base's centre.
+//!   base's centre;
+//! - [`tripod`]: `tripodMotionControl`, the torso's and wrists' tripods as heave, pitch
+//!   and roll joints.
 //!
 //! `yarp_devices::Registry::install(cermod::register)` adds them to a program's devices.
 #![forbid(unsafe_code)]
 
 pub mod double_lidar;
 pub mod odometry;
+pub mod tripod;
 
 use yarp_devices::{Factory, Registry};
 
@@ -22,6 +25,10 @@ const DRIVERS: &[(&str, Factory)] = &[
     (double_lidar::NAME, || {
         Box::new(double_lidar::CerDoubleLidar::new())
     }),
+    (
+        tripod::NAME,
+        || Box::new(tripod::TripodMotionControl::new()),
+    ),
 ];
 
 /// Adds R1's drivers to `registry` (`Registry::install(cermod::register)`).

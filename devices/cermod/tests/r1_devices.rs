@@ -158,3 +158,80 @@ fn double_lidar_merges_front_and_back() {
     .unwrap_err();
     assert!(e.to_string().contains("resolution"), "{e}");
 }
+
+#[test]
+fn torso_tripod_reaches_heave_pitch_and_roll() {
+    // the torso board: three legs (m) and the yaw, in position control
+    let board: SharedDevice = shared(open(&text(
+        "device fakeMotionControl\n[GENERAL]\nJoints 4\n",
+    )));
+    {
+        let mut b = board.lock();
+        let p = b.device().as_position_control().unwrap();
+        p.set_ref_speeds(&[0.5, 0.5, 0.5, 10.0]).unwrap();
+    }
+    let mut tripod = open(&r1_device("cer_torso_equivalent_mc"));
+    // not attached: no axes yet, as C++
+    assert!(tripod.device().as_encoders().unwrap().get_axes().is_err());
+    tripod
+        .device()
+        .as_multiple_wrapper()
+        .unwrap()
+        .attach_all(&[("FirstSetOfJoints".into(), board.clone())])
+        .expect("attach");
+    let d = tripod.device();
+    assert_eq!(
+        d.as_axis_info().unwrap().get_axis_name(1).unwrap(),
+        "torso_pitch_eq_joint"
+    );
+    // pitch's Encoder is -1: its limits and values change sign, the range stays
+    assert_eq!(
+        d.as_control_limits().unwrap().get_limits(0).unwrap(),
+        (-0.04, 0.15)
+    );
+    assert_eq!(
+        d.as_control_limits().unwrap().get_limits(1).unwrap(),
+        (-25.0, 25.0)
+    );
+    let p = d.as_position_control().unwrap();
+    p.set_ref_speed(0, 0.05).unwrap();
+    p.position_moves(&[0.05, 5.0, 3.0]).unwrap();
+    assert_eq!(p.get_target_positions().unwrap(), vec![0.05, 5.0, 3.0]);
+    let q = wait_for("the tripod at its target", || {
+        let q = tripod.device().as_encoders()?.get_encoders().ok()?;
+        let done =
+            (q[0] - 0.05).abs() < 1e-4 && (q[1] - 5.0).abs() < 0.05 && (q[2] - 3.0).abs() < 0.05;
+        done.then_some(q)
+    });
+    // the legs: C++'s inverse kinematics of heave 0.05, pitch -5 (Encoder -1), roll 3
+    let legs = board
+        .lock()
+        .device()
+        .as_encoders()
+        .unwrap()
+        .get_encoders()
+        .unwrap();
+    let want = cermod::tripod::Tripod {
+        radius: 0.09,
+        base: [
+            [1.0, 0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ],
+    }
+    .inverse([0.05, -5.0, 3.0]);
+    for k in 0..3 {
+        assert!(
+            (legs[k] - want[k]).abs() < 1e-4,
+            "legs {legs:?} want {want:?} (joints {q:?})"
+        );
+    }
+    // velocity control is refused, as C++'s
+    assert!(tripod
+        .device()
+        .as_velocity_control()
+        .unwrap()
+        .velocity_move(0, 0.01)
+        .is_err());
+}
