@@ -90,7 +90,7 @@ impl Drop for NetNs {
 }
 
 /// The addresses of a robots-configuration robot: the host's (`PC104IpAddress` of
-/// `hardware/electronics/pc104.xml`) first, then every board's `IpAddress` of its
+/// `hardware/electronics/pc104.xml`, else of any hardware file) first, then every board's `IpAddress` of its
 /// `hardware/` files, as `../shared/peers/run-netns.sh` finds them.
 pub fn robot_addresses(robot: &Path) -> Vec<Ipv4Addr> {
     fn values(text: &str, key: &str) -> Vec<Ipv4Addr> {
@@ -102,7 +102,7 @@ pub fn robot_addresses(robot: &Path) -> Vec<Ipv4Addr> {
             })
             .collect()
     }
-    fn walk(dir: &Path, out: &mut Vec<Ipv4Addr>) {
+    fn walk(dir: &Path, key: &str, out: &mut Vec<Ipv4Addr>) {
         let Ok(entries) = std::fs::read_dir(dir) else {
             return;
         };
@@ -110,10 +110,10 @@ pub fn robot_addresses(robot: &Path) -> Vec<Ipv4Addr> {
         entries.sort();
         for p in entries {
             if p.is_dir() {
-                walk(&p, out);
+                walk(&p, key, out);
             } else if p.extension().is_some_and(|e| e == "xml") {
                 if let Ok(t) = std::fs::read_to_string(&p) {
-                    out.extend(values(&t, "IpAddress"));
+                    out.extend(values(&t, key));
                 }
             }
         }
@@ -121,8 +121,13 @@ pub fn robot_addresses(robot: &Path) -> Vec<Ipv4Addr> {
     let mut ips = std::fs::read_to_string(robot.join("hardware/electronics/pc104.xml"))
         .map(|t| values(&t, "PC104IpAddress"))
         .unwrap_or_default();
+    // robots without a pc104.xml name the host in another electronics file (nao_client.xml)
+    if ips.is_empty() {
+        walk(&robot.join("hardware"), "PC104IpAddress", &mut ips);
+        ips.dedup();
+    }
     let mut boards = Vec::new();
-    walk(&robot.join("hardware"), &mut boards);
+    walk(&robot.join("hardware"), "IpAddress", &mut boards);
     boards.sort();
     boards.dedup();
     for b in boards {

@@ -205,6 +205,11 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
             continue;
         };
         let cfg = dev.to_property().map_err(|e| e.to_string())?;
+        // a mixed robot's CAN adapter (`canbusdevice` and a `CAN` group) is no Ethernet board
+        if cfg.find_group("ETH_BOARD").is_none() && cfg.find_group("CAN").is_some() {
+            tracing::debug!("{}: a CAN adapter, not an Ethernet board", file.display());
+            continue;
+        }
         let params = BoardParams::read(&cfg).map_err(|e| format!("{}: {e}", file.display()))?;
         boards
             .entry(params.ip)

@@ -16,9 +16,10 @@
 //! each byte awaited at most 0.2 s; a read is tried 3 times and a write 4, with C++'s
 //! recovery between (the chip's `SYS_STATUS`/`SYS_ERR` asked, garbage drained).
 //!
-//! `YARP_BNO055_COMPORT` (when set) replaces `comport`, so a robot's unmodified file can run
-//! against an emulated chip on a pseudo-terminal (`icub-board-emulator --bno055 PATH`);
-//! `YARP_BNO055_I2C` likewise replaces `i2c`.
+//! `YARP_BNO055_COMPORT` (when set) puts the chip on that serial line whatever bus the file
+//! names, so a robot's unmodified file can run against an emulated chip on a pseudo-terminal
+//! (`icub-board-emulator --bno055 PATH`, which speaks the chip's UART protocol; an I2C bus
+//! cannot be emulated without the kernel's help); `YARP_BNO055_I2C` replaces `i2c`.
 
 use super::interfaces::*;
 use super::params::now;
@@ -514,7 +515,11 @@ impl DeviceDriver for BoschImu {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = BoschImuParams::read(config)?;
         let comport = overridden(COMPORT_ENV, p.comport);
-        let i2c = overridden(I2C_ENV, p.i2c);
+        // an emulated chip on a serial line stands for the robot's, on whatever bus
+        let i2c = match std::env::var(COMPORT_ENV) {
+            Ok(s) if !s.trim().is_empty() => None,
+            _ => overridden(I2C_ENV, p.i2c),
+        };
         let refuse = |got: &str| DeviceError::BadParam {
             device: NAME.into(),
             param: "comport".into(),

@@ -700,19 +700,25 @@ fn mc4(props: &Node, map: &Node, boards: &[BoardInfo]) -> Result<McServiceConfig
         .and_then(|b| b.strings("enable"))
         .unwrap_or_default()
         .iter()
-        .map(|s| match s.as_str() {
-            "position" => Ok(1u16 << 1),
-            "pidvalues" => Ok(1 << 2),
-            "status" => Ok(1 << 3),
-            "print" => Ok(1 << 6),
-            "motorposition" => Ok(1 << 10),
-            other => Err(ParamError::bad(
-                "MC4/BROADCASTPOLICY/enable",
-                "position, pidvalues, status, print, motorposition",
-                other,
-            )),
-        })
-        .sum::<Result<u16, _>>()?;
+        // short (`position`) or full (`eomc_mc4broadcast_position`), as C++ accepts them
+        .map(
+            |s| match s.strip_prefix("eomc_mc4broadcast_").unwrap_or(s) {
+                "position" => 1u16 << 1,
+                "pidvalues" => 1 << 2,
+                "status" => 1 << 3,
+                "print" => 1 << 6,
+                "motorposition" => 1 << 10,
+                // C++ leaves out what it does not know
+                "none" => 0,
+                other => {
+                    tracing::warn!(
+                        "MC4/BROADCASTPOLICY/enable: `{other}` is no broadcast: left out"
+                    );
+                    0
+                }
+            },
+        )
+        .fold(0u16, |acc, bit| acc | bit);
     let ports = map.need_group("ACTUATOR")?.strings("port").ok_or_else(|| {
         ParamError::missing("JOINTMAPPING/ACTUATOR/port", "one MC4 location per joint")
     })?;
