@@ -209,7 +209,17 @@ fn left_arm_boards_open_move_calibrate_and_report_silence() {
     assert_eq!(arrays.get_nr_of_encoder_arrays(), 1);
     assert_eq!(arrays.get_encoder_array_name(0).unwrap(), "l_hand_mais");
     assert_eq!(arrays.get_encoder_array_size(0), 15);
-    assert_eq!(arrays.get_encoder_array_measure(0).unwrap().values, v);
+    // the same values as the analog reading (the MAIS streams on: two reads in a row agree
+    // once no new sample came between them)
+    wait_for(
+        "the encoder array as the analog reading",
+        Duration::from_secs(2),
+        || {
+            let _ = mais.as_analog_sensor().unwrap().read(&mut v);
+            let arrays = mais.as_encoder_arrays().unwrap();
+            arrays.get_encoder_array_measure(0).unwrap().values == v
+        },
+    );
 
     // The hand's skin with its skinSpec (new style): every triangle disabled by
     // default, then 20 special sets enable some (board 14: triangles 0-6 and 8-11).
