@@ -122,6 +122,17 @@ impl WireWriter {
         self
     }
 
+    /// A `list<string>`: compact, its strings untagged, as the generated code writes it.
+    pub fn string_list(&mut self, v: &[String]) -> &mut Self {
+        self.i32(tags::LIST | tags::STRING);
+        self.i32(v.len() as i32);
+        for s in v {
+            self.i32(s.len() as i32);
+            self.out.extend_from_slice(s.as_bytes());
+        }
+        self
+    }
+
     pub fn int32(&mut self, x: i32) -> &mut Self {
         self.i32(tags::INT32);
         self.i32(x);

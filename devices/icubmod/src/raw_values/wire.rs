@@ -11,85 +11,45 @@
 
 use std::collections::BTreeMap;
 use yarp_devices::raw_values::RawValuesKeyMetadata;
+use yarp_devices::sensors::wire::WireWriter;
 use yarp_devices::thrift::{fail_reply, is_protocol_version_request, protocol_version_reply, word};
-use yarp_proto::tags::{self, Generation};
-use yarp_proto::{Bottle, Value};
+use yarp_proto::tags::Generation;
+use yarp_proto::{Bottle, Value, Vocab32};
 
 /// The service's one method.
 pub const GET_METADATA: &str = "getMetadata";
 
-/// Raw little-endian writes of C++'s `WireWriter`.
-#[derive(Default)]
-struct Out(Vec<u8>);
-
-impl Out {
-    fn i32(&mut self, x: i32) -> &mut Self {
-        self.0.extend_from_slice(&x.to_le_bytes());
-        self
-    }
-    fn len(&mut self, n: usize) -> &mut Self {
-        self.i32(i32::try_from(n).unwrap_or(i32::MAX))
-    }
-    fn list(&mut self, n: usize) -> &mut Self {
-        self.i32(tags::LIST).len(n)
-    }
-    /// `writeString`: tagged unless inside a string list; no NUL.
-    fn string(&mut self, s: &str, tagged: bool) -> &mut Self {
-        if tagged {
-            self.i32(tags::STRING);
-        }
-        self.len(s.len());
-        self.0.extend_from_slice(s.as_bytes());
-        self
-    }
-    fn strings(&mut self, v: &[String]) -> &mut Self {
-        self.i32(tags::LIST | tags::STRING).len(v.len());
-        for s in v {
-            self.string(s, false);
-        }
-        self
-    }
-}
-
 /// The stream message of `map`.
 pub fn encode_data_map(map: &BTreeMap<String, Vec<i32>>) -> Vec<u8> {
-    let mut o = Out::default();
-    o.list(1).list(map.len());
+    let mut w = WireWriter::new();
+    w.list_header(1).list_header(map.len());
     for (key, values) in map {
-        o.list(2).string(key, true);
-        o.i32(tags::LIST | tags::INT32).len(values.len());
-        for &v in values {
-            o.i32(v);
-        }
+        w.list_header(2)
+            .string(key)
+            .int32_list(values.iter().copied());
     }
-    o.0
-}
-
-fn encode_metadata_map(o: &mut Out, map: &BTreeMap<String, RawValuesKeyMetadata>) {
-    o.list(map.len());
-    for (key, m) in map {
-        o.list(2).string(key, true);
-        o.list(3)
-            .strings(&m.raw_value_names)
-            .strings(&m.axes_names)
-            .i32(tags::INT32)
-            .i32(m.size);
-    }
+    w.into_bytes()
 }
 
 /// The `getMetadata` reply: its one-element reply list, then the map.
 pub fn encode_metadata_reply(map: &BTreeMap<String, RawValuesKeyMetadata>) -> Vec<u8> {
-    let mut o = Out::default();
-    o.list(1);
-    encode_metadata_map(&mut o, map);
-    o.0
+    let mut w = WireWriter::new();
+    w.list_header(1).list_header(map.len());
+    for (key, m) in map {
+        w.list_header(2).string(key);
+        w.list_header(3)
+            .string_list(&m.raw_value_names)
+            .string_list(&m.axes_names)
+            .int32(m.size);
+    }
+    w.into_bytes()
 }
 
 /// The `getMetadata` call.
 pub fn encode_get_metadata() -> Vec<u8> {
-    let mut o = Out::default();
-    o.list(1).string(GET_METADATA, true);
-    o.0
+    let mut w = WireWriter::new();
+    w.list_header(1).string(GET_METADATA);
+    w.into_bytes()
 }
 
 /// Why a message is not what the protocol says.
@@ -188,15 +148,12 @@ pub fn handle_rpc(
     match words.iter().map(String::as_str).collect::<Vec<_>>()[..] {
         [GET_METADATA] => encode_metadata_reply(&metadata().unwrap_or_default()),
         ["help"] | ["help", "--all"] => {
-            let mut o = Out::default();
-            o.list(2)
-                .i32(tags::VOCAB32)
-                .i32(yarp_proto::Vocab32::new("many").0);
-            o.list(3);
+            let mut w = WireWriter::new();
+            w.list_header(2).vocab(Vocab32::new("many")).list_header(3);
             for s in ["*** Available commands:", GET_METADATA, "help"] {
-                o.string(s, true);
+                w.string(s);
             }
-            o.0
+            w.into_bytes()
         }
         _ => fail_reply(),
     }
