@@ -122,16 +122,8 @@ fn needs(dir: &Path, top: &Path) -> Result<Needs, String> {
 /// The robot's top-level file as `yarprobotinterface` finds it: the `config` of its
 /// `yarprobotinterface.ini` (a name starting with `/` is absolute), else `icub_all.xml`.
 fn top_file(dir: &Path) -> Result<PathBuf, String> {
-    let ini = std::fs::read_to_string(dir.join("yarprobotinterface.ini")).unwrap_or_default();
-    let config = Property::from_config_text(&ini).ok().and_then(|p| {
-        p.find("config")
-            .and_then(|v| v.as_str().map(str::to_string))
-    });
-    let file = match config {
-        Some(c) if c.starts_with('/') => PathBuf::from(c),
-        Some(c) => dir.join(c),
-        None => dir.join("icub_all.xml"),
-    };
+    let file = icub_emulators::eth::robot_file(dir)
+        .or_else(|_| can_robot::robot_file(dir).map_err(|e| e.to_string()))?;
     if file.is_file() {
         Ok(file)
     } else {
