@@ -29,7 +29,7 @@ pub enum ContactKind {
 }
 
 impl ContactKind {
-    fn unknowns(&self) -> usize {
+    pub fn unknowns(&self) -> usize {
         match self {
             ContactKind::FullWrench => 6,
             ContactKind::PureForce => 3,
@@ -134,8 +134,57 @@ impl Estimator {
         })
     }
 
+    /// The link states, propagated from the base frame's link (the IMU's, or
+    /// the fixed frame's) whatever link the dynamics' traversal starts from.
     pub fn kinematics(&self, joints: &JointState, base: &BaseMotion) -> Result<LinkStates> {
-        kinematics(&self.model, &self.traversal, joints, base)
+        let link = base.frame().link;
+        if link == self.traversal.base {
+            kinematics(&self.model, &self.traversal, joints, base)
+        } else {
+            kinematics(
+                &self.model,
+                &Traversal::new(&self.model, link),
+                joints,
+                base,
+            )
+        }
+    }
+
+    /// wholebodydynamics' choice of contacts among `frames` (in order): a frame
+    /// is taken for its submodel while the submodel's unknowns stay within
+    /// six, so with full wrenches the first frame of each submodel. Unknown
+    /// frames are skipped (returned second). Every submodel must get one: the
+    /// error lists the links of those that do not.
+    pub fn choose_contacts(
+        &self,
+        frames: &[(String, ContactKind)],
+    ) -> Result<(Vec<Contact>, Vec<String>)> {
+        let mut chosen: Vec<Contact> = Vec::new();
+        let mut unknown = Vec::new();
+        let mut unknowns = vec![0usize; self.submodels.count()];
+        for (name, kind) in frames {
+            let Ok(contact) = Contact::new(&self.model, name, *kind) else {
+                unknown.push(name.clone());
+                continue;
+            };
+            let sub = self.submodels.of_frame(&contact.frame);
+            if unknowns[sub] + kind.unknowns() <= 6 {
+                unknowns[sub] += kind.unknowns();
+                chosen.push(contact);
+            }
+        }
+        if let Some(sub) = unknowns.iter().position(|&n| n == 0) {
+            let links: Vec<&str> = self.submodels.traversals[sub]
+                .order
+                .iter()
+                .map(|&l| self.model.links[l].name.as_str())
+                .collect();
+            return Err(DynError::Estimation(format!(
+                "missing contact for the submodel composed by the links: {}",
+                links.join(" ")
+            )));
+        }
+        Ok((chosen, unknown))
     }
 
     /// The external wrenches at `contacts` and the joint torques, given the

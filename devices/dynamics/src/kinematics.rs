@@ -128,7 +128,7 @@ pub enum BaseMotion {
 }
 
 impl BaseMotion {
-    fn frame(&self) -> FrameRef {
+    pub fn frame(&self) -> FrameRef {
         match *self {
             BaseMotion::Fixed { frame, .. } | BaseMotion::Floating { frame, .. } => frame,
         }
@@ -162,7 +162,7 @@ pub(crate) fn joint_step(
     q: &DVector<f64>,
 ) -> (Iso, Motion) {
     let j = &model.joints[joint];
-    let pos = j.dof.map_or(0.0, |d| q[d]);
+    let pos = j.dof.map_or(j.held_at, |d| q[d]);
     let axis = j.axis.into_inner();
     let s_urdf = match j.kind {
         JointKind::Fixed => Motion::zeros(),

@@ -49,6 +49,8 @@ pub struct Joint {
     pub limits: Option<(f64, f64)>,
     /// The joint's index among the model's degrees of freedom.
     pub dof: Option<usize>,
+    /// Where the joint is held when it is not a degree of freedom.
+    pub held_at: f64,
 }
 
 impl Joint {
@@ -167,6 +169,7 @@ impl Model {
                 axis: raw.axis,
                 limits: raw.limits,
                 dof,
+                held_at: 0.0,
             });
         }
         for (name, parent, origin) in fake {
@@ -285,11 +288,19 @@ impl Model {
         })
     }
 
-    /// Only the named joints move; every other joint is held at zero (as
-    /// iDynTree's reduced models do). The joint vectors follow `names`' order.
-    pub fn with_dofs(mut self, names: &[impl AsRef<str>]) -> Result<Model> {
+    /// Only the named joints move; every other joint is held where `held`
+    /// says, else at zero (as iDynTree's reduced models do). The joint vectors
+    /// follow `names`' order.
+    pub fn with_dofs(mut self, names: &[impl AsRef<str>], held: &[(String, f64)]) -> Result<Model> {
         for j in &mut self.joints {
             j.dof = None;
+            j.held_at = 0.0;
+        }
+        for (name, q) in held {
+            let j = self
+                .joint(name)
+                .ok_or_else(|| DynError::UnknownJoint(name.clone()))?;
+            self.joints[j].held_at = *q;
         }
         self.dofs.clear();
         for (i, name) in names.iter().enumerate() {
@@ -307,6 +318,19 @@ impl Model {
             self.dofs.push(j);
         }
         Ok(self)
+    }
+
+    /// Keeps only the named F/T sensors, in the order named (wholebodydynamics'
+    /// `SixAxisForceTorqueSensorsNames`): the model then splits at their joints
+    /// only.
+    pub fn select_ft(&mut self, names: &[impl AsRef<str>]) -> Result<()> {
+        let mut chosen = Vec::with_capacity(names.len());
+        for name in names {
+            let i = self.sensors.ft_index(name.as_ref())?;
+            chosen.push(self.sensors.ft[i].clone());
+        }
+        self.sensors.ft = chosen;
+        Ok(())
     }
 
     /// The total mass.

@@ -97,8 +97,7 @@ fn two_link_arm_matches_the_textbook_equations() {
             ddq: DVector::from_row_slice(&ddq),
         };
         let states = kinematics(&model, &t, &joints, &base).unwrap();
-        let tau =
-            inverse_dynamics(&model, &t, &joints.q, &states, &[Wrench::zeros(); 3]).torques;
+        let tau = inverse_dynamics(&model, &t, &joints.q, &states, &[Wrench::zeros(); 3]).torques;
         let (c1, c2, s2, c12) = (q[0].cos(), q[1].cos(), q[1].sin(), (q[0] + q[1]).cos());
         let m11 = m1 * lc1 * lc1 + i1 + m2 * (l1 * l1 + lc2 * lc2 + 2.0 * l1 * lc2 * c2) + i2;
         let m12 = m2 * (lc2 * lc2 + l1 * lc2 * c2) + i2;

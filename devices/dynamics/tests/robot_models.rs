@@ -212,3 +212,38 @@ fn icub_arms_are_ikins_chains() {
         }
     }
 }
+
+/// Kinematics from the waist IMU (on torso_1, reached against the URDF's
+/// joints) gives what kinematics from the fixed root gives when the IMU reads
+/// the gravity of that posture: the same F/T readings and torques.
+#[test]
+fn ergocub_from_its_imu_is_ergocub_from_its_root() {
+    let model = urdf::read_file(ergocub()).unwrap();
+    let est = Estimator::new(model, "root_link").unwrap();
+    let m = &est.model;
+    let q: Vec<f64> = (0..m.dof_count())
+        .map(|i| 0.3 * ((i as f64) * 1.7).sin())
+        .collect();
+    let still = JointState::at_rest(&q);
+    let g = Vector3::new(0.0, 0.0, -G);
+    let fixed = BaseMotion::Fixed {
+        frame: m.frame("root_link").unwrap(),
+        gravity: g,
+    };
+    let states = est.kinematics(&still, &fixed).unwrap();
+    let imu = m.frame("waist_imu_0").unwrap();
+    let root_h_imu = states.relative(est.traversal.base, imu.link) * imu.link_h_frame;
+    let floating = BaseMotion::Floating {
+        frame: imu,
+        proper_acc: root_h_imu.rotation.inverse() * -g,
+        ang_vel: Vector3::zeros(),
+        ang_acc: Vector3::zeros(),
+    };
+    let contacts = [Contact::new(m, "root_link", ContactKind::FullWrench).unwrap()];
+    let (ft_fixed, a) = est.expected_ft(&still, &fixed, &contacts).unwrap();
+    let (ft_floating, b) = est.expected_ft(&still, &floating, &contacts).unwrap();
+    for (x, y) in ft_fixed.iter().zip(&ft_floating) {
+        assert!((x - y).norm() < 1e-9, "{x} vs {y}");
+    }
+    assert!((a.torques - b.torques).norm() < 1e-9);
+}
