@@ -256,6 +256,32 @@ pub fn is_call_of(cmd: &Bottle, methods: &[&str]) -> bool {
     }
 }
 
+/// The method a classic thrift request calls and its arguments: the first words joined
+/// with `_` until they name one of `methods`, as C++'s generated `read` joins tags
+/// (`getScanRate RPC` and `getScanRate_RPC` are the same call), after an optional
+/// `__direct__`.
+pub fn split_method<'a>(
+    cmd: &'a Bottle,
+    methods: &[&'static str],
+) -> Option<(&'static str, &'a [Value])> {
+    let mut items = cmd.items();
+    if items.first().and_then(word).as_deref() == Some("__direct__") {
+        items = &items[1..];
+    }
+    let most_words = methods.iter().map(|m| m.split('_').count()).max()?;
+    let mut tag = String::new();
+    for (i, v) in items.iter().enumerate().take(most_words) {
+        if i > 0 {
+            tag.push('_');
+        }
+        tag.push_str(&word(v)?);
+        if let Some(m) = methods.iter().find(|m| **m == tag) {
+            return Some((m, &items[i + 1..]));
+        }
+    }
+    None
+}
+
 /// The `[fail]` reply (a plain Bottle, compact vocab list, as C++ writes it).
 pub fn fail_reply() -> Vec<u8> {
     Bottle::new().with(Vocab32::new("fail")).encode()

@@ -13,7 +13,9 @@
 
 use super::{IRangefinder2D, LaserStatus};
 use crate::sensors::wire::WireWriter;
-use crate::thrift::{is_protocol_version_request, protocol_version_reply, word, ReturnValue};
+use crate::thrift::{
+    is_protocol_version_request, protocol_version_reply, split_method, ReturnValue,
+};
 use thiserror::Error;
 use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value, Vocab32};
@@ -113,37 +115,20 @@ const METHODS: &[&str] = &[
     "setScanRate_RPC",
 ];
 
-/// Splits a request into its method and arguments, joining words with `_` as C++'s
-/// generated `read` does (`getScanRate RPC` and `getScanRate_RPC` are the same method).
+/// Splits a request into its method and arguments (see [`split_method`]).
 pub fn parse_request(cmd: &Bottle) -> Option<(&'static str, Vec<f64>)> {
-    let mut items = cmd.iter().peekable();
-    if items.peek().and_then(|v| word(v)).as_deref() == Some("__direct__") {
-        items.next();
-    }
-    let mut tag = String::new();
-    for v in items.by_ref() {
-        if !tag.is_empty() {
-            tag.push('_');
+    let (m, rest) = split_method(cmd, METHODS)?;
+    let args = rest.iter().map(Value::as_f64).collect::<Option<Vec<_>>>()?;
+    let wanted = if m.starts_with("set") {
+        if m.contains("Range") || m.contains("Limits") {
+            2
+        } else {
+            1
         }
-        tag.push_str(&word(v)?);
-        if let Some(m) = METHODS.iter().find(|m| **m == tag) {
-            let args = items.map(Value::as_f64).collect::<Option<Vec<_>>>()?;
-            let wanted = if m.starts_with("set") {
-                if m.contains("Range") || m.contains("Limits") {
-                    2
-                } else {
-                    1
-                }
-            } else {
-                0
-            };
-            return (args.len() == wanted).then_some((*m, args));
-        }
-        if tag.matches('_').count() >= 1 {
-            return None;
-        }
-    }
-    None
+    } else {
+        0
+    };
+    (args.len() == wanted).then_some((m, args))
 }
 
 /// Answers one request of a client of `generation` on `dev` (`None`: no device
