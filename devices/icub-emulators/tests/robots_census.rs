@@ -27,9 +27,6 @@ const KNOWN: &[(&str, &str, &str)] = &[
     ("R1SN001", "cer_laser_front_device (rpLidar3)", RPLIDAR),
     ("R1SN002", "cer_laser_back_device (rpLidar2)", RPLIDAR),
     ("R1SN002", "cer_laser_front_device (rpLidar2)", RPLIDAR),
-    ("ergoCubSN001", "wholebodydynamics (wholebodydynamics)", WBD),
-    ("ergoCubSN002", "wholebodydynamics (wholebodydynamics)", WBD),
-    ("ergoCubSN003", "wholebodydynamics (wholebodydynamics)", WBD),
     ("iCubPrague01", "OrientationSensorsNames", ORIENTATION),
     ("iCubShanghai01", "OrientationSensorsNames", ORIENTATION),
     ("iCubTokyo01", "right_leg_oints", OINTS),
@@ -46,20 +43,16 @@ const KNOWN: &[(&str, &str, &str)] = &[
     ("robots-icebox/iCubAnkara01", "l_foot_ft (found", L_FOOT_FT),
     ("robots-icebox/iCubBarcelona01", "right_leg_oints", OINTS),
     ("robots-icebox/iCubDijon01", "l_foot_ft (found", L_FOOT_FT),
+    ("robots-icebox/iCubGenova04", "HW_USE_MAS_IMU", WBD_OLD),
     (
-        "robots-icebox/iCubGenova04",
-        "wholebodydynamics (wholebodydynamics)",
-        WBD,
+        "robots-icebox/iCubGenova09",
+        "impossible to find modelFile",
+        NO_MODEL,
     ),
     (
         "robots-icebox/iCubGenova04",
         "cbw_ros (controlBoard_nws_ros)",
         ROS1,
-    ),
-    (
-        "robots-icebox/iCubGenova09",
-        "wholebodydynamics (wholebodydynamics)",
-        WBD,
     ),
     (
         "robots-icebox/iCubHertfordshire01",
@@ -110,13 +103,17 @@ const KNOWN: &[(&str, &str, &str)] = &[
 ];
 
 /// Device types this build lacks yet.
-const WBD: &str =
-    "wholebodydynamics (robotology/whole-body-estimators) is not in this build yet: issue 36";
 const RPLIDAR: &str =
     "rpLidar2/rpLidar3 (robotology/yarp-device-rplidar, on Slamtec's serial protocol) are not in \
      this build yet, nor an emulated RPLidar";
 /// Device types C++ YARP 3.12 lacks too: its yarprobotinterface stops at them ("Could not find
 /// device"), ours with --keep-going goes on without them.
+const WBD_OLD: &str =
+    "its wholebodydynamics file predates the HW_USE_MAS_IMU group whole-body-estimators \
+     requires: C++'s open fails too (\"missing required group parameter HW_USE_MAS_IMU\")";
+const NO_MODEL: &str =
+    "no URDF of this retired iCub is installed (PyPI's icub-models 3.2.0 has none): C++'s \
+     wholebodydynamics does not find its modelFile either";
 const ROS1: &str = "controlBoard_nws_ros (ROS 1) is not in C++ YARP 3.12 either";
 const CBW2: &str = "controlboardwrapper2 was removed from C++ YARP before 3.12";
 /// Robots' files that C++ refuses at the same point (icub-main's host run here stops there).
@@ -158,6 +155,22 @@ const UNSERVED: &[(&str, &str)] = &[(OINTS, "/right_leg")];
 const FRANKFURT: &str =
     "yarprobotinterface.ini says `config /icub_all.xml`, an absolute path where \
      there is no file: C++'s ResourceFinder finds none either";
+
+/// The data directories holding the robots' URDFs: `../shared/robot-models/ergoCub`
+/// and, from the ROS venv (tests/peers/install-ros2.sh installs icub-models there),
+/// `share/iCub`.
+fn model_dirs() -> String {
+    let mut dirs = vec![
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/robot-models/ergoCub")
+    ];
+    if let Some(venv) = std::env::var_os("ROS_VENV") {
+        dirs.push(PathBuf::from(venv).join("share/iCub"));
+    }
+    std::env::join_paths(dirs)
+        .expect("paths without ':'")
+        .to_string_lossy()
+        .into_owned()
+}
 
 fn robots_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/robots-configuration")
@@ -317,6 +330,12 @@ fn census(robot: &str) {
     let mut ri = {
         let mut c = net.cmd("yarprobotinterface", "yarp-device-programs");
         c.current_dir(&dir).arg("--keep-going").envs(env);
+        // As installed on the robot's computer: the robot's name, and the models
+        // (ergocub-software's share/ergoCub, icub-models' share/iCub) among the data
+        // directories, where wholebodydynamics finds its `modelFile`.
+        let name = robot.rsplit('/').next().unwrap_or(robot);
+        c.env("YARP_ROBOT_NAME", name)
+            .env("YARP_DATA_DIRS", model_dirs());
         Proc::spawn("yarprobotinterface", c)
     };
     groups.0.push(ri.pid());
