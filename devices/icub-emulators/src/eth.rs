@@ -51,6 +51,8 @@ use icub_eth::id::{endpoint as ep, entity as en, ids, tag};
 use icub_eth::plant::{JointModel, SimpleJoint};
 use icub_eth::Entity;
 pub use icub_eth::{AddressMap, ADDRESS_MAP_ENV};
+
+use crate::body;
 use yarp_devices::robotinterface::read_robot_str;
 use yarp_proto::{Bottle, Property, Value};
 
@@ -139,6 +141,17 @@ pub struct BoardSpec {
     pub protocol: Option<[icub_eth::entities::mn::Version; 4]>,
     /// The devices that use the board (for the start-up listing).
     pub users: Vec<String>,
+    /// Where the board sits in the robot's body (the mechanical files): its joints
+    /// (board joint, the axis' name, raw units per degree) and the F/T sensors on its
+    /// CAN ports (`(port, address)`, the sensor's name).
+    pub wiring: Wiring,
+}
+
+/// How a board is wired into the robot's body.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Wiring {
+    pub joints: Vec<(usize, String, f64)>,
+    pub ft: Vec<((u8, u8), String)>,
 }
 
 impl BoardSpec {
@@ -148,6 +161,7 @@ impl BoardSpec {
             joints: 0,
             protocol: None,
             users: Vec::new(),
+            wiring: Wiring::default(),
         }
     }
 
@@ -244,9 +258,71 @@ pub fn robot_boards(dir: &Path, top: Option<&Path>) -> Result<Vec<BoardSpec>, St
                 .and_then(|g| g.find("Joints"))
                 .and_then(number)
                 .map_or(0, |n| n.max(0.0) as usize);
+            b.wiring.joints = joint_wiring(&cfg);
+        }
+        if dev.kind == "embObjMultipleFTsensors" || dev.kind == "embObjFTsensor" {
+            b.wiring.ft.extend(ft_wiring(&cfg));
         }
     }
     Ok(boards.into_values().collect())
+}
+
+/// The values of a group line, as texts (a list value or the rest of the line).
+fn line_texts(group: &Bottle, key: &str) -> Vec<String> {
+    let Some(line) = group.find_group(key) else {
+        return Vec::new();
+    };
+    let rest = &line.items()[1..];
+    let items = match rest {
+        [v] if v.is_list() => v.as_list().map(Bottle::items).unwrap_or_default(),
+        _ => rest,
+    };
+    items.iter().map(text).collect()
+}
+
+/// A motion control device's joints in the body: `GENERAL` `AxisMap`, `AxisName` and
+/// `Encoder` (the mechanical description of the board's axes).
+fn joint_wiring(cfg: &Property) -> Vec<(usize, String, f64)> {
+    let Some(general) = cfg.find_group("GENERAL") else {
+        return Vec::new();
+    };
+    let map = line_texts(general, "AxisMap");
+    let names = line_texts(general, "AxisName");
+    let encoders = line_texts(general, "Encoder");
+    names
+        .iter()
+        .enumerate()
+        .filter_map(|(i, name)| {
+            let joint = map
+                .get(i)
+                .and_then(|m| m.parse::<f64>().ok())
+                .map_or(i, |m| m as usize);
+            let enc: f64 = encoders.get(i)?.parse().ok()?;
+            (enc != 0.0).then(|| (joint, name.clone(), enc))
+        })
+        .collect()
+}
+
+/// An F/T device's sensors on the board's CAN ports: `SERVICE/PROPERTIES/SENSORS` `id`
+/// and `location` (`CAN2:13`: port 1, address 13).
+fn ft_wiring(cfg: &Property) -> Vec<((u8, u8), String)> {
+    let Some(sensors) = cfg
+        .find_group("SERVICE")
+        .and_then(|s| s.find_group("PROPERTIES"))
+        .and_then(|p| p.find_group("SENSORS"))
+    else {
+        return Vec::new();
+    };
+    let ids = line_texts(sensors, "id");
+    let locations = line_texts(sensors, "location");
+    ids.into_iter()
+        .zip(locations)
+        .filter_map(|(id, loc)| {
+            let (port, addr) = loc.strip_prefix("CAN")?.split_once(':')?;
+            let port: u8 = port.parse().ok()?;
+            Some(((port.checked_sub(1)?, addr.parse().ok()?), id))
+        })
+        .collect()
 }
 
 /// The CAN id of an MTB's taxel message (iCub CAN protocol): the class
@@ -271,6 +347,8 @@ fn inertial_id(location: u8) -> u8 {
 /// What a board learned of its sensors from the host.
 #[derive(Debug, Default, Clone)]
 struct Learned {
+    /// The FT service's sensors, in the board's order: `(port, address)` of each.
+    ft: Vec<(u8, u8)>,
     /// The inertials3 service's sensors, in the board's order: their `eOas_sensor_t` and
     /// the id their readings carry.
     inertials: Vec<(u8, u8)>,
@@ -283,6 +361,13 @@ impl Learned {
     /// A service the host configured and the board verified.
     fn verified(&mut self, cat: u8, config: &[u8]) {
         match cat {
+            category::FT => {
+                self.ft = icub_eth::entities::service::CanSensorsConfig::from_ft_bytes(config)
+                    .sensors
+                    .iter()
+                    .map(|d| (d.can_location.port, d.can_location.addr))
+                    .collect();
+            }
             category::INERTIALS3 => {
                 self.inertials = SensorSetConfig::from_inertial3_bytes(config)
                     .sensors
@@ -350,7 +435,14 @@ impl SkinTriangles {
 
 /// Writes the values of the sensors a board has (those the host's services gave it),
 /// slowly varying so that streams visibly change.
-fn update_sensors(engine: &mut BoardEngine, learned: &Learned, t: f64, age_us: u64, tick: u64) {
+fn update_sensors(
+    engine: &mut BoardEngine,
+    learned: &Learned,
+    felt: Option<(&Wiring, &body::Readings)>,
+    t: f64,
+    age_us: u64,
+    tick: u64,
+) {
     let s = (t * 0.5).sin();
     let store = engine.store_mut();
     let has = |e: u8| store.count(ep::ANALOG_SENSORS, e);
@@ -499,10 +591,16 @@ fn update_sensors(engine: &mut BoardEngine, learned: &Learned, t: f64, age_us: u
     }
     for i in 0..fts {
         let s = s as f32;
+        // what the body makes the sensor at this CAN place read, else a slow pattern
+        let sensed = felt.and_then(|(wiring, readings)| {
+            let place = learned.ft.get(usize::from(i))?;
+            let name = &wiring.ft.iter().find(|(p, _)| p == place)?.1;
+            readings.ft.get(name).map(|v| v.map(|x| x as f32))
+        });
         let ft = FtStatus {
             timed_value: FtTimedValue {
                 age: age_us,
-                values: [s, 2.0 * s, 9.81, 0.1 * s, 0.2 * s, 0.3],
+                values: sensed.unwrap_or([s, 2.0 * s, 9.81, 0.1 * s, 0.2 * s, 0.3]),
                 ..Default::default()
             },
             ..Default::default()
@@ -523,6 +621,8 @@ pub struct ServeOptions {
     /// Record every ROP a host sends to a board in `DIR/<board's robot IP>.jsonl`
     /// ([`record`]).
     pub record: Option<PathBuf>,
+    /// The robot's body: the F/T sensors read what it makes them read.
+    pub body: Option<SharedBody>,
 }
 
 /// Binds every board's socket (failing, naming the board, when an address is missing)
@@ -588,14 +688,17 @@ pub fn serve_with(
             last_step: None,
             tick: 0,
             learned: Learned::default(),
+            wiring: spec.wiring.clone(),
+            felt: options.body.as_ref().map(|b| b.readings.clone()),
         });
         served.push(ServedBoard { spec, local });
     }
     // the writer ends when the boards' thread drops the last recorder
     drop(recorder);
+    let body = options.body.clone();
     let t = std::thread::Builder::new()
         .name("eth-boards".into())
-        .spawn(move || run_boards(boards, stop, epoch))
+        .spawn(move || run_boards(boards, stop, epoch, body))
         .map_err(|e| e.to_string())?;
     threads.insert(0, t);
     Ok((served, threads))
@@ -616,6 +719,9 @@ struct ServedState {
     last_step: Option<Duration>,
     tick: u64,
     learned: Learned,
+    /// The board's place in the body, and what the body makes its sensors read.
+    wiring: Wiring,
+    felt: Option<Arc<std::sync::Mutex<body::Readings>>>,
 }
 
 impl ServedState {
@@ -700,9 +806,14 @@ impl ServedState {
 
     /// Writes the sensors' values as they are `now` (since the boards began serving).
     fn update_sensors(&mut self, now: Duration) {
+        let felt = self
+            .felt
+            .as_ref()
+            .map(|f| f.lock().unwrap_or_else(|e| e.into_inner()).clone());
         update_sensors(
             &mut self.engine,
             &self.learned,
+            felt.as_ref().map(|r| (&self.wiring, r)),
             now.as_secs_f64(),
             now.as_micros() as u64,
             self.tick,
@@ -728,6 +839,43 @@ impl ServedState {
             }
         }
     }
+}
+
+/// How often the body's statics are recomputed from the joints (its sensors' readings
+/// are held between).
+const BODY_PERIOD: Duration = Duration::from_millis(5);
+
+/// The robot's body shared by the boards' thread (which poses it from the joints) and
+/// whatever else reads its sensors (the serial IMUs).
+#[derive(Debug, Clone)]
+pub struct SharedBody {
+    pub body: Arc<std::sync::Mutex<body::Body>>,
+    pub readings: Arc<std::sync::Mutex<body::Readings>>,
+}
+
+impl SharedBody {
+    pub fn new(b: body::Body) -> Self {
+        let readings = b.readings();
+        SharedBody {
+            body: Arc::new(std::sync::Mutex::new(b)),
+            readings: Arc::new(std::sync::Mutex::new(readings)),
+        }
+    }
+}
+
+/// Poses the body from the boards' joints and takes what its sensors read.
+fn feel(shared: &SharedBody, boards: &[ServedState]) {
+    let mut body = shared.body.lock().unwrap_or_else(|e| e.into_inner());
+    for b in boards {
+        for (j, name, encoder) in &b.wiring.joints {
+            if let Some(joint) = b.engine.joint(*j) {
+                body.set_position(name, (joint.feedback().position / encoder).to_radians());
+            }
+        }
+    }
+    let readings = body.readings();
+    drop(body);
+    *shared.readings.lock().unwrap_or_else(|e| e.into_inner()) = readings;
 }
 
 /// The longest the serving thread sleeps.
@@ -784,7 +932,13 @@ pub fn wake_stats() -> (u64, u64, u64, u64, u64) {
     )
 }
 
-fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>, epoch: Instant) {
+fn run_boards(
+    mut boards: Vec<ServedState>,
+    stop: Arc<AtomicBool>,
+    epoch: Instant,
+    body: Option<SharedBody>,
+) {
+    let mut body_due = Duration::ZERO;
     // A board keeps its period in firmware; here the thread asks for real-time
     // scheduling like the host's receiver (best effort: refused without the capability).
     yarp_net::realtime::try_fifo_current_thread(
@@ -812,6 +966,13 @@ fn run_boards(mut boards: Vec<ServedState>, stop: Arc<AtomicBool>, epoch: Instan
         for (i, b) in boards.iter_mut().enumerate() {
             if poller.readable(i) {
                 b.receive(&mut buf, epoch);
+            }
+        }
+        if let Some(body) = &body {
+            let now = epoch.elapsed();
+            if now >= body_due {
+                body_due = now + BODY_PERIOD;
+                feel(body, &boards);
             }
         }
         for b in &mut boards {

@@ -6,8 +6,11 @@
 //! - [`can_robot`]: the CAN boards (`icub-board-emulator`, over crate `icub_can`'s
 //!   emulated boards);
 //! - [`eth`]: the Ethernet boards (`icub-eth-emulator`);
-//! - [`bno055`]: the Bosch BNO055 head IMU on a pseudo-terminal (`--bno055 PATH` of both).
+//! - [`bno055`]: the Bosch BNO055 head IMU on a pseudo-terminal (`--bno055 PATH` of both);
+//! - [`body`]: the robot's body under gravity (and pushes), from its URDF, for what the
+//!   emulated F/T sensors and IMUs read (`--urdf PATH`).
 
 pub mod bno055;
+pub mod body;
 pub mod can_robot;
 pub mod eth;

@@ -99,7 +99,7 @@ impl EmulatedMt for EmulatedMti {
 pub fn serve(
     mut port: impl MtxPort,
     mut mtx: impl EmulatedMt,
-    motion: fn(f64) -> Sample,
+    mut motion: impl FnMut(f64) -> Sample + Send + 'static,
 ) -> std::io::Result<MtxHandle> {
     let stop = Arc::new(AtomicBool::new(false));
     let silent = Arc::new(AtomicBool::new(false));
@@ -187,12 +187,22 @@ pub fn pty_link(link: &Path) -> std::io::Result<(MtxHandle, PathBuf)> {
 
 /// [`pty_link`] for any emulated sensor, e.g. an [`EmulatedMti`].
 pub fn pty_link_with(link: &Path, mt: impl EmulatedMt) -> std::io::Result<(MtxHandle, PathBuf)> {
+    pty_link_moving(link, mt, emulated_motion)
+}
+
+/// As [`pty_link_with`], streaming what `motion(seconds since start)` gives (a body's
+/// reading of the sensor) instead of the emulated head's motion.
+pub fn pty_link_moving(
+    link: &Path,
+    mt: impl EmulatedMt,
+    motion: impl FnMut(f64) -> Sample + Send + 'static,
+) -> std::io::Result<(MtxHandle, PathBuf)> {
     let (port, path) = pty()?;
     if link.symlink_metadata().is_ok() {
         std::fs::remove_file(link)?;
     }
     std::os::unix::fs::symlink(&path, link)?;
-    let mut handle = serve(port, mt, emulated_motion)?;
+    let mut handle = serve(port, mt, motion)?;
     handle.link = Some((link.to_path_buf(), path.clone()));
     Ok((handle, path))
 }

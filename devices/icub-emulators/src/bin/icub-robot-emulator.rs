@@ -1,5 +1,5 @@
 //! `icub-robot-emulator ROBOT_DIR [--config FILE.xml] [--address-map MAP] [--can-port PORT]
-//! [--serial-dir DIR]`: everything a robots-configuration robot's files call for, from one
+//! [--serial-dir DIR] [--urdf PATH [--stance STANCE]]`: everything a robots-configuration robot's files call for, from one
 //! command: its Ethernet boards (`icub-eth-emulator`), its CAN buses (`icub-board-emulator`,
 //! one UDP hub per network from `--can-port`, default 20000), and its serial devices on
 //! pseudo-terminals in `--serial-dir` (default: a directory of its own): the head's Xsens
@@ -9,7 +9,10 @@
 //! It prints, for `yarprobotinterface` to be run with, one `env NAME=VALUE` line per
 //! environment variable that points the robot's devices at the emulators
 //! (`YARP_ICUB_ETH_ADDRESS_MAP`, `YARP_ICUB_CAN_BACKEND`, `YARP_ICUB_XSENS_SERIAL`,
-//! `YARP_BNO055_COMPORT`), then `ready` once every emulator serves. SIGINT or SIGTERM
+//! `YARP_BNO055_COMPORT`), then `ready` once every emulator serves. With `--urdf` the
+//! Ethernet robot gets a body (`icub-eth-emulator --urdf`): its F/T sensors and its MTi
+//! (the body's accelerometer its device's `sensor_name` names) read the body's statics,
+//! and `push LINK FX FY FZ` lines on standard input push it. SIGINT or SIGTERM
 //! stops them all (exit 0); one that stops on its own stops the rest (exit 1).
 
 use std::io::{BufRead, BufReader};
@@ -34,7 +37,9 @@ lines to run yarprobotinterface with, then `ready`.
   --address-map MAP     serve the robot's addresses elsewhere, e.g. 10.0.1.0/24=127.0.1.0/24
                         (default: $YARP_ICUB_ETH_ADDRESS_MAP; empty: the robot's own)
   --can-port PORT       first UDP port of the CAN hubs (default 20000)
-  --serial-dir DIR      where the pseudo-terminals' links go (default: a new temporary one)";
+  --serial-dir DIR      where the pseudo-terminals' links go (default: a new temporary one)
+  --urdf PATH           the robot's body (Ethernet robots): F/T sensors and the MTi read it
+  --stance STANCE       fixed-root (default) or standing:FRAME,FRAME,...";
 
 /// How long an emulator may take to say it serves.
 const START: Duration = Duration::from_secs(60);
@@ -45,6 +50,8 @@ struct Options {
     map: String,
     can_port: u16,
     serial_dir: Option<PathBuf>,
+    urdf: Option<PathBuf>,
+    stance: Option<String>,
 }
 
 fn parse() -> Result<Options, String> {
@@ -55,6 +62,8 @@ fn parse() -> Result<Options, String> {
         map: std::env::var(ADDRESS_MAP_ENV).unwrap_or_default(),
         can_port: 20000,
         serial_dir: None,
+        urdf: None,
+        stance: None,
     };
     let mut dir = None;
     while let Some(a) = args.next() {
@@ -66,6 +75,8 @@ fn parse() -> Result<Options, String> {
                 o.can_port = value()?.parse().map_err(|e| format!("--can-port: {e}"))?
             }
             "--serial-dir" => o.serial_dir = Some(value()?.into()),
+            "--urdf" => o.urdf = Some(value()?.into()),
+            "--stance" => o.stance = Some(value()?),
             "-h" | "--help" => {
                 println!("{HELP}");
                 std::process::exit(0)
@@ -85,6 +96,8 @@ struct Needs {
     can_networks: usize,
     mtx: bool,
     mti: bool,
+    /// The MTi's `sensor_name`: the body's accelerometer it is.
+    mti_sensor: Option<String>,
     bno055: bool,
 }
 
@@ -96,7 +109,13 @@ fn needs(dir: &Path, top: &Path) -> Result<Needs, String> {
     for d in &robot.devices {
         match d.kind.as_str() {
             "xsensmtx" => n.mtx = true,
-            "xsensmt" => n.mti = true,
+            "xsensmt" => {
+                n.mti = true;
+                n.mti_sensor = d.to_property().ok().and_then(|p| {
+                    p.find("sensor_name")
+                        .and_then(|v| v.as_str().map(str::to_string))
+                });
+            }
             // on a serial line or an I2C bus: the emulated chip speaks UART for both
             // (`YARP_BNO055_COMPORT` moves the device to it)
             "imuBosch_BNO055" => n.bno055 = true,
@@ -157,12 +176,17 @@ impl Drop for Running {
 
 /// Starts the sibling program `name` with `args` and waits for its line containing
 /// `ready`; its output goes on to our stderr.
-fn start(name: &'static str, args: &[String], ready: &'static str) -> Result<Running, String> {
+fn start(
+    name: &'static str,
+    args: &[String],
+    ready: &'static str,
+    stdin: bool,
+) -> Result<Running, String> {
     let exe = std::env::current_exe().map_err(|e| e.to_string())?;
     let program = exe.with_file_name(name);
     let mut child = Command::new(&program)
         .args(args)
-        .stdin(Stdio::null())
+        .stdin(if stdin { Stdio::piped() } else { Stdio::null() })
         .stdout(Stdio::piped())
         .spawn()
         .map_err(|e| format!("{}: {e}", program.display()))?;
@@ -231,7 +255,7 @@ fn run(o: Options, stop: &AtomicBool) -> Result<(), String> {
             args.extend(["--bno055".into(), text(&bno)]);
             env.push(format!("YARP_BNO055_COMPORT={}", text(&bno)));
         }
-        running.push(start("icub-board-emulator", &args, "ready")?);
+        running.push(start("icub-board-emulator", &args, "ready", false)?);
     }
     // the Ethernet boards and the MTi (icub-eth-emulator)
     if n.eth_boards > 0 || n.mti {
@@ -244,7 +268,28 @@ fn run(o: Options, stop: &AtomicBool) -> Result<(), String> {
             args.extend(["--xsens".into(), text(&mti)]);
             env.push(format!("YARP_ICUB_XSENS_SERIAL={}", text(&mti)));
         }
-        running.push(start("icub-eth-emulator", &args, "serving")?);
+        if let Some(urdf) = &o.urdf {
+            args.extend(["--urdf".into(), text(urdf)]);
+            if let Some(s) = &o.stance {
+                args.extend(["--stance".into(), s.clone()]);
+            }
+            if let Some(s) = &n.mti_sensor {
+                args.extend(["--xsens-sensor".into(), s.clone()]);
+            }
+        }
+        let mut eth = start("icub-eth-emulator", &args, "serving", o.urdf.is_some())?;
+        // our standard input (`push …` lines) goes on to the body's emulator
+        if let Some(mut to) = eth.child.stdin.take() {
+            std::thread::spawn(move || {
+                use std::io::Write;
+                for line in std::io::stdin().lock().lines().map_while(Result::ok) {
+                    if writeln!(to, "{line}").is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        running.push(eth);
     }
     for e in &env {
         println!("env {e}");

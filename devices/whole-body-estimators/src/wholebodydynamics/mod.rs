@@ -662,6 +662,8 @@ fn run(
     };
     let mut next = Instant::now();
     let mut last_error = String::new();
+    let mut publishing = false;
+    tracing::info!("{NAME}: estimating every {period:?}");
     while !stop.load(Ordering::SeqCst) {
         let (vel, acc) = {
             let s = shared.lock();
@@ -676,6 +678,10 @@ fn run(
             .and_then(|r| shared.lock().core.step(&r));
         match outputs {
             Ok(Some(out)) => {
+                if !publishing {
+                    tracing::info!("{NAME}: the F/T offsets are known: publishing the estimates");
+                    publishing = true;
+                }
                 let mut hw = hardware.lock();
                 hw.publish_torques(&out.torques);
                 hw.gravity_compensation(&out.gravity_torques);

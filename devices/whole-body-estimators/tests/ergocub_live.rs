@@ -1,0 +1,319 @@
+//! wholebodydynamics on ergoCubSN001, live from the robot's own files: our
+//! `yarprobotinterface` on `ergocub.xml` against `icub-robot-emulator` with the robot's
+//! URDF as its body, hanging at its root (as on the crane): the F/T sensors and the
+//! waist MTi read the body's statics. After `calib` on `<prefix>/rpc` (offsets: the
+//! emulated sensors have none), in three poses, the torques the boards report (which
+//! wholebodydynamics sends them as their virtual torque sensors) are the body's joint
+//! torques, within 0.05 N·m or 2 %.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use yarp_interop_tests::{robot_addresses, run_fed, workspace_program, NetNs, Proc};
+
+fn shared() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared")
+}
+
+/// The robot's network: its namespace, the name server's configuration and every
+/// process group started in it (stopped at the end, however the test ends).
+struct Robot {
+    ns: NetNs,
+    conf: tempfile::TempDir,
+    groups: Vec<u32>,
+}
+
+impl Robot {
+    fn cmd(&self, program: &str, package: &str) -> Command {
+        use std::os::unix::process::CommandExt;
+        let mut c = self.ns.command(workspace_program(program, package));
+        c.process_group(0)
+            .env("YARP_CONFIG_HOME", self.conf.path())
+            .env_remove("YARP_NAMESPACE")
+            .env("RUST_LOG", "info");
+        c
+    }
+
+    fn spawn(&mut self, name: &str, c: Command) -> Proc {
+        let p = Proc::spawn(name, c);
+        self.groups.push(p.pid());
+        p
+    }
+
+    fn rpc(&self, port: &str, input: &str) -> String {
+        let mut c = self.cmd("yarp", "yarp-cli");
+        c.args(["rpc", port]);
+        run_fed("yarp rpc", c, input, Duration::from_secs(30))
+    }
+}
+
+impl Drop for Robot {
+    fn drop(&mut self) {
+        for signal in ["-TERM", "-KILL"] {
+            for pgid in &self.groups {
+                let _ = Command::new("kill")
+                    .args([signal, "--", &format!("-{pgid}")])
+                    .stderr(std::process::Stdio::null())
+                    .status();
+            }
+            std::thread::sleep(Duration::from_millis(300));
+        }
+    }
+}
+
+/// The numbers of the `Response:` lines: those of the list in it when there is one
+/// (`[is] [encs] (…) [ok]`), else all of them (`[is] [axes] 6`).
+fn numbers(reply: &str) -> Vec<f64> {
+    reply
+        .lines()
+        .filter_map(|l| l.strip_prefix("Response:"))
+        .flat_map(|l| {
+            let list = match (l.find('('), l.find(')')) {
+                (Some(a), Some(b)) if a < b => &l[a + 1..b],
+                _ => l,
+            };
+            list.split_whitespace()
+                .filter_map(|w| w.parse().ok())
+                .collect::<Vec<f64>>()
+        })
+        .collect()
+}
+
+const PARTS: &[&str] = &[
+    "head",
+    "torso",
+    "left_arm",
+    "right_arm",
+    "left_leg",
+    "right_leg",
+];
+
+/// Each part's axis names, by asking its board (`[get] [name] j`).
+fn axis_names(robot: &Robot) -> HashMap<&'static str, Vec<String>> {
+    let mut out = HashMap::new();
+    for part in PARTS {
+        let port = format!("/ergocub/{part}/rpc:i");
+        let axes = numbers(&robot.rpc(&port, "[get] [axes]\n"))
+            .first()
+            .copied()
+            .unwrap_or(0.0) as usize;
+        let input: String = (0..axes).map(|j| format!("[get] [name] {j}\n")).collect();
+        let names: Vec<String> = robot
+            .rpc(&port, &input)
+            .lines()
+            .filter_map(|l| l.strip_prefix("Response:"))
+            // `[is] [name] 0 torso_roll [ok]`: the word that is neither a vocab nor a number
+            .map(|l| {
+                l.split_whitespace()
+                    .map(|w| w.trim_matches('"'))
+                    .rfind(|w| !w.starts_with('[') && w.parse::<f64>().is_err())
+                    .unwrap_or_default()
+                    .to_string()
+            })
+            .collect();
+        assert_eq!(names.len(), axes, "{part}: names {names:?}");
+        out.insert(*part, names);
+    }
+    out
+}
+
+/// The torques every part's board reports, by axis name.
+fn board_torques(
+    robot: &Robot,
+    names: &HashMap<&'static str, Vec<String>>,
+) -> HashMap<String, f64> {
+    let mut out = HashMap::new();
+    for part in PARTS {
+        let t = numbers(&robot.rpc(&format!("/ergocub/{part}/rpc:i"), "[get] [torq] [trqs]\n"));
+        assert_eq!(t.len(), names[part].len(), "{part}: torques {t:?}");
+        out.extend(names[part].iter().cloned().zip(t));
+    }
+    out
+}
+
+/// What the emulated body says its joints bear (`report`).
+fn body_torques(emulator: &mut Proc) -> HashMap<String, f64> {
+    use std::io::Write;
+    writeln!(
+        emulator.child.stdin.as_mut().expect("the emulator's stdin"),
+        "report"
+    )
+    .unwrap();
+    let line = emulator.wait_line("body torques", Duration::from_secs(10));
+    let at = line.find("body torques").unwrap() + "body torques".len();
+    line[at..]
+        .split_whitespace()
+        .filter_map(|kv| {
+            let (k, v) = kv.split_once('=')?;
+            Some((k.to_string(), v.parse().ok()?))
+        })
+        .collect()
+}
+
+/// Moves the named joints (degrees) and waits until every part's encoders stand still.
+fn pose(robot: &Robot, names: &HashMap<&'static str, Vec<String>>, targets: &[(&str, f64)]) {
+    for part in PARTS {
+        let cmds: String = targets
+            .iter()
+            .filter_map(|(name, deg)| {
+                names[part]
+                    .iter()
+                    .position(|n| n == name)
+                    .map(|j| format!("[set] [pos] {j} {deg}\n"))
+            })
+            .collect();
+        if !cmds.is_empty() {
+            robot.rpc(&format!("/ergocub/{part}/rpc:i"), &cmds);
+        }
+    }
+    let start = Instant::now();
+    let mut last: Vec<f64> = Vec::new();
+    loop {
+        std::thread::sleep(Duration::from_millis(500));
+        let now: Vec<f64> = PARTS
+            .iter()
+            .flat_map(|p| numbers(&robot.rpc(&format!("/ergocub/{p}/rpc:i"), "[get] [encs]\n")))
+            .collect();
+        if !last.is_empty()
+            && now.len() == last.len()
+            && now.iter().zip(&last).all(|(a, b)| (a - b).abs() < 0.01)
+        {
+            break;
+        }
+        let moving: Vec<(usize, f64, f64)> = now
+            .iter()
+            .zip(&last)
+            .enumerate()
+            .filter(|(_, (a, b))| (*a - *b).abs() >= 0.01)
+            .map(|(i, (a, b))| (i, *a, *b))
+            .collect();
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the joints did not settle: {moving:?} ({} vs {} values)",
+            now.len(),
+            last.len()
+        );
+        last = now;
+    }
+}
+
+#[test]
+fn ergocub_hanging_torques_are_the_bodys() {
+    let dir = shared().join("robots-configuration/ergoCubSN001");
+    let urdf = shared().join("robot-models/ergoCub/robots/ergoCubSN001/model.urdf");
+    let mut robot = Robot {
+        ns: NetNs::new().expect("a network namespace (run under netns-run)"),
+        conf: tempfile::tempdir().unwrap(),
+        groups: Vec::new(),
+    };
+    robot
+        .ns
+        .add_addresses(&robot_addresses(&dir))
+        .expect("the robot's addresses");
+    let mut server = {
+        let mut c = robot.cmd("yarpserver", "yarp-net");
+        c.args(["--ip", "127.0.0.1", "--socket", "10000", "--write"]);
+        robot.spawn("yarpserver", c)
+    };
+    server.wait_line("Ok. Ready!", Duration::from_secs(20));
+    let serial = tempfile::tempdir().unwrap();
+    let mut emulator = {
+        let mut c = robot.cmd("icub-robot-emulator", "icub-emulators");
+        c.arg(&dir)
+            .args(["--address-map", ""])
+            .arg("--serial-dir")
+            .arg(serial.path())
+            .arg("--urdf")
+            .arg(&urdf);
+        robot.spawn("icub-robot-emulator", c)
+    };
+    emulator.wait_line("ready: ", Duration::from_secs(90));
+    let env: Vec<(String, String)> = emulator
+        .seen
+        .iter()
+        .filter_map(|l| l.strip_prefix("env ")?.split_once('='))
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    let mut ri = {
+        let mut c = robot.cmd("yarprobotinterface", "yarp-device-programs");
+        c.current_dir(&dir)
+            .envs(env)
+            .env("YARP_ROBOT_NAME", "ergoCubSN001")
+            .env("YARP_DATA_DIRS", shared().join("robot-models/ergoCub"));
+        robot.spawn("yarprobotinterface", c)
+    };
+    ri.wait_line("running happily", Duration::from_secs(150));
+    let names = axis_names(&robot);
+    // The offsets against the body held at its root (the emulated sensors have none).
+    let reply = robot.rpc("/wholeBodyDynamics/rpc", "calib all 300\n");
+    assert!(reply.contains("[ok]"), "calib: {reply}");
+    let poses: [&[(&str, f64)]; 3] = [
+        &[],
+        &[
+            ("l_shoulder_pitch", -40.0),
+            ("l_shoulder_roll", 30.0),
+            ("l_elbow", 50.0),
+            ("r_shoulder_pitch", -20.0),
+            ("r_elbow", 70.0),
+            ("torso_pitch", 10.0),
+            ("l_hip_pitch", 30.0),
+            ("l_knee", -40.0),
+            ("r_hip_roll", 15.0),
+            ("r_knee", -20.0),
+            ("neck_pitch", 10.0),
+        ],
+        &[
+            ("l_shoulder_roll", 60.0),
+            ("l_shoulder_yaw", 20.0),
+            ("l_wrist_yaw", 20.0),
+            ("r_shoulder_roll", 45.0),
+            ("r_wrist_pitch", 20.0),
+            ("torso_roll", 5.0),
+            ("torso_yaw", 15.0),
+            ("l_hip_pitch", -10.0),
+            ("l_ankle_pitch", 20.0),
+            ("r_hip_pitch", 45.0),
+            ("r_knee", -60.0),
+            ("r_ankle_roll", 10.0),
+        ],
+    ];
+    let estimated_axes: Vec<String> = {
+        let text = std::fs::read_to_string(dir.join("estimators/wholebodydynamics.xml")).unwrap();
+        let at = text.find("name=\"axesNames\">(").unwrap() + "name=\"axesNames\">(".len();
+        text[at..]
+            .split(')')
+            .next()
+            .unwrap()
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .collect()
+    };
+    let mut worst = (0.0f64, String::new());
+    for (k, targets) in poses.iter().enumerate() {
+        pose(&robot, &names, targets);
+        ri.drain();
+        // the estimate's filters (3 Hz) settle
+        std::thread::sleep(Duration::from_secs(1));
+        let truth = body_torques(&mut emulator);
+        let boards = board_torques(&robot, &names);
+        for axis in &estimated_axes {
+            let t = *truth
+                .get(axis)
+                .unwrap_or_else(|| panic!("the body reports no {axis}: {truth:?}"));
+            let e = *boards
+                .get(axis)
+                .unwrap_or_else(|| panic!("no board reports {axis}: {boards:?}"));
+            let tolerance = (0.02 * t.abs()).max(0.05);
+            assert!(
+                (t - e).abs() <= tolerance,
+                "pose {k}: {axis}: estimated {e:.4} N·m, the body bears {t:.4} N·m"
+            );
+            if (t - e).abs() > worst.0 {
+                worst = ((t - e).abs(), format!("pose {k} {axis}: {e:.4} vs {t:.4}"));
+            }
+        }
+    }
+    eprintln!("worst difference {:.4} N·m ({})", worst.0, worst.1);
+}
