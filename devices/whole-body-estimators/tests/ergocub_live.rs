@@ -199,9 +199,19 @@ fn pose(robot: &Robot, names: &HashMap<&'static str, Vec<String>>, targets: &[(&
     }
 }
 
-#[test]
-fn ergocub_hanging_torques_are_the_bodys() {
-    let dir = shared().join("robots-configuration/ergoCubSN001");
+/// A running ergoCub: its network, the emulator (with the body) and yarprobotinterface.
+struct Running {
+    robot: Robot,
+    emulator: Proc,
+    ri: Proc,
+    names: HashMap<&'static str, Vec<String>>,
+    /// wholebodydynamics' `axesNames`.
+    estimated: Vec<String>,
+}
+
+/// Brings the robot of `dir` up with ergoCubSN001's URDF as its body, then calibrates
+/// wholebodydynamics' offsets (`calib all 300`).
+fn start(dir: &std::path::Path) -> Running {
     let urdf = shared().join("robot-models/ergoCub/robots/ergoCubSN001/model.urdf");
     let mut robot = Robot {
         ns: NetNs::new().expect("a network namespace (run under netns-run)"),
@@ -210,7 +220,7 @@ fn ergocub_hanging_torques_are_the_bodys() {
     };
     robot
         .ns
-        .add_addresses(&robot_addresses(&dir))
+        .add_addresses(&robot_addresses(dir))
         .expect("the robot's addresses");
     let mut server = {
         let mut c = robot.cmd("yarpserver", "yarp-net");
@@ -218,13 +228,15 @@ fn ergocub_hanging_torques_are_the_bodys() {
         robot.spawn("yarpserver", c)
     };
     server.wait_line("Ok. Ready!", Duration::from_secs(20));
-    let serial = tempfile::tempdir().unwrap();
+    std::mem::forget(server); // its process group is stopped with the robot's
+    let serial = dir.join(".serial");
+    std::fs::create_dir_all(&serial).unwrap();
     let mut emulator = {
         let mut c = robot.cmd("icub-robot-emulator", "icub-emulators");
-        c.arg(&dir)
+        c.arg(dir)
             .args(["--address-map", ""])
             .arg("--serial-dir")
-            .arg(serial.path())
+            .arg(&serial)
             .arg("--urdf")
             .arg(&urdf);
         robot.spawn("icub-robot-emulator", c)
@@ -238,7 +250,7 @@ fn ergocub_hanging_torques_are_the_bodys() {
         .collect();
     let mut ri = {
         let mut c = robot.cmd("yarprobotinterface", "yarp-device-programs");
-        c.current_dir(&dir)
+        c.current_dir(dir)
             .envs(env)
             .env("YARP_ROBOT_NAME", "ergoCubSN001")
             .env("YARP_DATA_DIRS", shared().join("robot-models/ergoCub"));
@@ -249,6 +261,79 @@ fn ergocub_hanging_torques_are_the_bodys() {
     // The offsets against the body held at its root (the emulated sensors have none).
     let reply = robot.rpc("/wholeBodyDynamics/rpc", "calib all 300\n");
     assert!(reply.contains("[ok]"), "calib: {reply}");
+    ri.wait_line(
+        "F/T offsets calibrated over 300 samples",
+        Duration::from_secs(30),
+    );
+    let text = std::fs::read_to_string(dir.join("estimators/wholebodydynamics.xml")).unwrap();
+    let key = "name=\"axesNames\">(";
+    let at = text.find(key).unwrap() + key.len();
+    let estimated = text[at..]
+        .split(')')
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .collect();
+    Running {
+        robot,
+        emulator,
+        ri,
+        names,
+        estimated,
+    }
+}
+
+/// The worst difference between the boards' torques and the body's over `axes`, failing
+/// beyond 0.05 N·m or 2 %.
+fn check_torques(r: &mut Running, axes: &[String], what: &str) -> (f64, String) {
+    // the estimate's filters (3 Hz) settle
+    std::thread::sleep(Duration::from_secs(1));
+    r.ri.drain();
+    let truth = body_torques(&mut r.emulator);
+    let boards = board_torques(&r.robot, &r.names);
+    let mut worst = (0.0f64, String::new());
+    for axis in axes {
+        let t = *truth
+            .get(axis)
+            .unwrap_or_else(|| panic!("the body reports no {axis}: {truth:?}"));
+        let e = *boards
+            .get(axis)
+            .unwrap_or_else(|| panic!("no board reports {axis}: {boards:?}"));
+        let tolerance = (0.02 * t.abs()).max(0.05);
+        assert!(
+            (t - e).abs() <= tolerance,
+            "{what}: {axis}: estimated {e:.4} N·m, the body bears {t:.4} N·m"
+        );
+        if (t - e).abs() > worst.0 {
+            worst = ((t - e).abs(), format!("{what} {axis}: {e:.4} vs {t:.4}"));
+        }
+    }
+    worst
+}
+
+/// The robot's files copied as they are (the user then edits one).
+fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().map(Result::unwrap) {
+        let target = to.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), target).unwrap();
+        }
+    }
+}
+
+/// Three poses: the boards' torques (wholebodydynamics' estimates, through the boards'
+/// virtual torque sensors) are the body's; a compliant joint gets its gravity torque as
+/// impedance offset.
+#[test]
+fn ergocub_hanging_torques_are_the_bodys() {
+    let work = tempfile::tempdir().unwrap();
+    let dir = work.path().join("ergoCubSN001");
+    copy_dir(&shared().join("robots-configuration/ergoCubSN001"), &dir);
+    let mut r = start(&dir);
     let poses: [&[(&str, f64)]; 3] = [
         &[],
         &[
@@ -279,41 +364,132 @@ fn ergocub_hanging_torques_are_the_bodys() {
             ("r_ankle_roll", 10.0),
         ],
     ];
-    let estimated_axes: Vec<String> = {
-        let text = std::fs::read_to_string(dir.join("estimators/wholebodydynamics.xml")).unwrap();
-        let at = text.find("name=\"axesNames\">(").unwrap() + "name=\"axesNames\">(".len();
-        text[at..]
-            .split(')')
-            .next()
-            .unwrap()
-            .split(',')
-            .map(|s| s.trim().to_string())
-            .collect()
-    };
     let mut worst = (0.0f64, String::new());
     for (k, targets) in poses.iter().enumerate() {
-        pose(&robot, &names, targets);
-        ri.drain();
-        // the estimate's filters (3 Hz) settle
-        std::thread::sleep(Duration::from_secs(1));
-        let truth = body_torques(&mut emulator);
-        let boards = board_torques(&robot, &names);
-        for axis in &estimated_axes {
-            let t = *truth
-                .get(axis)
-                .unwrap_or_else(|| panic!("the body reports no {axis}: {truth:?}"));
-            let e = *boards
-                .get(axis)
-                .unwrap_or_else(|| panic!("no board reports {axis}: {boards:?}"));
-            let tolerance = (0.02 * t.abs()).max(0.05);
-            assert!(
-                (t - e).abs() <= tolerance,
-                "pose {k}: {axis}: estimated {e:.4} N·m, the body bears {t:.4} N·m"
-            );
-            if (t - e).abs() > worst.0 {
-                worst = ((t - e).abs(), format!("pose {k} {axis}: {e:.4} vs {t:.4}"));
-            }
+        pose(&r.robot, &r.names, targets);
+        let axes = r.estimated.clone();
+        let w = check_torques(&mut r, &axes, &format!("pose {k}"));
+        if w.0 > worst.0 {
+            worst = w;
         }
     }
     eprintln!("worst difference {:.4} N·m ({})", worst.0, worst.1);
+    // Gravity compensation: l_hip_pitch, compliant in position control, gets its gravity
+    // torque as impedance offset.
+    let j = r.names["left_leg"]
+        .iter()
+        .position(|n| n == "l_hip_pitch")
+        .unwrap();
+    let leg = "/ergocub/left_leg/rpc:i";
+    let reply = r
+        .robot
+        .rpc(leg, &format!("[set] [intm] [mode] {j} [comp]\n"));
+    assert!(!reply.contains("[fail]"), "{reply}");
+    std::thread::sleep(Duration::from_secs(1));
+    let offset = numbers(&r.robot.rpc(leg, &format!("[get] [iimp] [iof] {j}\n")));
+    let gravity = body_torques(&mut r.emulator)["l_hip_pitch"];
+    let got = *offset.last().expect("an impedance offset");
+    assert!(
+        (got - gravity).abs() <= (0.02 * gravity.abs()).max(0.05),
+        "impedance offset {got:.4} N·m, gravity torque {gravity:.4} N·m ({offset:?})"
+    );
+    eprintln!(
+        "l_hip_pitch compliant: impedance offset {got:.4} N·m, gravity torque {gravity:.4} N·m"
+    );
+}
+
+/// A user's wholebodydynamics.xml for manipulation: the left arm's F/T sensor among the
+/// estimation's and a contact at the left palm. The emulator pushes the palm down with
+/// 10 N: the palm's wrench port shows it, and the arm's torques follow the body's (its
+/// change is the Jacobian-transposed push).
+#[test]
+fn ergocub_push_on_the_palm_is_estimated() {
+    let work = tempfile::tempdir().unwrap();
+    let dir = work.path().join("ergoCubSN001");
+    copy_dir(&shared().join("robots-configuration/ergoCubSN001"), &dir);
+    let file = dir.join("estimators/wholebodydynamics.xml");
+    let text = std::fs::read_to_string(&file)
+        .unwrap()
+        .replace(
+            "(l_foot_front_ft, l_foot_rear_ft,",
+            "(l_arm_ft, l_foot_front_ft, l_foot_rear_ft,",
+        )
+        .replace(
+            "(root_link,l_foot_front,",
+            "(root_link,l_hand_palm,l_foot_front,",
+        );
+    assert!(text.contains("(l_arm_ft,") && text.contains("l_hand_palm,l_foot_front"));
+    std::fs::write(&file, text).unwrap();
+    let mut r = start(&dir);
+    pose(
+        &r.robot,
+        &r.names,
+        &[
+            ("l_shoulder_pitch", -30.0),
+            ("l_shoulder_roll", 40.0),
+            ("l_elbow", 60.0),
+        ],
+    );
+    let arm: Vec<String> = [
+        "l_shoulder_pitch",
+        "l_shoulder_roll",
+        "l_shoulder_yaw",
+        "l_elbow",
+        "l_wrist_yaw",
+        "l_wrist_roll",
+        "l_wrist_pitch",
+    ]
+    .map(String::from)
+    .to_vec();
+    check_torques(&mut r, &arm, "before the push");
+    let before = board_torques(&r.robot, &r.names);
+    let truth_before = body_torques(&mut r.emulator);
+    {
+        use std::io::Write;
+        writeln!(
+            r.emulator.child.stdin.as_mut().unwrap(),
+            "push l_hand_palm 0 0 -10"
+        )
+        .unwrap();
+    }
+    r.emulator
+        .wait_line("pushed: push l_hand_palm", Duration::from_secs(10));
+    let worst = check_torques(&mut r, &arm, "pushed");
+    let after = board_torques(&r.robot, &r.names);
+    let truth_after = body_torques(&mut r.emulator);
+    for axis in &arm {
+        let (d_est, d_true) = (
+            after[axis] - before[axis],
+            truth_after[axis] - truth_before[axis],
+        );
+        eprintln!("{axis}: the push changed the estimate by {d_est:.4} N·m, the body's torque by {d_true:.4} N·m");
+    }
+    eprintln!("worst difference {:.4} N·m ({})", worst.0, worst.1);
+    // The palm's wrench port: (l_hand_palm, l_hand_palm, root_link), the root's axes
+    // (the world's: the robot hangs upright), about the palm.
+    let mut reader = {
+        let mut c = r.robot.cmd("yarp", "yarp-cli");
+        c.args([
+            "read",
+            "/reader",
+            "/wholeBodyDynamics/left_arm/cartesianEndEffectorWrench:o",
+        ]);
+        r.robot.spawn("yarp read", c)
+    };
+    let line = loop {
+        let l = reader.wait_line(".", Duration::from_secs(10));
+        let v: Vec<f64> = l
+            .split_whitespace()
+            .filter_map(|w| w.parse().ok())
+            .collect();
+        if v.len() == 6 {
+            break v;
+        }
+    };
+    let force = (line[0], line[1], line[2]);
+    assert!(
+        force.0.abs() < 0.5 && force.1.abs() < 0.5 && (force.2 + 10.0).abs() < 0.5,
+        "the palm's external wrench {line:?}, pushed with (0, 0, -10) N"
+    );
+    eprintln!("the palm's wrench port: {line:?}");
 }
