@@ -209,9 +209,11 @@ struct Running {
     estimated: Vec<String>,
 }
 
-/// Brings the robot of `dir` up with ergoCubSN001's URDF as its body, then calibrates
-/// wholebodydynamics' offsets (`calib all 300`).
-fn start(dir: &std::path::Path) -> Running {
+/// Brings the robot of `dir` up with ergoCubSN001's URDF as its body held as `stance`
+/// says (`icub-robot-emulator --stance`), then calibrates wholebodydynamics' offsets
+/// (`calib all 300`: base_link holds the robot) or, standing, zeroes them (`resetOffset`:
+/// the emulated sensors have none) once the start-up calibration is over.
+fn start(dir: &std::path::Path, stance: &str) -> Running {
     let urdf = shared().join("robot-models/ergoCub/robots/ergoCubSN001/model.urdf");
     let mut robot = Robot {
         ns: NetNs::new().expect("a network namespace (run under netns-run)"),
@@ -333,7 +335,7 @@ fn ergocub_hanging_torques_are_the_bodys() {
     let work = tempfile::tempdir().unwrap();
     let dir = work.path().join("ergoCubSN001");
     copy_dir(&shared().join("robots-configuration/ergoCubSN001"), &dir);
-    let mut r = start(&dir);
+    let mut r = start(&dir, "fixed-root");
     let poses: [&[(&str, f64)]; 3] = [
         &[],
         &[
@@ -420,7 +422,7 @@ fn ergocub_push_on_the_palm_is_estimated() {
         );
     assert!(text.contains("(l_arm_ft,") && text.contains("l_hand_palm,l_foot_front"));
     std::fs::write(&file, text).unwrap();
-    let mut r = start(&dir);
+    let mut r = start(&dir, "fixed-root");
     pose(
         &r.robot,
         &r.names,
@@ -492,4 +494,36 @@ fn ergocub_push_on_the_palm_is_estimated() {
         "the palm's external wrench {line:?}, pushed with (0, 0, -10) N"
     );
     eprintln!("the palm's wrench port: {line:?}");
+}
+
+/// Standing on its four foot plates (the body shares its weight among them): each foot
+/// F/T sensor carries its plate's share, and the torques of every estimated joint, legs
+/// included, are the body's in two poses.
+#[test]
+fn ergocub_standing_torques_are_the_bodys() {
+    let work = tempfile::tempdir().unwrap();
+    let dir = work.path().join("ergoCubSN001");
+    copy_dir(&shared().join("robots-configuration/ergoCubSN001"), &dir);
+    let mut r = start(
+        &dir,
+        "standing:l_foot_front,l_foot_rear,r_foot_front,r_foot_rear",
+    );
+    let axes = r.estimated.clone();
+    let mut worst = check_torques(&mut r, &axes, "standing");
+    pose(
+        &r.robot,
+        &r.names,
+        &[
+            ("l_shoulder_pitch", -30.0),
+            ("r_elbow", 60.0),
+            ("torso_pitch", 15.0),
+            ("l_hip_roll", 5.0),
+            ("neck_pitch", -10.0),
+        ],
+    );
+    let w = check_torques(&mut r, &axes, "standing, leaning");
+    if w.0 > worst.0 {
+        worst = w;
+    }
+    eprintln!("worst difference {:.4} N·m ({})", worst.0, worst.1);
 }
