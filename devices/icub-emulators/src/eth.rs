@@ -349,6 +349,8 @@ fn inertial_id(location: u8) -> u8 {
 struct Learned {
     /// The FT service's sensors, in the board's order: `(port, address)` of each.
     ft: Vec<(u8, u8)>,
+    /// The strain service's board: `(port, address)`.
+    strain: Option<(u8, u8)>,
     /// The inertials3 service's sensors, in the board's order: their `eOas_sensor_t` and
     /// the id their readings carry.
     inertials: Vec<(u8, u8)>,
@@ -361,6 +363,12 @@ impl Learned {
     /// A service the host configured and the board verified.
     fn verified(&mut self, cat: u8, config: &[u8]) {
         match cat {
+            category::STRAIN => {
+                self.strain = config
+                    .get(..icub_eth::entities::service::StrainServiceConfig::SIZE)
+                    .and_then(|b| icub_eth::entities::service::StrainServiceConfig::from_bytes(b).ok())
+                    .map(|c| (c.can_location.port, c.can_location.addr));
+            }
             category::FT => {
                 self.ft = icub_eth::entities::service::CanSensorsConfig::from_ft_bytes(config)
                     .sensors
@@ -458,7 +466,16 @@ fn update_sensors(
         // Full scale 2000 N / 50 N·m (strain2 defaults); values as fractions of it, in
         // the boards' encodings (offset binary values, big-endian full scales).
         let full = [2000u16, 2000, 2000, 50, 50, 50];
-        let frac = [0.01 * s, 0.02 * s, 0.1, 0.01 * s, 0.02, 0.03 * s];
+        // what the body makes the strain at this CAN place read, else a slow pattern
+        let sensed = felt.and_then(|(wiring, readings)| {
+            let place = learned.strain.as_ref()?;
+            let name = &wiring.ft.iter().find(|(p, _)| p == place)?.1;
+            readings.ft.get(name).copied()
+        });
+        let frac = match sensed {
+            Some(v) => std::array::from_fn(|k| (v[k] / f64::from(full[k])).clamp(-1.0, 32767.0 / 32768.0)),
+            None => [0.01 * s, 0.02 * s, 0.1, 0.01 * s, 0.02, 0.03 * s],
+        };
         let readings: Vec<i16> = frac.iter().map(|f| (f * 32768.0) as i16).collect();
         let status = StrainStatus {
             fullscale: StrainStatus::full_scales_of(&full),
