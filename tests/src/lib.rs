@@ -9,10 +9,12 @@ pub mod docs;
 mod netns;
 mod peer;
 mod procs;
+mod robot_net;
 pub use cpp_tools::*;
 pub use netns::*;
 pub use peer::*;
 pub use procs::*;
+pub use robot_net::RobotNet;
 
 use std::net::SocketAddr;
 use std::path::PathBuf;

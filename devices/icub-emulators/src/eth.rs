@@ -366,7 +366,9 @@ impl Learned {
             category::STRAIN => {
                 self.strain = config
                     .get(..icub_eth::entities::service::StrainServiceConfig::SIZE)
-                    .and_then(|b| icub_eth::entities::service::StrainServiceConfig::from_bytes(b).ok())
+                    .and_then(|b| {
+                        icub_eth::entities::service::StrainServiceConfig::from_bytes(b).ok()
+                    })
                     .map(|c| (c.can_location.port, c.can_location.addr));
             }
             category::FT => {
@@ -473,7 +475,9 @@ fn update_sensors(
             readings.ft.get(name).copied()
         });
         let frac = match sensed {
-            Some(v) => std::array::from_fn(|k| (v[k] / f64::from(full[k])).clamp(-1.0, 32767.0 / 32768.0)),
+            Some(v) => {
+                std::array::from_fn(|k| (v[k] / f64::from(full[k])).clamp(-1.0, 32767.0 / 32768.0))
+            }
             None => [0.01 * s, 0.02 * s, 0.1, 0.01 * s, 0.02, 0.03 * s],
         };
         let readings: Vec<i16> = frac.iter().map(|f| (f * 32768.0) as i16).collect();

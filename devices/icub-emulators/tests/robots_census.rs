@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use yarp_interop_tests::{robot_addresses, run_fed, workspace_program, NetNs, Proc};
+use yarp_interop_tests::RobotNet;
 
 /// What a robot's start-up is known to leave out, and why: (robot directory, a fragment of
 /// the log line naming it, the reason). A robot whose start-up C++ refuses as a whole has
@@ -176,31 +176,6 @@ fn robots_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/robots-configuration")
 }
 
-/// One robot's network: its namespace and the YARP configuration of its name server.
-struct RobotNet {
-    ns: NetNs,
-    conf: tempfile::TempDir,
-}
-
-impl RobotNet {
-    fn cmd(&self, program: &str, package: &str) -> Command {
-        use std::os::unix::process::CommandExt;
-        let mut c = self.ns.command(workspace_program(program, package));
-        c.process_group(0)
-            .env("YARP_CONFIG_HOME", self.conf.path())
-            .env_remove("YARP_NAMESPACE")
-            .env_remove(icub_emulators::eth::ADDRESS_MAP_ENV)
-            .env("RUST_LOG", "info");
-        c
-    }
-
-    fn yarp(&self, args: &[&str], input: &str) -> String {
-        let mut c = self.cmd("yarp", "yarp-cli");
-        c.args(args);
-        run_fed("yarp", c, input, Duration::from_secs(20))
-    }
-}
-
 /// The lines of the start-up log that name what did not come up.
 fn gaps(log: &[String]) -> Vec<String> {
     let mut out = Vec::new();
@@ -239,26 +214,6 @@ fn failures(list: &str) -> Vec<String> {
     out
 }
 
-/// Every process of a robot's network (each started in a process group of its own) is
-/// stopped when the census of the robot ends, however it ends.
-struct Groups(Vec<u32>);
-
-impl Drop for Groups {
-    fn drop(&mut self) {
-        for signal in ["-TERM", "-KILL"] {
-            for pgid in &self.0 {
-                let _ = Command::new("kill")
-                    .args([signal, "--", &format!("-{pgid}")])
-                    .stderr(std::process::Stdio::null())
-                    .status();
-            }
-            if signal == "-TERM" {
-                std::thread::sleep(Duration::from_millis(300));
-            }
-        }
-    }
-}
-
 fn census(robot: &str) {
     let dir = robots_dir().join(robot);
     if !dir.join("yarprobotinterface.ini").exists() {
@@ -270,20 +225,9 @@ fn census(robot: &str) {
         eprintln!("census {robot}: no yarprobotinterface file (predates it)");
         return;
     }
-    let net = RobotNet {
-        ns: NetNs::new().expect("a network namespace (run under netns-run)"),
-        conf: tempfile::tempdir().unwrap(),
-    };
-    net.ns
-        .add_addresses(&robot_addresses(&dir))
-        .expect("the robot's addresses");
-    let mut server = {
-        let mut c = net.cmd("yarpserver", "yarp-net");
-        c.args(["--ip", "127.0.0.1", "--socket", "10000", "--write"]);
-        Proc::spawn("yarpserver", c)
-    };
-    let mut groups = Groups(vec![server.pid()]);
-    server.wait_line("Ok. Ready!", Duration::from_secs(20));
+    // every program of the robot's network stops with it, however the census ends
+    let net = RobotNet::new(&dir);
+    let _server = net.server();
     let serial = tempfile::tempdir().unwrap();
     let mut emulator = {
         let mut c = net.cmd("icub-robot-emulator", "icub-emulators");
@@ -291,9 +235,8 @@ fn census(robot: &str) {
             .args(["--address-map", ""])
             .arg("--serial-dir")
             .arg(serial.path());
-        Proc::spawn("icub-robot-emulator", c)
+        net.spawn("icub-robot-emulator", c)
     };
-    groups.0.push(emulator.pid());
     // its own `ready: ...` (after its `env` lines), not a child's `ready`
     let refused: Vec<&(&str, &str, &str)> = KNOWN
         .iter()
@@ -336,9 +279,8 @@ fn census(robot: &str) {
         let name = robot.rsplit('/').next().unwrap_or(robot);
         c.env("YARP_ROBOT_NAME", name)
             .env("YARP_DATA_DIRS", model_dirs());
-        Proc::spawn("yarprobotinterface", c)
+        net.spawn("yarprobotinterface", c)
     };
-    groups.0.push(ri.pid());
     let happy = ri.try_wait_line("running happily", Duration::from_secs(150));
     let up = start.elapsed();
     assert!(
@@ -403,7 +345,7 @@ fn census(robot: &str) {
         let mut reader = {
             let mut c = net.cmd("yarp", "yarp-cli");
             c.args(["read", "/census/reader", &format!("{part}/state:o")]);
-            Proc::spawn("yarp read", c)
+            net.spawn("yarp read", c)
         };
         // a line of numbers: the part's encoders
         let line = reader.try_wait_line(".", Duration::from_secs(20));

@@ -83,7 +83,7 @@ fn ergocub_hanging_torques_are_the_bodys() {
         .rpc(leg, &format!("[set] [intm] [mode] {j} [comp]\n"));
     assert!(!reply.contains("[fail]"), "{reply}");
     std::thread::sleep(Duration::from_secs(1));
-    let offset = numbers(&r.robot.rpc(leg, &format!("[get] [iimp] [iof] {j}\n")));
+    let offset = numbers(&r.robot.net.rpc(leg, &format!("[get] [iimp] [iof] {j}\n")));
     let gravity = body_torques(&mut r.emulator)["l_hip_pitch"];
     let got = *offset.last().expect("an impedance offset");
     assert!(
@@ -165,13 +165,13 @@ fn ergocub_push_on_the_palm_is_estimated() {
     // The palm's wrench port: (l_hand_palm, l_hand_palm, root_link), the root's axes
     // (the world's: the robot hangs upright), about the palm.
     let mut reader = {
-        let mut c = r.robot.cmd("yarp", "yarp-cli");
+        let mut c = r.robot.net.cmd("yarp", "yarp-cli");
         c.args([
             "read",
             "/reader",
             "/wholeBodyDynamics/left_arm/cartesianEndEffectorWrench:o",
         ]);
-        r.robot.spawn("yarp read", c)
+        r.robot.net.spawn("yarp read", c)
     };
     let line = loop {
         let l = reader.wait_line(".", Duration::from_secs(10));

@@ -143,13 +143,13 @@ fn icub_on_its_pole_torques_and_a_push_are_the_bodys() {
     let w = check_torques(&mut r, &arm, "pushed");
     eprintln!("pushed: worst difference {:.4} N·m ({})", w.0, w.1);
     let mut reader = {
-        let mut c = r.robot.cmd("yarp", "yarp-cli");
+        let mut c = r.robot.net.cmd("yarp", "yarp-cli");
         c.args([
             "read",
             "/reader",
             "/icub02/wholeBodyDynamics/left_arm/cartesianEndEffectorWrench:o",
         ]);
-        r.robot.spawn("yarp read", c)
+        r.robot.net.spawn("yarp read", c)
     };
     let wrench = loop {
         let l = reader.wait_line(".", Duration::from_secs(10));

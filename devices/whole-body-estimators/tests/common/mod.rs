@@ -5,60 +5,24 @@
 
 use std::collections::HashMap;
 use std::path::PathBuf;
-use std::process::Command;
 use std::time::{Duration, Instant};
 
-use yarp_interop_tests::{robot_addresses, run_fed, workspace_program, NetNs, Proc};
+use yarp_interop_tests::{Proc, RobotNet};
 
 pub fn shared() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared")
 }
 
-/// The robot's network: its namespace, the name server's configuration and every
-/// process group started in it (stopped at the end, however the test ends).
+/// The robot's network (stopped, with every program in it, when dropped) and its
+/// boards' port prefix (`/ergocub`, `/icub`).
 pub struct Robot {
-    /// The control boards' port prefix (`/ergocub`, `/icub`).
     pub prefix: String,
-    ns: NetNs,
-    conf: tempfile::TempDir,
-    groups: Vec<u32>,
+    pub net: RobotNet,
 }
 
 impl Robot {
-    pub fn cmd(&self, program: &str, package: &str) -> Command {
-        use std::os::unix::process::CommandExt;
-        let mut c = self.ns.command(workspace_program(program, package));
-        c.process_group(0)
-            .env("YARP_CONFIG_HOME", self.conf.path())
-            .env_remove("YARP_NAMESPACE")
-            .env("RUST_LOG", "info");
-        c
-    }
-
-    pub fn spawn(&mut self, name: &str, c: Command) -> Proc {
-        let p = Proc::spawn(name, c);
-        self.groups.push(p.pid());
-        p
-    }
-
     pub fn rpc(&self, port: &str, input: &str) -> String {
-        let mut c = self.cmd("yarp", "yarp-cli");
-        c.args(["rpc", port]);
-        run_fed("yarp rpc", c, input, Duration::from_secs(30))
-    }
-}
-
-impl Drop for Robot {
-    fn drop(&mut self) {
-        for signal in ["-TERM", "-KILL"] {
-            for pgid in &self.groups {
-                let _ = Command::new("kill")
-                    .args([signal, "--", &format!("-{pgid}")])
-                    .stderr(std::process::Stdio::null())
-                    .status();
-            }
-            std::thread::sleep(Duration::from_millis(300));
-        }
+        self.net.rpc(port, input)
     }
 }
 
@@ -94,7 +58,7 @@ pub fn axis_names(robot: &Robot) -> HashMap<&'static str, Vec<String>> {
     let mut out = HashMap::new();
     for part in PARTS {
         let port = format!("{}/{part}/rpc:i", robot.prefix);
-        let axes = numbers(&robot.rpc(&port, "[get] [axes]\n"))
+        let axes = numbers(&robot.net.rpc(&port, "[get] [axes]\n"))
             .first()
             .copied()
             .unwrap_or(0.0) as usize;
@@ -125,7 +89,7 @@ pub fn board_torques(
 ) -> HashMap<String, f64> {
     let mut out = HashMap::new();
     for part in PARTS {
-        let t = numbers(&robot.rpc(
+        let t = numbers(&robot.net.rpc(
             &format!("{}/{part}/rpc:i", robot.prefix),
             "[get] [torq] [trqs]\n",
         ));
@@ -167,7 +131,9 @@ pub fn pose(robot: &Robot, names: &HashMap<&'static str, Vec<String>>, targets: 
             })
             .collect();
         if !cmds.is_empty() {
-            robot.rpc(&format!("{}/{part}/rpc:i", robot.prefix), &cmds);
+            robot
+                .net
+                .rpc(&format!("{}/{part}/rpc:i", robot.prefix), &cmds);
         }
     }
     let start = Instant::now();
@@ -177,7 +143,11 @@ pub fn pose(robot: &Robot, names: &HashMap<&'static str, Vec<String>>, targets: 
         let now: Vec<f64> = PARTS
             .iter()
             .flat_map(|p| {
-                numbers(&robot.rpc(&format!("{}/{p}/rpc:i", robot.prefix), "[get] [encs]\n"))
+                numbers(
+                    &robot
+                        .net
+                        .rpc(&format!("{}/{p}/rpc:i", robot.prefix), "[get] [encs]\n"),
+                )
             })
             .collect();
         if !last.is_empty()
@@ -206,6 +176,8 @@ pub fn pose(robot: &Robot, names: &HashMap<&'static str, Vec<String>>, targets: 
 /// A running robot: its network, the emulator (with the body) and yarprobotinterface.
 pub struct Running {
     pub robot: Robot,
+    /// The name server (stopped when dropped).
+    pub server: Proc,
     pub emulator: Proc,
     pub ri: Proc,
     pub names: HashMap<&'static str, Vec<String>>,
@@ -231,27 +203,15 @@ pub struct RobotSpec {
 /// the emulated sensors have none) once the start-up calibration is over.
 pub fn start(spec: &RobotSpec, dir: &std::path::Path, stance: &str) -> Running {
     let urdf = &spec.urdf;
-    let mut robot = Robot {
+    let robot = Robot {
         prefix: spec.prefix.to_string(),
-        ns: NetNs::new().expect("a network namespace (run under netns-run)"),
-        conf: tempfile::tempdir().unwrap(),
-        groups: Vec::new(),
+        net: RobotNet::new(dir),
     };
-    robot
-        .ns
-        .add_addresses(&robot_addresses(dir))
-        .expect("the robot's addresses");
-    let mut server = {
-        let mut c = robot.cmd("yarpserver", "yarp-net");
-        c.args(["--ip", "127.0.0.1", "--socket", "10000", "--write"]);
-        robot.spawn("yarpserver", c)
-    };
-    server.wait_line("Ok. Ready!", Duration::from_secs(20));
-    std::mem::forget(server); // its process group is stopped with the robot's
+    let server = robot.net.server();
     let serial = dir.join(".serial");
     std::fs::create_dir_all(&serial).unwrap();
     let mut emulator = {
-        let mut c = robot.cmd("icub-robot-emulator", "icub-emulators");
+        let mut c = robot.net.cmd("icub-robot-emulator", "icub-emulators");
         c.arg(dir)
             .args(["--address-map", "", "--stance", stance])
             .arg("--serial-dir")
@@ -261,7 +221,7 @@ pub fn start(spec: &RobotSpec, dir: &std::path::Path, stance: &str) -> Running {
         if let Some(config) = spec.config {
             c.args(["--config", config]);
         }
-        robot.spawn("icub-robot-emulator", c)
+        robot.net.spawn("icub-robot-emulator", c)
     };
     emulator.wait_line("ready: ", Duration::from_secs(90));
     let env: Vec<(String, String)> = emulator
@@ -271,7 +231,7 @@ pub fn start(spec: &RobotSpec, dir: &std::path::Path, stance: &str) -> Running {
         .map(|(k, v)| (k.to_string(), v.to_string()))
         .collect();
     let mut ri = {
-        let mut c = robot.cmd("yarprobotinterface", "yarp-device-programs");
+        let mut c = robot.net.cmd("yarprobotinterface", "yarp-device-programs");
         c.current_dir(dir)
             .envs(env)
             .env("YARP_ROBOT_NAME", spec.name)
@@ -279,13 +239,13 @@ pub fn start(spec: &RobotSpec, dir: &std::path::Path, stance: &str) -> Running {
         if let Some(config) = spec.config {
             c.args(["--config", config]);
         }
-        robot.spawn("yarprobotinterface", c)
+        robot.net.spawn("yarprobotinterface", c)
     };
     ri.wait_line("running happily", Duration::from_secs(150));
     let names = axis_names(&robot);
     if stance == "fixed-root" {
         // The offsets against the body held at its root (the emulated sensors have none).
-        let reply = robot.rpc(spec.wbd_rpc, "calib all 300\n");
+        let reply = robot.net.rpc(spec.wbd_rpc, "calib all 300\n");
         assert!(reply.contains("[ok]"), "calib: {reply}");
         ri.wait_line(
             "F/T offsets calibrated over 300 samples",
@@ -297,7 +257,7 @@ pub fn start(spec: &RobotSpec, dir: &std::path::Path, stance: &str) -> Running {
         if !ri.seen.iter().any(|l| l.contains(done)) {
             ri.wait_line(done, Duration::from_secs(30));
         }
-        let reply = robot.rpc(spec.wbd_rpc, "resetOffset all\n");
+        let reply = robot.net.rpc(spec.wbd_rpc, "resetOffset all\n");
         assert!(reply.contains("[ok]"), "resetOffset: {reply}");
     }
     let text = std::fs::read_to_string(dir.join("estimators/wholebodydynamics.xml")).unwrap();
@@ -312,6 +272,7 @@ pub fn start(spec: &RobotSpec, dir: &std::path::Path, stance: &str) -> Running {
         .collect();
     Running {
         robot,
+        server,
         emulator,
         ri,
         names,
