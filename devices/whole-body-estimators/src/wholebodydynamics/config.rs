@@ -11,6 +11,10 @@ use super::NAME;
 yarp_devices::device_params! {
     /// What `wholebodydynamics` reads (whole-body-estimators' `WholeBodyDynamicsDevice`).
     pub struct WbdParams for "wholebodydynamics" {
+        // In the order C++'s open reads them (its first missing one is ours): the F/T
+        // sensors' remapper, the estimator, the settings, then the rest.
+        /// The F/T sensors used, by name (each a force_torque sensor of the URDF), in this order
+        "multipleAnalogSensorsNames::SixAxisForceTorqueSensorsNames" ft_names: Vec<String> = required,
         /// The joints estimated, by name: the model's degrees of freedom in this order,
         /// found on the attached boards by their axis names
         "axesNames" axes_names: Vec<String> = required,
@@ -55,8 +59,6 @@ yarp_devices::device_params! {
         "HW_USE_MAS_IMU::accelerometer" accelerometer: String = required,
         /// The IMU's gyroscope, by its multiple-analog-sensors name
         "HW_USE_MAS_IMU::gyroscope" gyroscope: String = required,
-        /// The F/T sensors used, by name (each a force_torque sensor of the URDF), in this order
-        "multipleAnalogSensorsNames::SixAxisForceTorqueSensorsNames" ft_names: Vec<String> = required,
         /// Frames of a full-wrench contact, the first of each submodel taken
         "defaultContactFrames" default_contact_frames: Vec<String> = optional,
         /// Contact frames replacing defaultContactFrames, with their types
