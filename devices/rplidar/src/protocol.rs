@@ -529,6 +529,8 @@ pub fn varbitscale_encode(mm: u32) -> u32 {
 
 /// The angle (q16 degrees) the SDK subtracts from an ultra measurement at `dist_q2`: the
 /// mean offset of the lidar's optics, shorter for near targets.
+// The SDK's own approximations of π, kept for the same integers.
+#[allow(clippy::approx_constant)]
 pub fn ultra_offset_q16(dist_q2: i64) -> i64 {
     let mut offset = (7.5 * 3.1415926535 * 65536.0 / 180.0) as i64;
     if dist_q2 >= 200 {
