@@ -8,9 +8,11 @@
 //! - [`eth`]: the Ethernet boards (`icub-eth-emulator`);
 //! - [`bno055`]: the Bosch BNO055 head IMU on a pseudo-terminal (`--bno055 PATH` of both);
 //! - [`body`]: the robot's body under gravity (and pushes), from its URDF, for what the
-//!   emulated F/T sensors and IMUs read (`--urdf PATH`).
+//!   emulated F/T sensors and IMUs read (`--urdf PATH`);
+//! - [`rplidar`]: a Slamtec RPLidar A2/A3 (R1's base lasers) without I/O, scanning a room.
 
 pub mod bno055;
 pub mod body;
 pub mod can_robot;
 pub mod eth;
+pub mod rplidar;

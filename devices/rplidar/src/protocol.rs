@@ -503,7 +503,7 @@ const VBS_SCALED_LEVEL: [u32; 5] = [4, 3, 2, 1, 0];
 const VBS_TARGET_BASE: [u32; 5] = [1 << 14, 1 << 12, 1 << 11, 1 << 9, 0];
 
 /// A scaled distance (mm) and its scale level.
-fn varbitscale_decode(scaled: u32) -> (u32, u32) {
+pub fn varbitscale_decode(scaled: u32) -> (u32, u32) {
     for i in 0..5 {
         if scaled >= VBS_SCALED_BASE[i] {
             let level = VBS_SCALED_LEVEL[i];
