@@ -242,7 +242,7 @@ impl EmulatedLidar {
                         (a * 64.0) as u16,
                         mm.saturating_mul(4),
                         47,
-                        i % per_rev == 0,
+                        i.is_multiple_of(per_rev),
                     ));
                     self.sent += 1;
                 }
