@@ -8,6 +8,14 @@
 //! - [`Model::A3`], firmware 1.26: three scan modes, Standard (`0x81`), Express (`0x82`) and
 //!   Boost (ultra capsules `0x84`, 63 µs a sample, the typical one).
 
+use std::io::ErrorKind;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use icub_can::emulator::mtx::{pty, MtxPort};
 use rplidar::protocol::{
     self, ans, cmd, conf, Capsule, Descriptor, DeviceInfo, RequestReader, UltraCapsule,
 };
@@ -314,6 +322,82 @@ impl EmulatedLidar {
             cabins,
         }
     }
+}
+
+/// A lidar served on a pseudo-terminal; stops (and removes its link) when dropped.
+pub struct LidarHandle {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    link: Option<(PathBuf, PathBuf)>,
+}
+
+impl Drop for LidarHandle {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::SeqCst);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+        if let Some((link, pts)) = self.link.take() {
+            if std::fs::read_link(&link).is_ok_and(|target| target == pts) {
+                let _ = std::fs::remove_file(&link);
+            }
+        }
+    }
+}
+
+/// Serves `lidar` on `port` in a thread until the handle is dropped: answers as requests
+/// come, streams its scan as it turns.
+pub fn serve(mut port: impl MtxPort, mut lidar: EmulatedLidar) -> std::io::Result<LidarHandle> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let st = stop.clone();
+    let thread = std::thread::Builder::new()
+        .name("rplidar".into())
+        .spawn(move || {
+            let start = Instant::now();
+            let mut buf = [0u8; 256];
+            let _ = port.set_read_timeout(Duration::from_millis(2));
+            while !st.load(Ordering::SeqCst) {
+                let now = start.elapsed().as_secs_f64();
+                match port.read(&mut buf) {
+                    Ok(n) => {
+                        let answer = lidar.handle(&buf[..n], now);
+                        let _ = port.write_all(&answer);
+                    }
+                    Err(e)
+                        if matches!(
+                            e.kind(),
+                            ErrorKind::TimedOut | ErrorKind::Interrupted | ErrorKind::WouldBlock
+                        ) => {}
+                    Err(e) => {
+                        // the host side closed (pty hang-up): wait for it to come back
+                        tracing::trace!("emulated RPLidar: {e}");
+                        std::thread::sleep(Duration::from_millis(10));
+                    }
+                }
+                let out = lidar.stream(start.elapsed().as_secs_f64());
+                if !out.is_empty() {
+                    let _ = port.write_all(&out);
+                }
+            }
+        })?;
+    Ok(LidarHandle {
+        stop,
+        thread: Some(thread),
+        link: None,
+    })
+}
+
+/// Serves a new lidar on a pseudo-terminal reachable as `link` (the `serial_port` a
+/// robot file names, or the path the device is pointed at); the terminal's own path too.
+pub fn pty_link(link: &Path, model: Model) -> std::io::Result<(LidarHandle, PathBuf)> {
+    let (port, path) = pty()?;
+    if link.symlink_metadata().is_ok() {
+        std::fs::remove_file(link)?;
+    }
+    std::os::unix::fs::symlink(&path, link)?;
+    let mut handle = serve(port, EmulatedLidar::new(model))?;
+    handle.link = Some((link.to_path_buf(), path.clone()));
+    Ok((handle, path))
 }
 
 #[cfg(test)]

@@ -23,10 +23,6 @@ use yarp_interop_tests::RobotNet;
 /// the log line naming it, the reason). A robot whose start-up C++ refuses as a whole has
 /// one entry, matched against what our programs print when they refuse it.
 const KNOWN: &[(&str, &str, &str)] = &[
-    ("R1SN001", "cer_laser_back_device (rpLidar3)", RPLIDAR),
-    ("R1SN001", "cer_laser_front_device (rpLidar3)", RPLIDAR),
-    ("R1SN002", "cer_laser_back_device (rpLidar2)", RPLIDAR),
-    ("R1SN002", "cer_laser_front_device (rpLidar2)", RPLIDAR),
     ("iCubPrague01", "OrientationSensorsNames", ORIENTATION),
     ("iCubShanghai01", "OrientationSensorsNames", ORIENTATION),
     ("iCubTokyo01", "right_leg_oints", OINTS),
@@ -102,10 +98,6 @@ const KNOWN: &[(&str, &str, &str)] = &[
     ),
 ];
 
-/// Device types this build lacks yet.
-const RPLIDAR: &str =
-    "rpLidar2/rpLidar3 (robotology/yarp-device-rplidar, on Slamtec's serial protocol) are not in \
-     this build yet, nor an emulated RPLidar";
 /// Device types C++ YARP 3.12 lacks too: its yarprobotinterface stops at them ("Could not find
 /// device"), ours with --keep-going goes on without them.
 const WBD_OLD: &str =

@@ -3,13 +3,14 @@
 //! command: its Ethernet boards (`icub-eth-emulator`), its CAN buses (`icub-board-emulator`,
 //! one UDP hub per network from `--can-port`, default 20000), and its serial devices on
 //! pseudo-terminals in `--serial-dir` (default: a directory of its own): the head's Xsens
-//! MTx (`xsensmtx`), an Xsens MTi (`xsensmt`) and a Bosch BNO055 (`imuBosch_BNO055`, on
-//! a serial line even where the robot has it on I2C).
+//! MTx (`xsensmtx`), an Xsens MTi (`xsensmt`), a Bosch BNO055 (`imuBosch_BNO055`, on
+//! a serial line even where the robot has it on I2C) and R1's RPLidars (`rpLidar2`: an A2,
+//! `rpLidar3`: an A3, served by this program).
 //!
 //! It prints, for `yarprobotinterface` to be run with, one `env NAME=VALUE` line per
 //! environment variable that points the robot's devices at the emulators
 //! (`YARP_ICUB_ETH_ADDRESS_MAP`, `YARP_ICUB_CAN_BACKEND`, `YARP_ICUB_XSENS_SERIAL`,
-//! `YARP_BNO055_COMPORT`), then `ready` once every emulator serves. With `--urdf` the
+//! `YARP_BNO055_COMPORT`, `YARP_RPLIDAR_PORTS`), then `ready` once every emulator serves. With `--urdf` the
 //! Ethernet robot gets a body (`icub-eth-emulator --urdf`): its F/T sensors and its MTi
 //! (the body's accelerometer its device's `sensor_name` names) read the body's statics,
 //! and `push LINK FX FY FZ` lines on standard input push it. SIGINT or SIGTERM
@@ -99,6 +100,8 @@ struct Needs {
     /// The MTi's `sensor_name`: the body's accelerometer it is.
     mti_sensor: Option<String>,
     bno055: bool,
+    /// The RPLidars: their files' serial ports and models.
+    lidars: Vec<(String, icub_emulators::rplidar::Model)>,
 }
 
 fn needs(dir: &Path, top: &Path) -> Result<Needs, String> {
@@ -119,6 +122,22 @@ fn needs(dir: &Path, top: &Path) -> Result<Needs, String> {
             // on a serial line or an I2C bus: the emulated chip speaks UART for both
             // (`YARP_BNO055_COMPORT` moves the device to it)
             "imuBosch_BNO055" => n.bno055 = true,
+            kind @ ("rpLidar2" | "rpLidar3") => {
+                let port = d.to_property().ok().and_then(|p| {
+                    p.find_group("GENERAL")
+                        .and_then(|g| g.find("serial_port"))
+                        .and_then(|v| v.as_str().map(str::to_string))
+                });
+                if let Some(port) = port {
+                    // rpLidar2 drives A1/A2 lidars, rpLidar3 the A3s of R1SN001
+                    let model = if kind == "rpLidar2" {
+                        icub_emulators::rplidar::Model::A2
+                    } else {
+                        icub_emulators::rplidar::Model::A3
+                    };
+                    n.lidars.push((port, model));
+                }
+            }
             _ => {}
         }
     }
@@ -291,17 +310,36 @@ fn run(o: Options, stop: &AtomicBool) -> Result<(), String> {
         }
         running.push(eth);
     }
+    // the RPLidars, on pseudo-terminals served here
+    let mut lidars = Vec::new();
+    let mut moved = Vec::new();
+    for (k, (port, model)) in n.lidars.iter().enumerate() {
+        let link = serial_dir.join(format!("rplidar-{k}"));
+        let (handle, _) = icub_emulators::rplidar::pty_link(&link, *model)
+            .map_err(|e| format!("RPLidar on {}: {e}", link.display()))?;
+        lidars.push(handle);
+        moved.push(format!("{port}={}", text(&link)));
+    }
+    if !moved.is_empty() {
+        env.push(format!("YARP_RPLIDAR_PORTS={}", moved.join(",")));
+    }
     for e in &env {
         println!("env {e}");
     }
     println!(
-        "ready: {} Ethernet boards, {} CAN networks{}{}{}",
+        "ready: {} Ethernet boards, {} CAN networks{}{}{}{}",
         n.eth_boards,
         n.can_networks,
         if n.mtx { ", Xsens MTx" } else { "" },
         if n.mti { ", Xsens MTi" } else { "" },
         if n.bno055 { ", BNO055" } else { "" },
+        if n.lidars.is_empty() {
+            String::new()
+        } else {
+            format!(", {} RPLidars", n.lidars.len())
+        },
     );
+
     loop {
         if stop.load(Ordering::SeqCst) {
             return Ok(());
