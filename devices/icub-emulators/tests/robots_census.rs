@@ -39,7 +39,11 @@ const KNOWN: &[(&str, &str, &str)] = &[
     ("robots-icebox/iCubAnkara01", "l_foot_ft (found", L_FOOT_FT),
     ("robots-icebox/iCubBarcelona01", "right_leg_oints", OINTS),
     ("robots-icebox/iCubDijon01", "l_foot_ft (found", L_FOOT_FT),
-    ("robots-icebox/iCubGenova04", "HW_USE_MAS_IMU", WBD_OLD),
+    (
+        "robots-icebox/iCubGenova04",
+        "multipleAnalogSensorsNames",
+        WBD_OLD,
+    ),
     (
         "robots-icebox/iCubGenova09",
         "impossible to find modelFile",
@@ -101,8 +105,9 @@ const KNOWN: &[(&str, &str, &str)] = &[
 /// Device types C++ YARP 3.12 lacks too: its yarprobotinterface stops at them ("Could not find
 /// device"), ours with --keep-going goes on without them.
 const WBD_OLD: &str =
-    "its wholebodydynamics file predates the HW_USE_MAS_IMU group whole-body-estimators \
-     requires: C++'s open fails too (\"missing required group parameter HW_USE_MAS_IMU\")";
+    "its wholebodydynamics file predates the groups whole-body-estimators requires \
+     (multipleAnalogSensorsNames, HW_USE_MAS_IMU): C++'s open fails too (\"Impossible to find \
+     required group multipleAnalogSensorsNames\")";
 const NO_MODEL: &str =
     "no URDF of this retired iCub is installed (PyPI's icub-models 3.2.0 has none): C++'s \
      wholebodydynamics does not find its modelFile either";
