@@ -141,16 +141,7 @@ fn ergocub_push_on_the_palm_is_estimated() {
     check_torques(&mut r, &arm, "before the push");
     let before = board_torques(&r.robot, &r.names);
     let truth_before = body_torques(&mut r.emulator);
-    {
-        use std::io::Write;
-        writeln!(
-            r.emulator.child.stdin.as_mut().unwrap(),
-            "push l_hand_palm 0 0 -10"
-        )
-        .unwrap();
-    }
-    r.emulator
-        .wait_line("pushed: push l_hand_palm", Duration::from_secs(10));
+    push_down(&mut r, "l_hand_palm");
     let worst = check_torques(&mut r, &arm, "pushed");
     let after = board_torques(&r.robot, &r.names);
     let truth_after = body_torques(&mut r.emulator);
@@ -164,25 +155,10 @@ fn ergocub_push_on_the_palm_is_estimated() {
     eprintln!("worst difference {:.4} N·m ({})", worst.0, worst.1);
     // The palm's wrench port: (l_hand_palm, l_hand_palm, root_link), the root's axes
     // (the world's: the robot hangs upright), about the palm.
-    let mut reader = {
-        let mut c = r.robot.net.cmd("yarp", "yarp-cli");
-        c.args([
-            "read",
-            "/reader",
-            "/wholeBodyDynamics/left_arm/cartesianEndEffectorWrench:o",
-        ]);
-        r.robot.net.spawn("yarp read", c)
-    };
-    let line = loop {
-        let l = reader.wait_line(".", Duration::from_secs(10));
-        let v: Vec<f64> = l
-            .split_whitespace()
-            .filter_map(|w| w.parse().ok())
-            .collect();
-        if v.len() == 6 {
-            break v;
-        }
-    };
+    let line = read_wrench(
+        &r,
+        "/wholeBodyDynamics/left_arm/cartesianEndEffectorWrench:o",
+    );
     let force = (line[0], line[1], line[2]);
     assert!(
         force.0.abs() < 0.5 && force.1.abs() < 0.5 && (force.2 + 10.0).abs() < 0.5,

@@ -14,7 +14,6 @@ mod common;
 
 use common::*;
 use std::path::PathBuf;
-use std::time::Duration;
 
 /// The ROS venv's icub-models (tests/peers/install-ros2.sh installs it there).
 fn icub_models() -> Option<PathBuf> {
@@ -122,16 +121,7 @@ fn icub_on_its_pole_torques_and_a_push_are_the_bodys() {
     }
     eprintln!("worst difference {:.4} N·m ({})", worst.0, worst.1);
     // 10 N down on the left hand.
-    {
-        use std::io::Write;
-        writeln!(
-            r.emulator.child.stdin.as_mut().unwrap(),
-            "push l_hand 0 0 -10"
-        )
-        .unwrap();
-    }
-    r.emulator
-        .wait_line("pushed: push l_hand", Duration::from_secs(10));
+    push_down(&mut r, "l_hand");
     let arm: Vec<String> = [
         "l_shoulder_pitch",
         "l_shoulder_roll",
@@ -142,25 +132,10 @@ fn icub_on_its_pole_torques_and_a_push_are_the_bodys() {
     .to_vec();
     let w = check_torques(&mut r, &arm, "pushed");
     eprintln!("pushed: worst difference {:.4} N·m ({})", w.0, w.1);
-    let mut reader = {
-        let mut c = r.robot.net.cmd("yarp", "yarp-cli");
-        c.args([
-            "read",
-            "/reader",
-            "/icub02/wholeBodyDynamics/left_arm/cartesianEndEffectorWrench:o",
-        ]);
-        r.robot.net.spawn("yarp read", c)
-    };
-    let wrench = loop {
-        let l = reader.wait_line(".", Duration::from_secs(10));
-        let v: Vec<f64> = l
-            .split_whitespace()
-            .filter_map(|w| w.parse().ok())
-            .collect();
-        if v.len() == 6 {
-            break v;
-        }
-    };
+    let wrench = read_wrench(
+        &r,
+        "/icub02/wholeBodyDynamics/left_arm/cartesianEndEffectorWrench:o",
+    );
     assert!(
         wrench[0].abs() < 0.5 && wrench[1].abs() < 0.5 && (wrench[2] + 10.0).abs() < 0.5,
         "the hand's external wrench {wrench:?}, pushed with (0, 0, -10) N"

@@ -320,3 +320,36 @@ pub fn copy_dir(from: &std::path::Path, to: &std::path::Path) {
         }
     }
 }
+
+/// Pushes `link` down with 10 N through the emulator's standard input, once it says so.
+pub fn push_down(r: &mut Running, link: &str) {
+    use std::io::Write;
+    writeln!(
+        r.emulator
+            .child
+            .stdin
+            .as_mut()
+            .expect("the emulator's stdin"),
+        "push {link} 0 0 -10"
+    )
+    .unwrap();
+    r.emulator
+        .wait_line(&format!("pushed: push {link}"), Duration::from_secs(10));
+}
+
+/// The first six numbers a wrench port sends (`yarp read`).
+pub fn read_wrench(r: &Running, port: &str) -> Vec<f64> {
+    let mut c = r.robot.net.cmd("yarp", "yarp-cli");
+    c.args(["read", "/reader", port]);
+    let mut reader = r.robot.net.spawn("yarp read", c);
+    loop {
+        let l = reader.wait_line(".", Duration::from_secs(10));
+        let v: Vec<f64> = l
+            .split_whitespace()
+            .filter_map(|w| w.parse().ok())
+            .collect();
+        if v.len() == 6 {
+            return v;
+        }
+    }
+}
