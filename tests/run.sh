@@ -23,4 +23,8 @@ cargo test --workspace --doc --quiet
 echo "== programs (yarp, yarpserver, yarpdev, yarprobotinterface, gateway, emulator, launcher)"
 cargo build --workspace --bins --quiet
 echo "== tests (under netns-run)"
-"$netns_run" cargo nextest run --workspace --no-fail-fast
+status=0
+"$netns_run" cargo nextest run --workspace --no-fail-fast || status=$?
+echo "== prune the target directory to this build"
+tests/prune-target.sh || true
+exit $status
