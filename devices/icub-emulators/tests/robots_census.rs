@@ -8,7 +8,7 @@
 //! For each robot: start-up reaches "running happily"; what does not open or attach is
 //! exactly the robot's entries in [`KNOWN`] (each with its reason: a device type this build
 //! lacks yet, or a file C++ refuses too); every control board (a port `…/rpc:i` beside a
-//! `…/state:o`) answers `get axes`, and one part's `state:o` streams; Ctrl-C parks and
+//! `…/state:o` and a `…/stateExt:o`) answers `get axes`, and one part's `state:o` streams; Ctrl-C parks and
 //! closes (exit 0) within 60 s. Start-up times are printed (`census ROBOT up S s`), for
 //! BENCHMARKS.md. Directories without a yarprobotinterface file predate it: C++ cannot
 //! run them either.
@@ -317,7 +317,9 @@ fn census(robot: &str) {
     let boards: Vec<&str> = names
         .iter()
         .filter_map(|n| n.strip_suffix("/rpc:i"))
+        // a board's wrapper streams stateExt:o too (a Cartesian controller has only state:o)
         .filter(|p| names.contains(&format!("{p}/state:o").as_str()))
+        .filter(|p| names.contains(&format!("{p}/stateExt:o").as_str()))
         .collect();
     // a part whose remapper C++ refuses too has its wrapper but no board behind it
     let unserved: Vec<&str> = UNSERVED

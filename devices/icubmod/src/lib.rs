@@ -1,6 +1,6 @@
 //! `icubmod`: the iCub devices of icub-main (`src/libraries/icubmod`), as drivers of the
 //! YARP device framework (crate `yarp-devices`). The CAN devices run over the driver cores
-//! of crate `icub_can`, the cartesian server over the kinematics of crate `icub_ikin`:
+//! of crate `icub_can` (the Cartesian controller is crate `icub_cartesian`'s):
 //!
 //! | device (icub-main directory) | module | interfaces |
 //! |------------------------------|--------|------------|
@@ -13,8 +13,7 @@
 //! | `imuFilter` | [`imu_filter`] | an IMU with its gyro bias removed (`IMultipleWrapper` + the IMU interfaces) |
 //! | `skinWrapper` | [`skin_wrapper`] | an `analogServer` per skin part |
 //! | `parametricCalibrator` | [`calibrator`] | `ICalibrator`, `IRemoteCalibrator` |
-//! | `cartesiancontrollerserver` (`cartesianController`) | [`cartesian`] | `IMultipleWrapper` (pose on `state:o`) |
-//!
+//! //!
 //! Programs make them known with [`register`] before opening devices:
 //! `yarp_devices::Registry::install(icubmod::register)`.
 //!
@@ -28,7 +27,6 @@
 pub mod analog;
 pub mod boards;
 pub mod calibrator;
-pub mod cartesian;
 pub mod common;
 pub mod eth;
 pub mod imu_filter;
@@ -43,7 +41,6 @@ pub mod xsens;
 
 pub use analog::CanBusAnalogSensor;
 pub use calibrator::ParametricCalibrator;
-pub use cartesian::CartesianControllerServer;
 pub use imu_filter::ImuFilter;
 pub use inertial::CanBusInertialMtb;
 pub use motion_control::CanMotionControl;
@@ -88,9 +85,6 @@ pub const DRIVERS: &[(&str, Factory)] = &[
         Box::new(raw_values::fake::FakeRawValuesPublisher::new())
     }),
     ("skinWrapper", || Box::new(SkinWrapper::new())),
-    (cartesian::NAME, || {
-        Box::new(CartesianControllerServer::new())
-    }),
 ];
 
 /// Adds the iCub drivers to `registry` (`Registry::install(icubmod::register)`).

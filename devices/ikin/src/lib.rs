@@ -59,6 +59,7 @@ pub mod error;
 pub mod ik;
 pub mod limbs;
 pub mod link;
+pub mod minjerk;
 pub mod pose;
 pub mod properties;
 

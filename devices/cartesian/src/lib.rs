@@ -1,0 +1,30 @@
+//! icub-main's Cartesian control for the YARP device framework, wire-compatible with C++:
+//!
+//! | C++ | here |
+//! |---|---|
+//! | `iKinCartesianSolver` module (iKin's `CartesianSolver`) | [`solver`] (sans I/O), [`solver_service`], the `iKinCartesianSolver` program |
+//! | `cartesiancontrollerserver` (`ServerCartesianController`) | [`server`] (sans I/O), [`server_device`] |
+//! | the protocol's vocabs and `CartesianHelper` options | [`protocol`] |
+//!
+//! The min-jerk controller that plans the joints is iKin's, in [`icub_ikin::minjerk`].
+#![forbid(unsafe_code)]
+
+pub mod protocol;
+pub mod server;
+pub mod server_device;
+pub mod solver;
+pub mod solver_service;
+
+use yarp_devices::driver::{Factory, Registry};
+
+/// The provider name `yarpdev --list` shows.
+pub const PROVIDER: &str = "icub-cartesian";
+
+const DRIVERS: &[(&str, Factory)] = &[(server::NAME, || {
+    Box::new(server_device::CartesianControllerServer::new())
+})];
+
+/// Adds the Cartesian devices to `registry` (`Registry::install(icub_cartesian::register)`).
+pub fn register(registry: &mut Registry) {
+    registry.add(PROVIDER, DRIVERS);
+}
