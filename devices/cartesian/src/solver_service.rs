@@ -233,7 +233,7 @@ fn wait_part(cfg: &SolverConfig, name: &str, part: &str) -> Result<PolyDriver, S
                     });
                 }
                 tracing::info!(
-                    "{name}: /{}/{part} not yet: still {left:.1} s to timeout expiry",
+                    "{name}: /{}/{part} not yet ({e}): still {left:.1} s to timeout expiry",
                     cfg.robot
                 );
                 std::thread::sleep(Duration::from_secs(1));
