@@ -5,6 +5,7 @@
 //! the driver implements that interface (the Rust form of C++ `PolyDriver::view`).
 
 use crate::battery::IBattery;
+use crate::cartesian_control::ICartesianControl;
 use crate::error::{DevResult, DeviceError};
 use crate::framegrabber::interfaces::{
     IFrameGrabberControls, IFrameGrabberControlsDC1394, IFrameGrabberImage,
@@ -191,6 +192,8 @@ crate::device_interfaces! {
     as_navigation_2d_velocity: INavigation2DVelocityActions => "INavigation2DVelocityActions" (Motor),
     as_frame_transform_storage_get: IFrameTransformStorageGet => "IFrameTransformStorageGet" (Other),
     as_frame_transform_storage_set: IFrameTransformStorageSet => "IFrameTransformStorageSet" (Other),
+    // Operational-space control.
+    as_cartesian_control: ICartesianControl => "ICartesianControl" (Other),
     // Wrappers and calibrators.
     as_wrapper: IWrapper => "IWrapper" (Wrapper),
     as_multiple_wrapper: IMultipleWrapper => "IMultipleWrapper" (Wrapper),

@@ -9,6 +9,7 @@
 
 pub mod battery;
 pub mod bundler;
+pub mod cartesian_control;
 pub mod controlboard;
 pub mod driver;
 pub mod error;

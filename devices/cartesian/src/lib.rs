@@ -4,11 +4,13 @@
 //! |---|---|
 //! | `iKinCartesianSolver` module (iKin's `CartesianSolver`) | [`solver`] (sans I/O), [`solver_service`], the `iKinCartesianSolver` program |
 //! | `cartesiancontrollerserver` (`ServerCartesianController`) | [`server`] (sans I/O), [`server_device`] |
+//! | `cartesiancontrollerclient` (`ClientCartesianController`) | [`client`], as `yarp_devices`' `ICartesianControl` |
 //! | the protocol's vocabs and `CartesianHelper` options | [`protocol`] |
 //!
 //! The min-jerk controller that plans the joints is iKin's, in [`icub_ikin::minjerk`].
 #![forbid(unsafe_code)]
 
+pub mod client;
 pub mod protocol;
 pub mod server;
 pub mod server_device;
@@ -20,9 +22,14 @@ use yarp_devices::driver::{Factory, Registry};
 /// The provider name `yarpdev --list` shows.
 pub const PROVIDER: &str = "icub-cartesian";
 
-const DRIVERS: &[(&str, Factory)] = &[(server::NAME, || {
-    Box::new(server_device::CartesianControllerServer::new())
-})];
+const DRIVERS: &[(&str, Factory)] = &[
+    (server::NAME, || {
+        Box::new(server_device::CartesianControllerServer::new())
+    }),
+    (client::NAME, || {
+        Box::new(client::CartesianControllerClient::new())
+    }),
+];
 
 /// Adds the Cartesian devices to `registry` (`Registry::install(icub_cartesian::register)`).
 pub fn register(registry: &mut Registry) {

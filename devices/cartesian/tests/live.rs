@@ -459,3 +459,93 @@ fn cpp_client_reaches_three_poses_on_our_server_and_on_cpps_beside_it() {
         );
     }
 }
+
+#[test]
+fn rust_client_reaches_three_poses_reads_events_and_stops_at_the_closest_reachable() {
+    let test = "rust_client_reaches_three_poses_reads_events_and_stops_at_the_closest_reachable";
+    let _robot = up(test);
+    wait_solver(test, CTRL);
+    let mut pd = PolyDriver::open(&Property::from_text(format!(
+        "(device cartesiancontrollerclient) (remote {CTRL}) (local /rust_cartesian_client)"
+    )))
+    .expect("cartesiancontrollerclient");
+    let cart = pd
+        .device()
+        .as_cartesian_control()
+        .expect("ICartesianControl");
+    let info = cart.get_info().unwrap();
+    assert!(
+        info.to_string().contains("(server_version \"2.0\")"),
+        "{info}"
+    );
+    assert!(info.to_string().contains("(arm_type left_v2)"), "{info}");
+    let ctx = cart.store_context().unwrap();
+    let traj_time = 1.0;
+    cart.set_traj_time(traj_time).unwrap();
+    cart.set_in_target_tol(1e-3).unwrap();
+    cart.register_ongoing_checkpoint(0.5).unwrap();
+    for want in reachable_poses() {
+        let (x, o) = (
+            [want[0], want[1], want[2]],
+            [want[3], want[4], want[5], want[6]],
+        );
+        // the solver's answer for it, without moving
+        let asked = cart.ask_for_pose(&x, &o, None).unwrap();
+        assert_eq!(asked.q.len(), 10, "{asked:?}");
+        cart.take_events();
+        cart.go_to_pose_sync(&x, &o, 0.0).unwrap();
+        assert!(
+            cart.wait_motion_done(0.01, 10.0).unwrap(),
+            "{test}: not done"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+        let ((px, po), _) = cart.get_pose().unwrap();
+        let dist = (0..3).map(|k| (px[k] - x[k]).powi(2)).sum::<f64>().sqrt();
+        let ang = axis_angle_error(&po, &o) * RAD2DEG;
+        assert!(
+            dist < 1e-3 && ang < 2.0,
+            "{test}: {:.2} mm, {ang:.2} deg",
+            dist * 1e3
+        );
+        let kinds: Vec<String> = cart
+            .take_events()
+            .iter()
+            .map(|e| match e.checkpoint {
+                Some(c) => format!("{} {c}", e.kind),
+                None => e.kind.clone(),
+            })
+            .collect();
+        assert_eq!(
+            kinds.first().map(String::as_str),
+            Some("motion-onset"),
+            "{kinds:?}"
+        );
+        assert!(kinds.iter().any(|k| k == "motion-ongoing 0.5"), "{kinds:?}");
+        assert_eq!(
+            kinds.last().map(String::as_str),
+            Some("motion-done"),
+            "{kinds:?}"
+        );
+    }
+    // out of reach: the hand ends where the solver's closest answer is, and says done
+    let far = [-1.5, -0.2, 0.4];
+    cart.go_to_position_sync(&far, 0.0).unwrap();
+    assert!(
+        cart.wait_motion_done(0.01, 10.0).unwrap(),
+        "{test}: not done"
+    );
+    std::thread::sleep(Duration::from_millis(100));
+    let des = cart.get_desired().unwrap();
+    let ((px, _), _) = cart.get_pose().unwrap();
+    let gap = (0..3)
+        .map(|k| (px[k] - des.x[k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(gap < 2e-3, "{test}: {gap} m from the solver's closest pose");
+    let reach = (0..3).map(|k| (px[k] - far[k]).powi(2)).sum::<f64>().sqrt();
+    assert!(reach > 0.5, "{test}: an out-of-reach target reached?");
+    cart.restore_context(ctx).unwrap();
+    assert_eq!(cart.get_traj_time().unwrap(), 2.0);
+    assert_eq!(cart.get_dof().unwrap(), vec![0, 0, 0, 1, 1, 1, 1, 1, 1, 1]);
+    pd.close().unwrap();
+}
