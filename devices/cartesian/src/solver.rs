@@ -30,6 +30,8 @@ pub enum SolverConfigError {
     NoName(String),
     #[error("type {0}: {1}")]
     Type(String, icub_ikin::KinError),
+    #[error("{0}: custom kinematics (CustomKinFile) are not supported by this build")]
+    Custom(String),
 }
 
 /// A solver's configuration: one group of `cartesianSolver.ini`, as
@@ -70,6 +72,10 @@ impl SolverConfig {
         let group = ini
             .find_group(part)
             .ok_or_else(|| SolverConfigError::NoGroup(part.into()))?;
+        // C++ runs a CustomCartesianSolver for such a group, whatever its name
+        if group.check("CustomKinFile") {
+            return Err(SolverConfigError::Custom(part.into()));
+        }
         let text = |k: &str| {
             group.find(k).and_then(|v| match v {
                 Value::Vocab32(w) => Some(w.as_string()),

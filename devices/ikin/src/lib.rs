@@ -47,8 +47,8 @@
 //! arm.chain_mut().set_ang(sol.q.as_slice())?;
 //! # let _ = pose;
 //!
-//! // Unknown hardware versions are rejected with the list of known ones.
-//! let err = Limb::arm("left_v9").unwrap_err().to_string();
+//! // Unknown sides are rejected with the list of known types.
+//! let err = Limb::arm("middle_v2").unwrap_err().to_string();
 //! assert!(err.contains("left_v2.5"));
 //! # Ok::<(), icub_ikin::KinError>(())
 //! ```

@@ -12,9 +12,10 @@
 //! | torso | `""`, `v1` … `v3` (as the arm) | < 3 or iCub 3 |
 //! | finger | `<side>_<thumb\|index\|middle\|ring\|little>[_<na\|a\|b>]` | thumb `a` or `b` (default) |
 //!
-//! iKin parses the arm version as a number and falls back to a default limb
-//! for anything else; here every accepted string is listed and anything else
-//! is a [`KinError::UnknownType`].
+//! iKin parses the version as a number and picks the geometry by thresholds, so
+//! a version between the listed ones (`left_v2.7` for a leg) is taken as C++
+//! takes it; a side other than `left`/`right` or a version that is no number is a
+//! [`KinError::UnknownType`] listing the usual strings.
 
 use std::f64::consts::{FRAC_PI_2 as P2, PI};
 
@@ -65,7 +66,7 @@ impl LimbKind {
 /// Hardware versions of the arm (iKin picks the geometry by numeric
 /// thresholds 1.7, 2.0 and 3.0 on the number after `_v`).
 pub const ARM_VERSIONS: &[&str] = &["v1", "v1.5", "v1.7", "v2", "v2.5", "v2.6", "v2.7", "v3"];
-/// Hardware versions of the leg (matched literally by iKin).
+/// Hardware versions of the leg (< 2, < 3 and 3 by iKin's thresholds).
 pub const LEG_VERSIONS: &[&str] = &["v1", "v2.5", "v3"];
 /// Hardware versions of the eye, eye-neck-ref and head-center chains.
 pub const EYE_VERSIONS: &[&str] = &["v1", "v2", "v2.5", "v2.6", "v3"];
@@ -165,7 +166,12 @@ fn side_version<'a>(kind: LimbKind, t: &'a str, versions: &[&str]) -> Result<(Si
         "right" => Side::Right,
         _ => return Err(unknown(kind, t)),
     };
-    if !versions.contains(&ver) {
+    // iKin reads the number after `_v` and picks the geometry by thresholds: a version
+    // between the listed ones (a leg's `v2.7`, on seven robots) is as good as C++ takes it
+    let numeric = ver
+        .strip_prefix('v')
+        .is_some_and(|n| n.parse::<f64>().is_ok_and(f64::is_finite));
+    if !versions.contains(&ver) && !numeric {
         return Err(unknown(kind, t));
     }
     Ok((side, ver))
@@ -532,7 +538,15 @@ fn leg(t: &str) -> Result<(Chain, f64)> {
     let (side, v) = side_version(LimbKind::Leg, t, LEG_VERSIONS)?;
     let ver = version_number(v);
     let y = if side == Side::Right { 1.0 } else { -1.0 };
-    let (h0, links) = match (side, v) {
+    // iKin 2.11: below 2 the first legs, below 3 the v2.5 legs, then the iCub 3's
+    let era = if ver < 2.0 {
+        "v1"
+    } else if ver < 3.0 {
+        "v2.5"
+    } else {
+        "v3"
+    };
+    let (h0, links) = match (side, era) {
         (Side::Right, "v1") => (
             leg_h0_v1(0.0681),
             vec![
