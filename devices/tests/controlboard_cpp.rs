@@ -565,3 +565,70 @@ fn our_remote_drives_cpp_fake_motion_control() {
     amp.set_max_current(0, 2.0).unwrap();
     assert_eq!(amp.get_max_current(0).unwrap(), 2.0);
 }
+
+/// C++'s wrapper before its board is attached (a robot starting up: its ports exist, `get
+/// axes` fails): our `remote_controlboard` fails to open, and so again when retried with
+/// the same local ports, as iKinCartesianSolver's `waitPart` retries, never hanging.
+#[test]
+fn our_remote_retries_a_cpp_wrapper_without_its_board() {
+    let test = "our_remote_retries_a_cpp_wrapper_without_its_board";
+    let Some(yarp) = cpp_program(test, "yarp") else {
+        return;
+    };
+    let bin = yarp.parent().unwrap();
+    let _srv = cpp_yarpdev(
+        bin,
+        &[
+            "--device",
+            "controlBoard_nws_yarp",
+            "--name",
+            "/cppnoboard",
+            "--period",
+            "0.01",
+        ],
+        "/cppnoboard/rpc:i",
+    );
+    let cfg = Property::from_config_text(
+        "device remote_controlboard\nremote /cppnoboard\nlocal /retrycpp\n",
+    )
+    .unwrap();
+    for attempt in 0..3 {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let cfg = cfg.clone();
+        std::thread::spawn(move || {
+            let _ = tx.send(
+                PolyDriver::open(&cfg)
+                    .map(|_| ())
+                    .map_err(|e| e.to_string()),
+            );
+        });
+        let got = rx
+            .recv_timeout(std::time::Duration::from_secs(30))
+            .unwrap_or_else(|_| panic!("{test}: open #{attempt} hangs"));
+        assert!(got.is_err(), "{test}: open #{attempt}: {got:?}");
+    }
+}
+
+/// Our `remote_controlboard` closed and opened again with the same local ports (a client
+/// restarted) gets C++'s wrapper's stream again: closing asked C++'s udp output to go.
+#[test]
+fn our_remote_reopened_gets_the_cpp_stream_again() {
+    let test = "our_remote_reopened_gets_the_cpp_stream_again";
+    let Some(yarp) = cpp_program(test, "yarp") else {
+        return;
+    };
+    let bin = yarp.parent().unwrap();
+    let _srv = cpp_board(bin, "/cppreopen");
+    let cfg = Property::from_config_text(
+        "device remote_controlboard\nremote /cppreopen\nlocal /reopen\n",
+    )
+    .unwrap();
+    for attempt in 0..3 {
+        let mut pd = PolyDriver::open(&cfg).expect("remote_controlboard");
+        let got = controlboard_common::wait_for("encoders", || {
+            pd.device().as_encoders().unwrap().get_encoders().ok()
+        });
+        assert!(!got.is_empty(), "{test}: attempt {attempt}");
+        pd.close().unwrap();
+    }
+}

@@ -258,6 +258,42 @@ fn remote_drives_our_wrapper_over_tcp() {
     exercise(&mut remote);
 }
 
+/// A wrapper opened before its board is attached (a robot starting up) answers `get axes`
+/// with a failure: the open fails, and a second open with the same local ports, once the
+/// board is there, succeeds (iKinCartesianSolver's `waitPart` retries so).
+#[test]
+fn a_retried_open_succeeds_once_the_wrapper_has_its_board() {
+    name_client();
+    let mut server = open("device controlBoard_nws_yarp\nname /late\nperiod 0.01\n");
+    let cfg =
+        Property::from_config_text("device remote_controlboard\nremote /late\nlocal /retry\n")
+            .unwrap();
+    let err = PolyDriver::open(&cfg)
+        .err()
+        .expect("no board behind the wrapper yet");
+    assert!(err.to_string().contains("/late"), "{err}");
+    let board =
+        yarp_devices::driver::shared(open("device fakeMotionControl\n[GENERAL]\njoints 4\n"));
+    server
+        .device()
+        .as_wrapper()
+        .unwrap()
+        .attach(board)
+        .expect("attach");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(
+            PolyDriver::open(&cfg)
+                .map(|_| ())
+                .map_err(|e| e.to_string()),
+        );
+    });
+    let second = rx
+        .recv_timeout(std::time::Duration::from_secs(20))
+        .expect("the second open hangs");
+    assert!(second.is_ok(), "{second:?}");
+}
+
 #[test]
 fn open_errors_name_the_parameter() {
     name_client();

@@ -173,6 +173,26 @@ fn main() {
     )
     .expect("config");
     let mut arm = PolyDriver::open(&cfg).expect("remote_controlboard to /icub/left_arm");
+    // the left arm's Cartesian solver: its server streams the pose once connected to it
+    let solver = std::env::current_exe()
+        .ok()
+        .and_then(|exe| Some(exe.parent()?.parent()?.join("iKinCartesianSolver")))
+        .filter(|p| p.is_file())
+        .map(|p| {
+            Reaped(
+                Command::new(p)
+                    .arg("--from")
+                    .arg(robot_dir.join("cartesianSolver.ini"))
+                    .args(["--part", "left_arm"])
+                    .stdout(Stdio::null())
+                    .stderr(Stdio::null())
+                    .spawn()
+                    .expect("spawn iKinCartesianSolver"),
+            )
+        });
+    if solver.is_none() {
+        println!("(no iKinCartesianSolver beside this bench: the cartesian state:o stays silent; cargo build --release -p icub-cartesian)");
+    }
     let net = yarp_net::blocking::Network::from_conf().expect("network");
     let cart = yarp_net::blocking::BufferedPort::open(&net, "/bench/cartesian:i").expect("port");
     net.connect(

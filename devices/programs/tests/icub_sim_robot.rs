@@ -35,6 +35,22 @@ fn genova_dir() -> PathBuf {
         .join("../../../shared/robots-configuration/iCubGenova01")
 }
 
+/// The left arm's Cartesian solver on the robot's `cartesianSolver.ini` in `dir` (its
+/// cartesiancontrollerserver streams `state:o` once connected to it, as C++'s); killed
+/// and reaped on drop.
+fn left_arm_solver(dir: &Path) -> Reaped {
+    let program = yarp_interop_tests::workspace_program("iKinCartesianSolver", "icub-cartesian");
+    let child = std::process::Command::new(program)
+        .arg("--from")
+        .arg(dir.join("cartesianSolver.ini"))
+        .args(["--part", "left_arm"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("iKinCartesianSolver");
+    Reaped(child)
+}
+
 /// A name server for this test process, announced through a private yarp.conf.
 fn start_name_server() -> tempfile::TempDir {
     let dir = tempfile::tempdir().expect("temp dir");
@@ -203,6 +219,7 @@ fn simulated_icub_comes_up_moves_and_shuts_down() {
         CM_POSITION
     );
     // the cartesian state of the left arm, from the same encoders
+    let _solver = left_arm_solver(&robot_dir());
     let net = Network::from_conf().expect("network");
     let cart = BufferedPort::open(&net, "/test/left_arm_cartesian:i").unwrap();
     net.connect(
@@ -469,6 +486,7 @@ fn genova01_icub_all_runs_its_can_devices_against_the_emulator() {
     }
 
     // the left arm moves through its wrapper, and its cartesian state follows
+    let _solver = left_arm_solver(&genova_dir());
     let net = Network::from_conf().expect("network");
     let cart = BufferedPort::open(&net, "/real/left_arm_cartesian:i").unwrap();
     net.connect(
@@ -706,6 +724,7 @@ fn keep_going_runs_the_real_genova01_config_as_processes() {
         "{text}"
     );
 
+    let _solver = left_arm_solver(&genova_dir());
     let net = Network::from_conf().expect("network");
     let cart = BufferedPort::open(&net, "/kg/left_arm_cartesian:i").unwrap();
     net.connect(

@@ -22,7 +22,8 @@ pub fn package_of(program: &str) -> &'static str {
         "yarpserver" => "yarp-net",
         "yarpdev" | "yarprobotinterface" => "yarp-device-programs",
         "yarp-ros2-gateway" => "yarp-ros2-gateway",
-        "icub-board-emulator" | "icub-eth-emulator" => "icub-emulators",
+        "icub-board-emulator" | "icub-eth-emulator" | "icub-robot-emulator" => "icub-emulators",
+        "iKinCartesianSolver" => "icub-cartesian",
         "yarp-launch" => "yarp-launch",
         _ => "<package>",
     }

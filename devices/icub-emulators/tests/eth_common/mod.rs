@@ -143,8 +143,10 @@ pub fn bring_up_with(
     let robot = read_robot_file(top, config)
         .unwrap_or_else(|e| panic!("{e}"))
         .robot;
-    // What yarprobotinterface registers: the framework's drivers and icubmod's.
+    // What yarprobotinterface registers: the framework's drivers, icubmod's and the
+    // Cartesian controller (the robots' files open one per arm).
     yarp_devices::Registry::install(icubmod::register);
+    yarp_devices::Registry::install(icub_cartesian::register);
     let mut runner = RobotRunner::new(robot);
     runner.set_keep_going(true);
     eprintln!(

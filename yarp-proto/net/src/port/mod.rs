@@ -747,6 +747,7 @@ impl Port {
 
     /// Unregisters, closes every connection (outputs get a `q`) and stops listening.
     pub async fn close(self) {
+        self.ask_sources_to_disconnect().await;
         let _ = self.shutdown_tx.send(true);
         let outputs: Vec<_> = {
             let mut st = self.shared.lock();
@@ -759,6 +760,35 @@ impl Port {
         if let Some(ns) = &self.shared.ns {
             let _ = ns.unregister(&self.shared.name).await;
         }
+    }
+}
+
+impl Port {
+    /// As C++'s `PortCore::closeMain`: each named source is asked (through its admin port)
+    /// to drop its connection to this port before it closes. A udp sender learns nothing
+    /// from a closed socket: it would keep its connection to a port that is gone, and
+    /// take a new port of the same name for one it already has (a restarted client of a
+    /// C++ `controlBoard_nws_yarp` got no stream). Bounded: a dead source costs a second.
+    async fn ask_sources_to_disconnect(&self) {
+        let Some(ns) = self.shared.ns.clone() else {
+            return;
+        };
+        let me = self.shared.name.clone();
+        let mut asks = tokio::task::JoinSet::new();
+        for from in self.inputs() {
+            if !from.starts_with('/') || from == me {
+                continue;
+            }
+            let (ns, me) = (ns.clone(), me.clone());
+            asks.spawn(async move {
+                let _ = tokio::time::timeout(
+                    Duration::from_secs(1),
+                    crate::network::disconnect(&ns, &from, &me),
+                )
+                .await;
+            });
+        }
+        while asks.join_next().await.is_some() {}
     }
 }
 
