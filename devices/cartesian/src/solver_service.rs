@@ -86,12 +86,20 @@ impl SolverService {
         }
         let limits = svc.limits(&cfg)?;
         let mut solver = SolverCore::new(cfg, &limits)?;
-        // initPos: every encoder read, the current pose as the target
+        // initPos: every encoder read (as C++, waiting as long as it takes), the current
+        // pose as the target
+        let mut told = Instant::now();
         loop {
             match svc.feedback() {
                 Ok(fb) if solver.set_feedback(&fb).is_ok() => break,
-                _ => std::thread::sleep(Duration::from_millis(10)),
+                Ok(_) => {}
+                Err(e) if told.elapsed() >= Duration::from_secs(5) => {
+                    tracing::warn!("{name}: still waiting for the robot's encoders: {e}");
+                    told = Instant::now();
+                }
+                Err(_) => {}
             }
+            std::thread::sleep(Duration::from_millis(10));
         }
         solver.init_target();
         *core.lock() = Some(solver);
