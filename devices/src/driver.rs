@@ -11,6 +11,7 @@ use crate::framegrabber::interfaces::{
     IFrameGrabberControls, IFrameGrabberControlsDC1394, IFrameGrabberImage,
 };
 use crate::frames::{IFrameTransformStorageGet, IFrameTransformStorageSet};
+use crate::gaze_control::IGazeControl;
 use crate::interfaces::*;
 use crate::kind::{kind_of, suggest, Kind};
 use crate::navigation::{INavigation2DVelocityActions, IOdometry2D};
@@ -194,6 +195,7 @@ crate::device_interfaces! {
     as_frame_transform_storage_set: IFrameTransformStorageSet => "IFrameTransformStorageSet" (Other),
     // Operational-space control.
     as_cartesian_control: ICartesianControl => "ICartesianControl" (Other),
+    as_gaze_control: IGazeControl => "IGazeControl" (Other),
     // Wrappers and calibrators.
     as_wrapper: IWrapper => "IWrapper" (Wrapper),
     as_multiple_wrapper: IMultipleWrapper => "IMultipleWrapper" (Wrapper),

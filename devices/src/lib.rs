@@ -16,6 +16,7 @@ pub mod error;
 pub mod fake_motion_control;
 pub mod framegrabber;
 pub mod frames;
+pub mod gaze_control;
 pub mod interfaces;
 pub mod kind;
 pub mod navigation;

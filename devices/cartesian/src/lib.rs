@@ -6,11 +6,15 @@
 //! | `cartesiancontrollerserver` (`ServerCartesianController`) | [`server`] (sans I/O), [`server_device`] |
 //! | `cartesiancontrollerclient` (`ClientCartesianController`) | [`client`], as `yarp_devices`' `ICartesianControl` |
 //! | the protocol's vocabs and `CartesianHelper` options | [`protocol`] |
+//! | `iKinGazeCtrl` module | [`gaze`] (`core` sans I/O, `service`, head `kinematics`), the `iKinGazeCtrl` program |
+//! | `gazecontrollerclient` (`ClientGazeController`) | [`gaze_client`], as `yarp_devices`' `IGazeControl` |
 //!
 //! The min-jerk controller that plans the joints is iKin's, in [`icub_ikin::minjerk`].
 #![forbid(unsafe_code)]
 
 pub mod client;
+pub mod gaze;
+pub mod gaze_client;
 pub mod protocol;
 pub mod server;
 pub mod server_device;
@@ -28,6 +32,9 @@ const DRIVERS: &[(&str, Factory)] = &[
     }),
     (client::NAME, || {
         Box::new(client::CartesianControllerClient::new())
+    }),
+    (gaze_client::NAME, || {
+        Box::new(gaze_client::GazeControllerClient::new())
     }),
 ];
 
