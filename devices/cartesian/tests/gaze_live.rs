@@ -49,12 +49,20 @@ fn encoders(dev: &SharedDevice) -> Vec<f64> {
     pd.device().as_encoders().unwrap().get_encoders().unwrap()
 }
 
-#[test]
-fn our_client_looks_at_three_points_through_our_ikingazectrl() {
-    let test = "our_client_looks_at_three_points_through_our_ikingazectrl";
+/// The robot's torso and head boards and our iKinGazeCtrl on them.
+struct Robot {
+    torso: SharedDevice,
+    head: SharedDevice,
+    _nws: Vec<PolyDriver>,
+    _gaze: yarp_interop_tests::Reaped,
+}
+
+/// `name`: the module's port prefix (each test its own: a killed module's ports stay
+/// registered in this process's name server).
+fn up(test: &str, name: &str) -> Robot {
     yarp_interop_tests::name_server();
     yarp_devices::Registry::install(icub_cartesian::register);
-    let (torso, _torso_nws) = board(
+    let (torso, torso_nws) = board(
         "/icub/torso",
         &[(-59.0, 59.0), (-39.0, 39.0), (-22.0, 84.0)],
     );
@@ -66,7 +74,7 @@ fn our_client_looks_at_three_points_through_our_ikingazectrl() {
         (-50.0, 50.0),
         (0.0, 90.0),
     ];
-    let (head, _head_nws) = board("/icub/head", &head_limits);
+    let (head, head_nws) = board("/icub/head", &head_limits);
     {
         // eyes slightly converged, as a calibrated head parks them
         let mut pd = head.lock();
@@ -95,26 +103,55 @@ fn our_client_looks_at_three_points_through_our_ikingazectrl() {
             "off",
             "--ping_robot_tmo",
             "20",
+            "--name",
+            name,
         ])
         .stderr(log)
         .spawn()
         .expect("iKinGazeCtrl");
-    let _gaze = yarp_interop_tests::Reaped(child);
-    yarp_interop_tests::wait_for("/iKinGazeCtrl/rpc", || {
-        yarp_interop_tests::registered("/iKinGazeCtrl/rpc").then_some(())
-    });
+    let gaze = yarp_interop_tests::Reaped(child);
+    let rpc = format!("/{name}/rpc");
+    yarp_interop_tests::wait_for(&rpc, || yarp_interop_tests::registered(&rpc).then_some(()));
+    let _ = test;
+    Robot {
+        torso,
+        head,
+        _nws: vec![torso_nws, head_nws],
+        _gaze: gaze,
+    }
+}
+
+/// The fixation point, as the head's kinematics computes it from the boards' encoders.
+fn fixation(robot: &Robot) -> [f64; 3] {
+    let kin = Head::new("v2.5").unwrap();
+    let t = encoders(&robot.torso);
+    let h = encoders(&robot.head);
+    let tq = [t[2] * DEG2RAD, t[1] * DEG2RAD, t[0] * DEG2RAD];
+    let hq: [f64; 6] = std::array::from_fn(|k| h[k] * DEG2RAD);
+    let fp = kin.fixation_point(&tq, &hq).expect("the eyes converge");
+    [fp[0], fp[1], fp[2]]
+}
+
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// Three points in front of the robot (its root frame: x backwards, y right, z up).
+const POINTS: [[f64; 3]; 3] = [[-0.5, 0.0, 0.35], [-0.45, 0.12, 0.3], [-0.6, -0.1, 0.45]];
+
+#[test]
+fn our_client_looks_at_three_points_through_our_ikingazectrl() {
+    let test = "our_client_looks_at_three_points_through_our_ikingazectrl";
+    let robot = up(test, "iKinGazeCtrlRust");
     let mut pd = PolyDriver::open(&Property::from_text(
-        "(device gazecontrollerclient) (remote /iKinGazeCtrl) (local /gaze_test)",
+        "(device gazecontrollerclient) (remote /iKinGazeCtrlRust) (local /gaze_test)",
     ))
     .expect("gazecontrollerclient");
     let gaze = pd.device().as_gaze_control().expect("IGazeControl");
     let info = gaze.get_info().unwrap().to_string();
     assert!(info.contains("(server_version \"2.0\")"), "{info}");
     assert!(info.contains("(head_version \"2.5\")"), "{info}");
-    let kin = Head::new("v2.5").unwrap();
-    // in front of the robot (its root frame: x backwards, y right... z up)
-    let points = [[-0.5, 0.0, 0.35], [-0.45, 0.12, 0.3], [-0.6, -0.1, 0.45]];
-    for p in points {
+    for p in POINTS {
         gaze.take_events();
         gaze.look_at_fixation_point_sync(&p).unwrap();
         assert!(
@@ -122,27 +159,12 @@ fn our_client_looks_at_three_points_through_our_ikingazectrl() {
             "{test}: not done"
         );
         std::thread::sleep(Duration::from_millis(100));
-        let t = encoders(&torso);
-        let h = encoders(&head);
-        let mut tq = [t[2] * DEG2RAD, t[1] * DEG2RAD, t[0] * DEG2RAD];
-        if kin.version >= 3.0 {
-            tq.reverse();
-        }
-        let hq: [f64; 6] = std::array::from_fn(|k| h[k] * DEG2RAD);
-        let fp = kin.fixation_point(&tq, &hq).expect("the eyes converge");
-        let d = ((fp[0] - p[0]).powi(2) + (fp[1] - p[1]).powi(2) + (fp[2] - p[2]).powi(2)).sqrt();
+        let fp = fixation(&robot);
+        let d = dist(&fp, &p);
         eprintln!("{test}: {p:?}: fixation {fp:?} ({:.1} mm off)", d * 1e3);
-        assert!(
-            d < 0.01,
-            "{test}: {:.1} mm from {p:?} (head {h:?})",
-            d * 1e3
-        );
+        assert!(d < 0.01, "{test}: {:.1} mm from {p:?}", d * 1e3);
         let (streamed, _) = gaze.get_fixation_point().unwrap();
-        let ds = ((streamed[0] - p[0]).powi(2)
-            + (streamed[1] - p[1]).powi(2)
-            + (streamed[2] - p[2]).powi(2))
-        .sqrt();
-        assert!(ds < 0.01, "{test}: x:o says {streamed:?}");
+        assert!(dist(&streamed, &p) < 0.01, "{test}: x:o says {streamed:?}");
         let kinds: Vec<String> = gaze.take_events().into_iter().map(|e| e.kind).collect();
         assert_eq!(
             kinds.first().map(String::as_str),
@@ -162,4 +184,95 @@ fn our_client_looks_at_three_points_through_our_ikingazectrl() {
     gaze.restore_context(ctx).unwrap();
     assert_eq!(gaze.get_neck_traj_time().unwrap(), 0.75);
     pd.close().unwrap();
+}
+
+/// icub-main's C++ client, built from ../shared/peers' sources against the C++ peer.
+fn cpp_gaze_client(test: &str) -> Option<(std::path::PathBuf, std::path::PathBuf)> {
+    let Some(bin) = yarp_interop_tests::cpp_bin_dir() else {
+        yarp_interop_tests::peer_missing(
+            test,
+            "C++ YARP with icub-main",
+            "no YARP_CPP_BIN",
+            yarp_interop_tests::CPP_YARP_INSTALL,
+        );
+        return None;
+    };
+    let prefix = std::fs::canonicalize(bin).ok()?.parent()?.to_path_buf();
+    let here = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let src = here.join("tests/peers/gaze_client.cpp");
+    let client =
+        here.join("../../../shared/peers/src/icub-main/src/libraries/icubmod/gazeController");
+    let mut text = std::fs::read(&src).unwrap();
+    text.extend(std::fs::read(client.join("ClientGazeController.cpp")).unwrap());
+    text.extend(prefix.to_string_lossy().as_bytes());
+    let stamp = text.iter().fold(0xcbf29ce484222325u64, |h, b| {
+        (h ^ u64::from(*b)).wrapping_mul(0x100000001b3)
+    });
+    let out =
+        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("gaze_client-{stamp:x}"));
+    if !out.is_file() {
+        let st = Command::new("g++")
+            .args(["-std=c++17", "-O1", "-o"])
+            .arg(&out)
+            .arg(&src)
+            .arg(client.join("ClientGazeController.cpp"))
+            .arg(format!("-I{}", client.display()))
+            .arg(format!("-I{}", prefix.join("include").display()))
+            .arg(format!("-L{}", prefix.join("lib").display()))
+            .args([
+                "-lYARP_dev",
+                "-lYARP_sig",
+                "-lYARP_math",
+                "-lYARP_os",
+                "-lYARP_init",
+            ])
+            .status()
+            .expect("g++");
+        assert!(st.success(), "{test}: building the C++ gaze client failed");
+    }
+    Some((out, prefix))
+}
+
+#[test]
+fn cpp_client_looks_at_three_points_through_our_ikingazectrl() {
+    let test = "cpp_client_looks_at_three_points_through_our_ikingazectrl";
+    let Some((program, prefix)) = cpp_gaze_client(test) else {
+        return;
+    };
+    let robot = up(test, "iKinGazeCtrl");
+    let mut cmd = Command::new(&program);
+    cmd.env("LD_LIBRARY_PATH", prefix.join("lib"))
+        .arg("/iKinGazeCtrl");
+    for p in POINTS {
+        for v in p {
+            cmd.arg(v.to_string());
+        }
+    }
+    let out = cmd.output().expect("C++ gaze client");
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        out.status.success(),
+        "{test}: {stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("STORED 1 "), "{stdout}");
+    let fixes: Vec<&str> = stdout.lines().filter(|l| l.starts_with("FIX")).collect();
+    assert_eq!(fixes.len(), 3, "{stdout}");
+    for (line, p) in fixes.iter().zip(POINTS) {
+        let f: Vec<f64> = line
+            .split_whitespace()
+            .skip(1)
+            .filter_map(|v| v.parse().ok())
+            .collect();
+        assert_eq!(&f[..3], &[1.0, 1.0, 1.0], "{test}: {line}");
+        let fp = [f[3], f[4], f[5]];
+        eprintln!(
+            "{test}: {p:?}: the C++ client reads {fp:?} ({:.1} mm off)",
+            dist(&fp, &p) * 1e3
+        );
+        assert!(dist(&fp, &p) < 0.01, "{test}: {line}");
+    }
+    // the last point, also as the head's kinematics has it
+    assert!(dist(&fixation(&robot), &POINTS[2]) < 0.01);
+    assert!(stdout.contains("RESTORED 1 0.750"), "{stdout}");
 }
