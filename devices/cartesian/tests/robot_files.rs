@@ -70,3 +70,34 @@ fn every_robots_solver_groups_read() {
     assert!(groups >= 100, "{groups} groups");
     assert_eq!(custom, 1);
 }
+
+/// Every robot's `iKinGazeCtrl.ini`, read as the module reads it: the head version snapped
+/// to the ones iKinGazeCtrl knows, and its eyes built from it.
+#[test]
+fn every_robots_gaze_file_reads() {
+    use icub_cartesian::gaze::core::GazeConfig;
+    use icub_cartesian::gaze::kinematics::Head;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/robots-configuration");
+    let mut seen = std::collections::BTreeMap::new();
+    for dir in [root.clone(), root.join("robots-icebox")] {
+        for e in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
+            let f = e.path().join("iKinGazeCtrl.ini");
+            if !f.is_file() {
+                continue;
+            }
+            let text = std::fs::read_to_string(&f).unwrap();
+            let p = yarp_proto::Property::from_config_text(&text)
+                .unwrap_or_else(|err| panic!("{}: {err}", f.display()));
+            let cfg = GazeConfig::from_property(&p);
+            Head::new(&cfg.head_version)
+                .unwrap_or_else(|err| panic!("{}: {}: {err}", f.display(), cfg.head_version));
+            let robot = e.file_name().to_string_lossy().into_owned();
+            seen.insert(robot, cfg.head_version.clone());
+        }
+    }
+    assert!(seen.len() >= 30, "{seen:?}");
+    // C++'s snapping: 2.8 kept, 3.1 to 3.0, no version 1.0
+    assert_eq!(seen.get("iCubGenova02").map(String::as_str), Some("v2.8"));
+    assert_eq!(seen.get("iCubGenova09").map(String::as_str), Some("v3.0"));
+    assert_eq!(seen.get("iCubLausanne01").map(String::as_str), Some("v1.0"));
+}

@@ -7,7 +7,7 @@
 //! |---|---|---|
 //! | arm | `left`, `right`, `<side>_v1`, `_v1.5`, `_v1.7`, `_v2`, `_v2.5`, `_v2.6`, `_v2.7`, `_v3` | < 1.7 hand link d = 137.3 mm, else 141.3; < 2 palm d = 16 mm, else 25.98; ≥ 3 the iCub 3 torso and arm |
 //! | leg | `left`, `right`, `<side>_v1`, `_v2.5`, `_v3` | one table each |
-//! | eye, eye-neck-ref, head-center | `left`, `right`, `<side>_v1`, `_v2`, `_v2.5`, `_v2.6`, `_v3` | v1; v2 = v2.5 = v2.6; v3 |
+//! | eye, eye-neck-ref, head-center | `left`, `right`, `<side>_v1`, `_v2`, `_v2.5`, `_v2.6`, `_v2.7`, `_v2.8`, `_v2.10`, `_v3` | v1; v2 = v2.5 = v2.6 = v2.7; v2.8 its cameras' image plane 1 cm back; v2.10 its own table and plane; v3 |
 //! | inertial sensor | `v1`, `v2`, `v2.5`, `v2.6`, `v3` | v2/v2.5/v2.6 share links; HN differs for v2.5, v2.6, v3 |
 //! | torso | `""`, `v1` … `v3` (as the arm) | < 3 or iCub 3 |
 //! | finger | `<side>_<thumb\|index\|middle\|ring\|little>[_<na\|a\|b>]` | thumb `a` or `b` (default) |
@@ -69,7 +69,7 @@ pub const ARM_VERSIONS: &[&str] = &["v1", "v1.5", "v1.7", "v2", "v2.5", "v2.6", 
 /// Hardware versions of the leg (< 2, < 3 and 3 by iKin's thresholds).
 pub const LEG_VERSIONS: &[&str] = &["v1", "v2.5", "v3"];
 /// Hardware versions of the eye, eye-neck-ref and head-center chains.
-pub const EYE_VERSIONS: &[&str] = &["v1", "v2", "v2.5", "v2.6", "v3"];
+pub const EYE_VERSIONS: &[&str] = &["v1", "v2", "v2.5", "v2.6", "v2.7", "v2.8", "v2.10", "v3"];
 /// Hardware versions (the whole type string) of the inertial sensor chain.
 pub const INERTIAL_VERSIONS: &[&str] = &["v1", "v2", "v2.5", "v2.6", "v3"];
 /// Fingers known to `iCubFinger`.
@@ -633,6 +633,14 @@ fn eye(t: &str) -> Result<(Chain, f64)> {
             lk(0.0, 0.001, -P2, -P2, -70.0, 60.0),
             lk(-0.054, 0.0825, -P2, P2, -55.0, 55.0),
         ]);
+    } else if v == "v2.10" {
+        // the 4k cameras' head (iKin compares versions as major.minor integers: 2.10 > 2.8)
+        links[2] = lk(0.0053, -0.2233, -P2, -P2, -59.0, 59.0);
+        links.extend([
+            lk(0.0110, 0.0, P2, P2, -40.0, 30.0),
+            lk(0.0, 0.0, -P2, -P2, -70.0, 60.0),
+            lk(-0.0510, 0.08052, -P2, P2, -55.0, 55.0),
+        ]);
     } else if ver < 3.0 {
         links[2] = lk(0.0, -0.2233, -P2, -P2, -59.0, 59.0);
         links.extend([
@@ -654,6 +662,17 @@ fn eye(t: &str) -> Result<(Chain, f64)> {
     // iKin's v3 eye zeroes H0 including H0(3,3); only the rotation matters
     // for positions, and we keep a proper homogeneous matrix.
     let mut c = Chain::from_links(h0_for(ver), links);
+    // the image planes of the event-driven (2.8) and 4k (2.10) cameras
+    let plane = match v {
+        "v2.8" => Some(-0.01),
+        "v2.10" => Some(-9.83e-3),
+        _ => None,
+    };
+    if let Some(z) = plane {
+        let mut hn = Matrix4::identity();
+        hn[(2, 3)] = z;
+        c.set_hn(hn)?;
+    }
     for i in 0..3 {
         c.block_link(i, 0.0)?;
     }

@@ -779,3 +779,22 @@ fn word4(b: &Bottle, i: usize) -> String {
     let w = crate::protocol::word_at(b, i).unwrap_or_default();
     w.chars().take(4).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn head_versions_snap_as_ikingazectrl_snaps_them() {
+        for (given, want) in [
+            ("v2.5", "v2.5"),
+            ("v3.1", "v3.0"),
+            ("v2.9", "v2.10"),
+            ("v1.5", "v1.0"),
+            ("V2", "v2.0"),
+            ("garbage", "v1.0"),
+        ] {
+            assert_eq!(snap_version(given), want, "{given}");
+        }
+    }
+}
