@@ -19,6 +19,14 @@ pub trait IGazeControl {
     fn look_at_abs_angles(&mut self, ang: &[f64; 3]) -> DevResult<()>;
     fn look_at_rel_angles(&mut self, ang: &[f64; 3]) -> DevResult<()>;
     fn look_at_abs_angles_sync(&mut self, ang: &[f64; 3]) -> DevResult<()>;
+    /// The pixel of point `x` in camera `cam` (0 left, 1 right).
+    fn get_2d_pixel(&mut self, cam: usize, x: &[f64; 3]) -> DevResult<[f64; 2]>;
+    /// The point at depth `z` along pixel `px` of camera `cam`.
+    fn get_3d_point(&mut self, cam: usize, px: &[f64; 2], z: f64) -> DevResult<[f64; 3]>;
+    /// The point seen at pixel `pl` of the left camera and `pr` of the right one.
+    fn triangulate_3d_point(&mut self, pl: &[f64; 2], pr: &[f64; 2]) -> DevResult<[f64; 3]>;
+    fn look_at_mono_pixel_sync(&mut self, cam: usize, px: &[f64; 2], z: f64) -> DevResult<()>;
+    fn look_at_stereo_pixels_sync(&mut self, pl: &[f64; 2], pr: &[f64; 2]) -> DevResult<()>;
     fn get_neck_traj_time(&mut self) -> DevResult<f64>;
     fn set_neck_traj_time(&mut self, t: f64) -> DevResult<()>;
     fn get_eyes_traj_time(&mut self) -> DevResult<f64>;

@@ -97,6 +97,23 @@ async fn read_events(port: Arc<Port>, received: Arc<Mutex<Vec<CartesianEvent>>>)
     }
 }
 
+/// The camera's name as C++ sends it (0: left, anything else right).
+fn eye(cam: usize) -> &'static str {
+    if cam == 0 {
+        "left"
+    } else {
+        "right"
+    }
+}
+
+/// `[ack] (x y z)`.
+fn point(r: &Bottle) -> DevResult<[f64; 3]> {
+    match r.get(1).and_then(protocol::numbers).as_deref() {
+        Some([x, y, z, ..]) => Ok([*x, *y, *z]),
+        _ => Err(DeviceError::failed(NAME, format!("no point in `{r}`"))),
+    }
+}
+
 async fn close_all(ports: Vec<Arc<Port>>) {
     for p in ports {
         if let Ok(p) = Arc::try_unwrap(p) {
@@ -385,6 +402,41 @@ impl IGazeControl for GazeControllerClient {
         }
         self.ack(words(&["look", "ang"]).with(Value::List(l)))
             .map(drop)
+    }
+
+    fn get_2d_pixel(&mut self, cam: usize, x: &[f64; 3]) -> DevResult<[f64; 2]> {
+        let mut l = Bottle::new().with(eye(cam));
+        for v in x {
+            l.push(*v);
+        }
+        let r = self.ack(words(&["get", "2D"]).with(Value::List(l)))?;
+        match r.get(1).and_then(protocol::numbers).as_deref() {
+            Some([u, v, ..]) => Ok([*u, *v]),
+            _ => Err(DeviceError::failed(NAME, format!("no pixel in `{r}`"))),
+        }
+    }
+
+    fn get_3d_point(&mut self, cam: usize, px: &[f64; 2], z: f64) -> DevResult<[f64; 3]> {
+        let l = Bottle::new().with(eye(cam)).with(px[0]).with(px[1]).with(z);
+        let r = self.ack(words(&["get", "3D", "mono"]).with(Value::List(l)))?;
+        point(&r)
+    }
+
+    fn triangulate_3d_point(&mut self, pl: &[f64; 2], pr: &[f64; 2]) -> DevResult<[f64; 3]> {
+        let l = protocol::f64_list(&[pl[0], pl[1], pr[0], pr[1]]);
+        let r = self.ack(words(&["get", "3D", "stereo"]).with(l))?;
+        point(&r)
+    }
+
+    fn look_at_mono_pixel_sync(&mut self, cam: usize, px: &[f64; 2], z: f64) -> DevResult<()> {
+        let l = Bottle::new().with(eye(cam)).with(px[0]).with(px[1]).with(z);
+        self.ack(words(&["look", "mono"]).with(Value::List(l)))
+            .map(drop)
+    }
+
+    fn look_at_stereo_pixels_sync(&mut self, pl: &[f64; 2], pr: &[f64; 2]) -> DevResult<()> {
+        let l = protocol::f64_list(&[pl[0], pl[1], pr[0], pr[1]]);
+        self.ack(words(&["look", "stereo"]).with(l)).map(drop)
     }
 
     fn get_neck_traj_time(&mut self) -> DevResult<f64> {

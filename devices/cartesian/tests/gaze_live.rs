@@ -105,7 +105,13 @@ fn up(test: &str, name: &str) -> Robot {
             "20",
             "--name",
             name,
+            // the eyes' calibration of a robot, read unmodified
+            "--cameras::file",
         ])
+        .arg(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../../shared/robots-configuration/iCubGenova01/icubEyes.ini"),
+        )
         .stderr(log)
         .spawn()
         .expect("iKinGazeCtrl");
@@ -179,6 +185,28 @@ fn our_client_looks_at_three_points_through_our_ikingazectrl() {
     }
     let ang = gaze.get_angles().unwrap();
     assert!(ang[2] > 0.0, "{ang:?}");
+    // a point seen by both cameras: triangulated back, then looked at by its pixels
+    let p = [-0.55, 0.05, 0.4];
+    let (pl, pr) = (
+        gaze.get_2d_pixel(0, &p).unwrap(),
+        gaze.get_2d_pixel(1, &p).unwrap(),
+    );
+    let back = gaze.triangulate_3d_point(&pl, &pr).unwrap();
+    assert!(dist(&back, &p) < 1e-6, "{test}: triangulated {back:?}");
+    gaze.look_at_stereo_pixels_sync(&pl, &pr).unwrap();
+    assert!(
+        gaze.wait_motion_done(0.02, 10.0).unwrap(),
+        "{test}: not done"
+    );
+    std::thread::sleep(Duration::from_millis(100));
+    let fp = fixation(&robot);
+    assert!(
+        dist(&fp, &p) < 0.01,
+        "{test}: looking at the pixels: {fp:?}"
+    );
+    // and the left camera's centre pixel at 0.5 m
+    let x = gaze.get_3d_point(0, &[160.0, 120.0], 0.5).unwrap();
+    assert!(dist(&x, &fp) > 0.0);
     let ctx = gaze.store_context().unwrap();
     gaze.set_neck_traj_time(2.0).unwrap();
     gaze.restore_context(ctx).unwrap();

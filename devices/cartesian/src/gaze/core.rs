@@ -10,7 +10,7 @@ use nalgebra::{DVector, Vector3};
 use std::collections::BTreeMap;
 use yarp_proto::{Bottle, Value};
 
-use super::kinematics::{Head, HeadLimits};
+use super::kinematics::{Camera, Head, HeadLimits};
 use crate::protocol::{ack, nack};
 
 /// What `[get] [info]` says of the server (`GAZECTRL_SERVER_VER`).
@@ -41,6 +41,8 @@ pub struct GazeConfig {
     pub imu: bool,
     pub vor: f64,
     pub ocr: f64,
+    /// `cameras::file` and `cameras::context`: the eyes' calibration (`icubEyes.ini`).
+    pub cameras: Option<(String, String)>,
 }
 
 impl GazeConfig {
@@ -91,6 +93,10 @@ impl GazeConfig {
                 .find("ocr")
                 .and_then(Value::as_f64)
                 .unwrap_or(if imu { 0.0 } else { 1.0 }),
+            cameras: group_text("cameras", "file").map(|f| {
+                let ctx = group_text("cameras", "context").unwrap_or_else(|| "iKinGazeCtrl".into());
+                (f, ctx)
+            }),
         }
     }
 }
@@ -214,6 +220,8 @@ pub struct GazeCore {
     torso: [f64; 3],
     fb: [f64; 6],
     now: f64,
+    /// The left and right cameras' intrinsics, when the calibration file gives them.
+    cameras: [Option<Camera>; 2],
 }
 
 impl GazeCore {
@@ -268,6 +276,7 @@ impl GazeCore {
             torso: [0.0; 3],
             fb: [0.0; 6],
             now: 0.0,
+            cameras: [None, None],
             cfg,
         };
         core.set_times(core.neck_time, core.eyes_time);
@@ -309,6 +318,50 @@ impl GazeCore {
             }
         }
         let x = self.head.point_from_abs_angles(&a)?;
+        Some([x[0], x[1], x[2]])
+    }
+
+    /// The cameras' intrinsics (left, right), from the calibration file.
+    pub fn set_cameras(&mut self, left: Option<Camera>, right: Option<Camera>) {
+        self.cameras = [left, right];
+    }
+
+    fn eye_and_camera(&self, eye: &str) -> Option<(nalgebra::Matrix4<f64>, Camera)> {
+        let (l, r) = self.head.eyes(&self.torso, &self.fb);
+        if eye == "left" {
+            Some((l, self.cameras[0]?))
+        } else {
+            Some((r, self.cameras[1]?))
+        }
+    }
+
+    /// `[eye u v z]` or `[eye u v "ver" degrees]` (`mono:i`, `look mono`): the point.
+    pub fn target_of_mono(&self, b: &Bottle) -> Option<[f64; 3]> {
+        let eye = b.get(0)?.as_str()?;
+        let (u, v) = (b.get(1)?.as_f64()?, b.get(2)?.as_f64()?);
+        let z = match b.get(3)? {
+            Value::Float64(z) => *z,
+            other if other.as_str() == Some("ver") => {
+                self.head.dist_from_vergence(b.get(4)?.as_f64()? * DEG2RAD)
+            }
+            _ => return None,
+        };
+        let (h, cam) = self.eye_and_camera(eye)?;
+        let x = self.head.unproject(&h, &cam, u, v, z);
+        Some([x[0], x[1], x[2]])
+    }
+
+    /// `[ul vl ur vr]` (`look stereo`, `stereo:i`): the point, triangulated.
+    pub fn target_of_stereo(&self, b: &Bottle) -> Option<[f64; 3]> {
+        let px: Vec<f64> = b.iter().filter_map(Value::as_f64).collect();
+        if px.len() < 4 {
+            return None;
+        }
+        let (l, r) = self.head.eyes(&self.torso, &self.fb);
+        let (cl, cr) = (self.cameras[0]?, self.cameras[1]?);
+        let x = self
+            .head
+            .triangulate((&l, &r), (&cl, &cr), [px[0], px[1]], [px[2], px[3]])?;
         Some([x[0], x[1], x[2]])
     }
 
@@ -500,6 +553,8 @@ impl GazeCore {
                 let nums: Vec<f64> = list.iter().filter_map(Value::as_f64).collect();
                 let target = match w(1).as_str() {
                     "3D" if nums.len() >= 3 => Some([nums[0], nums[1], nums[2]]),
+                    "mono" => self.target_of_mono(list),
+                    "ster" => self.target_of_stereo(list),
                     "ang" if list.len() >= 4 => {
                         let rel = list.get(0).and_then(Value::as_str) == Some("rel");
                         let a: Vec<f64> = list.iter().skip(1).filter_map(Value::as_f64).collect();
@@ -685,6 +740,36 @@ impl GazeCore {
                 }
                 _ => nack(),
             },
+            "2D" => {
+                let Some(list) = cmd.get(2).and_then(Value::as_list) else {
+                    return nack();
+                };
+                let eye = list.get(0).and_then(Value::as_str).unwrap_or("right");
+                let x: Vec<f64> = list.iter().skip(1).filter_map(Value::as_f64).collect();
+                match (self.eye_and_camera(eye), x.len() >= 3) {
+                    (Some((h, cam)), true) => {
+                        match self.head.project(&h, &cam, &Vector3::new(x[0], x[1], x[2])) {
+                            Some(px) => ack().with(crate::protocol::f64_list(&px)),
+                            None => nack(),
+                        }
+                    }
+                    _ => nack(),
+                }
+            }
+            "3D" if cmd.len() > 3 && matches!(word4(cmd, 2).as_str(), "mono" | "ster") => {
+                let Some(list) = cmd.get(3).and_then(Value::as_list) else {
+                    return nack();
+                };
+                let x = if word4(cmd, 2) == "mono" {
+                    self.target_of_mono(list)
+                } else {
+                    self.target_of_stereo(list)
+                };
+                match x {
+                    Some(x) => ack().with(crate::protocol::f64_list(&x)),
+                    None => nack(),
+                }
+            }
             "3D" if cmd.len() > 3 && word4(cmd, 2) == "ang" => {
                 let Some(list) = cmd.get(3).and_then(Value::as_list) else {
                     return nack();
@@ -753,7 +838,13 @@ impl GazeCore {
         .into_iter()
         .map(Value::from)
         .collect();
-        let eye = |_side: &str| Value::List(Bottle::new());
+        let intr = |c: &Option<Camera>| match c {
+            Some(c) => crate::protocol::f64_list(&c.projection()),
+            None => Value::List(Bottle::new()),
+        };
+        let size = |c: &Option<Camera>| c.map_or((0, 0), |c| (c.w, c.h));
+        let (wl, hl) = size(&self.cameras[0]);
+        let (wr, hr) = size(&self.cameras[1]);
         Bottle::new()
             .with(pair("server_version", SERVER_VERSION.into()))
             .with(pair(
@@ -765,12 +856,12 @@ impl GazeCore {
                 Value::Float64(self.min_vergence * RAD2DEG),
             ))
             .with(pair("events", Value::List(events)))
-            .with(pair("camera_intrinsics_left", eye("left")))
-            .with(pair("camera_width_left", Value::Int32(0)))
-            .with(pair("camera_height_left", Value::Int32(0)))
-            .with(pair("camera_intrinsics_right", eye("right")))
-            .with(pair("camera_width_right", Value::Int32(0)))
-            .with(pair("camera_height_right", Value::Int32(0)))
+            .with(pair("camera_intrinsics_left", intr(&self.cameras[0])))
+            .with(pair("camera_width_left", Value::Int32(wl)))
+            .with(pair("camera_height_left", Value::Int32(hl)))
+            .with(pair("camera_intrinsics_right", intr(&self.cameras[1])))
+            .with(pair("camera_width_right", Value::Int32(wr)))
+            .with(pair("camera_height_right", Value::Int32(hr)))
     }
 }
 

@@ -233,6 +233,94 @@ impl Head {
     }
 }
 
+/// A camera's intrinsics (`[CAMERA_CALIBRATION_LEFT]` of `icubEyes.ini`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    pub w: i32,
+    pub h: i32,
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+}
+
+impl Camera {
+    /// From a calibration group; `None` unless all six keys are there (as C++).
+    pub fn from_group(g: &yarp_proto::Bottle) -> Option<Camera> {
+        let n = |k: &str| g.find(k).and_then(yarp_proto::Value::as_f64);
+        Some(Camera {
+            w: n("w")? as i32,
+            h: n("h")? as i32,
+            fx: n("fx")?,
+            fy: n("fy")?,
+            cx: n("cx")?,
+            cy: n("cy")?,
+        })
+    }
+
+    /// The 3x4 projection, row-major (`Prj`).
+    pub fn projection(&self) -> [f64; 12] {
+        [
+            self.fx, 0.0, self.cx, 0.0, 0.0, self.fy, self.cy, 0.0, 0.0, 0.0, 1.0, 0.0,
+        ]
+    }
+}
+
+impl Head {
+    /// Pixel `(u, v)` of point `x` in an eye's camera (`projectPoint`).
+    pub fn project(&self, eye: &Matrix4<f64>, cam: &Camera, x: &Vector3<f64>) -> Option<[f64; 2]> {
+        let p = eye.try_inverse()? * x.push(1.0);
+        (p[2].abs() > 1e-9).then(|| [cam.fx * p[0] / p[2] + cam.cx, cam.fy * p[1] / p[2] + cam.cy])
+    }
+
+    /// The point at depth `z` along pixel `(u, v)` of an eye's camera (`projectPoint`).
+    pub fn unproject(
+        &self,
+        eye: &Matrix4<f64>,
+        cam: &Camera,
+        u: f64,
+        v: f64,
+        z: f64,
+    ) -> Vector3<f64> {
+        let p =
+            nalgebra::Vector4::new((u - cam.cx) * z / cam.fx, (v - cam.cy) * z / cam.fy, z, 1.0);
+        (eye * p).xyz()
+    }
+
+    /// The point seen at pixel `l` of the left camera and `r` of the right one, by linear
+    /// triangulation (`triangulatePoint`).
+    pub fn triangulate(
+        &self,
+        eyes: (&Matrix4<f64>, &Matrix4<f64>),
+        cams: (&Camera, &Camera),
+        l: [f64; 2],
+        r: [f64; 2],
+    ) -> Option<Vector3<f64>> {
+        let mut a = nalgebra::Matrix4x3::zeros();
+        let mut b = nalgebra::Vector4::zeros();
+        for (k, (h, cam, px)) in [(eyes.0, cams.0, l), (eyes.1, cams.1, r)]
+            .into_iter()
+            .enumerate()
+        {
+            let prj = nalgebra::Matrix3x4::from_row_slice(&cam.projection());
+            let p = prj * h.try_inverse()?;
+            for (row, coord) in [(0, px[0]), (1, px[1])] {
+                let line = p.row(row) - p.row(2) * coord;
+                a.set_row(2 * k + row, &line.fixed_columns::<3>(0));
+                b[2 * k + row] = -line[3];
+            }
+        }
+        let x = a.pseudo_inverse(1e-12).ok()? * b;
+        Some(x)
+    }
+
+    /// The distance at which the eyes verge by `ver` \[rad\] (`getDistFromVergence`).
+    pub fn dist_from_vergence(&self, ver: f64) -> f64 {
+        let t = (ver / 2.0).tan();
+        self.half_baseline * (1.0 + 1.0 / (t * t)).sqrt()
+    }
+}
+
 /// Degrees of an array of radians.
 pub fn deg<const N: usize>(v: [f64; N]) -> [f64; N] {
     v.map(|x| x / DEG2RAD)

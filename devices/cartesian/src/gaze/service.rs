@@ -121,7 +121,23 @@ impl GazeService {
                 let _ = pc.set_ref_acceleration(j, f64::MAX);
             }
         }
-        let core = Arc::new(Mutex::new(GazeCore::new(cfg.clone(), &limits)?));
+        let mut gaze = GazeCore::new(cfg.clone(), &limits)?;
+        if let Some((file, context)) = &cfg.cameras {
+            match yarp_devices::robotinterface::resource::find_file(file, Some(context))
+                .and_then(|f| std::fs::read_to_string(f).ok())
+                .and_then(|t| Property::from_config_text(t).ok())
+            {
+                Some(p) => {
+                    let cam = |g: &str| p.find_group(g).and_then(super::kinematics::Camera::from_group);
+                    gaze.set_cameras(cam("CAMERA_CALIBRATION_LEFT"), cam("CAMERA_CALIBRATION_RIGHT"));
+                }
+                None => tracing::warn!(
+                    "/{}: cameras file {file} (context {context}) not found: no image-plane targets",
+                    cfg.name
+                ),
+            }
+        }
+        let core = Arc::new(Mutex::new(gaze));
         let ns = yarp_net::network::name_client().map_err(|e| GazeError::Port {
             port: format!("/{}", cfg.name),
             why: e.to_string(),
@@ -169,8 +185,8 @@ impl GazeService {
         let tasks = vec![
             rt.spawn(serve_targets(ports.xd.clone(), core.clone(), false)),
             rt.spawn(serve_targets(ports.angles_in.clone(), core.clone(), true)),
-            rt.spawn(ignore(ports.mono.clone())),
-            rt.spawn(ignore(ports.stereo.clone())),
+            rt.spawn(serve_pixels(ports.mono.clone(), core.clone(), false)),
+            rt.spawn(serve_pixels(ports.stereo.clone(), core.clone(), true)),
             rt.spawn(serve_rpc(
                 ports.rpc.clone(),
                 core.clone(),
@@ -376,14 +392,30 @@ async fn serve_targets(port: Arc<Port>, core: Shared, angles: bool) {
     }
 }
 
-/// `mono:i` and `stereo:i` need the cameras' calibration, which this build does not read
-/// yet: their messages are dropped, said once.
-async fn ignore(port: Arc<Port>) {
+/// `mono:i` (`[eye u v z]`) and `stereo:i` (`[ul vl ur vr]`, triangulated: C++ servoes
+/// the depth with a PID there) in pixels of the calibrated cameras.
+async fn serve_pixels(port: Arc<Port>, core: Shared, stereo: bool) {
     let mut said = false;
-    while port.read().await.is_some() {
-        if !said {
-            tracing::warn!("{}: image-plane targets are not supported yet", port.name());
-            said = true;
+    while let Some(msg) = port.read().await {
+        let Ok(b) = msg.bottle() else { continue };
+        let mut core = core.lock();
+        let x = if stereo {
+            core.target_of_stereo(&b)
+        } else {
+            core.target_of_mono(&b)
+        };
+        match x {
+            Some(x) => {
+                core.set_target(x);
+            }
+            None if !said => {
+                tracing::warn!(
+                    "{}: no target from `{b}` (are the cameras calibrated?)",
+                    port.name()
+                );
+                said = true;
+            }
+            None => {}
         }
     }
 }
