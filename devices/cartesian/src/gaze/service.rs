@@ -12,7 +12,7 @@ use yarp_devices::{runtime, vocabs, PolyDriver};
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Stamp, Value};
 
-use super::core::{GazeConfig, GazeCore, GazeOutput, GazeReply, TS};
+use super::core::{GazeConfig, GazeCore, GazeEvent, GazeOutput, GazeReply, TS};
 
 /// Why the module could not start.
 #[derive(Debug, thiserror::Error)]
@@ -53,6 +53,8 @@ pub struct GazeService {
     quit: Arc<AtomicBool>,
     /// Stop commands from `rpc`, applied by the thread.
     stops: Arc<AtomicBool>,
+    /// Events of `rpc` commands (a stop's motion-done, suspended, resumed), sent by the thread.
+    rpc_events: Arc<Mutex<Vec<GazeEvent>>>,
 }
 
 fn board(cfg: &GazeConfig, part: &str) -> Result<PolyDriver, GazeError> {
@@ -181,6 +183,7 @@ impl GazeService {
         let onsets = Arc::new(onsets);
         let quit = Arc::new(AtomicBool::new(false));
         let stops = Arc::new(AtomicBool::new(false));
+        let rpc_events: Arc<Mutex<Vec<GazeEvent>>> = Arc::default();
         let rt = runtime::handle();
         let tasks = vec![
             rt.spawn(serve_targets(ports.xd.clone(), core.clone(), false)),
@@ -193,6 +196,7 @@ impl GazeService {
                 onsets.clone(),
                 quit.clone(),
                 stops.clone(),
+                rpc_events.clone(),
             )),
         ];
         tracing::info!("{prefix}: gaze controller up (head {})", cfg.head_version);
@@ -205,6 +209,7 @@ impl GazeService {
             onsets,
             quit,
             stops,
+            rpc_events,
         })
     }
 
@@ -254,7 +259,9 @@ impl GazeService {
         });
     }
 
-    fn apply(&mut self, out: GazeOutput, now: f64, counts: (&mut i32, &mut i32, &mut i32)) {
+    fn apply(&mut self, mut out: GazeOutput, now: f64, counts: (&mut i32, &mut i32, &mut i32)) {
+        out.events
+            .extend(std::mem::take(&mut *self.rpc_events.lock()));
         let dev = self.head.device();
         if out.onset {
             if let Some(cm) = dev.as_control_mode() {
@@ -426,6 +433,7 @@ async fn serve_rpc(
     onsets: Arc<tokio::sync::watch::Sender<u64>>,
     quit: Arc<AtomicBool>,
     stops: Arc<AtomicBool>,
+    rpc_events: Arc<Mutex<Vec<GazeEvent>>>,
 ) {
     while let Some(mut msg) = port.read().await {
         let cmd = msg.bottle().unwrap_or_default();
@@ -436,6 +444,7 @@ async fn serve_rpc(
         if out.stop {
             stops.store(true, Ordering::SeqCst);
         }
+        rpc_events.lock().extend(out.events);
         let reply = match reply {
             GazeReply::Now(b) => b,
             GazeReply::AfterOnset => {
