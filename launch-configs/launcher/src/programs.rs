@@ -23,7 +23,7 @@ pub fn package_of(program: &str) -> &'static str {
         "yarpdev" | "yarprobotinterface" => "yarp-device-programs",
         "yarp-ros2-gateway" => "yarp-ros2-gateway",
         "icub-board-emulator" | "icub-eth-emulator" | "icub-robot-emulator" => "icub-emulators",
-        "iKinCartesianSolver" => "icub-cartesian",
+        "iKinCartesianSolver" | "iKinGazeCtrl" => "icub-cartesian",
         "yarp-launch" => "yarp-launch",
         _ => "<package>",
     }
