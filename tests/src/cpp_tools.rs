@@ -147,6 +147,11 @@ fn cpp_read<R>(
             .block_on(async move {
                 loop {
                     match yarp_net::network::connect(&ns, &from, &to, Some(&carrier)).await {
+                        // our port saying it could not reach the reader: the same race
+                        Ok((false, msg)) if start.elapsed() < T => {
+                            eprintln!("connect {from} -> {to}: {msg}; retrying");
+                            tokio::time::sleep(Duration::from_millis(50)).await;
+                        }
                         Ok(done) => break done,
                         Err(e) if start.elapsed() < T => {
                             eprintln!("connect {from} -> {to}: {e}; retrying");
