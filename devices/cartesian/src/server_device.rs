@@ -29,6 +29,19 @@ const SOLVER_RPC_TIMEOUT: Duration = Duration::from_secs(5);
 
 type SharedCore = Arc<Mutex<Option<ServerCore>>>;
 
+/// What `rpc:i` and `command:i` did to the motion (a stop, its events), for the control
+/// thread to carry out and send.
+type Pending = Arc<Mutex<CycleOutput>>;
+
+/// Adds what a command did to what the thread will apply.
+fn defer(pending: &Pending, out: CycleOutput) {
+    if out.stop || !out.events.is_empty() {
+        let mut p = pending.lock();
+        p.stop |= out.stop;
+        p.events.extend(out.events);
+    }
+}
+
 /// The ports of a server.
 struct Ports {
     rpc: Arc<Port>,
@@ -90,6 +103,7 @@ pub struct CartesianControllerServer {
     thread: Option<(Arc<AtomicBool>, std::thread::JoinHandle<()>)>,
     /// The solver's latest answer, taken by the control thread.
     latest: Arc<Mutex<Option<Bottle>>>,
+    pending: Pending,
     tokens: Option<Arc<TokenWatch>>,
 }
 
@@ -188,11 +202,13 @@ impl DeviceDriver for CartesianControllerServer {
             self.core.clone(),
             link.clone(),
             tokens.clone(),
+            self.pending.clone(),
         )));
         self.tasks.push(rt.spawn(serve_commands(
             ports.command.clone(),
             self.core.clone(),
             link,
+            self.pending.clone(),
         )));
         self.tasks
             .push(rt.spawn(keep_latest(ports.slv_in.clone(), self.latest.clone())));
@@ -390,6 +406,7 @@ impl IMultipleWrapper for CartesianControllerServer {
         let stop = Arc::new(AtomicBool::new(false));
         let ctx = Loop {
             core: self.core.clone(),
+            pending: self.pending.clone(),
             ports,
             boards,
             latest: self.latest.clone(),
@@ -450,6 +467,7 @@ fn closing_event(port: &Arc<Port>) {
 /// The control thread's context.
 struct Loop {
     core: SharedCore,
+    pending: Pending,
     ports: Arc<Ports>,
     boards: Boards,
     latest: Arc<Mutex<Option<Bottle>>>,
@@ -543,7 +561,10 @@ impl Loop {
                     let out = {
                         let mut core = self.core.lock();
                         let Some(core) = core.as_mut() else { break };
-                        let out = core.cycle(now, &fb, latest.as_ref(), true, &mut link);
+                        let mut out = core.cycle(now, &fb, latest.as_ref(), true, &mut link);
+                        let asked = std::mem::take(&mut *self.pending.lock());
+                        out.stop |= asked.stop;
+                        out.events.splice(0..0, asked.events);
                         (out, core.released())
                     };
                     self.apply(out.0, &out.1, now, &mut count, &mut events);
@@ -626,17 +647,26 @@ impl Loop {
     }
 }
 
-async fn serve_rpc(port: Arc<Port>, core: SharedCore, link: PortLink, tokens: Arc<TokenWatch>) {
+async fn serve_rpc(
+    port: Arc<Port>,
+    core: SharedCore,
+    link: PortLink,
+    tokens: Arc<TokenWatch>,
+    pending: Pending,
+) {
     while let Some(mut msg) = port.read().await {
         let cmd = msg.bottle().unwrap_or_default();
         let mut link = link.clone();
         let core2 = core.clone();
+        let pending2 = pending.clone();
         let reply = runtime::device_call(move || {
             let mut out = CycleOutput::default();
-            match core2.lock().as_mut() {
+            let reply = match core2.lock().as_mut() {
                 Some(c) => c.respond(&cmd, &mut link, &mut out),
                 None => Reply::Now(nack()),
-            }
+            };
+            defer(&pending2, out);
+            reply
         });
         let reply = match reply {
             Reply::Now(b) => b,
@@ -653,14 +683,15 @@ async fn serve_rpc(port: Arc<Port>, core: SharedCore, link: PortLink, tokens: Ar
     }
 }
 
-async fn serve_commands(port: Arc<Port>, core: SharedCore, link: PortLink) {
+async fn serve_commands(port: Arc<Port>, core: SharedCore, link: PortLink, pending: Pending) {
     while let Some(msg) = port.read().await {
         let Ok(b) = msg.bottle() else { continue };
         let mut link = link.clone();
-        let core = core.clone();
+        let (core, pending) = (core.clone(), pending.clone());
         runtime::device_call(move || {
             if let Some(c) = core.lock().as_mut() {
-                c.on_command(&b, &mut link);
+                let out = c.on_command(&b, &mut link);
+                defer(&pending, out);
             }
         });
     }

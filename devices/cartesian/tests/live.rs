@@ -129,6 +129,36 @@ fn rust_client_reaches_three_poses_reads_events_and_stops_at_the_closest_reachab
     assert!(gap < 2e-3, "{test}: {gap} m from the solver's closest pose");
     let reach = (0..3).map(|k| (px[k] - far[k]).powi(2)).sum::<f64>().sqrt();
     assert!(reach > 0.5, "{test}: an out-of-reach target reached?");
+    // a stop mid-way: done at once, and said on events:o
+    let back = reachable_poses()[0];
+    cart.take_events();
+    cart.go_to_pose(
+        &[back[0], back[1], back[2]],
+        &[back[3], back[4], back[5], back[6]],
+        2.0,
+    )
+    .unwrap();
+    let started = std::time::Instant::now();
+    while cart.check_motion_done().unwrap() {
+        assert!(
+            started.elapsed() < Duration::from_secs(5),
+            "{test}: never started"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    cart.stop_control().unwrap();
+    assert!(
+        cart.check_motion_done().unwrap(),
+        "{test}: still moving after stop"
+    );
+    std::thread::sleep(Duration::from_millis(200));
+    let kinds: Vec<String> = cart.take_events().into_iter().map(|e| e.kind).collect();
+    assert_eq!(
+        kinds.last().map(String::as_str),
+        Some("motion-done"),
+        "{kinds:?}"
+    );
     cart.restore_context(ctx).unwrap();
     assert_eq!(cart.get_traj_time().unwrap(), 2.0);
     assert_eq!(cart.get_dof().unwrap(), vec![0, 0, 0, 1, 1, 1, 1, 1, 1, 1]);
