@@ -370,3 +370,78 @@ pub fn cpp_yarpserver(bin: &Path) {
         (server, tie, dir)
     });
 }
+
+/// A C++ test program built once (cached by its sources and the peer) against the C++ YARP
+/// of `$YARP_CPP_BIN`: `sources` compiled with `include_dirs` and linked to YARP's
+/// `libs`. `None` after [`crate::peer_missing`] when the peer is absent. With it, the
+/// program's run environment: `LD_LIBRARY_PATH` and the plugin directories
+/// ([`cpp_program_command`]).
+pub fn build_cpp_program(
+    test: &str,
+    name: &str,
+    sources: &[PathBuf],
+    include_dirs: &[PathBuf],
+    libs: &[&str],
+) -> Option<PathBuf> {
+    let Some(bin) = crate::cpp_bin_dir() else {
+        crate::peer_missing(
+            test,
+            "C++ YARP with icub-main",
+            "no YARP_CPP_BIN",
+            crate::CPP_YARP_INSTALL,
+        );
+        return None;
+    };
+    let prefix = std::fs::canonicalize(bin).ok()?.parent()?.to_path_buf();
+    let mut text = prefix.to_string_lossy().as_bytes().to_vec();
+    for s in sources {
+        text.extend(std::fs::read(s).unwrap_or_else(|e| panic!("{}: {e}", s.display())));
+    }
+    let stamp = text.iter().fold(0xcbf29ce484222325u64, |h, b| {
+        (h ^ u64::from(*b)).wrapping_mul(0x100000001b3)
+    });
+    let dir = std::env::temp_dir().join("yarp-rs-cpp-programs");
+    std::fs::create_dir_all(&dir).ok()?;
+    let out = dir.join(format!("{name}-{stamp:x}"));
+    if !out.is_file() {
+        let tmp = dir.join(format!("{name}-{stamp:x}.{}", std::process::id()));
+        let mut cmd = Command::new("g++");
+        cmd.args(["-std=c++17", "-O1", "-o"])
+            .arg(&tmp)
+            .args(sources);
+        for d in include_dirs
+            .iter()
+            .chain(std::iter::once(&prefix.join("include")))
+        {
+            cmd.arg(format!("-I{}", d.display()));
+        }
+        cmd.arg(format!("-L{}", prefix.join("lib").display()));
+        for l in libs {
+            cmd.arg(format!("-l{l}"));
+        }
+        let st = cmd.status().expect("g++");
+        assert!(st.success(), "{test}: building {name} failed");
+        std::fs::rename(&tmp, &out).ok()?;
+    }
+    Some(out)
+}
+
+/// A command running a program of [`build_cpp_program`] with the C++ peer's libraries and
+/// plugins (`LD_LIBRARY_PATH`, `YARP_DATA_DIRS`).
+pub fn cpp_program_command(program: &Path) -> Command {
+    let mut cmd = Command::new(program);
+    if let Some(prefix) = crate::cpp_bin_dir()
+        .and_then(|b| std::fs::canonicalize(b).ok())
+        .and_then(|b| b.parent().map(Path::to_path_buf))
+    {
+        cmd.env("LD_LIBRARY_PATH", prefix.join("lib")).env(
+            "YARP_DATA_DIRS",
+            format!(
+                "{}:{}",
+                prefix.join("share/yarp").display(),
+                prefix.join("share/iCub").display()
+            ),
+        );
+    }
+    cmd
+}

@@ -138,15 +138,41 @@ const BLOCKS_FROM: u16 = 10_000;
 /// The kernel's ephemeral range starts at 32768.
 const BLOCKS_TO: u16 = 32_000;
 
+/// Holds, for the rest of this process, the block of [`low_ports`] numbers holding
+/// `port`: a test that binds fixed ports there (an emulated robot's UDP hubs, 20000+n)
+/// keeps other tests' name servers from handing them out. Waits up to two minutes for a
+/// process holding it to end; false if it never did.
+pub fn hold_port_block(port: u16) -> bool {
+    if !(BLOCKS_FROM..BLOCKS_TO).contains(&port) {
+        return true;
+    }
+    let n = (port - BLOCKS_FROM) / PORT_BLOCK;
+    let end = Instant::now() + Duration::from_secs(120);
+    loop {
+        if claim_block(n).is_some() {
+            return true;
+        }
+        if Instant::now() > end {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
 /// Claims block `n` for this process (its lock is held until the process ends) and
 /// gives its first port number, or `None` when another process holds it.
 fn claim_block(n: u16) -> Option<u16> {
-    static HELD: std::sync::Mutex<Vec<std::fs::File>> = std::sync::Mutex::new(Vec::new());
+    static HELD: std::sync::Mutex<Vec<(u16, std::fs::File)>> = std::sync::Mutex::new(Vec::new());
+    let mut held = HELD.lock().unwrap_or_else(|e| e.into_inner());
+    // this process's own block (its name server's) is as good as claimed
+    if held.iter().any(|(k, _)| *k == n) {
+        return Some(BLOCKS_FROM + n * PORT_BLOCK);
+    }
     let dir = std::env::temp_dir().join("yarp-rs-test-port-blocks");
     std::fs::create_dir_all(&dir).ok()?;
     let file = std::fs::File::create(dir.join(n.to_string())).ok()?;
     file.try_lock().ok()?;
-    HELD.lock().unwrap_or_else(|e| e.into_inner()).push(file);
+    held.push((n, file));
     Some(BLOCKS_FROM + n * PORT_BLOCK)
 }
 

@@ -27,18 +27,13 @@ fn cpu_seconds(pid: u32) -> f64 {
 
 /// CPU share (percent of one core) of `pid` at rest over `secs`, then while the C++
 /// client moves the arm on `ctrl`.
-fn measure(
-    pid: u32,
-    ctrl: &str,
-    program: &std::path::Path,
-    prefix: &std::path::Path,
-) -> (f64, f64, f64) {
+fn measure(pid: u32, ctrl: &str, program: &std::path::Path) -> (f64, f64, f64) {
     let secs = 10.0;
     let c0 = cpu_seconds(pid);
     std::thread::sleep(Duration::from_secs_f64(secs));
     let rest = (cpu_seconds(pid) - c0) / secs * 100.0;
     let (c0, t0) = (cpu_seconds(pid), Instant::now());
-    let times = run_cpp_client("controllers_cpu", program, prefix, ctrl, 1.0);
+    let times = run_cpp_client("controllers_cpu", program, ctrl, 1.0);
     let moving = (cpu_seconds(pid) - c0) / t0.elapsed().as_secs_f64() * 100.0;
     (rest, moving, times.iter().sum::<f64>() / times.len() as f64)
 }
@@ -48,7 +43,7 @@ fn main() {
         return; // `cargo test --benches` lists benches: nothing to list here
     }
     let test = "controllers_cpu";
-    let Some((program, prefix)) = cpp_client(test) else {
+    let Some(program) = cpp_client(test) else {
         return;
     };
     yarp_interop_tests::name_server();
@@ -56,16 +51,11 @@ fn main() {
         return;
     };
     wait_solver(test, "/cpp/cartesianController/left_arm");
-    let theirs = measure(
-        cpp.0 .0.id(),
-        "/cpp/cartesianController/left_arm",
-        &program,
-        &prefix,
-    );
+    let theirs = measure(cpp.0 .0.id(), "/cpp/cartesianController/left_arm", &program);
     drop(cpp);
     let _robot = up(test);
     wait_solver(test, CTRL);
-    let ours = measure(std::process::id(), CTRL, &program, &prefix);
+    let ours = measure(std::process::id(), CTRL, &program);
     println!("cartesiancontrollerserver, left arm, period 10 ms (CPU % of one core)");
     println!("| | at rest | moving | time per pose (T = 1 s, tol 1 mm) |");
     println!("|---|---|---|---|");

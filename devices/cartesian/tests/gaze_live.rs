@@ -215,62 +215,31 @@ fn our_client_looks_at_three_points_through_our_ikingazectrl() {
 }
 
 /// icub-main's C++ client, built from ../shared/peers' sources against the C++ peer.
-fn cpp_gaze_client(test: &str) -> Option<(std::path::PathBuf, std::path::PathBuf)> {
-    let Some(bin) = yarp_interop_tests::cpp_bin_dir() else {
-        yarp_interop_tests::peer_missing(
-            test,
-            "C++ YARP with icub-main",
-            "no YARP_CPP_BIN",
-            yarp_interop_tests::CPP_YARP_INSTALL,
-        );
-        return None;
-    };
-    let prefix = std::fs::canonicalize(bin).ok()?.parent()?.to_path_buf();
+fn cpp_gaze_client(test: &str) -> Option<std::path::PathBuf> {
     let here = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let src = here.join("tests/peers/gaze_client.cpp");
     let client =
         here.join("../../../shared/peers/src/icub-main/src/libraries/icubmod/gazeController");
-    let mut text = std::fs::read(&src).unwrap();
-    text.extend(std::fs::read(client.join("ClientGazeController.cpp")).unwrap());
-    text.extend(prefix.to_string_lossy().as_bytes());
-    let stamp = text.iter().fold(0xcbf29ce484222325u64, |h, b| {
-        (h ^ u64::from(*b)).wrapping_mul(0x100000001b3)
-    });
-    let out =
-        std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("gaze_client-{stamp:x}"));
-    if !out.is_file() {
-        let st = Command::new("g++")
-            .args(["-std=c++17", "-O1", "-o"])
-            .arg(&out)
-            .arg(&src)
-            .arg(client.join("ClientGazeController.cpp"))
-            .arg(format!("-I{}", client.display()))
-            .arg(format!("-I{}", prefix.join("include").display()))
-            .arg(format!("-L{}", prefix.join("lib").display()))
-            .args([
-                "-lYARP_dev",
-                "-lYARP_sig",
-                "-lYARP_math",
-                "-lYARP_os",
-                "-lYARP_init",
-            ])
-            .status()
-            .expect("g++");
-        assert!(st.success(), "{test}: building the C++ gaze client failed");
-    }
-    Some((out, prefix))
+    yarp_interop_tests::build_cpp_program(
+        test,
+        "gaze_client",
+        &[
+            here.join("tests/peers/gaze_client.cpp"),
+            client.join("ClientGazeController.cpp"),
+        ],
+        &[client],
+        &["YARP_dev", "YARP_sig", "YARP_math", "YARP_os", "YARP_init"],
+    )
 }
 
 #[test]
 fn cpp_client_looks_at_three_points_through_our_ikingazectrl() {
     let test = "cpp_client_looks_at_three_points_through_our_ikingazectrl";
-    let Some((program, prefix)) = cpp_gaze_client(test) else {
+    let Some(program) = cpp_gaze_client(test) else {
         return;
     };
     let robot = up(test, "iKinGazeCtrl");
-    let mut cmd = Command::new(&program);
-    cmd.env("LD_LIBRARY_PATH", prefix.join("lib"))
-        .arg("/iKinGazeCtrl");
+    let mut cmd = yarp_interop_tests::cpp_program_command(&program);
+    cmd.arg("/iKinGazeCtrl");
     for p in POINTS {
         for v in p {
             cmd.arg(v.to_string());

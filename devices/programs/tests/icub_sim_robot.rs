@@ -39,11 +39,16 @@ fn genova_dir() -> PathBuf {
 /// cartesiancontrollerserver streams `state:o` once connected to it, as C++'s); killed
 /// and reaped on drop.
 fn left_arm_solver(dir: &Path) -> Reaped {
+    arm_solver(dir, "left_arm")
+}
+
+/// The Cartesian solver of `part` (`left_arm`, `right_arm`), as [`left_arm_solver`].
+fn arm_solver(dir: &Path, part: &str) -> Reaped {
     let program = yarp_interop_tests::workspace_program("iKinCartesianSolver", "icub-cartesian");
     let child = std::process::Command::new(program)
         .arg("--from")
         .arg(dir.join("cartesianSolver.ini"))
-        .args(["--part", "left_arm"])
+        .args(["--part", part])
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .spawn()
@@ -586,6 +591,10 @@ fn emulator_program() -> Option<PathBuf> {
 /// The emulator program with the whole iCub on UDP ports from `base_port`, and the head's
 /// Xsens MTx at `xsens` when given.
 fn spawn_emulator(program: &Path, base_port: u16, xsens: Option<&Path>) -> Reaped {
+    // no other test's name server may hand out the hubs' ports meanwhile
+    if !yarp_interop_tests::hold_port_block(base_port) {
+        eprintln!("ports {base_port}.. are held by another test process: going on");
+    }
     use std::io::{BufRead, BufReader};
     use std::process::{Command, Stdio};
     let mut cmd = Command::new(program);

@@ -201,41 +201,17 @@ pub fn axis_angle_error(a: &[f64], b: &[f64]) -> f64 {
     icub_ikin::pose::dcm2axis(&(ra * rb.transpose()))[3].abs()
 }
 
-/// The C++ client program, built once per source against the C++ peer.
-pub fn cpp_client(test: &str) -> Option<(PathBuf, PathBuf)> {
-    let bin = peer::cpp_bin_dir();
-    if bin.is_none() {
-        peer::peer_missing(
-            test,
-            "C++ YARP with icub-main",
-            "no YARP_CPP_BIN",
-            peer::CPP_YARP_INSTALL,
-        );
-        return None;
-    }
-    let prefix = std::fs::canonicalize(bin.unwrap())
-        .ok()?
-        .parent()?
-        .to_path_buf();
+/// icub-main's C++ `cartesiancontrollerclient` driven by `tests/peers/cartesian_client.cpp`,
+/// built once against the C++ peer.
+pub fn cpp_client(test: &str) -> Option<PathBuf> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/peers/cartesian_client.cpp");
-    let text = std::fs::read(&src).unwrap();
-    let stamp = text.iter().fold(0xcbf29ce484222325u64, |h, b| {
-        (h ^ u64::from(*b)).wrapping_mul(0x100000001b3)
-    }) ^ prefix.to_string_lossy().len() as u64;
-    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cartesian_client-{stamp:x}"));
-    if !out.is_file() {
-        let st = Command::new("g++")
-            .args(["-std=c++17", "-O1", "-o"])
-            .arg(&out)
-            .arg(&src)
-            .arg(format!("-I{}", prefix.join("include").display()))
-            .arg(format!("-L{}", prefix.join("lib").display()))
-            .args(["-lYARP_dev", "-lYARP_sig", "-lYARP_os", "-lYARP_init"])
-            .status()
-            .expect("g++");
-        assert!(st.success(), "{test}: building {} failed", src.display());
-    }
-    Some((out, prefix))
+    yarp_interop_tests::build_cpp_program(
+        test,
+        "cartesian_client",
+        &[src],
+        &[],
+        &["YARP_dev", "YARP_sig", "YARP_os", "YARP_init"],
+    )
 }
 
 /// Waits until the server at `ctrl` says its solver is connected.
@@ -266,23 +242,9 @@ pub fn wait_solver(test: &str, ctrl: &str) -> std::sync::Arc<yarp_net::port::Por
 
 /// Runs the C++ client on `ctrl`: the time each pose took (checked reached within
 /// 1 mm and 2 degrees) and the stdout.
-pub fn run_cpp_client(
-    test: &str,
-    program: &Path,
-    prefix: &Path,
-    ctrl: &str,
-    traj_time: f64,
-) -> Vec<f64> {
+pub fn run_cpp_client(test: &str, program: &Path, ctrl: &str, traj_time: f64) -> Vec<f64> {
     let poses = reachable_poses();
-    let mut cmd = Command::new(program);
-    cmd.env("LD_LIBRARY_PATH", prefix.join("lib")).env(
-        "YARP_DATA_DIRS",
-        format!(
-            "{}:{}",
-            prefix.join("share/yarp").display(),
-            prefix.join("share/iCub").display()
-        ),
-    );
+    let mut cmd = yarp_interop_tests::cpp_program_command(program);
     cmd.arg(ctrl).arg(traj_time.to_string());
     for p in &poses {
         for v in p {
