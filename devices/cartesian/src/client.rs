@@ -170,7 +170,8 @@ async fn read_state(port: Arc<Port>, latest: Latest) {
     }
 }
 
-async fn read_events(port: Arc<Port>, received: Arc<Mutex<Vec<CartesianEvent>>>) {
+/// Collects an `events:o` stream (the Cartesian and gaze servers' alike).
+pub(crate) async fn read_events(port: Arc<Port>, received: Arc<Mutex<Vec<CartesianEvent>>>) {
     while let Some(msg) = port.read().await {
         let Ok(b) = msg.bottle() else { continue };
         let Some(kind) = b.get(0).and_then(Value::as_str).map(str::to_string) else {
@@ -285,7 +286,8 @@ impl DeviceDriver for CartesianControllerClient {
     yarp_devices::views!(as_cartesian_control);
 }
 
-async fn close_all(ports: Vec<Arc<Port>>) {
+/// Closes ports no task holds any more.
+pub(crate) async fn close_all(ports: Vec<Arc<Port>>) {
     for p in ports {
         if let Ok(p) = Arc::try_unwrap(p) {
             p.close().await;

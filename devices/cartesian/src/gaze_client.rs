@@ -17,6 +17,7 @@ use yarp_devices::{nwc_ports, runtime};
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Value};
 
+use crate::client::{close_all, read_events};
 use crate::gaze::core::SERVER_VERSION;
 use crate::protocol;
 
@@ -76,27 +77,6 @@ async fn keep_latest(port: Arc<Port>, latest: Latest) {
     }
 }
 
-async fn read_events(port: Arc<Port>, received: Arc<Mutex<Vec<CartesianEvent>>>) {
-    while let Some(msg) = port.read().await {
-        let Ok(b) = msg.bottle() else { continue };
-        let Some(kind) = b.get(0).and_then(Value::as_str).map(str::to_string) else {
-            continue;
-        };
-        let checkpoint = (kind == "motion-ongoing")
-            .then(|| b.get(2).and_then(Value::as_f64))
-            .flatten();
-        let mut q = received.lock();
-        q.push(CartesianEvent {
-            kind,
-            time: b.get(1).and_then(Value::as_f64).unwrap_or(0.0),
-            checkpoint,
-        });
-        if q.len() > 1000 {
-            q.remove(0);
-        }
-    }
-}
-
 /// The camera's name as C++ sends it (0: left, anything else right).
 fn eye(cam: usize) -> &'static str {
     if cam == 0 {
@@ -111,14 +91,6 @@ fn point(r: &Bottle) -> DevResult<[f64; 3]> {
     match r.get(1).and_then(protocol::numbers).as_deref() {
         Some([x, y, z, ..]) => Ok([*x, *y, *z]),
         _ => Err(DeviceError::failed(NAME, format!("no point in `{r}`"))),
-    }
-}
-
-async fn close_all(ports: Vec<Arc<Port>>) {
-    for p in ports {
-        if let Ok(p) = Arc::try_unwrap(p) {
-            p.close().await;
-        }
     }
 }
 

@@ -23,6 +23,32 @@ pub mod solver_service;
 
 use yarp_devices::driver::{Factory, Registry};
 
+/// Raises `stop` at the first SIGINT or SIGTERM (the handlers installed now, so that an
+/// early signal is not lost): how `iKinCartesianSolver` and `iKinGazeCtrl` end.
+pub fn stop_on_signals(stop: std::sync::Arc<std::sync::atomic::AtomicBool>) -> std::io::Result<()> {
+    use tokio::signal::unix::{signal, SignalKind};
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()?;
+    let (mut int, mut term) = {
+        let _guard = rt.enter();
+        (
+            signal(SignalKind::interrupt())?,
+            signal(SignalKind::terminate())?,
+        )
+    };
+    std::thread::spawn(move || {
+        rt.block_on(async move {
+            tokio::select! {
+                _ = int.recv() => {}
+                _ = term.recv() => {}
+            }
+            stop.store(true, std::sync::atomic::Ordering::SeqCst);
+        })
+    });
+    Ok(())
+}
+
 /// The provider name `yarpdev --list` shows.
 pub const PROVIDER: &str = "icub-cartesian";
 

@@ -4,44 +4,19 @@
 //! point, as the head's kinematics computes it from the boards' encoders, reaches each
 //! within 1 cm.
 
+mod common;
+
 use icub_cartesian::gaze::kinematics::Head;
 use icub_ikin::DEG2RAD;
 use std::process::Command;
 use std::time::Duration;
-use yarp_devices::driver::{shared, SharedDevice};
+use yarp_devices::driver::SharedDevice;
 use yarp_devices::PolyDriver;
 use yarp_proto::Property;
 
+/// A fake board of `limits`' joints served as `name` (the Cartesian tests' own).
 fn board(name: &str, limits: &[(f64, f64)]) -> (SharedDevice, PolyDriver) {
-    let list = |f: fn(&(f64, f64)) -> f64| {
-        limits
-            .iter()
-            .map(f)
-            .map(|v| format!("{v}"))
-            .collect::<Vec<_>>()
-            .join(" ")
-    };
-    let fake = PolyDriver::open(
-        &Property::from_config_text(format!(
-            "device fakeMotionControl\n[GENERAL]\nJoints {}\n[LIMITS]\nMin ({})\nMax ({})\n",
-            limits.len(),
-            list(|l| l.0),
-            list(|l| l.1)
-        ))
-        .unwrap(),
-    )
-    .expect("fakeMotionControl");
-    let fake = shared(fake);
-    let mut nws = PolyDriver::open(&Property::from_text(format!(
-        "(device controlBoard_nws_yarp) (name {name}) (period 0.01)"
-    )))
-    .expect("controlBoard_nws_yarp");
-    nws.device()
-        .as_wrapper()
-        .unwrap()
-        .attach(fake.clone())
-        .expect("attach");
-    (fake, nws)
+    common::board(name, limits, limits.len())
 }
 
 fn encoders(dev: &SharedDevice) -> Vec<f64> {

@@ -11,7 +11,7 @@ use clap::Parser;
 use icub_cartesian::solver::SolverConfig;
 use icub_cartesian::solver_service::SolverService;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 #[derive(Parser)]
@@ -29,30 +29,6 @@ struct Args {
     /// The ResourceFinder context
     #[arg(long, default_value = "cartesianSolver")]
     context: String,
-}
-
-fn watch_signals(stop: Arc<AtomicBool>) -> std::io::Result<()> {
-    use tokio::signal::unix::{signal, SignalKind};
-    let rt = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()?;
-    let (mut int, mut term) = {
-        let _guard = rt.enter();
-        (
-            signal(SignalKind::interrupt())?,
-            signal(SignalKind::terminate())?,
-        )
-    };
-    std::thread::spawn(move || {
-        rt.block_on(async move {
-            tokio::select! {
-                _ = int.recv() => {}
-                _ = term.recv() => {}
-            }
-            stop.store(true, Ordering::SeqCst);
-        })
-    });
-    Ok(())
 }
 
 fn main() -> ExitCode {
@@ -95,7 +71,7 @@ fn main() -> ExitCode {
         }
     };
     let stop = Arc::new(AtomicBool::new(false));
-    if let Err(e) = watch_signals(stop.clone()) {
+    if let Err(e) = icub_cartesian::stop_on_signals(stop.clone()) {
         eprintln!("[ERROR] cannot install signal handlers: {e}");
         return ExitCode::FAILURE;
     }

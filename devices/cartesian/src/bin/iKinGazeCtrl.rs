@@ -10,33 +10,9 @@
 use icub_cartesian::gaze::core::GazeConfig;
 use icub_cartesian::gaze::service::GazeService;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use yarp_proto::Property;
-
-fn watch_signals(stop: Arc<AtomicBool>) -> std::io::Result<()> {
-    use tokio::signal::unix::{signal, SignalKind};
-    let rt = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()?;
-    let (mut int, mut term) = {
-        let _guard = rt.enter();
-        (
-            signal(SignalKind::interrupt())?,
-            signal(SignalKind::terminate())?,
-        )
-    };
-    std::thread::spawn(move || {
-        rt.block_on(async move {
-            tokio::select! {
-                _ = int.recv() => {}
-                _ = term.recv() => {}
-            }
-            stop.store(true, Ordering::SeqCst);
-        })
-    });
-    Ok(())
-}
 
 /// The options: the file's, then the command line's over them (`--a::b v` sets `b` of
 /// group `a`).
@@ -86,7 +62,7 @@ fn main() -> ExitCode {
     };
     let cfg = GazeConfig::from_property(&p);
     let stop = Arc::new(AtomicBool::new(false));
-    if let Err(e) = watch_signals(stop.clone()) {
+    if let Err(e) = icub_cartesian::stop_on_signals(stop.clone()) {
         eprintln!("[ERROR] cannot install signal handlers: {e}");
         return ExitCode::FAILURE;
     }
