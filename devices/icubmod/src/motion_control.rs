@@ -529,6 +529,7 @@ impl DeviceDriver for CanMotionControl {
     yarp_devices::views!(
         as_encoders,
         as_position_control,
+        as_position_direct,
         as_velocity_control,
         as_control_mode,
         as_axis_info,
@@ -688,6 +689,31 @@ impl IPositionControl for CanMotionControl {
         self.run(|c| c.stop(j))
     }
     fn get_target_position(&mut self, j: usize) -> DevResult<f64> {
+        self.check(j)?;
+        Ok(self.targets[j])
+    }
+}
+
+/// Position direct (C++ `setPositionRaw`): the reference streamed to the board
+/// (`SET_COMMAND_POSITION`) only while the joint is in position direct (or idle); in
+/// another mode the command is skipped with an error message, and the call still succeeds,
+/// as C++'s. The reference read back is the last position move's (C++'s `_ref_positions`).
+impl IPositionDirect for CanMotionControl {
+    fn get_axes(&mut self) -> DevResult<usize> {
+        self.axes()
+    }
+    fn set_position(&mut self, j: usize, reference: f64) -> DevResult<()> {
+        let mode = IControlMode::get_control_mode(self, j)?;
+        if mode != CM_POSITION_DIRECT && mode != CM_IDLE {
+            tracing::error!(
+                "setPositionRaw: skipping command because {} joint {j} is not in VOCAB_CM_POSITION_DIRECT mode",
+                self.id
+            );
+            return Ok(());
+        }
+        self.run(|c| c.set_position(j, reference))
+    }
+    fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
         self.check(j)?;
         Ok(self.targets[j])
     }
