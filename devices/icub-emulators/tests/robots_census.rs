@@ -123,16 +123,6 @@ const L_FOOT_FT: &str =
 const ORIENTATION: &str =
     "the inertials remapper names an orientation sensor the head's board does not \
      have: C++'s multipleanalogsensorsremapper refuses the attach too";
-/// Robots whose park at Ctrl-C is known to fail: (robot, a fragment of the failure, why).
-const PARK_KNOWN: &[(&str, &str, &str)] = &[(
-    "robots-icebox/iCubParis01",
-    "HeadV1_Calibrator",
-    "not yet: its emulated head's joint 0 creeps towards the park position (0.12 degrees \
-     short of -30 after 12 s, from 0) and never reports motion done, so the calibrator gives \
-     up after 30 s and yarprobotinterface exits 1, as C++'s does after a failed interrupt1 \
-     phase; the same head with other robots' files parks",
-)];
-
 /// Appends the robot's start-up time to `census.txt` in the tests' temporary directory,
 /// for BENCHMARKS.md.
 fn record(robot: &str, up: Duration, gaps: usize) {
@@ -366,21 +356,11 @@ fn census(robot: &str) {
         std::thread::sleep(Duration::from_millis(50));
     };
     let _ = ri.drain();
-    let park_gap = PARK_KNOWN.iter().find(|k| k.0 == robot);
-    match park_gap {
-        // it must still stop, and fail where it is known to
-        Some(k) => assert!(
-            status.is_some() && ri.seen.iter().any(|l| l.contains(k.1)),
-            "{robot}: Ctrl-C: {status:?}, expected the known park failure ({}); printed:\n{}",
-            k.2,
-            ri.seen.join("\n")
-        ),
-        None => assert!(
-            status.is_some_and(|s| s.success()),
-            "{robot}: Ctrl-C: {status:?}; yarprobotinterface printed:\n{}",
-            ri.seen.join("\n")
-        ),
-    }
+    assert!(
+        status.is_some_and(|s| s.success()),
+        "{robot}: Ctrl-C: {status:?}; yarprobotinterface printed:\n{}",
+        ri.seen.join("\n")
+    );
     record(robot, up, found.len());
 }
 

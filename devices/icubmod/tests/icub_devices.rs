@@ -325,10 +325,15 @@ fn velocity_and_group_moves() {
     assert!(eventually(Duration::from_secs(5), || pos
         .check_motion_dones()
         .unwrap_or(false)));
-    let now = dev.as_encoders().unwrap().get_encoders().unwrap();
-    for j in 0..2 {
-        assert!((now[j] - target[j]).abs() < 1.0, "joint {j}: {now:?}");
-    }
+    // done is the board's trajectory ended (the MC4's `_ended`): the joints then settle
+    let mut now = Vec::new();
+    assert!(
+        eventually(Duration::from_secs(2), || {
+            now = dev.as_encoders().unwrap().get_encoders().unwrap();
+            (0..2).all(|j| (now[j] - target[j]).abs() < 1.0)
+        }),
+        "{now:?} against {target:?}"
+    );
     // a wrong-sized command is refused, not sent
     let pos = dev.as_position_control().unwrap();
     assert!(matches!(

@@ -115,8 +115,6 @@ pub const DRIVE_PER_TORQUE_MAX: f64 = 3.0;
 /// `TorqueMax` (N·m at sensor full scale) of joints with no configured sensor: the
 /// iCubGenova01 shoulder's.
 pub const DEFAULT_TORQUE_MAX: f64 = 8.0;
-/// Encoder distance under which a position move counts as done, ticks.
-pub const DONE_TOLERANCE: f64 = 3.0;
 /// Number of periods the firmware averages the derivative term over (`DerPort`).
 const DERIVATIVE_TAPS: usize = 10;
 /// Broadcasts enabled until the host sets a policy.
@@ -511,12 +509,20 @@ impl JointSim {
         self.impedance_torque
     }
 
-    /// Whether the last position move has finished: the reference reached the target
-    /// and the joint settled there (at rest, so no overshoot follows).
+    /// `CAN_MOTION_DONE`, as the MC4 firmware answers it (`check_in_position` of
+    /// `pid.c`): in position, mixed and impedance-position modes, whether the trajectory
+    /// generator has ended (the reference reached the target: the joint itself may still
+    /// be settling, as on the board, which no longer checks `INPOSITION_THRESHOLD`); in
+    /// the velocity modes, whether no position trajectory is pending; always in position
+    /// direct; never in the other modes (idle, torque, open loop, calibration).
     pub fn motion_done(&self) -> bool {
-        (self.reference - self.target).abs() < 0.5
-            && (self.q - self.target).abs() <= DONE_TOLERANCE
-            && self.qd.abs() <= DONE_TOLERANCE * 10.0
+        match self.mode {
+            ControlMode::Position | ControlMode::Mixed | ControlMode::ImpedancePos => {
+                (self.reference - self.target).abs() < 0.5
+            }
+            ControlMode::Velocity | ControlMode::ImpedanceVel | ControlMode::Direct => true,
+            _ => false,
+        }
     }
 
     /// Advances by `dt` seconds, one control period at a time.

@@ -132,7 +132,10 @@ fn mc_board_answers_polling_and_moves() {
     wait_until("motion done", || {
         ask(&host, 1, 0, McCommand::MotionDone) == McReply::MotionDone(true)
     });
-    assert!((encoder(&host, 1, 0) - 1500).abs() <= 3);
+    // done means the trajectory ended (the firmware's `_ended`): the joint settles after
+    wait_until("settled at 1500", || {
+        (encoder(&host, 1, 0) - 1500).abs() <= 3
+    });
     // Beyond the limits the target is clamped.
     tell(
         &host,
@@ -146,7 +149,9 @@ fn mc_board_answers_polling_and_moves() {
     wait_until("clamped move", || {
         ask(&host, 1, 0, McCommand::MotionDone) == McReply::MotionDone(true)
     });
-    assert!((encoder(&host, 1, 0) - 2000).abs() <= 3);
+    wait_until("settled at 2000", || {
+        (encoder(&host, 1, 0) - 2000).abs() <= 3
+    });
     // The other joint did not move.
     assert_eq!(encoder(&host, 1, 1), -50);
 }
