@@ -15,7 +15,7 @@ secs="${1:-7}"
 shift || true
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-    targets=(bottle_decode text_parse ini_parse wire_decode nameserver datagram can_decode xsens_decode eth_decode shmem_ring ros_msg_decode mjpeg_monitor rplidar_decode)
+    targets=(bottle_decode text_parse ini_parse wire_decode nameserver datagram can_decode xsens_decode eth_decode shmem_ring ros_msg_decode mjpeg_monitor rplidar_decode cartesian_rpc)
 fi
 
 if ! cargo fuzz --help >/dev/null 2>&1; then
