@@ -9,6 +9,15 @@ use crate::error::DevResult;
 pub trait IGazeControl {
     fn set_tracking_mode(&mut self, on: bool) -> DevResult<()>;
     fn get_tracking_mode(&mut self) -> DevResult<bool>;
+    /// Gaze stabilisation (the head countering the IMU's rotation while idle).
+    fn set_stabilization_mode(&mut self, on: bool) -> DevResult<()>;
+    fn get_stabilization_mode(&mut self) -> DevResult<bool>;
+    /// The vestibulo-ocular reflex's gain (the eyes countering the IMU's rotation).
+    fn set_vor_gain(&mut self, gain: f64) -> DevResult<()>;
+    fn get_vor_gain(&mut self) -> DevResult<f64>;
+    /// The oculo-collic reflex's gain (the eyes countering the neck's motion).
+    fn set_ocr_gain(&mut self, gain: f64) -> DevResult<()>;
+    fn get_ocr_gain(&mut self) -> DevResult<f64>;
     /// The fixation point from the `x:o` stream, with its time.
     fn get_fixation_point(&mut self) -> DevResult<([f64; 3], f64)>;
     /// The absolute angles of the fixation point from the `angles:o` stream.

@@ -312,6 +312,31 @@ impl IGazeControl for GazeControllerClient {
         Ok(self.number(words(&["get", "track"]))? > 0.0)
     }
 
+    fn set_stabilization_mode(&mut self, on: bool) -> DevResult<()> {
+        self.ack(words(&["set", "stab"]).with(Value::Int32(i32::from(on))))
+            .map(drop)
+    }
+
+    fn get_stabilization_mode(&mut self) -> DevResult<bool> {
+        Ok(self.number(words(&["get", "stab"]))? > 0.0)
+    }
+
+    fn set_vor_gain(&mut self, gain: f64) -> DevResult<()> {
+        self.ack(words(&["set", "vor"]).with(gain)).map(drop)
+    }
+
+    fn get_vor_gain(&mut self) -> DevResult<f64> {
+        self.number(words(&["get", "vor"]))
+    }
+
+    fn set_ocr_gain(&mut self, gain: f64) -> DevResult<()> {
+        self.ack(words(&["set", "ocr"]).with(gain)).map(drop)
+    }
+
+    fn get_ocr_gain(&mut self) -> DevResult<f64> {
+        self.number(words(&["get", "ocr"]))
+    }
+
     fn get_fixation_point(&mut self) -> DevResult<([f64; 3], f64)> {
         let link = self.link()?;
         let (v, t) = Self::latest(link, &link.x, "getFixationPoint")?;

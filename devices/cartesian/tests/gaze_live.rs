@@ -35,6 +35,12 @@ struct Robot {
 /// `name`: the module's port prefix (each test its own: a killed module's ports stay
 /// registered in this process's name server).
 fn up(test: &str, name: &str) -> Robot {
+    up_with(test, name, None)
+}
+
+/// [`up`] with the head IMU `imu` (a `multipleanalogsensorsserver` as
+/// `/icub/head/inertials`): iKinGazeCtrl then runs with `imu::mode on`, its default.
+fn up_with(test: &str, name: &str, imu: Option<PolyDriver>) -> Robot {
     yarp_interop_tests::name_server();
     yarp_devices::Registry::install(icub_cartesian::register);
     let (torso, torso_nws) = board(
@@ -68,13 +74,15 @@ fn up(test: &str, name: &str) -> Robot {
         std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("iKinGazeCtrl.log"),
     )
     .unwrap();
-    let child = Command::new(env!("CARGO_BIN_EXE_iKinGazeCtrl"))
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_iKinGazeCtrl"));
+    if imu.is_none() {
+        cmd.args(["--imu::mode", "off"]);
+    }
+    let child = cmd
         .args([
             "--head_version",
             "v2.5",
             "--saccades",
-            "off",
-            "--imu::mode",
             "off",
             "--ping_robot_tmo",
             "20",
@@ -97,7 +105,7 @@ fn up(test: &str, name: &str) -> Robot {
     Robot {
         torso,
         head,
-        _nws: vec![torso_nws, head_nws],
+        _nws: [torso_nws, head_nws].into_iter().chain(imu).collect(),
         _gaze: gaze,
     }
 }
@@ -247,4 +255,77 @@ fn cpp_client_looks_at_three_points_through_our_ikingazectrl() {
     // the last point, also as the head's kinematics has it
     assert!(dist(&fixation(&robot), &POINTS[2]) < 0.01);
     assert!(stdout.contains("RESTORED 1 0.750"), "{stdout}");
+}
+
+/// With the head's IMU (a fakeIMU turning at a steady 10 deg/s about each axis, served as
+/// `/icub/head/inertials`), as iKinGazeCtrl runs by default: the reflexes' gains are
+/// C++'s defaults (VOR 1, OCR 0); gaze stabilisation, asked through our client, turns the
+/// idle neck against the rotation and says `stabilization-on`; turned off, the neck
+/// stops and it says `stabilization-off`. Without the IMU it is refused.
+#[test]
+fn stabilization_turns_the_idle_neck_against_the_imus_rotation() {
+    let test = "stabilization_turns_the_idle_neck_against_the_imus_rotation";
+    yarp_interop_tests::name_server();
+    let imu = PolyDriver::open(
+        &Property::from_config_text(
+            "device multipleanalogsensorsserver\nsubdevice fakeIMU\nname /icub/head/inertials\n\
+             period 10\nconstantValue true\n",
+        )
+        .unwrap(),
+    )
+    .expect("fakeIMU behind multipleanalogsensorsserver");
+    let robot = up_with(test, "iKinGazeCtrlImu", Some(imu));
+    let mut pd = PolyDriver::open(&Property::from_text(
+        "(device gazecontrollerclient) (remote /iKinGazeCtrlImu) (local /gaze_test_imu)",
+    ))
+    .expect("gazecontrollerclient");
+    let gaze = pd.device().as_gaze_control().expect("IGazeControl");
+    assert_eq!(gaze.get_vor_gain().unwrap(), 1.0);
+    assert_eq!(gaze.get_ocr_gain().unwrap(), 0.0);
+    gaze.set_ocr_gain(0.5).unwrap();
+    assert_eq!(gaze.get_ocr_gain().unwrap(), 0.5);
+    assert!(!gaze.get_stabilization_mode().unwrap());
+    let neck = |r: &Robot| encoders(&r.head)[..3].to_vec();
+    let before = neck(&robot);
+    gaze.take_events();
+    gaze.set_stabilization_mode(true).unwrap();
+    assert!(gaze.get_stabilization_mode().unwrap());
+    std::thread::sleep(Duration::from_millis(1000));
+    let turned = neck(&robot);
+    let moved = (0..3)
+        .map(|k| (turned[k] - before[k]).abs())
+        .fold(0.0, f64::max);
+    eprintln!("{test}: the neck from {before:?} to {turned:?}");
+    assert!(
+        moved > 1.0,
+        "{test}: the neck did not counter the rotation: {turned:?}"
+    );
+    gaze.set_stabilization_mode(false).unwrap();
+    assert!(!gaze.get_stabilization_mode().unwrap());
+    std::thread::sleep(Duration::from_millis(200));
+    let stopped = neck(&robot);
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(
+        neck(&robot),
+        stopped,
+        "{test}: the neck goes on after stabilization-off"
+    );
+    let kinds: Vec<String> = gaze.take_events().into_iter().map(|e| e.kind).collect();
+    assert!(kinds.contains(&"stabilization-on".to_string()), "{kinds:?}");
+    assert!(
+        kinds.contains(&"stabilization-off".to_string()),
+        "{kinds:?}"
+    );
+    pd.close().unwrap();
+    // without the IMU (imu::mode off) the request is refused, as C++'s
+    let _robot = up(test, "iKinGazeCtrlNoImu");
+    let mut pd = PolyDriver::open(&Property::from_text(
+        "(device gazecontrollerclient) (remote /iKinGazeCtrlNoImu) (local /gaze_test_noimu)",
+    ))
+    .expect("gazecontrollerclient");
+    let gaze = pd.device().as_gaze_control().expect("IGazeControl");
+    assert!(gaze.set_stabilization_mode(true).is_err());
+    assert_eq!(gaze.get_vor_gain().unwrap(), 0.0);
+    assert_eq!(gaze.get_ocr_gain().unwrap(), 1.0);
+    pd.close().unwrap();
 }

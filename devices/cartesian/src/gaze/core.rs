@@ -2,7 +2,10 @@
 //! that look at it, the min-jerk controller that moves the head there (neck in position
 //! direct, eyes in velocity, as C++'s), motion-done as C++ decides it, events, contexts
 //! and the `rpc` commands (matched on their first four letters, strings or vocabs, as
-//! C++'s `asVocab32` reads them).
+//! C++'s `asVocab32` reads them). With the head IMU: the vestibulo-ocular and oculo-collic
+//! reflexes (the eyes' counter-rotation while a motion runs) and gaze stabilisation while
+//! idle; C++'s stabilisation during a motion (its gyro loop around the neck's min-jerk
+//! command) is not done.
 
 use icub_ikin::minjerk::{Integrator, MinJerkVelFilter};
 use icub_ikin::{DEG2RAD, RAD2DEG};
@@ -41,6 +44,14 @@ pub struct GazeConfig {
     pub imu: bool,
     pub vor: f64,
     pub ocr: f64,
+    /// `imu::source_port_name`: the IMU's `multipleanalogsensorsserver`.
+    pub imu_source: String,
+    /// `imu::timeout` \[s\].
+    pub imu_timeout: f64,
+    /// `imu::stabilization_gain` \[1/s\].
+    pub stabilization_gain: f64,
+    /// `imu::gyro_noise_threshold` \[rad/s\] (given in deg/s).
+    pub gyro_noise_threshold: f64,
     /// `cameras::file` and `cameras::context`: the eyes' calibration (`icubEyes.ini`).
     pub cameras: Option<(String, String)>,
 }
@@ -68,11 +79,17 @@ impl GazeConfig {
         };
         let imu = group_text("imu", "mode").is_none_or(|m| m == "on");
         let torso = text("torso", "torso");
+        let robot = text("robot", "icub");
         GazeConfig {
             name: text("name", "iKinGazeCtrl")
                 .trim_start_matches('/')
                 .to_string(),
-            robot: text("robot", "icub"),
+            imu_source: group_text("imu", "source_port_name")
+                .unwrap_or_else(|| format!("/{robot}/head/inertials")),
+            imu_timeout: group("imu", "timeout").unwrap_or(0.04),
+            stabilization_gain: group("imu", "stabilization_gain").unwrap_or(11.0),
+            gyro_noise_threshold: group("imu", "gyro_noise_threshold").unwrap_or(5.0) * DEG2RAD,
+            robot,
             head: text("head", "head"),
             torso: (torso != "off").then_some(torso),
             neck_time: group("trajectory_time", "neck").unwrap_or(0.75),
@@ -157,6 +174,9 @@ pub struct GazeOutput {
     pub events: Vec<GazeEvent>,
     /// A motion started this period (sync looks may answer).
     pub onset: bool,
+    /// The joints' control modes are to be set (neck position direct, eyes velocity):
+    /// stabilisation started since the last period.
+    pub modes: bool,
 }
 
 /// How an RPC is answered.
@@ -179,6 +199,7 @@ struct Context {
     saccades: bool,
     bounds: HeadLimits,
     ntol: f64,
+    stabilize: bool,
 }
 
 /// The gaze controller's state.
@@ -222,6 +243,16 @@ pub struct GazeCore {
     now: f64,
     /// The left and right cameras' intrinsics, when the calibration file gives them.
     cameras: [Option<Camera>; 2],
+    /// The IMU's last angular velocity \[rad/s\], in its own frame (`None`: no reading).
+    gyro: Option<Vector3<f64>>,
+    /// The eyes' counter-rotation of this period (VOR and OCR) \[rad/s\].
+    counterv: Vector3<f64>,
+    /// Gaze stabilisation (`[set] [stab]`): the IMU's rotation countered while idle.
+    stabilize: bool,
+    /// C++'s `IntStabilizer` (Tustin, unbounded): its output and last input.
+    stab_int: (Vector3<f64>, Vector3<f64>),
+    /// The joints' modes are to be set at the next period (stabilisation started).
+    modes_pending: bool,
 }
 
 impl GazeCore {
@@ -277,6 +308,11 @@ impl GazeCore {
             fb: [0.0; 6],
             now: 0.0,
             cameras: [None, None],
+            gyro: None,
+            counterv: Vector3::zeros(),
+            stabilize: false,
+            stab_int: (Vector3::zeros(), Vector3::zeros()),
+            modes_pending: false,
             cfg,
         };
         core.set_times(core.neck_time, core.eyes_time);
@@ -385,7 +421,10 @@ impl GazeCore {
     /// One period with the torso (board order) and head encoders \[deg\].
     pub fn cycle(&mut self, now: f64, torso_deg: &[f64], head_deg: &[f64]) -> GazeOutput {
         self.now = now;
-        let mut out = GazeOutput::default();
+        let mut out = GazeOutput {
+            modes: std::mem::take(&mut self.modes_pending),
+            ..GazeOutput::default()
+        };
         let mut t = [0.0; 3];
         for (k, v) in torso_deg.iter().take(3).enumerate() {
             t[k] = v * DEG2RAD;
@@ -481,14 +520,21 @@ impl GazeCore {
             }
         }
         if self.active {
+            // the counter-rotation as the eyes' feed-forward: their target is solved for
+            // the neck's final posture (C++ integrates it into a reference that tracks
+            // the fixation point instead), so it settles there when the head is still
+            self.counterv = self.counter_velocity();
             let en = DVector::from_vec((0..3).map(|k| self.qd[k] - self.fb[k]).collect());
             let ee = DVector::from_vec((3..6).map(|k| self.qd[k] - self.fb[k]).collect());
             let vn = self.neck_filter.filt(self.neck_time, &en);
             let ve = self.eyes_filter.filt(self.eyes_time, &ee);
+            let ve = Vector3::new(ve[0], ve[1], ve[2]) + self.counterv;
             let plan = self.neck_plan.integrate(&vn).clone();
             out.neck = Some([plan[0] * RAD2DEG, plan[1] * RAD2DEG, plan[2] * RAD2DEG]);
             out.eyes = Some([ve[0] * RAD2DEG, ve[1] * RAD2DEG, ve[2] * RAD2DEG]);
             self.vel = [vn[0], vn[1], vn[2], ve[0], ve[1], ve[2]];
+        } else if self.stabilize {
+            self.stabilize_idle(&mut out);
         }
         self.streams(out)
     }
@@ -504,6 +550,136 @@ impl GazeCore {
             .map(|v| v * RAD2DEG)
             .collect();
         out
+    }
+
+    /// The IMU's angular velocity \[deg/s\] in its frame, as the `multipleanalogsensors`
+    /// gyroscope gives it, or `None` when it gave none this period.
+    pub fn set_gyro(&mut self, gyro_deg_s: Option<[f64; 3]>) {
+        self.gyro = gyro_deg_s.map(|g| Vector3::new(g[0], g[1], g[2]) * DEG2RAD);
+    }
+
+    /// `setGazeStabilization`: refused without an IMU (`imu::mode off`); on, the head
+    /// then counters the IMU's rotation while no motion runs; off, stops the head.
+    fn set_stabilization(&mut self, on: bool, out: &mut GazeOutput) -> bool {
+        if !self.cfg.imu {
+            return false;
+        }
+        if on == self.stabilize {
+            return true;
+        }
+        self.stabilize = on;
+        if on {
+            if !self.active {
+                self.neck_plan
+                    .reset(DVector::from_vec(self.fb[..3].to_vec()));
+                self.stab_int = (Vector3::zeros(), Vector3::zeros());
+            }
+            self.modes_pending = true;
+            out.events.push(GazeEvent {
+                name: "stabilization-on",
+                checkpoint: None,
+            });
+        } else {
+            self.active = false;
+            self.motion_done = true;
+            self.vel = [0.0; 6];
+            out.stop = true;
+            out.events.push(GazeEvent {
+                name: "stabilization-off",
+                checkpoint: None,
+            });
+        }
+        true
+    }
+
+    /// The gyroscope's reading above `gyro_noise_threshold`, else zero (the VOR's).
+    fn gyro_above_noise(&self) -> Vector3<f64> {
+        let g = self.gyro.unwrap_or_else(Vector3::zeros);
+        if g.norm() < self.cfg.gyro_noise_threshold {
+            Vector3::zeros()
+        } else {
+            g
+        }
+    }
+
+    /// `getEyesCounterVelocity`: the eyes' velocity \[rad/s\] (tilt, version, vergence)
+    /// that keeps the fixation point still while the head turns, from the IMU's rotation
+    /// (vestibulo-ocular reflex, gain `vor`) and the neck's commanded velocity
+    /// (oculo-collic reflex, gain `ocr`); zero with the eyes bound.
+    fn counter_velocity(&self) -> Vector3<f64> {
+        if self.eyes_bound >= 0.0 || (self.vor == 0.0 && self.ocr == 0.0) {
+            return Vector3::zeros();
+        }
+        let Some(fp) = self.fixation_point() else {
+            return Vector3::zeros();
+        };
+        let Some(j) = self.head.fixation_jacobian(&self.torso, &self.fb) else {
+            return Vector3::zeros();
+        };
+        let h = self.head.imu_frame(&self.torso, &self.fb);
+        let r = h.fixed_view::<3, 3>(0, 0);
+        let p = h.fixed_view::<3, 1>(0, 3);
+        let vor = (r * self.gyro_above_noise()).cross(&(fp - p));
+        let neck_vel = Vector3::new(self.vel[0], self.vel[1], self.vel[2]);
+        let ocr = self
+            .head
+            .point_velocity_of_neck(&self.torso, &self.fb, &fp, &neck_vel);
+        let rel = vor * self.vor + ocr * self.ocr;
+        match j.pseudo_inverse(1e-12) {
+            Ok(ji) => -(ji * rel),
+            Err(_) => Vector3::zeros(),
+        }
+    }
+
+    /// Gaze stabilisation while idle (C++'s controller without a motion): the neck turns
+    /// against the IMU's rotation (`stabilization_gain` on its integral), the eyes keep
+    /// the fixation point against what is left; nothing without a reading.
+    fn stabilize_idle(&mut self, out: &mut GazeOutput) {
+        let Some(gyro) = self.gyro else {
+            return;
+        };
+        let Some(x) = self.fixation_point() else {
+            return;
+        };
+        let h = self.head.imu_frame(&self.torso, &self.fb);
+        let r = h.fixed_view::<3, 3>(0, 0);
+        let p = h.fixed_view::<3, 1>(0, 3);
+        let w = r * gyro;
+        let dx = w.cross(&(x - p));
+        let jn = self.head.neck_jacobian(&self.torso, &self.fb);
+        let jw: nalgebra::Matrix3<f64> = jn.fixed_view::<3, 3>(3, 0).into_owned();
+        let imu_neck = jw
+            .pseudo_inverse(1e-12)
+            .map(|ji| ji * w)
+            .unwrap_or_default();
+        // Tustin: y += (x + x_old) Ts / 2
+        let input = -imu_neck;
+        self.stab_int.0 += (input + self.stab_int.1) * (TS / 2.0);
+        self.stab_int.1 = input;
+        let v_neck = self.stab_int.0 * self.cfg.stabilization_gain;
+        // the eyes only where the vergence is wide enough to tell the point
+        let v_eyes = if self.fb[5] > 4.0 * DEG2RAD {
+            self.head
+                .fixation_jacobian(&self.torso, &self.fb)
+                .and_then(|j| j.pseudo_inverse(1e-12).ok())
+                .map(|ji| ji * dx)
+                .unwrap_or_default()
+        } else {
+            Vector3::zeros()
+        };
+        let plan = self
+            .neck_plan
+            .integrate(&DVector::from_vec(v_neck.iter().copied().collect()))
+            .clone();
+        out.neck = Some([plan[0] * RAD2DEG, plan[1] * RAD2DEG, plan[2] * RAD2DEG]);
+        out.eyes = Some([
+            v_eyes[0] * RAD2DEG,
+            v_eyes[1] * RAD2DEG,
+            v_eyes[2] * RAD2DEG,
+        ]);
+        self.vel = [
+            v_neck[0], v_neck[1], v_neck[2], v_eyes[0], v_eyes[1], v_eyes[2],
+        ];
     }
 
     /// `[stop]`: the motion ends where it is.
@@ -535,6 +711,7 @@ impl GazeCore {
                 saccades: self.saccades,
                 bounds: self.limits,
                 ntol: self.ntol,
+                stabilize: self.stabilize,
             },
         );
         id
@@ -545,6 +722,10 @@ impl GazeCore {
         let w = |i: usize| word4(cmd, i);
         let reply = match w(0).as_str() {
             "get" if cmd.len() > 1 => self.get(cmd, &w(1)),
+            "set" if cmd.len() > 2 && w(1) == "stab" => match cmd.get(2).and_then(Value::as_f64) {
+                Some(v) if self.set_stabilization(v > 0.0, out) => ack(),
+                _ => nack(),
+            },
             "set" if cmd.len() > 2 => self.set(cmd, &w(1)),
             "look" if cmd.len() > 2 => {
                 let Some(list) = cmd.get(2).and_then(Value::as_list) else {
@@ -588,6 +769,7 @@ impl GazeCore {
                         self.saccades = c.saccades;
                         self.limits = c.bounds;
                         self.ntol = c.ntol;
+                        self.set_stabilization(c.stabilize, out);
                         ack()
                     }
                     None => nack(),
@@ -702,7 +884,7 @@ impl GazeCore {
             "sinh" => ack().with(self.sacc_inhibition),
             "sact" => ack().with(self.sacc_activation),
             "trac" => flag(self.tracking),
-            "stab" => flag(false),
+            "stab" => flag(self.stabilize),
             "done" => flag(self.motion_done),
             "sdon" => flag(true),
             "pitc" | "roll" | "yaw" => {
@@ -811,8 +993,6 @@ impl GazeCore {
                     }
                 }
             }
-            // no IMU in this build: gaze stabilisation is refused, as C++ without one
-            "stab" => return nack(),
             _ => return nack(),
         }
         ack()
@@ -887,5 +1067,135 @@ mod tests {
         ] {
             assert_eq!(snap_version(given), want, "{given}");
         }
+    }
+
+    fn core(imu: bool, vor: f64) -> GazeCore {
+        let mut cfg = GazeConfig::from_property(&yarp_proto::Property::new());
+        cfg.head_version = "v2.5".into();
+        cfg.imu = imu;
+        cfg.vor = vor;
+        cfg.ocr = 0.0;
+        let limits = [
+            (-40.0, 30.0),
+            (-70.0, 60.0),
+            (-55.0, 55.0),
+            (-35.0, 15.0),
+            (-50.0, 52.0),
+            (0.0, 90.0),
+        ];
+        GazeCore::new(cfg, &limits).unwrap()
+    }
+
+    /// The IMU's angular velocity in its own frame \[deg/s\] between two postures.
+    fn gyro_between(head: &Head, a: (&[f64; 3], &[f64; 6]), b: (&[f64; 3], &[f64; 6])) -> [f64; 3] {
+        let ra = head
+            .imu_frame(a.0, a.1)
+            .fixed_view::<3, 3>(0, 0)
+            .into_owned();
+        let rb = head
+            .imu_frame(b.0, b.1)
+            .fixed_view::<3, 3>(0, 0)
+            .into_owned();
+        let ax = icub_ikin::pose::dcm2axis(&(ra.transpose() * rb));
+        [0, 1, 2].map(|k| ax[k] * ax[3] / TS * RAD2DEG)
+    }
+
+    /// Tracks a point with the neck bound while the torso turns at 20 deg/s (the IMU
+    /// feels the turn): the worst fixation error once the turn is under way \[m\].
+    fn fixation_error_while_the_torso_turns(mut g: GazeCore) -> f64 {
+        let target = [-0.6, 0.0, 0.35];
+        let mut torso = [0.0f64; 3]; // board order: yaw, roll, pitch
+        let mut head = [0.0f64, 0.0, 0.0, 0.0, 0.0, 10.0];
+        let mut out = GazeOutput::default();
+        g.respond(&Bottle::from_text("set track 1"), &mut out);
+        // the neck held: the eyes alone keep the gaze
+        for j in ["pitch", "roll", "yaw"] {
+            g.respond(&Bottle::from_text(format!("bind {j} 0 0")), &mut out);
+        }
+        g.set_target(target);
+        let mut worst: f64 = 0.0;
+        for i in 0..400 {
+            let t = i as f64 * TS;
+            let before = (torso, head);
+            if i >= 200 {
+                torso[0] += 20.0 * TS;
+            }
+            let chain = |t: &[f64; 3]| [t[2] * DEG2RAD, t[1] * DEG2RAD, t[0] * DEG2RAD];
+            let rad = |h: &[f64; 6]| h.map(|v| v * DEG2RAD);
+            let gyro = gyro_between(
+                g.head(),
+                (&chain(&before.0), &rad(&before.1)),
+                (&chain(&torso), &rad(&head)),
+            );
+            g.set_gyro(Some(gyro));
+            let out = g.cycle(t, &torso, &head);
+            if let Some(n) = out.neck {
+                head[..3].copy_from_slice(&n);
+            }
+            if let Some(v) = out.eyes {
+                for k in 0..3 {
+                    head[3 + k] += v[k] * TS;
+                }
+            }
+            if i >= 250 {
+                let x = out.x.unwrap();
+                let d = (0..3)
+                    .map(|k| (x[k] - target[k]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                worst = worst.max(d);
+            }
+        }
+        worst
+    }
+
+    #[test]
+    fn the_vestibulo_ocular_reflex_holds_the_gaze_while_the_body_turns() {
+        let without = fixation_error_while_the_torso_turns(core(true, 0.0));
+        let with = fixation_error_while_the_torso_turns(core(true, 1.0));
+        eprintln!("fixation error while turning: {without:.4} m without VOR, {with:.4} m with");
+        // measured: 29 mm without, 1 mm with
+        assert!(with < 0.25 * without, "{with} against {without}");
+    }
+
+    #[test]
+    fn stabilization_needs_the_imu_and_counters_its_rotation_while_idle() {
+        let mut out = GazeOutput::default();
+        let mut off = core(false, 0.0);
+        assert_eq!(
+            off.respond(&Bottle::from_text("set stab 1"), &mut out),
+            GazeReply::Now(nack())
+        );
+        let mut g = core(true, 1.0);
+        let head = [0.0, 0.0, 0.0, 0.0, 0.0, 10.0];
+        g.cycle(0.0, &[0.0; 3], &head);
+        assert_eq!(
+            g.respond(&Bottle::from_text("set stab 1"), &mut out),
+            GazeReply::Now(ack())
+        );
+        assert_eq!(out.events[0].name, "stabilization-on");
+        assert!(g.cycle(TS, &[0.0; 3], &head).modes, "the joints' modes set");
+        assert_eq!(
+            g.respond(&Bottle::from_text("get stab"), &mut out),
+            GazeReply::Now(ack().with(Value::Int32(1)))
+        );
+        // the head turns up (the IMU pitches) at 10 deg/s: the neck answers down
+        let (r0, r1) = (
+            [0.0, 0.0, 0.0, 0.0, 0.0, 10.0 * DEG2RAD],
+            [0.1 * DEG2RAD, 0.0, 0.0, 0.0, 0.0, 10.0 * DEG2RAD],
+        );
+        let gyro = gyro_between(g.head(), (&[0.0; 3], &r0), (&[0.0; 3], &r1));
+        let mut neck = 0.0;
+        for i in 1..20 {
+            g.set_gyro(Some(gyro));
+            let out = g.cycle(i as f64 * TS, &[0.0; 3], &head);
+            neck = out.neck.expect("the neck commanded")[0];
+        }
+        assert!(neck < -0.1, "neck pitch {neck}");
+        let mut out = GazeOutput::default();
+        g.respond(&Bottle::from_text("set stab 0"), &mut out);
+        assert!(out.stop);
+        assert_eq!(out.events[0].name, "stabilization-off");
+        assert!(g.cycle(1.0, &[0.0; 3], &head).neck.is_none());
     }
 }

@@ -20,6 +20,8 @@ pub struct Head {
     center: Chain,
     /// `iKinGazeCtrl`'s `eyeCAbsFrame`: the head centre with every joint at zero.
     abs_frame: Matrix4<f64>,
+    /// The head IMU (`iCubInertialSensor`): 3 torso and 3 neck links.
+    imu: Chain,
     /// Half the distance between the eyes \[m\].
     pub half_baseline: f64,
     /// The version's number (below 3 the torso's joints run backwards on the board).
@@ -48,10 +50,14 @@ impl Head {
         let half_baseline =
             0.5 * (pl.fixed_view::<3, 1>(0, 3) - pr.fixed_view::<3, 1>(0, 3)).norm();
         let abs_frame = center.h_at(&[0.0; 8])?;
+        // iKinGazeCtrl 2.11 builds its IMU chain from the bare version ("2.5"), which
+        // iKin reads as 0.5: every head gets the v1 chain, as here
+        let imu = chain_of(Limb::inertial_sensor("v1")?);
         Ok(Head {
             left,
             right,
             center,
+            imu,
             abs_frame,
             half_baseline,
             version: v,
@@ -110,6 +116,58 @@ impl Head {
         let t1 = (b * e - c * d) / den;
         let t2 = (a * e - b * d) / den;
         Some(((p1 + z1 * t1) + (p2 + z2 * t2)) / 2.0)
+    }
+
+    /// The head IMU's frame (as iKinGazeCtrl's `iCubInertialSensor` computes it).
+    pub fn imu_frame(&self, torso: &[f64; 3], head: &[f64; 6]) -> Matrix4<f64> {
+        let q = [torso[0], torso[1], torso[2], head[0], head[1], head[2]];
+        self.imu.h_at(&q).unwrap_or_else(|_| Matrix4::identity())
+    }
+
+    /// How the fixation point moves with the eyes' tilt, version and vergence: its 3x3
+    /// Jacobian (`computeFixationPointData`'s), by central differences.
+    pub fn fixation_jacobian(&self, torso: &[f64; 3], head: &[f64; 6]) -> Option<Matrix3<f64>> {
+        let eps = 1e-6;
+        let mut j = Matrix3::zeros();
+        for k in 0..3 {
+            let (mut plus, mut minus) = (*head, *head);
+            plus[3 + k] += eps;
+            minus[3 + k] -= eps;
+            let d = self.fixation_point(torso, &plus)? - self.fixation_point(torso, &minus)?;
+            j.set_column(k, &(d / (2.0 * eps)));
+        }
+        Some(j)
+    }
+
+    /// The velocity of the point `x`, carried by the head, when the neck turns at
+    /// `neck_vel` \[rad/s\] (the linear rows of the head centre's Jacobian with the
+    /// point as its end).
+    pub fn point_velocity_of_neck(
+        &self,
+        torso: &[f64; 3],
+        head: &[f64; 6],
+        x: &Vector3<f64>,
+        neck_vel: &Vector3<f64>,
+    ) -> Vector3<f64> {
+        let j = self.neck_jacobian(torso, head);
+        let w = j.fixed_view::<3, 3>(3, 0) * neck_vel;
+        let h = self.center(torso, head);
+        let p = h.fixed_view::<3, 1>(0, 3).into_owned();
+        // a rigid point: v = v_end + w x (x - p_end)
+        j.fixed_view::<3, 3>(0, 0) * neck_vel + w.cross(&(x - p))
+    }
+
+    /// The head centre's geometric Jacobian over the three neck joints (rows: linear
+    /// velocity of the centre, then angular velocity).
+    pub fn neck_jacobian(&self, torso: &[f64; 3], head: &[f64; 6]) -> nalgebra::Matrix6x3<f64> {
+        let mut h = *head;
+        h[3] = 0.0;
+        let q = Self::links(torso, &h, 0.0);
+        let j = self
+            .center
+            .geo_jacobian_at(&q)
+            .unwrap_or_else(|_| nalgebra::Matrix6xX::zeros(8));
+        j.fixed_view::<6, 3>(0, 3).into_owned()
     }
 
     /// Azimuth, elevation and vergence of `x` in the absolute head frame \[rad\]

@@ -25,6 +25,8 @@ pub enum GazeError {
     Device(#[from] DeviceError),
     #[error("head_version: {0}")]
     Kinematics(#[from] icub_ikin::KinError),
+    #[error("imu: {source_port}: {why} (imu::mode off runs without it)")]
+    Imu { source_port: String, why: String },
 }
 
 type Shared = Arc<Mutex<GazeCore>>;
@@ -46,6 +48,8 @@ pub struct GazeService {
     core: Shared,
     head: PolyDriver,
     torso: Option<PolyDriver>,
+    /// The head IMU's `multipleanalogsensorsclient` (`imu::mode on`).
+    imu: Option<PolyDriver>,
     ports: Ports,
     tasks: Vec<tokio::task::JoinHandle<()>>,
     /// Motions started so far (sync looks wait for the next).
@@ -84,6 +88,55 @@ fn board(cfg: &GazeConfig, part: &str) -> Result<PolyDriver, GazeError> {
     }
 }
 
+/// The head IMU as C++ opens it: a `multipleanalogsensorsclient` on
+/// `imu::source_port_name` (`/<robot>/head/inertials`), local `/<name>/head/inertials`;
+/// C++ does not start without it, nor does this (tried until `ping_robot_tmo`, as the
+/// parts are, since the robot's wrappers come up together).
+fn imu_client(cfg: &GazeConfig) -> Result<PolyDriver, GazeError> {
+    let text = format!(
+        "(device multipleanalogsensorsclient) (remote {remote}) (local /{name}/head/inertials) \
+         (timeout {tmo})",
+        remote = cfg.imu_source,
+        name = cfg.name,
+        tmo = cfg.imu_timeout
+    );
+    let prop = Property::from_text(&text);
+    let start = Instant::now();
+    loop {
+        match PolyDriver::open(&prop) {
+            Ok(mut pd) => {
+                if pd.device().as_three_axis_gyroscopes().is_some() {
+                    return Ok(pd);
+                }
+                return Err(GazeError::Imu {
+                    source_port: cfg.imu_source.clone(),
+                    why: "no IThreeAxisGyroscopes".into(),
+                });
+            }
+            Err(e) if start.elapsed().as_secs_f64() < cfg.ping_robot_tmo => {
+                tracing::info!("/{}: {} not yet ({e})", cfg.name, cfg.imu_source);
+                std::thread::sleep(Duration::from_secs(1));
+            }
+            Err(e) => {
+                return Err(GazeError::Imu {
+                    source_port: cfg.imu_source.clone(),
+                    why: e.to_string(),
+                })
+            }
+        }
+    }
+}
+
+/// The first gyroscope's reading \[deg/s\] when its status is OK (`get_gyro`).
+fn gyro(pd: &mut PolyDriver) -> Option<[f64; 3]> {
+    let g = pd.device().as_three_axis_gyroscopes()?;
+    if g.get_three_axis_gyroscope_status(0) != yarp_devices::sensors::MasStatus::Ok {
+        return None;
+    }
+    let m = g.get_three_axis_gyroscope_measure(0).ok()?;
+    (m.values.len() >= 3).then(|| [m.values[0], m.values[1], m.values[2]])
+}
+
 fn encoders(pd: &mut PolyDriver) -> DevResult<Vec<f64>> {
     pd.device()
         .as_encoders()
@@ -104,6 +157,15 @@ impl GazeService {
             None => None,
         };
         let mut head = board(&cfg, &cfg.head)?;
+        let imu = if cfg.imu {
+            Some(imu_client(&cfg)?)
+        } else {
+            tracing::warn!(
+                "/{}: imu::mode off: IMU data will be not received/used",
+                cfg.name
+            );
+            None
+        };
         let limits = {
             let n = head
                 .device()
@@ -204,6 +266,7 @@ impl GazeService {
             core,
             head,
             torso,
+            imu,
             ports,
             tasks,
             onsets,
@@ -234,7 +297,12 @@ impl GazeService {
                 Ok(head) => {
                     warned = false;
                     let now = now_seconds();
-                    let out = self.core.lock().cycle(now, &torso, &head);
+                    let gyro = self.imu.as_mut().and_then(gyro);
+                    let out = {
+                        let mut core = self.core.lock();
+                        core.set_gyro(gyro);
+                        core.cycle(now, &torso, &head)
+                    };
                     self.apply(out, now, (&mut n_x, &mut n_q, &mut n_ev));
                 }
                 Err(e) if !warned => {
@@ -263,7 +331,7 @@ impl GazeService {
         out.events
             .extend(std::mem::take(&mut *self.rpc_events.lock()));
         let dev = self.head.device();
-        if out.onset {
+        if out.onset || out.modes {
             if let Some(cm) = dev.as_control_mode() {
                 for j in 0..3 {
                     let _ = cm.set_control_mode(j, vocabs::CM_POSITION_DIRECT);
@@ -272,7 +340,9 @@ impl GazeService {
                     let _ = cm.set_control_mode(j, vocabs::CM_VELOCITY);
                 }
             }
-            self.onsets.send_modify(|n| *n += 1);
+            if out.onset {
+                self.onsets.send_modify(|n| *n += 1);
+            }
         }
         if let Some(neck) = out.neck {
             if let Some(pd) = dev.as_position_direct() {
