@@ -255,6 +255,8 @@ fn cpp_client_looks_at_three_points_through_our_ikingazectrl() {
     // the last point, also as the head's kinematics has it
     assert!(dist(&fixation(&robot), &POINTS[2]) < 0.01);
     assert!(stdout.contains("RESTORED 1 0.750"), "{stdout}");
+    // imu::mode off: VOR 0, OCR 1, stabilisation refused (C++'s client gets false)
+    assert!(stdout.contains("REFLEXES 1 0.000 1.000 0 0"), "{stdout}");
 }
 
 /// With the head's IMU (a fakeIMU turning at a steady 10 deg/s about each axis, served as

@@ -42,6 +42,14 @@ int main(int argc, char* argv[]) {
         std::printf("FIX %d %d %d %s\n", ok ? 1 : 0, done ? 1 : 0, got ? 1 : 0,
                     fp.toString(6).c_str());
     }
+    // the reflexes' gains and the stabilisation (refused by a server without IMU)
+    double vor = -1.0, ocr = -1.0;
+    bool gains = gaze->getVORGain(&vor) && gaze->getOCRGain(&ocr);
+    bool stab = gaze->setStabilizationMode(true);
+    bool stab_on = true;
+    gaze->getStabilizationMode(&stab_on);
+    std::printf("REFLEXES %d %.3f %.3f %d %d\n", gains ? 1 : 0, vor, ocr, stab ? 1 : 0,
+                stab_on ? 1 : 0);
     bool restored = gaze->restoreContext(ctx);
     double t = 0.0;
     gaze->getNeckTrajTime(&t);
