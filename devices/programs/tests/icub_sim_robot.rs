@@ -624,6 +624,69 @@ fn spawn_emulator(program: &Path, base_port: u16, xsens: Option<&Path>) -> Reape
     emu
 }
 
+/// iCubGenova01 as processes: its CAN boards emulated on UDP ports from `base_port` (and
+/// the head's MTx on a pseudo-terminal), our `yarprobotinterface --keep-going` on its own
+/// `icub_all.xml`, up to "running happily".
+struct Genova01 {
+    robot: Reaped,
+    log: tempfile::NamedTempFile,
+    _emu: Reaped,
+    _dir: tempfile::TempDir,
+}
+
+impl Genova01 {
+    fn up(emulator: &Path, base_port: u16) -> Genova01 {
+        use std::process::{Command, Stdio};
+        let dir = tempfile::tempdir().unwrap();
+        let xsens = dir.path().join("ttyS0");
+        let emu = spawn_emulator(emulator, base_port, Some(&xsens));
+        let log = tempfile::NamedTempFile::new().unwrap();
+        let robot = Reaped(
+            Command::new(env!("CARGO_BIN_EXE_yarprobotinterface"))
+                .args(["--config", "icub_all.xml", "--keep-going"])
+                .env(
+                    icubmod::common::BACKEND_ENV,
+                    format!("udp://127.0.0.1:{base_port}+n"),
+                )
+                .env(icubmod::xsens::SERIAL_ENV, &xsens)
+                .current_dir(genova_dir())
+                .stdout(Stdio::null())
+                .stderr(log.reopen().unwrap())
+                .spawn()
+                .expect("spawn yarprobotinterface"),
+        );
+        let g = Genova01 {
+            robot,
+            log,
+            _emu: emu,
+            _dir: dir,
+        };
+        assert!(
+            eventually(Duration::from_secs(60), || g
+                .log()
+                .contains("running happily")),
+            "{}",
+            g.log()
+        );
+        g
+    }
+
+    /// What `yarprobotinterface` printed so far.
+    fn log(&self) -> String {
+        std::fs::read_to_string(self.log.path()).unwrap_or_default()
+    }
+
+    /// SIGINT: parks and exits 0.
+    fn interrupt(mut self) {
+        let pid = self.robot.0.id().to_string();
+        let _ = std::process::Command::new("kill")
+            .args(["-INT", &pid])
+            .status();
+        let status = wait_exit(&mut self.robot).expect("yarprobotinterface exits after SIGINT");
+        assert!(status.success(), "{status:?}\n{}", self.log());
+    }
+}
+
 /// The command lines of launch-configs/icub-sim/robot/README.md, as processes: the
 /// emulator binary on UDP ports 20000..20009 and `yarprobotinterface --config
 /// icub_all.xml` unchanged; a client moves the elbow; SIGINT parks and exits 0.
@@ -693,34 +756,12 @@ fn readme_command_lines_bring_up_the_robot_over_udp() {
 #[test]
 fn keep_going_runs_the_real_genova01_config_as_processes() {
     yarp_device_programs::register_all();
-    use std::process::{Command, Stdio};
     let Some(emulator) = emulator_program() else {
         return;
     };
     let _conf = start_name_server();
-    let dir = tempfile::tempdir().unwrap();
-    let xsens = dir.path().join("ttyS0");
-    let emu = spawn_emulator(&emulator, 21000, Some(&xsens));
-
-    let log = tempfile::NamedTempFile::new().unwrap();
-    let mut robot = Reaped(
-        Command::new(env!("CARGO_BIN_EXE_yarprobotinterface"))
-            .args(["--config", "icub_all.xml", "--keep-going"])
-            .env(icubmod::common::BACKEND_ENV, "udp://127.0.0.1:21000+n")
-            .env(icubmod::xsens::SERIAL_ENV, &xsens)
-            .current_dir(genova_dir())
-            .stdout(Stdio::null())
-            .stderr(log.reopen().unwrap())
-            .spawn()
-            .expect("spawn yarprobotinterface"),
-    );
-    let read_log = || std::fs::read_to_string(log.path()).unwrap_or_default();
-    assert!(
-        eventually(T, || read_log().contains("running happily")),
-        "{}",
-        read_log()
-    );
-    let text = read_log();
+    let robot = Genova01::up(&emulator, 21000);
+    let text = robot.log();
     // every device type is provided: the head's MTx (emulated) measures
     assert!(
         text.contains("MTx on") && text.contains("measuring"),
@@ -778,12 +819,7 @@ fn keep_going_runs_the_real_genova01_config_as_processes() {
     assert!(moved > 0.01, "{first:?} -> {last:?}");
     drop(arm);
     cart.close();
-
-    let pid = robot.0.id().to_string();
-    let _ = Command::new("kill").args(["-INT", &pid]).status();
-    let status = wait_exit(&mut robot).expect("yarprobotinterface exits after SIGINT");
-    assert!(status.success(), "{status:?}\n{}", read_log());
-    drop(emu);
+    robot.interrupt();
 }
 
 /// The Cartesian controllers of both arms of the simulated iCub (iCubGenova01's own
@@ -796,7 +832,6 @@ fn keep_going_runs_the_real_genova01_config_as_processes() {
 fn both_arms_reach_three_poses_with_our_and_cpps_clients() {
     let test = "both_arms_reach_three_poses_with_our_and_cpps_clients";
     yarp_device_programs::register_all();
-    use std::process::{Command, Stdio};
     let Some(emulator) = emulator_program() else {
         return;
     };
@@ -811,28 +846,7 @@ fn both_arms_reach_three_poses_with_our_and_cpps_clients() {
         return;
     };
     let _conf = start_name_server();
-    let dir = tempfile::tempdir().unwrap();
-    let xsens = dir.path().join("ttyS0");
-    let _emu = spawn_emulator(&emulator, 22000, Some(&xsens));
-    let log = tempfile::NamedTempFile::new().unwrap();
-    let mut robot = Reaped(
-        Command::new(env!("CARGO_BIN_EXE_yarprobotinterface"))
-            .args(["--config", "icub_all.xml", "--keep-going"])
-            .env(icubmod::common::BACKEND_ENV, "udp://127.0.0.1:22000+n")
-            .env(icubmod::xsens::SERIAL_ENV, &xsens)
-            .current_dir(genova_dir())
-            .stdout(Stdio::null())
-            .stderr(log.reopen().unwrap())
-            .spawn()
-            .expect("spawn yarprobotinterface"),
-    );
-    let read_log = || std::fs::read_to_string(log.path()).unwrap_or_default();
-    assert!(
-        eventually(Duration::from_secs(60), || read_log()
-            .contains("running happily")),
-        "{}",
-        read_log()
-    );
+    let robot = Genova01::up(&emulator, 22000);
     let _solvers = [
         arm_solver(&genova_dir(), "left_arm"),
         arm_solver(&genova_dir(), "right_arm"),
@@ -975,10 +989,7 @@ fn both_arms_reach_three_poses_with_our_and_cpps_clients() {
         }
     }
     drop(torso);
-    let pid = robot.0.id().to_string();
-    let _ = Command::new("kill").args(["-INT", &pid]).status();
-    let status = wait_exit(&mut robot).expect("yarprobotinterface exits after SIGINT");
-    assert!(status.success(), "{status:?}");
+    robot.interrupt();
 }
 
 /// The Cartesian controllers' in-target tolerance in the simulated-robot test: the

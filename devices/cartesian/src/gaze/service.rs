@@ -61,6 +61,22 @@ pub struct GazeService {
     rpc_events: Arc<Mutex<Vec<GazeEvent>>>,
 }
 
+/// Opens `prop`, trying again every second until `ping_robot_tmo` (the robot may still
+/// be coming up); the last error after that.
+fn open_within(cfg: &GazeConfig, prop: &Property, what: &str) -> Result<PolyDriver, String> {
+    let start = Instant::now();
+    loop {
+        match PolyDriver::open(prop) {
+            Ok(pd) => return Ok(pd),
+            Err(e) if start.elapsed().as_secs_f64() < cfg.ping_robot_tmo => {
+                tracing::info!("/{}: {what} not yet ({e})", cfg.name);
+                std::thread::sleep(Duration::from_secs(1));
+            }
+            Err(e) => return Err(e.to_string()),
+        }
+    }
+}
+
 fn board(cfg: &GazeConfig, part: &str) -> Result<PolyDriver, GazeError> {
     let text = format!(
         "(device remote_controlboard) (remote /{robot}/{part}) (local /{name}/{part}) \
@@ -68,24 +84,12 @@ fn board(cfg: &GazeConfig, part: &str) -> Result<PolyDriver, GazeError> {
         robot = cfg.robot,
         name = cfg.name
     );
-    let prop = Property::from_text(&text);
-    let start = Instant::now();
-    loop {
-        match PolyDriver::open(&prop) {
-            Ok(pd) => return Ok(pd),
-            Err(e) if start.elapsed().as_secs_f64() < cfg.ping_robot_tmo => {
-                tracing::info!("/{}: /{}/{part} not yet ({e})", cfg.name, cfg.robot);
-                std::thread::sleep(Duration::from_secs(1));
-            }
-            Err(e) => {
-                return Err(GazeError::Part {
-                    part: format!("/{}/{part}", cfg.robot),
-                    tmo: cfg.ping_robot_tmo,
-                    why: e.to_string(),
-                })
-            }
-        }
-    }
+    let remote = format!("/{}/{part}", cfg.robot);
+    open_within(cfg, &Property::from_text(&text), &remote).map_err(|why| GazeError::Part {
+        part: remote.clone(),
+        tmo: cfg.ping_robot_tmo,
+        why,
+    })
 }
 
 /// The head IMU as C++ opens it: a `multipleanalogsensorsclient` on
@@ -100,31 +104,15 @@ fn imu_client(cfg: &GazeConfig) -> Result<PolyDriver, GazeError> {
         name = cfg.name,
         tmo = cfg.imu_timeout
     );
-    let prop = Property::from_text(&text);
-    let start = Instant::now();
-    loop {
-        match PolyDriver::open(&prop) {
-            Ok(mut pd) => {
-                if pd.device().as_three_axis_gyroscopes().is_some() {
-                    return Ok(pd);
-                }
-                return Err(GazeError::Imu {
-                    source_port: cfg.imu_source.clone(),
-                    why: "no IThreeAxisGyroscopes".into(),
-                });
-            }
-            Err(e) if start.elapsed().as_secs_f64() < cfg.ping_robot_tmo => {
-                tracing::info!("/{}: {} not yet ({e})", cfg.name, cfg.imu_source);
-                std::thread::sleep(Duration::from_secs(1));
-            }
-            Err(e) => {
-                return Err(GazeError::Imu {
-                    source_port: cfg.imu_source.clone(),
-                    why: e.to_string(),
-                })
-            }
-        }
+    let error = |why: String| GazeError::Imu {
+        source_port: cfg.imu_source.clone(),
+        why,
+    };
+    let mut pd = open_within(cfg, &Property::from_text(&text), &cfg.imu_source).map_err(error)?;
+    if pd.device().as_three_axis_gyroscopes().is_none() {
+        return Err(error("no IThreeAxisGyroscopes".into()));
     }
+    Ok(pd)
 }
 
 /// The first gyroscope's reading \[deg/s\] when its status is OK (`get_gyro`).
