@@ -343,22 +343,22 @@ pub fn cpp_yarpdev(bin: &Path, args: &[&str], port: &str) -> Reaped {
 /// a private `yarp.conf` (`YARP_CONFIG_HOME`, so our devices and the C++ programs both use
 /// it). A test process uses one name server: the first call's.
 pub fn cpp_yarpserver(bin: &Path) {
-    static SERVER: OnceLock<(Reaped, ChildStdin, tempfile::TempDir)> = OnceLock::new();
+    static SERVER: OnceLock<(Reaped, ChildStdin)> = OnceLock::new();
     SERVER.get_or_init(|| {
-        let dir = tempfile::tempdir().unwrap();
-        std::env::set_var("YARP_CONFIG_HOME", dir.path());
+        let dir = crate::process_dir("yarp-rs-test-cpp-conf");
+        std::env::set_var("YARP_CONFIG_HOME", &dir);
         // Below the ephemeral range: yarpserver hands out numbers from its own port up,
         // and an ephemeral one collides with outgoing connections (C++ yarpdev then fails
         // to open its ports and never registers).
         let port = crate::low_ports()
             .find(|p| TcpListener::bind(("127.0.0.1", *p)).is_ok())
             .expect("a free port below the ephemeral range");
-        std::fs::File::create(dir.path().join("yarp.conf"))
+        std::fs::File::create(dir.join("yarp.conf"))
             .and_then(|mut f| writeln!(f, "127.0.0.1 {port} yarp"))
             .unwrap();
         let mut cmd = cpp_command(&bin.join("yarpserver"));
         cmd.args(["--ip", "127.0.0.1", "--socket", &port.to_string(), "--read"])
-            .env("YARP_CONFIG_HOME", dir.path());
+            .env("YARP_CONFIG_HOME", &dir);
         // Kept in a static for every test of this process: tied to the process, so it
         // does not outlive it.
         let (server, tie) = crate::spawn_tied_to_process(&cmd).expect("spawn C++ yarpserver");
@@ -367,7 +367,7 @@ pub fn cpp_yarpserver(bin: &Path) {
             assert!(start.elapsed() < T, "C++ yarpserver did not listen");
             std::thread::sleep(Duration::from_millis(20));
         }
-        (server, tie, dir)
+        (server, tie)
     });
 }
 

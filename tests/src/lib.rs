@@ -100,8 +100,28 @@ pub fn wait_for<R>(what: &str, mut f: impl FnMut() -> Option<R>) -> R {
 
 struct Net {
     addr: SocketAddr,
-    _dir: tempfile::TempDir,
     _rt: tokio::runtime::Runtime,
+}
+
+/// A directory of this test process's own, `<tmp>/<prefix>-<pid>`, for what a `static`
+/// keeps for the whole process (statics are never dropped, so a `TempDir` there leaks):
+/// on each call the directories of this prefix whose process is gone are removed.
+pub fn process_dir(prefix: &str) -> PathBuf {
+    let tmp = std::env::temp_dir();
+    let me = std::process::id();
+    let stem = format!("{prefix}-");
+    for entry in std::fs::read_dir(&tmp).into_iter().flatten().flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let pid = name.strip_prefix(&stem).and_then(|p| p.parse::<u32>().ok());
+        if pid
+            .is_some_and(|pid| pid != me && !std::path::Path::new(&format!("/proc/{pid}")).exists())
+        {
+            let _ = std::fs::remove_dir_all(entry.path());
+        }
+    }
+    let dir = tmp.join(format!("{stem}{me}"));
+    std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+    dir
 }
 
 /// Candidate ports for a test name server (ours or C++ `yarpserver`), below the kernel's
@@ -199,8 +219,8 @@ pub async fn bind_name_server() -> NameServer {
 pub fn name_server() -> SocketAddr {
     static NET: OnceLock<Net> = OnceLock::new();
     NET.get_or_init(|| {
-        let dir = tempfile::tempdir().expect("temp dir");
-        std::env::set_var("YARP_CONFIG_HOME", dir.path());
+        let dir = process_dir("yarp-rs-test-conf");
+        std::env::set_var("YARP_CONFIG_HOME", &dir);
         let rt = tokio::runtime::Builder::new_multi_thread()
             .worker_threads(1)
             .enable_all()
@@ -213,11 +233,7 @@ pub fn name_server() -> SocketAddr {
             addr
         });
         yarp_net::network::write_conf("127.0.0.1", addr.port()).expect("write yarp.conf");
-        Net {
-            addr,
-            _dir: dir,
-            _rt: rt,
-        }
+        Net { addr, _rt: rt }
     })
     .addr
 }

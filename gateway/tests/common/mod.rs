@@ -321,8 +321,7 @@ pub fn device_name_server() -> yarp_net::nameserver::NameClient {
     use std::sync::OnceLock;
     static NS: OnceLock<(std::net::SocketAddr, tokio::runtime::Runtime)> = OnceLock::new();
     let (addr, _) = NS.get_or_init(|| {
-        let dir = std::env::temp_dir().join(format!("gw-test-yarp-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("yarp config dir");
+        let dir = yarp_interop_tests::process_dir("gw-test-yarp");
         std::env::set_var("YARP_CONFIG_HOME", &dir);
         // Built on a plain thread: tests call this from inside their own runtime.
         let (addr, rt) = std::thread::spawn(|| {

@@ -16,11 +16,22 @@ use yarp_proto::wire::shmem::{self, Packet, RingHeader, HEADER_LEN};
 use yarp_proto::wire::{self, Carrier, YarpNumber};
 use yarp_proto::{bottle, Bottle, Stamp, Value};
 
-/// A private temp dir for the mutex files of this test binary (set before any port runs).
+/// A private temp dir for the mutex files of this test binary (set before any port runs);
+/// those of earlier runs whose process is gone are removed.
 fn temp() -> &'static PathBuf {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let d = std::env::temp_dir().join(format!("yarp-rs-shmem-{}", std::process::id()));
+        let tmp = std::env::temp_dir();
+        for e in std::fs::read_dir(&tmp).into_iter().flatten().flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let pid = name
+                .strip_prefix("yarp-rs-shmem-")
+                .and_then(|p| p.parse::<u32>().ok());
+            if pid.is_some_and(|p| !std::path::Path::new(&format!("/proc/{p}")).exists()) {
+                let _ = std::fs::remove_dir_all(e.path());
+            }
+        }
+        let d = tmp.join(format!("yarp-rs-shmem-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         std::env::set_var("TMPDIR", &d);
         d
