@@ -243,21 +243,20 @@ fn ports() {
 
 /// A `YARP_CONFIG_HOME` whose yarp.conf names a port where no name server listens.
 fn no_server_home() -> &'static Path {
-    static HOME: OnceLock<tempfile::TempDir> = OnceLock::new();
+    static HOME: OnceLock<std::path::PathBuf> = OnceLock::new();
     HOME.get_or_init(|| {
-        let dir = tempfile::tempdir().unwrap();
+        let dir = yarp_interop_tests::process_dir("yarp-rs-test-no-server");
         let port = TcpListener::bind("127.0.0.1:0")
             .unwrap()
             .local_addr()
             .unwrap()
             .port();
-        let conf = dir.path().join("yarp.conf");
+        let conf = dir.join("yarp.conf");
         std::fs::File::create(conf)
             .and_then(|mut f| writeln!(f, "127.0.0.1 {port} yarp"))
             .unwrap();
         dir
     })
-    .path()
 }
 
 #[test]
