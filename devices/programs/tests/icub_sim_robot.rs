@@ -827,7 +827,8 @@ fn keep_going_runs_the_real_genova01_config_as_processes() {
 /// arm's `iKinCartesianSolver` on the robot's `cartesianSolver.ini`, then our
 /// `cartesiancontrollerclient` and icub-main's C++ one (built from ../shared/peers) each
 /// reach three poses of each arm within 1 mm and 2 degrees, the measured pose in the
-/// server's tolerance before it says done, as C++'s `isInTargetHelper` asks.
+/// server's tolerance before it says done, as C++'s `isInTargetHelper` asks; an
+/// out-of-reach position ends at the solver's closest pose.
 #[test]
 fn both_arms_reach_three_poses_with_our_and_cpps_clients() {
     let test = "both_arms_reach_three_poses_with_our_and_cpps_clients";
@@ -949,6 +950,29 @@ fn both_arms_reach_three_poses_with_our_and_cpps_clients() {
                 t90 - onset
             );
         }
+        // out of reach: the hand ends at the solver's closest pose and says done
+        let far = [-1.5, if side == "left" { -0.2 } else { 0.2 }, 0.4];
+        cart.go_to_position_sync(&far, 0.0).unwrap();
+        assert!(
+            cart.wait_motion_done(0.02, 20.0).unwrap(),
+            "{test}: {side}: out of reach, not done"
+        );
+        std::thread::sleep(Duration::from_millis(200));
+        let des = cart.get_desired().unwrap();
+        let ((px, _), _) = cart.get_pose().unwrap();
+        let gap = (0..3)
+            .map(|k| (px[k] - des.x[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let reach = (0..3).map(|k| (px[k] - far[k]).powi(2)).sum::<f64>().sqrt();
+        eprintln!(
+            "{test}: {side}: out of reach: {:.2} mm from the solver's closest pose, {reach:.2} m short",
+            gap * 1e3
+        );
+        assert!(
+            gap < 2e-3 && reach > 0.5,
+            "{test}: {side}: {gap} m from the closest, {reach} m short"
+        );
         pd.close().unwrap();
         // icub-main's C++ client, the same poses
         let mut cmd = yarp_interop_tests::cpp_program_command(&cpp_client);
