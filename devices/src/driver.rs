@@ -15,7 +15,6 @@ use crate::gaze_control::IGazeControl;
 use crate::interfaces::*;
 use crate::kind::{kind_of, suggest, Kind};
 use crate::navigation::{INavigation2DVelocityActions, IOdometry2D};
-use crate::params::as_string as value_text;
 pub use crate::params::Params;
 use crate::rangefinder::IRangefinder2D;
 use crate::raw_values::IRawValuesPublisher;
@@ -458,7 +457,7 @@ impl PolyDriver {
     pub fn open(config: &Property) -> DevResult<PolyDriver> {
         let name = match config.find("device") {
             None => return Err(DeviceError::NoDeviceName),
-            Some(v) => value_text(v),
+            Some(v) => v.to_string_bare(),
         };
         let mut driver = Registry::get(&name)?;
         driver.open(config)?;
@@ -468,7 +467,7 @@ impl PolyDriver {
             open: true,
             subdevice: None,
         };
-        if let Some(sub) = config.find("subdevice").map(value_text) {
+        if let Some(sub) = config.find("subdevice").map(Value::to_string_bare) {
             if pd.driver.as_wrapper().is_none() && pd.driver.as_multiple_wrapper().is_none() {
                 return Err(DeviceError::BadParam {
                     device: pd.name.clone(),

@@ -11,15 +11,6 @@ use std::fmt::Write as _;
 use std::time::Duration;
 use yarp_proto::{Bottle, Property, Value};
 
-/// A value as C++ `asString` gives it: a string or vocab without quotes, anything else
-/// in its text form.
-pub fn as_string(v: &Value) -> String {
-    match v.as_str() {
-        Some(s) => s.to_string(),
-        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
-    }
-}
-
 /// Typed access to a device's configuration, with errors naming parameter and device.
 /// Keys may be `name` (top level) or `GROUP::name` (inside a `[GROUP]` section).
 pub struct Params<'a> {
@@ -90,7 +81,7 @@ impl<'a> Params<'a> {
     pub fn string(&self, key: &str) -> DevResult<Option<String>> {
         match self.find(key) {
             None => Ok(None),
-            Some(v) if v.is_string() || v.is_vocab() => Ok(Some(as_string(v))),
+            Some(v) if v.is_string() || v.is_vocab() => Ok(Some(v.to_string_bare())),
             Some(v) => Err(self.invalid(key, "a string", v)),
         }
     }
@@ -236,7 +227,7 @@ impl ParamType for Vec<String> {
     const TYPE: &'static str = "vector<string>";
     fn read(p: &Params<'_>, key: &str) -> DevResult<Option<Self>> {
         p.vector(key, "strings", |v| {
-            (v.is_string() || v.is_vocab()).then(|| as_string(v))
+            (v.is_string() || v.is_vocab()).then(|| v.to_string_bare())
         })
     }
 }

@@ -181,6 +181,12 @@ impl Value {
     pub fn to_text_bare(&self) -> Vec<u8> {
         crate::text::value_to_text(self, false)
     }
+
+    /// [`Self::to_text_bare`] as a `String`: what icub-main reads with `asString` or
+    /// `toString` (a string's own text, a number's digits).
+    pub fn to_string_bare(&self) -> String {
+        String::from_utf8_lossy(&self.to_text_bare()).into_owned()
+    }
 }
 
 impl PartialEq for Value {

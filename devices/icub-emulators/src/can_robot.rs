@@ -52,7 +52,7 @@ pub fn robot_file(dir: &Path) -> Result<PathBuf, LayoutError> {
     let ini = std::fs::read_to_string(dir.join("yarprobotinterface.ini")).unwrap_or_default();
     Property::from_config_text(&ini)
         .ok()
-        .and_then(|p| p.find("config").map(text))
+        .and_then(|p| p.find("config").map(Value::to_string_bare))
         .map(|f| dir.join(f))
         .filter(|f| f.is_file())
         .ok_or_else(|| LayoutError::NoRobotFile {
@@ -173,14 +173,6 @@ fn parse_address(s: &str) -> Option<u8> {
     (1..=14).contains(&a).then_some(a)
 }
 
-/// A value as icub-main reads it with `asString`.
-fn text(v: &Value) -> String {
-    match v.as_str() {
-        Some(s) => s.to_string(),
-        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
-    }
-}
-
 /// The values of `(key v1 v2 ...)` in `group` (`None`: top level); a single list value is
 /// flattened, as the devices read them.
 fn lookup(config: &Property, group: Option<&str>, key: &str) -> Option<Vec<String>> {
@@ -191,10 +183,10 @@ fn lookup(config: &Property, group: Option<&str>, key: &str) -> Option<Vec<Strin
     let rest: Vec<&Value> = line.iter().skip(1).collect();
     if let [only] = rest.as_slice() {
         if let Some(list) = only.as_list() {
-            return Some(list.iter().map(text).collect());
+            return Some(list.iter().map(Value::to_string_bare).collect());
         }
     }
-    Some(rest.into_iter().map(text).collect())
+    Some(rest.into_iter().map(Value::to_string_bare).collect())
 }
 
 /// The first value of `key` in `group`, else at the top level.

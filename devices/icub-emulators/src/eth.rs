@@ -71,11 +71,7 @@ pub struct BoardParams {
 
 /// A value's text (a string's own, a number's digits), without quotes.
 fn text(v: &Value) -> String {
-    let s = match v.as_str() {
-        Some(s) => s.to_string(),
-        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
-    };
-    s.trim().trim_matches('"').to_string()
+    v.to_string_bare().trim().trim_matches('"').to_string()
 }
 
 fn number(v: &Value) -> Option<f64> {

@@ -39,7 +39,6 @@ use icub_can::proto::ControlMode;
 
 use yarp_proto::Property;
 
-use crate::common::text;
 use yarp_devices::driver::{DeviceDriver, ICalibrator, SharedDevice};
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::interfaces::IRemoteCalibrator;
@@ -529,7 +528,7 @@ impl DeviceDriver for ParametricCalibrator {
                         device: self.name.clone(),
                         param: "CALIB_ORDER".into(),
                         expected: "lists of joint indices below `joints`",
-                        got: text(set),
+                        got: set.to_string_bare(),
                     })
             })
             .collect::<DevResult<_>>()?;

@@ -23,18 +23,12 @@ pub fn wall_time(at: Instant) -> f64 {
     now() - at.elapsed().as_secs_f64()
 }
 
-/// A value as the text icub-main would read with `asString` (numbers printed as such).
-pub fn text(v: &Value) -> String {
-    match v.as_str() {
-        Some(s) => s.to_string(),
-        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
-    }
-}
-
 /// The device's instance name for logs and errors: yarprobotinterface's `id` (the XML
 /// device name), else `default` (the device type).
 pub fn device_id(config: &Property, default: &str) -> String {
-    config.find("id").map_or_else(|| default.to_string(), text)
+    config
+        .find("id")
+        .map_or_else(|| default.to_string(), Value::to_string_bare)
 }
 
 /// The analog sensors' two message formats, bits per value (`format`).

@@ -103,7 +103,7 @@ pub fn include_tags(config: &Property) -> tree::IncludeTags {
         config
             .find(key)
             .map(|v| {
-                value_text(v)
+                v.to_string_bare()
                     .split_ascii_whitespace()
                     .map(str::to_owned)
                     .collect()
@@ -114,11 +114,6 @@ pub fn include_tags(config: &Property) -> tree::IncludeTags {
         enable: set("enable_tags"),
         disable: set("disable_tags"),
     }
-}
-
-/// C++ `Value::toString`: strings unquoted, lists without their outer parentheses.
-fn value_text(v: &Value) -> String {
-    String::from_utf8_lossy(&v.to_text_bare()).into_owned()
 }
 
 impl Reader {
@@ -197,7 +192,7 @@ impl Reader {
             }
         };
         let portprefix = match self.config.find("portprefix") {
-            Some(v) => value_text(v),
+            Some(v) => v.to_string_bare(),
             None => {
                 let p = match el.attr("portprefix") {
                     Some(p) => p.to_string(),
@@ -346,7 +341,7 @@ impl Reader {
         let external = el.attr("extern-name").and_then(|k| self.config.find(k));
         let value = match external {
             Some(Value::List(l)) => format!("({l})"),
-            Some(v) => value_text(v),
+            Some(v) => v.to_string_bare(),
             None => text.to_string(),
         };
         let value = value.replace("${portprefix}", &self.portprefix);

@@ -43,10 +43,7 @@ fn one(v: impl Into<Value>) -> Bottle {
 
 /// Answers `cmd` from `status`. Unknown commands get `[fail]`, as thrift servers reply.
 pub fn handle(cmd: &Bottle, status: &RpcStatus) -> RpcReply {
-    let tag = cmd
-        .get(0)
-        .map(|v| String::from_utf8_lossy(&v.to_text_bare()).into_owned())
-        .unwrap_or_default();
+    let tag = cmd.get(0).map(Value::to_string_bare).unwrap_or_default();
     let reply = |b| RpcReply {
         reply: b,
         quit: false,

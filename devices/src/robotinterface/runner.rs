@@ -20,7 +20,7 @@ use parking_lot::{Mutex, MutexGuard};
 use std::fmt;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use yarp_proto::{Bottle, Property};
+use yarp_proto::{Bottle, Property, Value};
 
 /// Makes devices for the runner; the registry in production, fakes in tests.
 pub trait DeviceFactory: Send + Sync {
@@ -538,10 +538,7 @@ fn network_names(list: &str) -> Vec<String> {
         Some(l) if b.len() == 1 => l.iter().cloned().collect(),
         _ => b.iter().cloned().collect(),
     };
-    items
-        .iter()
-        .map(|v| String::from_utf8_lossy(&v.to_text_bare()).into_owned())
-        .collect()
+    items.iter().map(Value::to_string_bare).collect()
 }
 
 /// A calibrate or park action, run on its own thread (C++ `CalibratorThread`).

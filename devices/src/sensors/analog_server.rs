@@ -135,7 +135,7 @@ fn port_entries(p: &Params<'_>, name: &str) -> DevResult<Vec<AnalogPortEntry>> {
     let mut entries = Vec::new();
     let mut sum = 0i64;
     for v in list.iter() {
-        let port = String::from_utf8_lossy(&v.to_text_bare()).into_owned();
+        let port = v.to_string_bare();
         let group = p.config.find_group(&port).ok_or_else(|| p.missing(&port))?;
         let mut rest: Vec<Value> = group.iter().skip(1).cloned().collect();
         // an XML <elem> may arrive as one text "0 191 0 191": read it as C++ re-parses it

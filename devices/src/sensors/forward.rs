@@ -13,11 +13,15 @@ pub trait FamilySource {
     fn family_name(&self, family: SensorFamily, i: usize) -> DevResult<String>;
     fn family_frame_name(&self, family: SensorFamily, i: usize) -> DevResult<String>;
     fn family_measure(&self, family: SensorFamily, i: usize) -> DevResult<SensorMeasurement>;
+    /// The values sensor `i` of a family without frames gives (skin patches, encoder
+    /// arrays): by default those of its latest measurement, 0 before the first.
+    fn family_size(&self, family: SensorFamily, i: usize) -> usize {
+        self.family_measure(family, i).map_or(0, |m| m.values.len())
+    }
 }
 
 /// Implements the MAS interface traits of the families named (`SensorFamily` variants)
-/// for `$ty: FamilySource`; a size of a family without frames is that of its latest
-/// measurement:
+/// for `$ty: FamilySource`:
 ///
 /// ```ignore
 /// yarp_devices::mas_interfaces!(EmbObjImu: ThreeAxisGyroscopes, OrientationSensors);
@@ -69,13 +73,11 @@ macro_rules! mas_interfaces {
         impl $crate::sensors::interfaces::$trait for $ty {
             $crate::mas_interfaces!(@common $family, $nr, $status, $name, $measure);
             fn $size(&self, i: usize) -> usize {
-                $crate::sensors::forward::FamilySource::family_measure(
+                $crate::sensors::forward::FamilySource::family_size(
                     self,
                     $crate::sensors::SensorFamily::$family,
                     i,
                 )
-                .map(|m| m.values.len())
-                .unwrap_or(0)
             }
         }
     };

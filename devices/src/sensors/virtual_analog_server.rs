@@ -141,8 +141,8 @@ impl TorqueMap {
         };
         let list = p.find("networks").ok_or_else(|| p.missing("networks"))?;
         let names: Vec<String> = match list.as_list() {
-            Some(l) => l.iter().map(value_text).collect(),
-            None => vec![value_text(list)],
+            Some(l) => l.iter().map(Value::to_string_bare).collect(),
+            None => vec![list.to_string_bare()],
         };
         let mut networks = Vec::new();
         let mut chan = vec![None; MAX_ENTRIES as usize];
@@ -151,7 +151,7 @@ impl TorqueMap {
             let rest: Vec<Value> = line.iter().skip(1).cloned().collect();
             let values: Vec<Value> = match rest.as_slice() {
                 [Value::List(l)] => l.iter().cloned().collect(),
-                [v] => Bottle::from_text(value_text(v)).into_items(),
+                [v] => Bottle::from_text(v.to_string_bare()).into_items(),
                 more => more.to_vec(),
             };
             let nums: Option<Vec<i64>> = values
@@ -243,13 +243,6 @@ impl TorqueMap {
         for n in &mut self.networks {
             n.torques.iter_mut().for_each(|t| *t = 0.0);
         }
-    }
-}
-
-fn value_text(v: &Value) -> String {
-    match v.as_str() {
-        Some(s) => s.to_string(),
-        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
     }
 }
 

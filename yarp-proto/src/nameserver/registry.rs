@@ -145,7 +145,7 @@ fn as_string(v: Option<&Value>) -> String {
 
 fn bare(v: Option<&Value>) -> String {
     match v {
-        Some(v) => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
+        Some(v) => v.to_string_bare(),
         None => String::new(),
     }
 }

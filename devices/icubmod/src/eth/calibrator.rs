@@ -51,9 +51,9 @@ use yarp_devices::vocabs::{
     CM_FORCE_IDLE, CM_HW_FAULT, CM_IDLE, CM_NOT_CONFIGURED, CM_POSITION, CM_UNKNOWN,
 };
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, ICalibrator, SharedDevice};
-use yarp_proto::{Property, Vocab32};
+use yarp_proto::{Property, Value, Vocab32};
 
-use super::config::{text, Node, ParamError};
+use super::config::{Node, ParamError};
 
 pub const NAME: &str = "parametricCalibratorEth";
 
@@ -257,7 +257,7 @@ impl ParametricCalibratorEth {
                         ParamError::bad(
                             "CALIB_ORDER",
                             "lists of joint indices below `joints`",
-                            text(set),
+                            set.to_string_bare(),
                         )
                         .for_device(id)
                     })
@@ -824,7 +824,9 @@ impl DeviceDriver for ParametricCalibratorEth {
     }
 
     fn open(&mut self, config: &Property) -> DevResult<()> {
-        let id = config.find("id").map_or_else(|| NAME.to_string(), text);
+        let id = config
+            .find("id")
+            .map_or_else(|| NAME.to_string(), Value::to_string_bare);
         self.read(&id, config)?;
         self.calibrated = false;
         Ok(())

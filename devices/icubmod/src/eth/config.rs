@@ -43,14 +43,6 @@ impl ParamError {
     }
 }
 
-/// A value as C++ `asString` gives it (numbers printed as such, quotes removed).
-pub fn text(v: &Value) -> String {
-    match v.as_str() {
-        Some(s) => s.to_string(),
-        None => String::from_utf8_lossy(&v.to_text_bare()).into_owned(),
-    }
-}
-
 /// A group (or the whole configuration) of a device.
 #[derive(Clone, Copy)]
 pub enum Node<'a> {
@@ -80,14 +72,17 @@ impl<'a> Node<'a> {
     }
 
     /// The sub-group `name` (a line whose values are lines).
-    pub fn group(&self, name: &'a str) -> Option<Node<'a>> {
+    pub fn group(&self, name: &str) -> Option<Node<'a>> {
         let b = self.line(name)?;
-        // The path is only for messages; leak-free: keep the group's own name.
-        Some(Node::Group(b, name))
+        // messages name it by the line's own first word, which lives as long as the file
+        Some(Node::Group(
+            b,
+            b.get(0).and_then(|v| v.as_str()).unwrap_or_default(),
+        ))
     }
 
     /// The sub-group `name`, or an error naming it.
-    pub fn need_group(&self, name: &'a str) -> Result<Node<'a>, ParamError> {
+    pub fn need_group(&self, name: &str) -> Result<Node<'a>, ParamError> {
         self.group(name)
             .ok_or_else(|| ParamError::missing(self.path_of(name), "a group"))
     }
@@ -102,10 +97,10 @@ impl<'a> Node<'a> {
         let rest: Vec<&Value> = line.iter().skip(1).collect();
         if let [only] = rest.as_slice() {
             if let Some(list) = only.as_list() {
-                return Some(list.iter().map(text).collect());
+                return Some(list.iter().map(Value::to_string_bare).collect());
             }
         }
-        Some(rest.into_iter().map(text).collect())
+        Some(rest.into_iter().map(Value::to_string_bare).collect())
     }
 
     /// The first value of `key`, as text.

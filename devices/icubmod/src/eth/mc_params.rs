@@ -364,7 +364,7 @@ fn pid_group(
     if name.eq_ignore_ascii_case("none") || name.is_empty() {
         return Ok(None);
     }
-    let Some(g) = root.group(leak(name)) else {
+    let Some(g) = root.group(name) else {
         return Err(ParamError::missing(
             format!("CONTROLS -> {name}"),
             "the PID group CONTROLS names",
@@ -394,22 +394,6 @@ fn pid_group(
         velocity_thres: opt("velocityThres"),
         filter_type: get("filterType")?,
     }))
-}
-
-/// Group names must live as long as the configuration for [`Node::group`]; the few PID
-/// group names of a robot are interned once.
-fn leak(name: &str) -> &'static str {
-    use parking_lot::Mutex;
-    use std::collections::HashSet;
-    use std::sync::OnceLock;
-    static NAMES: OnceLock<Mutex<HashSet<&'static str>>> = OnceLock::new();
-    let mut set = NAMES.get_or_init(|| Mutex::new(HashSet::new())).lock();
-    if let Some(s) = set.get(name) {
-        return s;
-    }
-    let s: &'static str = Box::leak(name.to_string().into_boxed_str());
-    set.insert(s);
-    s
 }
 
 /// The encoders of `JOINTMAPPING` by position (C++ `getEncoderAtJoint/AtMotor`).

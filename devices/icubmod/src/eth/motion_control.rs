@@ -34,9 +34,8 @@ use yarp_devices::interfaces::*;
 use yarp_devices::sensors::virtual_analog::{IVirtualAnalogSensor, VasStatus};
 use yarp_devices::vocabs::*;
 use yarp_devices::{DevResult, DeviceDriver, DeviceError};
-use yarp_proto::{Property, Vocab32};
+use yarp_proto::{Property, Value, Vocab32};
 
-use super::config::text;
 use super::manager::{Board, EthError, EthManager};
 use super::mc_params::{
     s16, s32, McParams, PidKind, PidParams, TemperatureSensor, NEWTONS_TO_SENSOR,
@@ -567,7 +566,9 @@ impl DeviceDriver for EmbObjMotionControl {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         super::tables::help_if_asked(NAME, config);
         self.close()?;
-        self.id = config.find("id").map_or_else(|| NAME.to_string(), text);
+        self.id = config
+            .find("id")
+            .map_or_else(|| NAME.to_string(), Value::to_string_bare);
         let id = self.id.clone();
         let pc104 = read_pc104(config).map_err(|e| e.for_device(&id))?;
         let eth = read_eth_board(config).map_err(|e| e.for_device(&id))?;

@@ -324,7 +324,7 @@ fn running_mode(p: &EthBoardDeclared, appl: &mut ApplConfig, ip: Ipv4Addr) {
     ];
     let mut flags = RXDOTX_OVERFLOW;
     for (value, bit) in flags_given {
-        let text = value.as_ref().map(super::config::text);
+        let text = value.as_ref().map(yarp_proto::Value::to_string_bare);
         match text.as_deref().map(str::trim) {
             Some("true") => flags |= bit,
             Some("false") => flags &= !bit,

@@ -32,12 +32,13 @@ use icub_eth::entities::analog::{
 use icub_eth::entities::mn::{category, service_type, ServiceCommand};
 use icub_eth::id::{entity as en, ids, tag};
 use icub_eth::{Entity, Id32};
+use yarp_devices::sensors::forward::FamilySource;
 use yarp_devices::sensors::interfaces::*;
 use yarp_devices::sensors::SensorFamily;
 use yarp_devices::{DevResult, DeviceDriver, DeviceError};
-use yarp_proto::Property;
+use yarp_proto::{Property, Value};
 
-use super::config::{text, Node, ParamError};
+use super::config::{Node, ParamError};
 use super::manager::{Board, EthManager};
 use super::params::{read_eth_board, read_pc104, read_service, ServiceKind};
 use super::service::{open_sensor, SensorService, Write};
@@ -93,7 +94,7 @@ impl Common {
     ) -> DevResult<()> {
         self.id = config
             .find("id")
-            .map_or_else(|| default_name.to_string(), text);
+            .map_or_else(|| default_name.to_string(), Value::to_string_bare);
         let id = self.id.clone();
         let pc104 = read_pc104(config).map_err(|e| e.for_device(&id))?;
         let eth = read_eth_board(config).map_err(|e| e.for_device(&id))?;
@@ -349,7 +350,7 @@ impl DeviceDriver for EmbObjFtSensor {
 /// One strain sensor in both families C++ serves: its force-torque, and the strain2's
 /// temperature (the board's temperature service, 0.1 °C units; `NotReady` while the
 /// board sends none), under the sensor's name, which is also its frame.
-impl yarp_devices::sensors::forward::FamilySource for EmbObjFtSensor {
+impl FamilySource for EmbObjFtSensor {
     fn family_count(&self, _family: SensorFamily) -> usize {
         1
     }
@@ -520,7 +521,7 @@ impl DeviceDriver for EmbObjMultipleFtSensors {
 
 /// The board's sensors as both families C++ serves them: force-torque, and each sensor's
 /// temperature (°C, the board's 0.1 °C units) under the same name and frame.
-impl yarp_devices::sensors::forward::FamilySource for EmbObjMultipleFtSensors {
+impl FamilySource for EmbObjMultipleFtSensors {
     fn family_count(&self, _family: SensorFamily) -> usize {
         self.names.len()
     }
@@ -819,7 +820,7 @@ impl DeviceDriver for EmbObjImu {
 
 /// The board's sensors by family: each family is the sensors of its types (the frame of
 /// a sensor is its name, as C++).
-impl yarp_devices::sensors::forward::FamilySource for EmbObjImu {
+impl FamilySource for EmbObjImu {
     fn family_count(&self, family: SensorFamily) -> usize {
         kinds_of(family).map_or(0, |k| self.of_kind(k).len())
     }
@@ -928,37 +929,41 @@ impl DeviceDriver for EmbObjMais {
     yarp_devices::views!(as_analog_sensor, as_encoder_arrays);
 }
 
-impl IEncoderArrays for EmbObjMais {
-    fn get_nr_of_encoder_arrays(&self) -> usize {
+/// One encoder array of the 15 values, as C++'s `IEncoderArrays`.
+impl FamilySource for EmbObjMais {
+    fn family_count(&self, _family: SensorFamily) -> usize {
         1
     }
-    fn get_encoder_array_status(&self, sens_index: usize) -> MasStatus {
-        if sens_index == 0 {
+    fn family_status(&self, _family: SensorFamily, i: usize) -> MasStatus {
+        if i == 0 {
             MasStatus::Ok
         } else {
             MasStatus::Unknown
         }
     }
-    fn get_encoder_array_name(&self, sens_index: usize) -> DevResult<String> {
-        if sens_index != 0 {
-            return Err(no_sensor(&self.c.id, sens_index, 1));
+    fn family_name(&self, _family: SensorFamily, i: usize) -> DevResult<String> {
+        if i != 0 {
+            return Err(no_sensor(&self.c.id, i, 1));
         }
         Ok(self.name.clone())
     }
-    fn get_encoder_array_size(&self, sens_index: usize) -> usize {
-        if sens_index == 0 {
+    fn family_frame_name(&self, family: SensorFamily, i: usize) -> DevResult<String> {
+        self.family_name(family, i)
+    }
+    fn family_size(&self, _family: SensorFamily, i: usize) -> usize {
+        if i == 0 {
             15
         } else {
             0
         }
     }
-    fn get_encoder_array_measure(&self, sens_index: usize) -> DevResult<SensorMeasurement> {
-        if sens_index != 0 {
-            return Err(no_sensor(&self.c.id, sens_index, 1));
-        }
+    fn family_measure(&self, family: SensorFamily, i: usize) -> DevResult<SensorMeasurement> {
+        self.family_name(family, i)?;
         Ok(SensorMeasurement::new(self.values()?, now()))
     }
 }
+
+yarp_devices::mas_interfaces!(EmbObjMais: EncoderArrays);
 
 analog_sensor!(EmbObjMais, 15);
 
@@ -1179,7 +1184,9 @@ impl DeviceDriver for EmbObjSkin {
 
     fn open(&mut self, config: &Property) -> DevResult<()> {
         super::tables::help_if_asked(SKIN, config);
-        let id = config.find("id").map_or_else(|| SKIN.to_string(), text);
+        let id = config
+            .find("id")
+            .map_or_else(|| SKIN.to_string(), Value::to_string_bare);
         let on_ports = skin_patches_on_ports(config).map_err(|e| e.for_device(&id))?;
         let spec = SkinSpec::read(&Node::root(config)).map_err(|e| e.for_device(&id))?;
         let patches: Vec<Vec<u8>> = on_ports.iter().map(|(_, a)| a.clone()).collect();
@@ -1306,35 +1313,39 @@ fn pos_data_index(enabled: usize, i: usize) -> Option<usize> {
     }
 }
 
-impl IEncoderArrays for EmbObjPos {
-    fn get_nr_of_encoder_arrays(&self) -> usize {
+/// One encoder array of one angle per enabled sensor, as C++'s `IEncoderArrays`.
+impl FamilySource for EmbObjPos {
+    fn family_count(&self, _family: SensorFamily) -> usize {
         self.names.len()
     }
-    fn get_encoder_array_status(&self, sens_index: usize) -> MasStatus {
-        if sens_index < self.names.len() {
+    fn family_status(&self, _family: SensorFamily, i: usize) -> MasStatus {
+        if i < self.names.len() {
             MasStatus::Ok
         } else {
             MasStatus::Unknown
         }
     }
-    fn get_encoder_array_name(&self, sens_index: usize) -> DevResult<String> {
+    fn family_name(&self, _family: SensorFamily, i: usize) -> DevResult<String> {
         self.names
-            .get(sens_index)
+            .get(i)
             .cloned()
-            .ok_or_else(|| no_sensor(POS, sens_index, self.names.len()))
+            .ok_or_else(|| no_sensor(POS, i, self.names.len()))
     }
-    fn get_encoder_array_size(&self, sens_index: usize) -> usize {
-        usize::from(sens_index < self.names.len())
+    fn family_frame_name(&self, family: SensorFamily, i: usize) -> DevResult<String> {
+        self.family_name(family, i)
     }
-    fn get_encoder_array_measure(&self, sens_index: usize) -> DevResult<SensorMeasurement> {
-        if sens_index >= self.names.len() {
-            return Err(no_sensor(POS, sens_index, self.names.len()));
-        }
-        let angle = self.angles()?[sens_index];
+    fn family_size(&self, _family: SensorFamily, i: usize) -> usize {
+        usize::from(i < self.names.len())
+    }
+    fn family_measure(&self, family: SensorFamily, i: usize) -> DevResult<SensorMeasurement> {
+        self.family_name(family, i)?;
+        let angle = self.angles()?[i];
         // C++ stamps the reading with the time it is asked for
         Ok(SensorMeasurement::new(vec![angle], now()))
     }
 }
+
+yarp_devices::mas_interfaces!(EmbObjPos: EncoderArrays);
 
 impl DeviceDriver for EmbObjPos {
     fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {

@@ -3,7 +3,7 @@
 //! the robot's file chooses (output ports, per-sensor calibration matrices and offsets).
 
 use yarp_devices::error::{DevResult, DeviceError};
-use yarp_devices::params::{as_string, FloatOnly};
+use yarp_devices::params::FloatOnly;
 use yarp_proto::{Bottle, Property, Value};
 
 use super::NAME;
@@ -143,7 +143,7 @@ fn group_lines<'a>(
     Some(g.items().iter().skip(1).filter_map(|v| {
         let line = v.as_list()?;
         let (key, rest) = line.items().split_first()?;
-        Some((as_string(key), rest))
+        Some((key.to_string_bare(), rest))
     }))
 }
 
@@ -161,7 +161,7 @@ fn strings(rest: &[Value]) -> Vec<String> {
         [v] if v.is_list() => v.as_list().map(Bottle::items).unwrap_or_default(),
         _ => rest,
     };
-    items.iter().map(as_string).collect()
+    items.iter().map(Value::to_string_bare).collect()
 }
 
 impl Config {

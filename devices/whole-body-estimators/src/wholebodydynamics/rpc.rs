@@ -2,7 +2,6 @@
 //! (classic YARP thrift: a method's words may come joined by `_` or apart, optional
 //! trailing arguments take their IDL defaults, `bool` replies are `[ok]`/`[fail]`).
 
-use yarp_devices::params::as_string;
 use yarp_devices::thrift::split_method;
 use yarp_proto::{Bottle, Value, Vocab32};
 
@@ -57,7 +56,7 @@ impl Args<'_> {
         self.0
             .get(i)
             .filter(|v| v.is_string() || v.is_vocab())
-            .map(as_string)
+            .map(Value::to_string_bare)
     }
     fn int_or(&self, i: usize, default: i64) -> Option<i64> {
         match self.0.get(i) {
@@ -70,7 +69,7 @@ impl Args<'_> {
     }
     fn flag(&self, i: usize) -> Option<bool> {
         match self.0.get(i)? {
-            v if v.is_vocab() || v.is_string() => match as_string(v).as_str() {
+            v if v.is_vocab() || v.is_string() => match v.to_string_bare().as_str() {
                 "ok" | "true" | "1" => Some(true),
                 "fail" | "false" | "0" => Some(false),
                 _ => None,
