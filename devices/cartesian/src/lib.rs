@@ -15,6 +15,7 @@
 pub mod client;
 pub mod gaze;
 pub mod gaze_client;
+mod module_client;
 pub mod protocol;
 pub mod server;
 pub mod server_device;
@@ -26,27 +27,7 @@ use yarp_devices::driver::{Factory, Registry};
 /// Raises `stop` at the first SIGINT or SIGTERM (the handlers installed now, so that an
 /// early signal is not lost): how `iKinCartesianSolver` and `iKinGazeCtrl` end.
 pub fn stop_on_signals(stop: std::sync::Arc<std::sync::atomic::AtomicBool>) -> std::io::Result<()> {
-    use tokio::signal::unix::{signal, SignalKind};
-    let rt = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()?;
-    let (mut int, mut term) = {
-        let _guard = rt.enter();
-        (
-            signal(SignalKind::interrupt())?,
-            signal(SignalKind::terminate())?,
-        )
-    };
-    std::thread::spawn(move || {
-        rt.block_on(async move {
-            tokio::select! {
-                _ = int.recv() => {}
-                _ = term.recv() => {}
-            }
-            stop.store(true, std::sync::atomic::Ordering::SeqCst);
-        })
-    });
-    Ok(())
+    yarp_net::signals::on_signals(move |_| stop.store(true, std::sync::atomic::Ordering::SeqCst))
 }
 
 /// The provider name `yarpdev --list` shows.

@@ -11,3 +11,4 @@ pub mod peer_generation;
 pub mod port;
 pub mod realtime;
 pub mod rpc;
+pub mod signals;

@@ -49,34 +49,16 @@ enum Stop {
 /// Installs SIGINT/SIGTERM handlers now (so that an early signal is not lost) and
 /// reports each signal on `tx`; the fourth one exits at once.
 fn watch_signals(tx: mpsc::Sender<Stop>) -> std::io::Result<()> {
-    use tokio::signal::unix::{signal, SignalKind};
-    let rt = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()?;
-    let (mut int, mut term) = {
-        let _guard = rt.enter();
-        (
-            signal(SignalKind::interrupt())?,
-            signal(SignalKind::terminate())?,
-        )
-    };
-    std::thread::spawn(move || {
-        rt.block_on(async move {
-            for count in 1.. {
-                let which = tokio::select! {
-                    _ = int.recv() => "SIGINT",
-                    _ = term.recv() => "SIGTERM",
-                };
-                // As C++: a device that does not let go is abandoned after three tries.
-                if count > 3 {
-                    info("Aborting...");
-                    std::process::exit(1);
-                }
-                let _ = tx.send(Stop::Signal(which));
-            }
-        })
-    });
-    Ok(())
+    let mut count = 0;
+    yarp_net::signals::on_signals(move |which| {
+        count += 1;
+        // As C++: a device that does not let go is abandoned after three tries.
+        if count > 3 {
+            info("Aborting...");
+            std::process::exit(1);
+        }
+        let _ = tx.send(Stop::Signal(which));
+    })
 }
 
 /// C++ class and network wrapper of the devices C++ YARP also has, for `--list`.
@@ -134,7 +116,7 @@ fn cxx_info(name: &str) -> (&'static str, Option<&'static str>) {
 /// C++ `PolyDriver` with `wrapping_enabled` (which yarpdev sets): a device whose network
 /// wrapper is another device is opened by `deviceBundler` with that wrapper.
 fn wrap_in_network_wrapper(options: &mut Property) {
-    let Some(device) = options.find("device").map(text) else {
+    let Some(device) = options.find("device").map(Value::to_string_bare) else {
         return;
     };
     let Some(wrapper) = cxx_info(&device).1 else {
@@ -178,17 +160,13 @@ fn print_help() {
     error("Device name not specified");
 }
 
-fn text(v: &Value) -> String {
-    String::from_utf8_lossy(&v.to_text_bare()).into_owned()
-}
-
 /// The options: `single_threaded 1`, then the `--from` file, then the command line.
 fn options(args: &[String]) -> Result<Property, String> {
     let cli = Property::from_args(args);
     let mut options = Property::new();
     options.put("single_threaded", 1);
-    if let Some(from) = cli.find("from").map(text) {
-        let context = cli.find("context").map(text);
+    if let Some(from) = cli.find("from").map(Value::to_string_bare) {
+        let context = cli.find("context").map(Value::to_string_bare);
         let path = resource::find_file(&from, context.as_deref())
             .unwrap_or_else(|| std::path::PathBuf::from(&from));
         let file = Property::from_config_file(&path)
@@ -253,7 +231,7 @@ fn run() -> i32 {
         return 0;
     }
     if let Some(lispy) = options.find("nested").or_else(|| options.find("lispy")) {
-        options = Property::from_text(text(lispy));
+        options = Property::from_text(lispy.to_string_bare());
     }
     // As C++: with `--from` but no `device`, the open below reports the missing name.
     if !options.check("device") && !options.check("from") {
@@ -264,8 +242,8 @@ fn run() -> i32 {
         // C++ 3.12 refuses this form; we still honour it, pointing at the new one.
         warning(&format!(
             "yarpdev --device {0} --subdevice {1} is deprecated in C++ YARP 3.12; use: yarpdev --device deviceBundler --wrapper_device {0} --attached_device {1}",
-            text(dev),
-            text(sub)
+            dev.to_string_bare(),
+            sub.to_string_bare()
         ));
     }
     options.put("wrapping_enabled", Value::from("1"));
@@ -300,7 +278,7 @@ fn run() -> i32 {
     // The terminator port C++ opens: any message on it stops the program.
     let name = options
         .find("name")
-        .map(text)
+        .map(Value::to_string_bare)
         .filter(|n| !n.is_empty())
         .unwrap_or_else(|| "/yarpdev".to_string());
     let quit_name = format!("{name}/quit");
@@ -366,10 +344,13 @@ mod tests {
     fn a_device_with_a_network_wrapper_is_bundled_with_it() {
         let mut o = Property::from_args(["--device", "test_motor", "--single_port"]);
         wrap_in_network_wrapper(&mut o);
-        assert_eq!(text(o.find("device").unwrap()), "deviceBundler");
-        assert_eq!(text(o.find("attached_device").unwrap()), "test_motor");
+        assert_eq!(o.find("device").unwrap().to_string_bare(), "deviceBundler");
         assert_eq!(
-            text(o.find("wrapper_device").unwrap()),
+            o.find("attached_device").unwrap().to_string_bare(),
+            "test_motor"
+        );
+        assert_eq!(
+            o.find("wrapper_device").unwrap().to_string_bare(),
             "controlBoard_nws_yarp"
         );
         for own in [
@@ -379,7 +360,7 @@ mod tests {
         ] {
             let mut o = Property::from_args(["--device", own]);
             wrap_in_network_wrapper(&mut o);
-            assert_eq!(text(o.find("device").unwrap()), own);
+            assert_eq!(o.find("device").unwrap().to_string_bare(), own);
             assert!(o.find("attached_device").is_none());
         }
     }

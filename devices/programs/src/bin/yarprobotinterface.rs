@@ -39,10 +39,6 @@ use yarp_net::nameserver::NameClient;
 use yarp_net::port::Port;
 use yarp_proto::{Property, Value};
 
-fn text(v: &Value) -> String {
-    String::from_utf8_lossy(&v.to_text_bare()).into_owned()
-}
-
 /// How the program learns it must stop: signals and the RPC `quit` raise `interrupted`,
 /// bump `count` and wake the main thread.
 #[derive(Clone)]
@@ -68,29 +64,7 @@ impl Interrupts {
 
 /// Installs SIGINT/SIGTERM handlers now, so that an early signal is not lost.
 fn watch_signals(interrupts: Interrupts) -> std::io::Result<()> {
-    use tokio::signal::unix::{signal, SignalKind};
-    let rt = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()?;
-    let (mut int, mut term) = {
-        let _guard = rt.enter();
-        (
-            signal(SignalKind::interrupt())?,
-            signal(SignalKind::terminate())?,
-        )
-    };
-    std::thread::spawn(move || {
-        rt.block_on(async move {
-            loop {
-                let why = tokio::select! {
-                    _ = int.recv() => "SIGINT",
-                    _ = term.recv() => "SIGTERM",
-                };
-                interrupts.raise(why);
-            }
-        })
-    });
-    Ok(())
+    yarp_net::signals::on_signals(move |why| interrupts.raise(why))
 }
 
 /// Options: `--from FILE` (else `yarprobotinterface.ini`, C++'s default config file, when
@@ -98,8 +72,8 @@ fn watch_signals(interrupts: Interrupts) -> std::io::Result<()> {
 /// they came from.
 fn options(args: &[String]) -> Result<(Property, Option<PathBuf>), String> {
     let cli = Property::from_args(args);
-    let context = cli.find("context").map(text);
-    let from = match cli.find("from").map(text) {
+    let context = cli.find("context").map(Value::to_string_bare);
+    let from = match cli.find("from").map(Value::to_string_bare) {
         Some(name) => {
             let found = resource::find_file(&name, context.as_deref());
             Some(found.ok_or_else(|| format!("cannot find --from {name}"))?)
@@ -123,9 +97,9 @@ fn options(args: &[String]) -> Result<(Property, Option<PathBuf>), String> {
 fn config_path(options: &Property, base: Option<&Path>) -> Result<PathBuf, String> {
     let name = options
         .find("config")
-        .map(text)
+        .map(Value::to_string_bare)
         .ok_or("Missing \"config\" argument")?;
-    let context = options.find("context").map(text);
+    let context = options.find("context").map(Value::to_string_bare);
     if let Some(p) = resource::find_file(&name, context.as_deref()) {
         return Ok(p);
     }
