@@ -43,18 +43,21 @@ pub struct NwcPorts<T> {
     latest: Latest<T>,
 }
 
-async fn receive<T>(
+/// How a client reads a stream message (a `from_bottle`); its error says what is wrong.
+pub type Parse<T, E> = fn(&Bottle) -> Result<T, E>;
+
+async fn receive<T, E: std::fmt::Display>(
     device: &'static str,
     port: Arc<Port>,
     latest: Latest<T>,
-    parse: fn(&Bottle) -> Result<T, String>,
+    parse: Parse<T, E>,
 ) {
     while let Some(msg) = port.read().await {
-        match msg
-            .bottle()
-            .map_err(|e| e.to_string())
-            .and_then(|b| parse(&b))
-        {
+        let parsed = match msg.bottle() {
+            Ok(b) => parse(&b).map_err(|e| e.to_string()),
+            Err(e) => Err(e.to_string()),
+        };
+        match parsed {
             Ok(m) => {
                 let t = msg.stamp.map_or(0.0, |s| s.time);
                 *latest.lock() = Some((m, t));
@@ -174,11 +177,11 @@ async fn close_port(port: Arc<Port>) {
 
 impl<T: Send + 'static> NwcPorts<T> {
     /// Opens both ports and connects them; what failed, with the port names, otherwise.
-    pub async fn open(
+    pub async fn open<E: std::fmt::Display + 'static>(
         device: &'static str,
         ns: NameClient,
         names: NwcNames,
-        parse: fn(&Bottle) -> Result<T, String>,
+        parse: Parse<T, E>,
     ) -> Result<NwcPorts<T>, String> {
         let NwcNames {
             stream: local,
@@ -288,11 +291,11 @@ impl<T: Send + 'static> NwcPorts<T> {
 
     /// Opens the ports from a device's `open` (blocking): a failure is a `BadParam` on
     /// `remote` naming what should be running there (`expected`).
-    pub fn open_for_device(
+    pub fn open_for_device<E: std::fmt::Display + 'static>(
         device: &'static str,
         expected: &'static str,
         names: NwcNames,
-        parse: fn(&Bottle) -> Result<T, String>,
+        parse: Parse<T, E>,
     ) -> DevResult<NwcPorts<T>> {
         let network = |got: String| DeviceError::BadParam {
             device: device.into(),

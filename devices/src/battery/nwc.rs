@@ -31,10 +31,6 @@ crate::device_params! {
 
 type Client = NwcPorts<BatteryData>;
 
-fn parse_data(b: &Bottle) -> Result<BatteryData, String> {
-    BatteryData::from_bottle(b).map_err(|e| e.to_string())
-}
-
 /// C++'s `IBattery::Battery_status` from the streamed int32 (unknown codes are errors).
 fn status_of(code: i32) -> BatteryStatus {
     match code {
@@ -98,7 +94,7 @@ impl DeviceDriver for BatteryNwcYarp {
             NAME,
             "a running battery_nws_yarp (is the name server running?)",
             names,
-            parse_data,
+            BatteryData::from_bottle,
         )?;
         self.close()?;
         self.client = Some(client);

@@ -11,6 +11,11 @@ use crate::thrift::{
 use yarp_proto::tags::Generation;
 use yarp_proto::{Bottle, Value};
 
+/// A stream message that is not an `OdometryData` (nine float64).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("not an OdometryData (nine float64): {0}")]
+pub struct OdometryDataError(pub Bottle);
+
 /// The one method of C++ `IOdometry2DMsgs`.
 pub const RESET: &str = "reset_odometry_RPC";
 
@@ -41,13 +46,13 @@ impl OdometryData {
     }
 
     /// Reads the struct from a stream message (nine numbers).
-    pub fn from_bottle(b: &Bottle) -> Result<OdometryData, String> {
+    pub fn from_bottle(b: &Bottle) -> Result<OdometryData, OdometryDataError> {
         let v: Vec<f64> = b.iter().filter_map(Value::as_f64).collect();
         let [odom_x, odom_y, odom_theta, base_vel_x, base_vel_y, base_vel_theta, odom_vel_x, odom_vel_y, odom_vel_theta] =
             <[f64; 9]>::try_from(v.as_slice())
                 .ok()
                 .filter(|_| b.len() == 9)
-                .ok_or_else(|| format!("not an OdometryData (nine float64): {b}"))?;
+                .ok_or_else(|| OdometryDataError(b.clone()))?;
         Ok(OdometryData {
             odom_x,
             odom_y,

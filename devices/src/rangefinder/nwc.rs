@@ -31,10 +31,6 @@ crate::device_params! {
 
 type Client = NwcPorts<LaserScan2D>;
 
-fn parse_scan(b: &Bottle) -> Result<LaserScan2D, String> {
-    LaserScan2D::from_bottle(b).map_err(|e| e.to_string())
-}
-
 /// The `rangefinder2D_nwc_yarp` device.
 #[derive(Default)]
 pub struct Rangefinder2DNwcYarp {
@@ -96,7 +92,7 @@ impl DeviceDriver for Rangefinder2DNwcYarp {
             NAME,
             "a running rangefinder2D_nws_yarp port (is the name server running?)",
             names,
-            parse_scan,
+            LaserScan2D::from_bottle,
         )?;
         self.close()?;
         self.client = Some(client);

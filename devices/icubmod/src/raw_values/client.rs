@@ -14,7 +14,7 @@ use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::nwc_ports::{NwcNames, NwcPorts};
 use yarp_devices::raw_values::{IRawValuesPublisher, RawValuesKeyMetadata};
-use yarp_proto::{Bottle, Property};
+use yarp_proto::Property;
 
 pub const NAME: &str = "rawValuesPublisherClient";
 
@@ -43,10 +43,6 @@ yarp_devices::device_params! {
 }
 
 type Map = BTreeMap<String, Vec<i32>>;
-
-fn parse(b: &Bottle) -> Result<Map, String> {
-    decode_data_map(b).map_err(|e| e.to_string())
-}
 
 /// The `rawValuesPublisherClient` device.
 #[derive(Default)]
@@ -82,7 +78,7 @@ impl DeviceDriver for RawValuesPublisherClient {
             NAME,
             "a running rawValuesPublisherServer (is the name server running?)",
             names,
-            parse,
+            decode_data_map,
         )?;
         self.close()?;
         self.client = Some(client);
