@@ -8,24 +8,27 @@
 //! last message is older than `timeout`; the rest goes through `rpc:i`.
 
 use parking_lot::Mutex;
-use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use yarp_devices::cartesian_control::{CartesianEvent, ICartesianControl, Pose, Solved};
 use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
-use yarp_devices::{nwc_ports, runtime};
+use yarp_devices::runtime;
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Value};
 
+use crate::module_client::ModuleLink;
 use crate::protocol::{self, word};
 use crate::server::SERVER_VERSION;
 
 /// The C++ device name.
 pub const NAME: &str = "cartesiancontrollerclient";
 
-/// How long a call waits for the server (a sync go waits for the solver as well).
-const RPC_TIMEOUT: Duration = Duration::from_secs(10);
+/// The client's ports, in the order they open (the RPC one first).
+const PORTS: [&str; 4] = ["rpc:o", "command:o", "state:i", "events:i"];
+const COMMAND: usize = 1;
+const STATE: usize = 2;
+const EVENTS: usize = 3;
 
 yarp_devices::device_params! {
     /// What `cartesiancontrollerclient` reads (icub-main's `ClientCartesianController`).
@@ -44,18 +47,7 @@ yarp_devices::device_params! {
 /// The latest pose of the state stream: pose, its envelope time, when it came.
 type Latest = Arc<Mutex<Option<([f64; 7], f64, Instant)>>>;
 
-struct Link {
-    remote: String,
-    rpc: Arc<Port>,
-    command: Arc<Port>,
-    state: Arc<Port>,
-    events: Arc<Port>,
-    tasks: Vec<tokio::task::JoinHandle<()>>,
-    latest: Latest,
-    received: Arc<Mutex<Vec<CartesianEvent>>>,
-    contexts: BTreeSet<i32>,
-    timeout: Duration,
-}
+type Link = ModuleLink<Latest>;
 
 /// `cartesiancontrollerclient`.
 #[derive(Default)]
@@ -72,27 +64,9 @@ impl CartesianControllerClient {
         self.link.as_mut().ok_or(DeviceError::NotOpen)
     }
 
-    fn call_within(&mut self, cmd: Bottle, timeout: Duration) -> DevResult<Bottle> {
-        let link = self.link()?;
-        nwc_ports::call_within(&link.remote, &link.rpc, cmd, timeout)
-    }
-
-    fn call(&mut self, cmd: Bottle) -> DevResult<Bottle> {
-        self.call_within(cmd, RPC_TIMEOUT)
-    }
-
     /// A call whose reply must start with `[ack]`.
     fn ack(&mut self, cmd: Bottle) -> DevResult<Bottle> {
-        let text = cmd.to_string();
-        let reply = self.call(cmd)?;
-        if protocol::is_ack(&reply) {
-            Ok(reply)
-        } else {
-            Err(DeviceError::failed(
-                NAME,
-                format!("`{text}` answered `{reply}`"),
-            ))
-        }
+        self.link()?.ack(cmd)
     }
 
     fn get(&mut self, opt: &str) -> DevResult<Bottle> {
@@ -104,7 +78,7 @@ impl CartesianControllerClient {
     }
 
     fn stream(&mut self, b: Bottle) -> DevResult<()> {
-        let port = self.link()?.command.clone();
+        let port = self.link()?.port(COMMAND);
         runtime::block_on_logged("cartesiancontrollerclient: command", async move {
             port.write_strict(&b, None).await;
         });
@@ -170,29 +144,6 @@ async fn read_state(port: Arc<Port>, latest: Latest) {
     }
 }
 
-/// Collects an `events:o` stream (the Cartesian and gaze servers' alike).
-pub(crate) async fn read_events(port: Arc<Port>, received: Arc<Mutex<Vec<CartesianEvent>>>) {
-    while let Some(msg) = port.read().await {
-        let Ok(b) = msg.bottle() else { continue };
-        let Some(kind) = b.get(0).and_then(Value::as_str).map(str::to_string) else {
-            continue;
-        };
-        let checkpoint = (kind == "motion-ongoing")
-            .then(|| b.get(2).and_then(Value::as_f64))
-            .flatten();
-        let mut q = received.lock();
-        q.push(CartesianEvent {
-            kind,
-            time: b.get(1).and_then(Value::as_f64).unwrap_or(0.0),
-            checkpoint,
-        });
-        // nobody reading: keep the latest thousand
-        if q.len() > 1000 {
-            q.remove(0);
-        }
-    }
-}
-
 impl DeviceDriver for CartesianControllerClient {
     fn parameters(&self) -> Vec<yarp_devices::params::ParamSpec> {
         CartesianControllerClientParams::PARAMS.to_vec()
@@ -201,57 +152,19 @@ impl DeviceDriver for CartesianControllerClient {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = CartesianControllerClientParams::read(config)?;
         self.close()?;
-        let refused = |why: String| DeviceError::BadParam {
-            device: NAME.into(),
-            param: "remote".into(),
-            expected: "the prefix of a running cartesiancontrollerserver",
-            got: why,
-        };
-        let ns = yarp_net::network::name_client().map_err(|e| refused(e.to_string()))?;
-        let (local, remote, carrier) = (p.local.clone(), p.remote.clone(), p.carrier.clone());
-        let ports = runtime::block_on_result(async move {
-            let mut ports = Vec::new();
-            for suffix in ["rpc:o", "command:o", "state:i", "events:i"] {
-                let name = format!("{local}/{suffix}");
-                match Port::open(&name, ns.clone()).await {
-                    Ok(port) => ports.push(Arc::new(port)),
-                    Err(e) => {
-                        close_all(ports).await;
-                        return Err(format!("{name}: {e}"));
-                    }
-                }
-            }
-            let rpc_i = format!("{remote}/rpc:i");
-            if let Err(e) = ports[0].connect(&rpc_i, None).await {
-                close_all(ports).await;
-                return Err(format!("cannot connect to {rpc_i}: {e}"));
-            }
-            Ok(ports)
-        })
-        .map_err(refused)?;
-        let mut it = ports.into_iter();
-        let mut next = || it.next().expect("four ports");
-        let (rpc, command, state, events) = (next(), next(), next(), next());
-        let latest: Latest = Arc::default();
-        let received: Arc<Mutex<Vec<CartesianEvent>>> = Arc::default();
-        let rt = runtime::handle();
-        let tasks = vec![
-            rt.spawn(read_state(state.clone(), latest.clone())),
-            rt.spawn(read_events(events.clone(), received.clone())),
-        ];
-        self.link = Some(Link {
-            remote: p.remote.clone(),
-            rpc,
-            command,
-            state,
-            events,
-            tasks,
-            latest,
-            received,
-            contexts: BTreeSet::new(),
-            timeout: Duration::from_secs_f64(p.timeout),
-        });
-        let result = self.handshake(&p.remote, &carrier);
+        let mut link = ModuleLink::open(
+            NAME,
+            "the prefix of a running cartesiancontrollerserver",
+            (&p.local, &p.remote),
+            &PORTS,
+            "rpc:i",
+            Duration::from_secs_f64(p.timeout),
+            Latest::default(),
+        )?;
+        link.spawn(read_state(link.port(STATE), link.streams.clone()));
+        link.read_events(EVENTS);
+        self.link = Some(link);
+        let result = self.handshake(&p.carrier);
         if result.is_err() {
             let _ = self.close();
         }
@@ -259,26 +172,10 @@ impl DeviceDriver for CartesianControllerClient {
     }
 
     fn close(&mut self) -> DevResult<()> {
-        if let Some(link) = self.link.as_ref() {
+        if let Some(link) = self.link.take() {
             // the contexts this client stored go with it, as C++'s close
             let ids: Vec<i32> = link.contexts.iter().copied().collect();
-            let _ = self.call_within(
-                words(&[word::DELETE]).with(protocol::i32_list(ids)),
-                Duration::from_secs(1),
-            );
-        }
-        if let Some(link) = self.link.take() {
-            for t in &link.tasks {
-                t.abort();
-            }
-            let ports = vec![link.rpc, link.command, link.state, link.events];
-            let tasks = link.tasks;
-            runtime::block_on_logged("cartesiancontrollerclient: closing", async move {
-                for t in tasks {
-                    let _ = t.await;
-                }
-                close_all(ports).await;
-            });
+            link.close(Some(words(&[word::DELETE]).with(protocol::i32_list(ids))));
         }
         Ok(())
     }
@@ -286,61 +183,17 @@ impl DeviceDriver for CartesianControllerClient {
     yarp_devices::views!(as_cartesian_control);
 }
 
-/// Closes ports no task holds any more.
-pub(crate) async fn close_all(ports: Vec<Arc<Port>>) {
-    for p in ports {
-        if let Ok(p) = Arc::try_unwrap(p) {
-            p.close().await;
-        }
-    }
-}
-
 impl CartesianControllerClient {
     /// C++'s open after the RPC connection: the version, the streams, the solver.
-    fn handshake(&mut self, remote: &str, carrier: &str) -> DevResult<()> {
+    fn handshake(&mut self, carrier: &str) -> DevResult<()> {
         let info = self.get(word::INFO)?;
-        let version = info
-            .get(1)
-            .and_then(Value::as_list)
-            .and_then(|l| l.find("server_version"))
-            .and_then(|v| v.as_str().map(str::to_string));
-        match version {
-            Some(v) if v != SERVER_VERSION => {
-                return Err(DeviceError::failed(
-                    NAME,
-                    format!(
-                        "server version {v} not compatible with this client's {SERVER_VERSION}"
-                    ),
-                ))
-            }
-            None => tracing::warn!("{NAME}: {remote} did not say its server_version"),
-            _ => {}
-        }
         let link = self.link()?;
-        let (command, state, events) = (
-            link.command.clone(),
-            link.state.name().to_string(),
-            link.events.name().to_string(),
-        );
-        let (remote, carrier) = (remote.to_string(), carrier.to_string());
-        let connected = runtime::block_on_result(async move {
-            let ns = yarp_net::network::name_client().map_err(|e| e.to_string())?;
-            command
-                .connect(&format!("{remote}/command:i"), Some(&carrier))
-                .await
-                .map_err(|e| e.to_string())?;
-            for (from, to) in [("state:o", state), ("events:o", events)] {
-                let from = format!("{remote}/{from}");
-                let (ok, why) = yarp_net::network::connect(&ns, &from, &to, Some(&carrier))
-                    .await
-                    .map_err(|e| e.to_string())?;
-                if !ok {
-                    return Err(format!("{from} -> {to}: {why}"));
-                }
-            }
-            Ok::<_, String>(())
-        });
-        connected.map_err(|e| DeviceError::failed(NAME, e))?;
+        link.check_version(&info, SERVER_VERSION)?;
+        link.connect_streams(
+            carrier,
+            &[(COMMAND, "command:i")],
+            &[("state:o", STATE), ("events:o", EVENTS)],
+        )?;
         let ison = self.get(word::IS_SOLVER_ON)?;
         if !Self::truth_at(&ison, 1)? {
             return Err(DeviceError::failed(
@@ -390,7 +243,7 @@ impl ICartesianControl for CartesianControllerClient {
 
     fn get_pose(&mut self) -> DevResult<(Pose, f64)> {
         let link = self.link()?;
-        let latest = *link.latest.lock();
+        let latest = *link.streams.lock();
         match latest {
             Some((x, t, at)) if at.elapsed() < link.timeout => Ok((split7(&x)?, t)),
             _ => Err(DeviceError::Timeout {
@@ -581,24 +434,13 @@ impl ICartesianControl for CartesianControllerClient {
     }
 
     fn restore_context(&mut self, id: i32) -> DevResult<()> {
-        // as C++: only the contexts this client stored, and the server's first
-        if id != 0 && !self.link()?.contexts.contains(&id) {
-            return Err(DeviceError::failed(
-                NAME,
-                format!("context {id} is not this client's"),
-            ));
-        }
+        self.link()?.check_context(id)?;
         self.ack(words(&[word::RESTORE]).with(Value::Int32(id)))
             .map(drop)
     }
 
     fn delete_context(&mut self, id: i32) -> DevResult<()> {
-        if !self.link()?.contexts.remove(&id) {
-            return Err(DeviceError::failed(
-                NAME,
-                format!("context {id} is not this client's"),
-            ));
-        }
+        self.link()?.forget_context(id)?;
         self.ack(words(&[word::DELETE]).with(protocol::i32_list([id])))
             .map(drop)
     }
@@ -622,10 +464,10 @@ impl ICartesianControl for CartesianControllerClient {
     }
 
     fn take_events(&mut self) -> Vec<CartesianEvent> {
-        match self.link.as_ref() {
-            Some(l) => std::mem::take(&mut *l.received.lock()),
-            None => Vec::new(),
-        }
+        self.link
+            .as_ref()
+            .map(Link::take_events)
+            .unwrap_or_default()
     }
 }
 

@@ -6,26 +6,35 @@
 //! streams with `carrier`, as C++'s. Commands are sent as C++ sends them: words as strings.
 
 use parking_lot::Mutex;
-use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use yarp_devices::cartesian_control::CartesianEvent;
 use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::gaze_control::IGazeControl;
-use yarp_devices::{nwc_ports, runtime};
+use yarp_devices::runtime;
 use yarp_net::port::Port;
 use yarp_proto::{Bottle, Property, Value};
 
-use crate::client::{close_all, read_events};
 use crate::gaze::core::SERVER_VERSION;
+use crate::module_client::ModuleLink;
 use crate::protocol;
 
 /// The C++ device name.
 pub const NAME: &str = "gazecontrollerclient";
 
-/// How long a call waits for the module (a sync look waits for the motion's onset).
-const RPC_TIMEOUT: Duration = Duration::from_secs(10);
+/// The client's ports, in the order they open (the RPC one first).
+const PORTS: [&str; 9] = [
+    "rpc", "xd:o", "angles:o", "mono:o", "stereo:o", "x:i", "angles:i", "q:i", "events:i",
+];
+const XD: usize = 1;
+const ANGLES_OUT: usize = 2;
+const MONO: usize = 3;
+const STEREO: usize = 4;
+const X_IN: usize = 5;
+const ANGLES_IN: usize = 6;
+const Q_IN: usize = 7;
+const EVENTS: usize = 8;
 
 yarp_devices::device_params! {
     /// What `gazecontrollerclient` reads (icub-main's `ClientGazeController`).
@@ -43,19 +52,14 @@ yarp_devices::device_params! {
 
 type Latest = Arc<Mutex<Option<(Vec<f64>, f64, Instant)>>>;
 
-struct Link {
-    remote: String,
-    rpc: Arc<Port>,
-    xd: Arc<Port>,
-    angles_out: Arc<Port>,
-    others: Vec<Arc<Port>>,
-    tasks: Vec<tokio::task::JoinHandle<()>>,
+/// The latest fixation point and angles the module streamed.
+#[derive(Default)]
+struct Streams {
     x: Latest,
     angles: Latest,
-    received: Arc<Mutex<Vec<CartesianEvent>>>,
-    contexts: BTreeSet<i32>,
-    timeout: Duration,
 }
+
+type Link = ModuleLink<Streams>;
 
 /// `gazecontrollerclient`.
 #[derive(Default)]
@@ -104,17 +108,7 @@ impl GazeControllerClient {
     }
 
     fn ack(&mut self, cmd: Bottle) -> DevResult<Bottle> {
-        let link = self.link()?;
-        let text = cmd.to_string();
-        let reply = nwc_ports::call_within(&link.remote, &link.rpc, cmd, RPC_TIMEOUT)?;
-        if protocol::is_ack(&reply) {
-            Ok(reply)
-        } else {
-            Err(DeviceError::failed(
-                NAME,
-                format!("`{text}` answered `{reply}`"),
-            ))
-        }
+        self.link()?.ack(cmd)
     }
 
     fn number(&mut self, cmd: Bottle) -> DevResult<f64> {
@@ -150,118 +144,42 @@ impl DeviceDriver for GazeControllerClient {
     fn open(&mut self, config: &Property) -> DevResult<()> {
         let p = GazeControllerClientParams::read(config)?;
         self.close()?;
-        let refused = |why: String| DeviceError::BadParam {
-            device: NAME.into(),
-            param: "remote".into(),
-            expected: "the prefix of a running iKinGazeCtrl",
-            got: why,
-        };
-        let ns = yarp_net::network::name_client().map_err(|e| refused(e.to_string()))?;
-        let (local, remote) = (p.local.clone(), p.remote.clone());
-        let ports = runtime::block_on_result(async move {
-            let mut ports = Vec::new();
-            for suffix in [
-                "rpc", "xd:o", "angles:o", "mono:o", "stereo:o", "x:i", "angles:i", "q:i",
-                "events:i",
-            ] {
-                let name = format!("{local}/{suffix}");
-                match Port::open(&name, ns.clone()).await {
-                    Ok(port) => ports.push(Arc::new(port)),
-                    Err(e) => {
-                        close_all(ports).await;
-                        return Err(format!("{name}: {e}"));
-                    }
-                }
-            }
-            if let Err(e) = ports[0].connect(&format!("{remote}/rpc"), None).await {
-                close_all(ports).await;
-                return Err(format!("cannot connect to {remote}/rpc: {e}"));
-            }
-            Ok(ports)
-        })
-        .map_err(refused)?;
-        let [rpc, xd, angles_out, mono, stereo, x_in, angles_in, q_in, events]: [Arc<Port>; 9] =
-            ports.try_into().map_err(|_| DeviceError::NotOpen)?;
-        let (x, angles): (Latest, Latest) = (Arc::default(), Arc::default());
-        let received: Arc<Mutex<Vec<CartesianEvent>>> = Arc::default();
-        let rt = runtime::handle();
-        let tasks = vec![
-            rt.spawn(keep_latest(x_in.clone(), x.clone())),
-            rt.spawn(keep_latest(angles_in.clone(), angles.clone())),
-            rt.spawn(read_events(events.clone(), received.clone())),
-        ];
-        self.link = Some(Link {
-            remote: p.remote.clone(),
-            rpc,
-            xd: xd.clone(),
-            angles_out: angles_out.clone(),
-            others: vec![
-                mono.clone(),
-                stereo.clone(),
-                x_in.clone(),
-                angles_in.clone(),
-                q_in.clone(),
-                events.clone(),
-            ],
-            tasks,
-            x,
-            angles,
-            received,
-            contexts: BTreeSet::new(),
-            timeout: Duration::from_secs_f64(p.timeout),
-        });
+        let mut link = ModuleLink::open(
+            NAME,
+            "the prefix of a running iKinGazeCtrl",
+            (&p.local, &p.remote),
+            &PORTS,
+            "rpc",
+            Duration::from_secs_f64(p.timeout),
+            Streams::default(),
+        )?;
+        link.spawn(keep_latest(link.port(X_IN), link.streams.x.clone()));
+        link.spawn(keep_latest(
+            link.port(ANGLES_IN),
+            link.streams.angles.clone(),
+        ));
+        link.read_events(EVENTS);
+        self.link = Some(link);
         // C++'s handshake: the server's version, then every stream
         let result = (|| {
             let info = self.ack(words(&["get", "info"]))?;
-            let version = info
-                .get(1)
-                .and_then(Value::as_list)
-                .and_then(|l| l.find("server_version"))
-                .and_then(|v| v.as_str().map(str::to_string));
-            match version {
-                Some(v) if v != SERVER_VERSION => {
-                    return Err(DeviceError::failed(
-                        NAME,
-                        format!(
-                            "server version {v} not compatible with this client's {SERVER_VERSION}"
-                        ),
-                    ))
-                }
-                None => tracing::warn!("{NAME}: {} did not say its server_version", p.remote),
-                _ => {}
-            }
-            let (remote, carrier) = (p.remote.clone(), p.carrier.clone());
-            let outs = [
-                (xd, "xd:i"),
-                (angles_out, "angles:i"),
-                (mono, "mono:i"),
-                (stereo, "stereo:i"),
-            ];
-            let ins = [
-                ("x:o", x_in.name().to_string()),
-                ("angles:o", angles_in.name().to_string()),
-                ("q:o", q_in.name().to_string()),
-                ("events:o", events.name().to_string()),
-            ];
-            runtime::block_on_result(async move {
-                let ns = yarp_net::network::name_client().map_err(|e| e.to_string())?;
-                for (port, to) in outs {
-                    port.connect(&format!("{remote}/{to}"), Some(&carrier))
-                        .await
-                        .map_err(|e| format!("{remote}/{to}: {e}"))?;
-                }
-                for (from, to) in ins {
-                    let from = format!("{remote}/{from}");
-                    let (ok, why) = yarp_net::network::connect(&ns, &from, &to, Some(&carrier))
-                        .await
-                        .map_err(|e| e.to_string())?;
-                    if !ok {
-                        return Err(format!("{from} -> {to}: {why}"));
-                    }
-                }
-                Ok::<_, String>(())
-            })
-            .map_err(|e| DeviceError::failed(NAME, e))
+            let link = self.link()?;
+            link.check_version(&info, SERVER_VERSION)?;
+            link.connect_streams(
+                &p.carrier,
+                &[
+                    (XD, "xd:i"),
+                    (ANGLES_OUT, "angles:i"),
+                    (MONO, "mono:i"),
+                    (STEREO, "stereo:i"),
+                ],
+                &[
+                    ("x:o", X_IN),
+                    ("angles:o", ANGLES_IN),
+                    ("q:o", Q_IN),
+                    ("events:o", EVENTS),
+                ],
+            )
         })();
         if result.is_err() {
             let _ = self.close();
@@ -270,31 +188,11 @@ impl DeviceDriver for GazeControllerClient {
     }
 
     fn close(&mut self) -> DevResult<()> {
-        if let Some(link) = self.link.as_ref() {
-            if !link.contexts.is_empty() {
-                let ids: Vec<i32> = link.contexts.iter().copied().collect();
-                let (remote, rpc) = (link.remote.clone(), link.rpc.clone());
-                let _ = nwc_ports::call_within(
-                    &remote,
-                    &rpc,
-                    words(&["del"]).with(protocol::i32_list(ids)),
-                    Duration::from_secs(1),
-                );
-            }
-        }
         if let Some(link) = self.link.take() {
-            for t in &link.tasks {
-                t.abort();
-            }
-            let mut ports = vec![link.rpc, link.xd, link.angles_out];
-            ports.extend(link.others);
-            let tasks = link.tasks;
-            runtime::block_on_logged("gazecontrollerclient: closing", async move {
-                for t in tasks {
-                    let _ = t.await;
-                }
-                close_all(ports).await;
-            });
+            // the contexts this client stored go with it, as C++'s close
+            let ids: Vec<i32> = link.contexts.iter().copied().collect();
+            let delete = (!ids.is_empty()).then(|| words(&["del"]).with(protocol::i32_list(ids)));
+            link.close(delete);
         }
         Ok(())
     }
@@ -339,7 +237,7 @@ impl IGazeControl for GazeControllerClient {
 
     fn get_fixation_point(&mut self) -> DevResult<([f64; 3], f64)> {
         let link = self.link()?;
-        let (v, t) = Self::latest(link, &link.x, "getFixationPoint")?;
+        let (v, t) = Self::latest(link, &link.streams.x, "getFixationPoint")?;
         match v[..] {
             [a, b, c, ..] => Ok(([a, b, c], t)),
             _ => Err(DeviceError::WrongSize {
@@ -351,7 +249,7 @@ impl IGazeControl for GazeControllerClient {
 
     fn get_angles(&mut self) -> DevResult<[f64; 3]> {
         let link = self.link()?;
-        let (v, _) = Self::latest(link, &link.angles, "getAngles")?;
+        let (v, _) = Self::latest(link, &link.streams.angles, "getAngles")?;
         match v[..] {
             [a, b, c, ..] => Ok([a, b, c]),
             _ => Err(DeviceError::WrongSize {
@@ -362,7 +260,7 @@ impl IGazeControl for GazeControllerClient {
     }
 
     fn look_at_fixation_point(&mut self, x: &[f64; 3]) -> DevResult<()> {
-        let port = self.link()?.xd.clone();
+        let port = self.link()?.port(XD);
         self.stream(port, x.iter().copied().collect());
         Ok(())
     }
@@ -373,7 +271,7 @@ impl IGazeControl for GazeControllerClient {
     }
 
     fn look_at_abs_angles(&mut self, ang: &[f64; 3]) -> DevResult<()> {
-        let port = self.link()?.angles_out.clone();
+        let port = self.link()?.port(ANGLES_OUT);
         let mut b = Bottle::new().with("abs");
         for a in ang {
             b.push(*a);
@@ -383,7 +281,7 @@ impl IGazeControl for GazeControllerClient {
     }
 
     fn look_at_rel_angles(&mut self, ang: &[f64; 3]) -> DevResult<()> {
-        let port = self.link()?.angles_out.clone();
+        let port = self.link()?.port(ANGLES_OUT);
         let mut b = Bottle::new().with("rel");
         for a in ang {
             b.push(*a);
@@ -487,22 +385,12 @@ impl IGazeControl for GazeControllerClient {
     }
 
     fn restore_context(&mut self, id: i32) -> DevResult<()> {
-        if id != 0 && !self.link()?.contexts.contains(&id) {
-            return Err(DeviceError::failed(
-                NAME,
-                format!("context {id} is not this client's"),
-            ));
-        }
+        self.link()?.check_context(id)?;
         self.ack(words(&["rest"]).with(Value::Int32(id))).map(drop)
     }
 
     fn delete_context(&mut self, id: i32) -> DevResult<()> {
-        if !self.link()?.contexts.remove(&id) {
-            return Err(DeviceError::failed(
-                NAME,
-                format!("context {id} is not this client's"),
-            ));
-        }
+        self.link()?.forget_context(id)?;
         self.ack(words(&["del"]).with(protocol::i32_list([id])))
             .map(drop)
     }
@@ -516,9 +404,9 @@ impl IGazeControl for GazeControllerClient {
     }
 
     fn take_events(&mut self) -> Vec<CartesianEvent> {
-        match self.link.as_ref() {
-            Some(l) => std::mem::take(&mut *l.received.lock()),
-            None => Vec::new(),
-        }
+        self.link
+            .as_ref()
+            .map(Link::take_events)
+            .unwrap_or_default()
     }
 }
