@@ -1,9 +1,9 @@
 //! The ports of a YARP network wrapper (an `*_nws_yarp` device): its stream ports and its
 //! RPC port open together with the device (one refused closes those already open), a
 //! task answers the RPC port with whatever device is attached at the time, and all close
-//! together. Shared by `rangefinder2D_nws_yarp`, `rgbdSensor_nws_yarp` and
-//! `battery_nws_yarp`. Each request is answered in its client's YARP generation, and
-//! [`WrapperPorts::peers`] tells the stream tasks their readers'.
+//! together. Shared by `rangefinder2D_nws_yarp`, `rgbdSensor_nws_yarp`,
+//! `odometry2D_nws_yarp` and `battery_nws_yarp`. Each request is answered in its client's
+//! YARP generation, and [`WrapperPorts::peers`] tells the stream tasks their readers'.
 
 use crate::driver::{DeviceDriver, SharedDevice};
 use crate::error::{DevResult, DeviceError};
@@ -17,6 +17,45 @@ use yarp_proto::Bottle;
 
 /// The device a wrapper serves, shared with its RPC task (`None` while detached).
 pub type Slot = Arc<Mutex<Option<SharedDevice>>>;
+
+/// The task a wrapper streams its attached device with; stopping it waits until it has.
+#[derive(Default)]
+pub struct StreamTask(Option<tokio::task::JoinHandle<()>>);
+
+impl StreamTask {
+    /// Starts `stream` in place of the one running.
+    pub fn start(&mut self, stream: impl std::future::Future<Output = ()> + Send + 'static) {
+        self.stop();
+        self.0 = Some(runtime::handle().spawn(stream));
+    }
+
+    pub fn stop(&mut self) {
+        if let Some(t) = self.0.take() {
+            t.abort();
+            runtime::block_on_logged("nws: closing", async move {
+                let _ = t.await;
+            });
+        }
+    }
+}
+
+/// A stream's read errors, logged once per streak of failures rather than every period.
+#[derive(Default)]
+pub struct FailureStreak(bool);
+
+impl FailureStreak {
+    pub fn passed(&mut self) {
+        self.0 = false;
+    }
+
+    /// `message` is logged if the last read passed.
+    pub fn failed(&mut self, message: impl FnOnce() -> String) {
+        if !self.0 {
+            tracing::error!("{}", message());
+        }
+        self.0 = true;
+    }
+}
 
 /// A reply as the wrapper's protocol builds it.
 pub enum Reply {

@@ -14,10 +14,9 @@ use super::protocol::{handle_rpc, read_battery, BatteryData, ChargeWarnings};
 use super::BatteryStatus;
 use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
-use crate::runtime;
 use crate::sensors::params::now;
 use crate::sensors::periodic::Ticker;
-use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
+use crate::wrapper_ports::{FailureStreak, Reply, Slot, StreamTask, WrapperPorts};
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Duration;
@@ -60,7 +59,7 @@ pub struct BatteryNwsYarp {
     log: bool,
     slot: Slot,
     ports: Option<WrapperPorts>,
-    stream_task: Option<tokio::task::JoinHandle<()>>,
+    stream_task: StreamTask,
 }
 
 impl BatteryNwsYarp {
@@ -101,7 +100,7 @@ async fn stream_battery(
     let mut last = BatteryData::default();
     let mut warnings = ChargeWarnings::default();
     let mut count: i32 = 0;
-    let mut failing = false;
+    let mut failing = FailureStreak::default();
     let mut log_file = log
         .then(|| {
             std::fs::File::create("batteryLog.txt")
@@ -122,7 +121,7 @@ async fn stream_battery(
         };
         match read {
             Ok(d) => {
-                failing = false;
+                failing.passed();
                 port.write_by_generation(&d.to_bottle(), &peers, Some(Stamp::new(count, now())))
                     .await;
                 count = count.wrapping_add(1);
@@ -136,13 +135,7 @@ async fn stream_battery(
                 }
                 last = d;
             }
-            Err(e) => {
-                // once per failure streak, not every period
-                if !failing {
-                    tracing::error!("{NAME}: sensor returned error: {e}");
-                }
-                failing = true;
-            }
+            Err(e) => failing.failed(|| format!("{NAME}: sensor returned error: {e}")),
         }
     }
 }
@@ -204,18 +197,13 @@ impl IWrapper for BatteryNwsYarp {
         *self.slot.lock() = Some(device.clone());
         let (port, peers) = (ports.streams[0].clone(), ports.peers.clone());
         let (period, log) = (self.period, self.log);
-        self.stream_task =
-            Some(runtime::handle().spawn(stream_battery(port, peers, period, device, log)));
+        self.stream_task
+            .start(stream_battery(port, peers, period, device, log));
         Ok(())
     }
 
     fn detach(&mut self) -> DevResult<()> {
-        if let Some(t) = self.stream_task.take() {
-            t.abort();
-            runtime::block_on_logged("nws: closing", async move {
-                let _ = t.await;
-            });
-        }
+        self.stream_task.stop();
         *self.slot.lock() = None;
         Ok(())
     }

@@ -10,10 +10,9 @@
 use super::protocol::{handle_rpc, odometer, velocity};
 use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
-use crate::runtime;
 use crate::sensors::params::now;
 use crate::sensors::periodic::Ticker;
-use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
+use crate::wrapper_ports::{Reply, Slot, StreamTask, WrapperPorts};
 use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::peer_generation::PeerGenerations;
@@ -40,7 +39,7 @@ pub struct Odometry2DNwsYarp {
     period: Duration,
     slot: Slot,
     ports: Option<WrapperPorts>,
-    stream_task: Option<tokio::task::JoinHandle<()>>,
+    stream_task: StreamTask,
 }
 
 impl Odometry2DNwsYarp {
@@ -159,17 +158,12 @@ impl IWrapper for Odometry2DNwsYarp {
             ports.streams[2].clone(),
         ];
         let task = stream_odometry(streams, ports.peers.clone(), self.period, device);
-        self.stream_task = Some(runtime::handle().spawn(task));
+        self.stream_task.start(task);
         Ok(())
     }
 
     fn detach(&mut self) -> DevResult<()> {
-        if let Some(t) = self.stream_task.take() {
-            t.abort();
-            runtime::block_on_logged("nws: closing", async move {
-                let _ = t.await;
-            });
-        }
+        self.stream_task.stop();
         *self.slot.lock() = None;
         Ok(())
     }

@@ -10,10 +10,9 @@
 use super::protocol::{handle_rpc, LaserScan2D};
 use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
-use crate::runtime;
 use crate::sensors::params::now;
 use crate::sensors::periodic::Ticker;
-use crate::wrapper_ports::{Reply, Slot, WrapperPorts};
+use crate::wrapper_ports::{FailureStreak, Reply, Slot, StreamTask, WrapperPorts};
 use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::peer_generation::PeerGenerations;
@@ -42,7 +41,7 @@ pub struct Rangefinder2DNwsYarp {
     period: Duration,
     slot: Slot,
     ports: Option<WrapperPorts>,
-    stream_task: Option<tokio::task::JoinHandle<()>>,
+    stream_task: StreamTask,
 }
 
 impl Rangefinder2DNwsYarp {
@@ -93,7 +92,7 @@ async fn stream_scans(
 ) {
     let mut ticker = Ticker::new(period);
     let mut count: i32 = 0;
-    let mut failing = false;
+    let mut failing = FailureStreak::default();
     loop {
         ticker.tick().await;
         if !port.has_outputs() {
@@ -101,18 +100,12 @@ async fn stream_scans(
         }
         match read_scan(&device) {
             Ok((scan, t)) => {
-                failing = false;
+                failing.passed();
                 port.write_by_generation(&scan.to_bottle(), &peers, Some(Stamp::new(count, t)))
                     .await;
                 count = count.wrapping_add(1);
             }
-            Err(e) => {
-                // once per failure streak, not every period
-                if !failing {
-                    tracing::error!("{NAME}: sensor returned error: {e}");
-                }
-                failing = true;
-            }
+            Err(e) => failing.failed(|| format!("{NAME}: sensor returned error: {e}")),
         }
     }
 }
@@ -179,17 +172,13 @@ impl IWrapper for Rangefinder2DNwsYarp {
         }
         *self.slot.lock() = Some(device.clone());
         let (port, peers, period) = (ports.streams[0].clone(), ports.peers.clone(), self.period);
-        self.stream_task = Some(runtime::handle().spawn(stream_scans(port, peers, period, device)));
+        self.stream_task
+            .start(stream_scans(port, peers, period, device));
         Ok(())
     }
 
     fn detach(&mut self) -> DevResult<()> {
-        if let Some(t) = self.stream_task.take() {
-            t.abort();
-            runtime::block_on_logged("nws: closing", async move {
-                let _ = t.await;
-            });
-        }
+        self.stream_task.stop();
         *self.slot.lock() = None;
         Ok(())
     }

@@ -200,7 +200,7 @@ async fn stream_measurements(
 ) {
     let mut ticker = super::periodic::Ticker::new(period);
     let mut count: i32 = 0;
-    let mut failing = false;
+    let mut failing = crate::wrapper_ports::FailureStreak::default();
     loop {
         ticker.tick().await;
         if !port.has_outputs() {
@@ -214,19 +214,13 @@ async fn stream_measurements(
         });
         match data {
             Ok(data) => {
-                failing = false;
+                failing.passed();
                 let stamp = Stamp::new(count, now());
                 count = count.wrapping_add(1);
                 port.write_by_generation(&data.to_bottle(), &peers, Some(stamp))
                     .await;
             }
-            Err(e) => {
-                // log once per failure streak, not every period
-                if !failing {
-                    tracing::error!("{NAME}: {e}");
-                }
-                failing = true;
-            }
+            Err(e) => failing.failed(|| format!("{NAME}: {e}")),
         }
     }
 }
