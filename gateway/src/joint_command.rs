@@ -244,10 +244,11 @@ pub fn speeds(from: impl IntoIterator<Item = f64>, to: &[f64], dt: Duration) -> 
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn info() -> BoardInfo {
+    /// Two revolute joints and a prismatic one (the trajectory tests' board too).
+    pub(crate) fn info() -> BoardInfo {
         BoardInfo {
             names: vec!["a".into(), "b".into(), "slide".into()],
             prismatic: vec![false, false, true],

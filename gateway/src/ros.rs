@@ -30,6 +30,18 @@ pub enum RosError {
     Security(#[from] crate::security::SecurityError),
 }
 
+impl RosError {
+    /// A ROS entity (`what`: topic, publisher, service...) on `name` that ros2-client
+    /// refused to make.
+    pub fn entity(what: &'static str, name: &str, e: impl std::fmt::Debug) -> RosError {
+        RosError::Entity {
+            what,
+            name: name.to_string(),
+            message: format!("{e:?}"),
+        }
+    }
+}
+
 /// Starts the gateway's single DDS participant (as a ros2-client context) and its node.
 ///
 /// `domain` is passed explicitly (ros2-client's `Context::new` ignores ROS_DOMAIN_ID);
@@ -233,43 +245,40 @@ pub fn new_node(ctx: &Context, namespace: &str, node_name: &str) -> Result<Node,
     ctx.new_node(name, options).map_err(|e| err(&e))
 }
 
+/// The topic `topic_name` of `ros_type`, to make publishers and subscriptions on.
+pub fn topic(
+    node: &Node,
+    topic_name: &str,
+    ros_type: &str,
+    q: &QosProfile,
+) -> Result<ros2_client::dds::rustdds::Topic, RosError> {
+    node.create_topic(&name(topic_name)?, message_type(ros_type), q)
+        .map_err(|e| RosError::entity("topic", topic_name, e))
+}
+
 /// A publisher of dynamic messages of `ros_type` on `topic`.
 pub fn publisher(
     node: &mut Node,
-    topic: &str,
+    topic_name: &str,
     ros_type: &str,
     q: &mapping::Qos,
 ) -> Result<ros2_client::Publisher<crate::dynmsg::Value>, RosError> {
-    let err = |what, e: &dyn std::fmt::Debug| RosError::Entity {
-        what,
-        name: topic.to_string(),
-        message: format!("{e:?}"),
-    };
-    let t = node
-        .create_topic(&name(topic)?, message_type(ros_type), &qos(q))
-        .map_err(|e| err("topic", &e))?;
+    let t = topic(node, topic_name, ros_type, &qos(q))?;
     node.create_publisher(&t, None)
-        .map_err(|e| err("publisher", &e))
+        .map_err(|e| RosError::entity("publisher", topic_name, e))
 }
 
 /// A subscription of dynamic messages of `ros_type` on `topic` (decode them with
 /// [`crate::dynmsg::MsgSeed`]).
 pub fn subscription(
     node: &mut Node,
-    topic: &str,
+    topic_name: &str,
     ros_type: &str,
     q: &mapping::Qos,
 ) -> Result<ros2_client::Subscription<crate::dynmsg::Value>, RosError> {
-    let err = |what, e: &dyn std::fmt::Debug| RosError::Entity {
-        what,
-        name: topic.to_string(),
-        message: format!("{e:?}"),
-    };
-    let t = node
-        .create_topic(&name(topic)?, message_type(ros_type), &qos(q))
-        .map_err(|e| err("topic", &e))?;
+    let t = topic(node, topic_name, ros_type, &qos(q))?;
     node.create_subscription(&t, None)
-        .map_err(|e| err("subscription", &e))
+        .map_err(|e| RosError::entity("subscription", topic_name, e))
 }
 
 /// A server of service `name` of type `pkg/srv/Name` (Enhanced service mapping, as
@@ -283,19 +292,9 @@ where
     Req: ros2_client::Message + Clone + 'static,
     Resp: ros2_client::Message + 'static,
 {
-    let q = service_qos();
-    node.create_server(
-        ros2_client::ServiceMapping::Enhanced,
-        &name(name_)?,
-        &service_type(srv_type),
-        q.clone(),
-        q,
-    )
-    .map_err(|e| RosError::Entity {
-        what: "service",
-        name: name_.to_string(),
-        message: format!("{e:?}"),
-    })
+    let (n, t, q) = (name(name_)?, service_type(srv_type), service_qos());
+    node.create_server(ros2_client::ServiceMapping::Enhanced, &n, &t, q.clone(), q)
+        .map_err(|e| RosError::entity("service", name_, e))
 }
 
 /// A client of service `name` of type `pkg/srv/Name` (as [`server`]).
@@ -308,19 +307,9 @@ where
     Req: ros2_client::Message + Clone + 'static,
     Resp: ros2_client::Message + 'static,
 {
-    let q = service_qos();
-    node.create_client(
-        ros2_client::ServiceMapping::Enhanced,
-        &name(name_)?,
-        &service_type(srv_type),
-        q.clone(),
-        q,
-    )
-    .map_err(|e| RosError::Entity {
-        what: "client",
-        name: name_.to_string(),
-        message: format!("{e:?}"),
-    })
+    let (n, t, q) = (name(name_)?, service_type(srv_type), service_qos());
+    node.create_client(ros2_client::ServiceMapping::Enhanced, &n, &t, q.clone(), q)
+        .map_err(|e| RosError::entity("client", name_, e))
 }
 
 /// Makes the endpoints of `ros_type` that `dp` creates from now on announce its REP-2016

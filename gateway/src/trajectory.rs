@@ -473,13 +473,7 @@ impl Plan {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn info() -> BoardInfo {
-        BoardInfo {
-            names: vec!["a".into(), "b".into(), "slide".into()],
-            prismatic: vec![false, false, true],
-        }
-    }
+    use crate::joint_command::tests::info;
 
     const DEFAULTS: Defaults = Defaults {
         goal_position: 0.01,

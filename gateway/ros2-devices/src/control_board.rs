@@ -19,15 +19,14 @@
 
 use crate::control_msgs::{self as cm, JointIndexes, JointNames, OnlyImplemented, SetModes};
 use crate::node::{CommonParams, DeviceNode, NodeBuilder};
+use crate::periodic::Periodic;
 use futures::StreamExt;
 use parking_lot::{Mutex, MutexGuard};
 use ros2_client::{Publisher, Server};
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 use tokio::task::JoinHandle;
-use yarp_devices::sensors::periodic::Ticker;
 use yarp_devices::vocabs::JOINTTYPE_PRISMATIC;
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, IWrapper, SharedDevice};
 use yarp_ros2_gateway::counters::header;
@@ -539,65 +538,34 @@ fn now_ns() -> u64 {
         .map_or(0, |d| d.as_nanos() as u64)
 }
 
-/// The periodic publisher thread (C++ `PeriodicThread::run`).
-struct Streamer {
-    stop: Arc<AtomicBool>,
-    thread: Option<std::thread::JoinHandle<()>>,
-}
-
-impl Streamer {
-    fn start(
-        board: Arc<Board>,
-        node: Arc<ros2_client::Node>,
-        state: Arc<Publisher<Ros>>,
-        modes: Arc<Publisher<Ros>>,
-        period: Duration,
-        name: String,
-    ) -> DevResult<Streamer> {
-        let stop = Arc::new(AtomicBool::new(false));
-        let s = stop.clone();
-        let thread = std::thread::Builder::new()
-            .name(format!("{NAME} {name}"))
-            .spawn(move || {
-                let mut tick = Ticker::new(period);
-                while !s.load(Ordering::Relaxed) {
-                    tick.tick_blocking();
-                    let want_state = state.get_subscription_count(&node) > 0;
-                    let want_modes = modes.get_subscription_count(&node) > 0;
-                    if !(want_state || want_modes) {
-                        continue;
-                    }
-                    match read_state(&board, now_ns()) {
-                        Ok((st, md)) => {
-                            if want_state {
-                                let _ = state.publish(st);
-                            }
-                            if let (true, Some(md)) = (want_modes, md) {
-                                let _ = modes.publish(md);
-                            }
-                        }
-                        Err(e) => tracing::debug!("{NAME} {name}: {e}"),
-                    }
-                }
-            })
-            .map_err(|e| DeviceError::Failed {
-                device: NAME.into(),
-                reason: format!("cannot start the publisher thread: {e}"),
-            })?;
-        Ok(Streamer {
-            stop,
-            thread: Some(thread),
-        })
-    }
-}
-
-impl Drop for Streamer {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
+/// The periodic publisher thread (C++ `PeriodicThread::run`): the board's state, to
+/// whichever of the two topics has a subscriber.
+fn stream(
+    board: Arc<Board>,
+    node: Arc<ros2_client::Node>,
+    state: Arc<Publisher<Ros>>,
+    modes: Arc<Publisher<Ros>>,
+    period: Duration,
+    name: String,
+) -> DevResult<Periodic> {
+    Periodic::every(NAME, format!("{NAME} {name}"), period, move || {
+        let want_state = state.get_subscription_count(&node) > 0;
+        let want_modes = modes.get_subscription_count(&node) > 0;
+        if !(want_state || want_modes) {
+            return;
         }
-    }
+        match read_state(&board, now_ns()) {
+            Ok((st, md)) => {
+                if want_state {
+                    let _ = state.publish(st);
+                }
+                if let (true, Some(md)) = (want_modes, md) {
+                    let _ = modes.publish(md);
+                }
+            }
+            Err(e) => tracing::debug!("{NAME} {name}: {e}"),
+        }
+    })
 }
 
 struct Opened {
@@ -607,7 +575,7 @@ struct Opened {
     modes: Arc<Publisher<Ros>>,
     slot: Slot,
     tasks: Vec<JoinHandle<()>>,
-    streamer: Option<Streamer>,
+    streamer: Option<Periodic>,
 }
 
 impl Drop for Opened {
@@ -765,7 +733,7 @@ impl IWrapper for ControlBoardNwsRos2 {
             o.params.topic_name
         );
         *lock(&o.slot) = Some(board.clone());
-        o.streamer = Some(Streamer::start(
+        o.streamer = Some(stream(
             board,
             o.node.node.clone(),
             o.state.clone(),

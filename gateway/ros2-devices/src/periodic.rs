@@ -21,20 +21,33 @@ impl Periodic {
         device: SharedDevice,
         mut step: impl FnMut(&mut dyn DeviceDriver) + Send + 'static,
     ) -> DevResult<Periodic> {
+        Periodic::every(name, name.to_string(), period, move || {
+            let mut pd = device.lock();
+            step(pd.device());
+        })
+    }
+
+    /// Starts calling `step` every `period` (the first call at once) on a thread named
+    /// `thread`; `device` is who reports that the thread could not start.
+    pub fn every(
+        device: &str,
+        thread: String,
+        period: Duration,
+        mut step: impl FnMut() + Send + 'static,
+    ) -> DevResult<Periodic> {
         let stop = Arc::new(AtomicBool::new(false));
         let s = stop.clone();
         let thread = std::thread::Builder::new()
-            .name(name.to_string())
+            .name(thread)
             .spawn(move || {
                 let mut tick = Ticker::new(period);
                 while !s.load(Ordering::Relaxed) {
                     tick.tick_blocking();
-                    let mut pd = device.lock();
-                    step(pd.device());
+                    step();
                 }
             })
             .map_err(|e| DeviceError::Failed {
-                device: name.to_string(),
+                device: device.to_string(),
                 reason: format!("cannot start the publisher thread: {e}"),
             })?;
         Ok(Periodic {

@@ -17,11 +17,10 @@
 //! end); here it is elements 3..5.
 
 use crate::node::{CommonParams, DeviceNode, NodeBuilder};
+use crate::periodic::Periodic;
 use parking_lot::{Mutex, MutexGuard};
 use ros2_client::Publisher;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use yarp_devices::sensors::periodic::Ticker;
 use yarp_devices::sensors::SensorMeasurement;
 use yarp_devices::{DevResult, DeviceDriver, DeviceError, IMultipleWrapper, SharedDevice};
 use yarp_ros2_gateway::counters::header;
@@ -201,26 +200,12 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock()
 }
 
-/// The periodic publisher (C++ `PeriodicThread::run`).
-struct Streamer {
-    stop: Arc<AtomicBool>,
-    thread: Option<std::thread::JoinHandle<()>>,
-}
-
-impl Drop for Streamer {
-    fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-    }
-}
-
 struct Opened {
     params: CommonParams,
     node: DeviceNode,
     publisher: Arc<Publisher<Ros>>,
-    streamer: Option<Streamer>,
+    /// The periodic publisher (C++ `PeriodicThread::run`).
+    streamer: Option<Periodic>,
 }
 
 /// One wrapper of the family.
@@ -297,36 +282,22 @@ impl IMultipleWrapper for SensorNwsRos2 {
         };
         let frame = family.frame(lock(&device).device())?;
         o.streamer = None;
-        let stop = Arc::new(AtomicBool::new(false));
-        let (s, node, publisher) = (stop.clone(), o.node.node.clone(), o.publisher.clone());
+        let (node, publisher) = (o.node.node.clone(), o.publisher.clone());
         let period = o.params.period_duration();
         let topic = o.params.topic_name.clone();
-        let thread = std::thread::Builder::new()
-            .name(format!("{name} {topic}"))
-            .spawn(move || {
-                let mut tick = Ticker::new(period);
-                while !s.load(Ordering::Relaxed) {
-                    tick.tick_blocking();
-                    if publisher.get_subscription_count(&node) == 0 {
-                        continue;
-                    }
-                    let msg = family.message(lock(&device).device(), &frame);
-                    match msg {
-                        Ok(m) => {
-                            let _ = publisher.publish(m);
-                        }
-                        Err(e) => tracing::debug!("{name} {topic}: {e}"),
-                    }
+        let thread = format!("{name} {topic}");
+        o.streamer = Some(Periodic::every(name, thread, period, move || {
+            if publisher.get_subscription_count(&node) == 0 {
+                return;
+            }
+            let msg = family.message(lock(&device).device(), &frame);
+            match msg {
+                Ok(m) => {
+                    let _ = publisher.publish(m);
                 }
-            })
-            .map_err(|e| DeviceError::Failed {
-                device: name.into(),
-                reason: format!("cannot start the publisher thread: {e}"),
-            })?;
-        o.streamer = Some(Streamer {
-            stop,
-            thread: Some(thread),
-        });
+                Err(e) => tracing::debug!("{name} {topic}: {e}"),
+            }
+        })?);
         Ok(())
     }
 

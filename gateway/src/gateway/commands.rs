@@ -128,29 +128,46 @@ pub(super) fn missing(what: &str) -> Failure {
     Failure::Board(format!("remote_controlboard lacks {what}"))
 }
 
+/// Why a control board (or a trajectory controller's group of them) cannot be driven yet.
+#[derive(Debug, thiserror::Error)]
+pub(super) enum OpenError {
+    #[error(transparent)]
+    Config(#[from] yarp_proto::ParseError),
+    #[error(transparent)]
+    Device(#[from] DeviceError),
+    #[error("no {0}")]
+    Missing(&'static str),
+    #[error(transparent)]
+    Joints(#[from] joint_command::CommandError),
+    /// One board of a group.
+    #[error("{remote}: {source}")]
+    Of {
+        remote: String,
+        source: Box<OpenError>,
+    },
+}
+
 impl Board {
-    pub(super) fn open(local: &str, cb: &ControlBoard) -> Result<Board, String> {
+    pub(super) fn open(local: &str, cb: &ControlBoard) -> Result<Board, OpenError> {
         let text = format!(
             "device remote_controlboard\nremote {}\nlocal {local}\ncarrier tcp\n",
             cb.remote
         );
-        let prop = Property::from_config_text(&text).map_err(|e| e.to_string())?;
-        let mut dev = PolyDriver::open(&prop).map_err(|e| e.to_string())?;
+        let prop = Property::from_config_text(&text)?;
+        let mut dev = PolyDriver::open(&prop)?;
         let d = dev.device();
         let axes = d
             .as_encoders()
-            .ok_or("no IEncoders")?
-            .get_axes()
-            .map_err(|e| e.to_string())?;
-        let ai = d.as_axis_info().ok_or("no IAxisInfo")?;
+            .ok_or(OpenError::Missing("IEncoders"))?
+            .get_axes()?;
+        let ai = d.as_axis_info().ok_or(OpenError::Missing("IAxisInfo"))?;
         let mut info = BoardInfo::default();
         for j in 0..axes {
-            info.names
-                .push(ai.get_axis_name(j).map_err(|e| e.to_string())?);
+            info.names.push(ai.get_axis_name(j)?);
             info.prismatic
-                .push(ai.get_joint_type(j).map_err(|e| e.to_string())? == JOINTTYPE_PRISMATIC);
+                .push(ai.get_joint_type(j)? == JOINTTYPE_PRISMATIC);
         }
-        let default_axes = info.select(&cb.joints).map_err(|e| e.to_string())?;
+        let default_axes = info.select(&cb.joints)?;
         Ok(Board {
             dev,
             info,

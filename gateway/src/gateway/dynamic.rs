@@ -17,7 +17,19 @@ use std::time::Duration;
 use tokio::task::JoinHandle;
 use tracing::{debug, info, warn};
 use yarp_net::nameserver::NameClient;
-use yarp_net::port::Port;
+use yarp_net::port::{Port, PortError};
+
+/// Why one matching port or topic could not be bridged (logged; the next scan retries).
+#[derive(Debug, thiserror::Error)]
+enum BridgeError {
+    #[error(transparent)]
+    Ros(#[from] ros::RosError),
+    #[error(transparent)]
+    Port(#[from] PortError),
+    /// A topic or subscription DDS refused, as its Debug form says.
+    #[error("{0:?}")]
+    Dds(#[from] ros2_client::CreateError),
+}
 
 /// How often the name server is asked which ports exist.
 pub const SCAN_PERIOD: Duration = Duration::from_secs(1);
@@ -106,15 +118,11 @@ async fn start_one(
     own_prefix: &str,
     me: &str,
     c: Arc<Counters>,
-) -> Result<Live, String> {
+) -> Result<Live, BridgeError> {
     let topic = pattern::topic_for_port(&t.ros_topic, source);
-    let publisher = ros::publisher(node, &topic, &t.ros_type, &t.qos).map_err(|e| e.to_string())?;
+    let publisher = ros::publisher(node, &topic, &t.ros_type, &t.qos)?;
     let port_name = format!("{own_prefix}{source}");
-    let port = Arc::new(
-        Port::open(&port_name, ns.clone())
-            .await
-            .map_err(|e| e.to_string())?,
-    );
+    let port = Arc::new(Port::open(&port_name, ns.clone()).await?);
     let names = JointNameSource::new(t, ns, me);
     let tasks = vec![
         tokio::spawn(yarp_to_ros(
@@ -259,22 +267,14 @@ async fn mirror_one(
     topic: &str,
     prefix: &str,
     c: Arc<Counters>,
-) -> Result<Mirror, String> {
-    let rt = node
-        .create_topic(
-            &ros::name(topic).map_err(|e| e.to_string())?,
-            ros::message_type(&t.ros_type),
-            &ros::qos(&t.qos),
-        )
-        .map_err(|e| format!("{e:?}"))?;
-    let sub = node
-        .create_subscription(&rt, None)
-        .map_err(|e| format!("{e:?}"))?;
-    let port = Arc::new(
-        Port::open(&format!("{prefix}{topic}"), ns.clone())
-            .await
-            .map_err(|e| e.to_string())?,
-    );
+) -> Result<Mirror, BridgeError> {
+    let rt = node.create_topic(
+        &ros::name(topic)?,
+        ros::message_type(&t.ros_type),
+        &ros::qos(&t.qos),
+    )?;
+    let sub = node.create_subscription(&rt, None)?;
+    let port = Arc::new(Port::open(&format!("{prefix}{topic}"), ns.clone()).await?);
     let task = tokio::spawn(ros_to_yarp(sub, port.clone(), None, t.clone(), c));
     Ok(Mirror { task, port })
 }

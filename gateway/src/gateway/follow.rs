@@ -11,7 +11,7 @@
 //! running (CANCELED, INVALID_GOAL, as joint_trajectory_controller says); a cancel or a
 //! violated tolerance stops the joints where they are.
 
-use super::commands::{board_err, missing, Board, Failure};
+use super::commands::{board_err, missing, Board, Failure, OpenError};
 use crate::action::GoalId;
 use crate::dynmsg::Value as Ros;
 use crate::joint_command::{self, BoardInfo, Mode, Target};
@@ -135,7 +135,7 @@ struct Group {
 }
 
 impl Group {
-    fn open(prefix: &str, c: &TrajectoryController) -> Result<Group, String> {
+    fn open(prefix: &str, c: &TrajectoryController) -> Result<Group, OpenError> {
         let mut g = Group {
             boards: Vec::new(),
             axes: Vec::new(),
@@ -149,17 +149,19 @@ impl Group {
                 mode: c.mode,
                 joints: Vec::new(),
             };
-            let mut board = Board::open(&format!("{prefix}{remote}"), &cb)
-                .map_err(|e| format!("{remote}: {e}"))?;
+            let of = |e: OpenError| OpenError::Of {
+                remote: remote.clone(),
+                source: Box::new(e),
+            };
+            let mut board = Board::open(&format!("{prefix}{remote}"), &cb).map_err(of)?;
             let n = board.info.names.len();
             let lim = board
                 .dev
                 .device()
                 .as_control_limits()
-                .ok_or_else(|| format!("{remote}: no IControlLimits"))?;
+                .ok_or_else(|| of(OpenError::Missing("IControlLimits")))?;
             for j in 0..n {
-                g.limits
-                    .push(lim.get_limits(j).map_err(|e| format!("{remote}: {e}"))?);
+                g.limits.push(lim.get_limits(j).map_err(|e| of(e.into()))?);
                 g.axes.push((b, j));
             }
             g.info.names.extend(board.info.names.iter().cloned());
@@ -168,7 +170,7 @@ impl Group {
                 .extend(board.info.prismatic.iter().copied());
             g.boards.push(board);
         }
-        g.controlled = g.info.select(&c.joints).map_err(|e| e.to_string())?;
+        g.controlled = g.info.select(&c.joints)?;
         Ok(g)
     }
 

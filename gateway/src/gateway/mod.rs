@@ -15,7 +15,8 @@ mod yarp_rpc;
 
 use self::demand::{Demand, Gate};
 use self::services::{
-    call_ros, generic_command, generic_response, generic_service_types, serve_ros, text_rpc,
+    call_later, generic_command, generic_response, generic_service_types, serve_later, text_rpc,
+    RequestError,
 };
 use self::topics::{keep_connected, ros_to_yarp, yarp_to_ros, JointNameSource};
 use self::yarp_rpc::YarpRpc;
@@ -27,7 +28,7 @@ use crate::mapping::{
 };
 use crate::ros::{self, RosError};
 use crate::service::{self, EmptyMsg, OutcomeResponse, SetBoolRequest, StdSrv};
-use ros2_client::{Client, Context, Node, Publisher, Server, ServiceMapping, Subscription};
+use ros2_client::{Context, Node, Publisher, Subscription};
 use std::marker::PhantomData;
 use std::net::IpAddr;
 use std::sync::atomic::AtomicBool;
@@ -134,7 +135,7 @@ impl Gateway {
             ros::start_node(opt.domain_id, &opt.networks, &opt.namespace, &opt.node_name)?;
         let spinner = node
             .spinner()
-            .map_err(|e| entity_err("spinner", &opt.node_name, e))?;
+            .map_err(|e| RosError::entity("spinner", &opt.node_name, e))?;
         let spinner = tokio::spawn(async move {
             if let Err(e) = spinner.spin().await {
                 warn!("ROS spinner stopped: {e:?}");
@@ -277,53 +278,6 @@ impl Drop for Gateway {
     }
 }
 
-fn entity_err(what: &'static str, name: &str, e: impl std::fmt::Debug) -> RosError {
-    RosError::Entity {
-        what,
-        name: name.to_string(),
-        message: format!("{e:?}"),
-    }
-}
-
-/// The ROS service server of `s` (Enhanced service mapping, as rmw_fastrtps).
-fn ros_server<Req, Resp>(node: &mut Node, s: &ServiceEntry) -> Result<Server<Req, Resp>, RosError>
-where
-    Req: ros2_client::Message + Clone + 'static,
-    Resp: ros2_client::Message + 'static,
-{
-    let (name, stype, q) = service_names(s)?;
-    node.create_server(ServiceMapping::Enhanced, &name, &stype, q.clone(), q)
-        .map_err(|e| entity_err("service", &s.ros_service, e))
-}
-
-/// The ROS service client of `s` (Enhanced service mapping, as rmw_fastrtps).
-fn ros_client<Req, Resp>(node: &mut Node, s: &ServiceEntry) -> Result<Client<Req, Resp>, RosError>
-where
-    Req: ros2_client::Message + Clone + 'static,
-    Resp: ros2_client::Message + 'static,
-{
-    let (name, stype, q) = service_names(s)?;
-    node.create_client(ServiceMapping::Enhanced, &name, &stype, q.clone(), q)
-        .map_err(|e| entity_err("client", &s.ros_service, e))
-}
-
-fn service_names(
-    s: &ServiceEntry,
-) -> Result<
-    (
-        ros2_client::Name,
-        ros2_client::ServiceTypeName,
-        ros2_client::QosProfile,
-    ),
-    RosError,
-> {
-    Ok((
-        ros::name(&s.ros_service)?,
-        ros::service_type(&s.ros_type),
-        ros::service_qos(),
-    ))
-}
-
 struct Builder {
     ns: NameClient,
     /// For the extra nodes of dynamic mode (same participant).
@@ -360,6 +314,13 @@ impl Builder {
         Ok(p)
     }
 
+    /// A dynamic-mode entry's own node on the shared participant, named after the entry's
+    /// place in the table (`<node>_dyn<k>`).
+    fn dynamic_node(&self) -> Result<Node, RosError> {
+        let name = format!("{}_dyn{}", self.node_name, self.bridges.len());
+        ros::new_node(&self.ctx, &self.namespace, &name)
+    }
+
     async fn topic(&mut self, node: &mut Node, t: &TopicEntry) -> Result<(), StartError> {
         ros::announce_type_hash(&self.ctx.domain_participant(), &t.ros_type);
         if t.is_ros_pattern() {
@@ -374,13 +335,7 @@ impl Builder {
         }
         let port = self.open_port(port_name).await?;
         let qos = ros::qos(&t.qos);
-        let topic = node
-            .create_topic(
-                &ros::name(&t.ros_topic)?,
-                ros::message_type(&t.ros_type),
-                &qos,
-            )
-            .map_err(|e| entity_err("topic", &t.ros_topic, e))?;
+        let topic = ros::topic(node, &t.ros_topic, &t.ros_type, &qos)?;
         let counters = Arc::new(Counters::default());
         let mut own = None;
         let mut camera_info = None;
@@ -388,7 +343,7 @@ impl Builder {
         if t.direction.to_ros() {
             let publisher: Arc<Publisher<Ros>> = Arc::new(
                 node.create_publisher(&topic, None)
-                    .map_err(|e| entity_err("publisher", &t.ros_topic, e))?,
+                    .map_err(|e| RosError::entity("publisher", &t.ros_topic, e))?,
             );
             own = Some(publisher.gid());
             if t.qos.durability != Durability::TransientLocal {
@@ -413,7 +368,7 @@ impl Builder {
         if t.direction.to_yarp() {
             let sub: Subscription<Ros> = node
                 .create_subscription(&topic, None)
-                .map_err(|e| entity_err("subscription", &t.ros_topic, e))?;
+                .map_err(|e| RosError::entity("subscription", &t.ros_topic, e))?;
             let (port, t2, c) = (port.clone(), t.clone(), counters.clone());
             self.tasks
                 .push(tokio::spawn(ros_to_yarp(sub, port, own, t2, c)));
@@ -454,16 +409,10 @@ impl Builder {
 
     /// A joint-command entry: a ROS subscription feeding a control-board thread.
     fn joint_command(&mut self, node: &mut Node, t: &TopicEntry) -> Result<(), StartError> {
-        let topic = node
-            .create_topic(
-                &ros::name(&t.ros_topic)?,
-                ros::message_type(&t.ros_type),
-                &ros::qos(&t.qos),
-            )
-            .map_err(|e| entity_err("topic", &t.ros_topic, e))?;
+        let topic = ros::topic(node, &t.ros_topic, &t.ros_type, &ros::qos(&t.qos))?;
         let sub: Subscription<Ros> = node
             .create_subscription(&topic, None)
-            .map_err(|e| entity_err("subscription", &t.ros_topic, e))?;
+            .map_err(|e| RosError::entity("subscription", &t.ros_topic, e))?;
         let counters = Arc::new(Counters::default());
         let wanted = Arc::new(AtomicBool::new(false));
         let tx = commands::spawn_board(t, counters.clone(), wanted.clone()).map_err(|source| {
@@ -497,12 +446,7 @@ impl Builder {
     /// A `ros_topic` pattern entry: its own node, mirroring matching ROS topics into YARP
     /// ports as they come and go.
     fn ros_pattern(&mut self, t: &TopicEntry) -> Result<(), StartError> {
-        let k = self.bridges.len();
-        let node = ros::new_node(
-            &self.ctx,
-            &self.namespace,
-            &format!("{}_dyn{k}", self.node_name),
-        )?;
+        let node = self.dynamic_node()?;
         let counters = Arc::new(Counters::default());
         let prefix = t.yarp_port.clone().unwrap_or_default();
         self.tasks.push(tokio::spawn(dynamic::run_ros(
@@ -530,12 +474,7 @@ impl Builder {
 
     /// A `yarp_pattern` entry: its own node, bridging matching ports as they come and go.
     fn pattern(&mut self, t: &TopicEntry) -> Result<(), StartError> {
-        let k = self.bridges.len();
-        let node = ros::new_node(
-            &self.ctx,
-            &self.namespace,
-            &format!("{}_dyn{k}", self.node_name),
-        )?;
+        let node = self.dynamic_node()?;
         let counters = Arc::new(Counters::default());
         let own_prefix = format!("/{}/{}", self.node_name, t.name);
         self.tasks.push(tokio::spawn(dynamic::run(
@@ -598,19 +537,14 @@ impl Builder {
                 let q = ros::qos(&Default::default());
                 let req_name = format!("{}/request", s.ros_service);
                 let rep_name = format!("{}/reply", s.ros_service);
-                let ty = ros::message_type("std_msgs/msg/String");
-                let rq = node
-                    .create_topic(&ros::name(&req_name)?, ty.clone(), &q)
-                    .map_err(|e| entity_err("topic", &req_name, e))?;
-                let rp = node
-                    .create_topic(&ros::name(&rep_name)?, ty, &q)
-                    .map_err(|e| entity_err("topic", &rep_name, e))?;
+                let rq = ros::topic(node, &req_name, "std_msgs/msg/String", &q)?;
+                let rp = ros::topic(node, &rep_name, "std_msgs/msg/String", &q)?;
                 let sub: Subscription<Ros> = node
                     .create_subscription(&rq, None)
-                    .map_err(|e| entity_err("subscription", &req_name, e))?;
+                    .map_err(|e| RosError::entity("subscription", &req_name, e))?;
                 let publisher: Publisher<Ros> = node
                     .create_publisher(&rp, None)
-                    .map_err(|e| entity_err("publisher", &rep_name, e))?;
+                    .map_err(|e| RosError::entity("publisher", &rep_name, e))?;
                 let rpc = YarpRpc::new(self.ns.clone(), &s.yarp_port, &node.fully_qualified_name());
                 self.tasks.push(tokio::spawn(text_rpc(
                     sub,
@@ -624,46 +558,35 @@ impl Builder {
                 ros::announce_service_type_hash(&self.ctx.domain_participant(), &s.ros_type);
                 let (req_t, resp_t) = generic_service_types(&s.ros_type)?;
                 let c = counters.clone();
-                let deferred: Deferred = if direction == Direction::RosToYarp {
+                let deferred = if direction == Direction::RosToYarp {
                     let rpc =
                         YarpRpc::new(self.ns.clone(), &s.yarp_port, &node.fully_qualified_name());
-                    let server: Server<Ros, Ros> = ros_server(node, s)?;
                     let words = Bottle::from_text(s.command.as_deref().unwrap_or_default());
                     let what = s.ros_service.clone();
-                    Box::new(move |node| {
-                        tokio::spawn(serve_ros(
-                            server,
-                            node,
-                            rpc,
-                            c,
-                            MsgSeed(req_t),
-                            move |r: &Ros| generic_command(&words, req_t, r),
-                            move |reply| generic_response(&what, resp_t, reply),
-                        ))
-                    })
+                    serve_later(
+                        node,
+                        s,
+                        rpc,
+                        c,
+                        MsgSeed(req_t),
+                        move |r: &Ros| generic_command(&words, req_t, r),
+                        move |reply| generic_response(&what, resp_t, reply),
+                    )?
                 } else {
                     let port = self.open_port(&s.yarp_port).await?;
-                    let client: Client<Ros, Ros> = ros_client(node, s)?;
-                    let service_name = s.ros_service.clone();
-                    Box::new(move |node| {
-                        tokio::spawn(call_ros(
-                            port,
-                            client,
-                            node,
-                            c,
-                            service_name,
-                            MsgSeed(resp_t),
-                            move |b| {
-                                crate::generic::to_ros(req_t, b, now_ns())
-                                    .map_err(|e| e.to_string())
-                            },
-                            move |r| {
-                                crate::generic::to_yarp(resp_t, &r).unwrap_or_else(|e| {
-                                    service::fail_reply(&format!("the response: {e}"))
-                                })
-                            },
-                        ))
-                    })
+                    call_later(
+                        node,
+                        s,
+                        port,
+                        c,
+                        MsgSeed(resp_t),
+                        move |b| Ok(crate::generic::to_ros(req_t, b, now_ns())?),
+                        move |r| {
+                            crate::generic::to_yarp(resp_t, &r).unwrap_or_else(|e| {
+                                service::fail_reply(&format!("the response: {e}"))
+                            })
+                        },
+                    )?
                 };
                 self.deferred.push(deferred);
             }
@@ -671,115 +594,74 @@ impl Builder {
                 let rpc = YarpRpc::new(self.ns.clone(), &s.yarp_port, &node.fully_qualified_name());
                 let c = counters.clone();
                 let cmd = |t: &Option<String>| Bottle::from_text(t.as_deref().unwrap_or_default());
-                let deferred: Deferred = match StdSrv::from_type(&s.ros_type) {
-                    Some(StdSrv::Trigger) => {
-                        let server: Server<EmptyMsg, OutcomeResponse> = ros_server(node, s)?;
-                        let command = cmd(&s.command);
-                        Box::new(move |node| {
-                            tokio::spawn(serve_ros(
-                                server,
-                                node,
-                                rpc,
-                                c,
-                                PhantomData,
-                                move |_| command.clone(),
-                                service::outcome_from_call,
-                            ))
-                        })
-                    }
-                    Some(StdSrv::SetBool) => {
-                        let server: Server<SetBoolRequest, OutcomeResponse> = ros_server(node, s)?;
-                        let (on, off) = (cmd(&s.command_true), cmd(&s.command_false));
-                        Box::new(move |node| {
-                            tokio::spawn(serve_ros(
-                                server,
-                                node,
-                                rpc,
-                                c,
-                                PhantomData,
-                                move |r: &SetBoolRequest| {
-                                    if r.data {
-                                        on.clone()
-                                    } else {
-                                        off.clone()
-                                    }
-                                },
-                                service::outcome_from_call,
-                            ))
-                        })
-                    }
-                    Some(StdSrv::Empty) | None => {
-                        let server: Server<EmptyMsg, EmptyMsg> = ros_server(node, s)?;
-                        let command = cmd(&s.command);
-                        Box::new(move |node| {
-                            tokio::spawn(serve_ros(
-                                server,
-                                node,
-                                rpc,
-                                c,
-                                PhantomData,
-                                move |_| command.clone(),
-                                |_| EmptyMsg::default(),
-                            ))
-                        })
-                    }
+                let (command, on, off) =
+                    (cmd(&s.command), cmd(&s.command_true), cmd(&s.command_false));
+                let deferred = match StdSrv::from_type(&s.ros_type) {
+                    Some(StdSrv::Trigger) => serve_later(
+                        node,
+                        s,
+                        rpc,
+                        c,
+                        PhantomData,
+                        move |_: &EmptyMsg| command.clone(),
+                        service::outcome_from_call,
+                    )?,
+                    Some(StdSrv::SetBool) => serve_later(
+                        node,
+                        s,
+                        rpc,
+                        c,
+                        PhantomData,
+                        move |r: &SetBoolRequest| if r.data { on.clone() } else { off.clone() },
+                        service::outcome_from_call,
+                    )?,
+                    Some(StdSrv::Empty) | None => serve_later(
+                        node,
+                        s,
+                        rpc,
+                        c,
+                        PhantomData,
+                        move |_: &EmptyMsg| command.clone(),
+                        |_| EmptyMsg::default(),
+                    )?,
                 };
                 self.deferred.push(deferred);
             }
             (ServiceConversion::Command, _) => {
                 let port = self.open_port(&s.yarp_port).await?;
                 let c = counters.clone();
-                let service_name = s.ros_service.clone();
-                let deferred: Deferred = match StdSrv::from_type(&s.ros_type) {
-                    Some(StdSrv::Trigger) => {
-                        let client: Client<EmptyMsg, OutcomeResponse> = ros_client(node, s)?;
-                        Box::new(move |node| {
-                            tokio::spawn(call_ros(
-                                port,
-                                client,
-                                node,
-                                c,
-                                service_name,
-                                PhantomData,
-                                |_| Ok(EmptyMsg::default()),
-                                |r| service::reply_from_outcome(&r),
-                            ))
-                        })
-                    }
-                    Some(StdSrv::SetBool) => {
-                        let client: Client<SetBoolRequest, OutcomeResponse> = ros_client(node, s)?;
-                        Box::new(move |node| {
-                            tokio::spawn(call_ros(
-                                port,
-                                client,
-                                node,
-                                c,
-                                service_name,
-                                PhantomData,
-                                |b| {
-                                    service::setbool_from_command(b)
-                                        .map(|data| SetBoolRequest { data })
-                                        .ok_or_else(|| "SetBool takes a bool first".to_string())
-                                },
-                                |r| service::reply_from_outcome(&r),
-                            ))
-                        })
-                    }
-                    Some(StdSrv::Empty) | None => {
-                        let client: Client<EmptyMsg, EmptyMsg> = ros_client(node, s)?;
-                        Box::new(move |node| {
-                            tokio::spawn(call_ros(
-                                port,
-                                client,
-                                node,
-                                c,
-                                service_name,
-                                PhantomData,
-                                |_| Ok(EmptyMsg::default()),
-                                |_| service::ok_reply(),
-                            ))
-                        })
-                    }
+                let deferred = match StdSrv::from_type(&s.ros_type) {
+                    Some(StdSrv::Trigger) => call_later(
+                        node,
+                        s,
+                        port,
+                        c,
+                        PhantomData,
+                        |_| Ok(EmptyMsg::default()),
+                        |r: OutcomeResponse| service::reply_from_outcome(&r),
+                    )?,
+                    Some(StdSrv::SetBool) => call_later(
+                        node,
+                        s,
+                        port,
+                        c,
+                        PhantomData,
+                        |b| {
+                            service::setbool_from_command(b)
+                                .map(|data| SetBoolRequest { data })
+                                .ok_or(RequestError::NotABool)
+                        },
+                        |r: OutcomeResponse| service::reply_from_outcome(&r),
+                    )?,
+                    Some(StdSrv::Empty) | None => call_later(
+                        node,
+                        s,
+                        port,
+                        c,
+                        PhantomData,
+                        |_| Ok(EmptyMsg::default()),
+                        |_: EmptyMsg| service::ok_reply(),
+                    )?,
                 };
                 self.deferred.push(deferred);
             }
@@ -801,16 +683,15 @@ impl Builder {
             return Ok(());
         };
         let q = ros::qos(&Default::default());
-        let topic = node
-            .create_topic(
-                &ros::name("/diagnostics")?,
-                ros::message_type("diagnostic_msgs/msg/DiagnosticArray"),
-                &q,
-            )
-            .map_err(|e| entity_err("topic", "/diagnostics", e))?;
+        let topic = ros::topic(
+            node,
+            "/diagnostics",
+            "diagnostic_msgs/msg/DiagnosticArray",
+            &q,
+        )?;
         let publisher: Publisher<Ros> = node
             .create_publisher(&topic, None)
-            .map_err(|e| entity_err("publisher", "/diagnostics", e))?;
+            .map_err(|e| RosError::entity("publisher", "/diagnostics", e))?;
         let port = match &opt.diagnostics_port {
             Some(p) => Some(self.open_port(p).await?),
             None => None,

@@ -2,10 +2,12 @@
 //! ROS services, and the generic text RPC over String topics.
 
 use super::yarp_rpc::{RpcError, YarpRpc};
-use super::CALL_TIMEOUT;
+use super::{Deferred, CALL_TIMEOUT};
+use crate::convert::ConvertError;
 use crate::counters::Counters;
 use crate::dynmsg::{MsgSeed, Value as Ros};
-use crate::ros::RosError;
+use crate::mapping::ServiceEntry;
+use crate::ros::{self, RosError};
 use crate::service;
 use crate::types::MsgType;
 use futures::{pin_mut, StreamExt};
@@ -16,11 +18,89 @@ use std::time::Duration;
 use std::time::Instant;
 use tracing::{debug, warn};
 use yarp_net::port::Port;
-use yarp_proto::{Bottle, Value};
+use yarp_proto::{Bottle, DecodeError, Value};
 
 /// How long a service response waits for the requesting client's reader to be matched
 /// (rmw_fastrtps waits for the writer's max_blocking_time; ours waits without blocking).
 const CLIENT_MATCH_TIMEOUT: Duration = Duration::from_secs(2);
+
+/// Why a YARP request builds no ROS service request.
+#[derive(Debug, thiserror::Error)]
+pub(super) enum RequestError {
+    #[error(transparent)]
+    Decode(#[from] DecodeError),
+    #[error(transparent)]
+    Convert(#[from] ConvertError),
+    #[error("SetBool takes a bool first")]
+    NotABool,
+}
+
+/// Why a YARP reply gives no generic ROS message ([`generic_reply`]).
+#[derive(Debug, thiserror::Error)]
+pub(super) enum ReplyError {
+    #[error("the YARP port refused: `{0}`")]
+    Refused(Bottle),
+    #[error("the reply `{reply}` is not a {ty}: {source}")]
+    NotA {
+        reply: Bottle,
+        ty: &'static str,
+        source: ConvertError,
+    },
+    #[error(transparent)]
+    Rpc(#[from] RpcError),
+}
+
+/// [`serve_ros`] on a new server of `s`, started once the node is shared.
+pub(super) fn serve_later<Req, Resp, S>(
+    node: &mut Node,
+    s: &ServiceEntry,
+    rpc: YarpRpc,
+    c: Arc<Counters>,
+    seed: S,
+    cmd: impl Fn(&Req) -> Bottle + Send + Sync + 'static,
+    resp: impl Fn(Result<Bottle, RpcError>) -> Resp + Send + Sync + 'static,
+) -> Result<Deferred, RosError>
+where
+    Req: Message + Clone + Send + Sync + 'static,
+    Resp: Message + Send + Sync + 'static,
+    S: for<'de> DeserializeSeed<'de, Value = Req> + Clone + Send + Sync + 'static,
+{
+    let server = ros::server(node, &s.ros_service, &s.ros_type)?;
+    Ok(Box::new(move |node| {
+        tokio::spawn(serve_ros(server, node, rpc, c, seed, cmd, resp))
+    }))
+}
+
+/// [`call_ros`] on a new client of `s`, started once the node is shared.
+pub(super) fn call_later<Req, Resp, S>(
+    node: &mut Node,
+    s: &ServiceEntry,
+    port: Arc<Port>,
+    c: Arc<Counters>,
+    seed: S,
+    req: impl Fn(&Bottle) -> Result<Req, RequestError> + Send + Sync + 'static,
+    reply: impl Fn(Resp) -> Bottle + Send + Sync + 'static,
+) -> Result<Deferred, RosError>
+where
+    Req: Message + Clone + Send + Sync + 'static,
+    Resp: Message + Send + Sync + 'static,
+    S: for<'de> DeserializeSeed<'de, Value = Resp> + Clone + Send + Sync + 'static,
+{
+    let client = ros::client(node, &s.ros_service, &s.ros_type)?;
+    let service_name = s.ros_service.clone();
+    Ok(Box::new(move |node| {
+        tokio::spawn(call_ros(
+            port,
+            client,
+            node,
+            c,
+            service_name,
+            seed,
+            req,
+            reply,
+        ))
+    }))
+}
 
 /// ROS service server -> YARP RPC: each request sends `cmd(request)` to the YARP port and
 /// answers with `resp(reply or error)`.
@@ -77,7 +157,7 @@ pub(super) async fn call_ros<Req, Resp, S>(
     c: Arc<Counters>,
     service_name: String,
     seed: S,
-    req: impl Fn(&Bottle) -> Result<Req, String>,
+    req: impl Fn(&Bottle) -> Result<Req, RequestError>,
     reply: impl Fn(Resp) -> Bottle,
 ) where
     Req: Message + Clone + 'static,
@@ -89,10 +169,10 @@ pub(super) async fn call_ros<Req, Resp, S>(
         let Some(replier) = inc.take_replier() else {
             continue; // a plain write: nobody waits for an answer
         };
-        let request = match inc.bottle() {
-            Ok(b) => req(&b),
-            Err(e) => Err(e.to_string()),
-        };
+        let request = inc
+            .bottle()
+            .map_err(RequestError::from)
+            .and_then(|b| req(&b));
         let r = match request {
             Ok(r) => r,
             Err(why) => {
@@ -220,13 +300,16 @@ pub(super) fn refused(b: &Bottle) -> bool {
 pub(super) fn generic_reply(
     t: &'static MsgType,
     reply: Result<Bottle, RpcError>,
-) -> Result<Ros, String> {
-    match reply {
-        Ok(b) if refused(&b) => Err(format!("the YARP port refused: `{b}`")),
-        Ok(b) => crate::generic::to_ros(t, &b, super::now_ns())
-            .map_err(|e| format!("the reply `{b}` is not a {}: {e}", t.name)),
-        Err(e) => Err(e.to_string()),
+) -> Result<Ros, ReplyError> {
+    let b = reply?;
+    if refused(&b) {
+        return Err(ReplyError::Refused(b));
     }
+    crate::generic::to_ros(t, &b, super::now_ns()).map_err(|source| ReplyError::NotA {
+        reply: b,
+        ty: t.name,
+        source,
+    })
 }
 
 /// `t`'s default value, as rosidl's default constructor gives it.
