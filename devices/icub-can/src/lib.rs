@@ -30,8 +30,8 @@
 //! Each client owns one [`CanBus`] endpoint (`Arc<dyn CanBus>`) and a reader thread;
 //! every method is synchronous and bounded by a timeout:
 //!
-//! - [`client::McParams::from_lookup`]`(&|group, key| ...)` reads a `canmotioncontrol`
-//!   XML's groups (`CAN`, `GENERAL`, `LIMITS`, `VELOCITY`, `POS_PIDS`, `TRQ_PIDS`).
+//! - [`client::McParams`] holds a `canmotioncontrol`'s groups (`CAN`, `GENERAL`, `LIMITS`,
+//!   `VELOCITY`, `POS_PIDS`, `TRQ_PIDS`), as icubmod reads them.
 //! - [`client::MotorControlClient::open`]`(bus, params)` checks every board answers
 //!   (else [`client::ClientError::BoardsSilent`]) and configures them. Methods take
 //!   joint indices and degrees: `position_move`, `position_move_all`, `set_ref_speed`,

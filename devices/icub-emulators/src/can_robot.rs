@@ -17,9 +17,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use icub_can::client::strain::AnalogFormat;
-use icub_can::client::{McParams, StrainParams};
-use icub_can::emulator::network::{self, BoardKind, NetworkSpec};
+use icub_can::emulator::network::{self, BoardKind, McLayout, NetworkSpec};
 use yarp_devices::robotinterface::{read_robot_file, Device};
 use yarp_proto::{Bottle, Property, Value};
 
@@ -132,23 +130,20 @@ fn device_boards(device: &Device) -> Result<Option<(u32, Vec<BoardKind>)>, Layou
             .collect()
     };
     let boards = match kind {
-        "canmotioncontrol" => {
-            let params = McParams::from_lookup(&|g, k| lookup(&config, Some(g), k))
-                .map_err(|e| fail(e.to_string()))?;
-            let torque_max: Vec<f64> = lookup(&config, Some("GENERAL"), "TorqueMax")
-                .unwrap_or_default()
-                .iter()
-                .map(|v| v.parse().unwrap_or(0.0))
-                .collect();
-            network::mc_boards(&params, &torque_max)
-        }
+        "canmotioncontrol" => network::mc_boards(&mc_layout(&config).map_err(fail)?),
         "canBusAnalogSensor" | "canBusFtSensor" => {
-            let p = StrainParams::from_lookup(&|k| lookup_one(&config, None, k))
-                .map_err(|e| fail(e.to_string()))?;
-            vec![match p.format {
-                AnalogFormat::Bits16 => BoardKind::Strain(p.address),
-                AnalogFormat::Bits8 => BoardKind::Mais(p.address),
-            }]
+            // `format 8` is a MAIS (eight-bit values), the default 16 a strain
+            let address = lookup_one(&config, None, "canAddress")
+                .and_then(|a| parse_address(&a))
+                .ok_or_else(|| fail("canAddress is not 1..14".into()))?;
+            match lookup_one(&config, None, "format")
+                .as_deref()
+                .map(str::trim)
+            {
+                Some("8") => vec![BoardKind::Mais(address)],
+                None | Some("16") => vec![BoardKind::Strain(address)],
+                Some(f) => return Err(fail(format!("format {f} is not 8 or 16"))),
+            }
         }
         "canBusSkin" => addresses("skinCanIds")?
             .into_iter()
@@ -163,14 +158,77 @@ fn device_boards(device: &Device) -> Result<Option<(u32, Vec<BoardKind>)>, Layou
     Ok(Some((num, boards)))
 }
 
-/// A CAN address, decimal or `0x` hex, 1..=14.
-fn parse_address(s: &str) -> Option<u8> {
-    let s = s.trim().trim_matches('"');
-    let a = match s.strip_prefix("0x").or_else(|| s.strip_prefix("0X")) {
-        Some(h) => u8::from_str_radix(h, 16).ok()?,
-        None => s.parse().ok()?,
+/// The boards of a `canmotioncontrol` part: `CAN/CanAddresses`, and per joint
+/// (`GENERAL/Joints` of them) the axis, encoder, zero, limits and torque sensor.
+fn mc_layout(config: &Property) -> Result<McLayout, String> {
+    let numbers = |group: &str, key: &str| -> Vec<f64> {
+        lookup(config, Some(group), key)
+            .unwrap_or_default()
+            .iter()
+            .map(|v| number(v).unwrap_or(0.0))
+            .collect()
     };
-    (1..=14).contains(&a).then_some(a)
+    let joints = numbers("GENERAL", "Joints")
+        .first()
+        .map(|n| *n as usize)
+        .ok_or("no GENERAL/Joints")?;
+    // per joint, what the file gives, else `default`
+    let per_joint = |group: &str, key: &str, default: f64| -> Vec<f64> {
+        let v = numbers(group, key);
+        (0..joints)
+            .map(|j| v.get(j).copied().unwrap_or(default))
+            .collect()
+    };
+    let can_addresses = lookup(config, Some("CAN"), "CanAddresses")
+        .ok_or("no CAN/CanAddresses")?
+        .iter()
+        .map(|a| parse_address(a).ok_or(format!("CanAddresses: {a:?} is not 1..14")))
+        .collect::<Result<_, _>>()?;
+    let (ids, chans) = (
+        per_joint("GENERAL", "TorqueId", 0.0),
+        per_joint("GENERAL", "TorqueChan", 0.0),
+    );
+    let axis_map = match numbers("GENERAL", "AxisMap") {
+        v if v.len() >= joints => v[..joints].iter().map(|a| *a as usize).collect(),
+        _ => (0..joints).collect(),
+    };
+    let (min, max) = (
+        per_joint("LIMITS", "jntPosMin", f64::NEG_INFINITY),
+        per_joint("LIMITS", "jntPosMax", f64::INFINITY),
+    );
+    Ok(McLayout {
+        can_addresses,
+        axis_map,
+        encoder: per_joint("GENERAL", "Encoder", 1.0),
+        zeros: per_joint("GENERAL", "Zeros", 0.0),
+        limits: min.into_iter().zip(max).collect(),
+        torque_max: per_joint("GENERAL", "TorqueMax", 0.0),
+        // a sensor on a CAN address and a channel of six; TorqueId 0 is none
+        torque_sensors: ids
+            .iter()
+            .zip(&chans)
+            .map(|(&id, &ch)| {
+                ((1.0..=14.0).contains(&id) && (0.0..=5.0).contains(&ch))
+                    .then_some((id as u8, ch as u8))
+            })
+            .collect(),
+    })
+}
+
+/// A CAN address, 1..=14.
+fn parse_address(s: &str) -> Option<u8> {
+    number(s)
+        .filter(|a| (1.0..=14.0).contains(a) && a.fract() == 0.0)
+        .map(|a| a as u8)
+}
+
+/// A number as the robots' files write them (decimal, `0x` hex).
+fn number(s: &str) -> Option<f64> {
+    let s = s.trim().trim_matches('"');
+    match s.strip_prefix("0x").or_else(|| s.strip_prefix("0X")) {
+        Some(h) => i64::from_str_radix(h, 16).ok().map(|v| v as f64),
+        None => s.parse().ok(),
+    }
 }
 
 /// The values of `(key v1 v2 ...)` in `group` (`None`: top level); a single list value is

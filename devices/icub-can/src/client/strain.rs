@@ -54,53 +54,6 @@ impl StrainParams {
             reply_timeout: Duration::from_millis(100),
         }
     }
-
-    /// Reads `canAddress`, `period`, `useCalibration`, `channels`, `format`.
-    pub fn from_lookup(get: &dyn Fn(&str) -> Option<String>) -> Result<Self, ClientError> {
-        let num = |k: &str| -> Result<Option<i64>, ClientError> {
-            let Some(v) = get(k) else { return Ok(None) };
-            let v = v.trim().trim_matches('"').to_string();
-            let parsed = match v.strip_prefix("0x").or_else(|| v.strip_prefix("0X")) {
-                Some(h) => i64::from_str_radix(h, 16).ok(),
-                None => v.parse().ok(),
-            };
-            parsed
-                .map(Some)
-                .ok_or_else(|| ClientError::Config(format!("{k}: {v:?} is not a number")))
-        };
-        let address = num("canAddress")?
-            .ok_or_else(|| ClientError::Config("canAddress is missing".into()))?;
-        if !(1..=14).contains(&address) {
-            return Err(ClientError::Config(format!(
-                "canAddress {address} is not 1..14"
-            )));
-        }
-        let format = match num("format")?.unwrap_or(16) {
-            16 => AnalogFormat::Bits16,
-            8 => AnalogFormat::Bits8,
-            f => return Err(ClientError::Config(format!("format {f} is not 8 or 16"))),
-        };
-        let channels = num("channels")?.unwrap_or(6);
-        let max = if format == AnalogFormat::Bits16 {
-            6
-        } else {
-            16
-        };
-        if !(1..=max).contains(&channels) {
-            return Err(ClientError::Config(format!(
-                "channels {channels} is not 1..{max}"
-            )));
-        }
-        Ok(Self {
-            address: address as u8,
-            period_ms: num("period")?.unwrap_or(1).clamp(1, 255) as u8,
-            use_calibration: num("useCalibration")?.unwrap_or(0) > 0,
-            channels: channels as usize,
-            format,
-            host_address: 0,
-            reply_timeout: Duration::from_millis(100),
-        })
-    }
 }
 
 /// Status of a reading (`IAnalogSensor::AS_*`).

@@ -4,6 +4,8 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use super::mc::{broadcast_masks, torque_sensors, BROADCAST_FLAGS};
+use super::strain::AnalogFormat;
 use super::*;
 use crate::bus::inproc::VirtualBus;
 use crate::bus::udp::UdpBus;
@@ -11,6 +13,208 @@ use crate::bus::{BusError, CanBus};
 use crate::emulator::network::{self, BoardKind, NetworkSpec};
 use crate::emulator::{BusEmulator, EmulatorHandle, McBoard, McBoardConfig, MtbBoard, StrainBoard};
 use crate::proto::{ControlMode, PidKind};
+
+// A robot's file read as the tests need it (an XML lookup); the devices read these
+// parameters through icubmod's declarations (`CanMotionControlParams`).
+impl McParams {
+    /// Reads the parameters from an XML-like source: `get(group, key)` returns the
+    /// values after the key (e.g. `get("GENERAL", "Encoder")`), or `None` when absent.
+    fn from_lookup(get: &dyn Fn(&str, &str) -> Option<Vec<String>>) -> Result<Self, ClientError> {
+        let cfg = |m: String| ClientError::Config(m);
+        let nums = |group: &str, key: &str| -> Result<Option<Vec<f64>>, ClientError> {
+            match get(group, key) {
+                None => Ok(None),
+                Some(v) => v
+                    .iter()
+                    .map(|s| {
+                        let s = s.trim();
+                        let parsed = match s.strip_prefix("0x").or_else(|| s.strip_prefix("0X")) {
+                            Some(h) => i64::from_str_radix(h, 16).map(|x| x as f64).ok(),
+                            None => s.parse::<f64>().ok(),
+                        };
+                        parsed.ok_or_else(|| cfg(format!("[{group}] {key}: {s:?} is not a number")))
+                    })
+                    .collect::<Result<Vec<f64>, _>>()
+                    .map(Some),
+            }
+        };
+        let joints = nums("GENERAL", "Joints")?
+            .and_then(|v| v.first().copied())
+            .ok_or_else(|| cfg("[GENERAL] Joints is missing".into()))?
+            as usize;
+        let per_joint =
+            |group: &str, key: &str, default: Option<f64>| -> Result<Vec<f64>, ClientError> {
+                match nums(group, key)? {
+                    Some(v) if v.len() >= joints => Ok(v[..joints].to_vec()),
+                    Some(v) => Err(cfg(format!(
+                        "[{group}] {key} has {} values, {joints} joints",
+                        v.len()
+                    ))),
+                    None => default
+                        .map(|d| vec![d; joints])
+                        .ok_or_else(|| cfg(format!("[{group}] {key} is missing"))),
+                }
+            };
+        let addresses = nums("CAN", "CanAddresses")?
+            .ok_or_else(|| cfg("[CAN] CanAddresses is missing".into()))?;
+        let can_addresses = addresses
+            .iter()
+            .map(|a| {
+                if (1.0..=14.0).contains(a) {
+                    Ok(*a as u8)
+                } else {
+                    Err(cfg(format!("[CAN] CanAddresses: {a} is not 1..14")))
+                }
+            })
+            .collect::<Result<Vec<u8>, _>>()?;
+        let axis_map: Vec<usize> = per_joint("GENERAL", "AxisMap", None)
+            .or_else(|_| Ok::<_, ClientError>((0..joints).map(|j| j as f64).collect()))?
+            .into_iter()
+            .map(|a| a as usize)
+            .collect();
+        let min = per_joint("LIMITS", "jntPosMin", Some(f64::NEG_INFINITY))?;
+        let max = per_joint("LIMITS", "jntPosMax", Some(f64::INFINITY))?;
+        let pids = |group: &str| -> Result<Option<Vec<JointPid>>, ClientError> {
+            if get(group, "kp").is_none() {
+                return Ok(None);
+            }
+            let g = |k: &str| per_joint(group, k, Some(0.0));
+            let (kp, kd, ki, max_int, scale, max_output, offset) = (
+                g("kp")?,
+                g("kd")?,
+                g("ki")?,
+                g("maxInt")?,
+                g("shift")?,
+                g("maxOutput")?,
+                g("ko")?,
+            );
+            Ok(Some(
+                (0..joints)
+                    .map(|j| JointPid {
+                        kp: kp[j],
+                        kd: kd[j],
+                        ki: ki[j],
+                        max_int: max_int[j],
+                        scale: scale[j],
+                        max_output: max_output[j],
+                        offset: offset[j],
+                    })
+                    .collect(),
+            ))
+        };
+        let jv = per_joint("VELOCITY", "JNT_speed_estimation", Some(0.0))?;
+        let ja = per_joint("VELOCITY", "JNT_accel_estimation", Some(0.0))?;
+        let mv = per_joint("VELOCITY", "MOT_speed_estimation", Some(0.0))?;
+        let ma = per_joint("VELOCITY", "MOT_accel_estimation", Some(0.0))?;
+        let flags = BROADCAST_FLAGS
+            .iter()
+            .map(|(key, _)| nums("CAN", key))
+            .collect::<Result<Vec<_>, _>>()?;
+        let broadcast_policy = broadcast_masks(&flags, can_addresses.len());
+        let ms = |group: &str, key: &str, default: u64| -> Result<Duration, ClientError> {
+            Ok(Duration::from_millis(
+                nums(group, key)?
+                    .and_then(|v| v.first().copied())
+                    .map_or(default, |v| v.max(1.0) as u64),
+            ))
+        };
+        let lenient = |key: &str| nums("GENERAL", key).ok().flatten().unwrap_or_default();
+        let torque_max = lenient("TorqueMax");
+        let params = Self {
+            host_address: nums("CAN", "CanMyAddress")?
+                .and_then(|v| v.first().copied())
+                .unwrap_or(0.0) as u8,
+            reply_timeout: ms("CAN", "CanTimeout", 500)?,
+            broadcast_timeout: Duration::from_millis(500),
+            axis_names: get("GENERAL", "AxisName")
+                .map(|v| {
+                    v.into_iter()
+                        .map(|s| s.trim_matches('"').to_string())
+                        .collect()
+                })
+                .unwrap_or_else(|| (0..joints).map(|j| format!("joint{j}")).collect()),
+            encoder: per_joint("GENERAL", "Encoder", None)?,
+            zeros: per_joint("GENERAL", "Zeros", Some(0.0))?,
+            // As icub-main, a missing or short list means "no sensor" / scale 1, not an error.
+            torque_scale: (0..joints)
+                .map(|j| match torque_max.get(j) {
+                    Some(&max) if max > 0.0 => f64::from(0x8000u16) / max,
+                    _ => 1.0,
+                })
+                .collect(),
+            torque_sensors: torque_sensors(&lenient("TorqueId"), &lenient("TorqueChan"), joints),
+            rotor: per_joint("GENERAL", "Rotor", Some(1.0))?,
+            limits: min.into_iter().zip(max).collect(),
+            vel_shifts: per_joint("VELOCITY", "Shifts", Some(0.0))?
+                .into_iter()
+                .map(|v| v as u16)
+                .collect(),
+            estimation_shifts: (0..joints)
+                .map(|j| [jv[j] as u8, ja[j] as u8, mv[j] as u8, ma[j] as u8])
+                .collect(),
+            vel_timeouts: per_joint("VELOCITY", "Timeout", Some(100.0))?
+                .into_iter()
+                .map(|v| v as u16)
+                .collect(),
+            position_pids: pids("POS_PIDS")?,
+            torque_pids: pids("TRQ_PIDS")?,
+            broadcast_policy,
+            can_addresses,
+            axis_map,
+        };
+        params.validate()?;
+        Ok(params)
+    }
+}
+
+impl StrainParams {
+    /// Reads `canAddress`, `period`, `useCalibration`, `channels`, `format`.
+    fn from_lookup(get: &dyn Fn(&str) -> Option<String>) -> Result<Self, ClientError> {
+        let num = |k: &str| -> Result<Option<i64>, ClientError> {
+            let Some(v) = get(k) else { return Ok(None) };
+            let v = v.trim().trim_matches('"').to_string();
+            let parsed = match v.strip_prefix("0x").or_else(|| v.strip_prefix("0X")) {
+                Some(h) => i64::from_str_radix(h, 16).ok(),
+                None => v.parse().ok(),
+            };
+            parsed
+                .map(Some)
+                .ok_or_else(|| ClientError::Config(format!("{k}: {v:?} is not a number")))
+        };
+        let address = num("canAddress")?
+            .ok_or_else(|| ClientError::Config("canAddress is missing".into()))?;
+        if !(1..=14).contains(&address) {
+            return Err(ClientError::Config(format!(
+                "canAddress {address} is not 1..14"
+            )));
+        }
+        let format = match num("format")?.unwrap_or(16) {
+            16 => AnalogFormat::Bits16,
+            8 => AnalogFormat::Bits8,
+            f => return Err(ClientError::Config(format!("format {f} is not 8 or 16"))),
+        };
+        let channels = num("channels")?.unwrap_or(6);
+        let max = if format == AnalogFormat::Bits16 {
+            6
+        } else {
+            16
+        };
+        if !(1..=max).contains(&channels) {
+            return Err(ClientError::Config(format!(
+                "channels {channels} is not 1..{max}"
+            )));
+        }
+        Ok(Self {
+            address: address as u8,
+            period_ms: num("period")?.unwrap_or(1).clamp(1, 255) as u8,
+            use_calibration: num("useCalibration")?.unwrap_or(0) > 0,
+            channels: channels as usize,
+            format,
+            host_address: 0,
+            reply_timeout: Duration::from_millis(100),
+        })
+    }
+}
 
 fn robot_dir() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -90,7 +294,16 @@ fn left_arm_network(bus: &VirtualBus) -> EmulatorHandle {
         .get(&("GENERAL".to_string(), "TorqueMax".to_string()))
         .map(|v| v.iter().filter_map(|x| x.parse().ok()).collect())
         .unwrap_or_default();
-    let mut boards = network::mc_boards(&left_arm_params(), &torque_max);
+    let p = left_arm_params();
+    let mut boards = network::mc_boards(&network::McLayout {
+        can_addresses: p.can_addresses,
+        axis_map: p.axis_map,
+        encoder: p.encoder,
+        zeros: p.zeros,
+        limits: p.limits,
+        torque_max,
+        torque_sensors: p.torque_sensors,
+    });
     boards.push(BoardKind::Strain(0x0D));
     let net = NetworkSpec { num: 1, boards };
     BusEmulator::new(Arc::new(bus.endpoint()), network::build(&net))

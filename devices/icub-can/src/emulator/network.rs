@@ -1,7 +1,7 @@
 //! A CAN network of emulated boards, as data ([`NetworkSpec`]) and as running boards
-//! ([`build`]); [`mc_boards`] lays out the motor-control boards of one part from its
-//! `canmotioncontrol` parameters (`CanAddresses`, `AxisMap`, `Encoder`, `Zeros`,
-//! `jntPosMin`/`jntPosMax`, `TorqueId`/`TorqueChan`/`TorqueMax`): every joint starts at 0°
+//! ([`build`]); [`mc_boards`] lays out the motor-control boards of one part from what its
+//! `canmotioncontrol` file says of them ([`McLayout`]: `CanAddresses`, `AxisMap`, `Encoder`,
+//! `Zeros`, `jntPosMin`/`jntPosMax`, `TorqueId`/`TorqueChan`/`TorqueMax`): every joint starts at 0°
 //! clamped into its limits, and each joint with a `TorqueId` publishes its simulated
 //! torque (sensor units `τ·0x8000/TorqueMax`, sign of its `Encoder`, so positive torques
 //! turn the joint in its positive YARP direction) through a [`JointTorqueSensor`] at that
@@ -11,7 +11,6 @@
 
 use super::mc::{JointPlant, JointTorqueSensor, TorqueHub, TorqueLink};
 use super::{Board, MaisBoard, McBoard, McBoardConfig, MtbBoard, SpecError, StrainBoard};
-use crate::client::McParams;
 
 /// A board of a network.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,9 +37,28 @@ pub struct NetworkSpec {
     pub boards: Vec<BoardKind>,
 }
 
-/// The motor-control boards of one part (with the joint-torque sensors its joints name),
-/// from its `canmotioncontrol` parameters and `GENERAL::TorqueMax` (one per joint, N·m).
-pub fn mc_boards(params: &McParams, torque_max: &[f64]) -> Vec<BoardKind> {
+/// What the boards of one motor-control part are, as its file lays them out (the
+/// emulator reads it itself: it shares no reader with the driver).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct McLayout {
+    /// `CAN/CanAddresses`: the boards, two axes each.
+    pub can_addresses: Vec<u8>,
+    /// `GENERAL/AxisMap`: each joint's axis.
+    pub axis_map: Vec<usize>,
+    /// Per joint: `GENERAL/Encoder` (units per degree), `GENERAL/Zeros` (degrees).
+    pub encoder: Vec<f64>,
+    pub zeros: Vec<f64>,
+    /// Per joint: `LIMITS/jntPosMin`, `LIMITS/jntPosMax`.
+    pub limits: Vec<(f64, f64)>,
+    /// Per joint: `GENERAL/TorqueMax` (N·m), and the board and channel of its torque sensor
+    /// (`TorqueId`, `TorqueChan`; none for `TorqueId` 0).
+    pub torque_max: Vec<f64>,
+    pub torque_sensors: Vec<Option<(u8, u8)>>,
+}
+
+/// The motor-control boards of one part, with the joint-torque sensors its joints name.
+pub fn mc_boards(params: &McLayout) -> Vec<BoardKind> {
+    let torque_max = &params.torque_max;
     let mut axes: Vec<[(f64, JointPlant); 2]> =
         vec![[(0.0, JointPlant::default()); 2]; params.can_addresses.len()];
     for (j, &axis) in params.axis_map.iter().enumerate() {
