@@ -11,6 +11,7 @@ pub mod battery;
 pub mod bundler;
 pub mod cartesian_control;
 pub mod controlboard;
+pub mod device_thread;
 pub mod driver;
 pub mod error;
 pub mod fake_motion_control;

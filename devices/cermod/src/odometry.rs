@@ -12,10 +12,9 @@
 //! name server.
 
 use parking_lot::Mutex;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
+use yarp_devices::device_thread::{stopped, DeviceThread};
 use yarp_devices::driver::{DeviceDriver, IWrapper, SharedDevice};
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::navigation::{IOdometry2D, OdometryData};
@@ -126,8 +125,7 @@ pub struct CerOdometry {
     geometry: Geometry,
     state: Arc<Mutex<State>>,
     device: Option<SharedDevice>,
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
+    thread: DeviceThread,
 }
 
 impl Default for CerOdometry {
@@ -137,8 +135,7 @@ impl Default for CerOdometry {
             geometry: Geometry { r: 0.0, l: 1.0 },
             state: Arc::default(),
             device: None,
-            stop: Arc::default(),
-            thread: None,
+            thread: DeviceThread::default(),
         }
     }
 }
@@ -206,19 +203,12 @@ impl IWrapper for CerOdometry {
             ));
         }
         self.device = Some(device.clone());
-        self.stop.store(false, Ordering::SeqCst);
-        let (state, stop, period, g) = (
-            self.state.clone(),
-            self.stop.clone(),
-            self.period,
-            self.geometry,
-        );
-        let thread = std::thread::Builder::new()
-            .name(NAME.into())
-            .spawn(move || {
+        let (state, period, g) = (self.state.clone(), self.period, self.geometry);
+        self.thread
+            .spawn(NAME.into(), move |stop| {
                 let mut next = Instant::now();
                 let mut failing = false;
-                while !stop.load(Ordering::SeqCst) {
+                while !stopped(stop) {
                     match read_wheels(&device) {
                         Ok((left, right, t)) => {
                             failing = false;
@@ -235,15 +225,11 @@ impl IWrapper for CerOdometry {
                 }
             })
             .map_err(|e| DeviceError::failed(NAME, format!("cannot start: {e}")))?;
-        self.thread = Some(thread);
         Ok(())
     }
 
     fn detach(&mut self) -> DevResult<()> {
-        self.stop.store(true, Ordering::SeqCst);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
+        self.thread.stop();
         self.device = None;
         Ok(())
     }

@@ -42,10 +42,10 @@ use icub_can::xsens::{
 use parking_lot::Mutex;
 use serialport::SerialPort;
 use std::io::ErrorKind;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
+use yarp_devices::device_thread::{stopped, DeviceThread};
 use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::sensors::interfaces::*;
@@ -166,8 +166,7 @@ pub struct XsensImu {
     frame_name: String,
     stale_after: Duration,
     latest: Arc<Mutex<Latest>>,
-    stop: Arc<AtomicBool>,
-    reader: Option<JoinHandle<()>>,
+    reader: DeviceThread,
 }
 
 impl XsensImu {
@@ -179,8 +178,7 @@ impl XsensImu {
             frame_name: name.into(),
             stale_after,
             latest: Arc::default(),
-            stop: Arc::new(AtomicBool::new(false)),
-            reader: None,
+            reader: DeviceThread::default(),
         }
     }
 
@@ -369,7 +367,7 @@ fn read_samples(
     model: Model,
     mut port: Box<dyn SerialPort>,
     latest: Arc<Mutex<Latest>>,
-    stop: Arc<AtomicBool>,
+    stop: &AtomicBool,
 ) {
     let data_mid = match model {
         Model::Mtx => mid::MT_DATA,
@@ -379,7 +377,7 @@ fn read_samples(
     let mut buf = [0u8; 512];
     let mut bad = 0u64;
     let mut lost: Option<(Instant, Instant)> = None;
-    while !stop.load(Ordering::SeqCst) {
+    while !stopped(stop) {
         if let Some((since, tried)) = lost {
             std::thread::sleep(Duration::from_millis(50));
             if tried.elapsed() < REOPEN_EVERY {
@@ -450,7 +448,7 @@ impl XsensImu {
     fn status(&self, i: usize) -> MasStatus {
         match (i, self.fresh()) {
             (0, Some(_)) => MasStatus::Ok,
-            (0, None) if self.reader.is_some() => MasStatus::Timeout,
+            (0, None) if self.reader.is_running() => MasStatus::Timeout,
             _ => MasStatus::Error,
         }
     }
@@ -465,7 +463,7 @@ impl XsensImu {
         if i != 0 {
             return Err(no_sensor(self.model.name(), i, 1));
         }
-        if self.reader.is_none() {
+        if !self.reader.is_running() {
             return Err(DeviceError::NotOpen);
         }
         let l = self.fresh().ok_or_else(|| {
@@ -564,23 +562,19 @@ impl DeviceDriver for XsensImu {
         let fail =
             |what: String| DeviceError::failed(self.id.as_str(), format!("{serial}: {what}"));
         let (port, what) = connect(&serial, &self.model).map_err(fail)?;
-        self.stop.store(false, Ordering::SeqCst);
-        let (id, latest, stop) = (self.id.clone(), self.latest.clone(), self.stop.clone());
+        let (id, latest) = (self.id.clone(), self.latest.clone());
         let (path, model) = (serial.clone(), self.model.clone());
-        let reader = std::thread::Builder::new()
-            .name(format!("{kind} {serial}"))
-            .spawn(move || read_samples(id, path, model, port, latest, stop))
+        self.reader
+            .spawn(format!("{kind} {serial}"), move |stop| {
+                read_samples(id, path, model, port, latest, stop)
+            })
             .map_err(|e| fail(format!("cannot start the reader: {e}")))?;
-        self.reader = Some(reader);
         tracing::info!("{}: {what} on {serial} measuring", self.id);
         Ok(())
     }
 
     fn close(&mut self) -> DevResult<()> {
-        self.stop.store(true, Ordering::SeqCst);
-        if let Some(r) = self.reader.take() {
-            let _ = r.join();
-        }
+        self.reader.stop();
         *self.latest.lock() = Latest::default();
         Ok(())
     }
@@ -589,18 +583,12 @@ impl DeviceDriver for XsensImu {
     yarp_devices::imu_views!();
 }
 
-impl Drop for XsensImu {
-    fn drop(&mut self) {
-        let _ = self.close();
-    }
-}
-
 /// C++ `IGenericSensor::read`: roll pitch yaw, acc, gyro (deg/s), mag; a measure the
 /// sensor does not send reads as zeros.
 impl IAnalogSensor for XsensImu {
     fn read(&mut self, out: &mut Vec<f64>) -> AnalogStatus {
         let Some(l) = self.fresh() else {
-            return if self.reader.is_some() {
+            return if self.reader.is_running() {
                 AnalogStatus::Timeout
             } else {
                 AnalogStatus::Error

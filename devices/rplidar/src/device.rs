@@ -8,12 +8,11 @@
 //! serial port than its file names.
 
 use std::io::{Read, Write};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use parking_lot::Mutex;
+use yarp_devices::device_thread::{stopped, DeviceThread};
 use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::rangefinder::geometry::{LaserGeometry, Lidar2DParams};
@@ -201,8 +200,7 @@ pub struct RpLidar {
     geometry: LaserGeometry,
     info: Option<DeviceInfo>,
     shared: Arc<Mutex<Shared>>,
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
+    thread: DeviceThread,
 }
 
 impl RpLidar {
@@ -225,8 +223,7 @@ impl RpLidar {
                 stamp: 0.0,
                 revolutions: 0,
             })),
-            stop: Arc::default(),
-            thread: None,
+            thread: DeviceThread::default(),
         }
     }
 
@@ -477,61 +474,47 @@ impl DeviceDriver for RpLidar {
             revolutions: 0,
         };
         self.geometry = geometry.clone();
-        let (shared, stop, variant) = (self.shared.clone(), self.stop.clone(), self.variant);
+        let (shared, variant) = (self.shared.clone(), self.variant);
         let life = p.sample_buffer_life.max(0) as u64;
         let mut stream = match ans_type {
             ans::MEASUREMENT => Stream::Standard,
             ans::MEASUREMENT_CAPSULED_ULTRA => Stream::Ultra(UltraCapsuleDecoder::default()),
             _ => Stream::Express(CapsuleDecoder::default()),
         };
-        self.stop.store(false, Ordering::SeqCst);
-        self.thread = Some(
-            std::thread::Builder::new()
-                .name(self.name.into())
-                .spawn(move || {
-                    let mut revolution: Vec<Node> = Vec::new();
-                    let mut data = vec![f64::INFINITY; n];
-                    let mut count = 0u64;
-                    while !stop.load(Ordering::SeqCst) {
-                        link.fill();
-                        let mut pending = std::mem::take(&mut link.pending);
-                        for node in stream.decode(&mut pending) {
-                            if node.sync() && !revolution.is_empty() {
-                                if revolution[0].sync() {
-                                    count += 1;
-                                    fill_scan(
-                                        &mut data,
-                                        &revolution,
-                                        variant,
-                                        &geometry,
-                                        life,
-                                        count,
-                                    );
-                                    let mut s = shared.lock();
-                                    s.data.clone_from(&data);
-                                    s.stamp = now_s();
-                                    s.revolutions = count;
-                                }
-                                revolution.clear();
+        self.thread
+            .spawn(self.name.into(), move |stop| {
+                let mut revolution: Vec<Node> = Vec::new();
+                let mut data = vec![f64::INFINITY; n];
+                let mut count = 0u64;
+                while !stopped(stop) {
+                    link.fill();
+                    let mut pending = std::mem::take(&mut link.pending);
+                    for node in stream.decode(&mut pending) {
+                        if node.sync() && !revolution.is_empty() {
+                            if revolution[0].sync() {
+                                count += 1;
+                                fill_scan(&mut data, &revolution, variant, &geometry, life, count);
+                                let mut s = shared.lock();
+                                s.data.clone_from(&data);
+                                s.stamp = now_s();
+                                s.revolutions = count;
                             }
-                            revolution.push(node);
+                            revolution.clear();
                         }
-                        link.pending = pending;
+                        revolution.push(node);
                     }
-                    // close: motor stopped, scan stopped
-                    let _ = link.pwm(0);
-                    let _ = link.stop();
-                })
-                .map_err(|e| DeviceError::failed(self.name, e))?,
-        );
+                    link.pending = pending;
+                }
+                // close: motor stopped, scan stopped
+                let _ = link.pwm(0);
+                let _ = link.stop();
+            })
+            .map_err(|e| DeviceError::failed(self.name, e))?;
         Ok(())
     }
 
     fn close(&mut self) -> DevResult<()> {
-        self.stop.store(true, Ordering::SeqCst);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
+        self.thread.stop();
         Ok(())
     }
 

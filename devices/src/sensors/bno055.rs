@@ -23,13 +23,12 @@
 
 use super::interfaces::*;
 use super::params::now;
+use crate::device_thread::{stopped, DeviceThread};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
 use parking_lot::Mutex;
 use std::io::{Read, Write};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use yarp_proto::Property;
 
@@ -399,8 +398,7 @@ pub struct BoschImu {
     frame_name: String,
     channels: usize,
     readings: Arc<Mutex<Readings>>,
-    stop: Arc<AtomicBool>,
-    reader: Option<JoinHandle<()>>,
+    reader: DeviceThread,
 }
 
 impl Default for BoschImu {
@@ -410,8 +408,7 @@ impl Default for BoschImu {
             frame_name: "sensor_imu_bosch_bno055".into(),
             channels: 12,
             readings: Arc::default(),
-            stop: Arc::default(),
-            reader: None,
+            reader: DeviceThread::default(),
         }
     }
 }
@@ -549,40 +546,28 @@ impl DeviceDriver for BoschImu {
         let mut cycle = Cycle::new();
         start_chip(bus.as_mut(), serial, &mut cycle, &self.readings)
             .map_err(|e| DeviceError::failed(NAME, format!("{path}: {e}")))?;
-        self.stop.store(false, Ordering::SeqCst);
-        let (readings, stop) = (self.readings.clone(), self.stop.clone());
-        let reader = std::thread::Builder::new()
-            .name(format!("{NAME} {path}"))
-            .spawn(move || {
+        let readings = self.readings.clone();
+        self.reader
+            .spawn(format!("{NAME} {path}"), move |stop| {
                 let mut next = Instant::now() + period;
-                while !stop.load(Ordering::SeqCst) {
+                while !stopped(stop) {
                     std::thread::sleep(next.saturating_duration_since(Instant::now()));
                     next = (next + period).max(Instant::now());
                     cycle.run(bus.as_mut(), &readings);
                 }
             })
             .map_err(|e| DeviceError::failed(NAME, format!("cannot start the reader: {e}")))?;
-        self.reader = Some(reader);
         tracing::info!("{NAME}: measuring on {path}");
         Ok(())
     }
 
     fn close(&mut self) -> DevResult<()> {
-        self.stop.store(true, Ordering::SeqCst);
-        if let Some(r) = self.reader.take() {
-            let _ = r.join();
-        }
+        self.reader.stop();
         Ok(())
     }
 
     crate::views!(as_analog_sensor);
     crate::imu_views!();
-}
-
-impl Drop for BoschImu {
-    fn drop(&mut self) {
-        let _ = self.close();
-    }
 }
 
 /// C++ `IGenericSensor::read`: the 12 values, valid or not as the last cycle was.

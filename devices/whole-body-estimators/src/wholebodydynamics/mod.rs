@@ -30,14 +30,14 @@ pub mod core;
 pub mod filter;
 pub mod rpc;
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
-use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use parking_lot::Mutex;
 use robot_dynamics::estimation::Estimator;
 use robot_dynamics::urdf;
+use yarp_devices::device_thread::{stopped, DeviceThread};
 use yarp_devices::driver::{DeviceDriver, IMultipleWrapper, PolyDriver, SharedDevice};
 use yarp_devices::error::{DevResult, DeviceError};
 use yarp_devices::robotinterface::resource::find_file;
@@ -284,8 +284,7 @@ pub struct WholeBodyDynamics {
     shared: Option<Arc<Mutex<Shared>>>,
     hardware: Option<Arc<Mutex<Hardware>>>,
     ports: Ports,
-    stop: Arc<AtomicBool>,
-    thread: Option<JoinHandle<()>>,
+    thread: DeviceThread,
 }
 
 impl Default for WholeBodyDynamics {
@@ -301,8 +300,7 @@ impl WholeBodyDynamics {
             shared: None,
             hardware: None,
             ports: Ports::default(),
-            stop: Arc::default(),
-            thread: None,
+            thread: DeviceThread::default(),
         }
     }
 
@@ -350,14 +348,6 @@ impl WholeBodyDynamics {
         self.ports.rpc_task = Some(runtime::handle().spawn(serve_rpc(rpc.clone(), shared)));
         self.ports.rpc = Some(rpc);
         Ok(())
-    }
-
-    fn stop_thread(&mut self) {
-        self.stop.store(true, Ordering::SeqCst);
-        if let Some(t) = self.thread.take() {
-            let _ = t.join();
-        }
-        self.stop.store(false, Ordering::SeqCst);
     }
 }
 
@@ -515,7 +505,7 @@ impl IMultipleWrapper for WholeBodyDynamics {
         let config = self.config.clone().ok_or(DeviceError::NotOpen)?;
         let shared = self.shared.clone().ok_or(DeviceError::NotOpen)?;
         let p = &config.params;
-        self.stop_thread();
+        self.thread.stop();
         // The boards' axes, by name.
         let mut boards = open_remapper(&format!(
             "(device controlboardremapper) (axesNames ({}))",
@@ -594,23 +584,21 @@ impl IMultipleWrapper for WholeBodyDynamics {
         }
         let hardware = Arc::new(Mutex::new(hw));
         self.hardware = Some(hardware.clone());
-        let stop = self.stop.clone();
         let ports = PortsRef {
             wrenches: self.ports.wrenches.clone(),
             net: self.ports.net.clone(),
             filtered_ft: self.ports.filtered_ft.clone(),
         };
-        self.thread = Some(
-            std::thread::Builder::new()
-                .name("wholebodydynamics".into())
-                .spawn(move || run(shared, hardware, ports, stop))
-                .map_err(|e| failed(format!("could not start its thread: {e}")))?,
-        );
+        self.thread
+            .spawn("wholebodydynamics".into(), move |stop| {
+                run(shared, hardware, ports, stop)
+            })
+            .map_err(|e| failed(format!("could not start its thread: {e}")))?;
         Ok(())
     }
 
     fn detach_all(&mut self) -> DevResult<()> {
-        self.stop_thread();
+        self.thread.stop();
         if let (Some(hw), Some(config)) = (self.hardware.take(), &self.config) {
             let mut hw = hw.lock();
             if let (Some(shared), Some((_, axes))) = (&self.shared, &config.gravity_compensation) {
@@ -644,7 +632,7 @@ fn run(
     shared: Arc<Mutex<Shared>>,
     hardware: Arc<Mutex<Hardware>>,
     ports: PortsRef,
-    stop: Arc<AtomicBool>,
+    stop: &AtomicBool,
 ) {
     let (period, n_ft) = {
         let s = shared.lock();
@@ -664,7 +652,7 @@ fn run(
     let mut last_error = String::new();
     let mut publishing = false;
     tracing::info!("{NAME}: estimating every {period:?}");
-    while !stop.load(Ordering::SeqCst) {
+    while !stopped(stop) {
         let (vel, acc) = {
             let s = shared.lock();
             (
