@@ -319,3 +319,45 @@ impl<T: Send + 'static> NwcPorts<T> {
         close_port(self.rpc).await;
     }
 }
+
+/// A client device's ports while it is open: opening again replaces them; closing or
+/// dropping the device closes them.
+pub struct OpenPorts<T: Send + 'static>(Option<NwcPorts<T>>);
+
+impl<T: Send + 'static> Default for OpenPorts<T> {
+    fn default() -> Self {
+        Self(None)
+    }
+}
+
+impl<T: Send + 'static> OpenPorts<T> {
+    /// [`NwcPorts::open_for_device`], in place of the ports open now.
+    pub fn open<E: std::fmt::Display + 'static>(
+        &mut self,
+        device: &'static str,
+        expected: &'static str,
+        names: NwcNames,
+        parse: Parse<T, E>,
+    ) -> DevResult<()> {
+        let ports = NwcPorts::open_for_device(device, expected, names, parse)?;
+        self.close();
+        self.0 = Some(ports);
+        Ok(())
+    }
+
+    pub fn get(&self) -> DevResult<&NwcPorts<T>> {
+        self.0.as_ref().ok_or(DeviceError::NotOpen)
+    }
+
+    pub fn close(&mut self) {
+        if let Some(p) = self.0.take() {
+            p.close_for_device();
+        }
+    }
+}
+
+impl<T: Send + 'static> Drop for OpenPorts<T> {
+    fn drop(&mut self) {
+        self.close();
+    }
+}

@@ -12,7 +12,7 @@ use super::protocol::BatteryData;
 use super::{BatteryStatus, IBattery};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
-use crate::nwc_ports::{NwcNames, NwcPorts};
+use crate::nwc_ports::{NwcNames, OpenPorts};
 use yarp_proto::{Bottle, Property, Value};
 
 const NAME: &str = "battery_nwc_yarp";
@@ -28,8 +28,6 @@ crate::device_params! {
         carrier: String = "tcp",
     }
 }
-
-type Client = NwcPorts<BatteryData>;
 
 /// C++'s `IBattery::Battery_status` from the streamed int32 (unknown codes are errors).
 fn status_of(code: i32) -> BatteryStatus {
@@ -47,7 +45,7 @@ fn status_of(code: i32) -> BatteryStatus {
 /// The `battery_nwc_yarp` device.
 #[derive(Default)]
 pub struct BatteryNwcYarp {
-    client: Option<Client>,
+    client: OpenPorts<BatteryData>,
 }
 
 impl BatteryNwcYarp {
@@ -57,7 +55,7 @@ impl BatteryNwcYarp {
 
     /// The last data streamed, or the thrift defaults before any.
     fn last(&self) -> DevResult<BatteryData> {
-        let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
+        let c = self.client.get()?;
         let latest = c.latest();
         Ok(latest.as_ref().map_or(
             BatteryData {
@@ -90,31 +88,20 @@ impl DeviceDriver for BatteryNwcYarp {
             rpc: format!("{local}/rpc:o"),
             remote_rpc: format!("{remote}/rpc:i"),
         };
-        let client = Client::open_for_device(
+        self.client.open(
             NAME,
             "a running battery_nws_yarp (is the name server running?)",
             names,
             BatteryData::from_bottle,
-        )?;
-        self.close()?;
-        self.client = Some(client);
-        Ok(())
+        )
     }
 
     fn close(&mut self) -> DevResult<()> {
-        if let Some(c) = self.client.take() {
-            c.close_for_device();
-        }
+        self.client.close();
         Ok(())
     }
 
     crate::views!(as_battery);
-}
-
-impl Drop for BatteryNwcYarp {
-    fn drop(&mut self) {
-        let _ = self.close();
-    }
 }
 
 impl IBattery for BatteryNwcYarp {
@@ -134,7 +121,7 @@ impl IBattery for BatteryNwcYarp {
         Ok(self.last()?.temperature)
     }
     fn get_battery_info(&mut self) -> DevResult<String> {
-        let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
+        let c = self.client.get()?;
         let fields = c.call_returning(
             Bottle::new().with("getBatteryInfoRPC"),
             "the remote battery does not implement getBatteryInfo",

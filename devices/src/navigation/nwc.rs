@@ -8,8 +8,8 @@
 
 use super::{IOdometry2D, OdometryData};
 use crate::driver::DeviceDriver;
-use crate::error::{DevResult, DeviceError};
-use crate::nwc_ports::{NwcNames, NwcPorts};
+use crate::error::DevResult;
+use crate::nwc_ports::{NwcNames, OpenPorts};
 use yarp_proto::{Bottle, Property};
 
 const NAME: &str = "odometry2D_nwc_yarp";
@@ -29,7 +29,7 @@ crate::device_params! {
 /// The `odometry2D_nwc_yarp` device.
 #[derive(Default)]
 pub struct Odometry2DNwcYarp {
-    client: Option<NwcPorts<OdometryData>>,
+    client: OpenPorts<OdometryData>,
 }
 
 impl Odometry2DNwcYarp {
@@ -56,36 +56,25 @@ impl DeviceDriver for Odometry2DNwcYarp {
             rpc: format!("{local}/rpc"),
             remote_rpc: format!("{remote}/rpc"),
         };
-        let client = NwcPorts::open_for_device(
+        self.client.open(
             NAME,
             "a running odometry2D_nws_yarp (is the name server running?)",
             names,
             OdometryData::from_bottle,
-        )?;
-        self.close()?;
-        self.client = Some(client);
-        Ok(())
+        )
     }
 
     fn close(&mut self) -> DevResult<()> {
-        if let Some(c) = self.client.take() {
-            c.close_for_device();
-        }
+        self.client.close();
         Ok(())
     }
 
     crate::views!(as_odometry_2d);
 }
 
-impl Drop for Odometry2DNwcYarp {
-    fn drop(&mut self) {
-        let _ = self.close();
-    }
-}
-
 impl IOdometry2D for Odometry2DNwcYarp {
     fn get_odometry(&mut self) -> DevResult<(OdometryData, f64)> {
-        let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
+        let c = self.client.get()?;
         let latest = c.latest();
         Ok(latest
             .as_ref()
@@ -93,7 +82,7 @@ impl IOdometry2D for Odometry2DNwcYarp {
     }
 
     fn reset_odometry(&mut self) -> DevResult<()> {
-        let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
+        let c = self.client.get()?;
         let mut cmd = Bottle::new();
         for word in super::protocol::RESET.split('_') {
             cmd.push(word);

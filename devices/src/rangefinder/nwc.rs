@@ -12,7 +12,7 @@ use super::protocol::{status_of, LaserScan2D};
 use super::{IRangefinder2D, LaserStatus};
 use crate::driver::DeviceDriver;
 use crate::error::{DevResult, DeviceError};
-use crate::nwc_ports::{NwcNames, NwcPorts};
+use crate::nwc_ports::{NwcNames, OpenPorts};
 use yarp_proto::{Bottle, Property, Value};
 
 const NAME: &str = "rangefinder2D_nwc_yarp";
@@ -29,12 +29,10 @@ crate::device_params! {
     }
 }
 
-type Client = NwcPorts<LaserScan2D>;
-
 /// The `rangefinder2D_nwc_yarp` device.
 #[derive(Default)]
 pub struct Rangefinder2DNwcYarp {
-    client: Option<Client>,
+    client: OpenPorts<LaserScan2D>,
 }
 
 impl Rangefinder2DNwcYarp {
@@ -45,7 +43,7 @@ impl Rangefinder2DNwcYarp {
     /// Calls `method` (a thrift name such as `getScanRate_RPC`) with `args`; the fields
     /// after the return code, or the failure.
     fn call(&self, method: &str, args: &[f64]) -> DevResult<Vec<Value>> {
-        let client = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
+        let client = self.client.get()?;
         let mut cmd = Bottle::new();
         for word in method.split('_') {
             cmd.push(word);
@@ -88,43 +86,32 @@ impl DeviceDriver for Rangefinder2DNwcYarp {
             remote_stream: remote,
             carrier,
         };
-        let client = Client::open_for_device(
+        self.client.open(
             NAME,
             "a running rangefinder2D_nws_yarp port (is the name server running?)",
             names,
             LaserScan2D::from_bottle,
-        )?;
-        self.close()?;
-        self.client = Some(client);
-        Ok(())
+        )
     }
 
     fn close(&mut self) -> DevResult<()> {
-        if let Some(c) = self.client.take() {
-            c.close_for_device();
-        }
+        self.client.close();
         Ok(())
     }
 
     crate::views!(as_rangefinder_2d);
 }
 
-impl Drop for Rangefinder2DNwcYarp {
-    fn drop(&mut self) {
-        let _ = self.close();
-    }
-}
-
 impl IRangefinder2D for Rangefinder2DNwcYarp {
     fn get_raw_data(&mut self) -> DevResult<(Vec<f64>, f64)> {
-        let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
+        let c = self.client.get()?;
         let latest = c.latest();
         Ok(latest
             .as_ref()
             .map_or((Vec::new(), 0.0), |(s, t)| (s.scans.clone(), *t)))
     }
     fn get_device_status(&mut self) -> DevResult<LaserStatus> {
-        let c = self.client.as_ref().ok_or(DeviceError::NotOpen)?;
+        let c = self.client.get()?;
         let latest = c.latest();
         Ok(latest
             .as_ref()

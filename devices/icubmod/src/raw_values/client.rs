@@ -12,7 +12,7 @@ use super::wire::{decode_data_map, decode_metadata_reply, encode_get_metadata, G
 use std::collections::BTreeMap;
 use yarp_devices::driver::DeviceDriver;
 use yarp_devices::error::{DevResult, DeviceError};
-use yarp_devices::nwc_ports::{NwcNames, NwcPorts};
+use yarp_devices::nwc_ports::{NwcNames, NwcPorts, OpenPorts};
 use yarp_devices::raw_values::{IRawValuesPublisher, RawValuesKeyMetadata};
 use yarp_proto::Property;
 
@@ -47,7 +47,7 @@ type Map = BTreeMap<String, Vec<i32>>;
 /// The `rawValuesPublisherClient` device.
 #[derive(Default)]
 pub struct RawValuesPublisherClient {
-    client: Option<NwcPorts<Map>>,
+    client: OpenPorts<Map>,
 }
 
 impl RawValuesPublisherClient {
@@ -56,7 +56,7 @@ impl RawValuesPublisherClient {
     }
 
     fn client(&self) -> DevResult<&NwcPorts<Map>> {
-        self.client.as_ref().ok_or(DeviceError::NotOpen)
+        self.client.get()
     }
 }
 
@@ -74,31 +74,20 @@ impl DeviceDriver for RawValuesPublisherClient {
             rpc: format!("{}/rpc:i", p.local),
             remote_rpc: format!("{}/rpc:o", p.remote),
         };
-        let client = NwcPorts::open_for_device(
+        self.client.open(
             NAME,
             "a running rawValuesPublisherServer (is the name server running?)",
             names,
             decode_data_map,
-        )?;
-        self.close()?;
-        self.client = Some(client);
-        Ok(())
+        )
     }
 
     fn close(&mut self) -> DevResult<()> {
-        if let Some(c) = self.client.take() {
-            c.close_for_device();
-        }
+        self.client.close();
         Ok(())
     }
 
     yarp_devices::views!(as_raw_values_publisher);
-}
-
-impl Drop for RawValuesPublisherClient {
-    fn drop(&mut self) {
-        let _ = self.close();
-    }
 }
 
 impl IRawValuesPublisher for RawValuesPublisherClient {
