@@ -39,6 +39,71 @@ impl StreamTask {
     }
 }
 
+/// A streaming wrapper's state: its ports while open, the device it serves while
+/// attached, and the task streaming that device.
+#[derive(Default)]
+pub struct Serving {
+    slot: Slot,
+    ports: Option<WrapperPorts>,
+    stream: StreamTask,
+}
+
+impl Serving {
+    /// [`WrapperPorts::open`], answering with the device attached at the time.
+    pub fn open(
+        &mut self,
+        wrapper: &'static str,
+        streams: Vec<String>,
+        rpc: String,
+        answer: Answer,
+        client_port: ClientPort,
+    ) -> DevResult<()> {
+        let ports = WrapperPorts::open(
+            wrapper,
+            streams,
+            rpc,
+            self.slot.clone(),
+            answer,
+            client_port,
+        )?;
+        self.ports = Some(ports);
+        Ok(())
+    }
+
+    /// Serves `device` once `check` accepts it, streaming it with the task `stream` makes
+    /// from the ports; the device served before is detached first.
+    pub fn attach<F>(
+        &mut self,
+        device: SharedDevice,
+        check: impl FnOnce(&mut dyn DeviceDriver) -> DevResult<()>,
+        stream: impl FnOnce(&WrapperPorts, SharedDevice) -> F,
+    ) -> DevResult<()>
+    where
+        F: std::future::Future<Output = ()> + Send + 'static,
+    {
+        self.detach();
+        let Some(ports) = &self.ports else {
+            return Err(DeviceError::NotOpen);
+        };
+        check(device.lock().device())?;
+        *self.slot.lock() = Some(device.clone());
+        self.stream.start(stream(ports, device));
+        Ok(())
+    }
+
+    pub fn detach(&mut self) {
+        self.stream.stop();
+        *self.slot.lock() = None;
+    }
+
+    pub fn close(&mut self) {
+        self.detach();
+        if let Some(p) = self.ports.take() {
+            p.close();
+        }
+    }
+}
+
 /// A stream's read errors, logged once per streak of failures rather than every period.
 #[derive(Default)]
 pub struct FailureStreak(bool);

@@ -16,7 +16,7 @@ use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::sensors::params::now;
 use crate::sensors::periodic::Ticker;
-use crate::wrapper_ports::{FailureStreak, Reply, Slot, StreamTask, WrapperPorts};
+use crate::wrapper_ports::{FailureStreak, Reply, Serving};
 use std::io::Write;
 use std::sync::Arc;
 use std::time::Duration;
@@ -57,9 +57,7 @@ pub struct BatteryNwsYarp {
     name: String,
     period: Duration,
     log: bool,
-    slot: Slot,
-    ports: Option<WrapperPorts>,
-    stream_task: StreamTask,
+    serving: Serving,
 }
 
 impl BatteryNwsYarp {
@@ -158,24 +156,18 @@ impl DeviceDriver for BatteryNwsYarp {
         self.log = p.enable_log;
         self.name = p.name;
         self.period = Duration::from_secs_f64(p.period);
-        let ports = WrapperPorts::open(
+        self.serving.open(
             NAME,
             vec![self.data_port_name()],
             self.rpc_port_name(),
-            self.slot.clone(),
             answer,
             // C++'s client reads `<local>/data:i`, calls from `<local>/rpc:o`
             |rpc| Some(format!("{}/data:i", rpc.strip_suffix("/rpc:o")?)),
-        )?;
-        self.ports = Some(ports);
-        Ok(())
+        )
     }
 
     fn close(&mut self) -> DevResult<()> {
-        IWrapper::detach(self)?;
-        if let Some(p) = self.ports.take() {
-            p.close();
-        }
+        self.serving.close();
         Ok(())
     }
 
@@ -184,27 +176,23 @@ impl DeviceDriver for BatteryNwsYarp {
 
 impl IWrapper for BatteryNwsYarp {
     fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
-        IWrapper::detach(self)?;
-        let Some(ports) = &self.ports else {
-            return Err(DeviceError::NotOpen);
-        };
-        {
-            let mut pd = device.lock();
-            pd.device().as_battery().ok_or(DeviceError::Unsupported(
-                "battery_nws_yarp attaches an IBattery",
-            ))?;
-        }
-        *self.slot.lock() = Some(device.clone());
-        let (port, peers) = (ports.streams[0].clone(), ports.peers.clone());
         let (period, log) = (self.period, self.log);
-        self.stream_task
-            .start(stream_battery(port, peers, period, device, log));
-        Ok(())
+        self.serving.attach(
+            device,
+            |d| {
+                d.as_battery().map(drop).ok_or(DeviceError::Unsupported(
+                    "battery_nws_yarp attaches an IBattery",
+                ))
+            },
+            |ports, device| {
+                let (port, peers) = (ports.streams[0].clone(), ports.peers.clone());
+                stream_battery(port, peers, period, device, log)
+            },
+        )
     }
 
     fn detach(&mut self) -> DevResult<()> {
-        self.stream_task.stop();
-        *self.slot.lock() = None;
+        self.serving.detach();
         Ok(())
     }
 }

@@ -12,7 +12,7 @@ use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::sensors::params::now;
 use crate::sensors::periodic::Ticker;
-use crate::wrapper_ports::{Reply, Slot, StreamTask, WrapperPorts};
+use crate::wrapper_ports::{Reply, Serving};
 use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::peer_generation::PeerGenerations;
@@ -37,9 +37,7 @@ crate::device_params! {
 pub struct Odometry2DNwsYarp {
     name: String,
     period: Duration,
-    slot: Slot,
-    ports: Option<WrapperPorts>,
-    stream_task: StreamTask,
+    serving: Serving,
 }
 
 impl Odometry2DNwsYarp {
@@ -113,25 +111,20 @@ impl DeviceDriver for Odometry2DNwsYarp {
         let p = Odometry2DNwsYarpParams::read(config)?;
         self.name = p.name;
         self.period = Duration::from_secs_f64(p.period);
-        let ports = WrapperPorts::open(
+        self.serving.open(
             NAME,
             self.stream_names(),
             format!("{}/rpc", self.name),
-            self.slot.clone(),
             answer,
             // C++'s client reads `<local>/odometry:i`, calls from `<local>/rpc`
             |rpc| Some(format!("{}/odometry:i", rpc.strip_suffix("/rpc")?)),
         )?;
         tracing::info!("{NAME}: Waiting for device to attach");
-        self.ports = Some(ports);
         Ok(())
     }
 
     fn close(&mut self) -> DevResult<()> {
-        IWrapper::detach(self)?;
-        if let Some(p) = self.ports.take() {
-            p.close();
-        }
+        self.serving.close();
         Ok(())
     }
 
@@ -140,31 +133,23 @@ impl DeviceDriver for Odometry2DNwsYarp {
 
 impl IWrapper for Odometry2DNwsYarp {
     fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
-        IWrapper::detach(self)?;
-        let Some(ports) = &self.ports else {
-            return Err(DeviceError::NotOpen);
-        };
-        device
-            .lock()
-            .device()
-            .as_odometry_2d()
-            .ok_or(DeviceError::Unsupported(
-                "Subdevice passed to attach method is invalid (no IOdometry2D)",
-            ))?;
-        *self.slot.lock() = Some(device.clone());
-        let streams = [
-            ports.streams[0].clone(),
-            ports.streams[1].clone(),
-            ports.streams[2].clone(),
-        ];
-        let task = stream_odometry(streams, ports.peers.clone(), self.period, device);
-        self.stream_task.start(task);
-        Ok(())
+        let period = self.period;
+        self.serving.attach(
+            device,
+            |d| {
+                d.as_odometry_2d().map(drop).ok_or(DeviceError::Unsupported(
+                    "Subdevice passed to attach method is invalid (no IOdometry2D)",
+                ))
+            },
+            |ports, device| {
+                let streams = [0, 1, 2].map(|i| ports.streams[i].clone());
+                stream_odometry(streams, ports.peers.clone(), period, device)
+            },
+        )
     }
 
     fn detach(&mut self) -> DevResult<()> {
-        self.stream_task.stop();
-        *self.slot.lock() = None;
+        self.serving.detach();
         Ok(())
     }
 }

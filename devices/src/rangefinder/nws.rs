@@ -12,7 +12,7 @@ use crate::driver::{DeviceDriver, IWrapper, SharedDevice};
 use crate::error::{DevResult, DeviceError};
 use crate::sensors::params::now;
 use crate::sensors::periodic::Ticker;
-use crate::wrapper_ports::{FailureStreak, Reply, Slot, StreamTask, WrapperPorts};
+use crate::wrapper_ports::{FailureStreak, Reply, Serving};
 use std::sync::Arc;
 use std::time::Duration;
 use yarp_net::peer_generation::PeerGenerations;
@@ -39,9 +39,7 @@ crate::device_params! {
 pub struct Rangefinder2DNwsYarp {
     name: String,
     period: Duration,
-    slot: Slot,
-    ports: Option<WrapperPorts>,
-    stream_task: StreamTask,
+    serving: Serving,
 }
 
 impl Rangefinder2DNwsYarp {
@@ -127,24 +125,18 @@ impl DeviceDriver for Rangefinder2DNwsYarp {
         let p = Rangefinder2DNwsYarpParams::read(config)?;
         self.name = p.name;
         self.period = Duration::from_secs_f64(p.period);
-        let ports = WrapperPorts::open(
+        self.serving.open(
             NAME,
             vec![self.name.clone()],
             self.rpc_port_name(),
-            self.slot.clone(),
             answer,
             // C++'s client reads the scans on `<local>`, calls from `<local>/rpc:o`
             |rpc| rpc.strip_suffix("/rpc:o").map(str::to_string),
-        )?;
-        self.ports = Some(ports);
-        Ok(())
+        )
     }
 
     fn close(&mut self) -> DevResult<()> {
-        IWrapper::detach(self)?;
-        if let Some(p) = self.ports.take() {
-            p.close();
-        }
+        self.serving.close();
         Ok(())
     }
 
@@ -153,33 +145,32 @@ impl DeviceDriver for Rangefinder2DNwsYarp {
 
 impl IWrapper for Rangefinder2DNwsYarp {
     fn attach(&mut self, device: SharedDevice) -> DevResult<()> {
-        IWrapper::detach(self)?;
-        let Some(ports) = &self.ports else {
-            return Err(DeviceError::NotOpen);
-        };
-        {
-            // C++ refuses a device that cannot tell its geometry
-            let mut pd = device.lock();
-            let dev = pd
-                .device()
-                .as_rangefinder_2d()
-                .ok_or(DeviceError::Unsupported(
+        let period = self.period;
+        self.serving.attach(
+            device,
+            |d| {
+                // C++ refuses a device that cannot tell its geometry
+                let dev = d.as_rangefinder_2d().ok_or(DeviceError::Unsupported(
                     "rangefinder2D_nws_yarp attaches an IRangefinder2D",
                 ))?;
-            dev.get_distance_range()?;
-            dev.get_scan_limits()?;
-            dev.get_horizontal_resolution()?;
-        }
-        *self.slot.lock() = Some(device.clone());
-        let (port, peers, period) = (ports.streams[0].clone(), ports.peers.clone(), self.period);
-        self.stream_task
-            .start(stream_scans(port, peers, period, device));
-        Ok(())
+                dev.get_distance_range()?;
+                dev.get_scan_limits()?;
+                dev.get_horizontal_resolution()?;
+                Ok(())
+            },
+            |ports, device| {
+                stream_scans(
+                    ports.streams[0].clone(),
+                    ports.peers.clone(),
+                    period,
+                    device,
+                )
+            },
+        )
     }
 
     fn detach(&mut self) -> DevResult<()> {
-        self.stream_task.stop();
-        *self.slot.lock() = None;
+        self.serving.detach();
         Ok(())
     }
 }
