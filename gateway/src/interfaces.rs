@@ -63,24 +63,16 @@ pub fn lookup(name: &str) -> Option<&'static MsgType> {
     };
     let (pkg, _, stem) = crate::types::split_name(name)?;
     let parsed = match &source {
-        Source::Msg(p) => read(p).and_then(|text| {
-            msgdef::parse_msg(pkg, stem, &text)
-                .map(|d| vec![d])
-                .map_err(|e| e.to_string())
-        }),
+        Source::Msg(p) => read(p).and_then(|text| Ok(vec![msgdef::parse_msg(pkg, stem, &text)?])),
         Source::Srv(p) => {
-            let service = file_stem(p);
-            read(p)
-                .and_then(|text| msgdef::parse_srv(pkg, &service, &text).map_err(|e| e.to_string()))
+            read(p).and_then(|text| Ok(msgdef::parse_srv(pkg, &file_stem(p), &text)?))
         }
         Source::Action(p) => {
-            let action = file_stem(p);
-            read(p).and_then(|text| {
-                msgdef::parse_action(pkg, &action, &text).map_err(|e| e.to_string())
-            })
+            read(p).and_then(|text| Ok(msgdef::parse_action(pkg, &file_stem(p), &text)?))
         }
-        Source::Idl(p) => read(p)
-            .and_then(|text| crate::idl::parse(&text).map_err(|e| format!("{}: {e}", p.display()))),
+        Source::Idl(p) => read(p).and_then(|text| {
+            crate::idl::parse(&text).map_err(|e| DefinitionError::Idl(p.clone(), e))
+        }),
     };
     let mut r = reg.write().ok()?;
     match parsed {
@@ -94,7 +86,7 @@ pub fn lookup(name: &str) -> Option<&'static MsgType> {
         }
         Err(e) => {
             tracing::warn!("interface definition of {name}: {e}");
-            r.failed.insert(name.to_string(), e);
+            r.failed.insert(name.to_string(), e.to_string());
         }
     }
     r.loaded.get(name).copied()
@@ -131,8 +123,19 @@ pub fn message_names() -> Vec<String> {
     v
 }
 
-fn read(p: &Path) -> Result<String, String> {
-    std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))
+/// Why a definition found on file cannot be used.
+#[derive(Debug, thiserror::Error)]
+enum DefinitionError {
+    #[error("{}: {}", .0.display(), .1)]
+    Read(PathBuf, std::io::Error),
+    #[error(transparent)]
+    Def(#[from] msgdef::DefError),
+    #[error("{}: {}", .0.display(), .1)]
+    Idl(PathBuf, crate::idl::IdlError),
+}
+
+fn read(p: &Path) -> Result<String, DefinitionError> {
+    std::fs::read_to_string(p).map_err(|e| DefinitionError::Read(p.into(), e))
 }
 
 fn file_stem(p: &Path) -> String {

@@ -257,7 +257,7 @@ fn parse_body(
         let rest = rest.trim_start();
         if let Some((cname, value)) = rest.split_once('=') {
             let (cname, value) = (cname.trim(), value.trim());
-            let prim = match parse_type(type_str, pkg).map_err(&err)? {
+            let prim = match parse_type(type_str, pkg).map_err(|e| err(e.to_string()))? {
                 (BaseDef::Prim(p), Shape::Single, _) => p,
                 _ => {
                     return Err(err(format!(
@@ -265,7 +265,7 @@ fn parse_body(
                     )))
                 }
             };
-            check_name(cname, true).map_err(&err)?;
+            check_name(cname, true).map_err(|e| err(e.to_string()))?;
             def.constants.push(ConstDef {
                 name: cname.to_string(),
                 prim,
@@ -278,8 +278,9 @@ fn parse_body(
             Some((n, _)) => (n, None),
             None => (rest, None),
         };
-        check_name(fname, false).map_err(&err)?;
-        let (base, shape, string_capacity) = parse_type(type_str, pkg).map_err(&err)?;
+        check_name(fname, false).map_err(|e| err(e.to_string()))?;
+        let (base, shape, string_capacity) =
+            parse_type(type_str, pkg).map_err(|e| err(e.to_string()))?;
         if default.is_some() && matches!(base, BaseDef::Nested(_)) {
             return Err(err(format!(
                 "field {fname}: nested messages take no default value"
@@ -307,7 +308,7 @@ fn parse_body(
 
 /// Field names are lower-case (`[a-z][a-z0-9_]*`), constants upper-case; no `__`, no
 /// trailing `_` (rosidl's patterns).
-fn check_name(n: &str, constant: bool) -> Result<(), String> {
+fn check_name(n: &str, constant: bool) -> Result<(), BadName<'_>> {
     let first_ok = n.chars().next().is_some_and(|c| {
         if constant {
             c.is_ascii_uppercase()
@@ -327,16 +328,23 @@ fn check_name(n: &str, constant: bool) -> Result<(), String> {
     if first_ok && rest_ok && !n.contains("__") && !n.ends_with('_') {
         Ok(())
     } else {
-        Err(format!(
-            "`{n}` is not a valid {} name",
-            if constant { "constant" } else { "field" }
-        ))
+        Err(BadName(n, if constant { "constant" } else { "field" }))
     }
 }
 
+/// A name [`check_name`] refuses, and whether it was for a constant or a field.
+#[derive(Debug, thiserror::Error)]
+#[error("`{0}` is not a valid {1} name")]
+struct BadName<'a>(&'a str, &'static str);
+
+/// A type [`parse_type`] cannot read.
+#[derive(Debug, thiserror::Error)]
+#[error("`{0}` is not a type")]
+struct BadType<'a>(&'a str);
+
 /// `T`, `T[N]`, `T[<=N]`, `T[]` with `T` a primitive, `string<=N`, `pkg/Type` or `Type`.
-fn parse_type(s: &str, pkg: &str) -> Result<(BaseDef, Shape, u64), String> {
-    let bad = || format!("`{s}` is not a type");
+fn parse_type<'a>(s: &'a str, pkg: &str) -> Result<(BaseDef, Shape, u64), BadType<'a>> {
+    let bad = || BadType(s);
     let (base, shape) = match s.strip_suffix(']') {
         Some(head) => {
             let open = head.rfind('[').ok_or_else(bad)?;

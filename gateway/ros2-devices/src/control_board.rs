@@ -166,27 +166,23 @@ impl Board {
         names: &[String],
         values: &[f64],
         refs: &[f64],
-    ) -> Result<Command, String> {
+    ) -> Result<Command, CommandError> {
         let Some(joints) = self.select(names) else {
-            return Err(format!("unknown joint names (or too many) in {names:?}"));
+            return Err(CommandError::Names(names.to_vec()));
         };
         let n = self.axes();
         let all = names.is_empty() || names.len() == n;
         if values.is_empty() {
-            return Err("no values".into());
+            return Err(CommandError::NoValues);
         }
         if !all && names.len() != values.len() {
-            return Err(format!("{} names but {} values", names.len(), values.len()));
+            return Err(CommandError::Values(names.len(), values.len()));
         }
         if !refs.is_empty() && refs.len() != values.len() {
-            return Err(format!(
-                "{} values but {} reference values",
-                values.len(),
-                refs.len()
-            ));
+            return Err(CommandError::Refs(values.len(), refs.len()));
         }
         if all && values.len() != n {
-            return Err(format!("{} values for {n} joints", values.len()));
+            return Err(CommandError::Joints(values.len(), n));
         }
         let conv = |v: &[f64]| -> Vec<f64> {
             joints
@@ -201,6 +197,34 @@ impl Board {
             joints: (!names.is_empty()).then_some(joints),
         })
     }
+}
+
+/// Why a command message does not fit the board (C++ `messageVectorsCheck`).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CommandError {
+    #[error("unknown joint names (or too many) in {0:?}")]
+    Names(Vec<String>),
+    #[error("no values")]
+    NoValues,
+    #[error("{0} names but {1} values")]
+    Values(usize, usize),
+    #[error("{0} values but {1} reference values")]
+    Refs(usize, usize),
+    #[error("{0} values for {1} joints")]
+    Joints(usize, usize),
+}
+
+/// Why a command message was not applied.
+#[derive(Debug, thiserror::Error)]
+enum ApplyError {
+    #[error("no board is attached")]
+    NoBoard,
+    #[error(transparent)]
+    Command(#[from] CommandError),
+    #[error("the board has no {0}")]
+    Lacks(&'static str),
+    #[error(transparent)]
+    Device(#[from] DeviceError),
 }
 
 /// Which command topic a message came from.
@@ -249,7 +273,7 @@ fn floats(v: Option<&Ros>) -> Vec<f64> {
 }
 
 /// Applies one command message to the board.
-fn apply(board: &Board, topic: Topic, msg: &Ros) -> Result<(), String> {
+fn apply(board: &Board, topic: Topic, msg: &Ros) -> Result<(), ApplyError> {
     let f = msg.fields().unwrap_or_default();
     let names = strings(f.first());
     let values = floats(f.get(1));
@@ -257,34 +281,30 @@ fn apply(board: &Board, topic: Topic, msg: &Ros) -> Result<(), String> {
     let c = board.command(&names, &values, &refs)?;
     let mut pd = lock(&board.device);
     let dev = pd.device();
-    let err = |e: DeviceError| e.to_string();
+    use ApplyError::Lacks;
     match topic {
         Topic::Position => {
-            let p = dev
-                .as_position_control()
-                .ok_or("the board has no IPositionControl")?;
+            let p = dev.as_position_control().ok_or(Lacks("IPositionControl"))?;
             match &c.joints {
                 None => {
                     if !c.refs.is_empty() {
-                        p.set_ref_speeds(&c.refs).map_err(err)?;
+                        p.set_ref_speeds(&c.refs)?;
                     }
-                    p.position_moves(&c.values).map_err(err)
+                    p.position_moves(&c.values)?
                 }
                 Some(j) => {
                     if !c.refs.is_empty() {
-                        p.set_ref_speed_group(j, &c.refs).map_err(err)?;
+                        p.set_ref_speed_group(j, &c.refs)?;
                     }
-                    p.position_move_group(j, &c.values).map_err(err)
+                    p.position_move_group(j, &c.values)?
                 }
             }
         }
         Topic::PositionDirect => {
-            let p = dev
-                .as_position_direct()
-                .ok_or("the board has no IPositionDirect")?;
+            let p = dev.as_position_direct().ok_or(Lacks("IPositionDirect"))?;
             match &c.joints {
-                None => p.set_positions(&c.values).map_err(err),
-                Some(j) => p.set_positions_group(j, &c.values).map_err(err),
+                None => p.set_positions(&c.values)?,
+                Some(j) => p.set_positions_group(j, &c.values)?,
             }
         }
         Topic::Velocity => {
@@ -293,21 +313,20 @@ fn apply(board: &Board, topic: Topic, msg: &Ros) -> Result<(), String> {
                 // IPositionControl; here they live on the latter.
                 let p = dev
                     .as_position_control()
-                    .ok_or("the board has no reference accelerations")?;
+                    .ok_or(Lacks("reference accelerations"))?;
                 match &c.joints {
-                    None => p.set_ref_accelerations(&c.refs).map_err(err)?,
-                    Some(j) => p.set_ref_acceleration_group(j, &c.refs).map_err(err)?,
+                    None => p.set_ref_accelerations(&c.refs)?,
+                    Some(j) => p.set_ref_acceleration_group(j, &c.refs)?,
                 }
             }
-            let v = dev
-                .as_velocity_control()
-                .ok_or("the board has no IVelocityControl")?;
+            let v = dev.as_velocity_control().ok_or(Lacks("IVelocityControl"))?;
             match &c.joints {
-                None => v.velocity_moves(&c.values).map_err(err),
-                Some(j) => v.velocity_move_group(j, &c.values).map_err(err),
+                None => v.velocity_moves(&c.values)?,
+                Some(j) => v.velocity_move_group(j, &c.values)?,
             }
         }
     }
+    Ok(())
 }
 
 async fn serve_topic(sub: ros2_client::Subscription<Ros>, topic: Topic, slot: Slot, name: String) {
@@ -326,7 +345,7 @@ async fn serve_topic(sub: ros2_client::Subscription<Ros>, topic: Topic, slot: Sl
         };
         let board = lock(&slot).clone();
         let result = match board {
-            None => Err("no board is attached".to_string()),
+            None => Err(ApplyError::NoBoard),
             Some(b) => yarp_devices::runtime::device_call(|| apply(&b, topic, &msg)),
         };
         if let Err(e) = result {
@@ -766,6 +785,27 @@ mod tests {
     fn fake_board(axes: usize) -> Board {
         let c = Property::from_text(format!("(device fakeMotionControl) (axes {axes})"));
         Board::read(shared(PolyDriver::open(&c).expect("fakeMotionControl"))).unwrap()
+    }
+
+    #[test]
+    fn command_errors_say_what_is_wrong() {
+        let b = fake_board(3);
+        let err = |names: &[&str], values: &[f64], refs: &[f64]| {
+            let names: Vec<String> = names.iter().map(|s| s.to_string()).collect();
+            b.command(&names, values, refs).unwrap_err().to_string()
+        };
+        let j0 = b.names[0].as_str();
+        assert_eq!(
+            err(&["nope"], &[1.0], &[]),
+            r#"unknown joint names (or too many) in ["nope"]"#
+        );
+        assert_eq!(err(&[], &[], &[]), "no values");
+        assert_eq!(err(&[j0], &[1.0, 2.0], &[]), "1 names but 2 values");
+        assert_eq!(
+            err(&[j0], &[1.0], &[1.0, 2.0]),
+            "1 values but 2 reference values"
+        );
+        assert_eq!(err(&[], &[1.0], &[]), "1 values for 3 joints");
     }
 
     #[test]
