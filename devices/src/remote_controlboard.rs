@@ -790,6 +790,23 @@ impl Drop for RemoteControlBoard {
     }
 }
 
+/// Trait methods that are one remote call each, declared as
+/// `fn name(args) -> Reply => Method { fields };` with the protocol's method struct
+/// ([`m`]): what C++'s `RemoteControlBoard` writes out by hand, method by method.
+macro_rules! remote_calls {
+    ($(
+        $(#[$attr:meta])*
+        fn $name:ident($($arg:ident: $ty:ty),*) -> $ret:ty => $method:ident { $($field:tt)* };
+    )*) => {
+        $(
+            $(#[$attr])*
+            fn $name(&mut self, $($arg: $ty),*) -> DevResult<$ret> {
+                self.ask(m::$method { $($field)* })
+            }
+        )*
+    };
+}
+
 impl IEncoders for RemoteControlBoard {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
@@ -811,19 +828,11 @@ impl IEncoders for RemoteControlBoard {
             c.values.get(j).copied().filter(|_| c.valid).map(|p| (p, t))
         })
     }
-    fn set_encoder(&mut self, j: usize, value: f64) -> DevResult<()> {
-        self.ask(m::SetEncoder { j, value })
-    }
-    fn reset_encoder(&mut self, j: usize) -> DevResult<()> {
-        self.ask(m::ResetEncoder { j })
-    }
-    fn reset_encoders(&mut self) -> DevResult<()> {
-        self.ask(m::ResetEncoders {})
-    }
-    fn set_encoders(&mut self, values: &[f64]) -> DevResult<()> {
-        self.ask(m::SetEncoders {
-            values: values.to_vec(),
-        })
+    remote_calls! {
+        fn set_encoder(j: usize, value: f64) -> () => SetEncoder { j, value };
+        fn reset_encoder(j: usize) -> () => ResetEncoder { j };
+        fn reset_encoders() -> () => ResetEncoders {};
+        fn set_encoders(values: &[f64]) -> () => SetEncoders { values: values.to_vec() };
     }
     fn get_encoders(&mut self) -> DevResult<Vec<f64>> {
         self.state_vec(|d| &d.joint_position)
@@ -851,98 +860,56 @@ impl IPositionControl for RemoteControlBoard {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn position_move(&mut self, j: usize, target: f64) -> DevResult<()> {
-        self.ask(m::PositionMove { j, target })
-    }
-    fn relative_move(&mut self, j: usize, delta: f64) -> DevResult<()> {
-        self.ask(m::RelativeMove { j, delta })
-    }
-    fn check_motion_done(&mut self, j: usize) -> DevResult<bool> {
-        self.ask(m::CheckMotionDone { j })
-    }
-    fn set_ref_speed(&mut self, j: usize, speed: f64) -> DevResult<()> {
-        self.ask(m::SetRefSpeed { j, speed })
-    }
-    fn set_ref_acceleration(&mut self, j: usize, acc: f64) -> DevResult<()> {
-        self.ask(m::SetRefAcceleration { j, acc })
-    }
-    fn get_ref_speed(&mut self, j: usize) -> DevResult<f64> {
-        self.ask(m::GetRefSpeed { j })
-    }
-    fn get_ref_acceleration(&mut self, j: usize) -> DevResult<f64> {
-        self.ask(m::GetRefAcceleration { j })
-    }
-    fn stop(&mut self, j: usize) -> DevResult<()> {
-        self.ask(m::Stop { j })
-    }
-    fn get_target_position(&mut self, j: usize) -> DevResult<f64> {
-        self.ask(m::GetTargetPosition { j })
-    }
-    fn position_moves(&mut self, targets: &[f64]) -> DevResult<()> {
-        self.ask(m::PositionMoves {
-            targets: targets.to_vec(),
-        })
+    remote_calls! {
+        fn position_move(j: usize, target: f64) -> () => PositionMove { j, target };
+        fn relative_move(j: usize, delta: f64) -> () => RelativeMove { j, delta };
+        fn check_motion_done(j: usize) -> bool => CheckMotionDone { j };
+        fn set_ref_speed(j: usize, speed: f64) -> () => SetRefSpeed { j, speed };
+        fn set_ref_acceleration(j: usize, acc: f64) -> () => SetRefAcceleration { j, acc };
+        fn get_ref_speed(j: usize) -> f64 => GetRefSpeed { j };
+        fn get_ref_acceleration(j: usize) -> f64 => GetRefAcceleration { j };
+        fn stop(j: usize) -> () => Stop { j };
+        fn get_target_position(j: usize) -> f64 => GetTargetPosition { j };
+        fn position_moves(targets: &[f64]) -> () => PositionMoves { targets: targets.to_vec() };
     }
     fn position_move_group(&mut self, joints: &[usize], targets: &[f64]) -> DevResult<()> {
         let (joints, targets) = (group(joints), targets.to_vec());
         self.ask(m::PositionMoveGroup { joints, targets })
     }
-    fn relative_moves(&mut self, deltas: &[f64]) -> DevResult<()> {
-        self.ask(m::RelativeMoves {
-            deltas: deltas.to_vec(),
-        })
+    remote_calls! {
+        fn relative_moves(deltas: &[f64]) -> () => RelativeMoves { deltas: deltas.to_vec() };
     }
     fn relative_move_group(&mut self, joints: &[usize], deltas: &[f64]) -> DevResult<()> {
         let (joints, deltas) = (group(joints), deltas.to_vec());
         self.ask(m::RelativeMoveGroup { joints, deltas })
     }
-    fn check_motion_dones(&mut self) -> DevResult<bool> {
-        self.ask(m::CheckMotionDones {})
-    }
-    fn check_motion_done_group(&mut self, joints: &[usize]) -> DevResult<bool> {
-        self.ask(m::CheckMotionDoneGroup {
-            joints: group(joints),
-        })
-    }
-    fn set_ref_speeds(&mut self, speeds: &[f64]) -> DevResult<()> {
-        self.ask(m::SetRefSpeeds {
-            speeds: speeds.to_vec(),
-        })
+    remote_calls! {
+        fn check_motion_dones() -> bool => CheckMotionDones {};
+        fn check_motion_done_group(joints: &[usize]) -> bool => CheckMotionDoneGroup {
+            joints: group(joints)
+        };
+        fn set_ref_speeds(speeds: &[f64]) -> () => SetRefSpeeds { speeds: speeds.to_vec() };
     }
     fn set_ref_speed_group(&mut self, joints: &[usize], speeds: &[f64]) -> DevResult<()> {
         let (joints, speeds) = (group(joints), speeds.to_vec());
         self.ask(m::SetRefSpeedGroup { joints, speeds })
     }
-    fn set_ref_accelerations(&mut self, accs: &[f64]) -> DevResult<()> {
-        self.ask(m::SetRefAccelerations {
-            accs: accs.to_vec(),
-        })
+    remote_calls! {
+        fn set_ref_accelerations(accs: &[f64]) -> () => SetRefAccelerations { accs: accs.to_vec() };
     }
     fn set_ref_acceleration_group(&mut self, joints: &[usize], accs: &[f64]) -> DevResult<()> {
         let (joints, accs) = (group(joints), accs.to_vec());
         self.ask(m::SetRefAccelerationGroup { joints, accs })
     }
-    fn get_ref_speeds(&mut self) -> DevResult<Vec<f64>> {
-        self.ask(m::GetRefSpeeds {})
-    }
-    fn get_ref_accelerations(&mut self) -> DevResult<Vec<f64>> {
-        self.ask(m::GetRefAccelerations {})
-    }
-    fn stops(&mut self) -> DevResult<()> {
-        self.ask(m::Stops {})
-    }
-    fn stop_group(&mut self, joints: &[usize]) -> DevResult<()> {
-        self.ask(m::StopGroup {
-            joints: group(joints),
-        })
-    }
-    fn get_target_positions(&mut self) -> DevResult<Vec<f64>> {
-        self.ask(m::GetTargetPositions {})
-    }
-    fn get_target_position_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
-        self.ask(m::GetTargetPositionGroup {
-            joints: group(joints),
-        })
+    remote_calls! {
+        fn get_ref_speeds() -> Vec<f64> => GetRefSpeeds {};
+        fn get_ref_accelerations() -> Vec<f64> => GetRefAccelerations {};
+        fn stops() -> () => Stops {};
+        fn stop_group(joints: &[usize]) -> () => StopGroup { joints: group(joints) };
+        fn get_target_positions() -> Vec<f64> => GetTargetPositions {};
+        fn get_target_position_group(joints: &[usize]) -> Vec<f64> => GetTargetPositionGroup {
+            joints: group(joints)
+        };
     }
 }
 
@@ -954,8 +921,8 @@ impl IVelocityControl for RemoteControlBoard {
         let j = self.joint(j)?;
         self.stream(Kind::VelocityMove, Joints::One(j), vec![speed])
     }
-    fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
-        self.ask(m::GetRefVelocity { j })
+    remote_calls! {
+        fn get_ref_velocity(j: usize) -> f64 => GetRefVelocity { j };
     }
     fn velocity_moves(&mut self, speeds: &[f64]) -> DevResult<()> {
         self.check_all(speeds)?;
@@ -969,8 +936,8 @@ impl IVelocityControl for RemoteControlBoard {
             speeds.to_vec(),
         )
     }
-    fn get_ref_velocities(&mut self) -> DevResult<Vec<f64>> {
-        self.ask(m::GetRefVelocities {})
+    remote_calls! {
+        fn get_ref_velocities() -> Vec<f64> => GetRefVelocities {};
     }
 }
 
@@ -994,30 +961,22 @@ impl IVelocityDirect for RemoteControlBoard {
             v.to_vec(),
         )
     }
-    fn get_ref_velocity_direct(&mut self, j: usize) -> DevResult<f64> {
-        self.ask(m::GetRefVelocityDirect { j })
-    }
-    fn get_ref_velocities_direct(&mut self) -> DevResult<Vec<f64>> {
-        self.ask(m::GetRefVelocitiesDirect {})
-    }
-    fn get_ref_velocities_direct_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
-        self.ask(m::GetRefVelocitiesDirectGroup {
-            joints: group(joints),
-        })
+    remote_calls! {
+        fn get_ref_velocity_direct(j: usize) -> f64 => GetRefVelocityDirect { j };
+        fn get_ref_velocities_direct() -> Vec<f64> => GetRefVelocitiesDirect {};
+        fn get_ref_velocities_direct_group(joints: &[usize]) -> Vec<f64> =>
+            GetRefVelocitiesDirectGroup {
+                joints: group(joints)
+            };
     }
 }
 
 impl IRemoteVariables for RemoteControlBoard {
-    fn get_remote_variable(&mut self, key: &str) -> DevResult<Bottle> {
-        self.ask(m::GetRemoteVariable {
-            key: key.to_string(),
-        })
-    }
-    fn set_remote_variable(&mut self, key: &str, value: &Bottle) -> DevResult<()> {
-        self.ask(m::SetRemoteVariable {
-            key: key.to_string(),
-            value: crate::controlboard::v3::Flat(value.clone()),
-        })
+    remote_calls! {
+        fn get_remote_variable(key: &str) -> Bottle => GetRemoteVariable { key: key.to_string() };
+        fn set_remote_variable(key: &str, value: &Bottle) -> () => SetRemoteVariable {
+            key: key.to_string(), value: crate::controlboard::v3::Flat(value.clone())
+        };
     }
     fn get_remote_variables_list(&mut self) -> DevResult<Bottle> {
         self.ask(m::GetRemoteVariablesList {}).map(|k| k.0)
@@ -1025,23 +984,21 @@ impl IRemoteVariables for RemoteControlBoard {
 }
 
 impl IJointFault for RemoteControlBoard {
-    fn get_last_joint_fault(&mut self, j: usize) -> DevResult<(i32, String)> {
-        self.ask(m::GetLastJointFault { j })
+    remote_calls! {
+        fn get_last_joint_fault(j: usize) -> (i32, String) => GetLastJointFault { j };
     }
 }
 
 impl IJointBrake for RemoteControlBoard {
-    fn is_joint_braked(&mut self, j: usize) -> DevResult<bool> {
-        self.ask(m::IsJointBraked { j })
-    }
-    fn set_manual_brake_active(&mut self, j: usize, active: bool) -> DevResult<()> {
-        self.ask(m::SetManualBrakeActive { j, active })
-    }
-    fn set_auto_brake_enabled(&mut self, j: usize, enabled: bool) -> DevResult<()> {
-        self.ask(m::SetAutoBrakeEnabled { j, enabled })
-    }
-    fn get_auto_brake_enabled(&mut self, j: usize) -> DevResult<bool> {
-        self.ask(m::GetAutoBrakeEnabled { j })
+    remote_calls! {
+        fn is_joint_braked(j: usize) -> bool => IsJointBraked { j };
+        fn set_manual_brake_active(j: usize, active: bool) -> () => SetManualBrakeActive {
+            j, active
+        };
+        fn set_auto_brake_enabled(j: usize, enabled: bool) -> () => SetAutoBrakeEnabled {
+            j, enabled
+        };
+        fn get_auto_brake_enabled(j: usize) -> bool => GetAutoBrakeEnabled { j };
     }
 }
 
@@ -1049,8 +1006,10 @@ impl IControlMode for RemoteControlBoard {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn get_available_control_modes(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
-        self.ask(m::GetAvailableControlModes { j: J16(j) })
+    remote_calls! {
+        fn get_available_control_modes(j: usize) -> Vec<Vocab32> => GetAvailableControlModes {
+            j: J16(j)
+        };
     }
     fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
         let j = self.joint(j)?;
@@ -1059,8 +1018,8 @@ impl IControlMode for RemoteControlBoard {
             c.values.get(j).copied().filter(|_| c.valid).map(Vocab32)
         })
     }
-    fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
-        self.ask(m::SetControlMode { j, mode })
+    remote_calls! {
+        fn set_control_mode(j: usize, mode: Vocab32) -> () => SetControlMode { j, mode };
     }
     fn get_control_modes(&mut self) -> DevResult<Vec<Vocab32>> {
         self.state(|d, _| {
@@ -1069,10 +1028,8 @@ impl IControlMode for RemoteControlBoard {
                 .then(|| c.values.iter().copied().map(Vocab32).collect())
         })
     }
-    fn set_control_modes(&mut self, modes: &[Vocab32]) -> DevResult<()> {
-        self.ask(m::SetControlModes {
-            modes: modes.to_vec(),
-        })
+    remote_calls! {
+        fn set_control_modes(modes: &[Vocab32]) -> () => SetControlModes { modes: modes.to_vec() };
     }
     fn set_control_modes_group(&mut self, joints: &[usize], modes: &[Vocab32]) -> DevResult<()> {
         let (joints, modes) = (group(joints), modes.to_vec());
@@ -1091,8 +1048,8 @@ impl IInteractionMode for RemoteControlBoard {
             c.values.get(j).copied().filter(|_| c.valid).map(Vocab32)
         })
     }
-    fn set_interaction_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
-        self.ask(m::SetInteractionMode { j, mode })
+    remote_calls! {
+        fn set_interaction_mode(j: usize, mode: Vocab32) -> () => SetInteractionMode { j, mode };
     }
     fn get_interaction_modes(&mut self) -> DevResult<Vec<Vocab32>> {
         self.state(|d, _| {
@@ -1101,10 +1058,10 @@ impl IInteractionMode for RemoteControlBoard {
                 .then(|| c.values.iter().copied().map(Vocab32).collect())
         })
     }
-    fn set_interaction_modes(&mut self, modes: &[Vocab32]) -> DevResult<()> {
-        self.ask(m::SetInteractionModes {
-            modes: modes.to_vec(),
-        })
+    remote_calls! {
+        fn set_interaction_modes(modes: &[Vocab32]) -> () => SetInteractionModes {
+            modes: modes.to_vec()
+        };
     }
     fn set_interaction_modes_group(
         &mut self,
@@ -1117,8 +1074,8 @@ impl IInteractionMode for RemoteControlBoard {
 }
 
 impl IAxisInfo for RemoteControlBoard {
-    fn get_axis_name(&mut self, j: usize) -> DevResult<String> {
-        self.ask(m::GetAxisName { j })
+    remote_calls! {
+        fn get_axis_name(j: usize) -> String => GetAxisName { j };
     }
     fn get_joint_type(&mut self, j: usize) -> DevResult<Vocab32> {
         self.ask(m::GetJointType { j }).map(Vocab32)
@@ -1126,25 +1083,13 @@ impl IAxisInfo for RemoteControlBoard {
 }
 
 impl IControlLimits for RemoteControlBoard {
-    fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        self.ask(m::SetLimits {
-            j: J16(j),
-            min,
-            max,
-        })
-    }
-    fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        self.ask(m::GetLimits { j: J16(j) })
-    }
-    fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        self.ask(m::SetVelLimits {
-            j: J16(j),
-            min,
-            max,
-        })
-    }
-    fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        self.ask(m::GetVelLimits { j: J16(j) })
+    remote_calls! {
+        fn set_limits(j: usize, min: f64, max: f64) -> () => SetLimits { j: J16(j), min, max };
+        fn get_limits(j: usize) -> (f64, f64) => GetLimits { j: J16(j) };
+        fn set_vel_limits(j: usize, min: f64, max: f64) -> () => SetVelLimits {
+            j: J16(j), min, max
+        };
+        fn get_vel_limits(j: usize) -> (f64, f64) => GetVelLimits { j: J16(j) };
     }
 }
 
@@ -1162,11 +1107,10 @@ impl ITorqueControl for RemoteControlBoard {
                 got: got.0.len(),
             })
     }
-    fn set_motor_torque_params(&mut self, j: usize, p: [f64; 9]) -> DevResult<()> {
-        self.ask(m::SetMotorTorqueParams {
-            j,
-            params: crate::controlboard::v3::Listed(p.to_vec()),
-        })
+    remote_calls! {
+        fn set_motor_torque_params(j: usize, p: [f64; 9]) -> () => SetMotorTorqueParams {
+            j, params: crate::controlboard::v3::Listed(p.to_vec())
+        };
     }
     fn get_torque(&mut self, j: usize) -> DevResult<f64> {
         self.state_one(j, |d| &d.torque)
@@ -1175,34 +1119,24 @@ impl ITorqueControl for RemoteControlBoard {
         let j = self.joint(j)?;
         self.stream(Kind::RefTorque, Joints::One(j), vec![t])
     }
-    fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
-        self.ask(m::GetRefTorque { j })
+    remote_calls! {
+        fn get_ref_torque(j: usize) -> f64 => GetRefTorque { j };
     }
     fn get_torques(&mut self) -> DevResult<Vec<f64>> {
         self.state_vec(|d| &d.torque)
     }
-    fn get_torque_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        self.ask(m::GetTorqueRange { j })
+    remote_calls! {
+        fn get_torque_range(j: usize) -> (f64, f64) => GetTorqueRange { j };
     }
 }
 
 impl IMotorEncoders for RemoteControlBoard {
-    fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
-        self.ask(m::GetNumOfMotorEncoders {})
-    }
-    fn set_motor_encoder(&mut self, m: usize, value: f64) -> DevResult<()> {
-        self.ask(m::SetMotorEncoder { m, value })
-    }
-    fn set_motor_encoders(&mut self, values: &[f64]) -> DevResult<()> {
-        self.ask(m::SetMotorEncoders {
-            values: values.to_vec(),
-        })
-    }
-    fn reset_motor_encoder(&mut self, m: usize) -> DevResult<()> {
-        self.ask(m::ResetMotorEncoder { m })
-    }
-    fn reset_motor_encoders(&mut self) -> DevResult<()> {
-        self.ask(m::ResetMotorEncoders {})
+    remote_calls! {
+        fn get_num_of_motor_encoders() -> usize => GetNumOfMotorEncoders {};
+        fn set_motor_encoder(m: usize, value: f64) -> () => SetMotorEncoder { m, value };
+        fn set_motor_encoders(values: &[f64]) -> () => SetMotorEncoders { values: values.to_vec() };
+        fn reset_motor_encoder(m: usize) -> () => ResetMotorEncoder { m };
+        fn reset_motor_encoders() -> () => ResetMotorEncoders {};
     }
     fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
         self.state_one(m, |d| &d.motor_position)
@@ -1225,71 +1159,37 @@ impl IMotorEncoders for RemoteControlBoard {
 }
 
 impl IAmplifierControl for RemoteControlBoard {
-    fn enable_amp(&mut self, j: usize) -> DevResult<()> {
-        self.ask(m::EnableAmp { j })
-    }
-    fn disable_amp(&mut self, j: usize) -> DevResult<()> {
-        self.ask(m::DisableAmp { j })
-    }
-    fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>> {
-        self.ask(m::GetAmpStatuses {})
+    remote_calls! {
+        fn enable_amp(j: usize) -> () => EnableAmp { j };
+        fn disable_amp(j: usize) -> () => DisableAmp { j };
+        fn get_amp_statuses() -> Vec<i32> => GetAmpStatuses {};
     }
     fn get_current(&mut self, j: usize) -> DevResult<f64> {
         self.state_one(j, |d| &d.current)
     }
-    fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
-        self.ask(m::GetMaxCurrent { j })
-    }
-    fn set_max_current(&mut self, j: usize, value: f64) -> DevResult<()> {
-        self.ask(m::SetMaxCurrent { j, value })
-    }
-    fn get_amp_status(&mut self, j: usize) -> DevResult<i32> {
-        self.ask(m::GetAmpStatus { j })
-    }
-    fn get_nominal_current(&mut self, m: usize) -> DevResult<f64> {
-        self.ask(m::GetNominalCurrent { m })
-    }
-    fn set_nominal_current(&mut self, m: usize, value: f64) -> DevResult<()> {
-        self.ask(m::SetNominalCurrent { m, value })
-    }
-    fn get_peak_current(&mut self, m: usize) -> DevResult<f64> {
-        self.ask(m::GetPeakCurrent { m })
-    }
-    fn set_peak_current(&mut self, m: usize, value: f64) -> DevResult<()> {
-        self.ask(m::SetPeakCurrent { m, value })
-    }
-    fn get_pwm(&mut self, m: usize) -> DevResult<f64> {
-        self.ask(m::GetPwm { m })
-    }
-    fn get_pwm_limit(&mut self, m: usize) -> DevResult<f64> {
-        self.ask(m::GetPwmLimit { m })
-    }
-    fn set_pwm_limit(&mut self, m: usize, value: f64) -> DevResult<()> {
-        self.ask(m::SetPwmLimit { m, value })
-    }
-    fn get_power_supply_voltage(&mut self, m: usize) -> DevResult<f64> {
-        self.ask(m::GetPowerSupplyVoltage { m })
+    remote_calls! {
+        fn get_max_current(j: usize) -> f64 => GetMaxCurrent { j };
+        fn set_max_current(j: usize, value: f64) -> () => SetMaxCurrent { j, value };
+        fn get_amp_status(j: usize) -> i32 => GetAmpStatus { j };
+        fn get_nominal_current(m: usize) -> f64 => GetNominalCurrent { m };
+        fn set_nominal_current(m: usize, value: f64) -> () => SetNominalCurrent { m, value };
+        fn get_peak_current(m: usize) -> f64 => GetPeakCurrent { m };
+        fn set_peak_current(m: usize, value: f64) -> () => SetPeakCurrent { m, value };
+        fn get_pwm(m: usize) -> f64 => GetPwm { m };
+        fn get_pwm_limit(m: usize) -> f64 => GetPwmLimit { m };
+        fn set_pwm_limit(m: usize, value: f64) -> () => SetPwmLimit { m, value };
+        fn get_power_supply_voltage(m: usize) -> f64 => GetPowerSupplyVoltage { m };
     }
 }
 
 impl IMotor for RemoteControlBoard {
-    fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
-        self.ask(m::GetTemperature { m })
-    }
-    fn get_number_of_motors(&mut self) -> DevResult<usize> {
-        self.ask(m::GetNumberOfMotors {})
-    }
-    fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
-        self.ask(m::GetGearboxRatio { m })
-    }
-    fn set_gearbox_ratio(&mut self, m: usize, value: f64) -> DevResult<()> {
-        self.ask(m::SetGearboxRatio { m, value })
-    }
-    fn get_temperature_limit(&mut self, m: usize) -> DevResult<f64> {
-        self.ask(m::GetTemperatureLimit { m })
-    }
-    fn set_temperature_limit(&mut self, m: usize, value: f64) -> DevResult<()> {
-        self.ask(m::SetTemperatureLimit { m, value })
+    remote_calls! {
+        fn get_temperature(m: usize) -> f64 => GetTemperature { m };
+        fn get_number_of_motors() -> usize => GetNumberOfMotors {};
+        fn get_gearbox_ratio(m: usize) -> f64 => GetGearboxRatio { m };
+        fn set_gearbox_ratio(m: usize, value: f64) -> () => SetGearboxRatio { m, value };
+        fn get_temperature_limit(m: usize) -> f64 => GetTemperatureLimit { m };
+        fn set_temperature_limit(m: usize, value: f64) -> () => SetTemperatureLimit { m, value };
     }
 }
 
@@ -1311,11 +1211,10 @@ impl IPidControl for RemoteControlBoard {
     fn get_pid_feedforward(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
         self.pid_feedforward(ty, j)
     }
-    fn get_pid_extra_info(&mut self, ty: Vocab32, j: usize) -> DevResult<PidExtraInfo> {
-        self.ask(m::GetPidExtraInfo {
-            ty: PidType(ty),
-            j: J16(j),
-        })
+    remote_calls! {
+        fn get_pid_extra_info(ty: Vocab32, j: usize) -> PidExtraInfo => GetPidExtraInfo {
+            ty: PidType(ty), j: J16(j)
+        };
     }
     fn get_available_pids(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
         let numbered = self.ask(m::GetAvailablePids { j: J16(j) })?;
@@ -1324,76 +1223,36 @@ impl IPidControl for RemoteControlBoard {
             .map(|v| PidType::from_v4(v).0)
             .collect())
     }
-    fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
-        self.ask(m::GetPid {
-            ty: PidType(ty),
-            j: J16(j),
-        })
-    }
-    fn set_pid(&mut self, ty: Vocab32, j: usize, pid: Pid) -> DevResult<()> {
-        self.ask(m::SetPid {
-            ty: PidType(ty),
-            j: J16(j),
-            pid,
-        })
-    }
-    fn enable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        self.ask(m::EnablePid {
-            ty: PidType(ty),
-            j: J16(j),
-        })
-    }
-    fn disable_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        self.ask(m::DisablePid {
-            ty: PidType(ty),
-            j: J16(j),
-        })
-    }
-    fn is_pid_enabled(&mut self, ty: Vocab32, j: usize) -> DevResult<bool> {
-        self.ask(m::IsPidEnabled {
-            ty: PidType(ty),
-            j: J16(j),
-        })
-    }
-    fn set_pid_reference(&mut self, ty: Vocab32, j: usize, value: f64) -> DevResult<()> {
-        self.ask(m::SetPidReference {
-            ty: PidType(ty),
-            j: J16(j),
-            value,
-        })
-    }
-    fn get_pid_reference(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        self.ask(m::GetPidReference {
-            ty: PidType(ty),
-            j: J16(j),
-        })
-    }
-    fn get_pid_error(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        self.ask(m::GetPidError {
-            ty: PidType(ty),
-            j: J16(j),
-        })
-    }
-    fn get_pid_output(&mut self, ty: Vocab32, j: usize) -> DevResult<f64> {
-        self.ask(m::GetPidOutput {
-            ty: PidType(ty),
-            j: J16(j),
-        })
-    }
-    fn reset_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<()> {
-        self.ask(m::ResetPid {
-            ty: PidType(ty),
-            j: J16(j),
-        })
+    remote_calls! {
+        fn get_pid(ty: Vocab32, j: usize) -> Pid => GetPid { ty: PidType(ty), j: J16(j) };
+        fn set_pid(ty: Vocab32, j: usize, pid: Pid) -> () => SetPid {
+            ty: PidType(ty), j: J16(j), pid
+        };
+        fn enable_pid(ty: Vocab32, j: usize) -> () => EnablePid { ty: PidType(ty), j: J16(j) };
+        fn disable_pid(ty: Vocab32, j: usize) -> () => DisablePid { ty: PidType(ty), j: J16(j) };
+        fn is_pid_enabled(ty: Vocab32, j: usize) -> bool => IsPidEnabled {
+            ty: PidType(ty), j: J16(j)
+        };
+        fn set_pid_reference(ty: Vocab32, j: usize, value: f64) -> () => SetPidReference {
+            ty: PidType(ty), j: J16(j), value
+        };
+        fn get_pid_reference(ty: Vocab32, j: usize) -> f64 => GetPidReference {
+            ty: PidType(ty), j: J16(j)
+        };
+        fn get_pid_error(ty: Vocab32, j: usize) -> f64 => GetPidError {
+            ty: PidType(ty), j: J16(j)
+        };
+        fn get_pid_output(ty: Vocab32, j: usize) -> f64 => GetPidOutput {
+            ty: PidType(ty), j: J16(j)
+        };
+        fn reset_pid(ty: Vocab32, j: usize) -> () => ResetPid { ty: PidType(ty), j: J16(j) };
     }
 }
 
 impl ICurrentControl for RemoteControlBoard {
-    fn get_ref_current(&mut self, j: usize) -> DevResult<f64> {
-        self.ask(m::GetRefCurrent { j })
-    }
-    fn get_current_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        self.ask(m::GetCurrentRange { j })
+    remote_calls! {
+        fn get_ref_current(j: usize) -> f64 => GetRefCurrent { j };
+        fn get_current_range(j: usize) -> (f64, f64) => GetCurrentRange { j };
     }
     fn set_ref_current(&mut self, j: usize, current: f64) -> DevResult<()> {
         let j = self.joint(j)?;
@@ -1414,8 +1273,8 @@ impl ICurrentControl for RemoteControlBoard {
 }
 
 impl IPwmControl for RemoteControlBoard {
-    fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64> {
-        self.ask(m::GetRefDutyCycle { j })
+    remote_calls! {
+        fn get_ref_duty_cycle(j: usize) -> f64 => GetRefDutyCycle { j };
     }
     fn set_ref_duty_cycle(&mut self, j: usize, duty: f64) -> DevResult<()> {
         let j = self.joint(j)?;
@@ -1438,8 +1297,8 @@ impl IPositionDirect for RemoteControlBoard {
         let j = self.joint(j)?;
         self.stream(Kind::Position, Joints::One(j), vec![reference])
     }
-    fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
-        self.ask(m::GetRefPosition { j })
+    remote_calls! {
+        fn get_ref_position(j: usize) -> f64 => GetRefPosition { j };
     }
     fn set_positions(&mut self, references: &[f64]) -> DevResult<()> {
         self.check_all(references)?;
@@ -1453,13 +1312,11 @@ impl IPositionDirect for RemoteControlBoard {
             references.to_vec(),
         )
     }
-    fn get_ref_positions(&mut self) -> DevResult<Vec<f64>> {
-        self.ask(m::GetRefPositions {})
-    }
-    fn get_ref_positions_group(&mut self, joints: &[usize]) -> DevResult<Vec<f64>> {
-        self.ask(m::GetRefPositionsGroup {
-            joints: group(joints),
-        })
+    remote_calls! {
+        fn get_ref_positions() -> Vec<f64> => GetRefPositions {};
+        fn get_ref_positions_group(joints: &[usize]) -> Vec<f64> => GetRefPositionsGroup {
+            joints: group(joints)
+        };
     }
 }
 
@@ -1477,20 +1334,18 @@ impl IImpedanceControl for RemoteControlBoard {
         let v = padded(self.ask(m::GetImpedance { j })?.0);
         Ok((v[0], v[1]))
     }
-    fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
-        self.ask(m::SetImpedance {
-            j,
-            values: Listed(vec![stiffness, damping]),
-        })
+    remote_calls! {
+        fn set_impedance(j: usize, stiffness: f64, damping: f64) -> () => SetImpedance {
+            j, values: Listed(vec![stiffness, damping])
+        };
     }
     fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
         Ok(padded(self.ask(m::GetImpedanceOffset { j })?.0)[0])
     }
-    fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
-        self.ask(m::SetImpedanceOffset {
-            j,
-            values: Listed(vec![offset]),
-        })
+    remote_calls! {
+        fn set_impedance_offset(j: usize, offset: f64) -> () => SetImpedanceOffset {
+            j, values: Listed(vec![offset])
+        };
     }
     fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits> {
         let v = padded(self.ask(m::GetImpedanceLimits { j })?.0);
@@ -1545,49 +1400,35 @@ impl IControlCalibration for RemoteControlBoard {
     fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
         self.ask(m::CalibrationDone { j }).map(|d| d.0)
     }
-    fn calibrate_robot(&mut self) -> DevResult<()> {
-        self.ask(m::CalibrateRobot {})
+    remote_calls! {
+        fn calibrate_robot() -> () => CalibrateRobot {};
     }
     fn park(&mut self, _wait: bool) -> DevResult<()> {
         // a lone vocab, as C++ sends it
         self.ask(m::Park { wait: None })
     }
-    fn abort_calibration(&mut self) -> DevResult<()> {
-        self.ask(m::AbortCalibration {})
-    }
-    fn abort_park(&mut self) -> DevResult<()> {
-        self.ask(m::AbortPark {})
+    remote_calls! {
+        fn abort_calibration() -> () => AbortCalibration {};
+        fn abort_park() -> () => AbortPark {};
     }
 }
 
 impl IRemoteCalibrator for RemoteControlBoard {
-    fn is_calibrator_device_present(&mut self) -> DevResult<bool> {
-        self.ask(m::IsCalibratorPresent {})
-    }
-    fn calibrate_single_joint(&mut self, j: usize) -> DevResult<()> {
-        self.ask(m::CalibrateSingleJoint { j })
-    }
-    fn calibrate_whole_part(&mut self) -> DevResult<()> {
-        self.ask(m::CalibrateWholePart {})
-    }
-    fn homing_single_joint(&mut self, j: usize) -> DevResult<()> {
-        self.ask(m::HomingSingleJoint { j })
-    }
-    fn homing_whole_part(&mut self) -> DevResult<()> {
-        self.ask(m::HomingWholePart {})
+    remote_calls! {
+        fn is_calibrator_device_present() -> bool => IsCalibratorPresent {};
+        fn calibrate_single_joint(j: usize) -> () => CalibrateSingleJoint { j };
+        fn calibrate_whole_part() -> () => CalibrateWholePart {};
+        fn homing_single_joint(j: usize) -> () => HomingSingleJoint { j };
+        fn homing_whole_part() -> () => HomingWholePart {};
     }
     fn park_single_joint(&mut self, j: usize, _wait: bool) -> DevResult<()> {
         // the wait flag does not travel (C++ drops it too)
         self.ask(m::ParkSingleJoint { j })
     }
-    fn park_whole_part(&mut self) -> DevResult<()> {
-        self.ask(m::ParkWholePart {})
-    }
-    fn quit_calibrate(&mut self) -> DevResult<()> {
-        self.ask(m::QuitCalibrate {})
-    }
-    fn quit_park(&mut self) -> DevResult<()> {
-        self.ask(m::QuitPark {})
+    remote_calls! {
+        fn park_whole_part() -> () => ParkWholePart {};
+        fn quit_calibrate() -> () => QuitCalibrate {};
+        fn quit_park() -> () => QuitPark {};
     }
 }
 
