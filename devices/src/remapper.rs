@@ -362,6 +362,19 @@ macro_rules! on {
     };
 }
 
+/// Trait methods that hand joint `j` to the same method of the board that has it, as that
+/// board's joint: `fn name(j, args) -> Reply => as_view;` (C++'s remapper does this by
+/// hand, method by method).
+macro_rules! joint_calls {
+    ($(fn $name:ident($j:ident $(, $arg:ident: $ty:ty)*) -> $ret:ty => $view:ident;)*) => {
+        $(
+            fn $name(&mut self, $j: usize $(, $arg: $ty)*) -> DevResult<$ret> {
+                on!(self, $j, $view, |d, l| d.$name(l $(, $arg)*))
+            }
+        )*
+    };
+}
+
 impl DeviceDriver for ControlBoardRemapper {
     fn parameters(&self) -> Vec<crate::params::ParamSpec> {
         ControlBoardRemapperParams::PARAMS.to_vec()
@@ -512,23 +525,13 @@ impl IEncoders for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn get_encoder(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_encoders, |e, l| e.get_encoder(l))
-    }
-    fn get_encoder_speed(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_encoders, |e, l| e.get_encoder_speed(l))
-    }
-    fn get_encoder_acceleration(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_encoders, |e, l| e.get_encoder_acceleration(l))
-    }
-    fn get_encoder_timed(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_encoders, |e, l| e.get_encoder_timed(l))
-    }
-    fn set_encoder(&mut self, j: usize, value: f64) -> DevResult<()> {
-        on!(self, j, as_encoders, |e, l| e.set_encoder(l, value))
-    }
-    fn reset_encoder(&mut self, j: usize) -> DevResult<()> {
-        on!(self, j, as_encoders, |e, l| e.reset_encoder(l))
+    joint_calls! {
+        fn get_encoder(j) -> f64 => as_encoders;
+        fn get_encoder_speed(j) -> f64 => as_encoders;
+        fn get_encoder_acceleration(j) -> f64 => as_encoders;
+        fn get_encoder_timed(j) -> (f64, f64) => as_encoders;
+        fn set_encoder(j, value: f64) -> () => as_encoders;
+        fn reset_encoder(j) -> () => as_encoders;
     }
 }
 
@@ -536,38 +539,16 @@ impl IPositionControl for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn position_move(&mut self, j: usize, target: f64) -> DevResult<()> {
-        on!(self, j, as_position_control, |p, l| p
-            .position_move(l, target))
-    }
-    fn relative_move(&mut self, j: usize, delta: f64) -> DevResult<()> {
-        on!(self, j, as_position_control, |p, l| p
-            .relative_move(l, delta))
-    }
-    fn check_motion_done(&mut self, j: usize) -> DevResult<bool> {
-        on!(self, j, as_position_control, |p, l| p.check_motion_done(l))
-    }
-    fn set_ref_speed(&mut self, j: usize, speed: f64) -> DevResult<()> {
-        on!(self, j, as_position_control, |p, l| p
-            .set_ref_speed(l, speed))
-    }
-    fn set_ref_acceleration(&mut self, j: usize, acc: f64) -> DevResult<()> {
-        on!(self, j, as_position_control, |p, l| p
-            .set_ref_acceleration(l, acc))
-    }
-    fn get_ref_speed(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_position_control, |p, l| p.get_ref_speed(l))
-    }
-    fn get_ref_acceleration(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_position_control, |p, l| p
-            .get_ref_acceleration(l))
-    }
-    fn stop(&mut self, j: usize) -> DevResult<()> {
-        on!(self, j, as_position_control, |p, l| p.stop(l))
-    }
-    fn get_target_position(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_position_control, |p, l| p
-            .get_target_position(l))
+    joint_calls! {
+        fn position_move(j, target: f64) -> () => as_position_control;
+        fn relative_move(j, delta: f64) -> () => as_position_control;
+        fn check_motion_done(j) -> bool => as_position_control;
+        fn set_ref_speed(j, speed: f64) -> () => as_position_control;
+        fn set_ref_acceleration(j, acc: f64) -> () => as_position_control;
+        fn get_ref_speed(j) -> f64 => as_position_control;
+        fn get_ref_acceleration(j) -> f64 => as_position_control;
+        fn stop(j) -> () => as_position_control;
+        fn get_target_position(j) -> f64 => as_position_control;
     }
 }
 
@@ -575,12 +556,9 @@ impl IVelocityControl for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn velocity_move(&mut self, j: usize, speed: f64) -> DevResult<()> {
-        on!(self, j, as_velocity_control, |v, l| v
-            .velocity_move(l, speed))
-    }
-    fn get_ref_velocity(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_velocity_control, |v, l| v.get_ref_velocity(l))
+    joint_calls! {
+        fn velocity_move(j, speed: f64) -> () => as_velocity_control;
+        fn get_ref_velocity(j) -> f64 => as_velocity_control;
     }
 }
 
@@ -588,36 +566,24 @@ impl IVelocityDirect for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn set_ref_velocity_direct(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(self, j, as_velocity_direct, |d, l| d
-            .set_ref_velocity_direct(l, v))
-    }
-    fn get_ref_velocity_direct(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_velocity_direct, |d, l| d
-            .get_ref_velocity_direct(l))
+    joint_calls! {
+        fn set_ref_velocity_direct(j, v: f64) -> () => as_velocity_direct;
+        fn get_ref_velocity_direct(j) -> f64 => as_velocity_direct;
     }
 }
 
 impl IJointFault for ControlBoardRemapper {
-    fn get_last_joint_fault(&mut self, j: usize) -> DevResult<(i32, String)> {
-        on!(self, j, as_joint_fault, |f, l| f.get_last_joint_fault(l))
+    joint_calls! {
+        fn get_last_joint_fault(j) -> (i32, String) => as_joint_fault;
     }
 }
 
 impl IJointBrake for ControlBoardRemapper {
-    fn is_joint_braked(&mut self, j: usize) -> DevResult<bool> {
-        on!(self, j, as_joint_brake, |b, l| b.is_joint_braked(l))
-    }
-    fn set_manual_brake_active(&mut self, j: usize, active: bool) -> DevResult<()> {
-        on!(self, j, as_joint_brake, |b, l| b
-            .set_manual_brake_active(l, active))
-    }
-    fn set_auto_brake_enabled(&mut self, j: usize, enabled: bool) -> DevResult<()> {
-        on!(self, j, as_joint_brake, |b, l| b
-            .set_auto_brake_enabled(l, enabled))
-    }
-    fn get_auto_brake_enabled(&mut self, j: usize) -> DevResult<bool> {
-        on!(self, j, as_joint_brake, |b, l| b.get_auto_brake_enabled(l))
+    joint_calls! {
+        fn is_joint_braked(j) -> bool => as_joint_brake;
+        fn set_manual_brake_active(j, active: bool) -> () => as_joint_brake;
+        fn set_auto_brake_enabled(j, enabled: bool) -> () => as_joint_brake;
+        fn get_auto_brake_enabled(j) -> bool => as_joint_brake;
     }
 }
 
@@ -625,15 +591,10 @@ impl IControlMode for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn get_available_control_modes(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
-        on!(self, j, as_control_mode, |c, l| c
-            .get_available_control_modes(l))
-    }
-    fn get_control_mode(&mut self, j: usize) -> DevResult<Vocab32> {
-        on!(self, j, as_control_mode, |c, l| c.get_control_mode(l))
-    }
-    fn set_control_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
-        on!(self, j, as_control_mode, |c, l| c.set_control_mode(l, mode))
+    joint_calls! {
+        fn get_available_control_modes(j) -> Vec<Vocab32> => as_control_mode;
+        fn get_control_mode(j) -> Vocab32 => as_control_mode;
+        fn set_control_mode(j, mode: Vocab32) -> () => as_control_mode;
     }
 }
 
@@ -641,38 +602,25 @@ impl IInteractionMode for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn get_interaction_mode(&mut self, j: usize) -> DevResult<Vocab32> {
-        on!(self, j, as_interaction_mode, |i, l| i
-            .get_interaction_mode(l))
-    }
-    fn set_interaction_mode(&mut self, j: usize, mode: Vocab32) -> DevResult<()> {
-        on!(self, j, as_interaction_mode, |i, l| i
-            .set_interaction_mode(l, mode))
+    joint_calls! {
+        fn get_interaction_mode(j) -> Vocab32 => as_interaction_mode;
+        fn set_interaction_mode(j, mode: Vocab32) -> () => as_interaction_mode;
     }
 }
 
 impl IAxisInfo for ControlBoardRemapper {
-    fn get_axis_name(&mut self, j: usize) -> DevResult<String> {
-        on!(self, j, as_axis_info, |a, l| a.get_axis_name(l))
-    }
-    fn get_joint_type(&mut self, j: usize) -> DevResult<Vocab32> {
-        on!(self, j, as_axis_info, |a, l| a.get_joint_type(l))
+    joint_calls! {
+        fn get_axis_name(j) -> String => as_axis_info;
+        fn get_joint_type(j) -> Vocab32 => as_axis_info;
     }
 }
 
 impl IControlLimits for ControlBoardRemapper {
-    fn set_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        on!(self, j, as_control_limits, |c, l| c.set_limits(l, min, max))
-    }
-    fn get_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_control_limits, |c, l| c.get_limits(l))
-    }
-    fn set_vel_limits(&mut self, j: usize, min: f64, max: f64) -> DevResult<()> {
-        on!(self, j, as_control_limits, |c, l| c
-            .set_vel_limits(l, min, max))
-    }
-    fn get_vel_limits(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_control_limits, |c, l| c.get_vel_limits(l))
+    joint_calls! {
+        fn set_limits(j, min: f64, max: f64) -> () => as_control_limits;
+        fn get_limits(j) -> (f64, f64) => as_control_limits;
+        fn set_vel_limits(j, min: f64, max: f64) -> () => as_control_limits;
+        fn get_vel_limits(j) -> (f64, f64) => as_control_limits;
     }
 }
 
@@ -680,25 +628,13 @@ impl ITorqueControl for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn get_motor_torque_params(&mut self, j: usize) -> DevResult<[f64; 9]> {
-        on!(self, j, as_torque_control, |t, l| t
-            .get_motor_torque_params(l))
-    }
-    fn set_motor_torque_params(&mut self, j: usize, p: [f64; 9]) -> DevResult<()> {
-        on!(self, j, as_torque_control, |t, l| t
-            .set_motor_torque_params(l, p))
-    }
-    fn get_torque(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_torque_control, |t, l| t.get_torque(l))
-    }
-    fn set_ref_torque(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(self, j, as_torque_control, |t, l| t.set_ref_torque(l, v))
-    }
-    fn get_ref_torque(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_torque_control, |t, l| t.get_ref_torque(l))
-    }
-    fn get_torque_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_torque_control, |t, l| t.get_torque_range(l))
+    joint_calls! {
+        fn get_motor_torque_params(j) -> [f64; 9] => as_torque_control;
+        fn set_motor_torque_params(j, p: [f64; 9]) -> () => as_torque_control;
+        fn get_torque(j) -> f64 => as_torque_control;
+        fn set_ref_torque(j, v: f64) -> () => as_torque_control;
+        fn get_ref_torque(j) -> f64 => as_torque_control;
+        fn get_torque_range(j) -> (f64, f64) => as_torque_control;
     }
 }
 
@@ -706,35 +642,20 @@ impl IMotorEncoders for ControlBoardRemapper {
     fn get_num_of_motor_encoders(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn get_motor_encoder_timed(&mut self, m: usize) -> DevResult<(f64, f64)> {
-        on!(self, m, as_motor_encoders, |e, l| e
-            .get_motor_encoder_timed(l))
-    }
-    fn set_motor_encoder(&mut self, m: usize, v: f64) -> DevResult<()> {
-        on!(self, m, as_motor_encoders, |e, l| e.set_motor_encoder(l, v))
-    }
-    fn reset_motor_encoder(&mut self, m: usize) -> DevResult<()> {
-        on!(self, m, as_motor_encoders, |e, l| e.reset_motor_encoder(l))
-    }
-    fn get_motor_encoder(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor_encoders, |e, l| e.get_motor_encoder(l))
-    }
-    fn get_motor_encoder_speed(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor_encoders, |e, l| e
-            .get_motor_encoder_speed(l))
-    }
-    fn get_motor_encoder_acceleration(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor_encoders, |e, l| e
-            .get_motor_encoder_acceleration(l))
+    joint_calls! {
+        fn get_motor_encoder_timed(m) -> (f64, f64) => as_motor_encoders;
+        fn set_motor_encoder(m, v: f64) -> () => as_motor_encoders;
+        fn reset_motor_encoder(m) -> () => as_motor_encoders;
+        fn get_motor_encoder(m) -> f64 => as_motor_encoders;
+        fn get_motor_encoder_speed(m) -> f64 => as_motor_encoders;
+        fn get_motor_encoder_acceleration(m) -> f64 => as_motor_encoders;
     }
 }
 
 impl IAmplifierControl for ControlBoardRemapper {
-    fn enable_amp(&mut self, j: usize) -> DevResult<()> {
-        on!(self, j, as_amplifier_control, |a, l| a.enable_amp(l))
-    }
-    fn disable_amp(&mut self, j: usize) -> DevResult<()> {
-        on!(self, j, as_amplifier_control, |a, l| a.disable_amp(l))
+    joint_calls! {
+        fn enable_amp(j) -> () => as_amplifier_control;
+        fn disable_amp(j) -> () => as_amplifier_control;
     }
     fn get_amp_statuses(&mut self) -> DevResult<Vec<i32>> {
         (0..self.axes()?)
@@ -749,68 +670,35 @@ impl IAmplifierControl for ControlBoardRemapper {
             })
             .collect()
     }
-    fn get_current(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_amplifier_control, |a, l| a.get_current(l))
-    }
-    fn get_max_current(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_amplifier_control, |a, l| a.get_max_current(l))
-    }
-    fn set_max_current(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(self, j, as_amplifier_control, |a, l| a
-            .set_max_current(l, v))
-    }
-    fn get_nominal_current(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_amplifier_control, |a, l| a
-            .get_nominal_current(l))
-    }
-    fn set_nominal_current(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(self, j, as_amplifier_control, |a, l| a
-            .set_nominal_current(l, v))
-    }
-    fn get_peak_current(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_amplifier_control, |a, l| a.get_peak_current(l))
-    }
-    fn set_peak_current(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(self, j, as_amplifier_control, |a, l| a
-            .set_peak_current(l, v))
-    }
-    fn get_pwm(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_amplifier_control, |a, l| a.get_pwm(l))
-    }
-    fn get_pwm_limit(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_amplifier_control, |a, l| a.get_pwm_limit(l))
-    }
-    fn set_pwm_limit(&mut self, j: usize, v: f64) -> DevResult<()> {
-        on!(self, j, as_amplifier_control, |a, l| a.set_pwm_limit(l, v))
-    }
-    fn get_power_supply_voltage(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_amplifier_control, |a, l| a
-            .get_power_supply_voltage(l))
-    }
-    fn get_amp_status(&mut self, j: usize) -> DevResult<i32> {
-        on!(self, j, as_amplifier_control, |a, l| a.get_amp_status(l))
+    joint_calls! {
+        fn get_current(j) -> f64 => as_amplifier_control;
+        fn get_max_current(j) -> f64 => as_amplifier_control;
+        fn set_max_current(j, v: f64) -> () => as_amplifier_control;
+        fn get_nominal_current(j) -> f64 => as_amplifier_control;
+        fn set_nominal_current(j, v: f64) -> () => as_amplifier_control;
+        fn get_peak_current(j) -> f64 => as_amplifier_control;
+        fn set_peak_current(j, v: f64) -> () => as_amplifier_control;
+        fn get_pwm(j) -> f64 => as_amplifier_control;
+        fn get_pwm_limit(j) -> f64 => as_amplifier_control;
+        fn set_pwm_limit(j, v: f64) -> () => as_amplifier_control;
+        fn get_power_supply_voltage(j) -> f64 => as_amplifier_control;
+        fn get_amp_status(j) -> i32 => as_amplifier_control;
     }
 }
 
 impl IMotor for ControlBoardRemapper {
-    fn get_temperature(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor, |x, l| x.get_temperature(l))
+    joint_calls! {
+        fn get_temperature(m) -> f64 => as_motor;
     }
     fn get_number_of_motors(&mut self) -> DevResult<usize> {
         // one motor per joint of the part, as C++ (motors and joints are remapped alike)
         self.axes()
     }
-    fn get_gearbox_ratio(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor, |x, l| x.get_gearbox_ratio(l))
-    }
-    fn set_gearbox_ratio(&mut self, m: usize, v: f64) -> DevResult<()> {
-        on!(self, m, as_motor, |x, l| x.set_gearbox_ratio(l, v))
-    }
-    fn get_temperature_limit(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_motor, |x, l| x.get_temperature_limit(l))
-    }
-    fn set_temperature_limit(&mut self, m: usize, v: f64) -> DevResult<()> {
-        on!(self, m, as_motor, |x, l| x.set_temperature_limit(l, v))
+    joint_calls! {
+        fn get_gearbox_ratio(m) -> f64 => as_motor;
+        fn set_gearbox_ratio(m, v: f64) -> () => as_motor;
+        fn get_temperature_limit(m) -> f64 => as_motor;
+        fn set_temperature_limit(m, v: f64) -> () => as_motor;
     }
 }
 
@@ -818,8 +706,8 @@ impl IPidControl for ControlBoardRemapper {
     fn get_pid(&mut self, ty: Vocab32, j: usize) -> DevResult<Pid> {
         on!(self, j, as_pid_control, |p, l| p.get_pid(ty, l))
     }
-    fn get_available_pids(&mut self, j: usize) -> DevResult<Vec<Vocab32>> {
-        on!(self, j, as_pid_control, |p, l| p.get_available_pids(l))
+    joint_calls! {
+        fn get_available_pids(j) -> Vec<Vocab32> => as_pid_control;
     }
     fn set_pid_feedforward(&mut self, ty: Vocab32, j: usize, v: f64) -> DevResult<()> {
         on!(self, j, as_pid_control, |p, l| p
@@ -862,28 +750,18 @@ impl IPidControl for ControlBoardRemapper {
 }
 
 impl ICurrentControl for ControlBoardRemapper {
-    fn get_ref_current(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_current_control, |c, l| c.get_ref_current(l))
-    }
-    fn get_current_range(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_current_control, |c, l| c.get_current_range(l))
-    }
-    fn set_ref_current(&mut self, j: usize, current: f64) -> DevResult<()> {
-        on!(self, j, as_current_control, |c, l| c
-            .set_ref_current(l, current))
+    joint_calls! {
+        fn get_ref_current(j) -> f64 => as_current_control;
+        fn get_current_range(j) -> (f64, f64) => as_current_control;
+        fn set_ref_current(j, current: f64) -> () => as_current_control;
     }
 }
 
 impl IPwmControl for ControlBoardRemapper {
-    fn get_ref_duty_cycle(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_pwm_control, |c, l| c.get_ref_duty_cycle(l))
-    }
-    fn set_ref_duty_cycle(&mut self, j: usize, duty: f64) -> DevResult<()> {
-        on!(self, j, as_pwm_control, |c, l| c
-            .set_ref_duty_cycle(l, duty))
-    }
-    fn get_duty_cycle(&mut self, m: usize) -> DevResult<f64> {
-        on!(self, m, as_pwm_control, |c, l| c.get_duty_cycle(l))
+    joint_calls! {
+        fn get_ref_duty_cycle(j) -> f64 => as_pwm_control;
+        fn set_ref_duty_cycle(j, duty: f64) -> () => as_pwm_control;
+        fn get_duty_cycle(m) -> f64 => as_pwm_control;
     }
 }
 
@@ -891,24 +769,12 @@ impl IImpedanceControl for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn get_impedance(&mut self, j: usize) -> DevResult<(f64, f64)> {
-        on!(self, j, as_impedance_control, |i, l| i.get_impedance(l))
-    }
-    fn set_impedance(&mut self, j: usize, stiffness: f64, damping: f64) -> DevResult<()> {
-        on!(self, j, as_impedance_control, |i, l| i
-            .set_impedance(l, stiffness, damping))
-    }
-    fn get_impedance_offset(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_impedance_control, |i, l| i
-            .get_impedance_offset(l))
-    }
-    fn set_impedance_offset(&mut self, j: usize, offset: f64) -> DevResult<()> {
-        on!(self, j, as_impedance_control, |i, l| i
-            .set_impedance_offset(l, offset))
-    }
-    fn get_current_impedance_limit(&mut self, j: usize) -> DevResult<ImpedanceLimits> {
-        on!(self, j, as_impedance_control, |i, l| i
-            .get_current_impedance_limit(l))
+    joint_calls! {
+        fn get_impedance(j) -> (f64, f64) => as_impedance_control;
+        fn set_impedance(j, stiffness: f64, damping: f64) -> () => as_impedance_control;
+        fn get_impedance_offset(j) -> f64 => as_impedance_control;
+        fn set_impedance_offset(j, offset: f64) -> () => as_impedance_control;
+        fn get_current_impedance_limit(j) -> ImpedanceLimits => as_impedance_control;
     }
 }
 
@@ -932,9 +798,8 @@ impl IControlCalibration for ControlBoardRemapper {
         on!(self, j, as_control_calibration, |c, l| c
             .set_calibration_parameters(l, params))
     }
-    fn calibration_done(&mut self, j: usize) -> DevResult<bool> {
-        on!(self, j, as_control_calibration, |c, l| c
-            .calibration_done(l))
+    joint_calls! {
+        fn calibration_done(j) -> bool => as_control_calibration;
     }
 }
 
@@ -1011,12 +876,9 @@ impl IPositionDirect for ControlBoardRemapper {
     fn get_axes(&mut self) -> DevResult<usize> {
         self.axes()
     }
-    fn set_position(&mut self, j: usize, reference: f64) -> DevResult<()> {
-        on!(self, j, as_position_direct, |p, l| p
-            .set_position(l, reference))
-    }
-    fn get_ref_position(&mut self, j: usize) -> DevResult<f64> {
-        on!(self, j, as_position_direct, |p, l| p.get_ref_position(l))
+    joint_calls! {
+        fn set_position(j, reference: f64) -> () => as_position_direct;
+        fn get_ref_position(j) -> f64 => as_position_direct;
     }
 }
 
