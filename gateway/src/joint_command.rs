@@ -244,11 +244,10 @@ pub fn speeds(from: impl IntoIterator<Item = f64>, to: &[f64], dt: Duration) -> 
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
 
-    /// Two revolute joints and a prismatic one (the trajectory tests' board too).
-    pub(crate) fn info() -> BoardInfo {
+    fn info() -> BoardInfo {
         BoardInfo {
             names: vec!["a".into(), "b".into(), "slide".into()],
             prismatic: vec![false, false, true],

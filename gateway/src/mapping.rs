@@ -1168,13 +1168,6 @@ mod tests {
         }
     }
 
-    /// That `s` is refused for its entry's `key` (most tests break one key of a good file).
-    #[track_caller]
-    fn assert_rejected_at(s: &str, key: &str) {
-        let (_, k, msg) = entry_error(s);
-        assert_eq!(k, key, "{msg}");
-    }
-
     const OK: &str = r#"
 [[topic]]
 name = "counter"
@@ -1230,7 +1223,8 @@ command = "[home]"
 
     #[test]
     fn unknown_nested_key_is_named_with_its_path() {
-        assert_rejected_at(&OK.replace("depth = 5", "dept = 5"), "qos.dept");
+        let (_, key, _) = entry_error(&OK.replace("depth = 5", "dept = 5"));
+        assert_eq!(key, "qos.dept");
     }
 
     #[test]
@@ -1239,12 +1233,14 @@ command = "[home]"
         assert_eq!(entry, "topic[0] \"counter\"");
         assert_eq!(key, "qos.reliability");
         assert!(msg.contains("sometimes"), "{msg}");
-        assert_rejected_at(&OK.replace("\"yarp_to_ros\"", "\"sideways\""), "direction");
+        let (_, key, _) = entry_error(&OK.replace("\"yarp_to_ros\"", "\"sideways\""));
+        assert_eq!(key, "direction");
     }
 
     #[test]
     fn missing_key_is_named() {
-        assert_rejected_at(&OK.replace("ros_topic = \"/counter\"", ""), "ros_topic");
+        let (_, key, _) = entry_error(&OK.replace("ros_topic = \"/counter\"", ""));
+        assert_eq!(key, "ros_topic");
     }
 
     #[test]
@@ -1296,15 +1292,18 @@ command = "[home]"
         let (_, key, msg) = entry_error(&file.replace("action/Go", "action/Gone"));
         assert_eq!(key, "ros_type");
         assert!(msg.contains("unknown action type"), "{msg}");
-        assert_rejected_at(&file.replace("ros_to_yarp", "both"), "direction");
-        assert_rejected_at(
+        let (_, key, _) = entry_error(&file.replace("ros_to_yarp", "both"));
+        assert_eq!(key, "direction");
+        let (_, key, _) = entry_error(
             &file
                 .replace("ros_to_yarp", "yarp_to_ros")
                 .replace("ros_type", "command = \"go\"\nros_type"),
-            "command",
         );
-        assert_rejected_at(&file.replace("/go:i", "go"), "yarp_port");
-        assert_rejected_at(&file.replace("\"/go\"", "\"bad name\""), "ros_action");
+        assert_eq!(key, "command");
+        let (_, key, _) = entry_error(&file.replace("/go:i", "go"));
+        assert_eq!(key, "yarp_port");
+        let (_, key, _) = entry_error(&file.replace("\"/go\"", "\"bad name\""));
+        assert_eq!(key, "ros_action");
         let _ = std::fs::remove_dir_all(&dir);
     }
 
@@ -1368,7 +1367,8 @@ command = "[home]"
             (OK.replace("command = \"[home]\"", ""), "command"),
         ];
         for (text, want) in cases {
-            assert_rejected_at(&text, want);
+            let (_, key, msg) = entry_error(&text);
+            assert_eq!(key, want, "{msg}");
         }
     }
 
@@ -1382,7 +1382,7 @@ yarp_port = "/imu"
 ros_topic = "/imu"
 ros_type = "sensor_msgs/msg/Imu"
 "#;
-        assert_rejected_at(text, "direction");
+        assert_eq!(entry_error(text).1, "direction");
         let ok = text.replace("ros_to_yarp", "yarp_to_ros") + "frame_id = \"imu_link\"\n";
         assert_eq!(
             parse(&ok).unwrap().topics[0].frame_id.as_deref(),
@@ -1401,20 +1401,20 @@ yarp_source = "/icub/left_arm/state:o"
 ros_topic = "/left_arm/joint_states"
 ros_type = "sensor_msgs/msg/JointState"
 "#;
-        assert_rejected_at(text, "joint_names");
+        assert_eq!(entry_error(text).1, "joint_names");
         let with = format!(
             "{text}joint_names = {{ from = \"axis_info\", rpc_port = \"/icub/left_arm/rpc:i\" }}\n"
         );
         assert!(parse(&with).is_ok());
         let bad = format!("{text}joint_names = {{ from = \"guess\" }}\n");
-        assert_rejected_at(&bad, "joint_names.from");
+        assert_eq!(entry_error(&bad).1, "joint_names.from");
         let dynamic = with
             .replace(
                 "yarp_port = \"/gw/arm/state:i\"",
                 "yarp_pattern = \"/*/state:o\"",
             )
             .replace("yarp_source = \"/icub/left_arm/state:o\"\n", "");
-        assert_rejected_at(&dynamic, "yarp_pattern");
+        assert_eq!(entry_error(&dynamic).1, "yarp_pattern");
     }
 
     #[test]
@@ -1437,19 +1437,22 @@ control_board = { remote = "/robot/arm", mode = "position" }
             "control_board = { remote = \"/robot/arm\", mode = \"position\" }",
             "",
         );
-        assert_rejected_at(&no_board, "control_board");
-        assert_rejected_at(
-            &text.replace("\"position\"", "\"velocity\""),
-            "control_board.mode",
+        assert_eq!(entry_error(&no_board).1, "control_board");
+        assert_eq!(
+            entry_error(&text.replace("\"position\"", "\"velocity\"")).1,
+            "control_board.mode"
         );
-        assert_rejected_at(
-            &text.replace("\"position\"", "\"torque\""),
-            "control_board.mode",
+        assert_eq!(
+            entry_error(&text.replace("\"position\"", "\"torque\"")).1,
+            "control_board.mode"
         );
-        assert_rejected_at(&text.replace("ros_to_yarp", "yarp_to_ros"), "direction");
-        assert_rejected_at(
-            &text.replace("mode = ", "jionts = [], mode = "),
-            "control_board.jionts",
+        assert_eq!(
+            entry_error(&text.replace("ros_to_yarp", "yarp_to_ros")).1,
+            "direction"
+        );
+        assert_eq!(
+            entry_error(&text.replace("mode = ", "jionts = [], mode = ")).1,
+            "control_board.jionts"
         );
         // a multi-array with a board is a command; without, a plain Bottle stream
         let multi = text.replace(
@@ -1471,15 +1474,21 @@ control_board = { remote = "/robot/arm", mode = "position" }
             Conversion::MultiArray
         );
         // a board with a type commands cannot come from
-        assert_rejected_at(
-            &text.replace("trajectory_msgs/msg/JointTrajectory", "std_msgs/msg/String"),
-            "ros_type",
+        assert_eq!(
+            entry_error(
+                &text.replace("trajectory_msgs/msg/JointTrajectory", "std_msgs/msg/String")
+            )
+            .1,
+            "ros_type"
         );
-        assert_rejected_at(
-            &multi
-                .replace("conversion", "x")
-                .replace("ros_type = ", "conversion = \"multi_array\"\nros_type = "),
-            "control_board",
+        assert_eq!(
+            entry_error(
+                &multi
+                    .replace("conversion", "x")
+                    .replace("ros_type = ", "conversion = \"multi_array\"\nros_type = ")
+            )
+            .1,
+            "control_board"
         );
     }
 
@@ -1495,12 +1504,21 @@ ros_type = "std_msgs/msg/Float64"
 "#;
         let m = parse(text).unwrap();
         assert!(m.topics[0].is_ros_pattern());
-        assert_rejected_at(&text.replace("ros_to_yarp", "both"), "direction");
-        assert_rejected_at(&text.replace("/sensors/*", "sensors/*"), "ros_topic");
-        assert_rejected_at(&text.replace("/sensors/*", "/9*"), "ros_topic");
-        assert_rejected_at(
-            &text.replace("yarp_port = \"/ros\"", "yarp_sink = \"/x\""),
-            "yarp_port",
+        assert_eq!(
+            entry_error(&text.replace("ros_to_yarp", "both")).1,
+            "direction"
+        );
+        assert_eq!(
+            entry_error(&text.replace("/sensors/*", "sensors/*")).1,
+            "ros_topic"
+        );
+        assert_eq!(
+            entry_error(&text.replace("/sensors/*", "/9*")).1,
+            "ros_topic"
+        );
+        assert_eq!(
+            entry_error(&text.replace("yarp_port = \"/ros\"", "yarp_sink = \"/x\"")).1,
+            "yarp_port"
         );
     }
 
@@ -1528,7 +1546,10 @@ frame_id = "base"
             Conversion::Generic
         );
         // a frame_id needs a header
-        assert_rejected_at(&format!("{diag}frame_id = \"x\"\n"), "frame_id");
+        assert_eq!(
+            entry_error(&format!("{diag}frame_id = \"x\"\n")).1,
+            "frame_id"
+        );
         let yarp_pattern = diag
             .replace("direction = \"both\"", "direction = \"yarp_to_ros\"")
             .replace("yarp_port = \"/gw/js\"", "yarp_pattern = \"/kv/*\"");
@@ -1546,8 +1567,14 @@ ros_topic = "/robot/*"
         let m = parse(any).unwrap();
         assert_eq!(m.topics[0].ros_type, "");
         assert_eq!(m.topics[0].conversion(), Conversion::Generic);
-        assert_rejected_at(&format!("{any}conversion = \"text\"\n"), "conversion");
-        assert_rejected_at(&any.replace("/robot/*", "/robot/one"), "ros_type");
+        assert_eq!(
+            entry_error(&format!("{any}conversion = \"text\"\n")).1,
+            "conversion"
+        );
+        assert_eq!(
+            entry_error(&any.replace("/robot/*", "/robot/one")).1,
+            "ros_type"
+        );
     }
 
     #[test]
@@ -1586,14 +1613,15 @@ ros_service = "/arm/enable"
 ros_type = "std_srvs/srv/SetBool"
 command_true = "[on]"
 "#;
-        assert_rejected_at(text, "command_false");
+        assert_eq!(entry_error(text).1, "command_false");
         assert!(parse(&format!("{text}command_false = \"[off]\"\n")).is_ok());
     }
 
     #[test]
     fn duplicate_names_are_rejected() {
         let text = format!("{OK}\n{}", &OK[OK.find("[[service]]").unwrap()..]);
-        assert_rejected_at(&text, "name");
+        let (_, key, _) = entry_error(&text);
+        assert_eq!(key, "name");
     }
 
     #[test]
@@ -1608,6 +1636,9 @@ ros_type = "std_msgs/msg/String"
 "#;
         let m = parse(text).unwrap();
         assert_eq!(m.services[0].conversion(), ServiceConversion::TextRpc);
-        assert_rejected_at(&text.replace("ros_to_yarp", "yarp_to_ros"), "direction");
+        assert_eq!(
+            entry_error(&text.replace("ros_to_yarp", "yarp_to_ros")).1,
+            "direction"
+        );
     }
 }

@@ -473,7 +473,13 @@ impl Plan {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::joint_command::tests::info;
+
+    fn info() -> BoardInfo {
+        BoardInfo {
+            names: vec!["a".into(), "b".into(), "slide".into()],
+            prismatic: vec![false, false, true],
+        }
+    }
 
     const DEFAULTS: Defaults = Defaults {
         goal_position: 0.01,
