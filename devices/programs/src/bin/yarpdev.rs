@@ -340,17 +340,18 @@ fn main() {
 mod tests {
     use super::*;
 
+    fn text(v: &Value) -> String {
+        v.to_string_bare()
+    }
+
     #[test]
     fn a_device_with_a_network_wrapper_is_bundled_with_it() {
         let mut o = Property::from_args(["--device", "test_motor", "--single_port"]);
         wrap_in_network_wrapper(&mut o);
-        assert_eq!(o.find("device").unwrap().to_string_bare(), "deviceBundler");
+        assert_eq!(text(o.find("device").unwrap()), "deviceBundler");
+        assert_eq!(text(o.find("attached_device").unwrap()), "test_motor");
         assert_eq!(
-            o.find("attached_device").unwrap().to_string_bare(),
-            "test_motor"
-        );
-        assert_eq!(
-            o.find("wrapper_device").unwrap().to_string_bare(),
+            text(o.find("wrapper_device").unwrap()),
             "controlBoard_nws_yarp"
         );
         for own in [
@@ -360,7 +361,7 @@ mod tests {
         ] {
             let mut o = Property::from_args(["--device", own]);
             wrap_in_network_wrapper(&mut o);
-            assert_eq!(o.find("device").unwrap().to_string_bare(), own);
+            assert_eq!(text(o.find("device").unwrap()), own);
             assert!(o.find("attached_device").is_none());
         }
     }
